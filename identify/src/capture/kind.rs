@@ -1,0 +1,195 @@
+//! Capture kinds and the columns each kind may carry.
+//!
+//! This is the single place that says which columns exist. Every column name
+//! carries its SI unit as a suffix (`_s`, `_m`, `_n`, `_mps`, `_mps2`) so a
+//! file is self-describing without a side table of units.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// What was recorded: a tool rubbing over a surface, or a needle going into tissue.
+///
+/// The kind decides which columns a capture must and may have (see
+/// [`CaptureKind::required_columns`] and [`CaptureKind::optional_columns`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CaptureKind {
+    /// A tool tip sliding tangentially over a surface under a normal load;
+    /// used to identify friction and texture.
+    Rubbing,
+    /// A needle pushed along its axis into tissue; used to identify the
+    /// axial force-depth-velocity relation.
+    Insertion,
+}
+
+/// Sample time since the start of the recording, in seconds. Always the
+/// first column, strictly increasing.
+pub const TIME_S: &str = "time_s";
+
+// --- Rubbing columns -------------------------------------------------------
+
+/// Tool position along the sliding direction, in metres.
+pub const TANGENTIAL_POSITION_M: &str = "tangential_position_m";
+/// Normal load pressing the tool onto the surface, in newtons (positive
+/// when pressing into the surface).
+pub const NORMAL_FORCE_N: &str = "normal_force_n";
+/// Measured tool velocity along the sliding direction, in m/s (same sign
+/// convention as `tangential_position_m`).
+pub const TANGENTIAL_VELOCITY_MPS: &str = "tangential_velocity_mps";
+/// Velocity the protocol/controller asked for, in m/s. For rubbing it is
+/// along the sliding direction; for insertion along the needle axis
+/// (positive going deeper).
+pub const COMMANDED_VELOCITY_MPS: &str = "commanded_velocity_mps";
+/// Tool height along the surface normal, in metres (positive away from the
+/// surface).
+pub const NORMAL_POSITION_M: &str = "normal_position_m";
+/// Tangential force resisting the sliding, in newtons: positive when it
+/// opposes the motion (so a dissipative contact gives
+/// `friction_force_n * tangential_velocity_mps >= 0`).
+pub const FRICTION_FORCE_N: &str = "friction_force_n";
+/// Tangential force the device was commanded to apply, in newtons (same
+/// axis and sign as `tangential_position_m`).
+pub const TANGENTIAL_COMMAND_FORCE_N: &str = "tangential_command_force_n";
+/// Tool-mounted accelerometer, x axis, in m/s^2 (sensor frame).
+pub const ACCEL_X_MPS2: &str = "accel_x_mps2";
+/// Tool-mounted accelerometer, y axis, in m/s^2 (sensor frame).
+pub const ACCEL_Y_MPS2: &str = "accel_y_mps2";
+/// Tool-mounted accelerometer, z axis, in m/s^2 (sensor frame).
+pub const ACCEL_Z_MPS2: &str = "accel_z_mps2";
+
+// --- Insertion columns -----------------------------------------------------
+
+/// Displacement of the needle tip past the undeformed tissue surface, in
+/// metres: zero at first contact, positive inside tissue, negative in air.
+pub const DEPTH_M: &str = "depth_m";
+/// Force resisting the needle along its axis, in newtons: positive when it
+/// pushes the needle back out (i.e. resisting insertion).
+pub const AXIAL_FORCE_N: &str = "axial_force_n";
+/// Measured needle velocity along its axis, in m/s: positive going deeper
+/// (the time derivative of `depth_m`).
+pub const VELOCITY_MPS: &str = "velocity_mps";
+
+const RUBBING_REQUIRED: &[&str] = &[TIME_S, TANGENTIAL_POSITION_M, NORMAL_FORCE_N];
+const RUBBING_OPTIONAL: &[&str] = &[
+    TANGENTIAL_VELOCITY_MPS,
+    COMMANDED_VELOCITY_MPS,
+    NORMAL_POSITION_M,
+    FRICTION_FORCE_N,
+    TANGENTIAL_COMMAND_FORCE_N,
+    ACCEL_X_MPS2,
+    ACCEL_Y_MPS2,
+    ACCEL_Z_MPS2,
+];
+const INSERTION_REQUIRED: &[&str] = &[TIME_S, DEPTH_M, AXIAL_FORCE_N];
+const INSERTION_OPTIONAL: &[&str] = &[VELOCITY_MPS, COMMANDED_VELOCITY_MPS];
+
+impl CaptureKind {
+    /// Every kind, in a fixed order (handy for tests and CLI help).
+    pub const ALL: [CaptureKind; 2] = [CaptureKind::Rubbing, CaptureKind::Insertion];
+
+    /// The name used in the metadata line (`kind=rubbing`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CaptureKind::Rubbing => "rubbing",
+            CaptureKind::Insertion => "insertion",
+        }
+    }
+
+    /// Columns every capture of this kind must have, `time_s` first.
+    /// See the `*_M`/`*_N`/... constants in this module for each column's
+    /// meaning and sign convention.
+    pub fn required_columns(self) -> &'static [&'static str] {
+        match self {
+            CaptureKind::Rubbing => RUBBING_REQUIRED,
+            CaptureKind::Insertion => INSERTION_REQUIRED,
+        }
+    }
+
+    /// Columns a capture of this kind may additionally have, in the
+    /// canonical order (files may list them in any order after `time_s`).
+    pub fn optional_columns(self) -> &'static [&'static str] {
+        match self {
+            CaptureKind::Rubbing => RUBBING_OPTIONAL,
+            CaptureKind::Insertion => INSERTION_OPTIONAL,
+        }
+    }
+
+    /// Whether `name` is a required or optional column of this kind.
+    pub fn allows_column(self, name: &str) -> bool {
+        self.required_columns().contains(&name) || self.optional_columns().contains(&name)
+    }
+}
+
+impl fmt::Display for CaptureKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Error returned when parsing an unknown capture kind name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown capture kind `{0}` (expected `rubbing` or `insertion`)")]
+pub struct UnknownKind(pub String);
+
+impl FromStr for CaptureKind {
+    type Err = UnknownKind;
+
+    /// Parses the exact lowercase names written by [`CaptureKind::as_str`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        CaptureKind::ALL
+            .into_iter()
+            .find(|k| k.as_str() == s)
+            .ok_or_else(|| UnknownKind(s.to_owned()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for kind in CaptureKind::ALL {
+            assert_eq!(kind.as_str().parse::<CaptureKind>(), Ok(kind));
+            assert_eq!(kind.to_string(), kind.as_str());
+        }
+        assert_eq!("rubbing".parse::<CaptureKind>(), Ok(CaptureKind::Rubbing));
+        assert_eq!(
+            "Rubbing".parse::<CaptureKind>(),
+            Err(UnknownKind("Rubbing".into()))
+        );
+        assert_eq!(
+            "".parse::<CaptureKind>().unwrap_err().to_string(),
+            "unknown capture kind `` (expected `rubbing` or `insertion`)"
+        );
+    }
+
+    #[test]
+    fn column_lists_are_well_formed() {
+        for kind in CaptureKind::ALL {
+            assert_eq!(kind.required_columns()[0], TIME_S);
+            let all: Vec<&str> = kind
+                .required_columns()
+                .iter()
+                .chain(kind.optional_columns())
+                .copied()
+                .collect();
+            for (i, name) in all.iter().enumerate() {
+                assert!(!all[..i].contains(name), "{name} listed twice for {kind}");
+                assert!(kind.allows_column(name));
+                // Every column is unit-suffixed.
+                assert!(
+                    ["_s", "_m", "_n", "_mps", "_mps2"]
+                        .iter()
+                        .any(|suffix| name.ends_with(suffix)),
+                    "{name} has no unit suffix"
+                );
+            }
+        }
+        assert_eq!(
+            CaptureKind::Insertion.required_columns(),
+            &["time_s", "depth_m", "axial_force_n"]
+        );
+        assert!(!CaptureKind::Insertion.allows_column("friction_force_n"));
+        assert!(!CaptureKind::Rubbing.allows_column("depth_m"));
+    }
+}
