@@ -1,0 +1,4 @@
+//! Simulation: the ground-truth world and the protocols that measure it.
+
+pub mod protocols;
+pub mod world;

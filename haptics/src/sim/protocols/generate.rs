@@ -1,0 +1,253 @@
+//! `palpus gen`: writes a reproducible capture set to a folder.
+
+use std::fmt;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use identify::capture::{Capture, CaptureError, write_atomically};
+
+use super::{Split, li_bi, nakano, sinapov};
+use crate::sim::world::scratch::{Behaviour, household_surfaces};
+use crate::sim::world::surface::{SurfacePatch, nakano_surfaces};
+
+/// The groups of captures `generate` can write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum CaptureSet {
+    /// Li & Bi: hard contact, soft contact, needle insertion; a train and a test capture each.
+    LiBi,
+    /// Nakano: 7 surfaces × 3 rubbing runs.
+    Nakano,
+    /// Sinapov: 20 surfaces + air × 5 behaviours × 10 trials.
+    Sinapov,
+}
+
+impl CaptureSet {
+    /// Every set, in generation order.
+    pub const ALL: [CaptureSet; 3] = [Self::LiBi, Self::Nakano, Self::Sinapov];
+
+    /// Name on the command line and folder name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::LiBi => "li_bi",
+            Self::Nakano => "nakano",
+            Self::Sinapov => "sinapov",
+        }
+    }
+}
+
+impl fmt::Display for CaptureSet {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for CaptureSet {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|set| set.name() == s.replace('-', "_"))
+            .ok_or_else(|| format!("unknown capture set `{s}` (expected one of: li_bi, nakano, sinapov)"))
+    }
+}
+
+/// One written capture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Generated {
+    /// Path relative to the output folder.
+    pub path: PathBuf,
+    /// Protocol name, as in the capture's metadata.
+    pub protocol: &'static str,
+    /// What the capture is of: surface, tissue or contact.
+    pub label: String,
+    /// `train`, `test`, or the behaviour for scratches.
+    pub role: String,
+    /// Number of samples.
+    pub rows: usize,
+    /// Size on disk.
+    pub bytes: u64,
+}
+
+/// What `generate` wrote.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GenSummary {
+    /// Every capture, in the order written.
+    pub files: Vec<Generated>,
+}
+
+impl GenSummary {
+    /// Samples over all captures.
+    pub fn total_rows(&self) -> usize {
+        self.files.iter().map(|g| g.rows).sum()
+    }
+
+    /// Bytes over all captures (the manifest excluded).
+    pub fn total_bytes(&self) -> u64 {
+        self.files.iter().map(|g| g.bytes).sum()
+    }
+}
+
+/// Why generation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GenError {
+    /// A capture could not be built or written.
+    #[error("capture {}", path.display())]
+    Capture {
+        /// The capture's path, relative to the output folder.
+        path: PathBuf,
+        /// What was wrong.
+        #[source]
+        source: CaptureError,
+    },
+    /// A folder or the manifest could not be written.
+    #[error("cannot write {}: {source}", path.display())]
+    Io {
+        /// The path that failed.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// File name of the manifest written next to the captures.
+pub const MANIFEST: &str = "MANIFEST.csv";
+
+/// Writes the chosen capture sets under `out`, one sub-folder per set, plus a manifest listing
+/// every capture (`path,protocol,label,role,rows`). Each capture is written atomically; a rerun
+/// with the same seed rewrites identical bytes. `progress` is called after each capture.
+pub fn generate(
+    out: &Path,
+    seed: u64,
+    sets: &[CaptureSet],
+    progress: &mut dyn FnMut(&Generated),
+) -> Result<GenSummary, GenError> {
+    let mut summary = GenSummary::default();
+    let mut write = |relative: PathBuf,
+                     capture: Result<Capture, CaptureError>,
+                     protocol: &'static str,
+                     label: String,
+                     role: String| {
+        let capture = capture.map_err(|source| GenError::Capture {
+            path: relative.clone(),
+            source,
+        })?;
+        let path = out.join(&relative);
+        if let Some(parent) = path.parent() {
+            fs::create_dir_all(parent).map_err(|source| GenError::Io {
+                path: parent.to_owned(),
+                source,
+            })?;
+        }
+        capture.write_file(&path).map_err(|source| GenError::Capture {
+            path: relative.clone(),
+            source,
+        })?;
+        let bytes = fs::metadata(&path)
+            .map_err(|source| GenError::Io {
+                path: path.clone(),
+                source,
+            })?
+            .len();
+        let generated = Generated {
+            path: relative,
+            protocol,
+            label,
+            role,
+            rows: capture.len(),
+            bytes,
+        };
+        progress(&generated);
+        summary.files.push(generated);
+        Ok::<(), GenError>(())
+    };
+    let mut sets = sets.to_vec();
+    sets.sort();
+    sets.dedup();
+    for set in sets {
+        match set {
+            CaptureSet::LiBi => {
+                for split in [Split::Train, Split::Test] {
+                    let s = split.as_str();
+                    write(
+                        format!("li_bi/hard_contact_{s}.csv").into(),
+                        li_bi::hard_contact(seed, split),
+                        "li_bi_hard_contact",
+                        "aluminium_plate".into(),
+                        s.into(),
+                    )?;
+                    write(
+                        format!("li_bi/soft_contact_{s}.csv").into(),
+                        li_bi::soft_contact(seed, split),
+                        "li_bi_soft_contact",
+                        "sponge".into(),
+                        s.into(),
+                    )?;
+                    write(
+                        format!("li_bi/needle_{s}.csv").into(),
+                        li_bi::needle_insertion(seed, split),
+                        "li_bi_needle",
+                        "bovine_liver".into(),
+                        s.into(),
+                    )?;
+                }
+            }
+            CaptureSet::Nakano => {
+                for surface in nakano_surfaces() {
+                    let patch = SurfacePatch::new(&surface);
+                    for run in 0..nakano::RUNS {
+                        let role = if run == 0 { "train" } else { "test" };
+                        write(
+                            format!("nakano/{:02}_{}_run{run}.csv", surface.id, surface.name).into(),
+                            nakano::rubbing_run(&patch, run, seed),
+                            "nakano_rubbing",
+                            surface.name.into(),
+                            role.into(),
+                        )?;
+                    }
+                }
+            }
+            CaptureSet::Sinapov => {
+                for surface in household_surfaces() {
+                    for behaviour in Behaviour::ALL {
+                        for trial in 0..sinapov::TRIALS {
+                            write(
+                                format!("sinapov/{}/{}_t{trial:02}.csv", surface.name, behaviour.name())
+                                    .into(),
+                                sinapov::scratch_capture(&surface, behaviour, trial, seed),
+                                "sinapov_scratch",
+                                surface.name.into(),
+                                behaviour.name().into(),
+                            )?;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    write_manifest(out, &summary)?;
+    Ok(summary)
+}
+
+fn write_manifest(out: &Path, summary: &GenSummary) -> Result<(), GenError> {
+    let path = out.join(MANIFEST);
+    write_atomically(&path, |w| {
+        writeln!(w, "path,protocol,label,role,rows")?;
+        for g in &summary.files {
+            writeln!(
+                w,
+                "{},{},{},{},{}",
+                g.path.display(),
+                g.protocol,
+                g.label,
+                g.role,
+                g.rows
+            )?;
+        }
+        Ok(())
+    })
+    .map_err(|source: std::io::Error| GenError::Io { path, source })
+}

@@ -1,0 +1,123 @@
+//! Nakano's rubbing experiment (thesis ch. 3, Tables 3.1–3.2): the Omega.7's tip moves along x
+//! under position control at 5 mm/s while force control holds 0.3 N along z; the tip's height is
+//! the roughness signal and the reaction force along x, estimated by the reaction-force
+//! observer (RFOB, cut-off 50 rad/s) since the Omega.7 has no force sensor, is the friction
+//! signal. Each surface is rubbed three times — one run to train, two to test — each time on
+//! another track of the same surface.
+//!
+//! Logged at 1 kHz (the thesis samples at 0.3 ms; 1 kHz is the Omega.7's usual servo rate).
+
+use identify::capture::{Capture, CaptureError, CaptureKind, Metadata};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::columns::Columns;
+use super::{derive_seed, tag};
+use crate::sim::world::sensor::{Encoder, LowPass, Noise, PseudoDifferentiator, round_to};
+use crate::sim::world::surface::SurfacePatch;
+
+/// Device name written into these captures.
+pub const DEVICE: &str = "sim-omega7";
+/// Sample rate, Hz.
+pub const RATE_HZ: f64 = 1000.0;
+/// Commanded rubbing speed along x (Table 3.2), m/s.
+pub const SPEED_MPS: f64 = 0.005;
+/// Commanded normal force along z (Table 3.2), N.
+pub const NORMAL_FORCE_N: f64 = 0.3;
+/// Cut-off of the DOB and RFOB (Table 3.1), rad/s.
+pub const OBSERVER_CUTOFF_RADPS: f64 = 50.0;
+/// Length rubbed per run, m.
+pub const STROKE_M: f64 = 0.03;
+/// Runs per surface: one to train, two to test (thesis Sec. 3.2).
+pub const RUNS: u32 = 3;
+
+/// Noise of the RFOB estimate before its low-pass (from differentiating a quantized encoder and
+/// from current noise), N.
+const RFOB_NOISE_N: f64 = 0.02;
+/// Electrical and vibration noise on the tip height before the encoder, m.
+const HEIGHT_NOISE_M: f64 = 1e-6;
+/// Time for the position controller to bring the tip up to speed, s.
+const RAMP_S: f64 = 0.2;
+/// Pseudo-differentiator time constant for the logged velocity, s.
+const VELOCITY_TAU_S: f64 = 0.005;
+
+/// One rubbing run of `patch`. Run 0 is the training run.
+pub fn rubbing_run(patch: &SurfacePatch, run: u32, seed: u64) -> Result<Capture, CaptureError> {
+    let surface = patch.surface();
+    let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(
+        seed,
+        &[tag::NAKANO, u64::from(surface.id), u64::from(run)],
+    ));
+    let dt = 1.0 / RATE_HZ;
+    let encoder = Encoder {
+        quantum_m: Encoder::OMEGA7_QUANTUM_M,
+    };
+    let height_noise = Noise::new(HEIGHT_NOISE_M);
+    let rfob_noise = Noise::new(RFOB_NOISE_N);
+    let mut friction_observer = LowPass::new(OBSERVER_CUTOFF_RADPS, dt);
+    let mut normal_observer = LowPass::new(OBSERVER_CUTOFF_RADPS, dt);
+    let mut velocity = PseudoDifferentiator::new(dt, VELOCITY_TAU_S);
+    // Each run uses its own track: a start well apart from the other runs' on the patch, and the
+    // sample sits a little differently on the table each time (tilt).
+    let track = patch.track_length_m();
+    let start_m = (f64::from(run) / f64::from(RUNS) + rng.random_range(0.0..0.1)) * track;
+    let tilt = rng.random_range(-2e-3..2e-3);
+    let mut cols = Columns::new(&[
+        "time_s",
+        "tangential_position_m",
+        "tangential_velocity_mps",
+        "commanded_velocity_mps",
+        "normal_position_m",
+        "normal_force_n",
+        "friction_force_n",
+    ]);
+    // The linear ramp covers half the distance a full-speed start would.
+    let steps = ((STROKE_M / SPEED_MPS + RAMP_S / 2.0) * RATE_HZ).round() as usize;
+    let mut x = 0.0;
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        let command = SPEED_MPS * (t / RAMP_S).min(1.0);
+        x += command * dt;
+        let contact = patch.contact(start_m + x);
+        let z = contact.height_m + tilt * x + height_noise.sample(&mut rng);
+        let friction_n = patch.friction_n(start_m + x, NORMAL_FORCE_N);
+        let x_measured = encoder.read(x);
+        cols.push(&[
+            k as f64 / RATE_HZ,
+            x_measured,
+            round_to(velocity.update(x_measured), 1e-6),
+            command,
+            encoder.read(z),
+            round4(normal_observer.update(NORMAL_FORCE_N + rfob_noise.sample(&mut rng))),
+            round4(friction_observer.update(friction_n + rfob_noise.sample(&mut rng))),
+        ]);
+    }
+    let meta = Metadata::new(CaptureKind::Rubbing, DEVICE, RATE_HZ)
+        .with("protocol", "nakano_rubbing")
+        .with("source", "Nakano-thesis-ch3-Tables3.1-3.2")
+        .with("seed", seed)
+        .with("surface", surface.name)
+        .with("surface_id", surface.id)
+        .with("run", run)
+        .with("role", if run == 0 { "train" } else { "test" })
+        .with("command.speed_mps", SPEED_MPS)
+        .with("command.normal_force_n", NORMAL_FORCE_N)
+        .with("friction_source", "rfob")
+        .with("observer.cutoff_radps", OBSERVER_CUTOFF_RADPS)
+        .with("sensor.encoder_quantum_m", Encoder::OMEGA7_QUANTUM_M)
+        .with("sensor.height_noise_m", HEIGHT_NOISE_M)
+        .with("sensor.rfob_noise_n", RFOB_NOISE_N)
+        .with("track.start_m", start_m)
+        .with("track.tilt", tilt)
+        .with("truth.roughness_rms_m", surface.roughness.rms_m)
+        .with("truth.roughness_wavelength_m", surface.roughness.wavelength_m)
+        .with("truth.friction_coefficient", surface.friction_coefficient)
+        .with("truth.friction_variation", surface.friction_variation)
+        .with("truth.friction_law", "F=N*(mu(x)+dh/dx)");
+    cols.into_capture(meta)
+}
+
+/// Observer outputs are reported to 0.1 mN.
+fn round4(force_n: f64) -> f64 {
+    round_to(force_n, 1e-4)
+}
