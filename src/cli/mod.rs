@@ -1,0 +1,32 @@
+//! Command-line interface.
+
+// The command line is where palpus talks to its user.
+#![allow(clippy::print_stdout)]
+
+mod gen_cmd;
+
+use clap::{Parser, Subcommand};
+
+/// palpus — haptic VR training on identified dynamics.
+///
+/// Trainees puncture virtual tissue and rub virtual surfaces through a Force Dimension Omega.7
+/// (or its simulator) and feel forces identified from measured data. Without an Omega.7 the
+/// simulated world measures: `palpus gen` writes the papers' experiments as captures.
+#[derive(Debug, Parser)]
+#[command(name = "palpus", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    Gen(gen_cmd::GenArgs),
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Gen(args) => gen_cmd::run(&args),
+    }
+}

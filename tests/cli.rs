@@ -1,0 +1,115 @@
+//! The command line as a user meets it.
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use identify::capture::{Capture, CaptureKind};
+
+fn palpus(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_palpus"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn help_explains_the_commands() {
+    let o = palpus(&["--help"]);
+    assert!(o.status.success());
+    let t = text(&o);
+    assert!(t.contains("identified dynamics") && t.contains("gen"), "{t}");
+    let o = palpus(&["gen", "--help"]);
+    assert!(o.status.success());
+    let t = text(&o);
+    for needle in [
+        "--out",
+        "--seed",
+        "--only",
+        "li_bi",
+        "nakano",
+        "sinapov",
+        "same seed",
+    ] {
+        assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
+    }
+}
+
+#[test]
+fn bad_arguments_are_clear_errors() {
+    let o = palpus(&["gen", "--out", "x", "--only", "bogus"]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("unknown capture set `bogus`"), "{}", text(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a_file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let out = file.join("captures");
+    let o = palpus(&["gen", "--out", out.to_str().unwrap(), "--only", "li_bi"]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(
+        t.starts_with("error: generating captures into") && t.contains("a_file"),
+        "{t}"
+    );
+}
+
+/// `palpus gen --only li_bi` reproduces the committed capture set. Values are compared to
+/// 1e-9 relative rather than as bytes, so a platform whose libm differs in the last bit still
+/// passes.
+#[test]
+fn gen_reproduces_the_committed_li_bi_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = palpus(&[
+        "gen",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--only",
+        "li_bi",
+        "--seed",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(t.contains("li_bi_needle") && t.contains("total"), "{t}");
+    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
+    for name in [
+        "hard_contact_train",
+        "hard_contact_test",
+        "soft_contact_train",
+        "soft_contact_test",
+        "needle_train",
+        "needle_test",
+    ] {
+        let kind = if name.starts_with("needle") {
+            CaptureKind::Insertion
+        } else {
+            CaptureKind::Rubbing
+        };
+        let fresh = Capture::read_file(dir.path().join(format!("li_bi/{name}.csv")), kind).unwrap();
+        let kept = Capture::read_file(committed.join(format!("{name}.csv")), kind).unwrap();
+        assert_eq!(fresh.columns(), kept.columns(), "{name}");
+        assert_eq!(fresh.len(), kept.len(), "{name}");
+        let keys = |c: &Capture| {
+            c.metadata()
+                .extra()
+                .iter()
+                .map(|(k, _)| k.clone())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(keys(&fresh), keys(&kept), "{name}");
+        for (a, b) in fresh.data().iter().zip(kept.data()) {
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() <= 1e-9 * x.abs().max(1e-3), "{name}: {x} vs {y}");
+            }
+        }
+    }
+}
