@@ -1,0 +1,681 @@
+//! Li & Bi's three identifications (Sec. II-B, III-B–D), each compared with the baselines on
+//! held-out data.
+//!
+//! - **Hard contact**: friction against normal force with a linear kernel; the paper's
+//!   C = 1e11, ε = 0.003 kgf are the defaults, solved in SI as the identical scaled problem
+//!   (C/g on slacks in N, ε·g), which gives the same w and b = g·b_kgf.
+//! - **Soft contact**, two stages: a linear ε-SVR per constant-speed segment gives (wᵥ, mᵥ);
+//!   RBF ε-SVRs of speed then give w(v) and m(v); `F(v, P) = w(v)·P + m(v)`.
+//! - **Needle puncture**: an RBF ε-SVR of [depth, velocity] (C = 100, γ = 30, ε = 0.02 N),
+//!   inputs scaled to [0, 1], on up to 350 samples spread over the capture's in-tissue samples (the paper trains on 350).
+//!
+//! Velocity comes from the capture's velocity column, or from its position by the paper's
+//! pseudo-differentiation (Eq. 13) when it has none.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::baselines::{CoulombViscous, RbfNetwork, RbfNetworkParams};
+use crate::capture::{Capture, CaptureKind};
+use crate::metrics::Metrics;
+use crate::model_file::{
+    CaptureRef, Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity,
+    ScaledSvr, SvrHyper, sha256_hex,
+};
+use crate::signal::pseudo_differentiate;
+use crate::svr::{InputScaling, Kernel, SvrFit, SvrParams, fit};
+
+/// Standard gravity, to express the paper's kgf hyperparameters in SI.
+const KGF_N: f64 = 9.806_65;
+/// Pseudo-differentiation time constant when a capture has no velocity column, s.
+const PSEUDO_DIFF_TAU_S: f64 = 0.01;
+
+/// What to identify and with which hyperparameters (None: the defaults of that model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IdentifyOptions {
+    /// Which model.
+    pub kind: ModelKind,
+    /// C (soft contact: of the second stage).
+    pub c: Option<f64>,
+    /// ε in the target's unit (soft contact: of the second stage, both w and m).
+    pub epsilon: Option<f64>,
+    /// RBF γ on the scaled inputs (ignored by the linear hard-contact model).
+    pub gamma: Option<f64>,
+    /// Needle: at most this many training samples.
+    pub max_samples: usize,
+}
+
+impl IdentifyOptions {
+    /// Defaults for `kind`.
+    pub fn new(kind: ModelKind) -> Self {
+        Self {
+            kind,
+            c: None,
+            epsilon: None,
+            gamma: None,
+            max_samples: 350,
+        }
+    }
+}
+
+/// Accuracy of the SVR model and of both baselines on the same data.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ComparedMetrics {
+    /// The identified ε-SVR model.
+    pub svr: Metrics,
+    /// Coulomb (∝ normal force) + viscous (∝ velocity) least squares; friction models only.
+    pub coulomb_viscous: Option<Metrics>,
+    /// RBF network (k-means centres, least-squares weights).
+    pub rbf_network: Metrics,
+}
+
+/// What an identification found, for people (a table) and programs (`--json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// `hard`, `soft`, `needle`.
+    pub model: String,
+    /// Training samples of the final stage.
+    pub n_train: usize,
+    /// Support vectors (all SVRs of the model).
+    pub n_sv: usize,
+    /// Linear model slope (hard contact).
+    pub w: Option<f64>,
+    /// Linear model intercept, N (hard contact).
+    pub b: Option<f64>,
+    /// The same intercept in kgf, to compare with the paper's Eq. 12.
+    pub b_kgf: Option<f64>,
+    /// Dual objective of the (final-stage) SVR(s), summed.
+    pub dual_objective: f64,
+    /// Relative duality gap, worst over the SVRs.
+    pub relative_gap: f64,
+    /// Fit time of all SVRs, s.
+    pub fit_seconds: f64,
+    /// `test` when evaluated on a held-out capture, else `train`.
+    pub evaluated_on: String,
+    /// SVR and baselines on that data.
+    pub metrics: ComparedMetrics,
+    /// Soft contact: the first stage's (speed m/s, w, m N) per segment.
+    pub stage1: Vec<[f64; 3]>,
+    /// Hyperparameters used.
+    pub hyperparameters: Vec<SvrHyper>,
+}
+
+/// A model and its report.
+#[derive(Debug, Clone)]
+pub struct Identified {
+    /// The model file to save.
+    pub model: ModelFile,
+    /// The report.
+    pub report: Report,
+}
+
+/// Why an identification failed.
+#[derive(Debug, thiserror::Error)]
+pub enum IdentifyError {
+    /// A capture lacks what this model needs.
+    #[error(transparent)]
+    Capture(#[from] crate::capture::CaptureError),
+    /// The data cannot make this model.
+    #[error("{}: {reason}", path.display())]
+    Data {
+        /// Capture.
+        path: std::path::PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// A fit failed.
+    #[error("fitting {what}: {source}")]
+    Svr {
+        /// Which SVR.
+        what: String,
+        /// Why.
+        #[source]
+        source: crate::svr::SvrError,
+    },
+    /// A baseline failed.
+    #[error("baseline {what}: {reason}")]
+    Baseline {
+        /// Which.
+        what: &'static str,
+        /// Why.
+        reason: String,
+    },
+    /// Metrics could not be computed.
+    #[error("metrics: {0}")]
+    Metrics(String),
+}
+
+/// The samples a friction model needs.
+struct FrictionData {
+    time_s: Vec<f64>,
+    normal_force_n: Vec<f64>,
+    velocity_mps: Vec<f64>,
+    friction_force_n: Vec<f64>,
+    commanded_mps: Option<Vec<f64>>,
+}
+
+fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result<Vec<f64>, IdentifyError> {
+    if c.has_column(velocity_column) {
+        return Ok(c.column(velocity_column)?.to_vec());
+    }
+    pseudo_differentiate(c.time(), c.column(position_column)?, PSEUDO_DIFF_TAU_S).map_err(|e| {
+        IdentifyError::Data {
+            path: c.source().to_owned(),
+            reason: e.to_string(),
+        }
+    })
+}
+
+fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
+    if c.metadata().kind() != CaptureKind::Rubbing {
+        return Err(IdentifyError::Data {
+            path: c.source().to_owned(),
+            reason: "friction models need a rubbing capture".into(),
+        });
+    }
+    Ok(FrictionData {
+        time_s: c.time().to_vec(),
+        normal_force_n: c.column("normal_force_n")?.to_vec(),
+        velocity_mps: velocity(c, "tangential_velocity_mps", "tangential_position_m")?,
+        friction_force_n: c.column("friction_force_n")?.to_vec(),
+        commanded_mps: c
+            .has_column("commanded_velocity_mps")
+            .then(|| c.column("commanded_velocity_mps").map(<[f64]>::to_vec))
+            .transpose()?,
+    })
+}
+
+fn svr(
+    what: &str,
+    c: f64,
+    epsilon: f64,
+    kernel: Kernel,
+    x: &[f64],
+    dim: usize,
+    y: &[f64],
+) -> Result<SvrFit, IdentifyError> {
+    let params = SvrParams::builder()
+        .c(c)
+        .epsilon(epsilon)
+        .kernel(kernel)
+        .build()
+        .map_err(|source| IdentifyError::Svr {
+            what: what.into(),
+            source,
+        })?;
+    fit(&params, x, dim, y).map_err(|source| IdentifyError::Svr {
+        what: what.into(),
+        source,
+    })
+}
+
+fn metrics(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Metrics, IdentifyError> {
+    Metrics::compute(time_s, measured, predicted).map_err(|e| IdentifyError::Metrics(e.to_string()))
+}
+
+fn capture_ref(path: &Path) -> CaptureRef {
+    CaptureRef {
+        path: path.to_owned(),
+        sha256: std::fs::read(path).map(|b| sha256_hex(&b)).unwrap_or_default(),
+    }
+}
+
+fn scaled(svr: crate::svr::SvrModel, scaling: InputScaling) -> ScaledSvr {
+    ScaledSvr {
+        scaling,
+        output_scale: 1.0,
+        svr,
+    }
+}
+
+fn range(x: &[f64], dim: usize) -> Vec<[f64; 2]> {
+    (0..dim)
+        .map(|k| {
+            let col = x.iter().skip(k).step_by(dim);
+            [
+                col.clone().fold(f64::INFINITY, |a, &v| a.min(v)),
+                col.fold(f64::NEG_INFINITY, |a, &v| a.max(v)),
+            ]
+        })
+        .collect()
+}
+
+/// Identifies `options.kind` from `train`, evaluating on `test` when given (else on `train`).
+pub fn identify(
+    train: &Capture,
+    test: Option<&Capture>,
+    options: &IdentifyOptions,
+) -> Result<Identified, IdentifyError> {
+    match options.kind {
+        ModelKind::HardFriction => hard(train, test, options),
+        ModelKind::SoftFriction => soft(train, test, options),
+        ModelKind::NeedlePuncture => needle(train, test, options),
+    }
+}
+
+/// Both baselines for friction data, evaluated on `eval`. The RBF network sees the inputs the
+/// SVR model sees: normal force alone for hard contact (whose law ignores speed, and whose
+/// held-out trajectory runs at other speeds), normal force and speed for soft contact.
+fn friction_baselines(
+    tr: &FrictionData,
+    eval: &FrictionData,
+    with_speed: bool,
+) -> Result<(Metrics, Metrics), IdentifyError> {
+    let cv =
+        CoulombViscous::fit(&tr.normal_force_n, &tr.velocity_mps, &tr.friction_force_n).map_err(|e| {
+            IdentifyError::Baseline {
+                what: "Coulomb+viscous",
+                reason: e.to_string(),
+            }
+        })?;
+    let cv_pred: Vec<f64> = (0..eval.time_s.len())
+        .map(|i| cv.predict(eval.normal_force_n[i], eval.velocity_mps[i]))
+        .collect();
+    let inputs = |d: &FrictionData| -> Vec<f64> {
+        (0..d.time_s.len())
+            .flat_map(|i| {
+                if with_speed {
+                    vec![d.normal_force_n[i], d.velocity_mps[i]]
+                } else {
+                    vec![d.normal_force_n[i]]
+                }
+            })
+            .collect()
+    };
+    let (x_tr, x_ev) = (inputs(tr), inputs(eval));
+    let dim = if with_speed { 2 } else { 1 };
+    let net = RbfNetwork::fit(
+        &x_tr,
+        dim,
+        &tr.friction_force_n,
+        &RbfNetworkParams::for_samples(tr.time_s.len()),
+    )
+    .map_err(|e| IdentifyError::Baseline {
+        what: "RBF network",
+        reason: e.to_string(),
+    })?;
+    let net_pred = net.predict_many(&x_ev).map_err(|e| IdentifyError::Baseline {
+        what: "RBF network",
+        reason: e.to_string(),
+    })?;
+    Ok((
+        metrics(&eval.time_s, &eval.friction_force_n, &cv_pred)?,
+        metrics(&eval.time_s, &eval.friction_force_n, &net_pred)?,
+    ))
+}
+
+fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+    let started = Instant::now();
+    let tr = friction_data(train)?;
+    let ev = match test {
+        Some(t) => friction_data(t)?,
+        None => friction_data(train)?,
+    };
+    let (c, epsilon) = (o.c.unwrap_or(1e11 / KGF_N), o.epsilon.unwrap_or(0.003 * KGF_N));
+    let f = svr(
+        "hard-contact SVR",
+        c,
+        epsilon,
+        Kernel::Linear,
+        &tr.normal_force_n,
+        1,
+        &tr.friction_force_n,
+    )?;
+    let w = f.model.linear_weights().map(|w| w[0]);
+    let b = f.model.bias;
+    let model = scaled(f.model.clone(), InputScaling::identity(1));
+    let predicted: Vec<f64> = ev.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
+    let svr_metrics = metrics(&ev.time_s, &ev.friction_force_n, &predicted)?;
+    let train_pred: Vec<f64> = tr.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
+    let (cv, net) = friction_baselines(&tr, &ev, false)?;
+    let hyper = vec![SvrHyper {
+        label: "svr".into(),
+        c,
+        epsilon,
+        kernel: Kernel::Linear,
+    }];
+    finish(
+        ModelKind::HardFriction,
+        train,
+        test,
+        vec![Quantity {
+            name: "normal_force_n".into(),
+        }],
+        Quantity {
+            name: "friction_force_n".into(),
+        },
+        ModelBody::Single(model),
+        hyper,
+        tr.time_s.len(),
+        (
+            metrics(&tr.time_s, &tr.friction_force_n, &train_pred)?,
+            svr_metrics,
+        ),
+        (Some(cv), net),
+        &[&f],
+        started,
+        range(&tr.normal_force_n, 1),
+        (w, Some(b)),
+        Vec::new(),
+    )
+}
+
+fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+    let started = Instant::now();
+    let tr = friction_data(train)?;
+    let ev = match test {
+        Some(t) => friction_data(t)?,
+        None => friction_data(train)?,
+    };
+    let Some(commanded) = &tr.commanded_mps else {
+        return Err(IdentifyError::Data {
+            path: train.source().to_owned(),
+            reason:
+                "soft-contact identification needs constant-speed segments (column commanded_velocity_mps)"
+                    .into(),
+        });
+    };
+    // Stage 1: a linear ε-SVR of friction against normal force per constant-speed segment.
+    let mut speeds: Vec<f64> = Vec::new();
+    for &v in commanded {
+        if !speeds.contains(&v) {
+            speeds.push(v);
+        }
+    }
+    let (c1, eps1) = (1e11 / KGF_N, 0.003 * KGF_N);
+    let mut stage1 = Vec::new();
+    let mut fits = Vec::new();
+    for &v in &speeds {
+        let idx: Vec<usize> = (0..commanded.len()).filter(|&i| commanded[i] == v).collect();
+        if idx.len() < 3 {
+            continue;
+        }
+        let p: Vec<f64> = idx.iter().map(|&i| tr.normal_force_n[i]).collect();
+        let f: Vec<f64> = idx.iter().map(|&i| tr.friction_force_n[i]).collect();
+        let speed = idx.iter().map(|&i| tr.velocity_mps[i]).sum::<f64>() / idx.len() as f64;
+        let fitted = svr(
+            &format!("stage-1 SVR at {v} m/s"),
+            c1,
+            eps1,
+            Kernel::Linear,
+            &p,
+            1,
+            &f,
+        )?;
+        let w = fitted.model.linear_weights().map_or(0.0, |w| w[0]);
+        stage1.push([speed, w, fitted.model.bias]);
+        fits.push(fitted);
+    }
+    if stage1.len() < 3 {
+        return Err(IdentifyError::Data {
+            path: train.source().to_owned(),
+            reason: format!(
+                "{} constant-speed segments with ≥ 3 samples; the second stage needs at least 3",
+                stage1.len()
+            ),
+        });
+    }
+    // Stage 2: RBF ε-SVRs of speed for w and m, on speeds scaled to [0, 1].
+    let v: Vec<f64> = stage1.iter().map(|s| s[0]).collect();
+    let scaling = InputScaling::min_max(&v, 1);
+    let v_scaled = scaling.apply(&v);
+    let (c2, gamma) = (o.c.unwrap_or(100.0), o.gamma.unwrap_or(2.0));
+    let eps_w = o.epsilon.unwrap_or(0.002);
+    let eps_m = o.epsilon.unwrap_or(0.002);
+    let ws: Vec<f64> = stage1.iter().map(|s| s[1]).collect();
+    let ms: Vec<f64> = stage1.iter().map(|s| s[2]).collect();
+    let fw = svr(
+        "slope SVR w(v)",
+        c2,
+        eps_w,
+        Kernel::Rbf { gamma },
+        &v_scaled,
+        1,
+        &ws,
+    )?;
+    let fm = svr(
+        "intercept SVR m(v)",
+        c2,
+        eps_m,
+        Kernel::Rbf { gamma },
+        &v_scaled,
+        1,
+        &ms,
+    )?;
+    let body = ModelBody::TwoStage {
+        slope: scaled(fw.model.clone(), scaling.clone()),
+        intercept: scaled(fm.model.clone(), scaling),
+    };
+    let model_eval = |d: &FrictionData| -> Vec<f64> {
+        let mf = ModelFile::predict_body(&body);
+        (0..d.time_s.len())
+            .map(|i| mf(&[d.velocity_mps[i], d.normal_force_n[i]]))
+            .collect()
+    };
+    let svr_metrics = metrics(&ev.time_s, &ev.friction_force_n, &model_eval(&ev))?;
+    let train_metrics = metrics(&tr.time_s, &tr.friction_force_n, &model_eval(&tr))?;
+    let (cv, net) = friction_baselines(&tr, &ev, true)?;
+    let hyper = vec![
+        SvrHyper {
+            label: "stage1".into(),
+            c: c1,
+            epsilon: eps1,
+            kernel: Kernel::Linear,
+        },
+        SvrHyper {
+            label: "slope".into(),
+            c: c2,
+            epsilon: eps_w,
+            kernel: Kernel::Rbf { gamma },
+        },
+        SvrHyper {
+            label: "intercept".into(),
+            c: c2,
+            epsilon: eps_m,
+            kernel: Kernel::Rbf { gamma },
+        },
+    ];
+    let mut all = vec![&fw, &fm];
+    all.extend(fits.iter());
+    let x_range: Vec<f64> = (0..tr.time_s.len())
+        .flat_map(|i| [tr.velocity_mps[i], tr.normal_force_n[i]])
+        .collect();
+    finish(
+        ModelKind::SoftFriction,
+        train,
+        test,
+        vec![
+            Quantity {
+                name: "tangential_velocity_mps".into(),
+            },
+            Quantity {
+                name: "normal_force_n".into(),
+            },
+        ],
+        Quantity {
+            name: "friction_force_n".into(),
+        },
+        body,
+        hyper,
+        stage1.len(),
+        (train_metrics, svr_metrics),
+        (Some(cv), net),
+        &all,
+        started,
+        range(&x_range, 2),
+        (None, None),
+        stage1,
+    )
+}
+
+/// In-tissue samples of an insertion capture: time, [depth, velocity] row-major, force.
+type NeedleSamples = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
+    if c.metadata().kind() != CaptureKind::Insertion {
+        return Err(IdentifyError::Data {
+            path: c.source().to_owned(),
+            reason: "the needle model needs an insertion capture".into(),
+        });
+    }
+    let depth = c.column("depth_m")?;
+    let force = c.column("axial_force_n")?;
+    let vel = velocity(c, "velocity_mps", "depth_m")?;
+    let idx: Vec<usize> = (0..c.len()).filter(|&i| depth[i] > 0.0).collect();
+    if idx.len() < 10 {
+        return Err(IdentifyError::Data {
+            path: c.source().to_owned(),
+            reason: format!("only {} samples in tissue", idx.len()),
+        });
+    }
+    Ok((
+        idx.iter().map(|&i| c.time()[i]).collect(),
+        idx.iter().flat_map(|&i| [depth[i], vel[i]]).collect(),
+        idx.iter().map(|&i| force[i]).collect(),
+    ))
+}
+
+fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+    let started = Instant::now();
+    let (t_all, x_all, y_all) = needle_data(train)?;
+    // Up to max_samples spread evenly over the in-tissue samples.
+    let n_all = y_all.len();
+    let n = o.max_samples.clamp(2, n_all);
+    let pick: Vec<usize> = (0..n)
+        .map(|k| ((k as f64) * (n_all - 1) as f64 / (n - 1) as f64).round() as usize)
+        .collect();
+    let x: Vec<f64> = pick
+        .iter()
+        .flat_map(|&i| [x_all[2 * i], x_all[2 * i + 1]])
+        .collect();
+    let y: Vec<f64> = pick.iter().map(|&i| y_all[i]).collect();
+    let scaling = InputScaling::min_max(&x, 2);
+    let xs = scaling.apply(&x);
+    // γ = 30 on inputs scaled to [0, 1]: narrow enough to follow the puncture's fall, which
+    // a wider kernel smears over the neighbouring depths (held-out AISE 1.3e-2 against 3.1e-2
+    // at γ = 10 on the default capture set).
+    let (c, epsilon, gamma) = (
+        o.c.unwrap_or(100.0),
+        o.epsilon.unwrap_or(0.02),
+        o.gamma.unwrap_or(30.0),
+    );
+    let f = svr("needle SVR", c, epsilon, Kernel::Rbf { gamma }, &xs, 2, &y)?;
+    let model = scaled(f.model.clone(), scaling);
+    let (t_ev, x_ev, y_ev) = match test {
+        Some(t) => needle_data(t)?,
+        None => (t_all.clone(), x_all.clone(), y_all.clone()),
+    };
+    let predict = |xx: &[f64]| -> Vec<f64> { xx.chunks_exact(2).map(|r| model.predict(r)).collect() };
+    let svr_metrics = metrics(&t_ev, &y_ev, &predict(&x_ev))?;
+    let train_metrics = metrics(&t_all, &y_all, &predict(&x_all))?;
+    let net = RbfNetwork::fit(&x, 2, &y, &RbfNetworkParams::for_samples(y.len())).map_err(|e| {
+        IdentifyError::Baseline {
+            what: "RBF network",
+            reason: e.to_string(),
+        }
+    })?;
+    let net_pred = net.predict_many(&x_ev).map_err(|e| IdentifyError::Baseline {
+        what: "RBF network",
+        reason: e.to_string(),
+    })?;
+    let net_metrics = metrics(&t_ev, &y_ev, &net_pred)?;
+    let hyper = vec![SvrHyper {
+        label: "svr".into(),
+        c,
+        epsilon,
+        kernel: Kernel::Rbf { gamma },
+    }];
+    finish(
+        ModelKind::NeedlePuncture,
+        train,
+        test,
+        vec![
+            Quantity {
+                name: "depth_m".into(),
+            },
+            Quantity {
+                name: "velocity_mps".into(),
+            },
+        ],
+        Quantity {
+            name: "axial_force_n".into(),
+        },
+        ModelBody::Single(model),
+        hyper,
+        n,
+        (train_metrics, svr_metrics),
+        (None, net_metrics),
+        &[&f],
+        started,
+        range(&x, 2),
+        (None, None),
+        Vec::new(),
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    kind: ModelKind,
+    train: &Capture,
+    test: Option<&Capture>,
+    inputs: Vec<Quantity>,
+    output: Quantity,
+    body: ModelBody,
+    hyper: Vec<SvrHyper>,
+    n_train: usize,
+    (train_metrics, svr_metrics): (Metrics, Metrics),
+    (coulomb_viscous, rbf_network): (Option<Metrics>, Metrics),
+    fits: &[&SvrFit],
+    started: Instant,
+    input_range: Vec<[f64; 2]>,
+    (w, b): (Option<f64>, Option<f64>),
+    stage1: Vec<[f64; 3]>,
+) -> Result<Identified, IdentifyError> {
+    let n_sv = match &body {
+        ModelBody::Single(m) => m.svr.n_sv(),
+        ModelBody::TwoStage { slope, intercept } => slope.svr.n_sv() + intercept.svr.n_sv(),
+    };
+    let final_fits: Vec<&&SvrFit> = if kind == ModelKind::SoftFriction {
+        fits.iter().take(2).collect()
+    } else {
+        fits.iter().collect()
+    };
+    let report = Report {
+        model: kind.short_name().into(),
+        n_train,
+        n_sv,
+        w,
+        b,
+        b_kgf: b.map(|b| b / KGF_N),
+        dual_objective: final_fits.iter().map(|f| f.dual_objective).sum(),
+        relative_gap: fits.iter().map(|f| f.relative_gap()).fold(0.0, f64::max),
+        fit_seconds: started.elapsed().as_secs_f64(),
+        evaluated_on: if test.is_some() { "test" } else { "train" }.into(),
+        metrics: ComparedMetrics {
+            svr: svr_metrics,
+            coulomb_viscous,
+            rbf_network,
+        },
+        stage1,
+        hyperparameters: hyper.clone(),
+    };
+    let mut training = vec![capture_ref(train.source())];
+    training.retain(|r| !r.path.as_os_str().is_empty());
+    let model = ModelFile {
+        format: MODEL_FORMAT.into(),
+        version: MODEL_VERSION,
+        kind,
+        inputs,
+        output,
+        body,
+        hyperparameters: Hyperparameters::new(hyper),
+        training,
+        n_train,
+        train_metrics: Some(train_metrics),
+        test_metrics: test.map(|_| svr_metrics),
+        input_range,
+    };
+    Ok(Identified { model, report })
+}

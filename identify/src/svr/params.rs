@@ -1,0 +1,228 @@
+//! Hyperparameters, validated once into a checked type (the linfa convention): a value that
+//! could make the solver misbehave is a typed error before any work is done.
+
+use std::time::Duration;
+
+use super::error::SvrError;
+use super::kernel::Kernel;
+
+/// Which optimiser solves the dual.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Solver {
+    /// Interior point for up to [`SvrParams::DENSE_LIMIT`] samples, SMO beyond.
+    #[default]
+    Auto,
+    /// Dense primal–dual interior point (Mehrotra), then an exact active-set polish: tens of
+    /// iterations whatever C is, O(n³) per iteration.
+    InteriorPoint,
+    /// Sequential minimal optimisation with second-order working-set selection (libsvm's
+    /// algorithm): O(n) per iteration, scales to large n, slow when C is large.
+    Smo,
+}
+
+/// Unchecked hyperparameters; [`SvrParamsBuilder::build`] validates them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SvrParamsBuilder {
+    c: f64,
+    epsilon: f64,
+    kernel: Kernel,
+    solver: Solver,
+    tolerance: f64,
+    max_iterations: usize,
+    time_budget: Duration,
+}
+
+/// Checked hyperparameters of an ε-SVR.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SvrParams {
+    c: f64,
+    epsilon: f64,
+    kernel: Kernel,
+    solver: Solver,
+    tolerance: f64,
+    max_iterations: usize,
+    time_budget: Duration,
+}
+
+impl Default for SvrParamsBuilder {
+    fn default() -> Self {
+        Self {
+            c: 1.0,
+            epsilon: 0.1,
+            kernel: Kernel::Rbf { gamma: 1.0 },
+            solver: Solver::Auto,
+            tolerance: 1e-10,
+            max_iterations: 0,
+            time_budget: Duration::from_secs(60),
+        }
+    }
+}
+
+impl SvrParamsBuilder {
+    /// Regularisation constant C > 0 (the weight of the ε-insensitive loss against ½‖w‖²).
+    pub fn c(mut self, c: f64) -> Self {
+        self.c = c;
+        self
+    }
+
+    /// Width ε ≥ 0 of the insensitive tube, in the units of the targets.
+    pub fn epsilon(mut self, epsilon: f64) -> Self {
+        self.epsilon = epsilon;
+        self
+    }
+
+    /// The kernel.
+    pub fn kernel(mut self, kernel: Kernel) -> Self {
+        self.kernel = kernel;
+        self
+    }
+
+    /// The optimiser.
+    pub fn solver(mut self, solver: Solver) -> Self {
+        self.solver = solver;
+        self
+    }
+
+    /// Relative optimality tolerance (duality gap for the interior point, KKT violation for SMO).
+    pub fn tolerance(mut self, tolerance: f64) -> Self {
+        self.tolerance = tolerance;
+        self
+    }
+
+    /// Iteration budget; 0 picks the solver's default (200 interior-point iterations;
+    /// 100 000 · n SMO iterations).
+    pub fn max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+
+    /// Wall-clock budget; a fit that exceeds it stops with [`SvrError::Budget`].
+    pub fn time_budget(mut self, budget: Duration) -> Self {
+        self.time_budget = budget;
+        self
+    }
+
+    /// Validates into [`SvrParams`].
+    pub fn build(self) -> Result<SvrParams, SvrError> {
+        let bad = |name: &'static str, value: f64, reason: &'static str| SvrError::InvalidHyperparameter {
+            name,
+            value,
+            reason,
+        };
+        if !(self.c.is_finite() && self.c > 0.0) {
+            return Err(bad("C", self.c, "must be finite and > 0"));
+        }
+        if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
+            return Err(bad("epsilon", self.epsilon, "must be finite and >= 0"));
+        }
+        match self.kernel {
+            Kernel::Linear => {}
+            Kernel::Rbf { gamma } => {
+                if !(gamma.is_finite() && gamma > 0.0) {
+                    return Err(bad("gamma", gamma, "must be finite and > 0"));
+                }
+            }
+            Kernel::Polynomial { gamma, coef0, degree } => {
+                if !(gamma.is_finite() && gamma > 0.0) {
+                    return Err(bad("gamma", gamma, "must be finite and > 0"));
+                }
+                if !coef0.is_finite() {
+                    return Err(bad("coef0", coef0, "must be finite"));
+                }
+                if degree == 0 || degree > 10 {
+                    return Err(bad("degree", f64::from(degree), "must be in 1..=10"));
+                }
+            }
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return Err(bad("tolerance", self.tolerance, "must be in (0, 1)"));
+        }
+        if self.time_budget.is_zero() {
+            return Err(bad("time_budget", 0.0, "must be > 0"));
+        }
+        Ok(SvrParams {
+            c: self.c,
+            epsilon: self.epsilon,
+            kernel: self.kernel,
+            solver: self.solver,
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            time_budget: self.time_budget,
+        })
+    }
+}
+
+impl SvrParams {
+    /// Samples above which [`Solver::Auto`] switches from the interior point to SMO: the dense
+    /// kernel matrix (n² doubles) and its O(n³) factorisations stop paying off there.
+    pub const DENSE_LIMIT: usize = 3000;
+
+    /// Starts a builder (C = 1, ε = 0.1, RBF γ = 1, automatic solver, tolerance 1e-10).
+    pub fn builder() -> SvrParamsBuilder {
+        SvrParamsBuilder::default()
+    }
+
+    /// C.
+    pub fn c(&self) -> f64 {
+        self.c
+    }
+    /// ε.
+    pub fn epsilon(&self) -> f64 {
+        self.epsilon
+    }
+    /// The kernel.
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+    /// The optimiser asked for.
+    pub fn solver(&self) -> Solver {
+        self.solver
+    }
+    /// Relative tolerance.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+    /// Iteration budget (0: the solver's default).
+    pub fn max_iterations(&self) -> usize {
+        self.max_iterations
+    }
+    /// Wall-clock budget.
+    pub fn time_budget(&self) -> Duration {
+        self.time_budget
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_values_are_typed_errors() {
+        let cases = [
+            SvrParams::builder().c(0.0),
+            SvrParams::builder().c(f64::INFINITY),
+            SvrParams::builder().c(f64::NAN),
+            SvrParams::builder().epsilon(-1e-9),
+            SvrParams::builder().kernel(Kernel::Rbf { gamma: 0.0 }),
+            SvrParams::builder().kernel(Kernel::Rbf { gamma: f64::NAN }),
+            SvrParams::builder().kernel(Kernel::Polynomial {
+                gamma: 1.0,
+                coef0: 0.0,
+                degree: 0,
+            }),
+            SvrParams::builder().tolerance(0.0),
+            SvrParams::builder().time_budget(Duration::ZERO),
+        ];
+        for b in cases {
+            let err = b.build().unwrap_err();
+            assert!(matches!(err, SvrError::InvalidHyperparameter { .. }), "{err}");
+        }
+        let p = SvrParams::builder()
+            .c(1e11)
+            .epsilon(0.0)
+            .kernel(Kernel::Linear)
+            .build()
+            .unwrap();
+        assert_eq!((p.c(), p.epsilon(), p.kernel()), (1e11, 0.0, Kernel::Linear));
+    }
+}

@@ -1,0 +1,449 @@
+//! Exact active-set polish of an approximate dual solution.
+//!
+//! An interior point approaches the optimum from inside the box, so its β is never exactly at
+//! 0 or ±C and its accuracy is limited by the conditioning of the last Newton systems. Once it
+//! has told which samples are inside the tube (β = 0), outside it (β = ±C) and on its boundary
+//! (free), the optimum is the solution of one linear system: for free samples
+//! `Σⱼ Kᵢⱼ βⱼ + b = yᵢ ∓ ε`, and `Σ β = 0`. Solving it and checking every KKT condition gives
+//! the optimum to rounding error; a violated condition moves that sample to the right set and
+//! the system is solved again (a few rounds of a primal active-set method).
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+
+/// Where a sample sits at the optimum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Side {
+    /// Inside the tube: β = 0.
+    Inside,
+    /// On the upper boundary (y − f = ε): 0 ≤ β ≤ C.
+    UpperFree,
+    /// On the lower boundary (y − f = −ε): −C ≤ β ≤ 0.
+    LowerFree,
+    /// Above the tube: β = C.
+    Above,
+    /// Below the tube: β = −C.
+    Below,
+}
+
+/// A polished solution. For a linear kernel it carries the primal weights too, which are
+/// exact where `Σ βᵢ xᵢ` would lose digits to cancellation (β ~ C = 1e11, w ~ 0.1).
+#[derive(Debug, Clone)]
+pub(crate) struct Polished {
+    pub beta: Vec<f64>,
+    pub bias: f64,
+    pub weights: Option<Vec<f64>>,
+}
+
+/// Tries to turn `sides` into an exact optimum; `None` if the active set does not settle.
+pub(crate) fn polish(
+    k: &Mat<f64>,
+    y: &[f64],
+    c: f64,
+    epsilon: f64,
+    mut sides: Vec<Side>,
+    max_rounds: usize,
+) -> Option<Polished> {
+    let n = y.len();
+    let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for _round in 0..max_rounds.min(2 * n + 20) {
+        let free: Vec<usize> = (0..n)
+            .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
+            .collect();
+        let mut beta = vec![0.0; n];
+        for i in 0..n {
+            beta[i] = match sides[i] {
+                Side::Above => c,
+                Side::Below => -c,
+                _ => 0.0,
+            };
+        }
+        // K β over the bounded samples: the fixed part of every f(xᵢ).
+        let mut g_fixed = vec![0.0; n];
+        super::ipm::mat_vec(k, &beta, &mut g_fixed);
+        let bias;
+        if free.is_empty() {
+            // No free support vector: b is any point of the interval the other samples allow;
+            // take its middle (libsvm's rule), which is also where the objective is flattest.
+            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            for i in 0..n {
+                let r0 = y[i] - g_fixed[i];
+                match sides[i] {
+                    Side::Inside => {
+                        lo = lo.max(r0 - epsilon);
+                        hi = hi.min(r0 + epsilon);
+                    }
+                    Side::Above => hi = hi.min(r0 - epsilon),
+                    Side::Below => lo = lo.max(r0 + epsilon),
+                    Side::UpperFree | Side::LowerFree => {}
+                }
+            }
+            let bounded_sum: f64 = beta.iter().sum();
+            if lo > hi + 1e-12 * y_scale || bounded_sum.abs() > 1e-9 * c.max(1.0) {
+                // The sets are inconsistent: let one sample become free and retry.
+                let worst = (0..n).filter(|&i| sides[i] != Side::Inside).max_by(|&a, &b| {
+                    margin(y, &g_fixed, a, epsilon).total_cmp(&margin(y, &g_fixed, b, epsilon))
+                });
+                match worst {
+                    Some(i) => {
+                        sides[i] = if sides[i] == Side::Above {
+                            Side::UpperFree
+                        } else {
+                            Side::LowerFree
+                        };
+                        continue;
+                    }
+                    None => return None,
+                }
+            }
+            bias = if lo.is_finite() && hi.is_finite() {
+                0.5 * (lo + hi)
+            } else if lo.is_finite() {
+                lo
+            } else if hi.is_finite() {
+                hi
+            } else {
+                0.0
+            };
+        } else {
+            // Bordered system [K_FF 1; 1ᵀ 0] [β_F; b] = [y_F ∓ ε − (Kβ_bounded)_F; −Σβ_bounded].
+            let m = free.len();
+            let a = Mat::<f64>::from_fn(m + 1, m + 1, |r, col| match (r < m, col < m) {
+                (true, true) => k[(free[r], free[col])],
+                (true, false) | (false, true) => 1.0,
+                (false, false) => 0.0,
+            });
+            let bounded_sum: f64 = beta.iter().sum();
+            let rhs = Mat::<f64>::from_fn(m + 1, 1, |r, _| {
+                if r < m {
+                    let i = free[r];
+                    let target = if sides[i] == Side::UpperFree {
+                        y[i] - epsilon
+                    } else {
+                        y[i] + epsilon
+                    };
+                    target - g_fixed[i]
+                } else {
+                    -bounded_sum
+                }
+            });
+            let x = solve_bordered(&a, &rhs)?;
+            for (r, &i) in free.iter().enumerate() {
+                beta[i] = x[r];
+            }
+            bias = x[m];
+        }
+
+        // Check every KKT condition; move the worst violator to where it belongs. One move per
+        // round, as an active-set method does: moving every violator at once can cycle.
+        let mut kbeta = vec![0.0; n];
+        super::ipm::mat_vec(k, &beta, &mut kbeta);
+        let residuals: Vec<f64> = (0..n).map(|i| y[i] - kbeta[i] - bias).collect();
+        let worst = worst_violation(&sides, &beta, &residuals, c, epsilon, y_scale);
+        let changed = match worst {
+            Some((_, i, to)) => {
+                sides[i] = to;
+                true
+            }
+            None => false,
+        };
+        if !changed {
+            // Clip the free coefficients' rounding excursions back into the box.
+            for b in &mut beta {
+                *b = b.clamp(-c, c);
+            }
+            return Some(Polished {
+                beta,
+                bias,
+                weights: None,
+            });
+        }
+    }
+    None
+}
+
+/// The KKT condition violated most, and the set its sample belongs in.
+fn worst_violation(
+    sides: &[Side],
+    beta: &[f64],
+    residuals: &[f64],
+    c: f64,
+    epsilon: f64,
+    y_scale: f64,
+) -> Option<(f64, usize, Side)> {
+    let tol_r = 1e-9 * y_scale;
+    let tol_b = 1e-9 * c;
+    let mut worst: Option<(f64, usize, Side)> = None;
+    for (i, (&side, &r)) in sides.iter().zip(residuals).enumerate() {
+        // Violations are scaled to be comparable: residuals by the targets, β by C.
+        let candidate = match side {
+            Side::Inside if r > epsilon + tol_r => Some(((r - epsilon) / y_scale, Side::UpperFree)),
+            Side::Inside if r < -epsilon - tol_r => Some(((-epsilon - r) / y_scale, Side::LowerFree)),
+            Side::Above if r < epsilon - tol_r => Some(((epsilon - r) / y_scale, Side::UpperFree)),
+            Side::Below if r > -epsilon + tol_r => Some(((r + epsilon) / y_scale, Side::LowerFree)),
+            Side::UpperFree if beta[i] > c + tol_b => Some(((beta[i] - c) / c, Side::Above)),
+            Side::UpperFree if r > epsilon + tol_r => Some(((r - epsilon) / y_scale, Side::Above)),
+            Side::UpperFree if beta[i] < -tol_b => Some((-beta[i] / c, Side::Inside)),
+            Side::UpperFree if r < epsilon - tol_r => Some(((epsilon - r) / y_scale, Side::Inside)),
+            Side::LowerFree if beta[i] < -c - tol_b => Some(((-c - beta[i]) / c, Side::Below)),
+            Side::LowerFree if r < -epsilon - tol_r => Some(((-epsilon - r) / y_scale, Side::Below)),
+            Side::LowerFree if beta[i] > tol_b => Some((beta[i] / c, Side::Inside)),
+            Side::LowerFree if r > -epsilon + tol_r => Some(((r + epsilon) / y_scale, Side::Inside)),
+            _ => None,
+        };
+        if let Some((v, to)) = candidate
+            && worst.is_none_or(|(w, _, _)| v > w)
+        {
+            worst = Some((v, i, to));
+        }
+    }
+    worst
+}
+
+/// The linear-kernel polish, in the primal: unknowns `(w, b, β_F)`.
+///
+/// With at least d + 1 free samples, `(w, b)` follows from their equations `xᵢ·w + b = yᵢ ∓ ε`
+/// alone — data of order 1, no β involved — and the residuals `yᵢ − xᵢ·w − b` are then exact
+/// to rounding. β_F comes from stationarity `Σ_F βᵢ xᵢ = w − Σ_U βᵢ xᵢ`, `Σ_F βᵢ = −Σ_U βᵢ`
+/// (minimum norm when underdetermined); its cancellation error is far below the C-relative
+/// tolerance it is checked with. With fewer free samples (moderate C), the full square system
+/// is solved at once.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn polish_linear(
+    x: &[f64],
+    dim: usize,
+    y: &[f64],
+    c: f64,
+    epsilon: f64,
+    mut sides: Vec<Side>,
+    max_rounds: usize,
+) -> Option<Polished> {
+    let n = y.len();
+    let d = dim;
+    let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let row = |i: usize| &x[i * d..(i + 1) * d];
+    for _round in 0..max_rounds.min(2 * n + 20) {
+        let free: Vec<usize> = (0..n)
+            .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
+            .collect();
+        let bound_beta = |i: usize| match sides[i] {
+            Side::Above => c,
+            Side::Below => -c,
+            _ => 0.0,
+        };
+        let target = |i: usize| {
+            if sides[i] == Side::UpperFree {
+                y[i] - epsilon
+            } else {
+                y[i] + epsilon
+            }
+        };
+        let bounded_sum: f64 = (0..n).map(bound_beta).sum();
+        let mut bounded_moment = vec![0.0; d];
+        for i in 0..n {
+            let bi = bound_beta(i);
+            if bi != 0.0 {
+                for (m, xk) in bounded_moment.iter_mut().zip(row(i)) {
+                    *m += bi * xk;
+                }
+            }
+        }
+        let (w, b, beta_free) =
+            if free.len() > d {
+                // (w, b) from the free samples' equations.
+                let a = nalgebra::DMatrix::from_fn(free.len(), d + 1, |r, col| {
+                    if col < d { row(free[r])[col] } else { 1.0 }
+                });
+                let t = nalgebra::DVector::from_fn(free.len(), |r, _| target(free[r]));
+                let svd = a.clone().svd(true, true);
+                let wb = svd.solve(&t, 1e-12 * svd.singular_values.max()).ok()?;
+                let w: Vec<f64> = wb.iter().take(d).copied().collect();
+                let b = wb[d];
+                // β_F: [x_F; 1]ᵀ β_F = [w − Σ_U βx; −Σ_U β], minimum norm.
+                let s = nalgebra::DMatrix::from_fn(d + 1, free.len(), |r, col| {
+                    if r < d { row(free[col])[r] } else { 1.0 }
+                });
+                let rhs = nalgebra::DVector::from_fn(d + 1, |r, _| {
+                    if r < d {
+                        w[r] - bounded_moment[r]
+                    } else {
+                        -bounded_sum
+                    }
+                });
+                let svd = s.svd(true, true);
+                let bf = svd.solve(&rhs, 1e-12 * svd.singular_values.max()).ok()?;
+                (w, b, bf.iter().copied().collect::<Vec<f64>>())
+            } else {
+                // Square system in (w, b, β_F).
+                let m = free.len();
+                let size = d + 1 + m;
+                let a = nalgebra::DMatrix::from_fn(size, size, |r, col| {
+                    if r < m {
+                        // xᵢ·w + b = tᵢ
+                        if col < d {
+                            row(free[r])[col]
+                        } else if col == d {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    } else if r < m + d {
+                        // w_k − Σ_F βᵢ x_ik = moment_k
+                        let k = r - m;
+                        if col == k {
+                            1.0
+                        } else if col > d {
+                            -row(free[col - d - 1])[k]
+                        } else {
+                            0.0
+                        }
+                    } else if col > d {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                });
+                let rhs = nalgebra::DVector::from_fn(size, |r, _| {
+                    if r < m {
+                        target(free[r])
+                    } else if r < m + d {
+                        bounded_moment[r - m]
+                    } else {
+                        -bounded_sum
+                    }
+                });
+                let sol = a.full_piv_lu().solve(&rhs)?;
+                (
+                    sol.iter().take(d).copied().collect(),
+                    sol[d],
+                    sol.iter().skip(d + 1).copied().collect(),
+                )
+            };
+        if !b.is_finite() || w.iter().chain(&beta_free).any(|v| !v.is_finite()) {
+            return None;
+        }
+        let mut beta: Vec<f64> = (0..n).map(bound_beta).collect();
+        for (&i, &bf) in free.iter().zip(&beta_free) {
+            beta[i] = bf;
+        }
+        let residuals: Vec<f64> = (0..n)
+            .map(|i| y[i] - row(i).iter().zip(&w).map(|(a, b)| a * b).sum::<f64>() - b)
+            .collect();
+        let wv = worst_violation(&sides, &beta, &residuals, c, epsilon, y_scale);
+        match wv {
+            Some((_, i, to)) if free.len() == d + 1 && matches!(to, Side::UpperFree | Side::LowerFree) => {
+                pivot(&mut sides, &beta, &free, i, to, c, |k| row(k))?;
+            }
+            Some((_, i, to)) => sides[i] = to,
+            None => {
+                for v in &mut beta {
+                    *v = v.clamp(-c, c);
+                }
+                return Some(Polished {
+                    beta,
+                    bias: b,
+                    weights: Some(w),
+                });
+            }
+        }
+    }
+    None
+}
+
+/// A sample enters a free set that already determines (w, b) (d + 1 samples): the simplex
+/// pivot. Its β moves off its bound along the one direction that keeps stationarity and
+/// Σβ = 0 (`δ_F = −A_F⁻¹ aᵢ` with `A_F = [x_F; 1]`), and the first free β to reach 0 or ±C
+/// leaves the free set (ratio test). Adding it without one leaving would make the free
+/// equations inconsistent and the active set cycle.
+fn pivot<'a>(
+    sides: &mut [Side],
+    beta: &[f64],
+    free: &[usize],
+    entering: usize,
+    to: Side,
+    c: f64,
+    row: impl Fn(usize) -> &'a [f64],
+) -> Option<()> {
+    let m = free.len();
+    let d = m - 1;
+    let a = nalgebra::DMatrix::from_fn(m, m, |r, col| if r < d { row(free[col])[r] } else { 1.0 });
+    let ai = nalgebra::DVector::from_fn(m, |r, _| if r < d { row(entering)[r] } else { 1.0 });
+    let delta = a.lu().solve(&(-ai))?;
+    // Direction of the entering β: off its current value into the side it is entering.
+    let sign = if to == Side::UpperFree { 1.0 } else { -1.0 };
+    let from_bound = matches!(sides[entering], Side::Above | Side::Below);
+    let s = if from_bound { -sign } else { sign };
+    let mut step = c;
+    let mut leaving: Option<(usize, Side)> = None;
+    for (r, &k) in free.iter().enumerate() {
+        let rate = s * delta[r];
+        let (lo, hi) = if sides[k] == Side::UpperFree {
+            (0.0, c)
+        } else {
+            (-c, 0.0)
+        };
+        let t = if rate > 0.0 {
+            (hi - beta[k]) / rate
+        } else if rate < 0.0 {
+            (lo - beta[k]) / rate
+        } else {
+            continue;
+        };
+        if t.max(0.0) < step {
+            step = t.max(0.0);
+            let hit_zero = (rate > 0.0 && hi == 0.0) || (rate < 0.0 && lo == 0.0);
+            let side = if hit_zero {
+                Side::Inside
+            } else if rate > 0.0 {
+                Side::Above
+            } else {
+                Side::Below
+            };
+            leaving = Some((k, side));
+        }
+    }
+    match leaving {
+        Some((k, side)) => {
+            sides[k] = side;
+            sides[entering] = to;
+        }
+        // The entering β crosses its whole range first: it moves to the other bound.
+        None => {
+            sides[entering] = match (from_bound, to) {
+                (true, _) => Side::Inside,
+                (false, Side::UpperFree) => Side::Above,
+                (false, _) => Side::Below,
+            };
+        }
+    }
+    Some(())
+}
+
+/// Solves the bordered system; when it is singular (more free samples than the kernel's rank
+/// plus one, as with a linear kernel), takes the minimum-norm least-squares solution and lets
+/// the KKT check judge it.
+fn solve_bordered(a: &Mat<f64>, rhs: &Mat<f64>) -> Option<Vec<f64>> {
+    let m = a.nrows();
+    let x = a.full_piv_lu().solve(rhs);
+    let scale = 1.0 + (0..m).fold(0.0f64, |acc, r| acc.max(rhs[(r, 0)].abs()));
+    let residual = (0..m).fold(0.0f64, |acc, r| {
+        let ax: f64 = (0..m).map(|col| a[(r, col)] * x[(col, 0)]).sum();
+        acc.max((ax - rhs[(r, 0)]).abs())
+    });
+    if (0..m).all(|r| x[(r, 0)].is_finite()) && residual <= 1e-10 * scale {
+        return Some((0..m).map(|r| x[(r, 0)]).collect());
+    }
+    let dense = nalgebra::DMatrix::from_fn(m, m, |r, col| a[(r, col)]);
+    let b = nalgebra::DVector::from_fn(m, |r, _| rhs[(r, 0)]);
+    let svd = dense.svd(true, true);
+    let cutoff = 1e-12 * svd.singular_values.max();
+    let x = svd.solve(&b, cutoff).ok()?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
+}
+
+/// How far a bounded sample's residual sits on the wrong side of its tube boundary.
+fn margin(y: &[f64], g: &[f64], i: usize, epsilon: f64) -> f64 {
+    (y[i] - g[i]).abs() - epsilon
+}
