@@ -1,7 +1,27 @@
-//! The haptic side of palpus.
+//! The haptic side of palpus: devices, the 1 kHz loop, control, force laws, the recorder, and
+//! the simulated world they are tested against.
 //!
-//! Today this crate holds the simulated world: ground-truth tissue, friction and surface physics
-//! seen through realistic sensor models, and the measurement protocols of the three papers that
-//! turn that world into captures. The same world later drives the simulated Omega.7.
+//! - [`device`]: one small device interface (CHAI3D's), a simulated Omega.7, the real one
+//!   through the vendor SDK, capture replay, HID pedals;
+//! - [`rt`]: absolute-deadline pacing, real-time scheduling, the rate monitor, the watchdog and
+//!   the loop itself (allocation-free per tick);
+//! - [`control`]: DOB and RFOB (Nakano ch. 2), PD + DOB motion control, admittance rendering
+//!   (Li & Bi Fig. 11), the rubbing controller (Nakano Table 3.1);
+//! - [`law`]: force laws over identified models (needle puncture, hard and soft friction);
+//! - [`safety`]: force limits, the NaN guard, the force gate;
+//! - [`recorder`]: samples to capture files through a lock-free ring;
+//! - [`acquire`]: the protocols `palpus capture` runs through a device;
+//! - [`sim`]: the ground-truth world, the papers' protocols, the simulated hand.
 
+pub mod acquire;
+pub mod control;
+pub mod device;
+pub mod law;
+pub mod recorder;
+pub mod rt;
+pub mod safety;
 pub mod sim;
+
+pub use device::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
+pub use rt::{Controller, HapticSample, LoopConfig, LoopError, LoopHandle, RateStats, TickInput, TickOutput};
+pub use safety::{ForceGate, ForceOverride, SafetyFilter};

@@ -1,4 +1,5 @@
-//! Simulation: the ground-truth world and the protocols that measure it.
+//! Simulation: the ground-truth world, the protocols that measure it, and the operator's hand.
 
+pub mod hand;
 pub mod protocols;
 pub mod world;

@@ -192,12 +192,15 @@ pub struct NeedleForce {
 impl NeedleSite {
     /// A fresh, intact insertion site.
     pub fn new(tissue: NeedleTissue) -> Self {
+        // At most one puncture per membrane: reserving them now keeps `step` allocation-free,
+        // so a site can live on the haptic thread (the simulated Omega.7).
+        let punctures = Vec::with_capacity(tissue.membranes.len());
         Self {
             tissue,
             punctured: 0,
             cut_depth_m: 0.0,
             friction_n: 0.0,
-            punctures: Vec::new(),
+            punctures,
         }
     }
 

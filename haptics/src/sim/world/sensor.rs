@@ -142,45 +142,9 @@ impl LowPass {
     }
 }
 
-/// Pseudo-differentiation of a measured position (Li & Bi Eq. 13): `v(z) = (z - 1) / ((T + τ) z
-/// - τ) · x(z)`, i.e. the backward difference through a first-order filter of time constant τ.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PseudoDifferentiator {
-    period_s: f64,
-    tau_s: f64,
-    previous_position_m: Option<f64>,
-    velocity_mps: f64,
-}
-
-impl PseudoDifferentiator {
-    /// A differentiator sampled every `period_s` with time constant `tau_s`.
-    pub fn new(period_s: f64, tau_s: f64) -> Self {
-        Self {
-            period_s,
-            tau_s,
-            previous_position_m: None,
-            velocity_mps: 0.0,
-        }
-    }
-
-    /// Starts from a known velocity (a rig that was already moving when logging began).
-    pub fn with_initial_velocity(mut self, velocity_mps: f64) -> Self {
-        self.velocity_mps = velocity_mps;
-        self
-    }
-
-    /// Feeds one position sample, returns the velocity estimate.
-    ///
-    /// From Eq. 13: `(T + τ) v[k] - τ v[k-1] = x[k] - x[k-1]`.
-    pub fn update(&mut self, position_m: f64) -> f64 {
-        if let Some(previous) = self.previous_position_m {
-            self.velocity_mps =
-                (position_m - previous + self.tau_s * self.velocity_mps) / (self.period_s + self.tau_s);
-        }
-        self.previous_position_m = Some(position_m);
-        self.velocity_mps
-    }
-}
+/// Pseudo-differentiation of a measured position (Li & Bi Eq. 13); the identification side
+/// owns it, since captures without a velocity column are differentiated there too.
+pub use identify::signal::PseudoDifferentiator;
 
 #[cfg(test)]
 mod tests {

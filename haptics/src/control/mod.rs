@@ -1,0 +1,12 @@
+//! Control: observers (DOB, RFOB), acceleration-based motion and force control, admittance
+//! rendering, and the rubbing controller.
+
+pub mod admittance;
+pub mod motion;
+pub mod observer;
+pub mod rubbing;
+
+pub use admittance::{Admittance, AdmittanceConfig};
+pub use motion::{AccelerationControl, MotionGains, OMEGA7_INTERNAL};
+pub use observer::{DisturbanceObserver, InternalForces, Observed, Observers3, ReactionForceObserver};
+pub use rubbing::{RubbingController, RubbingPhase, RubbingPlan};

@@ -1,0 +1,568 @@
+//! The real Omega.7 through Force Dimension's SDK (`libdhd`), loaded at run time.
+//!
+//! As in CHAI3D's `CDeltaDevices.cpp`, the library is opened with the dynamic loader and each
+//! function is looked up by name; every lookup has an availability flag, so a library that
+//! lacks an optional function (the gripper on an omega.3, the button mask) still works and a
+//! missing required one is a typed error naming it. Forces are off until
+//! [`HapticDevice::enable_forces`] turns them on.
+//!
+//! The functions are the SDK's C API (`dhdc.h`), called with the C calling convention; the
+//! trailing `char ID` argument is the id `dhdOpen` returned.
+
+use std::ffi::{CStr, c_char, c_int, c_uchar};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::DVec3;
+
+use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
+use crate::safety::ForceOverride;
+
+/// Environment variable naming the library file to load instead of the default search.
+pub const LIBRARY_ENV: &str = "PALPUS_DHD_LIBRARY";
+
+/// File names tried, in order, through the dynamic loader's search path.
+pub const LIBRARY_NAMES: [&str; 2] = ["libdhd.so", "libdhd.so.3"];
+
+/// Force Dimension's USB vendor id.
+pub const FORCE_DIMENSION_VENDOR_ID: u16 = 0x1451;
+
+type GetDeviceCount = unsafe extern "C" fn() -> c_int;
+type Open = unsafe extern "C" fn() -> c_int;
+type Close = unsafe extern "C" fn(c_char) -> c_int;
+type GetVec3 = unsafe extern "C" fn(*mut f64, *mut f64, *mut f64, c_char) -> c_int;
+type GetGripperGap = unsafe extern "C" fn(*mut f64, c_char) -> c_int;
+type SetForceTorqueGripper = unsafe extern "C" fn(f64, f64, f64, f64, f64, f64, f64, c_char) -> c_int;
+type EnableForce = unsafe extern "C" fn(c_uchar, c_char) -> c_int;
+type GetSdkVersion = unsafe extern "C" fn(*mut c_int, *mut c_int, *mut c_int, *mut c_int);
+type GetButtonMask = unsafe extern "C" fn(c_char) -> c_int;
+type GetTime = unsafe extern "C" fn() -> f64;
+type ErrorGetLastStr = unsafe extern "C" fn() -> *const c_char;
+type GetSystemName = unsafe extern "C" fn(c_char) -> *const c_char;
+
+/// The SDK's functions, each present or not.
+#[derive(Debug, Clone, Copy, Default)]
+struct Functions {
+    get_device_count: Option<GetDeviceCount>,
+    open: Option<Open>,
+    close: Option<Close>,
+    get_position: Option<GetVec3>,
+    get_linear_velocity: Option<GetVec3>,
+    get_gripper_gap: Option<GetGripperGap>,
+    set_force_torque_gripper: Option<SetForceTorqueGripper>,
+    enable_force: Option<EnableForce>,
+    get_sdk_version: Option<GetSdkVersion>,
+    get_button_mask: Option<GetButtonMask>,
+    get_time: Option<GetTime>,
+    error_get_last_str: Option<ErrorGetLastStr>,
+    get_system_name: Option<GetSystemName>,
+}
+
+/// The SDK's functions palpus looks up, and whether each is required.
+pub const SYMBOLS: [(&str, bool); 13] = [
+    ("dhdGetDeviceCount", false),
+    ("dhdOpen", true),
+    ("dhdClose", true),
+    ("dhdGetPosition", true),
+    ("dhdGetLinearVelocity", true),
+    ("dhdGetGripperGap", false),
+    ("dhdSetForceAndTorqueAndGripperForce", true),
+    ("dhdEnableForce", true),
+    ("dhdGetSDKVersion", false),
+    ("dhdGetButtonMask", false),
+    ("dhdGetTime", false),
+    ("dhdErrorGetLastStr", false),
+    ("dhdGetSystemName", false),
+];
+
+/// The loaded SDK.
+pub struct DhdLibrary {
+    path: PathBuf,
+    functions: Functions,
+    // Keeps the code behind `functions` mapped; declared last so it is dropped last.
+    _library: libloading::Library,
+}
+
+impl std::fmt::Debug for DhdLibrary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DhdLibrary")
+            .field("path", &self.path)
+            .field("available", &self.available())
+            .finish_non_exhaustive()
+    }
+}
+
+/// The SDK's version.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SdkVersion {
+    /// Major.
+    pub major: i32,
+    /// Minor.
+    pub minor: i32,
+    /// Release.
+    pub release: i32,
+    /// Revision.
+    pub revision: i32,
+}
+
+impl std::fmt::Display for SdkVersion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}.{}.{}.{}",
+            self.major, self.minor, self.release, self.revision
+        )
+    }
+}
+
+/// Reads a symbol of type `T` if the library has it.
+///
+/// # Safety
+/// `T` must be the exact function-pointer type of the C function named `name`.
+unsafe fn lookup<T: Copy>(library: &libloading::Library, name: &str) -> Option<T> {
+    // SAFETY: the caller guarantees `T` matches the symbol's type; the copied pointer stays
+    // valid while `library` is loaded, which `DhdLibrary` guarantees by owning it.
+    unsafe { library.get::<T>(name.as_bytes()).ok().map(|s| *s) }
+}
+
+impl DhdLibrary {
+    /// Loads the SDK: `explicit` if given, else the file named by `PALPUS_DHD_LIBRARY`, else
+    /// `libdhd.so` and `libdhd.so.3` through the loader's search path.
+    pub fn load(explicit: Option<&Path>) -> Result<Self, DeviceError> {
+        let env = std::env::var_os(LIBRARY_ENV).map(PathBuf::from);
+        let candidates: Vec<PathBuf> = match explicit.map(Path::to_path_buf).or(env) {
+            Some(path) => vec![path],
+            None => LIBRARY_NAMES.iter().map(PathBuf::from).collect(),
+        };
+        let mut tried = Vec::new();
+        for candidate in candidates {
+            // SAFETY: loading a shared library runs its initialisers; libdhd's (or a library
+            // the user pointed us to as libdhd) are trusted like any linked dependency.
+            match unsafe { libloading::Library::new(&candidate) } {
+                Ok(library) => return Self::from_library(library, candidate),
+                Err(e) => tried.push(format!("{}: {e}", candidate.display())),
+            }
+        }
+        Err(DeviceError::SdkMissing {
+            tried: tried.join("; "),
+        })
+    }
+
+    fn from_library(library: libloading::Library, path: PathBuf) -> Result<Self, DeviceError> {
+        // SAFETY (every lookup below): each type alias is the C prototype of that function
+        // in Force Dimension's dhdc.h (SDK 3.x), with `char ID` as c_char and `uchar` as
+        // c_uchar.
+        let functions = unsafe {
+            Functions {
+                get_device_count: lookup(&library, "dhdGetDeviceCount"),
+                open: lookup(&library, "dhdOpen"),
+                close: lookup(&library, "dhdClose"),
+                get_position: lookup(&library, "dhdGetPosition"),
+                get_linear_velocity: lookup(&library, "dhdGetLinearVelocity"),
+                get_gripper_gap: lookup(&library, "dhdGetGripperGap"),
+                set_force_torque_gripper: lookup(&library, "dhdSetForceAndTorqueAndGripperForce"),
+                enable_force: lookup(&library, "dhdEnableForce"),
+                get_sdk_version: lookup(&library, "dhdGetSDKVersion"),
+                get_button_mask: lookup(&library, "dhdGetButtonMask"),
+                get_time: lookup(&library, "dhdGetTime"),
+                error_get_last_str: lookup(&library, "dhdErrorGetLastStr"),
+                get_system_name: lookup(&library, "dhdGetSystemName"),
+            }
+        };
+        let lib = Self {
+            path,
+            functions,
+            _library: library,
+        };
+        for (name, required) in SYMBOLS {
+            if required && !lib.has(name) {
+                return Err(DeviceError::SymbolMissing {
+                    library: lib.path.display().to_string(),
+                    symbol: name,
+                });
+            }
+        }
+        Ok(lib)
+    }
+
+    /// The file loaded.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Whether the library exports `symbol` (one of [`SYMBOLS`]).
+    pub fn has(&self, symbol: &str) -> bool {
+        let f = &self.functions;
+        match symbol {
+            "dhdGetDeviceCount" => f.get_device_count.is_some(),
+            "dhdOpen" => f.open.is_some(),
+            "dhdClose" => f.close.is_some(),
+            "dhdGetPosition" => f.get_position.is_some(),
+            "dhdGetLinearVelocity" => f.get_linear_velocity.is_some(),
+            "dhdGetGripperGap" => f.get_gripper_gap.is_some(),
+            "dhdSetForceAndTorqueAndGripperForce" => f.set_force_torque_gripper.is_some(),
+            "dhdEnableForce" => f.enable_force.is_some(),
+            "dhdGetSDKVersion" => f.get_sdk_version.is_some(),
+            "dhdGetButtonMask" => f.get_button_mask.is_some(),
+            "dhdGetTime" => f.get_time.is_some(),
+            "dhdErrorGetLastStr" => f.error_get_last_str.is_some(),
+            "dhdGetSystemName" => f.get_system_name.is_some(),
+            _ => false,
+        }
+    }
+
+    /// Every looked-up symbol with its availability.
+    pub fn available(&self) -> Vec<(&'static str, bool)> {
+        SYMBOLS.iter().map(|&(name, _)| (name, self.has(name))).collect()
+    }
+
+    /// The SDK version, if the library reports it.
+    pub fn sdk_version(&self) -> Option<SdkVersion> {
+        let f = self.functions.get_sdk_version?;
+        let (mut major, mut minor, mut release, mut revision) = (0, 0, 0, 0);
+        // SAFETY: four valid, writable c_int locations that outlive the call.
+        unsafe { f(&mut major, &mut minor, &mut release, &mut revision) };
+        Some(SdkVersion {
+            major,
+            minor,
+            release,
+            revision,
+        })
+    }
+
+    /// Number of Force Dimension devices connected, if the library can tell.
+    pub fn device_count(&self) -> Option<i32> {
+        let f = self.functions.get_device_count?;
+        // SAFETY: no arguments; the SDK returns a count or −1.
+        Some(unsafe { f() })
+    }
+
+    /// The SDK's description of its last error.
+    pub fn last_error(&self) -> Option<String> {
+        let f = self.functions.error_get_last_str?;
+        // SAFETY: the SDK returns null or a pointer to a NUL-terminated static string.
+        unsafe {
+            let p = f();
+            (!p.is_null()).then(|| CStr::from_ptr(p).to_string_lossy().into_owned())
+        }
+    }
+}
+
+/// An open Omega.7.
+#[derive(Debug)]
+pub struct Omega7 {
+    lib: Arc<DhdLibrary>,
+    specs: DeviceSpecs,
+    system: String,
+    id: c_int,
+    override_: Arc<DhdOverride>,
+    clock_start_s: Option<f64>,
+    open: bool,
+}
+
+/// The watchdog's path to the device: scales the last command and sends it from the watchdog
+/// thread. The SDK serialises calls per device internally, so this is safe beside the haptic
+/// thread (which is stalled whenever this is used).
+#[derive(Debug)]
+pub struct DhdOverride {
+    lib: Arc<DhdLibrary>,
+    gate: crate::safety::ForceGate,
+    id: AtomicU64,
+}
+
+impl ForceOverride for DhdOverride {
+    fn set_force_scale(&self, scale: f64) {
+        self.gate.set_force_scale(scale);
+        let c = self.gate.applied();
+        let id = self.id.load(Ordering::Relaxed) as c_char;
+        if let Some(f) = self.lib.functions.set_force_torque_gripper {
+            // SAFETY: plain doubles and the device id, per dhdc.h.
+            unsafe {
+                f(
+                    c.force_n.x,
+                    c.force_n.y,
+                    c.force_n.z,
+                    0.0,
+                    0.0,
+                    0.0,
+                    c.gripper_force_n,
+                    id,
+                )
+            };
+        }
+    }
+
+    fn force_scale(&self) -> f64 {
+        self.gate.force_scale()
+    }
+}
+
+impl Omega7 {
+    /// Loads the SDK (see [`DhdLibrary::load`]) and opens the first device.
+    pub fn open(library: Option<&Path>) -> Result<Self, DeviceError> {
+        Self::open_with(Arc::new(DhdLibrary::load(library)?))
+    }
+
+    /// Opens the first device through an already loaded SDK.
+    pub fn open_with(lib: Arc<DhdLibrary>) -> Result<Self, DeviceError> {
+        if lib.device_count() == Some(0) {
+            return Err(DeviceError::NoDevice {
+                detail: "the SDK sees no Force Dimension device".into(),
+            });
+        }
+        let open = lib.functions.open.ok_or(DeviceError::SymbolMissing {
+            library: lib.path.display().to_string(),
+            symbol: "dhdOpen",
+        })?;
+        // SAFETY: no arguments; returns a device id ≥ 0 or −1.
+        let id = unsafe { open() };
+        if id < 0 {
+            return Err(DeviceError::NoDevice {
+                detail: lib
+                    .last_error()
+                    .unwrap_or_else(|| format!("dhdOpen returned {id}")),
+            });
+        }
+        let system = lib
+            .functions
+            .get_system_name
+            .and_then(|f| {
+                // SAFETY: returns null or a NUL-terminated static string.
+                unsafe {
+                    let p = f(id as c_char);
+                    (!p.is_null()).then(|| CStr::from_ptr(p).to_string_lossy().into_owned())
+                }
+            })
+            .unwrap_or_else(|| "omega.7".into());
+        let override_ = Arc::new(DhdOverride {
+            lib: lib.clone(),
+            gate: crate::safety::ForceGate::new(),
+            id: AtomicU64::new(id as u64),
+        });
+        let mut device = Self {
+            lib,
+            specs: DeviceSpecs::OMEGA7,
+            system,
+            id,
+            override_,
+            clock_start_s: None,
+            open: true,
+        };
+        // Forces stay off until the loop enables them.
+        device.enable_forces(false)?;
+        Ok(device)
+    }
+
+    /// The device's name as the SDK reports it.
+    pub fn system_name(&self) -> &str {
+        &self.system
+    }
+
+    /// The loaded SDK.
+    pub fn library(&self) -> &Arc<DhdLibrary> {
+        &self.lib
+    }
+
+    fn check(&self, call: &'static str, code: c_int) -> Result<(), DeviceError> {
+        if code < 0 {
+            Err(DeviceError::Call { call, code })
+        } else {
+            Ok(())
+        }
+    }
+
+    fn id(&self) -> c_char {
+        self.id as c_char
+    }
+}
+
+impl HapticDevice for Omega7 {
+    fn specs(&self) -> &DeviceSpecs {
+        &self.specs
+    }
+
+    fn name(&self) -> &str {
+        "omega7"
+    }
+
+    fn enable_forces(&mut self, enabled: bool) -> Result<(), DeviceError> {
+        if !self.open {
+            return Err(DeviceError::Closed);
+        }
+        let Some(f) = self.lib.functions.enable_force else {
+            return Err(DeviceError::Fault("dhdEnableForce missing"));
+        };
+        // SAFETY: a flag and the device id, per dhdc.h.
+        let code = unsafe { f(c_uchar::from(enabled), self.id()) };
+        self.check("dhdEnableForce", code)
+    }
+
+    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+        if !self.open {
+            return Err(DeviceError::Closed);
+        }
+        let f = &self.lib.functions;
+        let (mut px, mut py, mut pz) = (0.0, 0.0, 0.0);
+        let (mut vx, mut vy, mut vz) = (0.0, 0.0, 0.0);
+        let (Some(position), Some(velocity)) = (f.get_position, f.get_linear_velocity) else {
+            return Err(DeviceError::Fault("position functions missing"));
+        };
+        // SAFETY: three writable doubles each, and the device id, per dhdc.h.
+        let code = unsafe { position(&mut px, &mut py, &mut pz, self.id()) };
+        self.check("dhdGetPosition", code)?;
+        // SAFETY: as above.
+        let code = unsafe { velocity(&mut vx, &mut vy, &mut vz, self.id()) };
+        self.check("dhdGetLinearVelocity", code)?;
+        let mut gap = 0.0;
+        if let Some(g) = f.get_gripper_gap {
+            // SAFETY: one writable double and the device id.
+            let code = unsafe { g(&mut gap, self.id()) };
+            self.check("dhdGetGripperGap", code)?;
+        }
+        let buttons = f.get_button_mask.map_or(0, |b| {
+            // SAFETY: the device id; returns the mask.
+            let mask = unsafe { b(self.id()) };
+            u32::try_from(mask).unwrap_or(0)
+        });
+        let time_s = match f.get_time {
+            Some(t) => {
+                // SAFETY: no arguments; returns seconds.
+                let now = unsafe { t() };
+                now - *self.clock_start_s.get_or_insert(now)
+            }
+            None => 0.0,
+        };
+        Ok(DeviceState {
+            time_s,
+            position_m: DVec3::new(px, py, pz),
+            velocity_mps: DVec3::new(vx, vy, vz),
+            gripper_gap_m: gap,
+            buttons,
+        })
+    }
+
+    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+        if !self.open {
+            return Err(DeviceError::Closed);
+        }
+        let c = self.override_.gate.pass(command);
+        let Some(f) = self.lib.functions.set_force_torque_gripper else {
+            return Err(DeviceError::Fault("dhdSetForceAndTorqueAndGripperForce missing"));
+        };
+        // SAFETY: plain doubles and the device id, per dhdc.h.
+        let code = unsafe {
+            f(
+                c.force_n.x,
+                c.force_n.y,
+                c.force_n.z,
+                0.0,
+                0.0,
+                0.0,
+                c.gripper_force_n,
+                self.id(),
+            )
+        };
+        self.check("dhdSetForceAndTorqueAndGripperForce", code)
+    }
+
+    fn force_override(&self) -> Arc<dyn ForceOverride> {
+        self.override_.clone()
+    }
+
+    fn close(&mut self) -> Result<(), DeviceError> {
+        if !self.open {
+            return Ok(());
+        }
+        let zeroed = self.command(&ForceCommand::ZERO);
+        let disabled = self.enable_forces(false);
+        self.open = false;
+        if let Some(close) = self.lib.functions.close {
+            // SAFETY: the device id, per dhdc.h.
+            let code = unsafe { close(self.id()) };
+            self.check("dhdClose", code)?;
+        }
+        zeroed.and(disabled)
+    }
+}
+
+impl Drop for Omega7 {
+    fn drop(&mut self) {
+        // The device must never be left commanding a force.
+        let _ = self.close();
+    }
+}
+
+/// A Force Dimension device seen on the USB bus (Linux sysfs), whether or not the SDK is
+/// installed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UsbDevice {
+    /// The sysfs path.
+    pub path: PathBuf,
+    /// Product id.
+    pub product_id: u16,
+    /// Product string, if the device reports one.
+    pub product: Option<String>,
+}
+
+/// Force Dimension devices on the USB bus, from `/sys/bus/usb/devices` (empty where that does
+/// not exist).
+pub fn usb_devices() -> Vec<UsbDevice> {
+    usb_devices_under(Path::new("/sys/bus/usb/devices"))
+}
+
+fn usb_devices_under(root: &Path) -> Vec<UsbDevice> {
+    let Ok(entries) = std::fs::read_dir(root) else {
+        return Vec::new();
+    };
+    let read_hex = |p: PathBuf| {
+        std::fs::read_to_string(p)
+            .ok()
+            .and_then(|s| u16::from_str_radix(s.trim(), 16).ok())
+    };
+    let mut found: Vec<UsbDevice> = entries
+        .flatten()
+        .filter(|e| read_hex(e.path().join("idVendor")) == Some(FORCE_DIMENSION_VENDOR_ID))
+        .map(|e| UsbDevice {
+            product_id: read_hex(e.path().join("idProduct")).unwrap_or(0),
+            product: std::fs::read_to_string(e.path().join("product"))
+                .ok()
+                .map(|s| s.trim().to_owned()),
+            path: e.path(),
+        })
+        .collect();
+    found.sort_by(|a, b| a.path.cmp(&b.path));
+    found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_library_says_what_to_do() {
+        let e = DhdLibrary::load(Some(Path::new("/nonexistent/libdhd.so"))).unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, DeviceError::SdkMissing { .. }));
+        assert!(
+            text.contains("install the Force Dimension SDK or use --device sim"),
+            "{text}"
+        );
+        assert!(text.contains("/nonexistent/libdhd.so"), "{text}");
+    }
+
+    #[test]
+    fn usb_scan_finds_force_dimension_devices_only() {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, vendor, product) in [("1-1", "1451", "0402"), ("1-2", "046d", "c52b")] {
+            let d = dir.path().join(name);
+            std::fs::create_dir(&d).unwrap();
+            std::fs::write(d.join("idVendor"), format!("{vendor}\n")).unwrap();
+            std::fs::write(d.join("idProduct"), format!("{product}\n")).unwrap();
+        }
+        let found = usb_devices_under(dir.path());
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].product_id, 0x0402);
+        assert!(usb_devices_under(Path::new("/nonexistent")).is_empty());
+    }
+}

@@ -1,0 +1,198 @@
+//! Playback of a capture as a device (HAPI's playback device): the loop sees the recorded
+//! positions and velocities at the capture's own rate, whatever its own rate is, and the
+//! commanded forces go nowhere.
+//!
+//! Axes: an insertion capture's `depth_m` is played along −z (the needle points down); a
+//! rubbing capture's `tangential_position_m` along x and `normal_position_m` (if present) along
+//! z. Between samples positions are interpolated linearly; velocities come from the capture's
+//! velocity column when it has one, else from the interpolation's slope.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use identify::capture::{Capture, CaptureKind};
+
+use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
+use crate::safety::{ForceGate, ForceOverride};
+
+/// A capture played back.
+#[derive(Debug)]
+pub struct ReplayDevice {
+    specs: DeviceSpecs,
+    time_s: Vec<f64>,
+    position_m: Vec<DVec3>,
+    velocity_mps: Option<Vec<DVec3>>,
+    period_s: f64,
+    tick: u64,
+    cursor: usize,
+    gate: Arc<ForceGate>,
+    closed: bool,
+}
+
+impl ReplayDevice {
+    /// Plays `capture`, read every `period_s` seconds of loop time.
+    pub fn new(capture: &Capture, period_s: f64) -> Result<Self, DeviceError> {
+        let bad = |reason: &str| DeviceError::BadReplay {
+            source_name: capture.source().display().to_string(),
+            reason: reason.to_owned(),
+        };
+        if !(period_s.is_finite() && period_s > 0.0) {
+            return Err(bad("the loop period must be positive"));
+        }
+        let column = |name: &str| capture.column(name).ok();
+        let n = capture.len();
+        let zeros = vec![0.0; n];
+        type Axes<'a> = (&'a [f64], &'a [f64], Option<&'a [f64]>, Option<&'a [f64]>);
+        let (x, z, vx, vz): Axes<'_> = match capture.metadata().kind() {
+            CaptureKind::Insertion => {
+                let depth = column("depth_m").ok_or_else(|| bad("no depth_m column"))?;
+                (&zeros, depth, None, column("velocity_mps"))
+            }
+            CaptureKind::Rubbing => {
+                let x =
+                    column("tangential_position_m").ok_or_else(|| bad("no tangential_position_m column"))?;
+                (
+                    x,
+                    column("normal_position_m").unwrap_or(&zeros),
+                    column("tangential_velocity_mps"),
+                    None,
+                )
+            }
+        };
+        let insertion = capture.metadata().kind() == CaptureKind::Insertion;
+        let sign_z = if insertion { -1.0 } else { 1.0 };
+        let position_m = (0..n).map(|i| DVec3::new(x[i], 0.0, sign_z * z[i])).collect();
+        let velocity_mps = match (vx, vz) {
+            (Some(vx), _) => Some((0..n).map(|i| DVec3::new(vx[i], 0.0, 0.0)).collect()),
+            (None, Some(vz)) => Some((0..n).map(|i| DVec3::new(0.0, 0.0, sign_z * vz[i])).collect()),
+            (None, None) => None,
+        };
+        let t0 = capture.time()[0];
+        Ok(Self {
+            specs: DeviceSpecs::OMEGA7,
+            time_s: capture.time().iter().map(|t| t - t0).collect(),
+            position_m,
+            velocity_mps,
+            period_s,
+            tick: 0,
+            cursor: 0,
+            gate: Arc::new(ForceGate::new()),
+            closed: false,
+        })
+    }
+
+    /// Length of the recording, s.
+    pub fn duration_s(&self) -> f64 {
+        self.time_s.last().copied().unwrap_or(0.0)
+    }
+}
+
+impl HapticDevice for ReplayDevice {
+    fn specs(&self) -> &DeviceSpecs {
+        &self.specs
+    }
+
+    fn name(&self) -> &str {
+        "replay"
+    }
+
+    fn enable_forces(&mut self, _enabled: bool) -> Result<(), DeviceError> {
+        Ok(())
+    }
+
+    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+        if self.closed {
+            return Err(DeviceError::Closed);
+        }
+        let t = self.tick as f64 * self.period_s;
+        let n = self.time_s.len();
+        if n == 0 || t > self.time_s[n - 1] {
+            return Err(DeviceError::EndOfReplay);
+        }
+        while self.cursor + 1 < n && self.time_s[self.cursor + 1] <= t {
+            self.cursor += 1;
+        }
+        let i = self.cursor;
+        let (position_m, slope) = match (self.time_s.get(i + 1), self.position_m.get(i + 1)) {
+            (Some(&t1), Some(&p1)) => {
+                let (t0, p0) = (self.time_s[i], self.position_m[i]);
+                let u = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+                (p0 + (p1 - p0) * u, (p1 - p0) / (t1 - t0))
+            }
+            _ => (self.position_m[i], DVec3::ZERO),
+        };
+        let velocity_mps = self.velocity_mps.as_ref().map_or(slope, |v| v[i]);
+        Ok(DeviceState {
+            time_s: t,
+            position_m,
+            velocity_mps,
+            gripper_gap_m: 0.0,
+            buttons: 0,
+        })
+    }
+
+    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+        if self.closed {
+            return Err(DeviceError::Closed);
+        }
+        self.gate.pass(command);
+        self.tick += 1;
+        Ok(())
+    }
+
+    fn force_override(&self) -> Arc<dyn ForceOverride> {
+        self.gate.clone()
+    }
+
+    fn close(&mut self) -> Result<(), DeviceError> {
+        self.closed = true;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rt::{self, LoopConfig, LoopIo, Pacing, RtRequest, StopReason, ZeroForce};
+    use identify::capture::Metadata;
+
+    #[test]
+    fn plays_at_the_recorded_rate_and_ends_cleanly() {
+        // 100 Hz insertion capture: depth goes 0 → 9.9 mm over 0.99 s.
+        let n = 100;
+        let time: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+        let depth: Vec<f64> = (0..n).map(|i| i as f64 * 1e-4).collect();
+        let force = vec![0.0; n];
+        let capture = Capture::new(
+            Metadata::new(CaptureKind::Insertion, "sim", 100.0),
+            vec!["time_s".into(), "depth_m".into(), "axial_force_n".into()],
+            vec![time, depth, force],
+        )
+        .unwrap();
+        let mut device = ReplayDevice::new(&capture, 1e-3).unwrap();
+        assert!((device.duration_s() - 0.99).abs() < 1e-12);
+        // At 1 kHz, tick 505 is t = 0.505 s: depth 5.05 mm, interpolated, along −z.
+        for _ in 0..505 {
+            device.read_state().unwrap();
+            device.command(&ForceCommand::ZERO).unwrap();
+        }
+        let s = device.read_state().unwrap();
+        assert!((s.position_m.z + 0.00505).abs() < 1e-12, "{}", s.position_m.z);
+        assert!((s.velocity_mps.z + 0.01).abs() < 1e-12);
+        // Through the loop, unpaced: it ends by itself after 0.99 s of loop time.
+        let device = ReplayDevice::new(&capture, 1e-3).unwrap();
+        let config = LoopConfig {
+            pacing: Pacing::Unpaced,
+            rt: RtRequest::NONE,
+            watchdog: None,
+            ..LoopConfig::default()
+        };
+        let outcome = rt::spawn(device, ZeroForce, LoopIo::default(), config)
+            .unwrap()
+            .join()
+            .unwrap();
+        let summary = outcome.result.unwrap();
+        assert_eq!(summary.reason, StopReason::EndOfStream);
+        assert!((990..=991).contains(&summary.ticks), "{}", summary.ticks);
+    }
+}

@@ -1,0 +1,327 @@
+//! The recorder: samples from the haptic thread to a capture file, without the haptic thread
+//! ever waiting.
+//!
+//! The haptic thread pushes [`HapticSample`]s into a bounded SPSC ring (`rtrb`); when the ring
+//! is full the sample is dropped and counted ([`crate::rt::RateStats::dropped_samples`]) rather
+//! than blocking a tick. A recorder thread drains the ring, turns each sample into a capture
+//! row through a mapping chosen by the caller, writes it with the strict [`CaptureWriter`], and
+//! flushes to the file at least every [`RecorderConfig::flush_interval`] (≤ 100 ms).
+//!
+//! Crash safety: after a flush every row written so far is in the file as whole lines. A
+//! process killed between flushes may leave the rows written since the last flush partly in
+//! the file — the writer's buffer can spill to the file on its own when it fills — so the
+//! last line of a killed recording may be cut. [`read_recording`] reads such a file: every
+//! whole row, and a cut last line reported, not treated as an error.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use identify::capture::{CaptureError, CaptureErrorKind, CaptureReader, CaptureWriter, Metadata};
+
+use crate::rt::HapticSample;
+
+/// Recorder settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RecorderConfig {
+    /// Ring capacity in samples (4096: four seconds at 1 kHz before anything is dropped).
+    pub capacity: usize,
+    /// Longest time between flushes to the file (at most 100 ms).
+    pub flush_interval: Duration,
+}
+
+impl Default for RecorderConfig {
+    fn default() -> Self {
+        Self {
+            capacity: 4096,
+            flush_interval: Duration::from_millis(50),
+        }
+    }
+}
+
+/// Counters the recorder thread updates, readable from anywhere.
+#[derive(Debug, Default)]
+pub struct RecorderStats {
+    written: AtomicU64,
+    flushed: AtomicU64,
+    rejected: AtomicU64,
+    flushes: AtomicU64,
+}
+
+impl RecorderStats {
+    /// Rows accepted by the writer.
+    pub fn rows_written(&self) -> u64 {
+        self.written.load(Ordering::Acquire)
+    }
+
+    /// Rows known to be in the file (as of the last flush).
+    pub fn rows_flushed(&self) -> u64 {
+        self.flushed.load(Ordering::Acquire)
+    }
+
+    /// Samples the writer rejected (non-finite values, time not increasing).
+    pub fn rows_rejected(&self) -> u64 {
+        self.rejected.load(Ordering::Acquire)
+    }
+
+    /// Flushes done.
+    pub fn flushes(&self) -> u64 {
+        self.flushes.load(Ordering::Acquire)
+    }
+}
+
+/// Turns a sample into a capture row (`row` is cleared before the call); returns false to skip
+/// the sample (e.g. outside the protocol's recording phase).
+pub trait RowMap: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static {}
+impl<F: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static> RowMap for F {}
+
+/// What the recorder did.
+#[derive(Debug)]
+pub struct RecorderSummary {
+    /// Rows in the file.
+    pub rows: u64,
+    /// Samples rejected by the writer.
+    pub rejected: u64,
+    /// The first rejection, if any.
+    pub first_rejection: Option<CaptureError>,
+}
+
+/// Why recording failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RecorderError {
+    /// The file could not be created.
+    #[error("cannot create {}", path.display())]
+    Create {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Writing failed (I/O), or no sample was recorded.
+    #[error(transparent)]
+    Capture(#[from] CaptureError),
+    /// The recorder thread could not be started.
+    #[error("cannot start the recorder thread")]
+    Spawn(#[source] std::io::Error),
+    /// The recorder thread panicked.
+    #[error("the recorder thread panicked")]
+    Panicked,
+}
+
+/// A running recorder thread.
+#[derive(Debug)]
+pub struct Recorder<W: Write + Send + 'static> {
+    stats: Arc<RecorderStats>,
+    stop: Arc<AtomicBool>,
+    thread: JoinHandle<Result<(W, RecorderSummary), RecorderError>>,
+}
+
+/// Creates `path` (replacing it) and starts recording into it; returns the ring's producer for
+/// the haptic loop and the recorder.
+pub fn record_to_file(
+    path: &Path,
+    meta: &Metadata,
+    columns: &[&str],
+    map: impl RowMap,
+    config: RecorderConfig,
+) -> Result<(rtrb::Producer<HapticSample>, Recorder<File>), RecorderError> {
+    let file = File::create(path).map_err(|source| RecorderError::Create {
+        path: path.to_owned(),
+        source,
+    })?;
+    let writer = CaptureWriter::with_source(file, path, meta, columns)?;
+    Recorder::spawn(writer, map, config)
+}
+
+impl<W: Write + Send + 'static> Recorder<W> {
+    /// Starts a recorder thread writing through `writer`.
+    pub fn spawn(
+        mut writer: CaptureWriter<W>,
+        mut map: impl RowMap,
+        config: RecorderConfig,
+    ) -> Result<(rtrb::Producer<HapticSample>, Self), RecorderError> {
+        let (producer, mut consumer) = rtrb::RingBuffer::new(config.capacity.max(1));
+        let stats = Arc::new(RecorderStats::default());
+        let stop = Arc::new(AtomicBool::new(false));
+        let (thread_stats, thread_stop) = (stats.clone(), stop.clone());
+        let interval = config.flush_interval.min(Duration::from_millis(100));
+        // The header is on disk before the first sample arrives.
+        writer.flush()?;
+        let thread = std::thread::Builder::new()
+            .name("recorder".into())
+            .spawn(move || {
+                let mut row = Vec::with_capacity(writer.columns().len());
+                let mut summary = RecorderSummary {
+                    rows: 0,
+                    rejected: 0,
+                    first_rejection: None,
+                };
+                let mut last_flush = Instant::now();
+                loop {
+                    let mut drained = 0;
+                    while let Ok(sample) = consumer.pop() {
+                        drained += 1;
+                        row.clear();
+                        if !map(&sample, &mut row) {
+                            continue;
+                        }
+                        match writer.write_row(&row) {
+                            Ok(()) => {
+                                summary.rows += 1;
+                                thread_stats.written.store(summary.rows, Ordering::Release);
+                            }
+                            Err(e) if matches!(e.kind, CaptureErrorKind::Io(_)) => return Err(e.into()),
+                            Err(e) => {
+                                summary.rejected += 1;
+                                thread_stats.rejected.store(summary.rejected, Ordering::Release);
+                                summary.first_rejection.get_or_insert(e);
+                            }
+                        }
+                        if drained % 256 == 0 && last_flush.elapsed() >= interval {
+                            break;
+                        }
+                    }
+                    let finished = consumer.is_empty()
+                        && (thread_stop.load(Ordering::Acquire) || consumer.is_abandoned());
+                    if last_flush.elapsed() >= interval || finished {
+                        writer.flush()?;
+                        last_flush = Instant::now();
+                        thread_stats.flushed.store(summary.rows, Ordering::Release);
+                        thread_stats.flushes.fetch_add(1, Ordering::AcqRel);
+                    }
+                    if finished {
+                        break;
+                    }
+                    if drained == 0 {
+                        std::thread::sleep(Duration::from_millis(2).min(interval));
+                    }
+                }
+                let inner = writer.finish()?;
+                Ok((inner, summary))
+            })
+            .map_err(RecorderError::Spawn)?;
+        Ok((producer, Self { stats, stop, thread }))
+    }
+
+    /// Live counters.
+    pub fn stats(&self) -> &Arc<RecorderStats> {
+        &self.stats
+    }
+
+    /// Drains what is left in the ring, finishes the file and returns the underlying writer.
+    /// Call after the haptic loop has stopped (or drop its producer). Fails with
+    /// [`CaptureErrorKind::NoSamples`] when nothing was recorded.
+    pub fn finish(self) -> Result<(W, RecorderSummary), RecorderError> {
+        self.stop.store(true, Ordering::Release);
+        self.thread.join().map_err(|_| RecorderError::Panicked)?
+    }
+}
+
+/// A recording read back.
+#[derive(Debug)]
+pub struct Recording {
+    /// The metadata line.
+    pub metadata: Metadata,
+    /// Column names.
+    pub columns: Vec<String>,
+    /// Rows, in order.
+    pub rows: Vec<Vec<f64>>,
+    /// Whether the file ended in a cut line (the recording process died between flushes);
+    /// that line is not in `rows`.
+    pub truncated: bool,
+}
+
+/// Reads a recording that may have been cut short: every whole row, and whether a partial
+/// last line was dropped. Any other defect is an error, as for every capture.
+pub fn read_recording(path: &Path) -> Result<Recording, CaptureError> {
+    let file = File::open(path).map_err(|e| CaptureError::new(path, CaptureErrorKind::Io(e)))?;
+    read_recording_from(BufReader::new(file), path)
+}
+
+fn read_recording_from<R: BufRead>(inner: R, path: &Path) -> Result<Recording, CaptureError> {
+    let mut reader = CaptureReader::new(inner, path, None)?;
+    let mut rows = Vec::new();
+    let mut row = Vec::new();
+    let mut truncated = false;
+    loop {
+        match reader.read_row(&mut row) {
+            Ok(true) => rows.push(row.clone()),
+            Ok(false) => break,
+            Err(e) if matches!(e.kind, CaptureErrorKind::TruncatedLastLine) => {
+                truncated = true;
+                break;
+            }
+            Err(e) if matches!(e.kind, CaptureErrorKind::NoSamples) && rows.is_empty() => break,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(Recording {
+        metadata: reader.metadata().clone(),
+        columns: reader.columns().to_vec(),
+        rows,
+        truncated,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use identify::capture::CaptureKind;
+
+    fn meta() -> Metadata {
+        Metadata::new(CaptureKind::Insertion, "sim-omega7", 1000.0)
+    }
+
+    const COLUMNS: &[&str] = &["time_s", "depth_m", "axial_force_n"];
+
+    fn map(s: &HapticSample, row: &mut Vec<f64>) -> bool {
+        row.extend([s.time_s, s.state.position_m.z, s.channels[0]]);
+        s.tick.is_multiple_of(2)
+    }
+
+    #[test]
+    fn records_every_sample_the_map_keeps_and_counts_rejections() {
+        let writer = CaptureWriter::new(Vec::new(), &meta(), COLUMNS).unwrap();
+        let (mut producer, recorder) = Recorder::spawn(writer, map, RecorderConfig::default()).unwrap();
+        for tick in 0..1000u64 {
+            let mut s = HapticSample {
+                tick,
+                time_s: tick as f64 * 1e-3,
+                ..HapticSample::default()
+            };
+            if tick == 500 {
+                s.channels[0] = f64::NAN;
+            }
+            while producer.push(s).is_err() {
+                std::thread::yield_now();
+            }
+        }
+        drop(producer);
+        let (bytes, summary) = recorder.finish().unwrap();
+        assert_eq!(summary.rows, 499);
+        assert_eq!(summary.rejected, 1);
+        assert!(matches!(
+            summary.first_rejection.unwrap().kind,
+            CaptureErrorKind::NotFinite
+        ));
+        let text = String::from_utf8(bytes).unwrap();
+        assert_eq!(text.lines().count(), 2 + 499);
+    }
+
+    #[test]
+    fn a_cut_last_line_is_reported_not_fatal() {
+        let text = "# palpus-capture format=1 kind=insertion device=sim-omega7 rate_hz=1000 units=si\n\
+                    time_s,depth_m,axial_force_n\n0.0,0.0,0.0\n0.001,0.0,0.1\n0.002,0.0";
+        let r = read_recording_from(text.as_bytes(), Path::new("cut.csv")).unwrap();
+        assert_eq!(r.rows.len(), 2);
+        assert!(r.truncated);
+        let bad = "# palpus-capture format=1 kind=insertion device=sim-omega7 rate_hz=1000 units=si\n\
+                   time_s,depth_m,axial_force_n\n0.0,0.0,0.0\n0.0,0.0,0.1\n";
+        assert!(read_recording_from(bad.as_bytes(), Path::new("bad.csv")).is_err());
+    }
+}

@@ -1,0 +1,458 @@
+//! The haptic loop: read device → controller (observers, models, admittance) → safety → write
+//! force → hand the sample to the recorder and the live view.
+//!
+//! [`run`] is the loop itself, on the calling thread; [`spawn`] runs it on a thread of its own
+//! with a watchdog beside it. Inside a tick nothing allocates, locks, logs or touches a file:
+//! samples leave through a bounded SPSC ring (`rtrb`, dropped and counted when full, never
+//! waited on) and the newest state through a triple buffer (`triple_buffer`, the reader never
+//! blocks the writer), and all statistics are atomics ([`RateMonitor`]).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use super::monitor::{RateMonitor, RateStats};
+use super::pacer::{Pacer, Pacing};
+use super::sched::{self, RtRequest, RtStatus};
+use super::watchdog::{Heartbeat, Watchdog, WatchdogConfig};
+use crate::device::{DeviceError, DeviceState, ForceCommand, HapticDevice};
+use crate::safety::SafetyFilter;
+
+/// Controller-defined values carried with each sample (estimated forces, model outputs, …).
+pub const CHANNELS: usize = 8;
+
+/// One tick, as recorded and shown live.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HapticSample {
+    /// Tick number from 0.
+    pub tick: u64,
+    /// Loop time, `tick · period`, s.
+    pub time_s: f64,
+    /// What the device reported.
+    pub state: DeviceState,
+    /// What was sent to the device, after the safety filter.
+    pub command: ForceCommand,
+    /// Controller-defined values; their meaning is the controller's (see its docs).
+    pub channels: [f64; CHANNELS],
+    /// Safety and model flags ([`crate::safety::flag`]).
+    pub flags: u32,
+}
+
+/// What a controller sees each tick.
+#[derive(Debug, Clone, Copy)]
+pub struct TickInput<'a> {
+    /// Tick number from 0.
+    pub tick: u64,
+    /// Loop time, s.
+    pub time_s: f64,
+    /// Nominal period, s.
+    pub period_s: f64,
+    /// The device's state this tick.
+    pub state: &'a DeviceState,
+    /// The command actually sent last tick (after safety), e.g. for a disturbance observer.
+    pub applied: &'a ForceCommand,
+}
+
+/// What a controller returns each tick.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TickOutput {
+    /// Force to command (the safety filter follows).
+    pub command: ForceCommand,
+    /// Values to record (see [`HapticSample::channels`]).
+    pub channels: [f64; CHANNELS],
+    /// Flags to record ([`crate::safety::flag`]).
+    pub flags: u32,
+}
+
+/// The per-tick computation. Runs on the haptic thread: it must not allocate, lock, log or do
+/// I/O.
+pub trait Controller: Send {
+    /// Computes this tick's command.
+    fn tick(&mut self, input: &TickInput<'_>, output: &mut TickOutput);
+
+    /// True when a scripted controller (a capture protocol) is done; the loop then stops.
+    fn finished(&self) -> bool {
+        false
+    }
+}
+
+impl<C: Controller + ?Sized> Controller for Box<C> {
+    fn tick(&mut self, input: &TickInput<'_>, output: &mut TickOutput) {
+        (**self).tick(input, output);
+    }
+    fn finished(&self) -> bool {
+        (**self).finished()
+    }
+}
+
+/// A controller that commands no force (device read-out, replay, benchmarks of the bare loop).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ZeroForce;
+
+impl Controller for ZeroForce {
+    fn tick(&mut self, _: &TickInput<'_>, output: &mut TickOutput) {
+        output.command = ForceCommand::ZERO;
+    }
+}
+
+/// How the loop runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopConfig {
+    /// Tick rate, Hz.
+    pub rate_hz: f64,
+    /// Real-time deadlines, or as fast as possible for simulated devices.
+    pub pacing: Pacing,
+    /// Real-time scheduling to ask for.
+    pub rt: RtRequest,
+    /// Watchdog, or None (unpaced runs of a simulator).
+    pub watchdog: Option<WatchdogConfig>,
+    /// Stop after this many ticks.
+    pub max_ticks: Option<u64>,
+}
+
+impl Default for LoopConfig {
+    /// 1 kHz, real time, SCHED_FIFO if permitted, watchdog on.
+    fn default() -> Self {
+        Self {
+            rate_hz: 1000.0,
+            pacing: Pacing::REALTIME,
+            rt: RtRequest::default(),
+            watchdog: Some(WatchdogConfig::default()),
+            max_ticks: None,
+        }
+    }
+}
+
+impl LoopConfig {
+    /// The period, or an error for a rate that is not a positive finite number up to 100 kHz.
+    pub fn period(&self) -> Result<Duration, LoopError> {
+        if self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= 100_000.0 {
+            Ok(Duration::from_secs_f64(1.0 / self.rate_hz))
+        } else {
+            Err(LoopError::BadRate(self.rate_hz))
+        }
+    }
+}
+
+/// Where samples go.
+#[derive(Default)]
+pub struct LoopIo {
+    /// To the recorder (bounded SPSC ring).
+    pub samples: Option<rtrb::Producer<HapticSample>>,
+    /// Newest sample for the UI (triple buffer).
+    pub live: Option<triple_buffer::Input<HapticSample>>,
+}
+
+impl std::fmt::Debug for LoopIo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LoopIo")
+            .field("samples", &self.samples.is_some())
+            .field("live", &self.live.is_some())
+            .finish()
+    }
+}
+
+/// State shared between the haptic thread and everyone else; all of it lock-free.
+#[derive(Debug)]
+pub struct LoopShared {
+    /// Timing statistics.
+    pub monitor: RateMonitor,
+    /// Bumped every tick; watched by the watchdog.
+    pub heartbeat: Arc<Heartbeat>,
+    stop: AtomicBool,
+    rt_status: OnceLock<RtStatus>,
+}
+
+impl LoopShared {
+    /// Shared state for a loop of this period.
+    pub fn new(period: Duration) -> Self {
+        Self {
+            monitor: RateMonitor::new(period),
+            heartbeat: Arc::new(Heartbeat::new()),
+            stop: AtomicBool::new(false),
+            rt_status: OnceLock::new(),
+        }
+    }
+
+    /// Asks the loop to stop at its next tick.
+    pub fn request_stop(&self) {
+        self.stop.store(true, Ordering::Release);
+    }
+
+    /// What real-time scheduling the haptic thread got (once it has started).
+    pub fn rt_status(&self) -> Option<RtStatus> {
+        self.rt_status.get().copied()
+    }
+}
+
+/// Why the loop ended without error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// [`LoopShared::request_stop`] was called.
+    Requested,
+    /// [`LoopConfig::max_ticks`] reached.
+    TickLimit,
+    /// The controller's script ended.
+    ControllerFinished,
+    /// The device ran out of data (a replay).
+    EndOfStream,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunSummary {
+    /// Ticks run.
+    pub ticks: u64,
+    /// Why it stopped.
+    pub reason: StopReason,
+}
+
+/// Why the loop stopped on an error. In every case the device was sent zero force first.
+#[derive(Debug, thiserror::Error)]
+pub enum LoopError {
+    /// The device failed.
+    #[error("haptic device failed at tick {tick}; force set to zero")]
+    Device {
+        /// Tick at which it failed.
+        tick: u64,
+        /// The device's error.
+        #[source]
+        source: DeviceError,
+    },
+    /// The haptic thread stalled and the watchdog ramped the force to zero.
+    #[error(
+        "the haptic thread stalled for {stall:?} before tick {tick}; the watchdog ramped the force to zero"
+    )]
+    WatchdogTripped {
+        /// The first tick after the stall.
+        tick: u64,
+        /// How long the loop was silent.
+        stall: Duration,
+    },
+    /// The configured rate is unusable.
+    #[error("loop rate {0} Hz is not in (0, 100000]")]
+    BadRate(f64),
+    /// A thread could not be started.
+    #[error("cannot start the haptic or watchdog thread")]
+    Spawn(#[source] std::io::Error),
+    /// The haptic thread panicked (a bug); the device was dropped with it.
+    #[error("the haptic thread panicked")]
+    Panicked,
+}
+
+/// Runs the loop on the calling thread until stopped, finished or failed.
+///
+/// Opens the device's force gate and enables its forces at the start, and sends zero force
+/// (and disables forces) at the end, whatever the outcome. Between its first and its last tick this function performs no
+/// heap allocation.
+pub fn run<D, C>(
+    device: &mut D,
+    controller: &mut C,
+    io: &mut LoopIo,
+    shared: &LoopShared,
+    config: &LoopConfig,
+) -> Result<RunSummary, LoopError>
+where
+    D: HapticDevice + ?Sized,
+    C: Controller + ?Sized,
+{
+    let period = config.period()?;
+    let period_s = period.as_secs_f64();
+    let status = sched::apply_to_current_thread(&config.rt);
+    // Set once per shared state; a second run on the same state keeps the first report.
+    let _ = shared.rt_status.set(status);
+    let safety = SafetyFilter::new(device.specs());
+    let monitor = &shared.monitor;
+    let heartbeat = &*shared.heartbeat;
+
+    // A new run starts with the gate open, even after a previous run's watchdog closed it.
+    device.force_override().set_force_scale(1.0);
+    if let Err(source) = device.enable_forces(true) {
+        safe_stop(device);
+        return Err(LoopError::Device { tick: 0, source });
+    }
+    let mut pacer = Pacer::new(period, config.pacing, Instant::now());
+    let mut applied = ForceCommand::ZERO;
+    let mut previous_wake: Option<Instant> = None;
+    let mut tick = 0u64;
+    let mut out = TickOutput::default();
+    let reason = loop {
+        if shared.stop.load(Ordering::Acquire) {
+            break StopReason::Requested;
+        }
+        if config.max_ticks.is_some_and(|max| tick >= max) {
+            break StopReason::TickLimit;
+        }
+        if controller.finished() {
+            break StopReason::ControllerFinished;
+        }
+        let wake = pacer.wait();
+        if heartbeat.tripped() {
+            safe_stop(device);
+            return Err(LoopError::WatchdogTripped {
+                tick,
+                stall: heartbeat.stall(),
+            });
+        }
+        heartbeat.beat(wake.at);
+        monitor.record_wake(
+            heartbeat.at_ns(wake.at),
+            wake.late.as_nanos() as u64,
+            previous_wake.map(|p| wake.at.duration_since(p).as_nanos() as u64),
+        );
+        previous_wake = Some(wake.at);
+
+        let state = match device.read_state() {
+            Ok(s) => s,
+            Err(e) if e.is_end_of_stream() => break StopReason::EndOfStream,
+            Err(source) => {
+                safe_stop(device);
+                return Err(LoopError::Device { tick, source });
+            }
+        };
+        let time_s = tick as f64 * period_s;
+        let input = TickInput {
+            tick,
+            time_s,
+            period_s,
+            state: &state,
+            applied: &applied,
+        };
+        out.flags = 0;
+        controller.tick(&input, &mut out);
+        let (command, safety_flags) = safety.apply(&out.command);
+        if let Err(source) = device.command(&command) {
+            safe_stop(device);
+            return Err(LoopError::Device { tick, source });
+        }
+        applied = command;
+        let sample = HapticSample {
+            tick,
+            time_s,
+            state,
+            command,
+            channels: out.channels,
+            flags: out.flags | safety_flags,
+        };
+        if let Some(ring) = io.samples.as_mut() {
+            let mut pending = ring.push(sample);
+            // Unpaced runs are simulations with no deadline to keep: wait for the recorder
+            // instead of losing samples. Real-time runs never wait.
+            while config.pacing == Pacing::Unpaced && pending.is_err() && !ring.is_abandoned() {
+                std::thread::yield_now();
+                pending = ring.push(sample);
+            }
+            if pending.is_err() {
+                monitor.record_dropped_sample();
+            }
+        }
+        if let Some(live) = io.live.as_mut() {
+            live.write(sample);
+        }
+        monitor.record_flags(sample.flags);
+        monitor.record_compute(wake.at.elapsed().as_nanos() as u64);
+        tick += 1;
+    };
+    safe_stop(device);
+    Ok(RunSummary { ticks: tick, reason })
+}
+
+/// Zero force, forces off; errors are ignored because this is already the way out.
+fn safe_stop<D: HapticDevice + ?Sized>(device: &mut D) {
+    let _ = device.command(&ForceCommand::ZERO);
+    let _ = device.enable_forces(false);
+}
+
+/// What a finished haptic thread hands back.
+#[derive(Debug)]
+pub struct LoopOutcome<D, C> {
+    /// The device, forces off.
+    pub device: D,
+    /// The controller, with its final state.
+    pub controller: C,
+    /// The loop's sample outputs (the ring's producer is dropped when this is, which tells the
+    /// recorder the run is over).
+    pub io: LoopIo,
+    /// How the run ended.
+    pub result: Result<RunSummary, LoopError>,
+}
+
+/// A loop running on its own thread.
+#[derive(Debug)]
+pub struct LoopHandle<D, C> {
+    shared: Arc<LoopShared>,
+    thread: JoinHandle<LoopOutcome<D, C>>,
+    watchdog: Option<Watchdog>,
+}
+
+/// Starts the loop on a thread named `haptic`, with a watchdog if configured.
+pub fn spawn<D, C>(
+    device: D,
+    controller: C,
+    io: LoopIo,
+    config: LoopConfig,
+) -> Result<LoopHandle<D, C>, LoopError>
+where
+    D: HapticDevice + 'static,
+    C: Controller + 'static,
+{
+    let shared = Arc::new(LoopShared::new(config.period()?));
+    let watchdog = match config.watchdog {
+        Some(w) => Some(
+            Watchdog::spawn(w, shared.heartbeat.clone(), device.force_override())
+                .map_err(LoopError::Spawn)?,
+        ),
+        None => None,
+    };
+    let thread_shared = shared.clone();
+    let thread = std::thread::Builder::new()
+        .name("haptic".into())
+        .spawn(move || {
+            let (mut device, mut controller, mut io) = (device, controller, io);
+            let result = run(&mut device, &mut controller, &mut io, &thread_shared, &config);
+            LoopOutcome {
+                device,
+                controller,
+                io,
+                result,
+            }
+        })
+        .map_err(LoopError::Spawn)?;
+    Ok(LoopHandle {
+        shared,
+        thread,
+        watchdog,
+    })
+}
+
+impl<D, C> LoopHandle<D, C> {
+    /// The lock-free shared state (monitor, heartbeat).
+    pub fn shared(&self) -> &Arc<LoopShared> {
+        &self.shared
+    }
+
+    /// Timing statistics so far.
+    pub fn stats(&self) -> RateStats {
+        self.shared.monitor.snapshot()
+    }
+
+    /// Asks the loop to stop at its next tick.
+    pub fn stop(&self) {
+        self.shared.request_stop();
+    }
+
+    /// Whether the haptic thread has ended.
+    pub fn is_finished(&self) -> bool {
+        self.thread.is_finished()
+    }
+
+    /// Waits for the loop to end, then stops the watchdog.
+    pub fn join(mut self) -> Result<LoopOutcome<D, C>, LoopError> {
+        let outcome = self.thread.join().map_err(|_| LoopError::Panicked);
+        if let Some(w) = self.watchdog.take() {
+            w.stop();
+        }
+        outcome
+    }
+}

@@ -1,0 +1,17 @@
+//! The real-time side: pacing, scheduling, the rate monitor, the watchdog and the loop.
+
+pub mod bench;
+pub mod haptic_loop;
+pub mod monitor;
+pub mod pacer;
+pub mod sched;
+pub mod watchdog;
+
+pub use haptic_loop::{
+    CHANNELS, Controller, HapticSample, LoopConfig, LoopError, LoopHandle, LoopIo, LoopOutcome, LoopShared,
+    RunSummary, StopReason, TickInput, TickOutput, ZeroForce, run, spawn,
+};
+pub use monitor::{Percentiles, RateMonitor, RateStats};
+pub use pacer::{Pacer, Pacing};
+pub use sched::{PinRequest, Pinning, Priority, RtRequest, RtStatus};
+pub use watchdog::{Heartbeat, Watchdog, WatchdogConfig};
