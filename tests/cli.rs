@@ -3,24 +3,11 @@
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
 use std::path::Path;
-use std::process::{Command, Output};
+mod common;
+
+use common::{palpus, text};
 
 use identify::capture::{Capture, CaptureKind};
-
-fn palpus(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_palpus"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
 
 #[test]
 fn help_explains_the_commands() {
@@ -112,4 +99,69 @@ fn gen_reproduces_the_committed_li_bi_set() {
             }
         }
     }
+}
+
+#[test]
+fn identify_prints_the_json_report_and_writes_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
+    let model = dir.path().join("needle.json");
+    let libsvm = dir.path().join("needle.model");
+    let o = palpus(&[
+        "identify",
+        root.join("needle_train.csv").to_str().unwrap(),
+        "--model",
+        "needle",
+        "--test",
+        root.join("needle_test.csv").to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+        "--libsvm",
+        libsvm.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["model"], "needle");
+    assert_eq!(report["n_train"], 350);
+    for key in ["n_sv", "dual_objective", "fit_seconds"] {
+        assert!(report[key].is_number(), "{key}");
+    }
+    for key in ["aise", "error_bound", "rmse"] {
+        assert!(report["metrics"]["svr"][key].as_f64().unwrap() > 0.0, "{key}");
+    }
+    assert!(report["metrics"]["rbf_network"]["aise"].is_number());
+    assert!(report["metrics"]["coulomb_viscous"].is_null());
+    assert!(identify::model_file::ModelFile::load(&model).is_ok());
+    assert!(
+        std::fs::read_to_string(&libsvm)
+            .unwrap()
+            .starts_with("svm_type epsilon_svr")
+    );
+
+    let o = palpus(&[
+        "identify",
+        root.join("hard_contact_train.csv").to_str().unwrap(),
+        "--model",
+        "hard",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((report["w"].as_f64().unwrap() - 0.1647).abs() < 0.005);
+    assert!(report["b"].is_number() && report["metrics"]["coulomb_viscous"]["aise"].is_number());
+
+    // A rubbing capture given as a needle one: the reader names the file and the kind.
+    let o = palpus(&[
+        "identify",
+        root.join("hard_contact_train.csv").to_str().unwrap(),
+        "--model",
+        "needle",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("hard_contact_train.csv") && text(&o).contains("insertion"),
+        "{}",
+        text(&o)
+    );
 }

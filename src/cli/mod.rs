@@ -3,7 +3,12 @@
 // The command line is where palpus talks to its user.
 #![allow(clippy::print_stdout)]
 
+mod bench_cmd;
+mod bench_svr;
+mod capture_cmd;
+mod devices_cmd;
 mod gen_cmd;
+mod identify_cmd;
 
 use clap::{Parser, Subcommand};
 
@@ -22,11 +27,19 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     Gen(gen_cmd::GenArgs),
+    Identify(identify_cmd::IdentifyArgs),
+    Capture(capture_cmd::CaptureArgs),
+    Devices(devices_cmd::DevicesArgs),
+    Bench(bench_cmd::BenchArgs),
 }
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Gen(args) => gen_cmd::run(&args),
+        Command::Identify(args) => identify_cmd::run(&args),
+        Command::Capture(args) => capture_cmd::run(&args),
+        Command::Devices(args) => devices_cmd::run(&args),
+        Command::Bench(args) => bench_cmd::run(&args),
     }
 }

@@ -1,0 +1,128 @@
+//! `palpus bench`.
+
+use std::time::Duration;
+
+use clap::{Args, Subcommand};
+use haptics::rt::bench::{BenchConfig, loop_bench};
+use haptics::rt::{LoopConfig, RtRequest};
+
+/// Measure performance.
+#[derive(Debug, Args)]
+pub(crate) struct BenchArgs {
+    #[command(subcommand)]
+    what: BenchWhat,
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchWhat {
+    Loop(LoopArgs),
+    Svr(super::bench_svr::SvrArgs),
+}
+
+/// Run the haptic loop at 1 kHz and report its timing.
+///
+/// The full haptic path runs: a simulated Omega.7 with a hand inserting a needle over and
+/// over, observers, the needle law through admittance control, the safety filter and the
+/// recorder. Reports the mean rate, period-error and lateness percentiles, overruns and the
+/// tick compute time, against the goals (rate within 0.1 %, p99.9 period error ≤ 100 µs, no
+/// tick more than 2 ms late, compute p99 ≤ 20 µs). `--load` runs a busy thread on every core
+/// beside the loop, as a renderer would.
+#[derive(Debug, Args)]
+struct LoopArgs {
+    /// How long to run, s.
+    #[arg(long, default_value_t = 10.0)]
+    seconds: f64,
+    /// Compete with a busy thread on every core.
+    #[arg(long)]
+    load: bool,
+    /// Do not ask for SCHED_FIFO or core pinning.
+    #[arg(long)]
+    no_realtime: bool,
+    /// Run without the watchdog, so that a stall is measured instead of ending the run.
+    #[arg(long)]
+    no_watchdog: bool,
+}
+
+fn us(d: Duration) -> String {
+    format!("{:.1} µs", d.as_secs_f64() * 1e6)
+}
+
+pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    match &args.what {
+        BenchWhat::Loop(args) => run_loop(args),
+        BenchWhat::Svr(args) => super::bench_svr::run(args),
+    }
+}
+
+fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
+    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 86_400.0) {
+        anyhow::bail!("--seconds must be in (0, 86400], not {}", args.seconds);
+    }
+    let mut loop_config = LoopConfig::default();
+    if args.no_realtime {
+        loop_config.rt = RtRequest::NONE;
+    }
+    if args.no_watchdog {
+        loop_config.watchdog = None;
+    }
+    let report = loop_bench(&BenchConfig {
+        seconds: args.seconds,
+        load: args.load,
+        loop_config,
+    })?;
+    let s = &report.stats;
+    let load = if report.load_threads > 0 {
+        format!("with {} busy threads", report.load_threads)
+    } else {
+        "no competing load".into()
+    };
+    println!("haptic loop, {:.0} s at 1 kHz, {load}", args.seconds);
+    if let Some(rt) = report.rt_status {
+        println!("scheduling:       {rt}");
+    }
+    match &report.outcome {
+        Ok(reason) => println!("ended:            {reason:?} after {} ticks", s.ticks),
+        Err(e) => println!("ended early:      {e}"),
+    }
+    let yes = |ok: bool| if ok { "meets goal" } else { "MISSES goal" };
+    println!(
+        "mean rate:        {:.3} Hz ({:+.4} %)  {}",
+        s.mean_rate_hz,
+        (s.mean_rate_hz / s.nominal_rate_hz - 1.0) * 100.0,
+        yes(s.rate_error() <= 0.001)
+    );
+    println!(
+        "period error:     p50 {}  p99 {}  p99.9 {}  max {}  {}",
+        us(s.period_error.p50),
+        us(s.period_error.p99),
+        us(s.period_error.p999),
+        us(s.period_error.max),
+        yes(s.period_error.p999 <= Duration::from_micros(100))
+    );
+    println!(
+        "lateness:         p50 {}  p99 {}  p99.9 {}  max {}",
+        us(s.lateness.p50),
+        us(s.lateness.p99),
+        us(s.lateness.p999),
+        us(s.lateness.max)
+    );
+    println!(
+        "overruns:         {} missed slots, {} ticks > 2 ms late  {}",
+        s.overruns,
+        s.late_over_2ms,
+        yes(s.late_over_2ms == 0)
+    );
+    println!(
+        "tick compute:     p50 {}  p99 {}  p99.9 {}  max {}  {}",
+        us(s.compute.p50),
+        us(s.compute.p99),
+        us(s.compute.p999),
+        us(s.compute.max),
+        yes(s.compute.p99 <= Duration::from_micros(20))
+    );
+    println!(
+        "recorder:         {} rows, {} samples dropped",
+        report.recorded_rows, s.dropped_samples
+    );
+    Ok(())
+}

@@ -1,0 +1,105 @@
+//! `palpus capture`.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use haptics::acquire::{CaptureOptions, Protocol, run_capture, sim_device};
+use haptics::device::HapticDevice;
+use haptics::device::omega7::Omega7;
+use haptics::rt::Pacing;
+
+/// Record a capture through a haptic device.
+///
+/// Runs a measurement protocol on the device in the 1 kHz haptic loop and records what the
+/// device measured and what its observers estimated, in the capture format `palpus gen`
+/// writes (the Omega.7 has no force sensor: forces come from its reaction-force observer).
+/// Protocols: needle (insertions at 2, 5 and 10 mm/s into fresh sites), hard (strokes on a
+/// hard plate under a varying load), soft (strokes at 2–40 mm/s on a sponge), rubbing (one
+/// 30 mm stroke at 5 mm/s under 0.3 N, Nakano's Table 3.2). On the simulator the world is the
+/// simulated one; on an Omega.7 the device moves by itself: keep hands clear and place the
+/// sample under the tip.
+#[derive(Debug, Args)]
+pub(crate) struct CaptureArgs {
+    /// The device: the simulated Omega.7, or a real one through the Force Dimension SDK.
+    #[arg(long, value_enum)]
+    device: DeviceKind,
+    /// What to capture: needle, hard, soft or rubbing.
+    #[arg(long, value_parser = parse_protocol)]
+    protocol: Protocol,
+    /// The capture file to write.
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// For `rubbing` on the simulator: which of Nakano's seven surfaces.
+    #[arg(long, default_value = "sandpaper_120")]
+    surface: String,
+    /// Simulator only: run as fast as possible instead of in real time (same capture, its
+    /// clock is the tick count).
+    #[arg(long)]
+    unpaced: bool,
+    /// Omega.7 only: the SDK library to load (default: $PALPUS_DHD_LIBRARY, then libdhd.so).
+    #[arg(long, value_name = "PATH")]
+    dhd_library: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum DeviceKind {
+    /// The simulated Omega.7.
+    Sim,
+    /// A Force Dimension Omega.7.
+    Omega7,
+}
+
+fn parse_protocol(s: &str) -> Result<Protocol, String> {
+    s.parse()
+}
+
+pub(crate) fn run(args: &CaptureArgs) -> anyhow::Result<()> {
+    let mut options = CaptureOptions::new(args.protocol);
+    options.surface = args.surface.clone();
+    if args.unpaced {
+        options.pacing = Pacing::Unpaced;
+    }
+    let device: Box<dyn HapticDevice> = match args.device {
+        DeviceKind::Sim => Box::new(sim_device(&options)?),
+        DeviceKind::Omega7 => {
+            if args.unpaced {
+                bail!("--unpaced is for the simulator only: a real device runs in real time");
+            }
+            Box::new(Omega7::open(args.dhd_library.as_deref()).context("opening the Omega.7")?)
+        }
+    };
+    if !args.quiet && options.pacing != Pacing::Unpaced {
+        println!(
+            "capturing `{}` on {} in real time into {} ...",
+            args.protocol,
+            device.name(),
+            args.out.display()
+        );
+    }
+    let report = run_capture(device, &args.out, &options, &mut |_| {})
+        .with_context(|| format!("capturing `{}` into {}", args.protocol, args.out.display()))?;
+    if args.quiet {
+        return Ok(());
+    }
+    let s = &report.stats;
+    println!(
+        "wrote {} rows to {} in {:.2} s",
+        report.recorder.rows,
+        report.path.display(),
+        report.elapsed.as_secs_f64()
+    );
+    if options.pacing != Pacing::Unpaced {
+        println!(
+            "loop: {} ticks, mean rate {:.3} Hz, period error p99 {:?}, overruns {}, dropped samples {}",
+            s.ticks, s.mean_rate_hz, s.period_error.p99, s.overruns, s.dropped_samples
+        );
+        if let Some(rt) = report.rt_status {
+            println!("scheduling: {rt}");
+        }
+    }
+    Ok(())
+}

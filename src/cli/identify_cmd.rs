@@ -1,0 +1,169 @@
+//! `palpus identify`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use identify::capture::{Capture, CaptureKind};
+use identify::identification::{IdentifyOptions, Report, identify};
+use identify::metrics::Metrics;
+use identify::model_file::{ModelBody, ModelKind, ScaledSvr};
+use identify::svr::write_libsvm_model;
+
+/// Identify a model from a capture with ε-SVR and compare it with the baselines.
+///
+/// hard: friction against normal force, linear kernel; defaults are Li & Bi's C = 1e11 and
+/// ε = 0.003 kgf, solved in SI (C/g, ε·g) — the same optimum, reported with b in N and kgf.
+/// soft: per constant-speed segment a linear fit (w, m), then RBF SVRs w(v), m(v); --c,
+/// --epsilon and --gamma set the second stage. needle: RBF SVR of [depth, velocity] on inputs
+/// scaled to [0, 1], at most --max-samples samples (default 350, as the paper).
+///
+/// The report compares the SVR with Coulomb+viscous least squares (friction models) and an
+/// RBF network by AISE, error bound max|F − F̂| and RMSE, on --test if given, else on the
+/// training capture.
+#[derive(Debug, Args)]
+pub(crate) struct IdentifyArgs {
+    /// Training capture.
+    capture: PathBuf,
+    /// Which model.
+    #[arg(long, value_enum)]
+    model: ModelArg,
+    /// Regularisation constant C.
+    #[arg(long = "c", value_name = "X")]
+    c: Option<f64>,
+    /// ε of the insensitive tube, in the target's SI unit (N; dimensionless for the slope).
+    #[arg(long, value_name = "X")]
+    epsilon: Option<f64>,
+    /// RBF γ on the scaled inputs.
+    #[arg(long, value_name = "X")]
+    gamma: Option<f64>,
+    /// Held-out capture to evaluate on.
+    #[arg(long, value_name = "CAPTURE")]
+    test: Option<PathBuf>,
+    /// Write the model here (JSON).
+    #[arg(long, value_name = "MODEL.json")]
+    out: Option<PathBuf>,
+    /// Also write the SVR in libsvm's model format (inputs scaled as the model file says;
+    /// the soft model's two SVRs go to FILE.slope and FILE.intercept).
+    #[arg(long, value_name = "FILE")]
+    libsvm: Option<PathBuf>,
+    /// Needle: at most this many training samples.
+    #[arg(long, default_value_t = 350)]
+    max_samples: usize,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ModelArg {
+    Hard,
+    Soft,
+    Needle,
+}
+
+pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
+    let kind = match args.model {
+        ModelArg::Hard => ModelKind::HardFriction,
+        ModelArg::Soft => ModelKind::SoftFriction,
+        ModelArg::Needle => ModelKind::NeedlePuncture,
+    };
+    let capture_kind = if kind == ModelKind::NeedlePuncture {
+        CaptureKind::Insertion
+    } else {
+        CaptureKind::Rubbing
+    };
+    let train = Capture::read_file(&args.capture, capture_kind)?;
+    let test = args
+        .test
+        .as_ref()
+        .map(|p| Capture::read_file(p, capture_kind))
+        .transpose()?;
+    let options = IdentifyOptions {
+        kind,
+        c: args.c,
+        epsilon: args.epsilon,
+        gamma: args.gamma,
+        max_samples: args.max_samples,
+    };
+    let identified =
+        identify(&train, test.as_ref(), &options).with_context(|| format!("identifying a {kind} model"))?;
+    if let Some(out) = &args.out {
+        identified.model.save(out)?;
+    }
+    if let Some(path) = &args.libsvm {
+        match &identified.model.body {
+            ModelBody::Single(m) => write_libsvm(m, path)?,
+            ModelBody::TwoStage { slope, intercept } => {
+                write_libsvm(slope, &with_suffix(path, "slope"))?;
+                write_libsvm(intercept, &with_suffix(path, "intercept"))?;
+            }
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&identified.report)?);
+    } else {
+        print_table(&identified.report, args);
+    }
+    Ok(())
+}
+
+fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".");
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+fn write_libsvm(m: &ScaledSvr, path: &Path) -> anyhow::Result<()> {
+    identify::capture::write_atomically(path, |w| {
+        write_libsvm_model(&m.svr, w).map_err(|e| std::io::Error::other(e.to_string()))
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+fn row(name: &str, m: &Metrics) {
+    println!(
+        "  {name:<16} {:>12.4e} {:>12.4e} {:>12.4e}",
+        m.aise, m.error_bound, m.rmse
+    );
+}
+
+fn print_table(r: &Report, args: &IdentifyArgs) {
+    println!(
+        "{} model from {} ({} training samples)",
+        r.model,
+        args.capture.display(),
+        r.n_train
+    );
+    for h in &r.hyperparameters {
+        println!(
+            "  {:<10} C = {:<12e} ε = {:<10e} kernel {:?}",
+            h.label, h.c, h.epsilon, h.kernel
+        );
+    }
+    if let (Some(w), Some(b), Some(b_kgf)) = (r.w, r.b, r.b_kgf) {
+        println!(
+            "  F = {w:.6}·P + {b:.6} N   (= {w:.6}·P + {b_kgf:.6} kgf; Li & Bi Eq. 12: 0.1647·P + 0.0033)"
+        );
+    }
+    if !r.stage1.is_empty() {
+        println!("  stage 1 (per speed):   v [mm/s]        w      m [N]");
+        for s in &r.stage1 {
+            println!("  {:>28.3} {:>8.4} {:>10.4}", s[0] * 1e3, s[1], s[2]);
+        }
+    }
+    println!(
+        "  support vectors {} / {}   dual objective {:.6e}   relative gap {:.1e}   fit {:.3} s",
+        r.n_sv, r.n_train, r.dual_objective, r.relative_gap, r.fit_seconds
+    );
+    println!(
+        "on {} data:{:>13} {:>12} {:>12}",
+        r.evaluated_on, "AISE [N²]", "max|e| [N]", "RMSE [N]"
+    );
+    row("ε-SVR", &r.metrics.svr);
+    if let Some(cv) = &r.metrics.coulomb_viscous {
+        row("Coulomb+viscous", cv);
+    }
+    row("RBF network", &r.metrics.rbf_network);
+}

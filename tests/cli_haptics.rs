@@ -1,0 +1,115 @@
+//! `palpus capture`, `palpus devices` and `palpus bench loop` as a user meets them.
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
+mod common;
+
+use common::{palpus, text};
+
+use identify::capture::{Capture, CaptureKind};
+
+#[test]
+fn devices_reports_none_found_and_succeeds() {
+    let o = palpus(&["devices"]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    for needle in [
+        "HID devices:",
+        "Omega.7 SDK (libdhd):",
+        "Force Dimension devices on USB",
+    ] {
+        assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
+    }
+    // No hardware and no SDK here: each says so plainly.
+    assert!(t.contains("none found") || t.contains("connected"), "{t}");
+    assert!(t.contains("use --device sim") || t.contains("SDK "), "{t}");
+}
+
+#[test]
+fn capture_on_the_simulator_writes_a_valid_capture() {
+    let dir = tempfile::tempdir().unwrap();
+    for (protocol, kind) in [
+        ("needle", CaptureKind::Insertion),
+        ("rubbing", CaptureKind::Rubbing),
+    ] {
+        let out = dir.path().join(format!("{protocol}.csv"));
+        let o = palpus(&[
+            "capture",
+            "--device",
+            "sim",
+            "--protocol",
+            protocol,
+            "--out",
+            out.to_str().unwrap(),
+            "--unpaced",
+        ]);
+        assert!(o.status.success(), "{}", text(&o));
+        assert!(text(&o).contains("rows to"), "{}", text(&o));
+        let c = Capture::read_file(&out, kind).unwrap();
+        assert!(c.len() > 1000);
+        assert_eq!(c.metadata().get("force_source"), Some("rfob"));
+    }
+}
+
+#[test]
+fn capture_errors_are_clear() {
+    let o = palpus(&[
+        "capture",
+        "--device",
+        "omega7",
+        "--protocol",
+        "needle",
+        "--out",
+        "x.csv",
+    ]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(
+        t.starts_with("error: opening the Omega.7")
+            && t.contains("install the Force Dimension SDK or use --device sim"),
+        "{t}"
+    );
+    let o = palpus(&[
+        "capture",
+        "--device",
+        "sim",
+        "--protocol",
+        "stab",
+        "--out",
+        "x.csv",
+    ]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("unknown protocol `stab`"), "{}", text(&o));
+    let o = palpus(&[
+        "capture",
+        "--device",
+        "sim",
+        "--protocol",
+        "rubbing",
+        "--surface",
+        "glass",
+        "--out",
+        "x.csv",
+    ]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("unknown surface `glass`"), "{}", text(&o));
+}
+
+#[test]
+fn bench_loop_reports_the_figures() {
+    let o = palpus(&["bench", "loop", "--seconds", "0.3"]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    for needle in [
+        "mean rate:",
+        "period error:",
+        "p99.9",
+        "overruns:",
+        "tick compute:",
+        "scheduling:",
+    ] {
+        assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
+    }
+    let o = palpus(&["bench", "loop", "--seconds", "-1"]);
+    assert!(!o.status.success());
+}
