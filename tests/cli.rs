@@ -165,3 +165,42 @@ fn identify_prints_the_json_report_and_writes_models() {
         text(&o)
     );
 }
+
+#[test]
+fn identify_search_reports_the_frontier_and_fits_the_best_point() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
+    let o = palpus(&[
+        "identify",
+        root.join("hard_contact_train.csv").to_str().unwrap(),
+        "--model",
+        "hard",
+        "--search",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let points = report["search"].as_array().unwrap();
+    assert_eq!(points.len(), 9, "3 C × 3 ε for the linear model");
+    let best = points
+        .iter()
+        .min_by(|a, b| {
+            a["cv_aise"]
+                .as_f64()
+                .unwrap()
+                .total_cmp(&b["cv_aise"].as_f64().unwrap())
+        })
+        .unwrap();
+    let used = &report["hyperparameters"][0];
+    assert_eq!(used["c"], best["c"]);
+    assert_eq!(used["epsilon"], best["epsilon"]);
+    for p in points {
+        assert!(p["n_sv"].as_f64().unwrap() >= 1.0 && p["fit_seconds"].as_f64().unwrap() >= 0.0);
+    }
+    // --search chooses the hyperparameters itself.
+    let o = palpus(&["identify", "x.csv", "--model", "hard", "--search", "--c", "1"]);
+    assert!(
+        !o.status.success() && text(&o).contains("cannot be used with"),
+        "{}",
+        text(&o)
+    );
+}

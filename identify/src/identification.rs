@@ -28,7 +28,7 @@ use crate::signal::pseudo_differentiate;
 use crate::svr::{InputScaling, Kernel, SvrFit, SvrParams, fit};
 
 /// Standard gravity, to express the paper's kgf hyperparameters in SI.
-const KGF_N: f64 = 9.806_65;
+pub(crate) const KGF_N: f64 = 9.806_65;
 /// Pseudo-differentiation time constant when a capture has no velocity column, s.
 const PSEUDO_DIFF_TAU_S: f64 = 0.01;
 
@@ -148,12 +148,12 @@ pub enum IdentifyError {
 }
 
 /// The samples a friction model needs.
-struct FrictionData {
-    time_s: Vec<f64>,
-    normal_force_n: Vec<f64>,
-    velocity_mps: Vec<f64>,
-    friction_force_n: Vec<f64>,
-    commanded_mps: Option<Vec<f64>>,
+pub(crate) struct FrictionData {
+    pub(crate) time_s: Vec<f64>,
+    pub(crate) normal_force_n: Vec<f64>,
+    pub(crate) velocity_mps: Vec<f64>,
+    pub(crate) friction_force_n: Vec<f64>,
+    pub(crate) commanded_mps: Option<Vec<f64>>,
 }
 
 fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result<Vec<f64>, IdentifyError> {
@@ -168,7 +168,7 @@ fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result
     })
 }
 
-fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
+pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
     if c.metadata().kind() != CaptureKind::Rubbing {
         return Err(IdentifyError::Data {
             path: c.source().to_owned(),
@@ -187,7 +187,7 @@ fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
     })
 }
 
-fn svr(
+pub(crate) fn svr(
     what: &str,
     c: f64,
     epsilon: f64,
@@ -362,22 +362,27 @@ fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
     )
 }
 
-fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
-    let started = Instant::now();
-    let tr = friction_data(train)?;
-    let ev = match test {
-        Some(t) => friction_data(t)?,
-        None => friction_data(train)?,
-    };
+/// The first soft-contact stage: one linear ε-SVR per constant-speed segment.
+pub(crate) struct StageOne {
+    /// (mean measured speed m/s, w, m N) per segment.
+    pub(crate) points: Vec<[f64; 3]>,
+    /// The fits behind them.
+    pub(crate) fits: Vec<SvrFit>,
+    /// Sample indices of each segment.
+    pub(crate) segments: Vec<Vec<usize>>,
+}
+
+/// Stage 1 of the soft contact: friction against normal force per constant-speed segment,
+/// with the paper's hard-contact hyperparameters (the same sensor measures both).
+pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, IdentifyError> {
     let Some(commanded) = &tr.commanded_mps else {
         return Err(IdentifyError::Data {
-            path: train.source().to_owned(),
+            path: source.to_owned(),
             reason:
                 "soft-contact identification needs constant-speed segments (column commanded_velocity_mps)"
                     .into(),
         });
     };
-    // Stage 1: a linear ε-SVR of friction against normal force per constant-speed segment.
     let mut speeds: Vec<f64> = Vec::new();
     for &v in commanded {
         if !speeds.contains(&v) {
@@ -385,8 +390,11 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         }
     }
     let (c1, eps1) = (1e11 / KGF_N, 0.003 * KGF_N);
-    let mut stage1 = Vec::new();
-    let mut fits = Vec::new();
+    let mut out = StageOne {
+        points: Vec::new(),
+        fits: Vec::new(),
+        segments: Vec::new(),
+    };
     for &v in &speeds {
         let idx: Vec<usize> = (0..commanded.len()).filter(|&i| commanded[i] == v).collect();
         if idx.len() < 3 {
@@ -405,18 +413,32 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
             &f,
         )?;
         let w = fitted.model.linear_weights().map_or(0.0, |w| w[0]);
-        stage1.push([speed, w, fitted.model.bias]);
-        fits.push(fitted);
+        out.points.push([speed, w, fitted.model.bias]);
+        out.fits.push(fitted);
+        out.segments.push(idx);
     }
-    if stage1.len() < 3 {
+    if out.points.len() < 3 {
         return Err(IdentifyError::Data {
-            path: train.source().to_owned(),
+            path: source.to_owned(),
             reason: format!(
                 "{} constant-speed segments with ≥ 3 samples; the second stage needs at least 3",
-                stage1.len()
+                out.points.len()
             ),
         });
     }
+    Ok(out)
+}
+
+fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+    let started = Instant::now();
+    let tr = friction_data(train)?;
+    let ev = match test {
+        Some(t) => friction_data(t)?,
+        None => friction_data(train)?,
+    };
+    let StageOne {
+        points: stage1, fits, ..
+    } = stage_one(&tr, train.source())?;
     // Stage 2: RBF ε-SVRs of speed for w and m, on speeds scaled to [0, 1].
     let v: Vec<f64> = stage1.iter().map(|s| s[0]).collect();
     let scaling = InputScaling::min_max(&v, 1);
@@ -460,8 +482,8 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
     let hyper = vec![
         SvrHyper {
             label: "stage1".into(),
-            c: c1,
-            epsilon: eps1,
+            c: 1e11 / KGF_N,
+            epsilon: 0.003 * KGF_N,
             kernel: Kernel::Linear,
         },
         SvrHyper {
@@ -511,9 +533,9 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
 }
 
 /// In-tissue samples of an insertion capture: time, [depth, velocity] row-major, force.
-type NeedleSamples = (Vec<f64>, Vec<f64>, Vec<f64>);
+pub(crate) type NeedleSamples = (Vec<f64>, Vec<f64>, Vec<f64>);
 
-fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
+pub(crate) fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
     if c.metadata().kind() != CaptureKind::Insertion {
         return Err(IdentifyError::Data {
             path: c.source().to_owned(),

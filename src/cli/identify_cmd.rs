@@ -8,7 +8,9 @@ use identify::capture::{Capture, CaptureKind};
 use identify::identification::{IdentifyOptions, Report, identify};
 use identify::metrics::Metrics;
 use identify::model_file::{ModelBody, ModelKind, ScaledSvr};
+use identify::search::{SearchGrid, SearchPoint, best, search};
 use identify::svr::write_libsvm_model;
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Identify a model from a capture with ε-SVR and compare it with the baselines.
 ///
@@ -28,6 +30,11 @@ pub(crate) struct IdentifyArgs {
     /// Which model.
     #[arg(long, value_enum)]
     model: ModelArg,
+    /// Choose C, ε and γ by 5-fold cross-validation over a grid around the defaults (contiguous
+    /// folds; leave-one-speed-out for the soft contact's second stage), print the explored
+    /// frontier, and fit with the best point.
+    #[arg(long, conflicts_with_all = ["c", "epsilon", "gamma"])]
+    search: bool,
     /// Regularisation constant C.
     #[arg(long = "c", value_name = "X")]
     c: Option<f64>,
@@ -79,12 +86,32 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         .as_ref()
         .map(|p| Capture::read_file(p, capture_kind))
         .transpose()?;
-    let options = IdentifyOptions {
+    let mut options = IdentifyOptions {
         kind,
         c: args.c,
         epsilon: args.epsilon,
         gamma: args.gamma,
         max_samples: args.max_samples,
+    };
+    let explored = if args.search {
+        let grid = SearchGrid::default_for(kind);
+        let bar = ProgressBar::new(0).with_style(
+            ProgressStyle::with_template("cross-validating {bar:30} {pos}/{len} grid points {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        let points = search(kind, &train, args.max_samples, &grid, &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })
+        .context("searching hyperparameters")?;
+        bar.finish_and_clear();
+        let chosen = best(&points).context("no grid point could be fitted")?;
+        options.c = Some(chosen.c);
+        options.epsilon = Some(chosen.epsilon);
+        options.gamma = chosen.gamma;
+        points
+    } else {
+        Vec::new()
     };
     let identified =
         identify(&train, test.as_ref(), &options).with_context(|| format!("identifying a {kind} model"))?;
@@ -101,8 +128,15 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         }
     }
     if args.json {
-        println!("{}", serde_json::to_string(&identified.report)?);
+        let mut report = serde_json::to_value(&identified.report)?;
+        if let Some(object) = report.as_object_mut() {
+            object.insert("search".into(), serde_json::to_value(&explored)?);
+        }
+        println!("{report}");
     } else {
+        if !explored.is_empty() {
+            print_frontier(&explored);
+        }
         print_table(&identified.report, args);
     }
     Ok(())
@@ -120,6 +154,31 @@ fn write_libsvm(m: &ScaledSvr, path: &Path) -> anyhow::Result<()> {
         write_libsvm_model(&m.svr, w).map_err(|e| std::io::Error::other(e.to_string()))
     })
     .with_context(|| format!("writing {}", path.display()))
+}
+
+fn print_frontier(points: &[SearchPoint]) {
+    let mut sorted: Vec<&SearchPoint> = points.iter().collect();
+    sorted.sort_by(|a, b| a.cv_aise.total_cmp(&b.cv_aise));
+    println!("explored {} points (best first):", points.len());
+    println!(
+        "  {:>10} {:>10} {:>8} {:>12} {:>7} {:>9} {:>11}",
+        "C", "ε", "γ", "CV AISE", "SVs", "fit [ms]", "predict [ns]"
+    );
+    for p in sorted {
+        let gamma = p.gamma.map_or("-".to_owned(), |g| format!("{g}"));
+        match &p.failed {
+            None => println!(
+                "  {:>10.3e} {:>10.3e} {gamma:>8} {:>12.4e} {:>7.1} {:>9.2} {:>11.0}",
+                p.c,
+                p.epsilon,
+                p.cv_aise,
+                p.n_sv,
+                p.fit_seconds * 1e3,
+                p.predict_ns
+            ),
+            Some(why) => println!("  {:>10.3e} {:>10.3e} {gamma:>8}  failed: {why}", p.c, p.epsilon),
+        }
+    }
 }
 
 fn row(name: &str, m: &Metrics) {
