@@ -13,7 +13,7 @@ use super::polish::{self, Side};
 use super::smo;
 
 /// Active-set moves allowed to a polish tried during the interior point's run.
-const EARLY_POLISH_ROUNDS: usize = 10;
+const EARLY_POLISH_ROUNDS: usize = 5;
 
 /// Relative duality gap above which a fit is an error rather than a model.
 pub const ACCEPT_GAP: f64 = 1e-6;

@@ -25,8 +25,9 @@ use super::error::SvrError;
 const NAME: &str = "interior point";
 
 /// Relative gap below which iterates are offered for polishing: by then the active set is
-/// usually identified, and an exact polish beats further Newton steps.
-pub(crate) const EARLY_GAP: f64 = 1e-5;
+/// settled, so the few polish rounds allowed succeed; tried earlier, each failed attempt costs
+/// dense solves (measured on the needle fixtures: 1e-8 beats 1e-5 by 1.5–2×).
+pub(crate) const EARLY_GAP: f64 = 1e-8;
 
 /// The iterate at the end of the solve, with what the polish needs to read the active set.
 #[derive(Debug, Clone)]
@@ -95,8 +96,11 @@ pub(crate) fn solve(
     let y_mean = y.iter().sum::<f64>() / n as f64;
 
     // Start on the central path of a well-scaled point: z well inside the box, all
-    // complementarity products equal.
-    let z0 = (0.5 * c).min(1.0);
+    // complementarity products equal. Bounded samples end at β = C, so starting near the
+    // middle of the box (capped at the scale targets can justify) saves the tens of iterations
+    // a start at 1 spends growing towards C: 14–16 iterations instead of 51–82 on the needle
+    // fixtures.
+    let z0 = (0.5 * c).min(1e3 * (1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()))));
     let mu0 = z0 * p_scale;
     let start = || Half {
         z: vec![z0; n],
