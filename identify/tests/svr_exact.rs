@@ -176,3 +176,48 @@ fn linear_1d_problems_match_the_exact_optimum_across_c_and_epsilon() {
         }
     }
 }
+
+/// libsvm's worst case: the paper's setting on paper-like pairs with samples outside the tube
+/// (`identify/fixtures/linear_hard_outside_tube.json`, made by make_svr_fixtures.py). libsvm
+/// ran 149.9 million iterations and returned w = −1441; the exact optimum has w ≈ 0.165.
+#[test]
+fn paper_setting_with_samples_outside_the_tube_where_libsvm_fails() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/linear_hard_outside_tube.json"
+    ))
+    .unwrap();
+    let f: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let floats = |v: &serde_json::Value| {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect::<Vec<f64>>()
+    };
+    let (x, y) = (floats(&f["x"]), floats(&f["y"]));
+    let (c, eps) = (f["c"].as_f64().unwrap(), f["epsilon"].as_f64().unwrap());
+    let fitted = fit(&linear(c, eps), &x, 1, &y).unwrap();
+    let (best, w_ref, b_ref) = brute_force_1d(&x, &y, c, eps);
+    let w = fitted.model.linear_weights().unwrap()[0];
+    let b = fitted.model.bias;
+    println!(
+        "ours: w {w} b {b} in {} iterations; exact: w {w_ref} b {b_ref}; libsvm: w {} after {} iterations",
+        fitted.iterations, f["libsvm"]["w"], f["libsvm"]["iterations"]
+    );
+    assert!(
+        fitted.primal_objective > 1e6,
+        "samples do lie outside the tube: P = {}",
+        fitted.primal_objective
+    );
+    assert!(
+        (fitted.primal_objective - best).abs() <= 1e-9 * best,
+        "{} vs {best}",
+        fitted.primal_objective
+    );
+    assert!((w - w_ref).abs() < 1e-6 && (b - b_ref).abs() < 1e-6);
+    assert!(
+        (f["libsvm"]["w"].as_f64().unwrap() - w_ref).abs() > 1.0,
+        "libsvm's failure is what this fixture records"
+    );
+}
