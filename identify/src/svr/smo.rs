@@ -20,6 +20,64 @@ const CACHE_BYTES: usize = 256 << 20;
 /// Curvature floor for non-positive-definite pairs (libsvm's τ).
 const TAU: f64 = 1e-12;
 
+/// The largest KKT values over the active set: max over I_up of −yₜ∇ₜ and over I_low of yₜ∇ₜ.
+fn extremes(
+    active: &[usize],
+    alpha: &[f64],
+    grad: &[f64],
+    label: impl Fn(usize) -> f64,
+    in_up: impl Fn(f64, f64) -> bool,
+    in_low: impl Fn(f64, f64) -> bool,
+) -> (f64, f64) {
+    let (mut up, mut low) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for &t in active {
+        let yt = label(t);
+        if in_up(alpha[t], yt) {
+            up = up.max(-yt * grad[t]);
+        }
+        if in_low(alpha[t], yt) {
+            low = low.max(yt * grad[t]);
+        }
+    }
+    (up, low)
+}
+
+/// Recomputes the gradient of every variable outside `active` from scratch,
+/// `∇ₜ = pₜ + Σⱼ yₜ yⱼ K(sₜ, sⱼ) αⱼ`, over the non-zero α only.
+#[allow(clippy::too_many_arguments)]
+fn rebuild_gradient(
+    grad: &mut [f64],
+    alpha: &[f64],
+    active: &[usize],
+    cache: &mut RowCache<'_>,
+    y: &[f64],
+    epsilon: f64,
+    n: usize,
+) {
+    let m = 2 * n;
+    let mut inactive = vec![true; m];
+    for &t in active {
+        inactive[t] = false;
+    }
+    if !inactive.iter().any(|&v| v) {
+        return;
+    }
+    for t in (0..m).filter(|&t| inactive[t]) {
+        grad[t] = if t < n { epsilon - y[t] } else { epsilon + y[t - n] };
+    }
+    for j in 0..m {
+        if alpha[j] == 0.0 {
+            continue;
+        }
+        let (yj, sj) = if j < n { (1.0, j) } else { (-1.0, j - n) };
+        let row = cache.row(sj);
+        for t in (0..m).filter(|&t| inactive[t]) {
+            let (yt, st) = if t < n { (1.0, t) } else { (-1.0, t - n) };
+            grad[t] += yt * yj * row[st] * alpha[j];
+        }
+    }
+}
+
 pub(crate) struct SmoSolution {
     pub beta: Vec<f64>,
     pub bias: f64,
@@ -119,6 +177,16 @@ pub(crate) fn solve(
     let in_up = |a: f64, yt: f64| (yt > 0.0 && a < c) || (yt < 0.0 && a > 0.0);
     let in_low = |a: f64, yt: f64| (yt > 0.0 && a > 0.0) || (yt < 0.0 && a < c);
 
+    // Shrinking (libsvm's heuristic): variables at a bound whose gradient says they will stay
+    // there leave the active set, so selection and gradient updates skip them; near the end
+    // their gradients are rebuilt and every variable is checked again, so shrinking changes
+    // the cost, never the answer.
+    let shrink_every = m.min(1000);
+    let mut counter = shrink_every;
+    let mut active: Vec<usize> = (0..m).collect();
+    let mut unshrunk = false;
+    let mut ki = vec![0.0; n];
+    let mut kj = vec![0.0; n];
     let mut iterations = 0;
     let mut violation = f64::INFINITY;
     while iterations < max_iterations {
@@ -130,50 +198,77 @@ pub(crate) fn solve(
                 gap: violation,
             });
         }
+        counter -= 1;
+        if counter == 0 {
+            counter = shrink_every;
+            let (g_up, g_low) = extremes(&active, &alpha, &grad, label, in_up, in_low);
+            if !unshrunk && g_up + g_low <= 10.0 * stop {
+                // Close to the end: bring everything back once, with exact gradients.
+                unshrunk = true;
+                rebuild_gradient(&mut grad, &alpha, &active, &mut cache, y, epsilon, n);
+                active = (0..m).collect();
+            }
+            active.retain(|&t| {
+                let (a, yt, g) = (alpha[t], label(t), grad[t]);
+                let at_upper = a >= c;
+                let at_lower = a <= 0.0;
+                !((at_upper && yt > 0.0 && -g > g_up)
+                    || (at_upper && yt < 0.0 && -g > g_low)
+                    || (at_lower && yt > 0.0 && g > g_low)
+                    || (at_lower && yt < 0.0 && g > g_up))
+            });
+        }
         // i: the most violating variable from I_up.
         let mut gmax = f64::NEG_INFINITY;
         let mut i_sel = usize::MAX;
-        for t in 0..m {
+        for &t in &active {
             let yt = label(t);
             if in_up(alpha[t], yt) && -yt * grad[t] >= gmax {
                 gmax = -yt * grad[t];
                 i_sel = t;
             }
         }
-        if i_sel == usize::MAX {
-            break;
-        }
-        let yi = label(i_sel);
-        let si = sample(i_sel);
-        let ki: Vec<f64> = cache.row(si).to_vec();
-        // j: the largest second-order decrease among I_low.
         let mut gmax2 = f64::NEG_INFINITY;
         let mut best = f64::INFINITY;
         let mut j_sel = usize::MAX;
-        for t in 0..m {
-            let yt = label(t);
-            if !in_low(alpha[t], yt) {
-                continue;
-            }
-            gmax2 = gmax2.max(yt * grad[t]);
-            let b = gmax + yt * grad[t];
-            if b > 0.0 {
-                let st = sample(t);
-                let a = (diag[si] + diag[st] - 2.0 * ki[st]).max(TAU);
-                let decrease = -b * b / a;
-                if decrease <= best {
-                    best = decrease;
-                    j_sel = t;
+        if i_sel != usize::MAX {
+            ki.copy_from_slice(cache.row(sample(i_sel)));
+            let si = sample(i_sel);
+            // j: the largest second-order decrease among I_low.
+            for &t in &active {
+                let yt = label(t);
+                if !in_low(alpha[t], yt) {
+                    continue;
+                }
+                gmax2 = gmax2.max(yt * grad[t]);
+                let b = gmax + yt * grad[t];
+                if b > 0.0 {
+                    let st = sample(t);
+                    let a = (diag[si] + diag[st] - 2.0 * ki[st]).max(TAU);
+                    let decrease = -b * b / a;
+                    if decrease <= best {
+                        best = decrease;
+                        j_sel = t;
+                    }
                 }
             }
         }
         violation = gmax + gmax2;
-        if violation < stop || j_sel == usize::MAX {
+        if i_sel == usize::MAX || violation < stop || j_sel == usize::MAX {
+            if active.len() < m {
+                // Converged on the active set: check everything with exact gradients.
+                rebuild_gradient(&mut grad, &alpha, &active, &mut cache, y, epsilon, n);
+                active = (0..m).collect();
+                counter = shrink_every;
+                continue;
+            }
             break;
         }
+        let yi = label(i_sel);
+        let si = sample(i_sel);
         let yj = label(j_sel);
         let sj = sample(j_sel);
-        let kj: Vec<f64> = cache.row(sj).to_vec();
+        kj.copy_from_slice(cache.row(sj));
         // Analytic two-variable step, clipped to the box (libsvm's update).
         let qii = diag[si];
         let qjj = diag[sj];
@@ -231,9 +326,9 @@ pub(crate) fn solve(
             alpha[j_sel] = aj;
         }
         let (di, dj) = (alpha[i_sel] - old_i, alpha[j_sel] - old_j);
-        for (t, g) in grad.iter_mut().enumerate() {
+        for &t in &active {
             let st = sample(t);
-            *g += label(t) * (yi * ki[st] * di + yj * kj[st] * dj);
+            grad[t] += label(t) * (yi * ki[st] * di + yj * kj[st] * dj);
         }
         iterations += 1;
     }
