@@ -65,15 +65,15 @@ fn rebuild_gradient(
     for t in (0..m).filter(|&t| inactive[t]) {
         grad[t] = if t < n { epsilon - y[t] } else { epsilon + y[t - n] };
     }
-    for j in 0..m {
-        if alpha[j] == 0.0 {
+    for (j, &aj) in alpha.iter().enumerate() {
+        if aj == 0.0 {
             continue;
         }
         let (yj, sj) = if j < n { (1.0, j) } else { (-1.0, j - n) };
         let row = cache.row(sj);
         for t in (0..m).filter(|&t| inactive[t]) {
             let (yt, st) = if t < n { (1.0, t) } else { (-1.0, t - n) };
-            grad[t] += yt * yj * row[st] * alpha[j];
+            grad[t] += yt * yj * row[st] * aj;
         }
     }
 }
