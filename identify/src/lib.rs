@@ -12,6 +12,7 @@ pub mod capture;
 pub mod identification;
 pub mod metrics;
 pub mod model_file;
+pub mod recognition;
 pub mod search;
 pub mod signal;
 pub mod svr;

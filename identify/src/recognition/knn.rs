@@ -1,0 +1,815 @@
+//! k-nearest-neighbour classification with class probabilities, and Sinapov et al.'s
+//! reliability-weighted fusion of several behaviours' classifiers (IEEE T-RO 2011, Sec. IV-B/C).
+//!
+//! The paper used WEKA's `IBk` with `k = 3`: Euclidean distance on attributes that WEKA
+//! min–max normalises over the training set by default, and class probabilities equal to the
+//! neighbours' vote fractions ("if two of the three neighbours had class label A then
+//! Pr(S = A) = 2/3"). [`FeatureScaling::MinMax`] reproduces that normalisation;
+//! [`FeatureScaling::None`] uses raw distances.
+//!
+//! Fusion: each behaviour `b`'s model gives `Pr_b(s | X_b)`; its weight `w_b` is the model's
+//! own cross-validated accuracy on its training data, and the prediction maximises
+//! `Σ_b w_b · Pr_b(s | X_b)`, so that an unreliable behaviour cannot outvote reliable ones.
+
+use thiserror::Error;
+
+/// Neighbours the paper used.
+pub const PAPER_K: usize = 3;
+
+/// Why a classifier could not be fitted or queried.
+#[derive(Debug, Error, PartialEq)]
+pub enum KnnError {
+    /// `k` must be at least one.
+    #[error("k must be at least 1")]
+    ZeroK,
+    /// No training points.
+    #[error("no training points")]
+    Empty,
+    /// Fewer training points than neighbours.
+    #[error("k = {k} neighbours asked for, only {points} training points")]
+    TooFewPoints {
+        /// Neighbours asked for.
+        k: usize,
+        /// Training points available.
+        points: usize,
+    },
+    /// Feature vectors have no values.
+    #[error("feature vectors are empty")]
+    ZeroDimension,
+    /// Features and labels (or groups) differ in count.
+    #[error("{features} feature vectors but {labels} labels")]
+    LengthMismatch {
+        /// Feature vectors given.
+        features: usize,
+        /// Labels (or groups) given.
+        labels: usize,
+    },
+    /// A vector has the wrong dimension.
+    #[error("vector {index} has {got} values, expected {expected}")]
+    Dimension {
+        /// Index of the vector (0 for a query).
+        index: usize,
+        /// Dimension of the training data.
+        expected: usize,
+        /// Dimension found.
+        got: usize,
+    },
+    /// A feature is NaN or infinite.
+    #[error("vector {index} has a value that is not finite")]
+    NonFinite {
+        /// Index of the vector (0 for a query).
+        index: usize,
+    },
+    /// A label is not below the class count.
+    #[error("label {label} of point {index} is not below the class count {classes}")]
+    LabelOutOfRange {
+        /// Index of the point.
+        index: usize,
+        /// The label.
+        label: usize,
+        /// Number of classes.
+        classes: usize,
+    },
+    /// Cross-validation needs at least two groups (recordings) and two folds.
+    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
+    TooFewGroups {
+        /// Distinct groups.
+        groups: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
+}
+
+/// How features are scaled before distances are taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FeatureScaling {
+    /// Raw values.
+    None,
+    /// Each feature mapped to `[0, 1]` by the training set's minimum and maximum (WEKA `IBk`'s
+    /// default, hence the paper's). A feature that is constant in training maps to 0. Without it
+    /// the few loud low-frequency cells would decide every distance.
+    #[default]
+    MinMax,
+}
+
+/// Hyperparameters of [`Knn`]; checked when fitting.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct KnnParams {
+    k: usize,
+    scaling: FeatureScaling,
+}
+
+impl Default for KnnParams {
+    /// The paper's: `k = 3`, min–max scaling.
+    fn default() -> Self {
+        Self {
+            k: PAPER_K,
+            scaling: FeatureScaling::default(),
+        }
+    }
+}
+
+impl KnnParams {
+    /// Number of neighbours.
+    pub fn k(mut self, k: usize) -> Self {
+        self.k = k;
+        self
+    }
+
+    /// Feature scaling.
+    pub fn scaling(mut self, scaling: FeatureScaling) -> Self {
+        self.scaling = scaling;
+        self
+    }
+
+    /// Fits a classifier: see [`Knn::fit`].
+    pub fn fit<V: AsRef<[f64]>>(
+        &self,
+        features: &[V],
+        labels: &[usize],
+        classes: usize,
+    ) -> Result<Knn, KnnError> {
+        Knn::fit(*self, features, labels, classes)
+    }
+}
+
+/// A fitted k-NN classifier: the (scaled) training set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Knn {
+    k: usize,
+    classes: usize,
+    dim: usize,
+    /// Per feature `(offset, factor)`: scaled = (x − offset)·factor.
+    scale: Vec<(f64, f64)>,
+    /// Scaled training points, row-major.
+    points: Vec<f64>,
+    labels: Vec<usize>,
+}
+
+impl Knn {
+    /// Stores the training set. Labels are `0..classes`.
+    pub fn fit<V: AsRef<[f64]>>(
+        params: KnnParams,
+        features: &[V],
+        labels: &[usize],
+        classes: usize,
+    ) -> Result<Self, KnnError> {
+        if params.k == 0 {
+            return Err(KnnError::ZeroK);
+        }
+        if features.is_empty() {
+            return Err(KnnError::Empty);
+        }
+        if features.len() != labels.len() {
+            return Err(KnnError::LengthMismatch {
+                features: features.len(),
+                labels: labels.len(),
+            });
+        }
+        if features.len() < params.k {
+            return Err(KnnError::TooFewPoints {
+                k: params.k,
+                points: features.len(),
+            });
+        }
+        let dim = features[0].as_ref().len();
+        if dim == 0 {
+            return Err(KnnError::ZeroDimension);
+        }
+        for (index, (f, &label)) in features.iter().zip(labels).enumerate() {
+            let f = f.as_ref();
+            if f.len() != dim {
+                return Err(KnnError::Dimension {
+                    index,
+                    expected: dim,
+                    got: f.len(),
+                });
+            }
+            if f.iter().any(|v| !v.is_finite()) {
+                return Err(KnnError::NonFinite { index });
+            }
+            if label >= classes {
+                return Err(KnnError::LabelOutOfRange {
+                    index,
+                    label,
+                    classes,
+                });
+            }
+        }
+        let scale = match params.scaling {
+            FeatureScaling::None => vec![(0.0, 1.0); dim],
+            FeatureScaling::MinMax => (0..dim)
+                .map(|j| {
+                    let (lo, hi) = features
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), f| {
+                            let v = f.as_ref()[j];
+                            (lo.min(v), hi.max(v))
+                        });
+                    let range = hi - lo;
+                    (lo, if range > 0.0 { 1.0 / range } else { 0.0 })
+                })
+                .collect(),
+        };
+        let mut points = Vec::with_capacity(features.len() * dim);
+        for f in features {
+            points.extend(f.as_ref().iter().zip(&scale).map(|(v, (o, s))| (v - o) * s));
+        }
+        Ok(Self {
+            k: params.k,
+            classes,
+            dim,
+            scale,
+            points,
+            labels: labels.to_vec(),
+        })
+    }
+
+    /// Number of classes.
+    pub fn classes(&self) -> usize {
+        self.classes
+    }
+
+    /// Indices of the `k` nearest training points, nearest first. Equal distances are broken
+    /// by training order (the earlier point is nearer), so results never depend on sorting
+    /// internals.
+    pub fn neighbours(&self, query: &[f64]) -> Result<Vec<usize>, KnnError> {
+        if query.len() != self.dim {
+            return Err(KnnError::Dimension {
+                index: 0,
+                expected: self.dim,
+                got: query.len(),
+            });
+        }
+        if query.iter().any(|v| !v.is_finite()) {
+            return Err(KnnError::NonFinite { index: 0 });
+        }
+        let q: Vec<f64> = query
+            .iter()
+            .zip(&self.scale)
+            .map(|(v, (o, s))| (v - o) * s)
+            .collect();
+        let mut dist: Vec<(f64, usize)> = self
+            .points
+            .chunks_exact(self.dim)
+            .enumerate()
+            .map(|(i, p)| (p.iter().zip(&q).map(|(a, b)| (a - b) * (a - b)).sum::<f64>(), i))
+            .collect();
+        dist.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        Ok(dist.into_iter().take(self.k).map(|(_, i)| i).collect())
+    }
+
+    /// Class probabilities: the fraction of the `k` neighbours with each label (the paper's and
+    /// WEKA's, unweighted by distance).
+    pub fn predict_proba(&self, query: &[f64]) -> Result<Vec<f64>, KnnError> {
+        let mut p = vec![0.0; self.classes];
+        for i in self.neighbours(query)? {
+            p[self.labels[i]] += 1.0 / self.k as f64;
+        }
+        Ok(p)
+    }
+
+    /// Most likely class. When several classes share the most votes (e.g. three different
+    /// labels with `k = 3`), the one of the nearest neighbour among them wins — the 1-NN answer
+    /// restricted to the tie, rather than an arbitrary class index.
+    pub fn predict(&self, query: &[f64]) -> Result<usize, KnnError> {
+        let neighbours = self.neighbours(query)?;
+        let mut votes = vec![0usize; self.classes];
+        for &i in &neighbours {
+            votes[self.labels[i]] += 1;
+        }
+        let best = votes.iter().copied().max().unwrap_or(0);
+        // `neighbours` is non-empty (k ≥ 1 and at least k points), so `find` succeeds; the
+        // fallback only keeps this free of panics.
+        Ok(neighbours
+            .iter()
+            .map(|&i| self.labels[i])
+            .find(|&l| votes[l] == best)
+            .unwrap_or(0))
+    }
+}
+
+/// The index of the largest probability; ties go to the lowest class index. `None` for an
+/// empty slice.
+pub fn argmax(p: &[f64]) -> Option<usize> {
+    p.iter()
+        .enumerate()
+        .fold(None, |best: Option<(usize, f64)>, (i, &v)| match best {
+            Some((_, bv)) if bv >= v => best,
+            _ => Some((i, v)),
+        })
+        .map(|(i, _)| i)
+}
+
+/// Fold of each sample when whole groups (recordings, trials) are dealt out to `folds` folds:
+/// the distinct group ids, sorted, go round-robin to folds `0, 1, …`. All samples of a group
+/// share a fold, so a recording is never on both sides of a split. With fewer groups than folds
+/// each group is its own fold (leave-one-group-out).
+pub fn group_folds(groups: &[u64], folds: usize) -> Result<(Vec<usize>, usize), KnnError> {
+    let mut distinct: Vec<u64> = groups.to_vec();
+    distinct.sort_unstable();
+    distinct.dedup();
+    if distinct.len() < 2 || folds < 2 {
+        return Err(KnnError::TooFewGroups {
+            groups: distinct.len(),
+            folds,
+        });
+    }
+    let folds = folds.min(distinct.len());
+    let fold = groups
+        .iter()
+        .map(|g| distinct.binary_search(g).map_or(0, |rank| rank % folds))
+        .collect();
+    Ok((fold, folds))
+}
+
+/// Accuracy of k-NN under cross-validation by group ([`group_folds`]): the reliability weight
+/// of a behaviour's model in the paper's fusion.
+pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
+    params: KnnParams,
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<f64, KnnError> {
+    if groups.len() != features.len() {
+        return Err(KnnError::LengthMismatch {
+            features: features.len(),
+            labels: groups.len(),
+        });
+    }
+    if labels.len() != features.len() {
+        return Err(KnnError::LengthMismatch {
+            features: features.len(),
+            labels: labels.len(),
+        });
+    }
+    let (fold, folds) = group_folds(groups, folds)?;
+    let mut correct = 0usize;
+    for f in 0..folds {
+        let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
+            .iter()
+            .zip(labels)
+            .zip(&fold)
+            .filter(|&(_, &g)| g != f)
+            .map(|((x, &y), _)| (x.as_ref(), y))
+            .unzip();
+        let model = Knn::fit(params, &train_x, &train_y, classes)?;
+        for ((x, &y), _) in features.iter().zip(labels).zip(&fold).filter(|&(_, &g)| g == f) {
+            if model.predict(x.as_ref())? == y {
+                correct += 1;
+            }
+        }
+    }
+    Ok(correct as f64 / features.len() as f64)
+}
+
+/// Why probabilities could not be fused.
+#[derive(Debug, Error, PartialEq)]
+pub enum FusionError {
+    /// Nothing to fuse.
+    #[error("no classifiers to fuse")]
+    Empty,
+    /// Probability vectors and weights differ in count.
+    #[error("{probabilities} probability vectors but {weights} weights")]
+    CountMismatch {
+        /// Probability vectors.
+        probabilities: usize,
+        /// Weights.
+        weights: usize,
+    },
+    /// Probability vectors differ in length.
+    #[error("classifier {index} gives {got} class probabilities, expected {expected}")]
+    ClassMismatch {
+        /// Index of the classifier.
+        index: usize,
+        /// Classes of the first classifier.
+        expected: usize,
+        /// Classes of this one.
+        got: usize,
+    },
+    /// A weight is negative or not finite.
+    #[error("weight {index} is {weight}; weights must be finite and non-negative")]
+    BadWeight {
+        /// Index of the classifier.
+        index: usize,
+        /// The weight.
+        weight: f64,
+    },
+    /// All weights are zero: no classifier is reliable, so there is nothing to trust.
+    #[error("all weights are zero")]
+    ZeroTotalWeight,
+    /// A query gives a feature vector per behaviour; this one has the wrong count.
+    #[error("{queries} queries for {behaviours} behaviours")]
+    QueryCount {
+        /// Queries given.
+        queries: usize,
+        /// Behaviours fitted.
+        behaviours: usize,
+    },
+    /// Fitting or querying one behaviour's classifier failed.
+    #[error("behaviour {behaviour}")]
+    Knn {
+        /// Index of the behaviour.
+        behaviour: usize,
+        /// What went wrong.
+        #[source]
+        source: KnnError,
+    },
+}
+
+/// One behaviour's training data: a feature vector, label and group (recording or trial, for
+/// the reliability cross-validation) per interaction.
+#[derive(Debug, Clone, Copy)]
+pub struct BehaviourData<'a, V> {
+    /// Feature vectors.
+    pub features: &'a [V],
+    /// Class labels, `0..classes`.
+    pub labels: &'a [usize],
+    /// Groups: interactions sharing a group are never split between training and testing.
+    pub groups: &'a [u64],
+}
+
+/// A k-NN model per behaviour and its reliability weight (Sinapov Sec. IV-C): the whole
+/// recognizer for interactions that may use any subset of the behaviours.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReliabilityFusion {
+    models: Vec<Knn>,
+    weights: Vec<f64>,
+}
+
+impl ReliabilityFusion {
+    /// Fits each behaviour's model on all its data and weighs it by its accuracy under
+    /// `folds`-fold cross-validation by group on that same data ([`cross_validated_accuracy`]).
+    pub fn fit<V: AsRef<[f64]>>(
+        params: KnnParams,
+        behaviours: &[BehaviourData<'_, V>],
+        classes: usize,
+        folds: usize,
+    ) -> Result<Self, FusionError> {
+        if behaviours.is_empty() {
+            return Err(FusionError::Empty);
+        }
+        let mut models = Vec::with_capacity(behaviours.len());
+        let mut weights = Vec::with_capacity(behaviours.len());
+        for (behaviour, d) in behaviours.iter().enumerate() {
+            let wrap = |source| FusionError::Knn { behaviour, source };
+            models.push(Knn::fit(params, d.features, d.labels, classes).map_err(wrap)?);
+            weights.push(
+                cross_validated_accuracy(params, d.features, d.labels, d.groups, classes, folds)
+                    .map_err(wrap)?,
+            );
+        }
+        Ok(Self { models, weights })
+    }
+
+    /// The behaviours' models, in the order given to [`ReliabilityFusion::fit`].
+    pub fn models(&self) -> &[Knn] {
+        &self.models
+    }
+
+    /// The behaviours' reliability weights (cross-validated accuracies).
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// Fused class probabilities of one surface: `queries[b]` is the feature vector from
+    /// behaviour `b`, or `None` where that behaviour was not performed. Fails with
+    /// [`FusionError::Empty`] when no behaviour was, and [`FusionError::ZeroTotalWeight`] when
+    /// only behaviours that never classified correctly were.
+    pub fn predict_proba(&self, queries: &[Option<&[f64]>]) -> Result<Vec<f64>, FusionError> {
+        if queries.len() != self.models.len() {
+            return Err(FusionError::QueryCount {
+                queries: queries.len(),
+                behaviours: self.models.len(),
+            });
+        }
+        let mut probabilities = Vec::new();
+        let mut weights = Vec::new();
+        for (behaviour, (q, (model, &w))) in queries
+            .iter()
+            .zip(self.models.iter().zip(&self.weights))
+            .enumerate()
+        {
+            if let Some(q) = q {
+                probabilities.push(
+                    model
+                        .predict_proba(q)
+                        .map_err(|source| FusionError::Knn { behaviour, source })?,
+                );
+                weights.push(w);
+            }
+        }
+        fuse(&probabilities, &weights)
+    }
+
+    /// The most likely class ([`argmax`] of [`ReliabilityFusion::predict_proba`]).
+    pub fn predict(&self, queries: &[Option<&[f64]>]) -> Result<usize, FusionError> {
+        let p = self.predict_proba(queries)?;
+        argmax(&p).ok_or(FusionError::Empty)
+    }
+}
+
+/// Reliability-weighted fusion: `Σ_b w_b·p_b / Σ_b w_b`, a probability vector again when the
+/// inputs are. Weights are the behaviours' cross-validated accuracies
+/// ([`cross_validated_accuracy`]); dividing by their sum keeps the result comparable across
+/// different numbers of behaviours without changing its argmax.
+pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec<f64>, FusionError> {
+    if probabilities.is_empty() {
+        return Err(FusionError::Empty);
+    }
+    if probabilities.len() != weights.len() {
+        return Err(FusionError::CountMismatch {
+            probabilities: probabilities.len(),
+            weights: weights.len(),
+        });
+    }
+    let classes = probabilities[0].as_ref().len();
+    let mut out = vec![0.0; classes];
+    let mut total = 0.0;
+    for (index, (p, &w)) in probabilities.iter().zip(weights).enumerate() {
+        let p = p.as_ref();
+        if p.len() != classes {
+            return Err(FusionError::ClassMismatch {
+                index,
+                expected: classes,
+                got: p.len(),
+            });
+        }
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(FusionError::BadWeight { index, weight: w });
+        }
+        total += w;
+        for (o, v) in out.iter_mut().zip(p) {
+            *o += w * v;
+        }
+    }
+    if total <= 0.0 {
+        return Err(FusionError::ZeroTotalWeight);
+    }
+    out.iter_mut().for_each(|v| *v /= total);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on a line: class 0 at 0, 1, 2; class 1 at 10, 11; class 2 at 20.
+    fn line() -> (Vec<[f64; 1]>, Vec<usize>) {
+        (
+            vec![[0.0], [1.0], [2.0], [10.0], [11.0], [20.0]],
+            vec![0, 0, 0, 1, 1, 2],
+        )
+    }
+
+    #[test]
+    fn vote_fractions_on_a_hand_example() {
+        let (x, y) = line();
+        let knn = KnnParams::default()
+            .scaling(FeatureScaling::None)
+            .fit(&x, &y, 3)
+            .expect("valid");
+        // Nearest to 1.2: 1, 2, 0 — all class 0.
+        assert_eq!(knn.neighbours(&[1.2]).expect("ok"), vec![1, 2, 0]);
+        assert_eq!(knn.predict_proba(&[1.2]).expect("ok"), vec![1.0, 0.0, 0.0]);
+        // Nearest to 9: 10 (1), 11 (2), 2 (7) → 1/3 class 0, 2/3 class 1.
+        let p = knn.predict_proba(&[9.0]).expect("ok");
+        assert!((p[0] - 1.0 / 3.0).abs() < 1e-12 && (p[1] - 2.0 / 3.0).abs() < 1e-12 && p[2] == 0.0);
+        assert_eq!(knn.predict(&[9.0]).expect("ok"), 1);
+        // Nearest to 15.4: 11 (4.4), 20 (4.6), 10 (5.4) → class 1 twice, class 2 once.
+        assert_eq!(knn.predict(&[15.4]).expect("ok"), 1);
+    }
+
+    #[test]
+    fn three_way_tie_goes_to_the_nearest_neighbour() {
+        let x = [[0.0], [5.0], [11.0]];
+        let y = [0, 1, 2];
+        let knn = KnnParams::default()
+            .scaling(FeatureScaling::None)
+            .fit(&x, &y, 3)
+            .expect("valid");
+        let p = knn.predict_proba(&[6.0]).expect("ok");
+        assert!(p.iter().all(|&v| (v - 1.0 / 3.0).abs() < 1e-12));
+        assert_eq!(knn.predict(&[6.0]).expect("ok"), 1);
+        assert_eq!(knn.predict(&[10.0]).expect("ok"), 2);
+        // Exactly equidistant points: the earlier training point counts as nearer.
+        let knn1 = KnnParams::default()
+            .k(1)
+            .scaling(FeatureScaling::None)
+            .fit(&[[0.0], [2.0]], &[1, 0], 2)
+            .expect("valid");
+        assert_eq!(knn1.predict(&[1.0]).expect("ok"), 1);
+    }
+
+    #[test]
+    fn min_max_scaling_equalises_features() {
+        // Feature 0 spans 0..1000, feature 1 spans 0..1 and carries the class.
+        let x = [[0.0, 0.0], [1000.0, 0.1], [0.0, 1.0], [900.0, 0.9]];
+        let y = [0, 0, 1, 1];
+        let raw = KnnParams::default()
+            .k(1)
+            .scaling(FeatureScaling::None)
+            .fit(&x, &y, 2)
+            .expect("valid");
+        let scaled = KnnParams::default().k(1).fit(&x, &y, 2).expect("valid");
+        let q = [980.0, 0.9];
+        // Raw: (1000, 0.1) is 400.64 away in squares, (900, 0.9) 6400.
+        assert_eq!(raw.predict(&q).expect("ok"), 0, "raw distance follows feature 0");
+        // Scaled: (0.98, 0.9) is 0.6404 from (1, 0.1) and 0.0064 from (0.9, 0.9).
+        assert_eq!(scaled.predict(&q).expect("ok"), 1);
+    }
+
+    #[test]
+    fn bad_input_is_a_typed_error() {
+        let (x, y) = line();
+        let p = KnnParams::default();
+        assert_eq!(p.k(0).fit(&x, &y, 3), Err(KnnError::ZeroK));
+        assert_eq!(p.fit::<[f64; 1]>(&[], &[], 3), Err(KnnError::Empty));
+        assert_eq!(
+            p.fit(&x, &y[..5], 3),
+            Err(KnnError::LengthMismatch {
+                features: 6,
+                labels: 5
+            })
+        );
+        assert_eq!(
+            p.k(7).fit(&x, &y, 3),
+            Err(KnnError::TooFewPoints { k: 7, points: 6 })
+        );
+        assert_eq!(
+            p.fit(&x, &y, 2),
+            Err(KnnError::LabelOutOfRange {
+                index: 5,
+                label: 2,
+                classes: 2
+            })
+        );
+        let ragged: Vec<Vec<f64>> = vec![vec![0.0], vec![1.0, 2.0], vec![3.0]];
+        assert_eq!(
+            p.fit(&ragged, &[0, 0, 0], 1),
+            Err(KnnError::Dimension {
+                index: 1,
+                expected: 1,
+                got: 2
+            })
+        );
+        assert_eq!(
+            p.fit(&[[0.0], [f64::NAN], [1.0]], &[0, 0, 0], 1),
+            Err(KnnError::NonFinite { index: 1 })
+        );
+        let empty: [[f64; 0]; 3] = [[], [], []];
+        assert_eq!(p.fit(&empty, &[0, 0, 0], 1), Err(KnnError::ZeroDimension));
+        let knn = p.fit(&x, &y, 3).expect("valid");
+        assert!(matches!(
+            knn.predict(&[1.0, 2.0]),
+            Err(KnnError::Dimension { .. })
+        ));
+        assert_eq!(
+            knn.predict_proba(&[f64::INFINITY]),
+            Err(KnnError::NonFinite { index: 0 })
+        );
+    }
+
+    #[test]
+    fn folds_keep_groups_together() {
+        let groups = [7, 7, 3, 3, 9, 1, 1];
+        let (fold, n) = group_folds(&groups, 3).expect("enough groups");
+        assert_eq!(n, 3);
+        // Sorted groups 1, 3, 7, 9 → folds 0, 1, 2, 0.
+        assert_eq!(fold, vec![2, 2, 1, 1, 0, 0, 0]);
+        let (_, n) = group_folds(&groups, 10).expect("enough groups");
+        assert_eq!(n, 4, "leave-one-group-out when groups < folds");
+        assert_eq!(
+            group_folds(&[5, 5], 10),
+            Err(KnnError::TooFewGroups { groups: 1, folds: 10 })
+        );
+    }
+
+    #[test]
+    fn cross_validated_accuracy_counts_held_out_predictions() {
+        // Two classes, three trials each; trial 2 of class 1 sits among class 0.
+        let x = [[0.0], [0.1], [0.2], [5.0], [5.1], [0.25]];
+        let y = [0, 0, 0, 1, 1, 1];
+        let groups = [0, 1, 2, 0, 1, 2];
+        let params = KnnParams::default().k(1).scaling(FeatureScaling::None);
+        let acc = cross_validated_accuracy(params, &x, &y, &groups, 2, 3).expect("valid");
+        // Fold 2 holds out 0.2 (class 0, nearest 0.1 → right) and 0.25 (class 1, nearest 0.1
+        // → wrong); folds 0 and 1 are all right: 5 of 6.
+        assert!((acc - 5.0 / 6.0).abs() < 1e-12, "{acc}");
+    }
+
+    #[test]
+    fn fusion_weights_reliable_behaviours() {
+        // Behaviour A (reliable, w = 0.9) says class 1; behaviour B (w = 0.3) is sure of 0.
+        let a = [0.0, 2.0 / 3.0, 1.0 / 3.0];
+        let b = [1.0, 0.0, 0.0];
+        let fused = fuse(&[a, b], &[0.9, 0.3]).expect("valid");
+        let expected = [0.3 / 1.2, 0.6 / 1.2, 0.3 / 1.2];
+        for (f, e) in fused.iter().zip(expected) {
+            assert!((f - e).abs() < 1e-12, "{fused:?}");
+        }
+        assert_eq!(argmax(&fused), Some(1));
+        assert!((fused.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        // With equal weights B's certainty would win: (1, 2/3, 1/3) / 2.
+        assert_eq!(argmax(&fuse(&[a, b], &[0.5, 0.5]).expect("valid")), Some(0));
+        // A useless behaviour (weight 0) changes nothing.
+        let alone = fuse(&[a, b], &[0.9, 0.0]).expect("valid");
+        assert!(
+            alone.iter().zip(a).all(|(f, e)| (f - e).abs() < 1e-12),
+            "{alone:?}"
+        );
+    }
+
+    #[test]
+    fn fitted_fusion_weighs_behaviours_by_their_cross_validated_accuracy() {
+        // Two classes, three trials (groups). Behaviour 0 separates them perfectly; behaviour 1
+        // puts class 1's trial 2 among class 0 (accuracy 5/6, as in the CV test above).
+        static GOOD: [[f64; 1]; 6] = [[0.0], [0.1], [0.2], [5.0], [5.1], [5.2]];
+        static POOR: [[f64; 1]; 6] = [[0.0], [0.1], [0.2], [5.0], [5.1], [0.25]];
+        let (good, poor) = (&GOOD, &POOR);
+        let labels = [0, 0, 0, 1, 1, 1];
+        let groups = [0, 1, 2, 0, 1, 2];
+        let data = |features: &'static [[f64; 1]]| BehaviourData {
+            features,
+            labels: &labels,
+            groups: &groups,
+        };
+        let params = KnnParams::default().k(1).scaling(FeatureScaling::None);
+        let fusion = ReliabilityFusion::fit(params, &[data(good), data(poor)], 2, 3).expect("valid");
+        assert_eq!(fusion.weights(), &[1.0, 5.0 / 6.0]);
+        // Behaviour 0 says 1 (near 5), behaviour 1 says 0 (near 0.1): the reliable one wins
+        // with 1/(1 + 5/6) = 6/11.
+        let p = fusion
+            .predict_proba(&[Some(&[4.9]), Some(&[0.12])])
+            .expect("valid");
+        assert!((p[1] - 6.0 / 11.0).abs() < 1e-12, "{p:?}");
+        assert_eq!(fusion.predict(&[Some(&[4.9]), Some(&[0.12])]).expect("valid"), 1);
+        // Only behaviour 1 performed: its answer alone.
+        assert_eq!(fusion.predict(&[None, Some(&[0.12])]).expect("valid"), 0);
+        assert_eq!(fusion.predict(&[None, None]), Err(FusionError::Empty));
+        assert_eq!(
+            fusion.predict(&[None]),
+            Err(FusionError::QueryCount {
+                queries: 1,
+                behaviours: 2
+            })
+        );
+        assert_eq!(
+            fusion.predict(&[Some(&[1.0, 2.0]), None]),
+            Err(FusionError::Knn {
+                behaviour: 0,
+                source: KnnError::Dimension {
+                    index: 0,
+                    expected: 1,
+                    got: 2
+                }
+            })
+        );
+        let one_group = [0, 0, 0, 0, 0, 0];
+        let bad = BehaviourData {
+            features: good,
+            labels: &labels,
+            groups: &one_group,
+        };
+        assert_eq!(
+            ReliabilityFusion::fit(params, &[data(good), bad], 2, 3),
+            Err(FusionError::Knn {
+                behaviour: 1,
+                source: KnnError::TooFewGroups { groups: 1, folds: 3 }
+            })
+        );
+    }
+
+    #[test]
+    fn fusion_rejects_bad_input() {
+        let a = [0.5, 0.5];
+        assert_eq!(fuse::<[f64; 2]>(&[], &[]), Err(FusionError::Empty));
+        assert_eq!(
+            fuse(&[a], &[1.0, 1.0]),
+            Err(FusionError::CountMismatch {
+                probabilities: 1,
+                weights: 2
+            })
+        );
+        assert_eq!(
+            fuse(&[&a[..], &[1.0][..]], &[1.0, 1.0]),
+            Err(FusionError::ClassMismatch {
+                index: 1,
+                expected: 2,
+                got: 1
+            })
+        );
+        assert_eq!(
+            fuse(&[a], &[-0.1]),
+            Err(FusionError::BadWeight {
+                index: 0,
+                weight: -0.1
+            })
+        );
+        assert_eq!(fuse(&[a, a], &[0.0, 0.0]), Err(FusionError::ZeroTotalWeight));
+        assert_eq!(argmax(&[]), None);
+        assert_eq!(argmax(&[0.2, 0.4, 0.4]), Some(1));
+    }
+}

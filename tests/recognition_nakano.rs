@@ -1,0 +1,268 @@
+//! Nakano's protocol end to end on the simulated captures (thesis Sec. 3.2–3.3, Fig. 4.15):
+//! generate the 7 surfaces × 3 rubbing runs (seed 1), cut each run into windows from x = 5 mm on
+//! (the thesis starts recognising there), train a SOM on run 0 of every surface and recognise the
+//! windows of runs 1 and 2 — split by recording, never windows of one run on both sides — with
+//! 10 SOM seeds pooled, as Fig. 4.15 averages 10 maps.
+//!
+//! The window (1000 samples = 5 mm of travel = 1 s) and the filters (2.5 mm cut-off, 0.2 mm
+//! smoothing) were chosen by reasoning before looking at the test runs (see
+//! `identify::recognition::nakano`); the window-length table is printed for information.
+#![allow(clippy::print_stdout)] // the tables are this test's report
+
+use std::sync::OnceLock;
+
+use haptics::sim::protocols::{CaptureSet, generate};
+use identify::capture::{Capture, CaptureKind};
+use identify::recognition::eval::ConfusionMatrix;
+use identify::recognition::nakano::{FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
+use identify::recognition::som::{Normalization, Som, SomParams};
+
+/// Recognition starts after this much travel (thesis Sec. 4.3), m.
+const START_TRAVEL_M: f64 = 0.005;
+/// Windows start every 100 samples (0.5 mm, 0.1 s).
+const HOP: usize = 100;
+/// The chosen window: 1000 samples, 5 mm of travel at 5 mm/s.
+const WINDOW: usize = 1000;
+/// SOM seeds pooled, as Fig. 4.15.
+const SEEDS: u64 = 10;
+
+struct Run {
+    surface: String,
+    train: bool,
+    capture: Capture,
+}
+
+fn runs() -> &'static [Run] {
+    static RUNS: OnceLock<Vec<Run>> = OnceLock::new();
+    RUNS.get_or_init(|| {
+        let dir = tempfile::tempdir().expect("tempdir");
+        generate(dir.path(), 1, &[CaptureSet::Nakano], &mut |_| {}).expect("generate");
+        let mut paths: Vec<_> = std::fs::read_dir(dir.path().join("nakano"))
+            .expect("nakano folder")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+            .collect();
+        paths.sort();
+        assert_eq!(paths.len(), 21);
+        paths
+            .iter()
+            .map(|p| {
+                let capture = Capture::read_file(p, CaptureKind::Rubbing).expect("capture");
+                let meta = capture.metadata();
+                Run {
+                    surface: meta.get("surface").expect("surface").to_owned(),
+                    train: meta.get("role") == Some("train"),
+                    capture,
+                }
+            })
+            .collect()
+    })
+}
+
+/// Feature vectors of `len`-sample windows every [`HOP`] samples from x = 5 mm on.
+fn windows(run: &Run, len: usize, config: &NakanoConfig) -> Vec<Vec<f64>> {
+    let signals = NakanoSignals::from_capture(&run.capture).expect("columns");
+    let x = signals.position_m();
+    let margin = config.lookahead_samples();
+    let first = x
+        .iter()
+        .position(|&p| p - x[0] >= START_TRAVEL_M)
+        .expect("5 mm of travel")
+        .max(margin);
+    (first..)
+        .step_by(HOP)
+        .take_while(|s| s + len + margin <= signals.len())
+        .map(|s| signals.features(s, len, config).expect("in range").to_vec())
+        .collect()
+}
+
+/// The thesis's reading of Eqs. 2.18–2.22 with `[n]`: features over every sample from the start
+/// of the stroke (after the filter margin) up to the decision point, decisions every [`HOP`]
+/// samples from x = 5 mm on — a growing window instead of a sliding one.
+fn growing_windows(run: &Run, config: &NakanoConfig) -> Vec<Vec<f64>> {
+    let signals = NakanoSignals::from_capture(&run.capture).expect("columns");
+    let x = signals.position_m();
+    let margin = config.lookahead_samples();
+    let first = x
+        .iter()
+        .position(|&p| p - x[0] >= START_TRAVEL_M)
+        .expect("5 mm of travel");
+    (first..)
+        .step_by(HOP)
+        .take_while(|end| end + margin <= signals.len())
+        .map(|end| {
+            signals
+                .features(margin, end - margin, config)
+                .expect("in range")
+                .to_vec()
+        })
+        .collect()
+}
+
+fn classes() -> Vec<String> {
+    let mut classes: Vec<String> = runs()
+        .iter()
+        .filter(|r| r.train)
+        .map(|r| r.surface.clone())
+        .collect();
+    classes.dedup();
+    classes
+}
+
+/// Training set (run 0 of every surface) and test set (runs 1, 2).
+type Labelled = (Vec<Vec<f64>>, Vec<String>);
+
+/// Windows of `len` samples, or growing windows when `len` is `None`.
+fn split(len: Option<usize>) -> (Labelled, Labelled) {
+    let config = NakanoConfig::default();
+    let (mut train, mut test): (Labelled, Labelled) = Default::default();
+    for run in runs() {
+        let set = if run.train { &mut train } else { &mut test };
+        let features = match len {
+            Some(len) => windows(run, len, &config),
+            None => growing_windows(run, &config),
+        };
+        for w in features {
+            set.0.push(w);
+            set.1.push(run.surface.clone());
+        }
+    }
+    (train, test)
+}
+
+/// Confusion over the test windows pooled over [`SEEDS`] maps, and the mean quantization and
+/// topographic errors on the training set.
+fn evaluate(len: Option<usize>, normalization: Normalization) -> (ConfusionMatrix<String>, f64, f64) {
+    let ((train, train_labels), (test, test_labels)) = split(len);
+    let mut pooled = ConfusionMatrix::new(classes()).expect("distinct");
+    let (mut qe, mut te) = (0.0, 0.0);
+    for seed in 0..SEEDS {
+        let params = SomParams {
+            seed,
+            normalization,
+            ..SomParams::default()
+        };
+        let som = Som::train(params, &train, &train_labels).expect("train");
+        qe += som.quantization_error(&train).expect("qe") / SEEDS as f64;
+        te += som.topographic_error(&train).expect("te") / SEEDS as f64;
+        for (v, truth) in test.iter().zip(&test_labels) {
+            pooled
+                .add(truth, som.classify(v).expect("classify"))
+                .expect("known");
+        }
+    }
+    (pooled, qe, te)
+}
+
+#[test]
+fn nakano_protocol_recognizes_every_surface() {
+    let ((train, _), (test, _)) = split(Some(WINDOW));
+    assert_eq!(train[0].len(), FEATURES);
+    println!(
+        "Nakano protocol: {} training windows (run 0), {} test windows (runs 1, 2), {WINDOW} samples each, hop {HOP}",
+        train.len(),
+        test.len()
+    );
+    let (matrix, qe, te) = evaluate(Some(WINDOW), Normalization::Standardize);
+    println!("standardised features, {SEEDS} SOM seeds pooled (percent of each true surface):");
+    println!("{}", matrix.to_text());
+    println!("training quantization error {qe:.4}, topographic error {te:.4}");
+    let rates = matrix.per_class_rates();
+    for (class, rate) in matrix.classes().iter().zip(&rates) {
+        let rate = rate.expect("every surface has test windows");
+        assert!(rate >= MIN_RATE, "{class}: {:.1} %", 100.0 * rate);
+    }
+    assert!(matrix.accuracy().expect("samples") >= 0.80);
+    assert!(te < 0.05, "topographic error {te}");
+}
+
+/// Lowest per-surface rate asserted at the chosen window.
+const MIN_RATE: f64 = 0.55;
+
+#[test]
+fn accuracy_against_window_length_and_normalisation() {
+    let mut table =
+        String::from("window_samples  travel_mm  accuracy_standardised  accuracy_thesis_norm  worst_class\n");
+    let mut accuracy = Vec::new();
+    for len in [250, 500, 1000, 2000] {
+        let (standard, _, _) = evaluate(Some(len), Normalization::Standardize);
+        let (thesis, _, _) = evaluate(Some(len), Normalization::ThesisColumnNorm);
+        let worst = standard
+            .per_class_rates()
+            .into_iter()
+            .flatten()
+            .fold(1.0, f64::min);
+        let a = standard.accuracy().expect("samples");
+        let b = thesis.accuracy().expect("samples");
+        table.push_str(&format!(
+            "{len:>14}  {:>9.2}  {:>20.1} %  {:>18.1} %  {:>9.1} %\n",
+            len as f64 * 5e-3,
+            100.0 * a,
+            100.0 * b,
+            100.0 * worst
+        ));
+        accuracy.push(a);
+        // Standardising before unit-normalising beats Eq. 2.26's column norms at every length.
+        assert!(a > b + 0.05, "{len}: {a} vs {b}");
+    }
+    println!("{table}");
+    // Longer windows average more roughness waves: accuracy rises with the window.
+    assert!(accuracy[3] > accuracy[0] + 0.15, "{accuracy:?}");
+    let (growing, _, _) = evaluate(None, Normalization::Standardize);
+    println!("growing window from the stroke's start (Eq. 2.18 with [n]), decisions from x = 5 mm on:");
+    println!("{}", growing.to_text());
+    assert!(growing.accuracy().expect("samples") >= 0.88);
+    for rate in growing.per_class_rates() {
+        assert!(
+            rate.expect("test windows") >= 0.80,
+            "{:?}",
+            growing.per_class_rates()
+        );
+    }
+}
+
+#[test]
+fn streaming_features_equal_batch_on_a_generated_run_and_the_latency_is_window_plus_lookahead() {
+    let config = NakanoConfig::default();
+    // A test run of sandpaper_400, the finest roughness (the most waves to count).
+    let run = runs()
+        .iter()
+        .find(|r| r.surface == "sandpaper_400" && !r.train)
+        .expect("sandpaper_400 test run");
+    let signals = NakanoSignals::from_capture(&run.capture).expect("columns");
+    let mut stream = NakanoStream::new(config, WINDOW).expect("valid");
+    let (x, z, f) = (
+        signals.position_m(),
+        run.capture.column("normal_position_m").expect("height"),
+        run.capture.column("friction_force_n").expect("friction"),
+    );
+    let mut compared = 0;
+    for i in 0..signals.len() {
+        let Some(w) = stream.push(x[i], z[i], f[i]) else {
+            continue;
+        };
+        let start = w.start as usize;
+        // Decided at sample i: the window's last sample plus the filters' lookahead.
+        assert_eq!(i, start + WINDOW - 1 + config.lookahead_samples());
+        if start < config.lookahead_samples() {
+            continue;
+        }
+        let batch = signals.features(start, WINDOW, &config).expect("in range");
+        for (a, b) in w.features.iter().zip(&batch) {
+            assert!(
+                (a - b).abs() <= 1e-9 * a.abs().max(b.abs()),
+                "{start}: {a} vs {b}"
+            );
+        }
+        compared += 1;
+    }
+    assert!(compared > 4000, "{compared}");
+    let rate_hz = run.capture.metadata().rate_hz();
+    let latency_s = (WINDOW + config.lookahead_samples()) as f64 / rate_hz;
+    println!(
+        "decision latency: window {:.3} s + lookahead {:.3} s = {latency_s:.3} s",
+        WINDOW as f64 / rate_hz,
+        config.lookahead_samples() as f64 / rate_hz
+    );
+    assert!((latency_s - 1.27).abs() < 1e-9);
+}
