@@ -255,6 +255,28 @@ pub fn identify(
     }
 }
 
+/// The RBF-network baseline fitted on (`x_train`, `y_train`) and evaluated at `x_eval`.
+fn rbf_network(
+    x_train: &[f64],
+    dim: usize,
+    y_train: &[f64],
+    x_eval: &[f64],
+) -> Result<Vec<f64>, IdentifyError> {
+    let baseline = |e: crate::baselines::BaselineError| IdentifyError::Baseline {
+        what: "RBF network",
+        reason: e.to_string(),
+    };
+    RbfNetwork::fit(
+        x_train,
+        dim,
+        y_train,
+        &RbfNetworkParams::for_samples(y_train.len()),
+    )
+    .map_err(baseline)?
+    .predict_many(x_eval)
+    .map_err(baseline)
+}
+
 /// Both baselines for friction data, evaluated on `eval`. The RBF network sees the inputs the
 /// SVR model sees: normal force alone for hard contact (whose law ignores speed, and whose
 /// held-out trajectory runs at other speeds), normal force and speed for soft contact.
@@ -286,20 +308,7 @@ fn friction_baselines(
     };
     let (x_tr, x_ev) = (inputs(tr), inputs(eval));
     let dim = if with_speed { 2 } else { 1 };
-    let net = RbfNetwork::fit(
-        &x_tr,
-        dim,
-        &tr.friction_force_n,
-        &RbfNetworkParams::for_samples(tr.time_s.len()),
-    )
-    .map_err(|e| IdentifyError::Baseline {
-        what: "RBF network",
-        reason: e.to_string(),
-    })?;
-    let net_pred = net.predict_many(&x_ev).map_err(|e| IdentifyError::Baseline {
-        what: "RBF network",
-        reason: e.to_string(),
-    })?;
+    let net_pred = rbf_network(&x_tr, dim, &tr.friction_force_n, &x_ev)?;
     Ok((
         metrics(&eval.time_s, &eval.friction_force_n, &cv_pred)?,
         metrics(&eval.time_s, &eval.friction_force_n, &net_pred)?,
@@ -559,20 +568,26 @@ pub(crate) fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
     ))
 }
 
+/// Up to `max_samples` of the in-tissue samples, spread evenly over them (the paper trains on
+/// 350). Identification and the hyperparameter search train on exactly this set.
+pub(crate) fn spread((t, x, y): &NeedleSamples, max_samples: usize) -> NeedleSamples {
+    let n_all = y.len();
+    let n = max_samples.clamp(2, n_all.max(2));
+    let pick: Vec<usize> = (0..n)
+        .map(|k| ((k as f64) * n_all.saturating_sub(1) as f64 / (n - 1) as f64).round() as usize)
+        .collect();
+    (
+        pick.iter().map(|&i| t[i]).collect(),
+        pick.iter().flat_map(|&i| [x[2 * i], x[2 * i + 1]]).collect(),
+        pick.iter().map(|&i| y[i]).collect(),
+    )
+}
+
 fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let (t_all, x_all, y_all) = needle_data(train)?;
-    // Up to max_samples spread evenly over the in-tissue samples.
-    let n_all = y_all.len();
-    let n = o.max_samples.clamp(2, n_all);
-    let pick: Vec<usize> = (0..n)
-        .map(|k| ((k as f64) * (n_all - 1) as f64 / (n - 1) as f64).round() as usize)
-        .collect();
-    let x: Vec<f64> = pick
-        .iter()
-        .flat_map(|&i| [x_all[2 * i], x_all[2 * i + 1]])
-        .collect();
-    let y: Vec<f64> = pick.iter().map(|&i| y_all[i]).collect();
+    let all = needle_data(train)?;
+    let (_, x, y) = spread(&all, o.max_samples);
+    let (t_all, x_all, y_all) = all;
     let scaling = InputScaling::min_max(&x, 2);
     let xs = scaling.apply(&x);
     // γ = 30 on inputs scaled to [0, 1]: narrow enough to follow the puncture's fall, which
@@ -592,16 +607,7 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
     let predict = |xx: &[f64]| -> Vec<f64> { xx.chunks_exact(2).map(|r| model.predict(r)).collect() };
     let svr_metrics = metrics(&t_ev, &y_ev, &predict(&x_ev))?;
     let train_metrics = metrics(&t_all, &y_all, &predict(&x_all))?;
-    let net = RbfNetwork::fit(&x, 2, &y, &RbfNetworkParams::for_samples(y.len())).map_err(|e| {
-        IdentifyError::Baseline {
-            what: "RBF network",
-            reason: e.to_string(),
-        }
-    })?;
-    let net_pred = net.predict_many(&x_ev).map_err(|e| IdentifyError::Baseline {
-        what: "RBF network",
-        reason: e.to_string(),
-    })?;
+    let net_pred = rbf_network(&x, 2, &y, &x_ev)?;
     let net_metrics = metrics(&t_ev, &y_ev, &net_pred)?;
     let hyper = vec![SvrHyper {
         label: "svr".into(),
@@ -626,7 +632,7 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
         },
         ModelBody::Single(model),
         hyper,
-        n,
+        y.len(),
         (train_metrics, svr_metrics),
         (None, net_metrics),
         &[&f],

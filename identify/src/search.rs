@@ -11,7 +11,9 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::capture::Capture;
-use crate::identification::{FrictionData, IdentifyError, KGF_N, friction_data, needle_data, stage_one, svr};
+use crate::identification::{
+    FrictionData, IdentifyError, KGF_N, friction_data, needle_data, spread, stage_one, svr,
+};
 use crate::metrics::Metrics;
 use crate::model_file::ModelKind;
 use crate::svr::{InputScaling, Kernel};
@@ -183,17 +185,12 @@ impl Data {
                 }
             }
             ModelKind::NeedlePuncture => {
-                let (t, x, y) = needle_data(train)?;
-                let n_all = y.len();
-                let n = max_samples.clamp(2, n_all);
-                let pick: Vec<usize> = (0..n)
-                    .map(|k| ((k as f64) * (n_all - 1) as f64 / (n - 1) as f64).round() as usize)
-                    .collect();
+                let (time, x, y) = spread(&needle_data(train)?, max_samples);
                 Self::Regression {
-                    x: pick.iter().flat_map(|&i| [x[2 * i], x[2 * i + 1]]).collect(),
+                    x,
                     dim: 2,
-                    y: pick.iter().map(|&i| y[i]).collect(),
-                    time: pick.iter().map(|&i| t[i]).collect(),
+                    y,
+                    time,
                     scale: true,
                 }
             }

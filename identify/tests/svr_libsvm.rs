@@ -31,6 +31,25 @@ fn floats(v: &Value) -> Vec<f64> {
         .collect()
 }
 
+/// A fixture's data and hyperparameters, for `solver`.
+fn problem(f: &Value, solver: Solver) -> (Vec<f64>, Vec<f64>, usize, SvrParams) {
+    let params = SvrParams::builder()
+        .c(f["c"].as_f64().unwrap())
+        .epsilon(f["epsilon"].as_f64().unwrap())
+        .kernel(Kernel::Rbf {
+            gamma: f["gamma"].as_f64().unwrap(),
+        })
+        .solver(solver)
+        .build()
+        .unwrap();
+    (
+        floats(&f["x"]),
+        floats(&f["y"]),
+        f["dim"].as_u64().unwrap() as usize,
+        params,
+    )
+}
+
 #[test]
 fn dual_objective_equals_libsvm_on_every_fixture() {
     let all = fixtures();
@@ -40,20 +59,7 @@ fn dual_objective_equals_libsvm_on_every_fixture() {
     );
     for f in all {
         let name = f["name"].as_str().unwrap();
-        let (x, y, dim) = (
-            floats(&f["x"]),
-            floats(&f["y"]),
-            f["dim"].as_u64().unwrap() as usize,
-        );
-        let params = SvrParams::builder()
-            .c(f["c"].as_f64().unwrap())
-            .epsilon(f["epsilon"].as_f64().unwrap())
-            .kernel(Kernel::Rbf {
-                gamma: f["gamma"].as_f64().unwrap(),
-            })
-            .solver(Solver::InteriorPoint)
-            .build()
-            .unwrap();
+        let (x, y, dim, params) = problem(&f, Solver::InteriorPoint);
         let ours = fit(&params, &x, dim, &y).unwrap();
         let reference = f["libsvm"]["dual_objective"].as_f64().unwrap();
         let relative = (ours.dual_objective - reference).abs() / reference.abs();
@@ -118,20 +124,7 @@ fn smo_reaches_the_same_objective_on_the_small_fixtures() {
         .filter(|f| f["c"].as_f64().unwrap() <= 100.0)
     {
         let name = f["name"].as_str().unwrap();
-        let (x, y, dim) = (
-            floats(&f["x"]),
-            floats(&f["y"]),
-            f["dim"].as_u64().unwrap() as usize,
-        );
-        let params = SvrParams::builder()
-            .c(f["c"].as_f64().unwrap())
-            .epsilon(f["epsilon"].as_f64().unwrap())
-            .kernel(Kernel::Rbf {
-                gamma: f["gamma"].as_f64().unwrap(),
-            })
-            .solver(Solver::Smo)
-            .build()
-            .unwrap();
+        let (x, y, dim, params) = problem(&f, Solver::Smo);
         let ours = fit(&params, &x, dim, &y).unwrap_or_else(|e| panic!("{name}: {e}"));
         let reference = f["libsvm"]["dual_objective"].as_f64().unwrap();
         let relative = (ours.dual_objective - reference).abs() / reference.abs();
