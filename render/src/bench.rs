@@ -1,0 +1,183 @@
+//! Headless frame-rate benchmark: frames per second at a few sizes, MSAA 1 and 4, overlay on and
+//! off, with a per-stage time breakdown so it is clear where a frame's time goes.
+
+use std::fmt::Write as _;
+use std::sync::Arc;
+use std::time::Instant;
+
+use crate::demo::{NeedleState, demo_overlay, tissue_scene};
+use crate::error::RenderError;
+use crate::frame::Frame;
+use crate::gpu::GpuOptions;
+use crate::renderer::{Renderer, StageTimes};
+use crate::shapes;
+
+/// What to measure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchOptions {
+    pub sizes: Vec<[u32; 2]>,
+    pub msaa: Vec<u32>,
+    pub overlay: Vec<bool>,
+    /// Frames timed per configuration (after one warm-up frame).
+    pub frames: u32,
+    pub gpu: GpuOptions,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        BenchOptions {
+            sizes: vec![[640, 480], [1280, 720]],
+            msaa: vec![1, 4],
+            overlay: vec![false, true],
+            frames: 30,
+            gpu: GpuOptions::default(),
+        }
+    }
+}
+
+/// One configuration's result. Stage times are means per frame from a second run that waits
+/// for the GPU after each stage; `fps` comes from the unsplit run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchRow {
+    pub width: u32,
+    pub height: u32,
+    pub msaa: u32,
+    pub overlay: bool,
+    pub fps: f64,
+    pub frame_ms: f64,
+    /// Scene (and overlay) passes: uniforms, encoding, submit and execution.
+    pub draw_ms: f64,
+    pub resolve_ms: f64,
+    /// Overlay UI build and tessellation on the CPU.
+    pub overlay_cpu_ms: f64,
+    pub readback_ms: f64,
+}
+
+/// All rows and the adapter they ran on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchTable {
+    pub adapter: String,
+    pub rows: Vec<BenchRow>,
+}
+
+impl BenchTable {
+    /// A fixed-width text table.
+    pub fn to_text(&self) -> String {
+        let mut s = format!("headless render benchmark on {}\n", self.adapter);
+        s.push_str(
+            "   size     msaa overlay     fps  frame ms   draw ms resolve ms  ui cpu ms readback ms\n",
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "{:>5}x{:<5} {:>3} {:>7} {:>7.1} {:>9.2} {:>9.2} {:>10.2} {:>10.2} {:>11.2}",
+                r.width,
+                r.height,
+                r.msaa,
+                if r.overlay { "on" } else { "off" },
+                r.fps,
+                r.frame_ms,
+                r.draw_ms,
+                r.resolve_ms,
+                r.overlay_cpu_ms,
+                r.readback_ms
+            );
+        }
+        s
+    }
+}
+
+/// The benchmark scene: the tissue block (three layers, ~30 k triangles) with the needle pressing.
+pub fn bench_frame(overlay: bool) -> Frame {
+    let tissue: Vec<_> = shapes::tissue_block().into_iter().map(Arc::new).collect();
+    let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
+    let mut frame = tissue_scene(
+        &tissue,
+        &needle,
+        NeedleState::Pressing {
+            depth_m: 0.008,
+            radius_m: 0.012,
+        },
+    );
+    frame.overlay = overlay.then(demo_overlay);
+    frame
+}
+
+/// Runs every configuration of `options`.
+pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
+    let frames = options.frames.max(1);
+    let mut rows = Vec::new();
+    let mut adapter = String::new();
+    for &[width, height] in &options.sizes {
+        for &msaa in &options.msaa {
+            let mut renderer = Renderer::headless_with(width, height, msaa, &options.gpu)?;
+            adapter = renderer.adapter_description();
+            for &overlay in &options.overlay {
+                let frame = bench_frame(overlay);
+                renderer.render(&frame)?;
+                let start = Instant::now();
+                for _ in 0..frames {
+                    renderer.render(&frame)?;
+                }
+                let frame_s = start.elapsed().as_secs_f64() / f64::from(frames);
+                let mut stages = StageTimes::default();
+                for _ in 0..frames {
+                    renderer.render_timed(&frame, Some(&mut stages))?;
+                }
+                let per = |d: std::time::Duration| d.as_secs_f64() * 1e3 / f64::from(frames);
+                rows.push(BenchRow {
+                    width,
+                    height,
+                    msaa: renderer.msaa(),
+                    overlay,
+                    fps: 1.0 / frame_s,
+                    frame_ms: frame_s * 1e3,
+                    draw_ms: per(stages.draw),
+                    resolve_ms: per(stages.resolve),
+                    overlay_cpu_ms: per(stages.overlay_cpu),
+                    readback_ms: per(stages.readback),
+                });
+            }
+        }
+    }
+    Ok(BenchTable { adapter, rows })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_text_has_a_line_per_row() {
+        let row = BenchRow {
+            width: 640,
+            height: 480,
+            msaa: 4,
+            overlay: true,
+            fps: 50.0,
+            frame_ms: 20.0,
+            draw_ms: 12.0,
+            resolve_ms: 3.0,
+            overlay_cpu_ms: 1.0,
+            readback_ms: 4.0,
+        };
+        let table = BenchTable {
+            adapter: "test".into(),
+            rows: vec![
+                row.clone(),
+                BenchRow {
+                    overlay: false,
+                    ..row
+                },
+            ],
+        };
+        let text = table.to_text();
+        assert_eq!(text.lines().count(), 4);
+        assert!(
+            text.contains("640x480")
+                && text.contains("50.0")
+                && text.contains(" on ")
+                && text.contains(" off ")
+        );
+    }
+}

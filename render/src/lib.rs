@@ -1,0 +1,39 @@
+//! Draws a plain [`Frame`] value — camera, meshes with poses and materials, the tool, the tissue's
+//! deformation and the overlay's data — to a window or to an offscreen image. Knows nothing of
+//! haptics: the app fills the frame.
+//!
+//! - [`Renderer::headless`] + [`Renderer::render`] give an [`Image`]; [`window::run`] opens a
+//!   window that draws through the same code.
+//! - Dimples bend objects marked deformable in the vertex shader; after puncture they are drawn
+//!   see-through so the shaft inside shows.
+//! - [`golden`] compares images with a tolerance; [`bench`] measures frames per second.
+
+pub mod assets_gen;
+pub mod bench;
+pub mod demo;
+pub mod error;
+pub mod frame;
+pub mod gltf_io;
+pub mod golden;
+pub mod gpu;
+pub mod image;
+pub mod mesh;
+mod overlay;
+mod renderer;
+pub mod shapes;
+pub mod window;
+
+pub use assets_gen::{PATCH_CENTRES_M, PATCH_NAMES, default_assets, patch_centre_m, write_default_assets};
+/// egui is part of the API: [`Renderer::render_with_events`] takes its input events.
+pub use egui;
+pub use error::RenderError;
+pub use frame::{
+    Camera, Dimple, Frame, MAX_DIMPLES, Material, Object, Overlay, Param, Recognition, TissueState, Tool,
+    UiAction,
+};
+pub use gltf_io::{MeshError, compute_normals, load_glb, write_glb};
+pub use gpu::{Backend, GpuOptions};
+pub use image::Image;
+pub use mesh::MeshData;
+pub use overlay::PANEL_WIDTH_PT;
+pub use renderer::{HEADLESS_FORMAT, Renderer, StageTimes};

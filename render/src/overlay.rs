@@ -1,0 +1,390 @@
+//! The egui overlay: live plots, recognition and loop status, scene and parameter controls.
+//! Built from [`Overlay`] data each frame and painted over the 3-D image in its own pass, the same
+//! way for windows and offscreen images.
+
+use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, StrokeKind, Vec2};
+
+use crate::frame::{Overlay, UiAction};
+
+/// Width of the overlay's side panel, points.
+pub const PANEL_WIDTH_PT: f32 = 290.0;
+/// A haptic loop slower than this is shown in red.
+const RATE_WARN_HZ: f32 = 950.0;
+
+pub(crate) struct Painted {
+    pub primitives: Vec<egui::ClippedPrimitive>,
+    pub textures: egui::TexturesDelta,
+    pub pixels_per_point: f32,
+    pub actions: Vec<UiAction>,
+    pub platform_output: egui::PlatformOutput,
+}
+
+pub(crate) struct OverlayLayer {
+    ctx: egui::Context,
+    renderer: egui_wgpu::Renderer,
+    /// Last painted shapes, replayed for screenshots.
+    last: Option<(Vec<egui::ClippedPrimitive>, f32)>,
+    headless_frames: u64,
+}
+
+impl OverlayLayer {
+    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        // Dithering off: golden images must not depend on a noise pattern.
+        let renderer = egui_wgpu::Renderer::new(device, format, egui_wgpu::RendererOptions::PREDICTABLE);
+        let ctx = egui::Context::default();
+        ctx.set_visuals(egui::Visuals::dark());
+        OverlayLayer {
+            ctx,
+            renderer,
+            last: None,
+            headless_frames: 0,
+        }
+    }
+
+    pub fn context(&self) -> egui::Context {
+        self.ctx.clone()
+    }
+
+    /// Input for an offscreen frame: a fixed clock advancing 1/60 s per frame keeps images
+    /// reproducible.
+    pub fn headless_input(
+        &mut self,
+        size: [u32; 2],
+        pixels_per_point: f32,
+        events: Vec<egui::Event>,
+    ) -> egui::RawInput {
+        let mut input = egui::RawInput {
+            screen_rect: Some(Rect::from_min_size(
+                Pos2::ZERO,
+                Vec2::new(size[0] as f32, size[1] as f32) / pixels_per_point,
+            )),
+            time: Some(self.headless_frames as f64 / 60.0),
+            predicted_dt: 1.0 / 60.0,
+            events,
+            focused: true,
+            ..Default::default()
+        };
+        input
+            .viewports
+            .entry(egui::ViewportId::ROOT)
+            .or_default()
+            .native_pixels_per_point = Some(pixels_per_point);
+        self.headless_frames += 1;
+        input
+    }
+
+    /// Runs the UI code and tessellates it.
+    pub fn run(&mut self, overlay: &Overlay, input: egui::RawInput) -> Painted {
+        let mut actions = Vec::new();
+        let full = self.ctx.run_ui(input, |ui| {
+            // egui may run the closure twice in one frame; only the last pass's answers count.
+            actions.clear();
+            build(ui, overlay, &mut actions);
+        });
+        let primitives = self.ctx.tessellate(full.shapes, full.pixels_per_point);
+        Painted {
+            primitives,
+            textures: full.textures_delta,
+            pixels_per_point: full.pixels_per_point,
+            actions,
+            platform_output: full.platform_output,
+        }
+    }
+
+    pub fn paint(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        view: &wgpu::TextureView,
+        size: [u32; 2],
+        painted: &mut Painted,
+    ) {
+        for (id, deltas) in &painted.textures.set {
+            for delta in deltas {
+                self.renderer.update_texture(device, queue, *id, delta);
+            }
+        }
+        self.paint_primitives(
+            device,
+            queue,
+            view,
+            size,
+            &painted.primitives,
+            painted.pixels_per_point,
+        );
+        for id in &painted.textures.free {
+            self.renderer.free_texture(id);
+        }
+        // epaint checks in debug builds that every delta was handled before it is dropped.
+        painted.textures.clear();
+        self.last = Some((painted.primitives.clone(), painted.pixels_per_point));
+    }
+
+    pub fn last_pixels_per_point(&self) -> f32 {
+        self.last.as_ref().map_or(1.0, |(_, ppp)| *ppp)
+    }
+
+    pub fn repaint_last(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        view: &wgpu::TextureView,
+        size: [u32; 2],
+    ) {
+        if let Some((primitives, ppp)) = self.last.take() {
+            self.paint_primitives(device, queue, view, size, &primitives, ppp);
+            self.last = Some((primitives, ppp));
+        }
+    }
+
+    fn paint_primitives(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        view: &wgpu::TextureView,
+        size: [u32; 2],
+        primitives: &[egui::ClippedPrimitive],
+        pixels_per_point: f32,
+    ) {
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: size,
+            pixels_per_point,
+        };
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("overlay"),
+        });
+        let mut commands = self
+            .renderer
+            .update_buffers(device, queue, &mut encoder, primitives, &screen);
+        {
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("overlay"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let mut pass = pass.forget_lifetime();
+            self.renderer.render(&mut pass, primitives, &screen);
+        }
+        commands.push(encoder.finish());
+        queue.submit(commands);
+    }
+}
+
+fn build(ui: &mut egui::Ui, o: &Overlay, actions: &mut Vec<UiAction>) {
+    let frame = egui::Frame::side_top_panel(ui.style())
+        .fill(Color32::from_rgba_unmultiplied(18, 20, 24, 225))
+        .inner_margin(8.0);
+    egui::Panel::right("palpus_overlay")
+        .exact_size(PANEL_WIDTH_PT)
+        .resizable(false)
+        .frame(frame)
+        .show(ui, |ui| {
+            status(ui, o);
+            ui.separator();
+            plot(
+                ui,
+                "Force vs depth",
+                "depth mm",
+                &o.force_depth,
+                1000.0,
+                Color32::from_rgb(255, 170, 60),
+            );
+            ui.add_space(4.0);
+            plot(
+                ui,
+                "Force vs time",
+                "time s",
+                &o.force_time,
+                1.0,
+                Color32::from_rgb(90, 200, 255),
+            );
+            ui.separator();
+            controls(ui, o, actions);
+        });
+}
+
+fn status(ui: &mut egui::Ui, o: &Overlay) {
+    ui.heading("palpus");
+    ui.label(format!(
+        "Device: {}",
+        if o.device_status.is_empty() {
+            "—"
+        } else {
+            &o.device_status
+        }
+    ));
+    let rate = match o.haptic_rate_hz {
+        Some(hz) => {
+            let color = if hz < RATE_WARN_HZ {
+                Color32::from_rgb(255, 90, 80)
+            } else {
+                Color32::from_rgb(120, 220, 120)
+            };
+            egui::RichText::new(format!("{hz:.1} Hz")).color(color)
+        }
+        None => egui::RichText::new("—"),
+    };
+    ui.horizontal(|ui| {
+        ui.label("Haptic rate:");
+        ui.label(rate);
+    });
+    let err = o
+        .period_error_s
+        .map_or("—".to_string(), |e| format!("{:.1} µs", e * 1e6));
+    ui.label(format!("Period error: {err}"));
+    match &o.recognized {
+        Some(r) => {
+            ui.label(format!("Surface: {}", r.surface));
+            let c = r.confidence.clamp(0.0, 1.0);
+            ui.add(egui::ProgressBar::new(c).text(format!("confidence {:.0} %", c * 100.0)));
+        }
+        None => {
+            ui.label("Surface: —");
+        }
+    }
+}
+
+/// A line plot drawn with the painter: y is force in N, x is scaled by `x_scale` for display.
+fn plot(ui: &mut egui::Ui, title: &str, x_label: &str, points: &[[f32; 2]], x_scale: f32, color: Color32) {
+    let width = ui.available_width();
+    let (response, painter) = ui.allocate_painter(Vec2::new(width, 118.0), Sense::hover());
+    let rect = response.rect;
+    painter.rect_filled(rect, 3.0, Color32::from_gray(10));
+    painter.rect_stroke(
+        rect,
+        3.0,
+        Stroke::new(1.0, Color32::from_gray(60)),
+        StrokeKind::Inside,
+    );
+    let font = FontId::proportional(11.0);
+    let text = Color32::from_gray(200);
+    painter.text(
+        rect.left_top() + Vec2::new(6.0, 3.0),
+        Align2::LEFT_TOP,
+        title,
+        font.clone(),
+        text,
+    );
+    let area = Rect::from_min_max(
+        rect.left_top() + Vec2::new(40.0, 18.0),
+        rect.right_bottom() - Vec2::new(8.0, 18.0),
+    );
+    let finite: Vec<[f32; 2]> = points
+        .iter()
+        .filter(|p| p[0].is_finite() && p[1].is_finite())
+        .map(|p| [p[0] * x_scale, p[1]])
+        .collect();
+    let (mut x0, mut x1) = finite
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p[0]), b.max(p[0])));
+    let (mut y0, mut y1) = finite
+        .iter()
+        .fold((0.0f32, f32::MIN), |(a, b), p| (a.min(p[1]), b.max(p[1])));
+    if finite.is_empty() || x1 - x0 <= f32::EPSILON {
+        x0 = x0.clamp(-1e6, 0.0);
+        x1 = x0 + 1.0;
+    }
+    if finite.is_empty() || y1 - y0 <= f32::EPSILON {
+        y0 = 0.0;
+        y1 = 1.0;
+    } else {
+        y1 += 0.08 * (y1 - y0);
+    }
+    let axis = Stroke::new(1.0, Color32::from_gray(110));
+    painter.line_segment([area.left_bottom(), area.right_bottom()], axis);
+    painter.line_segment([area.left_bottom(), area.left_top()], axis);
+    let small = FontId::proportional(10.0);
+    painter.text(
+        area.left_top() - Vec2::new(4.0, 0.0),
+        Align2::RIGHT_TOP,
+        format!("{y1:.1}"),
+        small.clone(),
+        text,
+    );
+    painter.text(
+        area.left_bottom() - Vec2::new(4.0, 0.0),
+        Align2::RIGHT_BOTTOM,
+        format!("{y0:.1}"),
+        small.clone(),
+        text,
+    );
+    painter.text(
+        area.left_center() - Vec2::new(4.0, 0.0),
+        Align2::RIGHT_CENTER,
+        "N",
+        small.clone(),
+        text,
+    );
+    let below = area.left_bottom() + Vec2::new(0.0, 2.0);
+    painter.text(below, Align2::LEFT_TOP, format!("{x0:.1}"), small.clone(), text);
+    painter.text(
+        area.right_bottom() + Vec2::new(0.0, 2.0),
+        Align2::RIGHT_TOP,
+        format!("{x1:.1}"),
+        small.clone(),
+        text,
+    );
+    painter.text(
+        area.center_bottom() + Vec2::new(0.0, 2.0),
+        Align2::CENTER_TOP,
+        x_label,
+        small,
+        text,
+    );
+    if finite.len() >= 2 {
+        let to_screen = |p: &[f32; 2]| {
+            Pos2::new(
+                area.left() + (p[0] - x0) / (x1 - x0) * area.width(),
+                area.bottom() - (p[1] - y0) / (y1 - y0) * area.height(),
+            )
+        };
+        let line: Vec<Pos2> = finite.iter().map(to_screen).collect();
+        painter.add(Shape::line(line, Stroke::new(1.5, color)));
+    }
+}
+
+fn controls(ui: &mut egui::Ui, o: &Overlay, actions: &mut Vec<UiAction>) {
+    if !o.scenes.is_empty() {
+        ui.label("Scene");
+        ui.horizontal_wrapped(|ui| {
+            for (index, name) in o.scenes.iter().enumerate() {
+                let selected = o.current_scene == Some(index);
+                if ui.selectable_label(selected, name.as_str()).clicked() && !selected {
+                    actions.push(UiAction::SelectScene {
+                        index,
+                        name: name.clone(),
+                    });
+                }
+            }
+        });
+    }
+    for p in &o.params {
+        let (lo, hi) = if p.min <= p.max {
+            (p.min, p.max)
+        } else {
+            (p.max, p.min)
+        };
+        let mut value = p.value;
+        let mut slider = egui::Slider::new(&mut value, lo..=hi).text(p.name.as_str());
+        if !p.unit.is_empty() {
+            slider = slider.suffix(format!(" {}", p.unit));
+        }
+        if ui.add(slider).changed() && value != p.value {
+            actions.push(UiAction::SetParam {
+                name: p.name.clone(),
+                value,
+            });
+        }
+    }
+}

@@ -1,0 +1,922 @@
+//! The renderer: one drawing path for windows and offscreen images. A frame is drawn into a
+//! colour view (a swap-chain image or an offscreen texture); the overlay is painted on top in a
+//! second pass; headless rendering then copies the texture back to the CPU.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Weak};
+use std::time::{Duration, Instant};
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::error::RenderError;
+use crate::frame::{Frame, MAX_DIMPLES, Object, UiAction};
+use crate::gpu::{Gpu, GpuOptions};
+use crate::image::Image;
+use crate::mesh::MeshData;
+use crate::overlay::OverlayLayer;
+
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Offscreen images: 8-bit sRGB so lighting computed in linear space is encoded on store.
+pub const HEADLESS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Uniform slots must start at multiples of the device's offset alignment (256 on every backend).
+const OBJECT_SLOT_BYTES: u64 = 256;
+/// Largest image side accepted; lavapipe and most GPUs allow 8192 or more.
+const MAX_SIDE_PX: u32 = 8192;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GlobalsUniform {
+    view_proj: [[f32; 4]; 4],
+    eye_m: [f32; 4],
+    key_dir: [f32; 4],
+    dimple_centre: [[f32; 4]; MAX_DIMPLES],
+    dimple_normal: [[f32; 4]; MAX_DIMPLES],
+    counts: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ObjectUniform {
+    model: [[f32; 4]; 4],
+    normal_model: [[f32; 4]; 4],
+    color: [f32; 4],
+    surface: [f32; 4],
+    flags: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Vertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    color: [f32; 4],
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    Opaque,
+    Translucent,
+    /// The tool's hidden parts, over see-through tissue.
+    Xray,
+}
+
+struct GpuMesh {
+    /// Detects a freed mesh whose address was reused by a new one.
+    source: Weak<MeshData>,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    centre_m: Vec3,
+}
+
+struct Attachments {
+    size: [u32; 2],
+    msaa_view: Option<wgpu::TextureView>,
+    depth_view: wgpu::TextureView,
+}
+
+struct Offscreen {
+    size: [u32; 2],
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    padded_row_bytes: u32,
+}
+
+/// Wall-clock time per stage of one frame, measured by waiting for the GPU after each stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Uploading uniforms, encoding and executing the scene pass (and the overlay pass).
+    pub draw: Duration,
+    /// Resolving the multisampled image into the single-sample target.
+    pub resolve: Duration,
+    /// Building the overlay's UI and tessellating it (CPU).
+    pub overlay_cpu: Duration,
+    /// Copying the image to a CPU buffer and unpadding it.
+    pub readback: Duration,
+}
+
+/// How the overlay is produced for a drawn frame.
+pub(crate) enum OverlayInput {
+    /// Run the UI with this input (a new frame).
+    Run(egui::RawInput),
+    /// Paint the previous frame's shapes again (a screenshot must not consume input twice).
+    Replay { pixels_per_point: f32 },
+}
+
+impl OverlayInput {
+    fn pixels_per_point(&self) -> f32 {
+        match self {
+            OverlayInput::Run(input) => input
+                .viewports
+                .get(&egui::ViewportId::ROOT)
+                .and_then(|v| v.native_pixels_per_point)
+                .unwrap_or(1.0),
+            OverlayInput::Replay { pixels_per_point } => *pixels_per_point,
+        }
+    }
+}
+
+/// What one drawn frame returns besides pixels.
+#[derive(Default)]
+pub(crate) struct DrawOutput {
+    pub actions: Vec<UiAction>,
+    pub platform_output: Option<egui::PlatformOutput>,
+}
+
+/// Draws [`Frame`]s. Create it with [`Renderer::headless`] for images; the window module creates
+/// one for its surface.
+pub struct Renderer {
+    gpu: Gpu,
+    format: wgpu::TextureFormat,
+    msaa: u32,
+    opaque: wgpu::RenderPipeline,
+    translucent: wgpu::RenderPipeline,
+    xray: wgpu::RenderPipeline,
+    globals: wgpu::Buffer,
+    globals_group: wgpu::BindGroup,
+    object_layout: wgpu::BindGroupLayout,
+    objects: wgpu::Buffer,
+    objects_group: wgpu::BindGroup,
+    object_slots: u64,
+    meshes: HashMap<usize, GpuMesh>,
+    attachments: Option<Attachments>,
+    offscreen: Option<Offscreen>,
+    overlay: OverlayLayer,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("adapter", &self.gpu.adapter_description())
+            .field("format", &self.format)
+            .field("msaa", &self.msaa)
+            .field("meshes", &self.meshes.len())
+            .finish()
+    }
+}
+
+fn check_size(width: u32, height: u32) -> Result<(), RenderError> {
+    if width == 0 || height == 0 || width > MAX_SIDE_PX || height > MAX_SIDE_PX {
+        return Err(RenderError::BadSize {
+            width,
+            height,
+            max: MAX_SIDE_PX,
+        });
+    }
+    Ok(())
+}
+
+impl Renderer {
+    /// An offscreen renderer of `width`×`height` px with `msaa` samples (1 or 4; 4 falls back to
+    /// 1 where the adapter lacks it — see [`Renderer::msaa`]). Tries Vulkan, then GL.
+    pub fn headless(width: u32, height: u32, msaa: u32) -> Result<Self, RenderError> {
+        Self::headless_with(width, height, msaa, &GpuOptions::default())
+    }
+
+    /// [`Renderer::headless`] on the backends of `options`.
+    pub fn headless_with(
+        width: u32,
+        height: u32,
+        msaa: u32,
+        options: &GpuOptions,
+    ) -> Result<Self, RenderError> {
+        check_size(width, height)?;
+        if msaa != 1 && msaa != 4 {
+            return Err(RenderError::BadMsaa(msaa));
+        }
+        let gpu = Gpu::headless(options)?;
+        let mut renderer = Self::new(gpu, HEADLESS_FORMAT, msaa)?;
+        renderer.ensure_offscreen([width, height]);
+        Ok(renderer)
+    }
+
+    pub(crate) fn new(gpu: Gpu, format: wgpu::TextureFormat, msaa: u32) -> Result<Self, RenderError> {
+        if msaa != 1 && msaa != 4 {
+            return Err(RenderError::BadMsaa(msaa));
+        }
+        let msaa = gpu.supported_msaa(format, msaa);
+        let device = &gpu.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("scene.wgsl").into()),
+        });
+        let uniform_entry = |dynamic: bool, size: u64| wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: dynamic,
+                min_binding_size: wgpu::BufferSize::new(size),
+            },
+            count: None,
+        };
+        let globals_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("globals"),
+            entries: &[uniform_entry(false, size_of::<GlobalsUniform>() as u64)],
+        });
+        let object_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("object"),
+            entries: &[uniform_entry(true, size_of::<ObjectUniform>() as u64)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&globals_layout), Some(&object_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |kind: Pass| {
+            let translucent = kind != Pass::Opaque;
+            let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(match kind {
+                    Pass::Opaque => "scene opaque",
+                    Pass::Translucent => "scene translucent",
+                    Pass::Xray => "tool x-ray",
+                }),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &shader,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: size_of::<Vertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &attributes,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode: Some(wgpu::Face::Back),
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    // See-through layers are drawn after everything opaque, back to front, so
+                    // writing depth hides nothing already drawn; it lets the x-ray pass find
+                    // where tissue covers the tool.
+                    depth_write_enabled: Some(kind != Pass::Xray),
+                    depth_compare: Some(if kind == Pass::Xray {
+                        wgpu::CompareFunction::Greater
+                    } else {
+                        wgpu::CompareFunction::LessEqual
+                    }),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: wgpu::MultisampleState {
+                    count: msaa,
+                    mask: !0,
+                    alpha_to_coverage_enabled: false,
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &shader,
+                    entry_point: Some(if kind == Pass::Xray { "fs_xray" } else { "fs_main" }),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: Some(if translucent {
+                            wgpu::BlendState::ALPHA_BLENDING
+                        } else {
+                            wgpu::BlendState::REPLACE
+                        }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let opaque = pipeline(Pass::Opaque);
+        let translucent = pipeline(Pass::Translucent);
+        let xray = pipeline(Pass::Xray);
+        let globals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("globals"),
+            size: size_of::<GlobalsUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &globals_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            }],
+        });
+        let object_slots = 16;
+        let (objects, objects_group) = make_object_buffer(device, &object_layout, object_slots);
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(err.to_string()));
+        }
+        let overlay = OverlayLayer::new(device, format);
+        Ok(Renderer {
+            gpu,
+            format,
+            msaa,
+            opaque,
+            translucent,
+            xray,
+            globals,
+            globals_group,
+            object_layout,
+            objects,
+            objects_group,
+            object_slots,
+            meshes: HashMap::new(),
+            attachments: None,
+            offscreen: None,
+            overlay,
+        })
+    }
+
+    /// The MSAA sample count in use (1 or 4).
+    pub fn msaa(&self) -> u32 {
+        self.msaa
+    }
+
+    /// The offscreen image size, px.
+    pub fn size(&self) -> Option<[u32; 2]> {
+        self.offscreen.as_ref().map(|o| o.size)
+    }
+
+    /// The adapter, e.g. "llvmpipe (LLVM 19.1.7, 256 bits) on Vulkan (Cpu)".
+    pub fn adapter_description(&self) -> String {
+        self.gpu.adapter_description()
+    }
+
+    /// Changes the offscreen image size.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
+        check_size(width, height)?;
+        self.ensure_offscreen([width, height]);
+        Ok(())
+    }
+
+    pub(crate) fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    pub(crate) fn egui_context(&self) -> egui::Context {
+        self.overlay.context()
+    }
+
+    /// Draws `frame` offscreen and returns the picture (overlay included when the frame has one).
+    pub fn render(&mut self, frame: &Frame) -> Result<Image, RenderError> {
+        self.render_timed(frame, None).map(|(image, _)| image)
+    }
+
+    /// Like [`Renderer::render`], feeding `events` (pointer moves, clicks) to the overlay first
+    /// and returning what the user asked for.
+    pub fn render_with_events(
+        &mut self,
+        frame: &Frame,
+        events: Vec<egui::Event>,
+    ) -> Result<(Image, Vec<UiAction>), RenderError> {
+        let size = self.offscreen_size()?;
+        let input = self.overlay.headless_input(size, 1.0, events);
+        let view = self.offscreen_view()?;
+        let out = self.draw(frame, &view, size, OverlayInput::Run(input), None)?;
+        let image = self.read_back(None)?;
+        Ok((image, out.actions))
+    }
+
+    /// Draws and reads back with a time per stage when `timer` is given (the GPU is waited for
+    /// after each stage, which costs some throughput).
+    pub(crate) fn render_timed(
+        &mut self,
+        frame: &Frame,
+        mut timer: Option<&mut StageTimes>,
+    ) -> Result<(Image, Vec<UiAction>), RenderError> {
+        let size = self.offscreen_size()?;
+        let input = self.overlay.headless_input(size, 1.0, Vec::new());
+        let view = self.offscreen_view()?;
+        let out = self.draw(frame, &view, size, OverlayInput::Run(input), timer.as_deref_mut())?;
+        let image = self.read_back(timer)?;
+        Ok((image, out.actions))
+    }
+
+    fn offscreen_size(&self) -> Result<[u32; 2], RenderError> {
+        self.offscreen
+            .as_ref()
+            .map(|o| o.size)
+            .ok_or_else(|| RenderError::Gpu("no offscreen target".into()))
+    }
+
+    fn offscreen_view(&self) -> Result<wgpu::TextureView, RenderError> {
+        self.offscreen
+            .as_ref()
+            .map(|o| o.view.clone())
+            .ok_or_else(|| RenderError::Gpu("no offscreen target".into()))
+    }
+
+    pub(crate) fn ensure_offscreen(&mut self, size: [u32; 2]) {
+        if self.offscreen.as_ref().is_some_and(|o| o.size == size) {
+            return;
+        }
+        let device = &self.gpu.device;
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("offscreen colour"),
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: self.format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let padded_row_bytes = (size[0] * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(padded_row_bytes) * u64::from(size[1]),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        self.offscreen = Some(Offscreen {
+            size,
+            texture,
+            view,
+            readback,
+            padded_row_bytes,
+        });
+    }
+
+    fn ensure_attachments(&mut self, size: [u32; 2]) {
+        if self.attachments.as_ref().is_some_and(|a| a.size == size) {
+            return;
+        }
+        let device = &self.gpu.device;
+        let extent = wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: 1,
+        };
+        let make = |label, format, samples| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: extent,
+                    mip_level_count: 1,
+                    sample_count: samples,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let msaa_view = (self.msaa > 1).then(|| make("msaa colour", self.format, self.msaa));
+        let depth_view = make("depth", DEPTH_FORMAT, self.msaa);
+        self.attachments = Some(Attachments {
+            size,
+            msaa_view,
+            depth_view,
+        });
+    }
+
+    fn upload_mesh(&mut self, mesh: &Arc<MeshData>) -> usize {
+        let key = Arc::as_ptr(mesh) as usize;
+        if let Some(m) = self.meshes.get(&key)
+            && m.source.upgrade().is_some_and(|s| Arc::ptr_eq(&s, mesh))
+        {
+            return key;
+        }
+        let vertices: Vec<Vertex> = (0..mesh.positions.len())
+            .map(|i| Vertex {
+                position: mesh.positions[i],
+                normal: mesh.normals.get(i).copied().unwrap_or([0.0, 1.0, 0.0]),
+                color: mesh.colors.get(i).copied().unwrap_or([1.0; 4]),
+            })
+            .collect();
+        // Out-of-range indices would be a validation error on the GPU; such triangles are dropped.
+        let count = vertices.len() as u32;
+        let indices: Vec<u32> = mesh
+            .indices
+            .chunks_exact(3)
+            .filter(|t| t.iter().all(|&i| i < count))
+            .flatten()
+            .copied()
+            .collect();
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
+                (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p)))
+            });
+        let centre_m = if mesh.positions.is_empty() {
+            Vec3::ZERO
+        } else {
+            (lo + hi) * 0.5
+        };
+        let device = &self.gpu.device;
+        // Zero-sized buffers are not allowed; an empty mesh still gets a tiny one and draws nothing.
+        let vertex_bytes: &[u8] = if vertices.is_empty() {
+            &[0; 40]
+        } else {
+            bytemuck::cast_slice(&vertices)
+        };
+        let index_bytes: &[u8] = if indices.is_empty() {
+            &[0; 4]
+        } else {
+            bytemuck::cast_slice(&indices)
+        };
+        let gpu_mesh = GpuMesh {
+            source: Arc::downgrade(mesh),
+            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&mesh.name),
+                contents: vertex_bytes,
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+            indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&mesh.name),
+                contents: index_bytes,
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+            index_count: indices.len() as u32,
+            centre_m,
+        };
+        self.meshes.insert(key, gpu_mesh);
+        key
+    }
+
+    /// Draws `frame` into `view` (`size` px) and paints the overlay over it.
+    pub(crate) fn draw(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::TextureView,
+        size: [u32; 2],
+        overlay_input: OverlayInput,
+        mut timer: Option<&mut StageTimes>,
+    ) -> Result<DrawOutput, RenderError> {
+        let start = Instant::now();
+        self.ensure_attachments(size);
+        // Forget meshes the app no longer holds.
+        self.meshes.retain(|_, m| m.source.strong_count() > 0);
+
+        struct Item {
+            mesh: usize,
+            translucent: bool,
+            tool: bool,
+            distance_m: f32,
+        }
+        let punctured = frame.tissue.punctured;
+        let see_through = frame.tissue.punctured_opacity.clamp(0.0, 1.0);
+        let mut uniforms = Vec::new();
+        let mut items = Vec::new();
+        let tool_parts = frame
+            .tool
+            .iter()
+            .flat_map(|t| t.parts.iter().map(move |p| (t.pose, p, true)));
+        let all: Vec<(Mat4, &Object, bool)> = frame
+            .objects
+            .iter()
+            .map(|o| (Mat4::IDENTITY, o, false))
+            .chain(tool_parts)
+            .collect();
+        for (parent, object, tool) in all {
+            let key = self.upload_mesh(&object.mesh);
+            let model = parent * object.transform;
+            let mut color = object.material.color;
+            if object.deformable && punctured {
+                color[3] = color[3].min(see_through);
+            }
+            let m = &object.material;
+            uniforms.push(ObjectUniform {
+                model: model.to_cols_array_2d(),
+                normal_model: model.inverse().transpose().to_cols_array_2d(),
+                color,
+                surface: [
+                    m.roughness.clamp(0.0, 1.0),
+                    m.detail_period_m,
+                    m.specular,
+                    m.shininess.max(1.0),
+                ],
+                flags: [if object.deformable { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
+            });
+            let centre = self.meshes.get(&key).map_or(Vec3::ZERO, |g| g.centre_m);
+            let distance_m = model.transform_point3(centre).distance(frame.camera.eye_m);
+            items.push(Item {
+                mesh: key,
+                translucent: color[3] < 0.999,
+                tool,
+                distance_m,
+            });
+        }
+        // With the overlay on, the scene is framed in the part of the image the panel leaves free.
+        let scene_width = match &frame.overlay {
+            Some(_) => {
+                let ppp = overlay_input.pixels_per_point();
+                let panel_px = (crate::overlay::PANEL_WIDTH_PT * ppp).round() as u32;
+                size[0].saturating_sub(panel_px).max(size[0] / 3).max(1)
+            }
+            None => size[0],
+        };
+        self.write_uniforms(frame, [scene_width, size[1]], &uniforms);
+
+        let order: Vec<(usize, Pass)> = {
+            let mut order: Vec<(usize, Pass)> = (0..items.len())
+                .filter(|&i| !items[i].translucent)
+                .map(|i| (i, Pass::Opaque))
+                .collect();
+            let mut clear: Vec<usize> = (0..items.len()).filter(|&i| items[i].translucent).collect();
+            // Back to front, so nearer see-through layers blend over farther ones.
+            clear.sort_by(|&a, &b| items[b].distance_m.total_cmp(&items[a].distance_m));
+            order.extend(clear.into_iter().map(|i| (i, Pass::Translucent)));
+            if punctured {
+                order.extend(
+                    (0..items.len())
+                        .filter(|&i| items[i].tool && !items[i].translucent)
+                        .map(|i| (i, Pass::Xray)),
+                );
+            }
+            order
+        };
+
+        let device = &self.gpu.device;
+        let queue = &self.gpu.queue;
+        let Some(att) = self.attachments.as_ref() else {
+            return Err(RenderError::Gpu("attachments missing".into()));
+        };
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let split_resolve = timer.is_some() && att.msaa_view.is_some();
+        let mut encoder =
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("scene") });
+        {
+            let [r, g, b] = frame.clear_color;
+            let clear = wgpu::Color {
+                r: f64::from(r),
+                g: f64::from(g),
+                b: f64::from(b),
+                a: 1.0,
+            };
+            let (color_view, resolve_target) = match &att.msaa_view {
+                Some(msaa) => (msaa, if split_resolve { None } else { Some(view) }),
+                None => (view, None),
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("scene"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: color_view,
+                    depth_slice: None,
+                    resolve_target,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &att.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_viewport(0.0, 0.0, scene_width as f32, size[1] as f32, 0.0, 1.0);
+            pass.set_bind_group(0, &self.globals_group, &[]);
+            for (i, kind) in order {
+                let item = &items[i];
+                let Some(mesh) = self.meshes.get(&item.mesh) else {
+                    continue;
+                };
+                if mesh.index_count == 0 {
+                    continue;
+                }
+                pass.set_pipeline(match kind {
+                    Pass::Opaque => &self.opaque,
+                    Pass::Translucent => &self.translucent,
+                    Pass::Xray => &self.xray,
+                });
+                pass.set_bind_group(1, &self.objects_group, &[(i as u64 * OBJECT_SLOT_BYTES) as u32]);
+                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+            }
+        }
+        queue.submit([encoder.finish()]);
+        if let Some(t) = timer.as_deref_mut() {
+            wait(device)?;
+            t.draw += start.elapsed();
+        }
+        if split_resolve && let Some(msaa) = &att.msaa_view {
+            let start = Instant::now();
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("resolve"),
+            });
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("resolve"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: msaa,
+                    depth_slice: None,
+                    resolve_target: Some(view),
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Discard,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            queue.submit([encoder.finish()]);
+            wait(device)?;
+            if let Some(t) = timer.as_deref_mut() {
+                t.resolve += start.elapsed();
+            }
+        }
+
+        let mut out = DrawOutput::default();
+        if let (Some(_), OverlayInput::Replay { .. }) = (&frame.overlay, &overlay_input) {
+            self.overlay.repaint_last(device, queue, view, size);
+        } else if let (Some(overlay), OverlayInput::Run(overlay_input)) = (&frame.overlay, overlay_input) {
+            let cpu_start = Instant::now();
+            let mut painted = self.overlay.run(overlay, overlay_input);
+            if let Some(t) = timer.as_deref_mut() {
+                t.overlay_cpu += cpu_start.elapsed();
+            }
+            let gpu_start = Instant::now();
+            self.overlay.paint(device, queue, view, size, &mut painted);
+            out.actions = std::mem::take(&mut painted.actions);
+            out.platform_output = Some(std::mem::take(&mut painted.platform_output));
+            if let Some(t) = timer {
+                wait(device)?;
+                t.draw += gpu_start.elapsed();
+            }
+        }
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(err.to_string()));
+        }
+        if let Some(err) = self.gpu.take_uncaptured_error() {
+            return Err(RenderError::Gpu(err));
+        }
+        Ok(out)
+    }
+
+    fn write_uniforms(&mut self, frame: &Frame, size: [u32; 2], uniforms: &[ObjectUniform]) {
+        let aspect = size[0] as f32 / size[1].max(1) as f32;
+        let mut globals = GlobalsUniform::zeroed();
+        globals.view_proj = frame.camera.view_proj(aspect).to_cols_array_2d();
+        globals.eye_m = frame.camera.eye_m.extend(1.0).to_array();
+        // Key light from above, slightly behind the viewer's right shoulder.
+        let key = Vec3::new(0.45, 1.0, 0.35).normalize();
+        globals.key_dir = key.extend(0.22).to_array();
+        let dimples: Vec<_> = frame.tissue.dimples.iter().take(MAX_DIMPLES).collect();
+        for (i, d) in dimples.iter().enumerate() {
+            let normal = d.normal.try_normalize().unwrap_or(Vec3::Y);
+            globals.dimple_centre[i] = d.centre_m.extend(d.radius_m.max(1e-6)).to_array();
+            globals.dimple_normal[i] = normal.extend(d.depth_m).to_array();
+        }
+        globals.counts[0] = dimples.len() as u32;
+        self.gpu
+            .queue
+            .write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
+
+        let needed = uniforms.len().max(1) as u64;
+        if needed > self.object_slots {
+            let slots = needed.next_power_of_two();
+            let (buffer, group) = make_object_buffer(&self.gpu.device, &self.object_layout, slots);
+            self.objects = buffer;
+            self.objects_group = group;
+            self.object_slots = slots;
+        }
+        let mut bytes = vec![0u8; uniforms.len() * OBJECT_SLOT_BYTES as usize];
+        for (i, u) in uniforms.iter().enumerate() {
+            let at = i * OBJECT_SLOT_BYTES as usize;
+            bytes[at..at + size_of::<ObjectUniform>()].copy_from_slice(bytemuck::bytes_of(u));
+        }
+        if !bytes.is_empty() {
+            self.gpu.queue.write_buffer(&self.objects, 0, &bytes);
+        }
+    }
+
+    /// Copies the offscreen texture to the CPU.
+    fn read_back(&mut self, timer: Option<&mut StageTimes>) -> Result<Image, RenderError> {
+        let start = Instant::now();
+        let Some(off) = self.offscreen.as_ref() else {
+            return Err(RenderError::Readback("no offscreen target".into()));
+        };
+        let device = &self.gpu.device;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &off.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &off.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(off.padded_row_bytes),
+                    rows_per_image: Some(off.size[1]),
+                },
+            },
+            wgpu::Extent3d {
+                width: off.size[0],
+                height: off.size[1],
+                depth_or_array_layers: 1,
+            },
+        );
+        self.gpu.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        let slice = off.readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        wait(device)?;
+        rx.recv()
+            .map_err(|e| RenderError::Readback(e.to_string()))?
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        let row_bytes = off.size[0] as usize * 4;
+        let mut rgba = Vec::with_capacity(row_bytes * off.size[1] as usize);
+        {
+            let mapped = slice
+                .get_mapped_range()
+                .map_err(|e| RenderError::Readback(e.to_string()))?;
+            for row in mapped
+                .chunks(off.padded_row_bytes as usize)
+                .take(off.size[1] as usize)
+            {
+                rgba.extend_from_slice(&row[..row_bytes]);
+            }
+        }
+        off.readback.unmap();
+        if matches!(
+            self.format,
+            wgpu::TextureFormat::Bgra8UnormSrgb | wgpu::TextureFormat::Bgra8Unorm
+        ) {
+            for px in rgba.chunks_exact_mut(4) {
+                px.swap(0, 2);
+            }
+        }
+        if let Some(t) = timer {
+            t.readback += start.elapsed();
+        }
+        Image::from_rgba(off.size[0], off.size[1], rgba)
+    }
+
+    /// Draws `frame` offscreen at `size` with the overlay shapes of the window's last frame
+    /// replayed (used for window screenshots, which must not consume input twice).
+    pub(crate) fn capture(&mut self, frame: &Frame, size: [u32; 2]) -> Result<Image, RenderError> {
+        check_size(size[0], size[1])?;
+        self.ensure_offscreen(size);
+        let view = self.offscreen_view()?;
+        let pixels_per_point = self.overlay.last_pixels_per_point();
+        self.draw(
+            frame,
+            &view,
+            size,
+            OverlayInput::Replay { pixels_per_point },
+            None,
+        )?;
+        self.read_back(None)
+    }
+}
+
+fn make_object_buffer(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    slots: u64,
+) -> (wgpu::Buffer, wgpu::BindGroup) {
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("objects"),
+        size: slots * OBJECT_SLOT_BYTES,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("objects"),
+        layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &buffer,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<ObjectUniform>() as u64),
+            }),
+        }],
+    });
+    (buffer, group)
+}
+
+fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map(|_| ())
+        .map_err(|e| RenderError::Gpu(e.to_string()))
+}

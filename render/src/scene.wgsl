@@ -1,0 +1,145 @@
+// Scene shader: Gaussian dimples bend deformable objects in the vertex stage; lighting is done in
+// linear space and the sRGB render target encodes it on store.
+
+const MAX_DIMPLES: u32 = 4u;
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    eye_m: vec4<f32>,
+    // xyz: direction towards the key light; w: ambient strength.
+    key_dir: vec4<f32>,
+    // xyz centre (m), w radius (m).
+    dimple_centre: array<vec4<f32>, 4>,
+    // xyz outward normal, w depth (m).
+    dimple_normal: array<vec4<f32>, 4>,
+    // x: dimple count.
+    counts: vec4<u32>,
+};
+
+struct Object {
+    model: mat4x4<f32>,
+    normal_model: mat4x4<f32>,
+    color: vec4<f32>,
+    // x roughness, y detail period (m), z specular, w shininess.
+    surface: vec4<f32>,
+    // x: 1 when deformable.
+    flags: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+@group(1) @binding(0) var<uniform> object: Object;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+};
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world_m: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+    // Undeformed world position: the procedural detail sticks to the material, not to space.
+    @location(3) rest_m: vec3<f32>,
+};
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    let rest = (object.model * vec4<f32>(v.position, 1.0)).xyz;
+    var world = rest;
+    var n = normalize((object.normal_model * vec4<f32>(v.normal, 0.0)).xyz);
+    if object.flags.x > 0.5 {
+        let count = min(globals.counts.x, MAX_DIMPLES);
+        var tilt = vec3<f32>(0.0);
+        for (var i = 0u; i < count; i = i + 1u) {
+            let c = globals.dimple_centre[i];
+            let a = globals.dimple_normal[i];
+            let radius = max(c.w, 1e-6);
+            let rel = rest - c.xyz;
+            let along = dot(rel, a.xyz);
+            let perp = rel - along * a.xyz;
+            let f = a.w * exp(-dot(perp, perp) / (radius * radius)) * exp(-max(-along, 0.0) / (2.0 * radius));
+            world = world - a.xyz * f;
+            // Gradient of the displacement: walls of the dimple lean towards its centre. Only
+            // faces turned towards the indenter tilt; side walls keep their normals.
+            tilt = tilt - 2.0 * f * perp / (radius * radius) * max(dot(n, a.xyz), 0.0);
+        }
+        n = normalize(n + tilt);
+    }
+    var out: VertexOut;
+    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.world_m = world;
+    out.normal = n;
+    out.color = v.color * object.color;
+    out.rest_m = rest;
+    return out;
+}
+
+fn hash3(p: vec3<f32>) -> f32 {
+    let q = fract(p * 0.3183099 + vec3<f32>(0.1, 0.2, 0.3)) * 17.0;
+    return fract(q.x * q.y * q.z * (q.x + q.y + q.z));
+}
+
+// Value noise in 0..1 with smooth interpolation.
+fn noise3(p: vec3<f32>) -> f32 {
+    let i = floor(p);
+    let f = fract(p);
+    let u = f * f * (3.0 - 2.0 * f);
+    let n000 = hash3(i);
+    let n100 = hash3(i + vec3<f32>(1.0, 0.0, 0.0));
+    let n010 = hash3(i + vec3<f32>(0.0, 1.0, 0.0));
+    let n110 = hash3(i + vec3<f32>(1.0, 1.0, 0.0));
+    let n001 = hash3(i + vec3<f32>(0.0, 0.0, 1.0));
+    let n101 = hash3(i + vec3<f32>(1.0, 0.0, 1.0));
+    let n011 = hash3(i + vec3<f32>(0.0, 1.0, 1.0));
+    let n111 = hash3(i + vec3<f32>(1.0, 1.0, 1.0));
+    let x00 = mix(n000, n100, u.x);
+    let x10 = mix(n010, n110, u.x);
+    let x01 = mix(n001, n101, u.x);
+    let x11 = mix(n011, n111, u.x);
+    return mix(mix(x00, x10, u.y), mix(x01, x11, u.y), u.z);
+}
+
+fn shade(in: VertexOut, front: bool) -> vec4<f32> {
+    var n = normalize(in.normal);
+    if !front {
+        n = -n;
+    }
+    var base = in.color.rgb;
+    let roughness = object.surface.x;
+    if roughness > 0.0 {
+        let p = in.rest_m / max(object.surface.y, 1e-5);
+        let e = 0.35;
+        let h = noise3(p);
+        let grad = vec3<f32>(noise3(p + vec3<f32>(e, 0.0, 0.0)) - h, noise3(p + vec3<f32>(0.0, e, 0.0)) - h,
+            noise3(p + vec3<f32>(0.0, 0.0, e)) - h) / e;
+        // Bump: remove the normal's own component so only the tangential slope tilts it.
+        let slope = grad - dot(grad, n) * n;
+        n = normalize(n - roughness * 0.8 * slope);
+        base = base * (1.0 - roughness * 0.35 * (h - 0.5) * 2.0);
+    }
+    let view = normalize(globals.eye_m.xyz - in.world_m);
+    let key = normalize(globals.key_dir.xyz);
+    let fill = normalize(vec3<f32>(-0.5, 0.4, -0.6));
+    let diffuse = max(dot(n, key), 0.0) * 0.85 + max(dot(n, fill), 0.0) * 0.25;
+    // Hemisphere ambient: brighter from above.
+    let ambient = globals.key_dir.w * mix(0.5, 1.0, n.y * 0.5 + 0.5);
+    let half_vec = normalize(key + view);
+    let spec = object.surface.z * pow(max(dot(n, half_vec), 0.0), object.surface.w);
+    let rgb = base * (ambient + diffuse) + vec3<f32>(spec);
+    return vec4<f32>(rgb, in.color.a);
+}
+
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    return shade(in, front);
+}
+
+// The tool where tissue hides it (depth test "greater"): drawn half-transparent and tinted so the
+// shaft inside punctured tissue reads clearly through several see-through layers.
+@fragment
+fn fs_xray(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let lit = shade(in, front);
+    return vec4<f32>(mix(lit.rgb, vec3<f32>(0.55, 0.8, 1.0), 0.35), 0.7);
+}

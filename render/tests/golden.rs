@@ -1,0 +1,129 @@
+//! Golden images of the four reference views, drawn headless with the committed assets.
+//! `PALPUS_BLESS=1 cargo test -p render --test golden` rewrites `assets/golden/*.png`; on a
+//! mismatch the actual image and a diff land in `target/golden-failures/`.
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use render::demo::{NeedleState, demo_overlay, tissue_scene, tray_scene};
+use render::golden::{Tolerance, check};
+use render::{Frame, Image, MeshData, Renderer, load_glb};
+
+const WIDTH: u32 = 640;
+const HEIGHT: u32 = 480;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn meshes(file: &str) -> Vec<Arc<MeshData>> {
+    load_glb(&root().join("assets/meshes").join(file))
+        .unwrap()
+        .into_iter()
+        .map(Arc::new)
+        .collect()
+}
+
+fn draw(frame: &Frame, width: u32, height: u32) -> Image {
+    let mut renderer = Renderer::headless(width, height, 4).unwrap();
+    renderer.render(frame).unwrap()
+}
+
+fn golden(name: &str, image: &Image) {
+    let result = check(
+        name,
+        image,
+        &root().join("assets/golden"),
+        &root().join("target/golden-failures"),
+        Tolerance::default(),
+    );
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+}
+
+fn luma(p: [u8; 4]) -> f32 {
+    0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])
+}
+
+#[test]
+fn tissue_at_rest() {
+    let frame = tissue_scene(
+        &meshes("tissue_block.glb"),
+        &meshes("needle.glb"),
+        NeedleState::Above { height_m: 0.02 },
+    );
+    let image = draw(&frame, WIDTH, HEIGHT);
+    // The block fills the middle of the picture: not the background colour.
+    let centre = image.pixel(WIDTH / 2, HEIGHT * 3 / 5).unwrap();
+    assert!(luma(centre) > 40.0, "{centre:?}");
+    golden("tissue_at_rest", &image);
+}
+
+#[test]
+fn needle_dimpling_surface() {
+    let tissue = meshes("tissue_block.glb");
+    let needle = meshes("needle.glb");
+    let rest = draw(
+        &tissue_scene(&tissue, &needle, NeedleState::Above { height_m: 0.0 }),
+        WIDTH,
+        HEIGHT,
+    );
+    let pressed = draw(
+        &tissue_scene(
+            &tissue,
+            &needle,
+            NeedleState::Pressing {
+                depth_m: 0.010,
+                radius_m: 0.012,
+            },
+        ),
+        WIDTH,
+        HEIGHT,
+    );
+    // The dimple changes a sizeable area around the entry point, not just the needle.
+    let cmp = render::golden::compare(&pressed, &rest, 24).unwrap();
+    assert!(
+        cmp.differing_pixels > 2000,
+        "dimple changed only {} pixels",
+        cmp.differing_pixels
+    );
+    golden("needle_dimpling_surface", &pressed);
+}
+
+#[test]
+fn needle_inserted() {
+    let tissue = meshes("tissue_block.glb");
+    let needle = meshes("needle.glb");
+    let inserted = draw(
+        &tissue_scene(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 }),
+        WIDTH,
+        HEIGHT,
+    );
+    let mut opaque = tissue_scene(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 });
+    opaque.tissue.punctured = false;
+    let hidden = draw(&opaque, WIDTH, HEIGHT);
+    // See-through tissue reveals the shaft below the surface: the two pictures differ there.
+    let cmp = render::golden::compare(&inserted, &hidden, 24).unwrap();
+    assert!(
+        cmp.differing_pixels > 1000,
+        "only {} pixels changed",
+        cmp.differing_pixels
+    );
+    golden("needle_inserted", &inserted);
+}
+
+#[test]
+fn surface_tray_with_overlay() {
+    let needle = meshes("needle.glb");
+    let probe = needle.iter().find(|m| m.name == "shaft").cloned();
+    let mut frame = tray_scene(&meshes("surface_tray.glb"), probe, 3, 0.002);
+    frame.overlay = Some(demo_overlay());
+    let image = draw(&frame, 960, 600);
+    // The overlay panel on the right is dark and mostly opaque; the heading text is light.
+    let panel = image.pixel(960 - 20, 590).unwrap();
+    assert!(luma(panel) < 60.0, "{panel:?}");
+    golden("surface_tray_with_overlay", &image);
+}

@@ -1,0 +1,181 @@
+//! Behaviour of the offscreen renderer beyond the golden pictures: sizes, MSAA, errors, sRGB
+//! output, the overlay's actions.
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+use render::demo::{NeedleState, demo_overlay, tissue_scene};
+use render::egui;
+use render::{Camera, Frame, Material, Object, RenderError, Renderer, UiAction, shapes};
+
+fn plane_frame(color: [f32; 4]) -> Frame {
+    let plane = Arc::new(shapes::tissue_box(
+        "plane",
+        [-1.0, -0.01, -1.0],
+        [1.0, 0.0, 1.0],
+        4,
+        [1.0; 4],
+    ));
+    let mut frame = Frame::new(Camera::look_at(Vec3::new(0.0, 0.3, 0.0001), Vec3::ZERO));
+    let material = Material {
+        color,
+        roughness: 0.0,
+        specular: 0.0,
+        ..Material::default()
+    };
+    frame.objects.push(Object::new(plane, Mat4::IDENTITY, material));
+    frame
+}
+
+#[test]
+fn image_has_requested_size_and_background() {
+    let mut r = Renderer::headless(96, 64, 1).unwrap();
+    let mut frame = Frame::new(Camera::look_at(Vec3::new(0.0, 0.0, 1.0), Vec3::ZERO));
+    frame.clear_color = [0.5, 0.0, 0.0];
+    let img = r.render(&frame).unwrap();
+    assert_eq!((img.width, img.height), (96, 64));
+    // Linear 0.5 stored in an sRGB target encodes to 188.
+    let p = img.pixel(10, 10).unwrap();
+    assert!(
+        (i32::from(p[0]) - 188).abs() <= 1 && p[1] == 0 && p[2] == 0 && p[3] == 255,
+        "{p:?}"
+    );
+}
+
+#[test]
+fn lighting_is_brighter_for_brighter_material_and_msaa_keeps_it() {
+    let mut r1 = Renderer::headless(64, 64, 1).unwrap();
+    let mut r4 = Renderer::headless(64, 64, 4).unwrap();
+    assert!(r4.msaa() == 4 || r4.msaa() == 1);
+    let dark = r1
+        .render(&plane_frame([0.2, 0.2, 0.2, 1.0]))
+        .unwrap()
+        .pixel(32, 32)
+        .unwrap();
+    let bright = r1
+        .render(&plane_frame([0.8, 0.8, 0.8, 1.0]))
+        .unwrap()
+        .pixel(32, 32)
+        .unwrap();
+    let bright4 = r4
+        .render(&plane_frame([0.8, 0.8, 0.8, 1.0]))
+        .unwrap()
+        .pixel(32, 32)
+        .unwrap();
+    assert!(bright[0] > dark[0] + 40, "{dark:?} {bright:?}");
+    // Interior pixels are the same with and without multisampling.
+    assert!(bright4[0].abs_diff(bright[0]) <= 2, "{bright:?} {bright4:?}");
+}
+
+#[test]
+fn rendering_is_deterministic() {
+    let tissue: Vec<_> = shapes::tissue_block().into_iter().map(Arc::new).collect();
+    let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
+    let frame = tissue_scene(
+        &tissue,
+        &needle,
+        NeedleState::Pressing {
+            depth_m: 0.01,
+            radius_m: 0.012,
+        },
+    );
+    let mut r = Renderer::headless(128, 96, 4).unwrap();
+    let a = r.render(&frame).unwrap();
+    let b = r.render(&frame).unwrap();
+    assert_eq!(a, b);
+}
+
+#[test]
+fn bad_arguments_are_typed_errors() {
+    assert!(matches!(
+        Renderer::headless(0, 10, 1),
+        Err(RenderError::BadSize { .. })
+    ));
+    assert!(matches!(
+        Renderer::headless(10, 10, 3),
+        Err(RenderError::BadMsaa(3))
+    ));
+    let mut r = Renderer::headless(16, 16, 1).unwrap();
+    assert!(matches!(r.resize(100_000, 10), Err(RenderError::BadSize { .. })));
+    r.resize(32, 8).unwrap();
+    let img = r
+        .render(&Frame::new(Camera::look_at(Vec3::Z, Vec3::ZERO)))
+        .unwrap();
+    assert_eq!((img.width, img.height), (32, 8));
+}
+
+#[test]
+fn empty_and_broken_meshes_do_not_fail() {
+    let mut r = Renderer::headless(32, 32, 1).unwrap();
+    let mut frame = Frame::new(Camera::look_at(Vec3::Z, Vec3::ZERO));
+    let empty = render::MeshData {
+        name: "empty".into(),
+        positions: vec![],
+        normals: vec![],
+        colors: vec![],
+        indices: vec![],
+    };
+    let broken = render::MeshData {
+        name: "broken".into(),
+        indices: vec![0, 1, 7],
+        ..shapes::needle().remove(0)
+    };
+    frame
+        .objects
+        .push(Object::new(Arc::new(empty), Mat4::IDENTITY, Material::default()));
+    frame
+        .objects
+        .push(Object::new(Arc::new(broken), Mat4::IDENTITY, Material::default()));
+    r.render(&frame).unwrap();
+}
+
+#[test]
+fn overlay_click_on_scene_returns_select_action() {
+    let mut r = Renderer::headless(800, 600, 1).unwrap();
+    let mut frame = Frame::new(Camera::look_at(Vec3::Z, Vec3::ZERO));
+    let mut overlay = demo_overlay();
+    overlay.current_scene = Some(2);
+    frame.overlay = Some(overlay);
+    // First frame lays the panel out; find the "tissue_block" button by scanning where egui put it
+    // is not possible from pixels alone, so click along the scene row until an action comes back.
+    r.render(&frame).unwrap();
+    let mut found = None;
+    'scan: for y in (380..480).step_by(6) {
+        for x in (520..790).step_by(20) {
+            let pos = egui::pos2(x as f32, y as f32);
+            let press = vec![
+                egui::Event::PointerMoved(pos),
+                egui::Event::PointerButton {
+                    pos,
+                    button: egui::PointerButton::Primary,
+                    pressed: true,
+                    modifiers: Default::default(),
+                },
+            ];
+            r.render_with_events(&frame, press).unwrap();
+            let release = vec![egui::Event::PointerButton {
+                pos,
+                button: egui::PointerButton::Primary,
+                pressed: false,
+                modifiers: Default::default(),
+            }];
+            let (_, actions) = r.render_with_events(&frame, release).unwrap();
+            if let Some(a) = actions
+                .into_iter()
+                .find(|a| matches!(a, UiAction::SelectScene { .. }))
+            {
+                found = Some(a);
+                break 'scan;
+            }
+        }
+    }
+    match found {
+        Some(UiAction::SelectScene { index, name }) => {
+            assert_ne!(index, 2, "clicking the current scene must not ask to switch");
+            assert_eq!(name, ["liver_puncture", "tissue_block", "surface_tray"][index]);
+        }
+        other => panic!("no scene action found: {other:?}"),
+    }
+}
