@@ -9,6 +9,7 @@ mod capture_cmd;
 mod devices_cmd;
 mod gen_cmd;
 mod identify_cmd;
+mod recognize_cmd;
 
 use clap::{Parser, Subcommand};
 
@@ -31,6 +32,7 @@ enum Command {
     Capture(capture_cmd::CaptureArgs),
     Devices(devices_cmd::DevicesArgs),
     Bench(bench_cmd::BenchArgs),
+    Recognize(recognize_cmd::RecognizeArgs),
 }
 
 /// Runs the parsed command line.
@@ -41,5 +43,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Capture(args) => capture_cmd::run(&args),
         Command::Devices(args) => devices_cmd::run(&args),
         Command::Bench(args) => bench_cmd::run(&args),
+        Command::Recognize(args) => recognize_cmd::run(&args),
     }
 }

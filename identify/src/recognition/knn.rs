@@ -81,7 +81,8 @@ pub enum KnnError {
 }
 
 /// How features are scaled before distances are taken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum FeatureScaling {
     /// Raw values.
     None,
@@ -134,7 +135,7 @@ impl KnnParams {
 }
 
 /// A fitted k-NN classifier: the (scaled) training set.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Knn {
     k: usize,
     classes: usize,
@@ -228,6 +229,42 @@ impl Knn {
     /// Number of classes.
     pub fn classes(&self) -> usize {
         self.classes
+    }
+
+    /// Dimension of the feature vectors.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Checks the shapes and values of a classifier read from a file: `Err((field, reason))`.
+    pub fn check_shape(&self) -> Result<(), (&'static str, String)> {
+        if self.k == 0 || self.labels.len() < self.k {
+            return Err(("k", format!("k = {} with {} points", self.k, self.labels.len())));
+        }
+        if self.dim == 0 || self.scale.len() != self.dim {
+            return Err((
+                "scale",
+                format!("{} scales for dimension {}", self.scale.len(), self.dim),
+            ));
+        }
+        if self.points.len() != self.labels.len() * self.dim {
+            return Err((
+                "points",
+                format!("length is not {} points × {}", self.labels.len(), self.dim),
+            ));
+        }
+        if let Some(l) = self.labels.iter().find(|&&l| l >= self.classes) {
+            return Err((
+                "labels",
+                format!("label {l} is not below the class count {}", self.classes),
+            ));
+        }
+        let finite = self.points.iter().all(|v| v.is_finite())
+            && self.scale.iter().all(|(o, s)| o.is_finite() && s.is_finite());
+        if !finite {
+            return Err(("points", "contains a non-finite value".into()));
+        }
+        Ok(())
     }
 
     /// Indices of the `k` nearest training points, nearest first. Equal distances are broken

@@ -396,6 +396,12 @@ impl<T: Copy> Ring<T> {
         self.buf.len() == self.capacity
     }
 
+    /// Empties the ring, keeping its storage.
+    fn clear(&mut self) {
+        self.buf.clear();
+        self.head = 0;
+    }
+
     /// Pushes `value`; returns the evicted oldest value when the ring was full.
     fn push(&mut self, value: T) -> Option<T> {
         if self.buf.len() < self.capacity {
@@ -426,6 +432,8 @@ impl<T: Copy> Ring<T> {
 pub struct StreamWindow {
     /// Index (from 0, counting pushed samples) of the window's first sample.
     pub start: u64,
+    /// Position along the rubbing direction at the window's first sample, m (as pushed).
+    pub start_position_m: f64,
     /// The features, as [`NakanoSignals::features`] gives for that window.
     pub features: [f64; FEATURES],
 }
@@ -540,6 +548,27 @@ impl NakanoStream {
         self.config.lookahead_samples()
     }
 
+    /// Forgets every sample, as at the start of a new stroke; keeps the buffers (no allocation).
+    pub fn reset(&mut self) {
+        self.pushed = 0;
+        self.z_ref = None;
+        self.f_ref = None;
+        self.heights.clear();
+        self.height_sum = 0.0;
+        self.roughs.clear();
+        self.rough_sum = 0.0;
+        self.delayed.clear();
+        self.previous_smoothed = None;
+        self.window_rough.clear();
+        self.window_position.clear();
+        self.window_friction.clear();
+        self.window_crossing.clear();
+        self.sum_abs_r = 0.0;
+        self.rough_stats = SlidingMoments::default();
+        self.friction_stats = SlidingMoments::default();
+        self.crossings = 0;
+    }
+
     /// Pushes one sample; returns the features of the window that it completes, if any.
     pub fn push(&mut self, position_m: f64, height_m: f64, friction_n: f64) -> Option<StreamWindow> {
         self.pushed += 1;
@@ -585,6 +614,7 @@ impl NakanoStream {
         let lag = (h + s + self.window_len) as u64;
         Some(StreamWindow {
             start: self.pushed - lag,
+            start_position_m: self.window_position.get(0)?,
             features: [
                 self.sum_abs_r / n,
                 self.rough_stats.variance(),

@@ -200,15 +200,32 @@ impl Scaling {
 
     /// The vector the map sees for `features`: scaled, then (for `Standardize`) unit length.
     pub fn apply(&self, features: &[f64]) -> Vec<f64> {
-        let mut v: Vec<f64> = features
-            .iter()
-            .zip(self.offset.iter().zip(&self.scale))
-            .map(|(x, (o, s))| (x - o) / s)
-            .collect();
-        if self.normalization == Normalization::Standardize {
-            normalize(&mut v);
-        }
+        let mut v = vec![0.0; features.len().min(self.offset.len())];
+        self.apply_into(features, &mut v);
         v
+    }
+
+    /// [`Scaling::apply`] into `out` without allocating; writes `min(len)` values of the three.
+    pub fn apply_into(&self, features: &[f64], out: &mut [f64]) {
+        for (o, (x, (off, s))) in out
+            .iter_mut()
+            .zip(features.iter().zip(self.offset.iter().zip(&self.scale)))
+        {
+            *o = (x - off) / s;
+        }
+        if self.normalization == Normalization::Standardize {
+            normalize(out);
+        }
+    }
+
+    /// Number of features.
+    pub fn dim(&self) -> usize {
+        self.offset.len()
+    }
+
+    /// How features are scaled.
+    pub fn normalization(&self) -> Normalization {
+        self.normalization
     }
 }
 
@@ -225,6 +242,15 @@ fn normalize(v: &mut [f64]) -> bool {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// A map's answer for one feature vector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SomDecision {
+    /// The winning node.
+    pub node: usize,
+    /// Half the inner-product margin over the best node of another label, in `[0, 1]`.
+    pub confidence: f64,
 }
 
 /// A trained, labelled 1-D SOM.
@@ -357,6 +383,98 @@ impl<L: Clone + Ord> Som<L> {
             return Err(SomError::NonFinite { index: 0 });
         }
         Ok(self.scaling.apply(features))
+    }
+
+    /// Winner and confidence for raw `features`, without allocating: `scratch` (one value per
+    /// feature) receives the scaled vector. The winner is exactly [`Som::winner`]'s (same
+    /// arithmetic in the same order), so a live recognizer that calls this decides as the
+    /// offline pipeline does.
+    ///
+    /// The confidence is half the margin between the winner's inner product and the best inner
+    /// product of a node with another label: all vectors have unit length, so it lies in
+    /// `[0, 1]`; 0 means a node of another surface matches as well, and it is 1 when every node
+    /// has the winner's label.
+    pub fn decide_into(&self, features: &[f64], scratch: &mut [f64]) -> Result<SomDecision, SomError> {
+        let expected = self.scaling.dim();
+        for found in [features.len(), scratch.len()] {
+            if found != expected {
+                return Err(SomError::Dimension {
+                    index: 0,
+                    found,
+                    expected,
+                });
+            }
+        }
+        if features.iter().any(|x| !x.is_finite()) {
+            return Err(SomError::NonFinite { index: 0 });
+        }
+        self.scaling.apply_into(features, scratch);
+        let node = self.winner_scaled(scratch);
+        let best = self.reference.get(node).map_or(0.0, |m| dot(m, scratch));
+        let other = self
+            .reference
+            .iter()
+            .zip(&self.labels)
+            .filter(|(_, l)| self.labels.get(node) != Some(*l))
+            .map(|(m, _)| dot(m, scratch))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let confidence = if other.is_finite() {
+            (0.5 * (best - other)).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        Ok(SomDecision { node, confidence })
+    }
+
+    /// The number of features the map takes.
+    pub fn dim(&self) -> usize {
+        self.scaling.dim()
+    }
+
+    /// The feature scaling learned from the training data.
+    pub fn scaling(&self) -> &Scaling {
+        &self.scaling
+    }
+
+    /// Checks the shapes and values of a map read from a file, whose labels must be below
+    /// `classes`: `Err((field, reason))`.
+    pub fn check_shape(&self, classes: usize) -> Result<(), (&'static str, String)>
+    where
+        L: Copy + Into<usize>,
+    {
+        let (nodes, dim) = (self.params.nodes, self.scaling.dim());
+        if let Err(e) = self.params.check() {
+            return Err(("params", e.to_string()));
+        }
+        if self.reference.len() != nodes || self.reference.iter().any(|m| m.len() != dim) {
+            return Err(("reference", format!("expected {nodes} vectors of {dim} values")));
+        }
+        if self.labels.len() != nodes || self.hits.len() != nodes {
+            return Err(("labels", format!("expected {nodes} node labels and hit counts")));
+        }
+        if let Some(l) = self.labels.iter().map(|&l| l.into()).find(|&l| l >= classes) {
+            return Err((
+                "labels",
+                format!("label {l} is not below the class count {classes}"),
+            ));
+        }
+        if self.scaling.scale.len() != dim || dim == 0 {
+            return Err((
+                "scaling",
+                format!("expected {dim} offsets and scales, at least 1"),
+            ));
+        }
+        let finite = self
+            .reference
+            .iter()
+            .flatten()
+            .chain(&self.scaling.offset)
+            .all(|v| v.is_finite())
+            && self.scaling.scale.iter().all(|s| s.is_finite() && *s != 0.0);
+        if !finite {
+            return Err(("reference", "a non-finite value or a zero scale".into()));
+        }
+        Ok(())
     }
 
     /// The winning node for raw `features` (Eq. 2.27).

@@ -79,7 +79,8 @@ pub enum SpectralError {
 }
 
 /// How a histogram cell is scaled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum CellScale {
     /// Each cell is the *mean* spectrogram magnitude over its frames and DFT bins. The feature
     /// does not depend on the trial's length (a slow stroke has more frames, not larger cells)

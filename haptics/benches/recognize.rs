@@ -1,0 +1,48 @@
+//! Cost of one sample through the live recognizer (goal ≤ 2 µs): the streaming features on
+//! every sample, a SOM decision every hop (100 samples), over a whole simulated rubbing run.
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use haptics::recognize::LiveRecognizer;
+use haptics::sim::protocols::nakano::rubbing_run;
+use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+use identify::recognition::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
+use identify::recognition::som::SomParams;
+
+fn bench(c: &mut Criterion) {
+    let surfaces = nakano_surfaces();
+    let train: Vec<LabelledCapture> = surfaces
+        .iter()
+        .map(|s| {
+            let capture = rubbing_run(&SurfacePatch::new(s), 0, 1).expect("run");
+            LabelledCapture::new(capture, Path::new(s.name), String::new()).expect("labelled")
+        })
+        .collect();
+    let windowing = NakanoWindowing::new(1.0, 0.1, 1000.0).expect("valid");
+    let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    let test = rubbing_run(&SurfacePatch::new(&surfaces[2]), 1, 1).expect("run");
+    let x = test.column("tangential_position_m").expect("x").to_vec();
+    let z = test.column("normal_position_m").expect("z").to_vec();
+    let f = test.column("friction_force_n").expect("f").to_vec();
+    let mut live = LiveRecognizer::new(&model, 1000.0).expect("som");
+    let mut group = c.benchmark_group("live_recognizer");
+    group.throughput(Throughput::Elements(x.len() as u64));
+    group.bench_function("rubbing_run_per_sample", |b| {
+        b.iter(|| {
+            live.reset();
+            let mut last = 0;
+            for i in 0..x.len() {
+                if let Ok(Some(d)) = live.push(black_box(x[i]), black_box(z[i]), black_box(f[i])) {
+                    last = d.label;
+                }
+            }
+            black_box(last)
+        });
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,143 @@
+//! The live surface recognizer of the haptic thread: Nakano's features updated in O(1) per
+//! sample, a SOM decision every hop, (label, confidence) out.
+//!
+//! Everything it needs is allocated in [`LiveRecognizer::new`] (the stream's rings, the map, a
+//! scratch vector); [`LiveRecognizer::push`] does arithmetic on them only — no allocation, no
+//! lock, no I/O — so it can run inside the 1 kHz tick. It decides on exactly the windows the
+//! offline pipeline ([`RecognizerFile::decisions`]) decides on, with the same map arithmetic
+//! ([`Som::decide_into`]); the features come from the streaming sums instead of the batch ones
+//! and agree with them to ~1e-9 relative.
+
+use identify::recognition::model::{NakanoWindowing, RecognizerBody, RecognizerFile};
+use identify::recognition::nakano::{FEATURES, NakanoError, NakanoStream};
+use identify::recognition::som::{Som, SomError};
+
+/// Why a live recognizer could not be built or fed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LiveRecognizerError {
+    /// Only a SOM over Nakano's rubbing features runs live.
+    #[error("a {method} recognizer cannot run live: only `som` recognizers decide from the rubbing stream")]
+    Method {
+        /// The recognizer's method.
+        method: &'static str,
+    },
+    /// The loop's rate is not the rate the recognizer's windows are counted at.
+    #[error("the loop runs at {loop_hz} Hz but the recognizer's windows are counted at {model_hz} Hz")]
+    Rate {
+        /// The loop's rate, Hz.
+        loop_hz: f64,
+        /// The recognizer's rate, Hz.
+        model_hz: f64,
+    },
+    /// The stream could not be built.
+    #[error("feature stream")]
+    Stream(#[from] NakanoError),
+    /// The map refused a feature vector (a non-finite sample reached it).
+    #[error("map")]
+    Som(#[from] SomError),
+}
+
+/// One live decision.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiveDecision {
+    /// Index into the recognizer's classes.
+    pub label: usize,
+    /// Confidence in `[0, 1]`: half the SOM's inner-product margin over the best node of
+    /// another surface.
+    pub confidence: f64,
+    /// First sample (counted from 0 since construction or [`LiveRecognizer::reset`]) of the
+    /// window decided on.
+    pub window_start: u64,
+}
+
+/// Nakano's SOM recognizer, fed one sample per haptic tick.
+#[derive(Debug, Clone)]
+pub struct LiveRecognizer {
+    som: Som<usize>,
+    windowing: NakanoWindowing,
+    classes: Vec<String>,
+    stream: NakanoStream,
+    scratch: [f64; FEATURES],
+    first_position_m: Option<f64>,
+    current: Option<LiveDecision>,
+}
+
+impl LiveRecognizer {
+    /// A recognizer for a loop running at `loop_hz`, from a loaded SOM recognizer file.
+    pub fn new(model: &RecognizerFile, loop_hz: f64) -> Result<Self, LiveRecognizerError> {
+        let RecognizerBody::Som { windowing, som } = &model.body else {
+            return Err(LiveRecognizerError::Method {
+                method: model.method(),
+            });
+        };
+        // Written so that a NaN rate is refused too.
+        let same_rate = (loop_hz - windowing.rate_hz).abs() <= 1e-9 * windowing.rate_hz;
+        if !same_rate {
+            return Err(LiveRecognizerError::Rate {
+                loop_hz,
+                model_hz: windowing.rate_hz,
+            });
+        }
+        Ok(Self {
+            som: som.clone(),
+            windowing: *windowing,
+            classes: model.classes.clone(),
+            stream: NakanoStream::new(windowing.filters, windowing.window_samples)?,
+            scratch: [0.0; FEATURES],
+            first_position_m: None,
+            current: None,
+        })
+    }
+
+    /// Feeds one tick: the tip's position along the rubbing direction and its height, m, and
+    /// the friction (the RFOB's reaction force along x), N. Returns the new decision when this
+    /// sample completes a decision window, `None` otherwise (the previous one stands, see
+    /// [`LiveRecognizer::current`]). A non-finite sample is an error and leaves the decision
+    /// as it was; [`LiveRecognizer::reset`] before the next stroke.
+    pub fn push(
+        &mut self,
+        position_m: f64,
+        height_m: f64,
+        friction_n: f64,
+    ) -> Result<Option<LiveDecision>, LiveRecognizerError> {
+        let x0 = *self.first_position_m.get_or_insert(position_m);
+        let Some(window) = self.stream.push(position_m, height_m, friction_n) else {
+            return Ok(None);
+        };
+        let travel_m = (window.start_position_m - x0).abs();
+        if !self.windowing.is_decision_window(window.start, travel_m) {
+            return Ok(None);
+        }
+        let d = self.som.decide_into(&window.features, &mut self.scratch)?;
+        let decision = LiveDecision {
+            label: self.som.node_labels().get(d.node).copied().unwrap_or(0),
+            confidence: d.confidence,
+            window_start: window.start,
+        };
+        self.current = Some(decision);
+        Ok(Some(decision))
+    }
+
+    /// The latest decision, if any since the last reset.
+    pub fn current(&self) -> Option<LiveDecision> {
+        self.current
+    }
+
+    /// Forgets the stroke (tool lifted): the next sample starts a new one. No allocation.
+    pub fn reset(&mut self) {
+        self.stream.reset();
+        self.first_position_m = None;
+        self.current = None;
+    }
+
+    /// Class names; [`LiveDecision::label`] indexes them.
+    pub fn classes(&self) -> &[String] {
+        &self.classes
+    }
+
+    /// The windows it decides on.
+    pub fn windowing(&self) -> &NakanoWindowing {
+        &self.windowing
+    }
+}

@@ -1,0 +1,184 @@
+//! The live recognizer against the offline pipeline on Nakano's simulated rubbing runs: the
+//! same decisions on the same windows, no allocation per sample, and the errors of a recognizer
+//! that cannot run live.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use haptics::recognize::{LiveRecognizer, LiveRecognizerError};
+use haptics::sim::protocols::nakano::{RUNS, rubbing_run};
+use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+use identify::recognition::knn::KnnParams;
+use identify::recognition::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
+use identify::recognition::som::SomParams;
+use identify::recognition::spectral::CellScale;
+
+/// Counts allocations made by the thread that set [`COUNTING`].
+struct CountingAllocator;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+static COUNTING: AtomicBool = AtomicBool::new(false);
+
+thread_local! {
+    static THIS_THREAD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) && THIS_THREAD.try_with(|t| t.get()).unwrap_or(false) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same layout contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) && THIS_THREAD.try_with(|t| t.get()).unwrap_or(false) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+/// `runs[surface][run]`, labelled, generated in memory (seed 1).
+fn runs() -> Vec<Vec<LabelledCapture>> {
+    nakano_surfaces()
+        .iter()
+        .map(|surface| {
+            let patch = SurfacePatch::new(surface);
+            (0..RUNS)
+                .map(|run| {
+                    let capture = rubbing_run(&patch, run, 1).expect("run");
+                    let name = format!("{}_run{run}.csv", surface.name);
+                    LabelledCapture::new(capture, Path::new(&name), String::new()).expect("labelled")
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn live_decisions_equal_offline_decisions_without_allocating() {
+    let runs = runs();
+    let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
+    let windowing = NakanoWindowing::new(1.0, 0.1, 1000.0).expect("valid");
+    let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    let mut live = LiveRecognizer::new(&model, 1000.0).expect("som recognizer");
+    assert_eq!(live.classes(), model.classes.as_slice());
+    let (mut compared, mut correct) = (0, 0);
+    // The counter sees this thread's allocations (a control, so a zero below means something).
+    THIS_THREAD.with(|t| t.set(true));
+    COUNTING.store(true, Ordering::Relaxed);
+    let control: Vec<u8> = Vec::with_capacity(16);
+    COUNTING.store(false, Ordering::Relaxed);
+    assert_eq!(ALLOCATIONS.swap(0, Ordering::Relaxed), 1);
+    drop(control);
+    for surface_runs in &runs {
+        for c in &surface_runs[1..] {
+            let offline = model.decisions(c, None).expect("offline decisions");
+            let x = c.capture.column("tangential_position_m").expect("x");
+            let z = c.capture.column("normal_position_m").expect("z");
+            let f = c.capture.column("friction_force_n").expect("friction");
+            live.reset();
+            let mut online = Vec::with_capacity(offline.len());
+            ALLOCATIONS.store(0, Ordering::Relaxed);
+            THIS_THREAD.with(|t| t.set(true));
+            COUNTING.store(true, Ordering::Relaxed);
+            for i in 0..x.len() {
+                // `online` has room for every decision, so pushing onto it never allocates.
+                if let Some(d) = live.push(x[i], z[i], f[i]).expect("finite samples")
+                    && online.len() < online.capacity()
+                {
+                    online.push((i, d));
+                }
+            }
+            COUNTING.store(false, Ordering::Relaxed);
+            THIS_THREAD.with(|t| t.set(false));
+            assert_eq!(
+                ALLOCATIONS.load(Ordering::Relaxed),
+                0,
+                "allocated while recognizing"
+            );
+            assert_eq!(online.len(), offline.len(), "{}", c.reference.path.display());
+            assert!(offline.len() > 30);
+            for ((i, live_d), off) in online.iter().zip(&offline) {
+                assert_eq!(*i, off.decided_at);
+                assert_eq!(live_d.window_start as usize, off.window_start);
+                assert_eq!(live_d.label, off.label, "window at {}", off.window_start);
+                assert!((live_d.confidence - off.confidence).abs() < 1e-6);
+                assert!((0.0..=1.0).contains(&live_d.confidence));
+            }
+            assert_eq!(live.current().map(|d| d.label), offline.last().map(|d| d.label));
+            compared += offline.len();
+            correct += offline
+                .iter()
+                .filter(|d| model.classes[d.label] == c.label)
+                .count();
+        }
+    }
+    assert_eq!(compared, 14 * 37);
+    assert!(correct as f64 / compared as f64 > 0.75, "{correct}/{compared}");
+}
+
+#[test]
+fn only_a_som_at_its_own_rate_runs_live() {
+    let runs = runs();
+    let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    assert!(matches!(
+        LiveRecognizer::new(&model, 500.0),
+        Err(LiveRecognizerError::Rate { .. })
+    ));
+    let mut live = LiveRecognizer::new(&model, 1000.0).expect("som");
+    let c = &runs[0][1].capture;
+    let (x, z, f) = (
+        c.column("tangential_position_m").expect("x"),
+        c.column("normal_position_m").expect("z"),
+        c.column("friction_force_n").expect("f"),
+    );
+    for i in 0..x.len() {
+        live.push(x[i], z[i], f[i]).expect("finite");
+    }
+    // A NaN reaches the map one window later and is refused there, not turned into a label.
+    let before = live.current();
+    let refused = (0..2000).any(|i| live.push(x[i], f64::NAN, f[i]).is_err());
+    assert!(refused);
+    assert_eq!(live.current(), before);
+    live.reset();
+    assert_eq!(live.current(), None);
+
+    // A k-NN recognizer needs whole scratches: it cannot run live.
+    let scratches: Vec<LabelledCapture> = haptics::sim::world::scratch::household_surfaces()
+        .iter()
+        .take(2)
+        .flat_map(|s| {
+            (0..3).map(move |t| {
+                let c = haptics::sim::protocols::sinapov::scratch_capture(
+                    s,
+                    haptics::sim::world::scratch::Behaviour::ALL[0],
+                    t,
+                    1,
+                )
+                .expect("scratch");
+                LabelledCapture::new(c, Path::new("scratch.csv"), String::new()).expect("labelled")
+            })
+        })
+        .collect();
+    let knn = RecognizerFile::train_knn(&scratches, KnnParams::default(), CellScale::Mean).expect("knn");
+    assert!(matches!(
+        LiveRecognizer::new(&knn, 1000.0),
+        Err(LiveRecognizerError::Method { method: "knn" })
+    ));
+}
