@@ -2,6 +2,13 @@
 //!
 //! `identify` (models from captures) and `haptics` (the simulated world, devices, the haptic
 //! loop) know nothing of each other's threads or files; this crate is the only place that joins
-//! them.
+//! them: scenes say what a session contains ([`scene`]), [`models`] loads or identifies exactly
+//! the models a scene needs, [`session`] runs them on the haptic thread and reports.
 
 pub mod cli;
+pub mod models;
+pub mod recognizer;
+pub mod scene;
+pub mod session;
+pub mod view;
+pub mod window;

@@ -202,7 +202,12 @@ impl ModelFile {
                 path: path.to_owned(),
                 source,
             })?;
-        let model: Self = serde_json::from_str(&text).map_err(|e| ModelFileError::Parse {
+        Self::from_slice(text.as_bytes(), path)
+    }
+
+    /// Parses and validates a model file's bytes; `path` names it in errors.
+    pub fn from_slice(bytes: &[u8], path: &Path) -> Result<Self, ModelFileError> {
+        let model: Self = serde_json::from_slice(bytes).map_err(|e| ModelFileError::Parse {
             path: path.to_owned(),
             line: e.line(),
             reason: e.to_string(),

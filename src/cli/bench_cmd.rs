@@ -17,6 +17,20 @@ pub(crate) struct BenchArgs {
 enum BenchWhat {
     Loop(LoopArgs),
     Svr(super::bench_svr::SvrArgs),
+    Render(RenderArgs),
+}
+
+/// Frames per second of the renderer, headless, with where a frame's time goes.
+///
+/// Draws the needle-in-tissue demo frame at 640×480 and 1280×720, MSAA 1 and 4, with and
+/// without the overlay, on the first adapter found (Vulkan, then GL; lavapipe where there is
+/// no GPU). A second pass waits for the device after each stage to split a frame into drawing,
+/// MSAA resolve, overlay CPU work and readback.
+#[derive(Debug, Args)]
+struct RenderArgs {
+    /// Frames timed per configuration.
+    #[arg(long, default_value_t = 30)]
+    frames: u32,
 }
 
 /// Run the haptic loop at 1 kHz and report its timing.
@@ -51,6 +65,17 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match &args.what {
         BenchWhat::Loop(args) => run_loop(args),
         BenchWhat::Svr(args) => super::bench_svr::run(args),
+        BenchWhat::Render(args) => {
+            if args.frames == 0 {
+                anyhow::bail!("--frames must be at least 1");
+            }
+            let options = render::bench::BenchOptions {
+                frames: args.frames,
+                ..render::bench::BenchOptions::default()
+            };
+            print!("{}", render::bench::run(&options)?.to_text());
+            Ok(())
+        }
     }
 }
 

@@ -33,6 +33,10 @@ pub(crate) struct CaptureArgs {
     /// For `rubbing` on the simulator: which of Nakano's seven surfaces.
     #[arg(long, default_value = "sandpaper_120")]
     surface: String,
+    /// For `rubbing` on the simulator: where on the patch the stroke starts, mm (another
+    /// offset rubs another track of the same surface).
+    #[arg(long, default_value_t = 10.0, value_name = "MM")]
+    track_offset_mm: f64,
     /// Simulator only: run as fast as possible instead of in real time (same capture, its
     /// clock is the tick count).
     #[arg(long)]
@@ -60,6 +64,13 @@ fn parse_protocol(s: &str) -> Result<Protocol, String> {
 pub(crate) fn run(args: &CaptureArgs) -> anyhow::Result<()> {
     let mut options = CaptureOptions::new(args.protocol);
     options.surface = args.surface.clone();
+    if !(args.track_offset_mm.is_finite() && (0.0..=280.0).contains(&args.track_offset_mm)) {
+        bail!(
+            "--track-offset-mm {}: expected 0–280 mm (the patch is 330 mm long)",
+            args.track_offset_mm
+        );
+    }
+    options.track_offset_m = args.track_offset_mm * 1e-3;
     if args.unpaced {
         options.pacing = Pacing::Unpaced;
     }
@@ -79,6 +90,9 @@ pub(crate) fn run(args: &CaptureArgs) -> anyhow::Result<()> {
             device.name(),
             args.out.display()
         );
+    }
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let report = run_capture(device, &args.out, &options, &mut |_| {})
         .with_context(|| format!("capturing `{}` into {}", args.protocol, args.out.display()))?;

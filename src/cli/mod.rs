@@ -10,6 +10,8 @@ mod devices_cmd;
 mod gen_cmd;
 mod identify_cmd;
 mod recognize_cmd;
+mod render_cmd;
+mod run_cmd;
 
 use clap::{Parser, Subcommand};
 
@@ -17,7 +19,8 @@ use clap::{Parser, Subcommand};
 ///
 /// Trainees puncture virtual tissue and rub virtual surfaces through a Force Dimension Omega.7
 /// (or its simulator) and feel forces identified from measured data. Without an Omega.7 the
-/// simulated world measures: `palpus gen` writes the papers' experiments as captures.
+/// simulated world measures: `palpus gen` writes the papers' experiments as captures, and
+/// `palpus run` starts a scene (default: a needle into virtual liver).
 #[derive(Debug, Parser)]
 #[command(name = "palpus", version, about, long_about)]
 pub struct Cli {
@@ -27,6 +30,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    Run(run_cmd::RunArgs),
+    Render(render_cmd::RenderArgs),
     Gen(gen_cmd::GenArgs),
     Identify(identify_cmd::IdentifyArgs),
     Capture(capture_cmd::CaptureArgs),
@@ -38,6 +43,8 @@ enum Command {
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Run(args) => run_cmd::run(&args),
+        Command::Render(args) => render_cmd::run(&args),
         Command::Gen(args) => gen_cmd::run(&args),
         Command::Identify(args) => identify_cmd::run(&args),
         Command::Capture(args) => capture_cmd::run(&args),

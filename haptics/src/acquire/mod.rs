@@ -134,6 +134,9 @@ pub struct CaptureOptions {
     pub protocol: Protocol,
     /// For `rubbing`: which of Nakano's surfaces (simulator only).
     pub surface: String,
+    /// For `rubbing`: where along the simulated patch the stroke starts, m (each track of a
+    /// 0.33 m patch is different, like rubbing another spot of the same sample).
+    pub track_offset_m: f64,
     /// Real time, or as fast as possible (simulator only).
     pub pacing: Pacing,
     /// Loop settings besides pacing.
@@ -146,6 +149,7 @@ impl CaptureOptions {
         Self {
             protocol,
             surface: "sandpaper_120".into(),
+            track_offset_m: 0.01,
             pacing: Pacing::REALTIME,
             loop_config: LoopConfig::default(),
         }
@@ -202,7 +206,7 @@ pub fn sim_device(options: &CaptureOptions) -> Result<SimOmega7, AcquireError> {
             SimWorld::surface(
                 Texture::Patch {
                     patch: Box::new(SurfacePatch::new(&surface)),
-                    offset_m: 0.01,
+                    offset_m: options.track_offset_m,
                 },
                 SURFACE_Z_M,
             )
@@ -297,7 +301,9 @@ pub fn metadata(protocol: Protocol, device: &str, rate_hz: f64, options: &Captur
                         }
                     }
                     _ => {
-                        meta = meta.with("surface", &options.surface);
+                        meta = meta
+                            .with("surface", &options.surface)
+                            .with("track_offset_m", options.track_offset_m);
                     }
                 }
             }

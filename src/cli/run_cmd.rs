@@ -1,0 +1,191 @@
+//! `palpus run`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::models;
+use crate::scene::{DEFAULT_SCENE, Scene};
+use crate::session::report::{self, ModelLine, SessionReport};
+use crate::session::{self, DeviceChoice, SessionOptions, analysis};
+
+/// Run a scene: identify or load the models it needs, render them on the haptic thread, show
+/// the tissue, report.
+///
+/// With a display (and without --headless) a window opens: drag with the mouse or scroll to
+/// move the simulated hand, the overlay shows live force, the recognized surface and the loop
+/// rate. Without one, or with --headless, a scripted trainee performs the scene's task and a
+/// report folder is written: force plots, a rendered frame, loop statistics, the recognized
+/// surface timeline, and the summary printed here.
+#[derive(Debug, Args)]
+pub(crate) struct RunArgs {
+    /// The scene file.
+    #[arg(default_value = DEFAULT_SCENE)]
+    scene: PathBuf,
+    /// sim, omega7, or replay:FILE (a capture played back as the device's motion).
+    #[arg(long, default_value = "sim", value_parser = parse_device)]
+    device: DeviceChoice,
+    /// No window: the scripted trainee performs the task.
+    #[arg(long)]
+    headless: bool,
+    /// Stop each part of the task after this many seconds.
+    #[arg(long, value_name = "S")]
+    duration: Option<f64>,
+    /// Record the session as a capture (rubbing scenes: one file per surface).
+    #[arg(long, value_name = "FILE")]
+    record: Option<PathBuf>,
+    /// Where the report goes (default: out/run/SCENE).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
+    /// Where identified models are cached (default: $PALPUS_CACHE_DIR, else ~/.cache/palpus).
+    #[arg(long, value_name = "DIR")]
+    cache_dir: Option<PathBuf>,
+    /// Simulator only: run as fast as possible instead of in real time.
+    #[arg(long)]
+    unpaced: bool,
+    /// In a window on the simulator: the scripted trainee performs the task instead of the
+    /// mouse (a demonstration, and how the window is tested under Xvfb).
+    #[arg(long)]
+    autopilot: bool,
+    /// Omega.7 only: the SDK library to load.
+    #[arg(long, value_name = "PATH")]
+    dhd_library: Option<PathBuf>,
+}
+
+fn parse_device(s: &str) -> Result<DeviceChoice, String> {
+    s.parse()
+}
+
+/// Whether a window can be opened here.
+pub(crate) fn has_display() -> bool {
+    ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|x| !x.is_empty()))
+}
+
+pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let scene = Scene::load(&args.scene)?;
+    if let Some(d) = args.duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        anyhow::bail!("--duration {d}: expected a positive number of seconds");
+    }
+    if args.unpaced && args.device != DeviceChoice::Sim {
+        anyhow::bail!("--unpaced is for the simulator only: a real device runs in real time");
+    }
+    let cache_dir = args.cache_dir.clone().unwrap_or_else(models::default_cache_dir);
+    let resolved = models::resolve_with_progress(&scene, &cache_dir)?;
+    let options = SessionOptions {
+        device: args.device.clone(),
+        duration_s: args.duration,
+        record: args.record.clone(),
+        pacing: if args.unpaced {
+            haptics::rt::Pacing::Unpaced
+        } else {
+            haptics::rt::Pacing::REALTIME
+        },
+        dhd_library: args.dhd_library.clone(),
+        autopilot: args.autopilot,
+    };
+    let segments = session::segments(&scene, &resolved)?;
+    let headless = args.headless || !has_display();
+    let dir = |scene: &Scene| {
+        args.report
+            .clone()
+            .unwrap_or_else(|| Path::new("out").join("run").join(&scene.name))
+    };
+    let (scene, runs, recognition) = if headless {
+        println!(
+            "running scene {} headless on {} ({} part{}) ...",
+            scene.name,
+            options.device_label(),
+            segments.len(),
+            if segments.len() == 1 { "" } else { "s" }
+        );
+        let mut runs = Vec::new();
+        let mut recognition = Vec::new();
+        let mut recognizer = crate::recognizer::SceneRecognizer::for_scene(&scene)?;
+        for segment in &segments {
+            let run = session::run_segment(&scene, segment, segments.len(), &options, None)
+                .with_context(|| format!("running {}", segment.object))?;
+            if let Some(r) = recognizer.as_mut() {
+                recognition.extend(r.recognize(&run)?);
+            }
+            runs.push(run);
+        }
+        (scene, runs, recognition)
+    } else {
+        println!(
+            "running scene {} in a window on {}: drag or scroll to push the tool, arrows/WASD to move it, F12 for a screenshot",
+            scene.name,
+            options.device_label()
+        );
+        let screenshot = dir(&scene).join("window.png");
+        std::fs::create_dir_all(dir(&scene))
+            .with_context(|| format!("creating {}", dir(&scene).display()))?;
+        let outcome = crate::window::run(
+            scene.clone(),
+            segments,
+            options.clone(),
+            cache_dir,
+            Some(screenshot),
+        )?;
+        (outcome.scene.unwrap_or(scene), outcome.runs, outcome.recognition)
+    };
+    if runs.is_empty() {
+        anyhow::bail!("the session ran no part of the scene");
+    }
+    let dir = dir(&scene);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    report::write_force_plot(&dir.join("force.png"), &runs)?;
+    let frame = crate::view::render_session_frame(&scene, &runs, &recognition, &dir.join("frame.png"));
+    // A report folder holds one session: nothing of an earlier one may remain beside it.
+    let stale: &[&str] = if frame.is_ok() {
+        &["frame.txt"]
+    } else {
+        &["frame.png", "frame_inserted.png"]
+    };
+    for name in stale.iter().chain(if recognition.is_empty() {
+        &["timeline.csv"][..]
+    } else {
+        &[][..]
+    }) {
+        let _ = std::fs::remove_file(dir.join(name));
+    }
+    if let Err(why) = &frame {
+        let path = dir.join("frame.txt");
+        identify::capture::write_atomically(&path, |w| {
+            use std::io::Write;
+            writeln!(w, "no frame could be rendered: {why}")
+        })
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    let accuracy = (!recognition.is_empty()).then(|| {
+        recognition
+            .iter()
+            .filter(|r: &&report::Recognition| r.label == r.truth)
+            .count() as f64
+            / recognition.len() as f64
+    });
+    let report = SessionReport {
+        scene: scene.name.clone(),
+        scene_file: scene.path.clone(),
+        device: runs
+            .first()
+            .map_or_else(|| options.device_label(), |r| r.device.clone()),
+        models: resolved.iter().map(ModelLine::new).collect(),
+        segments: runs.iter().map(analysis::summarize).collect(),
+        recognition,
+        recognition_accuracy: accuracy,
+        frame,
+        recorded: runs.iter().filter_map(|r| r.recorded.clone()).collect(),
+        wall_s: started.elapsed().as_secs_f64(),
+    };
+    report::write_summary(&dir, &report)?;
+    print!("{}", report.to_text());
+    println!("report in {}", dir.display());
+    Ok(())
+}

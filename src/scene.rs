@@ -1,0 +1,735 @@
+//! Scenes: what a session contains, read from TOML.
+//!
+//! A scene lists objects (a mesh, a pose, a material), materials (each names the models it
+//! needs: needle puncture, friction, a recognizable surface), where each model comes from (a
+//! model file, or a capture and hyperparameters to identify it from), the device, the
+//! recognizer, the haptic settings and the task a scripted trainee performs when nobody holds
+//! the device. Paths are relative to the scene file. Loading validates everything once, so
+//! every later stage can trust the scene; each error names the file, the key and the reason.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+/// The scene `palpus run` starts when none is given.
+pub const DEFAULT_SCENE: &str = "scenes/needle_liver.toml";
+
+/// A scene, validated, with every path resolved against the scene file's folder.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name, used in reports.
+    pub name: String,
+    /// One line for the trainee.
+    #[serde(default)]
+    pub description: String,
+    /// The haptic device.
+    #[serde(default)]
+    pub device: DeviceSection,
+    /// Admittance rendering.
+    #[serde(default)]
+    pub haptics: HapticsSection,
+    /// The camera.
+    pub camera: CameraSection,
+    /// What is drawn and touched.
+    pub objects: Vec<Object>,
+    /// Materials by name.
+    pub materials: BTreeMap<String, Material>,
+    /// Models by name; only those a material of a drawn object references are ever read.
+    #[serde(default)]
+    pub models: BTreeMap<String, ModelSource>,
+    /// Live surface recognition, if the scene has one.
+    pub recognizer: Option<RecognizerSection>,
+    /// What the scripted trainee does in a headless run.
+    pub task: Task,
+    /// The file it was read from.
+    #[serde(skip)]
+    pub path: PathBuf,
+}
+
+/// `[device]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceSection {
+    /// `sim` or `omega7` (`palpus run --device` overrides it).
+    #[serde(default = "default_device")]
+    pub kind: String,
+    /// Haptic rate, Hz.
+    #[serde(default = "default_rate")]
+    pub rate_hz: f64,
+}
+
+fn default_device() -> String {
+    "sim".into()
+}
+
+fn default_rate() -> f64 {
+    1000.0
+}
+
+impl Default for DeviceSection {
+    fn default() -> Self {
+        Self {
+            kind: default_device(),
+            rate_hz: default_rate(),
+        }
+    }
+}
+
+/// `[haptics]`: the virtual tool the admittance renderer moves.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HapticsSection {
+    /// Virtual mass, kg.
+    #[serde(default = "default_mass")]
+    pub virtual_mass_kg: f64,
+    /// Virtual damping, N·s/m.
+    #[serde(default = "default_damping")]
+    pub virtual_damping_nspm: f64,
+    /// The simulated hand's grip stiffness, N/m.
+    #[serde(default = "default_grip")]
+    pub grip_stiffness_npm: f64,
+    /// Smallest loading peak the needle law takes for a membrane, N: an identified surface
+    /// ripples by a few tenths of a newton near the surface, which must not read as a rupture.
+    #[serde(default = "default_min_peak")]
+    pub rupture_min_peak_n: f64,
+}
+
+fn default_min_peak() -> f64 {
+    0.4
+}
+
+fn default_mass() -> f64 {
+    0.8
+}
+
+fn default_damping() -> f64 {
+    4.0
+}
+
+fn default_grip() -> f64 {
+    300.0
+}
+
+impl Default for HapticsSection {
+    fn default() -> Self {
+        Self {
+            virtual_mass_kg: default_mass(),
+            virtual_damping_nspm: default_damping(),
+            grip_stiffness_npm: default_grip(),
+            rupture_min_peak_n: default_min_peak(),
+        }
+    }
+}
+
+/// `[camera]`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSection {
+    /// Eye position, m (scene frame: y up).
+    pub eye_m: [f64; 3],
+    /// Point looked at, m.
+    pub target_m: [f64; 3],
+    /// Vertical field of view, degrees.
+    #[serde(default = "default_fov")]
+    pub fov_deg: f64,
+}
+
+fn default_fov() -> f64 {
+    40.0
+}
+
+/// One `[[objects]]` entry.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    /// Name, unique in the scene.
+    pub name: String,
+    /// A glTF binary, optionally `#node` to take one node of it.
+    pub mesh: String,
+    /// Position, m.
+    #[serde(default)]
+    pub position_m: [f64; 3],
+    /// Rotation about x, y, z (applied in that order), degrees.
+    #[serde(default)]
+    pub rotation_deg: [f64; 3],
+    /// A key of `[materials]`.
+    pub material: String,
+    /// The object is the tool the device moves (at most one per scene).
+    #[serde(default)]
+    pub tool: bool,
+}
+
+impl Object {
+    /// The mesh file and, if given, the node.
+    pub fn mesh_parts(&self) -> (&str, Option<&str>) {
+        match self.mesh.split_once('#') {
+            Some((file, node)) => (file, Some(node)),
+            None => (self.mesh.as_str(), None),
+        }
+    }
+}
+
+/// One `[materials.NAME]` table.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Linear RGB colour multiplying the mesh's vertex colours.
+    #[serde(default = "white")]
+    pub color: [f64; 3],
+    /// Opacity (tissue turns translucent after puncture whatever this says).
+    #[serde(default = "one")]
+    pub opacity: f64,
+    /// Visual roughness 0–1 (surface detail in the renderer).
+    #[serde(default)]
+    pub roughness: f64,
+    /// The needle-puncture model (a key of `[models]`).
+    pub puncture: Option<String>,
+    /// The friction model (a key of `[models]`).
+    pub friction: Option<String>,
+    /// A simulated physical surface (one of Nakano's seven) the recognizer should name.
+    pub surface: Option<String>,
+    /// Contact stiffness of a friction surface, N/m.
+    #[serde(default = "default_contact_stiffness")]
+    pub contact_stiffness_npm: f64,
+}
+
+fn white() -> [f64; 3] {
+    [1.0; 3]
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn default_contact_stiffness() -> f64 {
+    2000.0
+}
+
+/// Where a model comes from: `file = …`, or `kind`, `capture` and hyperparameters.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSource {
+    /// `needle`, `hard` or `soft`.
+    pub kind: String,
+    /// A model file written by `palpus identify --out`.
+    pub file: Option<PathBuf>,
+    /// A capture to identify the model from.
+    pub capture: Option<PathBuf>,
+    /// Regularisation constant C (defaults: the model kind's).
+    pub c: Option<f64>,
+    /// ε in the target's SI unit.
+    pub epsilon: Option<f64>,
+    /// RBF γ on the scaled inputs.
+    pub gamma: Option<f64>,
+    /// Needle: at most this many training samples.
+    #[serde(default = "default_max_samples")]
+    pub max_samples: usize,
+}
+
+fn default_max_samples() -> usize {
+    350
+}
+
+/// `[recognizer]`: a recognizer model file or captures to train one from.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecognizerSection {
+    /// `som` or `knn`.
+    #[serde(default = "default_method")]
+    pub method: String,
+    /// A recognizer model file.
+    pub file: Option<PathBuf>,
+    /// A folder of rubbing captures to train from.
+    pub captures: Option<PathBuf>,
+}
+
+fn default_method() -> String {
+    "som".into()
+}
+
+/// `[task]`: what the scripted trainee does.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Task {
+    /// Insert the needle straight down at the entry point, hold, withdraw.
+    Insertion {
+        /// Start this far above the surface, m.
+        start_above_m: f64,
+        /// Insertion depth of the hand's target below the surface, m.
+        depth_m: f64,
+        /// Insertion speed, m/s.
+        speed_mps: f64,
+        /// Hold at depth, s.
+        hold_s: f64,
+        /// Withdrawal speed, m/s.
+        withdraw_speed_mps: f64,
+    },
+    /// Rub each touchable object in turn along x, pressing down.
+    Rub {
+        /// Normal force the hand presses with, N.
+        normal_force_n: f64,
+        /// Stroke length, m.
+        stroke_m: f64,
+        /// Stroke speed, m/s.
+        speed_mps: f64,
+        /// Strokes (there and back counts two) on each object.
+        strokes: u32,
+    },
+}
+
+impl Task {
+    /// Short name for reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Task::Insertion { .. } => "insertion",
+            Task::Rub { .. } => "rub",
+        }
+    }
+}
+
+/// Which model a material needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ModelRole {
+    /// `puncture = …`.
+    Puncture,
+    /// `friction = …`.
+    Friction,
+}
+
+impl fmt::Display for ModelRole {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ModelRole::Puncture => "puncture",
+            ModelRole::Friction => "friction",
+        })
+    }
+}
+
+/// Why a scene cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{file}: {source}")]
+    Io {
+        /// The scene file.
+        file: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// Not TOML, or a key of the wrong type, missing or unknown.
+    #[error("{file}: {message}")]
+    Parse {
+        /// The scene file.
+        file: PathBuf,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// A value that parses but makes no sense.
+    #[error("{file}: `{key}`: {reason}")]
+    Invalid {
+        /// The scene file.
+        file: PathBuf,
+        /// The key, dotted (`materials.liver.puncture`).
+        key: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            file: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and validates scene text; `path` names it and anchors its relative paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, SceneError> {
+        let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            file: path.to_owned(),
+            message: e.to_string().trim_end().replace('\n', " | "),
+        })?;
+        scene.path = path.to_owned();
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// The folder relative paths start from.
+    pub fn base_dir(&self) -> &Path {
+        self.path.parent().unwrap_or(Path::new("."))
+    }
+
+    /// `relative` against the scene file's folder.
+    pub fn resolve(&self, relative: &Path) -> PathBuf {
+        if relative.is_absolute() {
+            relative.to_owned()
+        } else {
+            self.base_dir().join(relative)
+        }
+    }
+
+    fn invalid(&self, key: impl Into<String>, reason: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            file: self.path.clone(),
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// The tool object, if any.
+    pub fn tool(&self) -> Option<&Object> {
+        self.objects.iter().find(|o| o.tool)
+    }
+
+    /// The models the drawn objects' materials need: (model name, role, material name), each
+    /// model once, in a fixed order. Nothing else in `[models]` is ever read.
+    pub fn referenced_models(&self) -> Vec<(String, ModelRole, String)> {
+        let mut out: Vec<(String, ModelRole, String)> = Vec::new();
+        for object in &self.objects {
+            let Some(material) = self.materials.get(&object.material) else {
+                continue;
+            };
+            for (role, name) in [
+                (ModelRole::Puncture, &material.puncture),
+                (ModelRole::Friction, &material.friction),
+            ] {
+                if let Some(name) = name
+                    && !out.iter().any(|(n, _, _)| n == name)
+                {
+                    out.push((name.clone(), role, object.material.clone()));
+                }
+            }
+        }
+        out
+    }
+
+    fn validate(&self) -> Result<(), SceneError> {
+        if self.name.trim().is_empty() {
+            return Err(self.invalid("name", "must not be empty"));
+        }
+        if !matches!(self.device.kind.as_str(), "sim" | "omega7") {
+            return Err(self.invalid(
+                "device.kind",
+                format!("`{}`: expected sim or omega7", self.device.kind),
+            ));
+        }
+        let rate = self.device.rate_hz;
+        if !(rate.is_finite() && (100.0..=10_000.0).contains(&rate)) {
+            return Err(self.invalid("device.rate_hz", format!("{rate}: expected 100–10000 Hz")));
+        }
+        let h = self.haptics;
+        for (key, value) in [
+            ("haptics.virtual_mass_kg", h.virtual_mass_kg),
+            ("haptics.virtual_damping_nspm", h.virtual_damping_nspm),
+            ("haptics.grip_stiffness_npm", h.grip_stiffness_npm),
+            ("haptics.rupture_min_peak_n", h.rupture_min_peak_n),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(self.invalid(key, format!("{value}: must be a positive number")));
+            }
+        }
+        let c = self.camera;
+        if c.eye_m.iter().chain(&c.target_m).any(|v| !v.is_finite()) || c.eye_m == c.target_m {
+            return Err(self.invalid("camera", "eye_m and target_m must be finite and distinct"));
+        }
+        if !(c.fov_deg.is_finite() && c.fov_deg > 1.0 && c.fov_deg < 170.0) {
+            return Err(self.invalid("camera.fov_deg", format!("{}: expected 1–170°", c.fov_deg)));
+        }
+        if self.objects.is_empty() {
+            return Err(self.invalid("objects", "a scene needs at least one object"));
+        }
+        let mut tools = 0;
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = |field: &str| format!("objects[{i}].{field}");
+            if self.objects[..i].iter().any(|p| p.name == o.name) {
+                return Err(self.invalid(key("name"), format!("`{}` is used twice", o.name)));
+            }
+            let (file, node) = o.mesh_parts();
+            if !file.ends_with(".glb") {
+                return Err(self.invalid(key("mesh"), format!("`{}`: expected a .glb file", o.mesh)));
+            }
+            if node.is_some_and(str::is_empty) {
+                return Err(self.invalid(key("mesh"), "empty node name after `#`"));
+            }
+            if o.position_m.iter().chain(&o.rotation_deg).any(|v| !v.is_finite()) {
+                return Err(self.invalid(key("position_m"), "pose values must be finite"));
+            }
+            if !self.materials.contains_key(&o.material) {
+                return Err(self.invalid(key("material"), format!("`{}` is not in [materials]", o.material)));
+            }
+            tools += usize::from(o.tool);
+        }
+        if tools > 1 {
+            return Err(self.invalid("objects", "at most one object can be the tool"));
+        }
+        for (name, m) in &self.materials {
+            let key = |field: &str| format!("materials.{name}.{field}");
+            if m.color
+                .iter()
+                .any(|v| !(v.is_finite() && (0.0..=1.0).contains(v)))
+            {
+                return Err(self.invalid(key("color"), "components must lie in 0–1"));
+            }
+            if !(m.opacity.is_finite() && (0.0..=1.0).contains(&m.opacity)) {
+                return Err(self.invalid(key("opacity"), "must lie in 0–1"));
+            }
+            if !(m.roughness.is_finite() && (0.0..=1.0).contains(&m.roughness)) {
+                return Err(self.invalid(key("roughness"), "must lie in 0–1"));
+            }
+            if !(m.contact_stiffness_npm.is_finite() && m.contact_stiffness_npm > 0.0) {
+                return Err(self.invalid(key("contact_stiffness_npm"), "must be positive"));
+            }
+            for (field, model, kinds) in [
+                ("puncture", &m.puncture, &["needle"][..]),
+                ("friction", &m.friction, &["hard", "soft"][..]),
+            ] {
+                let Some(model) = model else { continue };
+                let Some(source) = self.models.get(model) else {
+                    return Err(self.invalid(key(field), format!("model `{model}` is not in [models]")));
+                };
+                if !kinds.contains(&source.kind.as_str()) {
+                    return Err(self.invalid(
+                        key(field),
+                        format!(
+                            "model `{model}` is a {} model; expected {}",
+                            source.kind,
+                            kinds.join(" or ")
+                        ),
+                    ));
+                }
+            }
+            if let Some(surface) = &m.surface
+                && !haptics::acquire::surface_names().contains(&surface.as_str())
+            {
+                return Err(self.invalid(
+                    key("surface"),
+                    format!(
+                        "`{surface}` is not one of the simulated surfaces ({})",
+                        haptics::acquire::surface_names().join(", ")
+                    ),
+                ));
+            }
+        }
+        for (name, s) in &self.models {
+            let key = |field: &str| format!("models.{name}.{field}");
+            if !matches!(s.kind.as_str(), "needle" | "hard" | "soft") {
+                return Err(self.invalid(
+                    key("kind"),
+                    format!("`{}`: expected needle, hard or soft", s.kind),
+                ));
+            }
+            match (&s.file, &s.capture) {
+                (Some(_), Some(_)) => {
+                    return Err(self.invalid(key("file"), "give either `file` or `capture`, not both"));
+                }
+                (None, None) => {
+                    return Err(
+                        self.invalid(name.clone(), "needs `file` (a model) or `capture` (to identify)")
+                    );
+                }
+                _ => {}
+            }
+            for (field, value) in [("c", s.c), ("epsilon", s.epsilon), ("gamma", s.gamma)] {
+                if let Some(v) = value
+                    && !(v.is_finite() && v > 0.0)
+                {
+                    return Err(self.invalid(key(field), format!("{v}: must be a positive number")));
+                }
+            }
+            if s.max_samples < 10 {
+                return Err(self.invalid(key("max_samples"), "at least 10"));
+            }
+        }
+        if let Some(r) = &self.recognizer {
+            if !matches!(r.method.as_str(), "som" | "knn") {
+                return Err(self.invalid(
+                    "recognizer.method",
+                    format!("`{}`: expected som or knn", r.method),
+                ));
+            }
+            if r.file.is_some() == r.captures.is_some() {
+                return Err(self.invalid("recognizer", "give exactly one of `file` and `captures`"));
+            }
+        }
+        self.validate_task()
+    }
+
+    fn validate_task(&self) -> Result<(), SceneError> {
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(self.invalid(format!("task.{key}"), format!("{v}: must be a positive number")))
+            }
+        };
+        match self.task {
+            Task::Insertion {
+                start_above_m,
+                depth_m,
+                speed_mps,
+                hold_s,
+                withdraw_speed_mps,
+            } => {
+                positive("start_above_m", start_above_m)?;
+                positive("depth_m", depth_m)?;
+                positive("speed_mps", speed_mps)?;
+                positive("withdraw_speed_mps", withdraw_speed_mps)?;
+                if !(hold_s.is_finite() && hold_s >= 0.0) {
+                    return Err(self.invalid("task.hold_s", "must be zero or more"));
+                }
+                if depth_m + start_above_m > 0.07 {
+                    return Err(self.invalid(
+                        "task.depth_m",
+                        "the stroke leaves the Omega.7's workspace (at most 70 mm in all)",
+                    ));
+                }
+                if self.tool().is_none() {
+                    return Err(self.invalid("task", "an insertion needs a tool object (`tool = true`)"));
+                }
+                if !self.materials.values().any(|m| m.puncture.is_some()) {
+                    return Err(self.invalid("task", "an insertion needs a material with `puncture`"));
+                }
+            }
+            Task::Rub {
+                normal_force_n,
+                stroke_m,
+                speed_mps,
+                strokes,
+            } => {
+                positive("normal_force_n", normal_force_n)?;
+                positive("stroke_m", stroke_m)?;
+                positive("speed_mps", speed_mps)?;
+                if strokes == 0 {
+                    return Err(self.invalid("task.strokes", "at least one"));
+                }
+                if normal_force_n > 10.0 {
+                    return Err(self.invalid("task.normal_force_n", "above the Omega.7's 12 N less margin"));
+                }
+                if self.rubbed_objects().is_empty() {
+                    return Err(self.invalid(
+                        "task",
+                        "rubbing needs objects whose material has `friction` or `surface`",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Objects a rubbing task visits, in scene order.
+    pub fn rubbed_objects(&self) -> Vec<&Object> {
+        self.objects
+            .iter()
+            .filter(|o| {
+                !o.tool
+                    && self
+                        .materials
+                        .get(&o.material)
+                        .is_some_and(|m| m.friction.is_some() || m.surface.is_some())
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn default_text() -> String {
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_SCENE)).unwrap()
+    }
+
+    fn error(text: &str) -> String {
+        Scene::parse(text, Path::new("scenes/x.toml"))
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn the_default_scenes_load() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        for name in ["needle_liver", "surfaces_nakano", "friction_hard_soft"] {
+            let scene = Scene::load(&root.join("scenes").join(format!("{name}.toml"))).unwrap();
+            assert_eq!(scene.name, name);
+            assert!(scene.tool().is_some());
+        }
+        let needle = Scene::load(&root.join(DEFAULT_SCENE)).unwrap();
+        let refs = needle.referenced_models();
+        assert_eq!(refs.len(), 1);
+        assert_eq!(
+            (refs[0].0.as_str(), refs[0].1),
+            ("needle_liver", ModelRole::Puncture)
+        );
+    }
+
+    #[test]
+    fn unreferenced_models_are_not_referenced() {
+        let text = default_text().replace(
+            "[task]",
+            "[models.spare]\nkind = \"hard\"\ncapture = \"nowhere.csv\"\n\n[task]",
+        );
+        let scene = Scene::parse(&text, Path::new("scenes/x.toml")).unwrap();
+        assert!(scene.models.contains_key("spare"));
+        assert!(scene.referenced_models().iter().all(|(n, _, _)| n != "spare"));
+    }
+
+    #[test]
+    fn errors_name_the_file_and_the_key() {
+        let text = default_text();
+        let e = error(&text.replace("fov_deg = 40.0", "fov_deg = 40.0\nzoom = 2"));
+        assert!(e.starts_with("scenes/x.toml:") && e.contains("zoom"), "{e}");
+        let e = error(&text.replace("puncture = \"needle_liver\"", "puncture = \"kidney\""));
+        assert!(
+            e.contains("`materials.liver.puncture`") && e.contains("kidney"),
+            "{e}"
+        );
+        let e = error(&text.replace("kind = \"needle\"", "kind = \"hard\""));
+        assert!(
+            e.contains("materials.liver.puncture") && e.contains("hard model"),
+            "{e}"
+        );
+        let e = error(&text.replace("rate_hz = 1000.0", "rate_hz = -5.0"));
+        assert!(e.contains("`device.rate_hz`"), "{e}");
+        let e = error(&text.replace("speed_mps = 0.010", "speed_mps = 0.0"));
+        assert!(e.contains("`task.speed_mps`"), "{e}");
+        let e = error(&text.replace("material = \"vessel\"", "material = \"bone\""));
+        assert!(e.contains("`objects[1].material`") && e.contains("bone"), "{e}");
+        let e = error(&text.replace(
+            "capture = \"../assets/captures/li_bi/needle_train.csv\"",
+            "capture = \"a.csv\"\nfile = \"b.json\"",
+        ));
+        assert!(
+            e.contains("`models.needle_liver.file`") && e.contains("not both"),
+            "{e}"
+        );
+        let e = error(&text.replace("depth_m = 0.030", "depth_m = 0.2"));
+        assert!(e.contains("workspace"), "{e}");
+        let e = error("name = \"x\"\n[camera]\n");
+        assert!(e.contains("missing field"), "{e}");
+        let e = error(&text.replace(
+            "tool = true",
+            "tool = true\n[[objects]]\nname = \"n2\"\nmesh = \"n.glb\"\nmaterial = \"steel\"\ntool = true",
+        ));
+        assert!(e.contains("at most one object"), "{e}");
+    }
+
+    #[test]
+    fn paths_resolve_against_the_scene_folder() {
+        let scene = Scene::parse(&default_text(), Path::new("/data/scenes/s.toml")).unwrap();
+        assert_eq!(
+            scene.resolve(Path::new("../a/b.csv")),
+            Path::new("/data/scenes/../a/b.csv")
+        );
+        assert_eq!(scene.resolve(Path::new("/abs.csv")), Path::new("/abs.csv"));
+        assert_eq!(
+            scene.objects[0].mesh_parts(),
+            ("../assets/meshes/liver.glb", Some("liver"))
+        );
+    }
+}

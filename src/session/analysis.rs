@@ -1,0 +1,204 @@
+//! What a segment's samples say: punctures and their depths against the simulated tissue's
+//! truth, friction ratios, force extremes, loop rate.
+
+use haptics::HapticSample;
+use haptics::control::rubbing::channel as rub;
+use haptics::law::PunctureState;
+use haptics::sim::world::needle::NeedleTissue;
+use serde::Serialize;
+
+use super::channel as c;
+use super::{SURFACE_Z_M, SegmentKind, SegmentRun};
+
+/// One detected capsule or membrane rupture.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Puncture {
+    /// When, s.
+    pub time_s: f64,
+    /// Depth of the tool below the undeformed surface, m.
+    pub depth_m: f64,
+    /// Insertion speed of the tool at the loading peak just before, m/s.
+    pub speed_mps: f64,
+    /// Largest force of the loading before it, N.
+    pub peak_force_n: f64,
+    /// Depth at which the simulated liver the model was identified from ruptures at that
+    /// speed, m (membrane by index).
+    pub truth_depth_m: Option<f64>,
+}
+
+/// The summary of one segment.
+#[derive(Debug, Clone, Serialize)]
+pub struct SegmentSummary {
+    /// The object.
+    pub object: String,
+    /// `needle`, `friction` or `surface`.
+    pub kind: &'static str,
+    /// Ticks run.
+    pub ticks: u64,
+    /// Loop time covered, s.
+    pub duration_s: f64,
+    /// Mean loop rate, Hz.
+    pub mean_rate_hz: f64,
+    /// Nominal rate, Hz.
+    pub nominal_rate_hz: f64,
+    /// |mean − nominal| / nominal.
+    pub rate_error: f64,
+    /// Period error p99, µs.
+    pub period_error_p99_us: f64,
+    /// Ticks started over 2 ms late.
+    pub late_over_2ms: u64,
+    /// Largest force norm sent to the device, N.
+    pub max_command_n: f64,
+    /// The device's limit, N.
+    pub device_limit_n: f64,
+    /// Any NaN or infinite command.
+    pub non_finite_commands: u64,
+    /// Ticks the safety filter changed.
+    pub safety_events: u64,
+    /// Ticks where a model's inputs were clamped to its training box.
+    pub model_clamps: u64,
+    /// Ruptures (needle).
+    pub punctures: Vec<Puncture>,
+    /// Deepest tool depth (needle), m.
+    pub max_depth_m: Option<f64>,
+    /// Largest model force (needle: axial; friction: normal), N.
+    pub max_model_force_n: f64,
+    /// Mean friction / normal force while sliding (friction and surface segments).
+    pub mean_friction_ratio: Option<f64>,
+    /// How the loop ended.
+    pub outcome: String,
+}
+
+/// Summarises a segment.
+pub fn summarize(run: &SegmentRun) -> SegmentSummary {
+    let s = &run.samples;
+    let mut max_command_n: f64 = 0.0;
+    let mut non_finite = 0;
+    for x in s {
+        let f = x.command.force_n;
+        if f.is_finite() {
+            max_command_n = max_command_n.max(f.length());
+        } else {
+            non_finite += 1;
+        }
+    }
+    let (kind, punctures, max_depth_m, max_model_force_n, ratio) = match &run.segment.kind {
+        SegmentKind::Needle { .. } => {
+            let surface_z_m = if matches!(run.device.as_str(), d if d.starts_with("replay")) {
+                0.0
+            } else {
+                SURFACE_Z_M
+            };
+            let punctures = punctures(s);
+            let depth = s
+                .iter()
+                .map(|x| surface_z_m - x.channels[c::TOOL_Z_M])
+                .fold(f64::NEG_INFINITY, f64::max);
+            let force = s.iter().map(|x| x.channels[c::MODEL_Z_N]).fold(0.0, f64::max);
+            (
+                "needle",
+                punctures,
+                depth.is_finite().then_some(depth),
+                force,
+                None,
+            )
+        }
+        SegmentKind::Friction { .. } => {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for x in s {
+                let normal = x.channels[c::MODEL_Z_N];
+                if normal > 0.2 && x.state.velocity_mps.x.abs() > 0.003 {
+                    sum += x.channels[c::MODEL_X_N].abs() / normal;
+                    n += 1;
+                }
+            }
+            let force = s.iter().map(|x| x.channels[c::MODEL_Z_N]).fold(0.0, f64::max);
+            (
+                "friction",
+                Vec::new(),
+                None,
+                force,
+                (n > 0).then(|| sum / n as f64),
+            )
+        }
+        SegmentKind::Surface { .. } => {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for x in s {
+                let normal = x.channels[rub::NORMAL_FORCE_N];
+                if x.channels[rub::PHASE] == haptics::control::RubbingPhase::Rub.code() && normal > 0.1 {
+                    sum += x.channels[rub::FRICTION_N] / normal;
+                    n += 1;
+                }
+            }
+            let force = s
+                .iter()
+                .map(|x| x.channels[rub::NORMAL_FORCE_N])
+                .fold(0.0, f64::max);
+            (
+                "surface",
+                Vec::new(),
+                None,
+                force,
+                (n > 0).then(|| sum / n as f64),
+            )
+        }
+    };
+    let st = &run.stats;
+    SegmentSummary {
+        object: run.segment.object.clone(),
+        kind,
+        ticks: st.ticks,
+        duration_s: s.last().map_or(0.0, |x| x.time_s),
+        mean_rate_hz: st.mean_rate_hz,
+        nominal_rate_hz: st.nominal_rate_hz,
+        rate_error: st.rate_error(),
+        period_error_p99_us: st.period_error.p99.as_secs_f64() * 1e6,
+        late_over_2ms: st.late_over_2ms,
+        max_command_n,
+        device_limit_n: run.max_force_n,
+        non_finite_commands: non_finite,
+        safety_events: st.safety_events,
+        model_clamps: st.model_clamps,
+        punctures,
+        max_depth_m,
+        max_model_force_n,
+        mean_friction_ratio: ratio,
+        outcome: match &run.outcome {
+            Ok(r) => r.clone(),
+            Err(e) => format!("error: {e}"),
+        },
+    }
+}
+
+/// Ruptures: the law's state entering `Puncture`.
+fn punctures(s: &[HapticSample]) -> Vec<Puncture> {
+    let loading = PunctureState::CapsuleLoading.code();
+    let puncture = PunctureState::Puncture.code();
+    let tissue = NeedleTissue::bovine_liver();
+    let mut out: Vec<Puncture> = Vec::new();
+    let mut peak: f64 = 0.0;
+    // The loading speed at the peak: after it the tool surges forward as the force gives.
+    let mut peak_speed_mps = 0.0;
+    for w in s.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        if (a.channels[c::STATE] == loading || a.channels[c::STATE] == PunctureState::Insertion.code())
+            && a.channels[c::MODEL_Z_N] > peak
+        {
+            peak = a.channels[c::MODEL_Z_N];
+            peak_speed_mps = -a.channels[c::TOOL_VZ_MPS];
+        }
+        if b.channels[c::STATE] == puncture && a.channels[c::STATE] != puncture {
+            let speed_mps = peak_speed_mps;
+            let index = out.len();
+            out.push(Puncture {
+                time_s: b.time_s,
+                depth_m: b.channels[c::INPUT],
+                speed_mps,
+                peak_force_n: peak,
+                truth_depth_m: tissue.puncture_depth_m(index, speed_mps.max(0.0)),
+            });
+            peak = 0.0;
+        }
+    }
+    out
+}

@@ -1,0 +1,660 @@
+//! A session: a scene's models rendered by the haptic thread on a device, with a scripted
+//! trainee (headless) or the user's hand (window), recorded and summarised.
+//!
+//! A scene runs as one *segment* per thing the trainee works on: the needle's insertion site,
+//! or each surface a rubbing task visits. Each segment has its own haptic loop, because moving
+//! the tool from one patch to the next is a clutch (the workspace is re-centred on the next
+//! object), exactly as a trainee indexes an Omega.7 across a tray wider than its 160 mm
+//! workspace.
+
+pub mod analysis;
+pub mod report;
+pub mod script;
+
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use haptics::acquire::{self, CaptureOptions, Protocol};
+use haptics::control::{Admittance, AdmittanceConfig};
+use haptics::device::HapticDevice;
+use haptics::device::omega7::Omega7;
+use haptics::device::replay::ReplayDevice;
+use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
+use haptics::law::{
+    Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig, SoftFriction,
+    hard_friction_model, needle_model, soft_friction_models,
+};
+use haptics::recorder::{Recorder, RecorderConfig};
+use haptics::rt::{
+    self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, TickInput, TickOutput, WatchdogConfig,
+};
+use haptics::sim::hand::{HandImpedance, HandScript, LiveHand};
+use haptics::{DeviceSpecs, HapticSample};
+use identify::capture::{Capture, CaptureKind, CaptureWriter, Metadata};
+use identify::model_file::{ModelFile, ModelKind};
+
+use crate::models::ResolvedModel;
+use crate::scene::{ModelRole, Scene, Task};
+
+/// Height of the tissue surface or of the rubbed surface in device coordinates (z up), m: a
+/// little below the workspace centre, where the Omega.7 has room above and below.
+pub const SURFACE_Z_M: f64 = -0.02;
+
+/// Where on a simulated patch a session rubs, m: a track the recognizer's training captures
+/// (offsets 10, 60 and 110 mm) never touched.
+pub const LIVE_TRACK_OFFSET_M: f64 = 0.2;
+
+/// Which device the session runs on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DeviceChoice {
+    /// The simulated Omega.7 (with a scripted or UI-driven hand).
+    Sim,
+    /// A Force Dimension Omega.7 through its SDK.
+    Omega7,
+    /// A capture played back as the device's motion.
+    Replay(PathBuf),
+}
+
+impl FromStr for DeviceChoice {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "sim" => Ok(Self::Sim),
+            "omega7" => Ok(Self::Omega7),
+            _ => match s.strip_prefix("replay:") {
+                Some(path) if !path.is_empty() => Ok(Self::Replay(PathBuf::from(path))),
+                _ => Err(format!("`{s}`: expected sim, omega7 or replay:FILE")),
+            },
+        }
+    }
+}
+
+/// How to run.
+#[derive(Debug, Clone)]
+pub struct SessionOptions {
+    /// The device.
+    pub device: DeviceChoice,
+    /// Stop each segment after this long, s (None: when the task is done).
+    pub duration_s: Option<f64>,
+    /// Record the session into this capture (rubbing scenes: one file per surface, the
+    /// object's name before the extension).
+    pub record: Option<PathBuf>,
+    /// Real time, or as fast as the simulator goes (tests of the whole chain).
+    pub pacing: Pacing,
+    /// Omega.7 only: the SDK library.
+    pub dhd_library: Option<PathBuf>,
+    /// Simulator in a window: the scripted trainee moves the hand instead of the mouse (demos).
+    pub autopilot: bool,
+}
+
+impl SessionOptions {
+    /// The device in a few words.
+    pub fn device_label(&self) -> String {
+        match &self.device {
+            DeviceChoice::Sim => "simulated Omega.7".into(),
+            DeviceChoice::Omega7 => "Omega.7".into(),
+            DeviceChoice::Replay(p) => format!("replay of {}", p.display()),
+        }
+    }
+}
+
+/// What a segment works on.
+#[derive(Debug, Clone)]
+pub enum SegmentKind {
+    /// Needle insertion into tissue rendered from a puncture model.
+    Needle {
+        /// The model.
+        model: Box<ModelFile>,
+    },
+    /// Rubbing a surface rendered from a friction model.
+    Friction {
+        /// The model.
+        model: Box<ModelFile>,
+        /// Contact stiffness, N/m.
+        stiffness_npm: f64,
+    },
+    /// Rubbing a simulated physical surface with Nakano's controller (recognition).
+    Surface {
+        /// One of Nakano's seven surfaces.
+        surface: String,
+    },
+}
+
+/// One segment of a session.
+#[derive(Debug, Clone)]
+pub struct Segment {
+    /// The object worked on.
+    pub object: String,
+    /// What it is.
+    pub kind: SegmentKind,
+}
+
+/// Why a session could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The scene needs a model that was not resolved (a bug in resolution).
+    #[error("the scene's material `{material}` needs a {role} model that was not resolved")]
+    MissingModel {
+        /// The material.
+        material: String,
+        /// Its role.
+        role: ModelRole,
+    },
+    /// A model cannot drive its force law.
+    #[error("model `{model}`: {source}")]
+    Model {
+        /// The scene's name for it.
+        model: String,
+        /// Why.
+        source: haptics::law::IdentifiedModelError,
+    },
+    /// The device could not be opened.
+    #[error("opening the device: {0}")]
+    Device(#[from] haptics::DeviceError),
+    /// The replay capture is unreadable.
+    #[error(transparent)]
+    Replay(#[from] identify::capture::CaptureError),
+    /// The loop could not run.
+    #[error(transparent)]
+    Loop(#[from] haptics::LoopError),
+    /// Recording failed.
+    #[error(transparent)]
+    Recorder(#[from] haptics::recorder::RecorderError),
+    /// A simulated surface is unknown.
+    #[error(transparent)]
+    Acquire(#[from] acquire::AcquireError),
+    /// The device cannot run this task.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// The segments of `scene` with the models resolved for it.
+pub fn segments(scene: &Scene, models: &[ResolvedModel]) -> Result<Vec<Segment>, SessionError> {
+    let model = |material: &str, role: ModelRole, name: &Option<String>| {
+        name.as_ref()
+            .and_then(|n| models.iter().find(|m| &m.name == n))
+            .map(|m| Box::new(m.model.clone()))
+            .ok_or(SessionError::MissingModel {
+                material: material.into(),
+                role,
+            })
+    };
+    let mut out = Vec::new();
+    match scene.task {
+        Task::Insertion { .. } => {
+            for object in &scene.objects {
+                if object.tool {
+                    continue;
+                }
+                let material = &scene.materials[&object.material];
+                if material.puncture.is_some() {
+                    out.push(Segment {
+                        object: object.name.clone(),
+                        kind: SegmentKind::Needle {
+                            model: model(&object.material, ModelRole::Puncture, &material.puncture)?,
+                        },
+                    });
+                    break;
+                }
+            }
+        }
+        Task::Rub { .. } => {
+            for object in scene.rubbed_objects() {
+                let material = &scene.materials[&object.material];
+                let kind = if material.friction.is_some() {
+                    SegmentKind::Friction {
+                        model: model(&object.material, ModelRole::Friction, &material.friction)?,
+                        stiffness_npm: material.contact_stiffness_npm,
+                    }
+                } else {
+                    SegmentKind::Surface {
+                        surface: material.surface.clone().unwrap_or_default(),
+                    }
+                };
+                out.push(Segment {
+                    object: object.name.clone(),
+                    kind,
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// What one segment produced.
+#[derive(Debug)]
+pub struct SegmentRun {
+    /// The segment.
+    pub segment: Segment,
+    /// Every tick's sample, in order.
+    pub samples: Vec<HapticSample>,
+    /// Loop timing.
+    pub stats: RateStats,
+    /// Real-time scheduling granted.
+    pub rt_status: Option<RtStatus>,
+    /// How the loop ended.
+    pub outcome: Result<String, String>,
+    /// The capture written and its rows.
+    pub recorded: Option<(PathBuf, u64)>,
+    /// The device's force limit, N.
+    pub max_force_n: f64,
+    /// The device's name.
+    pub device: String,
+    /// Wall-clock time.
+    pub elapsed: Duration,
+}
+
+/// The live connection between a running segment and a window.
+#[derive(Debug, Clone)]
+pub struct LiveLink {
+    /// The hand target the UI moves (simulator only).
+    pub hand: Arc<LiveHand>,
+    /// Every sample so far (the window plots from it).
+    pub samples: Arc<Mutex<Vec<HapticSample>>>,
+    /// Set by the UI to end the segment.
+    pub stop: Arc<AtomicBool>,
+    /// The loop's statistics, refreshed about 50 times a second.
+    pub stats: Arc<Mutex<Option<RateStats>>>,
+}
+
+impl LiveLink {
+    /// A link with the hand at `start_m` (device coordinates).
+    pub fn new(start_m: DVec3) -> Self {
+        let hand = LiveHand::new();
+        hand.set(start_m, 0.01);
+        Self {
+            hand,
+            samples: Arc::new(Mutex::new(Vec::new())),
+            stop: Arc::new(AtomicBool::new(false)),
+            stats: Arc::new(Mutex::new(None)),
+        }
+    }
+}
+
+/// Where the tool starts for `segment` (device coordinates).
+pub fn start_position_m(scene: &Scene) -> DVec3 {
+    match scene.task {
+        Task::Insertion { start_above_m, .. } => DVec3::new(0.0, 0.0, SURFACE_Z_M + start_above_m),
+        Task::Rub { stroke_m, .. } => DVec3::new(-stroke_m / 2.0, 0.0, SURFACE_Z_M + 0.003),
+    }
+}
+
+/// Renders an environment at the device's own position (impedance rendering): for devices
+/// that only report motion, such as a replayed capture, where admittance has nothing to move.
+#[derive(Debug)]
+struct Direct<E>(E);
+
+impl<E: Environment> Controller for Direct<E> {
+    fn tick(&mut self, input: &TickInput<'_>, out: &mut TickOutput) {
+        let s = input.state;
+        let env = self.0.force(s.position_m, s.velocity_mps);
+        out.command.force_n = env.force_n;
+        out.flags |= env.flags;
+        // Same channel layout as the admittance renderer: hand, model, tool z, tool vz, state,
+        // law input, hand x, model x.
+        out.channels = [
+            -env.force_n.z,
+            env.force_n.z,
+            s.position_m.z,
+            s.velocity_mps.z,
+            env.state,
+            env.input,
+            -env.force_n.x,
+            env.force_n.x,
+        ];
+    }
+}
+
+/// Channel layout of the renderers' samples (admittance and direct alike).
+pub mod channel {
+    /// Hand force estimated by the RFOB, z, N.
+    pub const HAND_Z_N: usize = 0;
+    /// The model's force on the tool, z, N.
+    pub const MODEL_Z_N: usize = 1;
+    /// Virtual tool height, m.
+    pub const TOOL_Z_M: usize = 2;
+    /// Virtual tool vertical velocity, m/s.
+    pub const TOOL_VZ_MPS: usize = 3;
+    /// Law state code (needle: [`haptics::law::PunctureState::code`]).
+    pub const STATE: usize = 4;
+    /// Law input (needle depth, m; friction: normal force, N).
+    pub const INPUT: usize = 5;
+    /// The model's force on the tool, x, N.
+    pub const MODEL_X_N: usize = 7;
+}
+
+fn renderer<E: Environment + 'static>(env: E, scene: &Scene, direct: bool) -> Box<dyn Controller> {
+    if direct {
+        Box::new(Direct(env))
+    } else {
+        let h = scene.haptics;
+        Box::new(Admittance::new(
+            env,
+            AdmittanceConfig {
+                virtual_mass_kg: h.virtual_mass_kg,
+                virtual_damping_nspm: h.virtual_damping_nspm,
+                ..AdmittanceConfig::default()
+            },
+        ))
+    }
+}
+
+fn controller(
+    scene: &Scene,
+    segment: &Segment,
+    direct: bool,
+    surface_z_m: f64,
+) -> Result<Box<dyn Controller>, SessionError> {
+    let law_error = |source| SessionError::Model {
+        model: segment.object.clone(),
+        source,
+    };
+    Ok(match &segment.kind {
+        SegmentKind::Needle { model } => {
+            let config = NeedleLawConfig {
+                min_peak_n: scene.haptics.rupture_min_peak_n,
+                ..NeedleLawConfig::default()
+            };
+            let law = NeedleLaw::new(needle_model(model).map_err(law_error)?, config);
+            renderer(
+                NeedleEnvironment::new(law, surface_z_m, [0.0, 0.0]),
+                scene,
+                direct,
+            )
+        }
+        SegmentKind::Friction { model, stiffness_npm } => match model.kind {
+            ModelKind::SoftFriction => {
+                let (w, m) = soft_friction_models(model).map_err(law_error)?;
+                let max_normal = model.input_range.get(1).map_or(10.0, |r| r[1]);
+                let mut env = FrictionSurface::new(SoftFriction::new(w, m, max_normal), surface_z_m);
+                env.stiffness_npm = *stiffness_npm;
+                renderer(env, scene, direct)
+            }
+            _ => {
+                let law = HardFriction::new(hard_friction_model(model).map_err(law_error)?);
+                let mut env = FrictionSurface::new(law, surface_z_m);
+                env.stiffness_npm = *stiffness_npm;
+                renderer(env, scene, direct)
+            }
+        },
+        SegmentKind::Surface { .. } => acquire::controller(Protocol::Rubbing),
+    })
+}
+
+/// Recording layout of a segment: capture kind, columns and the row of a sample.
+fn recording(segment: &Segment) -> (CaptureKind, &'static [&'static str]) {
+    match segment.kind {
+        SegmentKind::Needle { .. } => (
+            CaptureKind::Insertion,
+            &["time_s", "depth_m", "velocity_mps", "axial_force_n"],
+        ),
+        SegmentKind::Friction { .. } => (
+            CaptureKind::Rubbing,
+            &[
+                "time_s",
+                "tangential_position_m",
+                "tangential_velocity_mps",
+                "normal_position_m",
+                "normal_force_n",
+                "friction_force_n",
+            ],
+        ),
+        SegmentKind::Surface { .. } => (CaptureKind::Rubbing, Protocol::Rubbing.columns()),
+    }
+}
+
+/// The capture row of a sample. Needle and friction rows hold the virtual tool's motion and
+/// the model's force on it: what the trainee felt, in the columns identification reads.
+fn row(kind: &SegmentKind, surface_z_m: f64, s: &HapticSample, row: &mut Vec<f64>) -> bool {
+    use channel as c;
+    match kind {
+        SegmentKind::Needle { .. } => {
+            let depth_m = surface_z_m - s.channels[c::TOOL_Z_M];
+            // Only contact is a capture of the tissue; the approach in air is not.
+            if depth_m <= 0.0 {
+                return false;
+            }
+            row.extend([
+                s.time_s,
+                depth_m,
+                -s.channels[c::TOOL_VZ_MPS],
+                s.channels[c::MODEL_Z_N],
+            ]);
+            true
+        }
+        SegmentKind::Friction { .. } => {
+            let normal_n = s.channels[c::MODEL_Z_N];
+            if normal_n <= 0.05 {
+                return false;
+            }
+            row.extend([
+                s.time_s,
+                s.state.position_m.x,
+                s.state.velocity_mps.x,
+                s.state.position_m.z - surface_z_m,
+                normal_n,
+                // Positive opposing the motion, as the capture format says.
+                -s.channels[c::MODEL_X_N] * s.state.velocity_mps.x.signum(),
+            ]);
+            true
+        }
+        SegmentKind::Surface { .. } => acquire::row(Protocol::Rubbing, s, row),
+    }
+}
+
+/// The file a segment records into: `record` itself for a single segment, else the object's
+/// name before the extension.
+pub fn record_path(record: &Path, object: &str, segments: usize) -> PathBuf {
+    if segments <= 1 {
+        return record.to_owned();
+    }
+    let stem = record
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = record
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "csv".into());
+    record.with_file_name(format!("{stem}.{object}.{ext}"))
+}
+
+/// Runs one segment to its end (the task's, `duration_s`, or the UI's stop).
+pub fn run_segment(
+    scene: &Scene,
+    segment: &Segment,
+    segments: usize,
+    options: &SessionOptions,
+    live: Option<&LiveLink>,
+) -> Result<SegmentRun, SessionError> {
+    let started = Instant::now();
+    let rate_hz = scene.device.rate_hz;
+    let period_s = 1.0 / rate_hz;
+    let mut surface_z_m = SURFACE_Z_M;
+    let mut script_end_s = None;
+    let mut direct = false;
+    let device: Box<dyn HapticDevice> = match (&options.device, &segment.kind) {
+        (DeviceChoice::Sim, SegmentKind::Surface { surface }) => {
+            let mut capture = CaptureOptions::new(Protocol::Rubbing);
+            capture.surface = surface.clone();
+            capture.track_offset_m = LIVE_TRACK_OFFSET_M;
+            capture.loop_config.rate_hz = rate_hz;
+            Box::new(acquire::sim_device(&capture)?)
+        }
+        (DeviceChoice::Sim, _) => {
+            let impedance = HandImpedance {
+                stiffness_npm: scene.haptics.grip_stiffness_npm,
+                ..HandImpedance::default()
+            };
+            let hand: Box<dyn HandScript> = match live {
+                Some(link) if !options.autopilot => Box::new(link.hand.clone()),
+                _ => {
+                    let w = script::trainee(&scene.task, SURFACE_Z_M, impedance.stiffness_npm);
+                    script_end_s = Some(w.end_s());
+                    Box::new(w)
+                }
+            };
+            let device = SimOmega7::new(
+                SimOmega7Config {
+                    period_s,
+                    start_m: start_position_m(scene),
+                    ..SimOmega7Config::default()
+                },
+                SimWorld::Free,
+            )
+            .with_hand(impedance, hand);
+            Box::new(device)
+        }
+        (DeviceChoice::Omega7, SegmentKind::Surface { .. }) => {
+            return Err(SessionError::Unsupported(
+                "the surfaces of a recognition scene are simulated; run it with --device sim".into(),
+            ));
+        }
+        (DeviceChoice::Omega7, _) => Box::new(Omega7::open(options.dhd_library.as_deref())?),
+        (DeviceChoice::Replay(path), kind) => {
+            let expected = match kind {
+                SegmentKind::Needle { .. } => CaptureKind::Insertion,
+                _ => CaptureKind::Rubbing,
+            };
+            let capture = Capture::read_file(path, expected)?;
+            let device = ReplayDevice::new(&capture, period_s)?;
+            script_end_s = Some(device.duration_s());
+            // A replayed insertion's depth runs along −z from 0.
+            surface_z_m = 0.0;
+            direct = true;
+            Box::new(device)
+        }
+    };
+    let device_name = device.name().to_owned();
+    let max_force_n = DeviceSpecs::OMEGA7.max_force_n;
+    let controller = controller(scene, segment, direct, surface_z_m)?;
+
+    let samples = live.map_or_else(|| Arc::new(Mutex::new(Vec::new())), |l| l.samples.clone());
+    if let Ok(mut s) = samples.lock() {
+        s.clear();
+    }
+    let sink = samples.clone();
+    let kind = segment.kind.clone();
+    let (capture_kind, columns) = recording(segment);
+    let record = options
+        .record
+        .as_ref()
+        .map(|r| record_path(r, &segment.object, segments));
+    let mut meta = match &segment.kind {
+        SegmentKind::Surface { surface } => {
+            let mut capture = CaptureOptions::new(Protocol::Rubbing);
+            capture.surface = surface.clone();
+            capture.track_offset_m = LIVE_TRACK_OFFSET_M;
+            acquire::metadata(Protocol::Rubbing, &device_name, rate_hz, &capture)
+        }
+        _ => Metadata::new(capture_kind, &device_name, rate_hz)
+            .with("protocol", "palpus_run")
+            .with("force_source", "model"),
+    };
+    meta.insert("scene", &scene.name);
+    meta.insert("object", &segment.object);
+    let map = move |s: &HapticSample, r: &mut Vec<f64>| {
+        if let Ok(mut all) = sink.lock() {
+            all.push(*s);
+        }
+        row(&kind, surface_z_m, s, r)
+    };
+    let ring = RecorderConfig {
+        capacity: 1 << 16,
+        ..RecorderConfig::default()
+    };
+    enum AnyRecorder {
+        File(Recorder<std::fs::File>),
+        Sink(Recorder<std::io::Sink>),
+    }
+    let (producer, recorder) = match &record {
+        Some(path) => {
+            let (p, r) = haptics::recorder::record_to_file(path, &meta, columns, map, ring)?;
+            (p, AnyRecorder::File(r))
+        }
+        None => {
+            let writer = CaptureWriter::new(std::io::sink(), &meta, columns)
+                .map_err(haptics::recorder::RecorderError::from)?;
+            let (p, r) = Recorder::spawn(writer, map, ring)?;
+            (p, AnyRecorder::Sink(r))
+        }
+    };
+
+    let mut config = LoopConfig {
+        rate_hz,
+        pacing: options.pacing,
+        ..LoopConfig::default()
+    };
+    if options.pacing == Pacing::Unpaced {
+        config.watchdog = None;
+    } else if options.device == DeviceChoice::Sim {
+        // A simulated device cannot hurt a hand, and a busy or virtual machine stalls a thread
+        // for tens of milliseconds now and then: the simulator's watchdog only ends a session
+        // that has really hung. A real device keeps the default 4 ms bound.
+        config.watchdog = Some(WatchdogConfig {
+            stall: Duration::from_millis(250),
+            ..WatchdogConfig::default()
+        });
+    }
+    let until_s = match (options.duration_s, script_end_s) {
+        (Some(d), Some(e)) => Some(d.min(e + 0.2)),
+        (Some(d), None) => Some(d),
+        (None, Some(e)) => Some(e + 0.2),
+        (None, None) => None,
+    };
+    config.max_ticks = until_s.map(|s| (s * rate_hz).round().max(1.0) as u64);
+    let io = LoopIo {
+        samples: Some(producer),
+        live: None,
+    };
+    let handle = rt::spawn(device, controller, io, config)?;
+    while !handle.is_finished() {
+        if let Some(l) = live {
+            if l.stop.load(Ordering::Relaxed) {
+                handle.stop();
+            }
+            if let Ok(mut s) = l.stats.lock() {
+                *s = Some(handle.stats());
+            }
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let stats = handle.stats();
+    let rt_status = handle.shared().rt_status();
+    let outcome = handle.join()?;
+    let mut device = outcome.device;
+    drop(outcome.io);
+    let _ = device.close();
+    let result = outcome
+        .result
+        .map(|r| format!("{:?}", r.reason))
+        .map_err(|e| e.to_string());
+    let recorded = match recorder {
+        AnyRecorder::File(r) => {
+            let (_, summary) = r.finish()?;
+            record.map(|p| (p, summary.rows))
+        }
+        AnyRecorder::Sink(r) => {
+            // An empty sink (a segment that never touched) is not an error without a file.
+            let _ = r.finish();
+            None
+        }
+    };
+    let samples = std::mem::take(&mut *samples.lock().unwrap_or_else(|e| e.into_inner()));
+    Ok(SegmentRun {
+        segment: segment.clone(),
+        samples,
+        stats,
+        rt_status,
+        outcome: result,
+        recorded,
+        max_force_n,
+        device: device_name,
+        elapsed: started.elapsed(),
+    })
+}

@@ -1,0 +1,352 @@
+//! The interactive session: the window draws the scene while the haptic thread renders the
+//! models; the mouse and keyboard move the simulated hand (a real Omega.7 is moved by the
+//! trainee's own hand).
+//!
+//! Controls: drag up/down or scroll to push the tool down/up, arrows or WASD to move it
+//! sideways, Space for the next object of a rubbing scene, F12 for a screenshot. The overlay
+//! switches scenes and sets the view's parameters.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use anyhow::Context;
+use glam::DVec3;
+use haptics::acquire::{self, Protocol};
+use haptics::recognize::LiveRecognizer;
+use render::window::{Input, Key, WindowApp, WindowConfig};
+use render::{Frame, Param, Recognition, UiAction};
+
+use crate::scene::Scene;
+use crate::session::report::Recognition as Decision;
+use crate::session::{
+    self, LiveLink, Segment, SegmentKind, SegmentRun, SessionError, SessionOptions, start_position_m,
+};
+use crate::view::{SceneView, ViewState, overlay_plots};
+
+/// How far the hand may move from the workspace centre, m (the Omega.7's Ø 160 mm, less a
+/// margin).
+const REACH_M: f64 = 0.07;
+/// Hand travel per pixel dragged, m.
+const DRAG_M_PER_PX: f64 = 1e-4;
+/// Hand travel per scroll line, m.
+const SCROLL_M_PER_LINE: f64 = 1e-3;
+/// Hand speed with a key held, m/s.
+const KEY_SPEED_MPS: f64 = 0.02;
+
+/// What the window session produced.
+#[derive(Debug, Default)]
+pub struct WindowOutcome {
+    /// Every segment run, in order.
+    pub runs: Vec<SegmentRun>,
+    /// Recognized-surface decisions.
+    pub recognition: Vec<Decision>,
+    /// The scene shown last (the overlay can switch).
+    pub scene: Option<Scene>,
+}
+
+struct Session {
+    scene: Scene,
+    view: SceneView,
+    segments: Vec<Segment>,
+    current: usize,
+    options: SessionOptions,
+    cache_dir: PathBuf,
+    link: LiveLink,
+    worker: Option<JoinHandle<Result<SegmentRun, SessionError>>>,
+    hand_m: DVec3,
+    recognizer: Option<LiveRecognizer>,
+    consumed: usize,
+    recognized: Option<(String, f32)>,
+    outcome: WindowOutcome,
+    scenes: Vec<PathBuf>,
+    error: Option<anyhow::Error>,
+    last_wall: Instant,
+    last_ticks: usize,
+    rate_hz: f32,
+}
+
+impl Session {
+    fn new(
+        scene: Scene,
+        segments: Vec<Segment>,
+        options: SessionOptions,
+        cache_dir: PathBuf,
+    ) -> anyhow::Result<Self> {
+        let view = SceneView::load(&scene)?;
+        let recognizer = live_recognizer(&scene)?;
+        let mut scenes: Vec<PathBuf> = std::fs::read_dir(scene.base_dir())
+            .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+            .unwrap_or_default();
+        scenes.retain(|p| p.extension().is_some_and(|e| e == "toml"));
+        scenes.sort();
+        let start = start_position_m(&scene);
+        let mut s = Self {
+            scene,
+            view,
+            segments,
+            current: 0,
+            options,
+            cache_dir,
+            link: LiveLink::new(start),
+            worker: None,
+            hand_m: start,
+            recognizer,
+            consumed: 0,
+            recognized: None,
+            outcome: WindowOutcome::default(),
+            scenes,
+            error: None,
+            last_wall: Instant::now(),
+            last_ticks: 0,
+            rate_hz: 0.0,
+        };
+        s.start();
+        Ok(s)
+    }
+
+    fn start(&mut self) {
+        let Some(segment) = self.segments.get(self.current).cloned() else {
+            return;
+        };
+        self.hand_m = start_position_m(&self.scene);
+        self.link = LiveLink::new(self.hand_m);
+        self.consumed = 0;
+        self.recognized = None;
+        if let Some(r) = &mut self.recognizer {
+            r.reset();
+        }
+        let (scene, options, link, n) = (
+            self.scene.clone(),
+            self.options.clone(),
+            self.link.clone(),
+            self.segments.len(),
+        );
+        self.worker = Some(std::thread::spawn(move || {
+            session::run_segment(&scene, &segment, n, &options, Some(&link))
+        }));
+    }
+
+    fn stop(&mut self) {
+        self.link.stop.store(true, Ordering::Relaxed);
+        if let Some(w) = self.worker.take() {
+            match w.join() {
+                Ok(Ok(run)) => self.outcome.runs.push(run),
+                Ok(Err(e)) => self.error = Some(e.into()),
+                Err(_) => self.error = Some(anyhow::anyhow!("the session thread panicked")),
+            }
+        }
+    }
+
+    fn switch_scene(&mut self, path: &Path) -> anyhow::Result<()> {
+        let scene = Scene::load(path)?;
+        let models = crate::models::resolve_with_progress(&scene, &self.cache_dir)?;
+        let segments = session::segments(&scene, &models)?;
+        let view = SceneView::load(&scene)?;
+        let recognizer = live_recognizer(&scene)?;
+        self.stop();
+        self.scene = scene;
+        self.segments = segments;
+        self.view = view;
+        self.recognizer = recognizer;
+        self.current = 0;
+        self.start();
+        Ok(())
+    }
+
+    fn move_hand(&mut self, input: &Input, dt_s: f32) {
+        let dt = f64::from(dt_s.clamp(0.0, 0.1));
+        let mut d = DVec3::ZERO;
+        d.z -= f64::from(input.drag_delta_px[1]) * DRAG_M_PER_PX;
+        d.z -= f64::from(input.scroll_lines) * SCROLL_M_PER_LINE;
+        for k in &input.keys_down {
+            let step = KEY_SPEED_MPS * dt;
+            match k {
+                Key::Left | Key::A => d.x -= step,
+                Key::Right | Key::D => d.x += step,
+                Key::Up | Key::W => d.y += step,
+                Key::Down | Key::S => d.y -= step,
+                Key::Space => {}
+            }
+        }
+        let p = self.hand_m + d;
+        self.hand_m = if p.length() > REACH_M {
+            p * (REACH_M / p.length())
+        } else {
+            p
+        };
+        self.link.hand.set(self.hand_m, 0.01);
+    }
+}
+
+fn live_recognizer(scene: &Scene) -> anyhow::Result<Option<LiveRecognizer>> {
+    let Some(section) = &scene.recognizer else {
+        return Ok(None);
+    };
+    let Some(file) = &section.file else {
+        return Ok(None);
+    };
+    let path = scene.resolve(file);
+    let model = identify::recognition::model::RecognizerFile::load(&path)
+        .with_context(|| format!("loading recognizer {}", path.display()))?;
+    Ok(Some(LiveRecognizer::new(&model, scene.device.rate_hz)?))
+}
+
+impl WindowApp for Session {
+    fn frame(&mut self, input: &Input, dt_s: f32) -> Frame {
+        if input.keys_pressed.contains(&Key::Space) && self.segments.len() > 1 {
+            self.stop();
+            self.current = (self.current + 1) % self.segments.len();
+            self.start();
+        }
+        self.move_hand(input, dt_s);
+        let segment = self.segments.get(self.current);
+        let kind = segment.map(|s| &s.kind);
+        let object = segment.map(|s| s.object.as_str());
+        let (last, mut overlay, ticks) = {
+            let samples = self.link.samples.lock().unwrap_or_else(|e| e.into_inner());
+            if let (Some(r), Some(SegmentKind::Surface { .. })) = (&mut self.recognizer, kind) {
+                let mut row = Vec::with_capacity(8);
+                for s in &samples[self.consumed.min(samples.len())..] {
+                    row.clear();
+                    if acquire::row(Protocol::Rubbing, s, &mut row)
+                        && let Ok(Some(d)) = r.push(row[1], row[4], row[6])
+                        && let (Some(name), Some(SegmentKind::Surface { surface })) =
+                            (r.classes().get(d.label), kind)
+                    {
+                        self.recognized = Some((name.clone(), d.confidence as f32));
+                        self.outcome.recognition.push(Decision {
+                            object: object.unwrap_or_default().to_owned(),
+                            truth: surface.clone(),
+                            time_s: s.time_s,
+                            label: name.clone(),
+                            confidence: d.confidence,
+                        });
+                    }
+                }
+            }
+            self.consumed = samples.len();
+            (
+                samples.last().copied(),
+                overlay_plots(&samples, kind, 10.0, 600),
+                samples.len(),
+            )
+        };
+        let wall = self.last_wall.elapsed().as_secs_f32();
+        if wall >= 0.5 {
+            self.rate_hz = ticks.saturating_sub(self.last_ticks) as f32 / wall;
+            self.last_wall = Instant::now();
+            self.last_ticks = ticks;
+        }
+        let state = ViewState {
+            object,
+            kind,
+            sample: last.as_ref(),
+        };
+        let mut frame = self.view.frame(&state);
+        overlay.haptic_rate_hz = Some(self.rate_hz);
+        overlay.period_error_s = self
+            .link
+            .stats
+            .lock()
+            .ok()
+            .and_then(|s| s.map(|s| s.period_error.p99.as_secs_f32()));
+        let running = self.worker.as_ref().is_some_and(|w| !w.is_finished());
+        overlay.device_status = format!(
+            "{} · {} · {}{}",
+            self.options.device_label(),
+            object.unwrap_or("-"),
+            if running { "running" } else { "stopped" },
+            if self.segments.len() > 1 {
+                " · Space: next object"
+            } else {
+                ""
+            }
+        );
+        overlay.recognized = self.recognized.as_ref().map(|(s, c)| Recognition {
+            surface: s.clone(),
+            confidence: *c,
+        });
+        overlay.scenes = self
+            .scenes
+            .iter()
+            .map(|p| {
+                p.file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            })
+            .collect();
+        overlay.current_scene = self.scenes.iter().position(|p| {
+            p.file_stem().map(|s| s.to_string_lossy())
+                == self.scene.path.file_stem().map(|s| s.to_string_lossy())
+        });
+        overlay.params = vec![
+            Param {
+                name: "dimple radius".into(),
+                value: self.view.dimple_radius_m * 1e3,
+                min: 4.0,
+                max: 25.0,
+                unit: "mm".into(),
+            },
+            Param {
+                name: "opacity after puncture".into(),
+                value: self.view.punctured_opacity,
+                min: 0.1,
+                max: 1.0,
+                unit: String::new(),
+            },
+        ];
+        frame.overlay = Some(overlay);
+        frame
+    }
+
+    fn action(&mut self, action: UiAction) {
+        match action {
+            UiAction::SetParam { name, value } => match name.as_str() {
+                "dimple radius" => self.view.dimple_radius_m = value.clamp(4.0, 25.0) * 1e-3,
+                "opacity after puncture" => self.view.punctured_opacity = value.clamp(0.1, 1.0),
+                _ => {}
+            },
+            UiAction::SelectScene { index, .. } => {
+                if let Some(path) = self.scenes.get(index).cloned()
+                    && path != self.scene.path
+                    && let Err(e) = self.switch_scene(&path)
+                {
+                    self.error = Some(e);
+                }
+            }
+        }
+    }
+
+    fn should_exit(&self) -> bool {
+        // A session with --duration ends when its haptic thread does.
+        self.options.duration_s.is_some() && self.worker.as_ref().is_some_and(JoinHandle::is_finished)
+    }
+}
+
+/// Runs the scene in a window until it is closed; `screenshot` is written on exit.
+pub fn run(
+    scene: Scene,
+    segments: Vec<Segment>,
+    options: SessionOptions,
+    cache_dir: PathBuf,
+    screenshot: Option<PathBuf>,
+) -> anyhow::Result<WindowOutcome> {
+    let title = format!("palpus — {}", scene.name);
+    let mut session = Session::new(scene, segments, options, cache_dir)?;
+    let config = WindowConfig {
+        title,
+        screenshot_on_exit: screenshot,
+        ..WindowConfig::default()
+    };
+    let shown = render::window::run(config, &mut session);
+    session.stop();
+    if let Some(e) = session.error.take() {
+        return Err(e);
+    }
+    shown?;
+    let mut outcome = std::mem::take(&mut session.outcome);
+    outcome.scene = Some(session.scene.clone());
+    Ok(outcome)
+}

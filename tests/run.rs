@@ -1,0 +1,392 @@
+//! `palpus run`: the default scene in real time as README's first command runs it, the
+//! record → identify → run loop, and the rubbing scenes.
+#![allow(clippy::unwrap_used)]
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::text;
+use identify::model_file::ModelFile;
+use serde_json::Value;
+
+/// The tests here run real-time haptic loops and renderers: one at a time, so that the 1 %
+/// rate check measures the loop and not a neighbouring test hogging the cores.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs `palpus run ARGS` with a private model cache.
+fn run(args: &[&str], cache: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
+        .arg("run")
+        .args(args)
+        .current_dir(root())
+        .env("PALPUS_CACHE_DIR", cache)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap()
+}
+
+fn report(dir: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+#[test]
+fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let attempt = || {
+        let o = run(
+            &["--headless", "--duration", "3", "--report", out.to_str().unwrap()],
+            &dir.path().join("cache"),
+        );
+        let printed = text(&o);
+        assert!(o.status.success(), "{printed}");
+        assert!(
+            printed.contains("scene needle_liver") && printed.contains("puncture 1"),
+            "{printed}"
+        );
+        report(&out)
+    };
+    let mut r = attempt();
+    // A virtual machine is sometimes descheduled for a hundred milliseconds or more: the loop
+    // then skips the slots it missed, and its mean rate over 3 s says nothing about the loop.
+    // Such a run shows ticks over 2 ms late; measure once more.
+    let stalled = |r: &Value| f(&r["segments"][0]["late_over_2ms"]) > 0.0;
+    if f(&r["segments"][0]["rate_error"]) >= 0.01 && stalled(&r) {
+        eprintln!(
+            "the machine stalled during the run ({}); measuring again",
+            r["segments"][0]
+        );
+        r = attempt();
+    }
+    let seg = &r["segments"][0];
+    // Three seconds at 1 kHz, at the nominal rate within 1 %.
+    assert!((f(&seg["duration_s"]) - 3.0).abs() < 0.01, "{seg}");
+    assert!(f(&seg["rate_error"]) < 0.01, "{seg}");
+    // Forces within the device's limits, never NaN.
+    assert!(f(&seg["max_command_n"]) <= f(&seg["device_limit_n"]), "{seg}");
+    assert_eq!(f(&seg["non_finite_commands"]), 0.0);
+    // The capsule gives where the simulated liver the model was identified from gives.
+    let p = &seg["punctures"][0];
+    let (depth, truth) = (f(&p["depth_m"]), f(&p["truth_depth_m"]));
+    assert!(
+        (depth - truth).abs() < 0.002,
+        "puncture at {depth} m, truth {truth} m"
+    );
+    assert!((0.8..1.6).contains(&f(&p["peak_force_n"])), "{p}");
+    // The report folder is complete.
+    for file in ["summary.txt", "report.json", "force.png"] {
+        assert!(out.join(file).is_file(), "{file} missing");
+    }
+    assert!(out.join("frame.png").is_file() || out.join("frame.txt").is_file());
+    assert!(["identified", "cache"].contains(&r["models"][0]["origin"].as_str().unwrap()));
+}
+
+#[test]
+fn a_recorded_session_re_identifies_to_the_same_model() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let session = dir.path().join("session.csv");
+    let first = dir.path().join("first");
+    let o = run(
+        &[
+            "--headless",
+            "--unpaced",
+            "--record",
+            session.to_str().unwrap(),
+            "--report",
+            first.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let reidentified = dir.path().join("re.json");
+    let o = common::palpus(&[
+        "identify",
+        session.to_str().unwrap(),
+        "--model",
+        "needle",
+        "--out",
+        reidentified.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+
+    // The same scene with the re-identified model file in place of the capture.
+    let scene_text = std::fs::read_to_string(root().join("scenes/needle_liver.toml")).unwrap();
+    let scene_text = scene_text
+        .replace("../", &format!("{}/", root().display()))
+        .lines()
+        .map(|l| {
+            if l.starts_with("capture = ") {
+                format!("file = {:?}", reidentified.display().to_string())
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let scene = dir.path().join("re.toml");
+    std::fs::write(&scene, scene_text).unwrap();
+    let second = dir.path().join("second");
+    let o = run(
+        &[
+            scene.to_str().unwrap(),
+            "--headless",
+            "--unpaced",
+            "--report",
+            second.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(report(&second)["models"][0]["origin"], "file");
+
+    // The two models agree along the trajectory the trainee took.
+    let original = ModelFile::load(Path::new(report(&first)["models"][0]["path"].as_str().unwrap())).unwrap();
+    let re = ModelFile::load(&reidentified).unwrap();
+    let capture =
+        identify::capture::Capture::read_file(&session, identify::capture::CaptureKind::Insertion).unwrap();
+    let (depth, velocity) = (
+        capture.column("depth_m").unwrap(),
+        capture.column("velocity_mps").unwrap(),
+    );
+    let range = &original.input_range;
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (&d, &v) in depth.iter().zip(velocity).step_by(5) {
+        if (range[0][0]..=range[0][1]).contains(&d) && (range[1][0]..=range[1][1]).contains(&v) {
+            let e = re.predict(&[d, v]) - original.predict(&[d, v]);
+            sum += e * e;
+            n += 1;
+        }
+    }
+    let rms = (sum / n as f64).sqrt();
+    assert!(n > 500 && rms < 0.2, "RMS difference {rms} N over {n} points");
+
+    // And the trainee feels the same puncture.
+    let (a, b) = (
+        &report(&first)["segments"][0]["punctures"][0],
+        &report(&second)["segments"][0]["punctures"][0],
+    );
+    assert!((f(&a["depth_m"]) - f(&b["depth_m"])).abs() < 0.0015, "{a} vs {b}");
+    assert!(
+        (f(&a["peak_force_n"]) - f(&b["peak_force_n"])).abs() < 0.15,
+        "{a} vs {b}"
+    );
+}
+
+#[test]
+fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let out = dir.path().join("friction");
+    let o = run(
+        &[
+            "scenes/friction_hard_soft.toml",
+            "--headless",
+            "--unpaced",
+            "--report",
+            out.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let r = report(&out);
+    let (plate, sponge) = (&r["segments"][0], &r["segments"][1]);
+    assert_eq!(
+        (plate["object"].as_str(), sponge["object"].as_str()),
+        (Some("plate"), Some("sponge"))
+    );
+    // Li & Bi Eq. 12 at 2 N: (0.1647·2 + 0.0324) / 2 = 0.181.
+    let hard = f(&plate["mean_friction_ratio"]);
+    assert!((hard - 0.181).abs() < 0.02, "plate friction ratio {hard}");
+    // The sponge grips far harder than the plate.
+    assert!(f(&sponge["mean_friction_ratio"]) > 2.0 * hard, "{sponge}");
+
+    let out = dir.path().join("surfaces");
+    let o = run(
+        &[
+            "scenes/surfaces_nakano.toml",
+            "--headless",
+            "--unpaced",
+            "--report",
+            out.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let r = report(&out);
+    assert_eq!(r["segments"].as_array().unwrap().len(), 7);
+    let accuracy = f(&r["recognition_accuracy"]);
+    assert!(accuracy > 0.75, "live recognition {accuracy}");
+    let timeline = std::fs::read_to_string(out.join("timeline.csv")).unwrap();
+    assert!(timeline.lines().count() > 7 * 20, "{timeline}");
+}
+
+#[test]
+fn a_bad_scene_is_a_clear_error() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.toml");
+    let text_ = std::fs::read_to_string(root().join("scenes/needle_liver.toml"))
+        .unwrap()
+        .replace("puncture = \"needle_liver\"", "puncture = \"kidney\"");
+    std::fs::write(&scene, text_).unwrap();
+    let o = run(
+        &[scene.to_str().unwrap(), "--headless"],
+        &dir.path().join("cache"),
+    );
+    assert!(!o.status.success());
+    let e = text(&o);
+    assert!(
+        e.contains("bad.toml") && e.contains("materials.liver.puncture") && e.contains("kidney"),
+        "{e}"
+    );
+    let o = run(&["--headless", "--device", "replay:"], &dir.path().join("cache"));
+    assert!(
+        !o.status.success() && text(&o).contains("replay:FILE"),
+        "{}",
+        text(&o)
+    );
+}
+
+#[test]
+fn the_window_opens_under_xvfb_and_shows_the_needle() {
+    let _serial = serial();
+    if std::process::Command::new("xvfb-run")
+        .arg("--help")
+        .output()
+        .is_err()
+    {
+        // `.ci/run` installs Xvfb; without it there is no display to test against.
+        eprintln!("xvfb-run not installed: the window test needs it (apt-get install xvfb xauth)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let o = std::process::Command::new("xvfb-run")
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 1280x720x24",
+            env!("CARGO_BIN_EXE_palpus"),
+            "run",
+        ])
+        .args([
+            "--autopilot",
+            "--duration",
+            "2.5",
+            "--report",
+            out.to_str().unwrap(),
+        ])
+        .current_dir(root())
+        .env("PALPUS_CACHE_DIR", dir.path().join("cache"))
+        .output()
+        .unwrap();
+    let printed = text(&o);
+    assert!(o.status.success(), "{printed}");
+    assert!(printed.contains("in a window"), "{printed}");
+    let shot = render::Image::load_png(&out.join("window.png")).unwrap();
+    assert_eq!((shot.width, shot.height), (1280, 720));
+    // The scripted trainee pushed the needle into the capsule while the window drew.
+    let seg = &report(&out)["segments"][0];
+    assert!(f(&seg["max_model_force_n"]) > 0.5, "{seg}");
+    assert!(f(&seg["rate_error"]) < 0.02, "{seg}");
+}
+
+#[test]
+fn palpus_render_draws_each_default_scene_and_the_dimple() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let render_ = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
+            .arg("render")
+            .args(args)
+            .current_dir(root())
+            .env("PALPUS_CACHE_DIR", &cache)
+            .output()
+            .unwrap()
+    };
+    for scene in ["needle_liver", "surfaces_nakano", "friction_hard_soft"] {
+        let out = dir.path().join(format!("{scene}.png"));
+        let o = render_(&[
+            &format!("scenes/{scene}.toml"),
+            "--out",
+            out.to_str().unwrap(),
+            "--size",
+            "320x240",
+            "--msaa",
+            "1",
+        ]);
+        assert!(o.status.success(), "{}", text(&o));
+        let image = render::Image::load_png(&out).unwrap();
+        assert_eq!((image.width, image.height), (320, 240));
+        // Something besides the background was drawn.
+        let background = image.pixel(0, 0).unwrap();
+        let drawn = image.rgba.chunks(4).filter(|p| p[..3] != background[..3]).count();
+        assert!(drawn > 320 * 240 / 20, "{scene}: {drawn} pixels drawn");
+    }
+    let state = dir.path().join("state.json");
+    std::fs::write(
+        &state,
+        r#"{"object": "liver", "tool_position_m": [0, 0, -0.03], "law_state": "capsule_loading"}"#,
+    )
+    .unwrap();
+    let pressed = dir.path().join("pressed.png");
+    let o = render_(&[
+        "scenes/needle_liver.toml",
+        "--out",
+        pressed.to_str().unwrap(),
+        "--size",
+        "320x240",
+        "--msaa",
+        "1",
+        "--state",
+        state.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rest = render::Image::load_png(&dir.path().join("needle_liver.png")).unwrap();
+    let pressed = render::Image::load_png(&pressed).unwrap();
+    let changed = rest
+        .rgba
+        .chunks(4)
+        .zip(pressed.rgba.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(changed > 200, "a 10 mm dimple changed only {changed} pixels");
+
+    std::fs::write(
+        &state,
+        r#"{"tool_position_m": [0, 0, -0.03], "law_state": "squeezed"}"#,
+    )
+    .unwrap();
+    let o = render_(&[
+        "scenes/needle_liver.toml",
+        "--out",
+        dir.path().join("x.png").to_str().unwrap(),
+        "--state",
+        state.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("state.json") && text(&o).contains("squeezed"),
+        "{}",
+        text(&o)
+    );
+}
