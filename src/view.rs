@@ -303,6 +303,10 @@ pub fn overlay_plots(
         ),
     };
     Overlay {
+        depth_label: match kind {
+            Some(SegmentKind::Surface { .. } | SegmentKind::Friction { .. }) => Some("position".into()),
+            _ => None,
+        },
         force_depth: recent
             .iter()
             .step_by(step)

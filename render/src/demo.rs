@@ -169,6 +169,7 @@ pub fn demo_overlay() -> Overlay {
         .collect();
     Overlay {
         force_depth,
+        depth_label: None,
         force_time,
         recognized: Some(Recognition {
             surface: "sandpaper_240".into(),

@@ -228,6 +228,8 @@ impl Dimple {
 pub struct Overlay {
     /// (depth m, force N) samples of the current insertion or press, oldest first.
     pub force_depth: Vec<[f32; 2]>,
+    /// What the x of `force_depth` is, when not the needle's depth (rubbing: `position`).
+    pub depth_label: Option<String>,
     /// (time s, force N) samples, oldest first.
     pub force_time: Vec<[f32; 2]>,
     pub recognized: Option<Recognition>,

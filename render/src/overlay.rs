@@ -192,10 +192,11 @@ fn build(ui: &mut egui::Ui, o: &Overlay, actions: &mut Vec<UiAction>) {
         .show(ui, |ui| {
             status(ui, o);
             ui.separator();
+            let quantity = o.depth_label.as_deref().unwrap_or("depth");
             plot(
                 ui,
-                "Force vs depth",
-                "depth mm",
+                &format!("Force vs {quantity}"),
+                &format!("{quantity} mm"),
                 &o.force_depth,
                 1000.0,
                 Color32::from_rgb(255, 170, 60),
