@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod models;
+pub mod recognition_plots;
 pub mod recognizer;
 pub mod scene;
 pub mod session;

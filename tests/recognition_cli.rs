@@ -114,6 +114,40 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
         "{shown}"
     );
 
+    // Plots, into a folder that does not exist yet.
+    let plots = dir.path().join("plots").join("som");
+    let plots_s = plots.to_string_lossy().into_owned();
+    let out = palpus(&args(
+        &["recognize", "eval", &model_s, "--plots", &plots_s],
+        &test_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    let (nodes, classes) = (12, 7);
+    for (name, size) in [
+        (
+            "confusion.png",
+            palpus::recognition_plots::confusion_size(classes),
+        ),
+        ("som_map.png", palpus::recognition_plots::som_map_size(nodes)),
+        (
+            "som_density.png",
+            palpus::recognition_plots::som_density_size(classes, nodes),
+        ),
+    ] {
+        let path = plots.join(name);
+        assert!(text(&out).contains(&path.display().to_string()), "{}", text(&out));
+        let image = render::Image::load_png(&path).expect("a PNG");
+        assert_eq!((image.width, image.height), size, "{name}");
+        // Drawn, not blank: the cells, bars and antialiased text give many distinct colours.
+        let colours = image
+            .rgba
+            .chunks(4)
+            .map(|p| (p[0], p[1], p[2]))
+            .collect::<std::collections::HashSet<_>>()
+            .len();
+        assert!(colours > 20, "{name}: {colours} colours");
+    }
+
     // A model from a newer version is refused, naming the file and the field.
     let mut newer = file.clone();
     newer["version"] = 99.into();

@@ -6,6 +6,7 @@
 mod bench_cmd;
 mod bench_svr;
 mod capture_cmd;
+mod categorize_cmd;
 mod devices_cmd;
 mod gen_cmd;
 mod identify_cmd;

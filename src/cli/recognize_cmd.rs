@@ -24,6 +24,7 @@ pub(crate) struct RecognizeArgs {
 enum RecognizeWhat {
     Train(TrainArgs),
     Eval(EvalArgs),
+    Categorize(super::categorize_cmd::CategorizeArgs),
 }
 
 /// Train a recognizer on captures and write it as JSON.
@@ -80,12 +81,17 @@ struct EvalArgs {
     /// som: evaluate with this window length instead of the trained one, s.
     #[arg(long, value_name = "S")]
     window_s: Option<f64>,
+    /// Also draw the confusion matrix (and, for a SOM, its topographic map and the
+    /// evaluation windows' density over its nodes) as PNGs into this folder.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
 }
 
 pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
     match &args.what {
         RecognizeWhat::Train(args) => train(args),
         RecognizeWhat::Eval(args) => eval(args),
+        RecognizeWhat::Categorize(args) => super::categorize_cmd::run(args),
     }
 }
 
@@ -133,6 +139,24 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let model = RecognizerFile::load(&args.model)?;
     let captures = read_all(&args.captures)?;
     let e = model.evaluate(&captures, args.window_s)?;
+    let plots = match &args.plots {
+        Some(dir) => crate::recognition_plots::write_eval_plots(
+            dir,
+            &model,
+            &captures,
+            &e.confusion.row_percent(),
+            args.window_s,
+        )?,
+        None => Vec::new(),
+    };
+    // With --json, stdout holds only the JSON object, so the plots are named on stderr.
+    for p in &plots {
+        if args.json {
+            eprintln!("wrote {}", p.display());
+        } else {
+            println!("wrote {}", p.display());
+        }
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&to_json(&e))?);
         return Ok(());

@@ -247,7 +247,7 @@ pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportErr
 use std::io::Write;
 
 /// Registers the bundled font with plotters once.
-fn font() {
+pub(crate) fn font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let _ = plotters::style::register_font(

@@ -1,6 +1,7 @@
 //! Surface recognition from rubbing and scratching: Nakano's roughness and friction features
 //! with a 1-D self-organizing map, and Sinapov's spectrotemporal features with k-NN and a one-vs-one SVC; recognizer
 //! files ([`model`]) train, store and evaluate either.
+pub mod category;
 pub mod eval;
 pub mod knn;
 pub mod model;

@@ -1,0 +1,282 @@
+//! `palpus recognize categorize`: surface categories after Sinapov et al. from a recognizer's
+//! confusions on labelled captures — a similarity matrix, a hierarchy by recursive normalized
+//! cuts, and a 2-D map of the surfaces.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use identify::recognition::category::{
+    CategoryError, CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,
+    similarity_from_confusion,
+};
+use identify::recognition::model::{LabelledCapture, RecognizerFile};
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+/// Group surfaces into a hierarchy of categories by how often the recognizer confuses them.
+///
+/// Evaluates the recognizer on the captures, turns its confusion matrix into a similarity
+/// (symmetrised row rates, 1 on the diagonal), splits the surfaces recursively by Shi & Malik's
+/// normalized cut, and writes `similarity.csv`, `categories.json` and `mds.png` (ISOMAP of
+/// `1 − similarity`, or classical MDS when the neighbour graph is disconnected) to `--out`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct CategorizeArgs {
+    /// Recognizer file (`palpus recognize train`).
+    #[arg(value_name = "MODEL.json")]
+    model: PathBuf,
+    /// Labelled captures to evaluate on (captures it was not trained on, so it errs).
+    #[arg(required = true)]
+    captures: Vec<PathBuf>,
+    /// Folder for similarity.csv, categories.json and mds.png (created if missing).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Keep a category whole when its best cut's Ncut value exceeds this (0–2).
+    #[arg(long, default_value_t = 0.5)]
+    max_ncut: f64,
+    /// Do not split categories with fewer surfaces than this (Sinapov et al. used 5; with a
+    /// recognizer that seldom errs, most cuts are cheap and 2 splits down to single surfaces).
+    #[arg(long, default_value_t = 5)]
+    min_size: usize,
+    /// ISOMAP neighbours; 0 for classical MDS.
+    #[arg(long, default_value_t = 4)]
+    isomap_k: usize,
+}
+
+pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
+    let model = RecognizerFile::load(&args.model)?;
+    let captures: Vec<LabelledCapture> = args
+        .captures
+        .iter()
+        .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
+        .collect::<anyhow::Result<_>>()?;
+    let e = model.evaluate(&captures, None)?;
+    let names = e.confusion.classes().to_vec();
+    let similarity = similarity_from_confusion(e.confusion.counts())?;
+    let tree = recursive_ncut(
+        &similarity,
+        StopRule {
+            max_ncut: args.max_ncut,
+            min_size: args.min_size,
+        },
+    )?;
+    let distances = distances_from_similarity(&similarity)?;
+    // ISOMAP needs a connected neighbour graph; a recognizer that never confuses some groups
+    // leaves them at equal distance 1, where classical MDS still gives a faithful picture.
+    let k = args.isomap_k.min(names.len().saturating_sub(1));
+    let (embedding, points) = match k {
+        0 => ("mds".to_owned(), classical_mds::<2>(&distances)?),
+        k => match isomap::<2>(&distances, k) {
+            Ok(p) => (format!("isomap k={k}"), p),
+            Err(CategoryError::Disconnected { .. }) => ("mds".to_owned(), classical_mds::<2>(&distances)?),
+            Err(other) => return Err(other.into()),
+        },
+    };
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    write_similarity(&args.out.join("similarity.csv"), &names, &similarity)?;
+    let json = serde_json::json!({
+        "method": e.method,
+        "decisions": e.confusion.total(),
+        "accuracy": e.confusion.accuracy(),
+        "classes": names,
+        "similarity": similarity,
+        "stop": { "max_ncut": args.max_ncut, "min_size": args.min_size },
+        "tree": tree_json(&tree, &names),
+        "embedding": {
+            "method": embedding,
+            "points": names.iter().zip(&points).map(|(n, p)| serde_json::json!({"class": n, "x": p[0], "y": p[1]})).collect::<Vec<_>>(),
+        },
+    });
+    let json_path = args.out.join("categories.json");
+    identify::capture::write_atomically(&json_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
+        std::io::Write::write_all(w, b"\n")
+    })
+    .with_context(|| format!("writing {}", json_path.display()))?;
+    write_scatter(&args.out.join("mds.png"), &names, &points, &tree, &embedding)?;
+    println!(
+        "{} on {} captures, {} decisions, accuracy {}",
+        e.method,
+        e.captures,
+        e.confusion.total(),
+        e.confusion
+            .accuracy()
+            .map_or_else(|| "-".to_owned(), |a| format!("{:.1} %", 100.0 * a))
+    );
+    println!("categories (recursive normalized cut):");
+    print!("{}", tree.to_text(&names));
+    println!(
+        "{} leaf categories; wrote similarity.csv, categories.json, mds.png ({embedding}) to {}",
+        tree.leaves().len(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn tree_json(tree: &CategoryTree, names: &[String]) -> serde_json::Value {
+    serde_json::json!({
+        "members": tree.members.iter().map(|&i| names.get(i).cloned().unwrap_or_default()).collect::<Vec<_>>(),
+        "ncut": tree.ncut,
+        "children": tree.children.iter().map(|c| tree_json(c, names)).collect::<Vec<_>>(),
+    })
+}
+
+/// A header row of class names, then one row per class: its name and its similarities.
+fn write_similarity(path: &Path, names: &[String], s: &[Vec<f64>]) -> anyhow::Result<()> {
+    let mut text = String::from("class");
+    for n in names {
+        text.push(',');
+        text.push_str(n);
+    }
+    text.push('\n');
+    for (n, row) in names.iter().zip(s) {
+        text.push_str(n);
+        for v in row {
+            text.push_str(&format!(",{v}"));
+        }
+        text.push('\n');
+    }
+    identify::capture::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+/// Registers the bundled font with plotters once (the bitmap backend has no system fonts).
+fn font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            epaint_default_fonts::UBUNTU_LIGHT,
+        );
+    });
+}
+
+/// Scatter of the embedded surfaces, labelled by name, coloured by leaf category.
+fn write_scatter(
+    path: &Path,
+    names: &[String],
+    points: &[[f64; 2]],
+    tree: &CategoryTree,
+    embedding: &str,
+) -> anyhow::Result<()> {
+    font();
+    let (w, h) = (1100u32, 900u32);
+    let mut rgb = vec![255u8; (w * h * 3) as usize];
+    let mut leaf_of = vec![0usize; names.len()];
+    for (leaf, members) in tree.leaves().iter().enumerate() {
+        for &i in *members {
+            if let Some(l) = leaf_of.get_mut(i) {
+                *l = leaf;
+            }
+        }
+    }
+    let range = |axis: usize| {
+        let (lo, hi) = points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p[axis]), b.max(p[axis]))
+            });
+        // Room for the labels right of the points, and a usable range when all points coincide.
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        (lo - 0.08 * span)..(hi + 0.25 * span)
+    };
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        let plot = |e: String| anyhow::anyhow!("drawing {}: {e}", path.display());
+        root.fill(&WHITE).map_err(|e| plot(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("surfaces by confusion similarity ({embedding})"),
+                ("sans-serif", 24),
+            )
+            .margin(16)
+            .x_label_area_size(36)
+            .y_label_area_size(52)
+            .build_cartesian_2d(range(0), range(1))
+            .map_err(|e| plot(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc("dimension 1")
+            .y_desc("dimension 2")
+            .draw()
+            .map_err(|e| plot(e.to_string()))?;
+        for (i, (name, p)) in names.iter().zip(points).enumerate() {
+            let color = Palette99::pick(leaf_of[i]).to_rgba();
+            // Labels staggered vertically by index so that coinciding points stay readable.
+            let dy = (i % 3) as i32 * 14 - 14;
+            let marker = EmptyElement::at((p[0], p[1]))
+                + Circle::new((0, 0), 6, color.filled())
+                + Text::new(
+                    name.clone(),
+                    (8, dy),
+                    ("sans-serif", 16).into_font().color(&BLACK),
+                );
+            chart
+                .draw_series(std::iter::once(marker))
+                .map_err(|e| plot(e.to_string()))?;
+        }
+        root.present().map_err(|e| plot(e.to_string()))?;
+    }
+    identify::capture::write_atomically(path, |out| {
+        let mut encoder = png::Encoder::new(out, w, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+        writer.write_image_data(&rgb).map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use haptics::sim::protocols::sinapov::scratch_capture;
+    use haptics::sim::world::scratch::{Behaviour, household_surfaces};
+    use identify::recognition::knn::KnnParams;
+    use identify::recognition::spectral::CellScale;
+
+    #[test]
+    fn categorizes_knn_confusions_on_generated_scratches() {
+        let dir = tempfile::tempdir().unwrap();
+        let behaviour = Behaviour::ALL[0];
+        let (mut train, mut test) = (Vec::new(), Vec::new());
+        for surface in household_surfaces().iter().take(5) {
+            for trial in 0..8 {
+                let capture = scratch_capture(surface, behaviour, trial, 1).unwrap();
+                let path = dir.path().join(format!("{}_{trial}.csv", surface.name));
+                capture.write_file(&path).unwrap();
+                if trial < 4 { &mut train } else { &mut test }.push(path);
+            }
+        }
+        let labelled: Vec<LabelledCapture> =
+            train.iter().map(|p| LabelledCapture::read(p).unwrap()).collect();
+        let model = RecognizerFile::train_knn(&labelled, KnnParams::default().k(3), CellScale::Mean).unwrap();
+        let model_path = dir.path().join("knn.json");
+        model.save(&model_path).unwrap();
+        let out = dir.path().join("cat");
+        run(&CategorizeArgs {
+            model: model_path,
+            captures: test,
+            out: out.clone(),
+            max_ncut: 0.5,
+            min_size: 2,
+            isomap_k: 3,
+        })
+        .unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("categories.json")).unwrap()).unwrap();
+        let classes = json["classes"].as_array().unwrap();
+        assert_eq!(classes.len(), 5);
+        let mut top = json["tree"]["members"].as_array().unwrap().clone();
+        top.sort_by_key(|v| v.to_string());
+        let mut sorted = classes.clone();
+        sorted.sort_by_key(|v| v.to_string());
+        assert_eq!(top, sorted, "the root holds every class");
+        assert_eq!(json["embedding"]["points"].as_array().unwrap().len(), 5);
+        let csv = std::fs::read_to_string(out.join("similarity.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 6);
+        let png = std::fs::read(out.join("mds.png")).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    }
+}
