@@ -239,7 +239,7 @@ pub fn write_confusion(path: &Path, classes: &[String], percent: &[Vec<f64>]) ->
 }
 
 /// SOM plot geometry: one column per node.
-const SOM_CELL_W: i32 = 96;
+const SOM_CELL_W: i32 = 112;
 const SOM_LEFT: i32 = 140;
 
 fn som_width(nodes: usize) -> u32 {
