@@ -446,16 +446,8 @@ impl RecognizerFile {
         cell_scale: CellScale,
     ) -> Result<Self, RecognizerError> {
         let classes = class_list(captures);
-        let plan = SpectrogramPlan::new();
-        let behaviour_names: BTreeSet<Option<&str>> =
-            captures.iter().map(|c| c.behaviour.as_deref()).collect();
         let mut behaviours = Vec::new();
-        for name in behaviour_names {
-            let (mut x, mut y) = (Vec::new(), Vec::new());
-            for c in captures.iter().filter(|c| c.behaviour.as_deref() == name) {
-                x.push(spectral(&plan, c, cell_scale)?);
-                y.push(class_index(&classes, c)?);
-            }
+        for (name, x, y) in histograms_by_behaviour(captures, &classes, cell_scale)? {
             let knn = params
                 .fit(&x, &y, classes.len())
                 .map_err(|source| RecognizerError::Knn {
@@ -489,16 +481,8 @@ impl RecognizerFile {
         cell_scale: CellScale,
     ) -> Result<Self, RecognizerError> {
         let classes = class_list(captures);
-        let plan = SpectrogramPlan::new();
-        let behaviour_names: BTreeSet<Option<&str>> =
-            captures.iter().map(|c| c.behaviour.as_deref()).collect();
         let mut behaviours = Vec::new();
-        for name in behaviour_names {
-            let (mut x, mut y) = (Vec::new(), Vec::new());
-            for c in captures.iter().filter(|c| c.behaviour.as_deref() == name) {
-                x.push(spectral(&plan, c, cell_scale)?);
-                y.push(class_index(&classes, c)?);
-            }
+        for (name, x, y) in histograms_by_behaviour(captures, &classes, cell_scale)? {
             let svc = Svc::fit(params, &x, &y, classes.len()).map_err(|source| RecognizerError::Svc {
                 behaviour: name.unwrap_or("").to_owned(),
                 source,
@@ -874,6 +858,35 @@ fn spectral(
             path: c.reference.path.clone(),
             source,
         })
+}
+
+/// Sinapov's histogram of each capture with its class index, grouped by behaviour (k-NN and SVM
+/// recognizers keep one classifier per behaviour).
+#[allow(clippy::type_complexity)] // one use, read in place
+fn histograms_by_behaviour<'a>(
+    captures: &'a [LabelledCapture],
+    classes: &[String],
+    cell_scale: CellScale,
+) -> Result<
+    Vec<(
+        Option<&'a str>,
+        Vec<[f64; super::spectral::FEATURE_LEN]>,
+        Vec<usize>,
+    )>,
+    RecognizerError,
+> {
+    let plan = SpectrogramPlan::new();
+    let names: BTreeSet<Option<&str>> = captures.iter().map(|c| c.behaviour.as_deref()).collect();
+    let mut out = Vec::new();
+    for name in names {
+        let (mut x, mut y) = (Vec::new(), Vec::new());
+        for c in captures.iter().filter(|c| c.behaviour.as_deref() == name) {
+            x.push(spectral(&plan, c, cell_scale)?);
+            y.push(class_index(classes, c)?);
+        }
+        out.push((name, x, y));
+    }
+    Ok(out)
 }
 
 /// The classifier of the capture's behaviour (k-NN and SVM recognizers keep one per behaviour).
