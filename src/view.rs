@@ -290,23 +290,9 @@ pub fn overlay_plots(
     let start = samples.partition_point(|s| s.time_s < t_end - window_s);
     let recent = &samples[start..];
     let step = (recent.len() / points.max(1)).max(1);
-    type Channel = fn(&HapticSample) -> f64;
-    let (force, x): (Channel, Channel) = match kind {
-        Some(SegmentKind::Surface { .. }) => (
-            |s| s.channels[haptics::control::rubbing::channel::FRICTION_N],
-            |s| s.state.position_m.x,
-        ),
-        Some(SegmentKind::Friction { .. }) => (|s| -s.channels[c::MODEL_X_N], |s| s.state.position_m.x),
-        _ => (
-            |s| s.channels[c::MODEL_Z_N],
-            |s| SURFACE_Z_M - s.channels[c::TOOL_Z_M],
-        ),
-    };
+    let (x, force, quantity) = crate::session::traces(kind);
     Overlay {
-        depth_label: match kind {
-            Some(SegmentKind::Surface { .. } | SegmentKind::Friction { .. }) => Some("position".into()),
-            _ => None,
-        },
+        depth_label: (quantity != "depth").then(|| quantity.to_owned()),
         force_depth: recent
             .iter()
             .step_by(step)

@@ -328,6 +328,33 @@ pub mod channel {
     pub const MODEL_X_N: usize = 7;
 }
 
+/// A sample's value in SI units.
+pub type Trace = fn(&HapticSample) -> f64;
+
+/// What a segment's force is plotted against, and the force: (position along the task's
+/// direction m — needle depth or tangential x —, force on the tool N, the position's name).
+/// The report's plots and the overlay read samples the same way; no segment reads as a needle.
+pub fn traces(kind: Option<&SegmentKind>) -> (Trace, Trace, &'static str) {
+    use haptics::control::rubbing::channel as rub;
+    match kind {
+        Some(SegmentKind::Needle { .. }) | None => (
+            |s| SURFACE_Z_M - s.channels[channel::TOOL_Z_M],
+            |s| s.channels[channel::MODEL_Z_N],
+            "depth",
+        ),
+        Some(SegmentKind::Friction { .. }) => (
+            |s| s.state.position_m.x,
+            |s| -s.channels[channel::MODEL_X_N],
+            "position",
+        ),
+        Some(SegmentKind::Surface { .. }) => (
+            |s| s.state.position_m.x,
+            |s| s.channels[rub::FRICTION_N],
+            "position",
+        ),
+    }
+}
+
 fn renderer<E: Environment + 'static>(env: E, scene: &Scene, direct: bool) -> Box<dyn Controller> {
     if direct {
         Box::new(Direct(env))

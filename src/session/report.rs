@@ -8,8 +8,7 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use super::analysis::SegmentSummary;
-use super::channel as c;
-use super::{SURFACE_Z_M, SegmentKind, SegmentRun};
+use super::{SegmentKind, SegmentRun};
 use crate::models::{Origin, ResolvedModel};
 
 /// Why a report could not be written.
@@ -273,34 +272,18 @@ pub fn write_force_plot(path: &Path, runs: &[SegmentRun]) -> Result<(), ReportEr
         root.fill(&WHITE).map_err(|e| plot_err(e.to_string()))?;
         let rows = root.split_evenly((runs.len().max(1), 2));
         for (i, run) in runs.iter().enumerate() {
-            let (x_label, xs, ys, title): (&str, Vec<f64>, Vec<f64>, String) = match run.segment.kind {
-                SegmentKind::Needle { .. } => (
-                    "depth [mm]",
-                    run.samples
-                        .iter()
-                        .map(|s| (SURFACE_Z_M - s.channels[c::TOOL_Z_M]) * 1e3)
-                        .collect(),
-                    run.samples.iter().map(|s| s.channels[c::MODEL_Z_N]).collect(),
-                    format!("{}: axial force vs depth", run.segment.object),
-                ),
-                SegmentKind::Friction { .. } => (
-                    "x [mm]",
-                    run.samples.iter().map(|s| s.state.position_m.x * 1e3).collect(),
-                    run.samples.iter().map(|s| -s.channels[c::MODEL_X_N]).collect(),
-                    format!("{}: friction vs position", run.segment.object),
-                ),
-                SegmentKind::Surface { .. } => (
-                    "x [mm]",
-                    run.samples.iter().map(|s| s.state.position_m.x * 1e3).collect(),
-                    run.samples
-                        .iter()
-                        .map(|s| s.channels[haptics::control::rubbing::channel::FRICTION_N])
-                        .collect(),
-                    format!("{}: friction (RFOB) vs position", run.segment.object),
-                ),
+            let (position, force, quantity) = super::traces(Some(&run.segment.kind));
+            let what = match run.segment.kind {
+                SegmentKind::Needle { .. } => "axial force",
+                SegmentKind::Friction { .. } => "friction",
+                SegmentKind::Surface { .. } => "friction (RFOB)",
             };
+            let x_label = format!("{quantity} [mm]");
+            let xs: Vec<f64> = run.samples.iter().map(|s| position(s) * 1e3).collect();
+            let ys: Vec<f64> = run.samples.iter().map(force).collect();
+            let title = format!("{}: {what} vs {quantity}", run.segment.object);
             let ts: Vec<f64> = run.samples.iter().map(|s| s.time_s).collect();
-            line_chart(&rows[2 * i], &title, x_label, &xs, &ys).map_err(plot_err)?;
+            line_chart(&rows[2 * i], &title, &x_label, &xs, &ys).map_err(plot_err)?;
             let title_t = format!("{}: force vs time", run.segment.object);
             line_chart(&rows[2 * i + 1], &title_t, "time [s]", &ts, &ys).map_err(plot_err)?;
         }
