@@ -10,6 +10,7 @@ mod categorize_cmd;
 mod devices_cmd;
 mod gen_cmd;
 mod identify_cmd;
+mod import_cmd;
 mod recognize_cmd;
 mod render_cmd;
 mod run_cmd;
@@ -39,6 +40,8 @@ enum Command {
     Devices(devices_cmd::DevicesArgs),
     Bench(bench_cmd::BenchArgs),
     Recognize(recognize_cmd::RecognizeArgs),
+    // `palpus import`: its help is `ImportArgs`' doc comment (a `///` here would replace it).
+    Import(import_cmd::ImportArgs),
 }
 
 /// Runs the parsed command line.
@@ -52,5 +55,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Devices(args) => devices_cmd::run(&args),
         Command::Bench(args) => bench_cmd::run(&args),
         Command::Recognize(args) => recognize_cmd::run(&args),
+        Command::Import(args) => import_cmd::run(&args),
     }
 }

@@ -28,6 +28,7 @@
 
 pub mod atomic;
 mod error;
+pub mod import;
 pub mod kind;
 mod meta;
 mod reader;

@@ -1,0 +1,170 @@
+//! `palpus import`.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use identify::capture::CaptureKind;
+use identify::capture::import::{ColumnMap, ImportSpec, import_csv, import_csv_report};
+use identify::model_file::sha256_hex;
+use identify::recognition::model::LabelledCapture;
+
+/// Import a CSV log recorded with another tool as a capture.
+///
+/// Reads a CSV file with a header row (`,`, `;` or tab delimited, detected; `#` lines and
+/// blank lines skipped), takes the columns named in --map, converts them to SI units,
+/// resamples them onto a uniform grid and writes a capture that `palpus identify` and the
+/// recognizers read like any other.
+///
+/// --map is a comma-separated list of `target=source` entries: target is a capture column
+/// (time_s, tangential_position_m, normal_force_n, friction_force_n, accel_x_mps2, depth_m,
+/// axial_force_n, ...), source a column of the CSV, optionally followed by a unit in brackets
+/// and/or a scale factor, e.g.
+///
+///   time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz[mN],friction_force_n=Fx*-1
+///
+/// Units: s ms us, m cm mm um, N mN kN, m/s cm/s mm/s, m/s2 mm/s2 g (9.80665 m/s2). Every
+/// required column of the kind must be mapped (time may come from --input-rate-hz instead).
+///
+/// Resampling: an input already uniform at the output rate is copied unchanged; upsampling
+/// or jittered timestamps use linear interpolation; downsampling first removes what the new
+/// rate cannot represent with a zero-phase low-pass (4th-order Butterworth forwards and
+/// backwards, cut-off 0.4 × the output rate), so fast vibrations do not alias into slow
+/// forces. The metadata records the source file, the map and the source rate.
+#[derive(Debug, Args)]
+pub(crate) struct ImportArgs {
+    /// The CSV file to import.
+    #[arg(value_name = "IN.csv")]
+    input: PathBuf,
+    /// Capture kind to produce: rubbing or insertion.
+    #[arg(long, value_parser = parse_kind)]
+    kind: CaptureKind,
+    /// Column mapping, e.g. `time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz*0.001`.
+    #[arg(long, value_name = "SPEC")]
+    map: String,
+    /// Output rate, Hz (default: the input's rate, which must then be uniform).
+    #[arg(long, value_name = "HZ")]
+    rate_hz: Option<f64>,
+    /// The input's rate, Hz, when it has no time column (row i is at i / rate).
+    #[arg(long, value_name = "HZ")]
+    input_rate_hz: Option<f64>,
+    /// The `device` recorded in the metadata.
+    #[arg(long, default_value = "imported", value_name = "NAME")]
+    device: String,
+    /// Extra metadata, repeatable: `--meta surface=sandpaper_400 --meta behaviour=scratch`
+    /// (the recognizers read the class from `surface`). No spaces in values.
+    #[arg(long = "meta", value_name = "KEY=VALUE", value_parser = parse_meta)]
+    meta: Vec<(String, String)>,
+    /// The capture file to write (written atomically: nothing is left on error).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+fn parse_kind(s: &str) -> Result<CaptureKind, String> {
+    s.parse()
+        .map_err(|e: identify::capture::UnknownKind| e.to_string())
+}
+
+fn parse_meta(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((key, value)) if !key.is_empty() => Ok((key.to_owned(), value.to_owned())),
+        _ => Err(format!("`{s}`: expected KEY=VALUE")),
+    }
+}
+
+pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
+    let map = ColumnMap::parse(&args.map)?;
+    let spec = ImportSpec {
+        kind: args.kind,
+        map,
+        rate_hz: args.rate_hz,
+        input_rate_hz: args.input_rate_hz,
+        device: args.device.clone(),
+        metadata: args.meta.clone(),
+    };
+    // Import errors name the input file (and line, column or map entry) themselves.
+    let imported = import_csv_report(&args.input, &spec)?;
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    imported
+        .capture
+        .write_file(&args.out)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    if !args.quiet {
+        // The metadata's `source_rate_hz` is the mean rate, written as an integer when within
+        // 1e-6 of one.
+        let source_rate = imported.capture.metadata().get("source_rate_hz").unwrap_or("?");
+        println!(
+            "imported {} rows at {source_rate} Hz from {} -> {} rows at {} Hz into {} ({})",
+            imported.rows_in,
+            args.input.display(),
+            imported.capture.len(),
+            imported.rate_hz,
+            args.out.display(),
+            imported.resampling
+        );
+    }
+    Ok(())
+}
+
+/// `recognize train|eval` reading researchers' logs directly, through the same column map as
+/// `palpus import`.
+#[derive(Debug, Args)]
+pub(crate) struct MappedCaptures {
+    /// Read the captures as CSV logs through this column map (as `palpus import --map`)
+    /// instead of as palpus captures.
+    #[arg(long, value_name = "SPEC")]
+    map: Option<String>,
+    /// With --map: resample the logs to this rate, Hz.
+    #[arg(long, value_name = "HZ", requires = "map")]
+    rate_hz: Option<f64>,
+    /// With --map: the logs' rate, Hz, when they have no time column.
+    #[arg(long, value_name = "HZ", requires = "map")]
+    input_rate_hz: Option<f64>,
+    /// With --map: metadata for every log, repeatable. `{dir}` and `{stem}` in a value stand
+    /// for the log's folder name and file name without extension, so logs laid out as
+    /// `SURFACE/RUN.csv` are labelled by `--meta surface={dir}`.
+    #[arg(long = "meta", value_name = "KEY=VALUE", value_parser = parse_meta, requires = "map")]
+    meta: Vec<(String, String)>,
+}
+
+impl MappedCaptures {
+    /// Reads `paths` as labelled rubbing captures: palpus captures, or logs through the map.
+    pub(crate) fn read(&self, paths: &[PathBuf]) -> anyhow::Result<Vec<LabelledCapture>> {
+        let Some(spec) = &self.map else {
+            return paths
+                .iter()
+                .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
+                .collect();
+        };
+        let map = ColumnMap::parse(spec)?;
+        paths
+            .iter()
+            .map(|p| {
+                let name = |s: Option<&std::ffi::OsStr>| {
+                    s.map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+                };
+                let (dir, stem) = (name(p.parent().and_then(|d| d.file_name())), name(p.file_stem()));
+                let spec = ImportSpec {
+                    kind: CaptureKind::Rubbing,
+                    map: map.clone(),
+                    rate_hz: self.rate_hz,
+                    input_rate_hz: self.input_rate_hz,
+                    device: "imported".into(),
+                    metadata: self
+                        .meta
+                        .iter()
+                        .map(|(k, v)| (k.clone(), v.replace("{dir}", &dir).replace("{stem}", &stem)))
+                        .collect(),
+                };
+                let capture = import_csv(p, &spec)?;
+                let bytes = std::fs::read(p).with_context(|| format!("reading {}", p.display()))?;
+                Ok(LabelledCapture::new(capture, p, sha256_hex(&bytes))?)
+            })
+            .collect()
+    }
+}

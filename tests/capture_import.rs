@@ -1,0 +1,425 @@
+//! `palpus import`: researchers' CSV logs become captures (column map, units, resampling).
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+#![allow(clippy::print_stdout)] // The measured errors and attenuations are this test's report.
+
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::Path;
+
+mod common;
+
+use common::{palpus, text};
+use identify::capture::{Capture, CaptureKind};
+
+/// Runs `palpus import IN --kind rubbing --out OUT ARGS...` and returns the output.
+fn import(input: &Path, out: &Path, args: &[&str]) -> std::process::Output {
+    let mut all = vec![
+        "import",
+        input.to_str().unwrap(),
+        "--kind",
+        "rubbing",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    all.extend_from_slice(args);
+    palpus(&all)
+}
+
+/// Deterministic uniform numbers in [-1, 1) (xorshift64*), so the test needs no RNG crate.
+struct Jitter(u64);
+
+impl Jitter {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        bits as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+// The analytic test signals, SI units: slow motion and load plus a 2 kHz tool vibration.
+const HF_HZ: f64 = 2000.0;
+const POS_AMPLITUDE_M: f64 = 0.01;
+const POS_HF_M: f64 = 5e-4;
+const FORCE_MEAN_N: f64 = 0.3;
+const FORCE_AMPLITUDE_N: f64 = 0.1;
+const FORCE_HF_N: f64 = 0.02;
+
+fn position_lf(t: f64) -> f64 {
+    POS_AMPLITUDE_M * (2.0 * PI * 3.0 * t).sin()
+}
+
+fn force_lf(t: f64) -> f64 {
+    FORCE_MEAN_N + FORCE_AMPLITUDE_N * (2.0 * PI * 7.0 * t + 0.5).sin()
+}
+
+/// The 2 kHz component, phased so that sampling it on a 1 kHz grid starting at `t0` would
+/// give its full amplitude as a constant: the worst case of aliasing.
+fn hf(t: f64, t0: f64) -> f64 {
+    (2.0 * PI * HF_HZ * (t - t0) + PI / 2.0).sin()
+}
+
+/// Largest |a − b| over the output samples at least `margin_s` from both ends.
+fn max_error(capture: &Capture, column: &str, expected: impl Fn(f64) -> f64, margin_s: f64) -> f64 {
+    let time = capture.time();
+    let (start, end) = (time[0] + margin_s, time[time.len() - 1] - margin_s);
+    time.iter()
+        .zip(capture.column(column).unwrap())
+        .filter(|(t, _)| (start..=end).contains(*t))
+        .map(|(&t, &v)| (v - expected(t)).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Measured by [`downsample`]: the largest errors away from the ends, and what is left of
+/// the 2 kHz vibration relative to its amplitude.
+struct Downsampled {
+    pos_error_m: f64,
+    force_error_n: f64,
+    pos_residual: f64,
+    force_residual: f64,
+    /// Largest position error within 0, 5, 10 and 20 ms of the ends, as a fraction of the
+    /// vibration's amplitude.
+    pos_edge_residuals: [f64; 4],
+}
+
+/// Writes a 10 kHz log with timestamps jittered by ± `jitter_ms` (ms, 1 ns resolution),
+/// position in mm, force in mN, renamed and quoted columns, `;` delimiter, and imports it at
+/// 1 kHz.
+fn downsample(jitter_ms: f64) -> Downsampled {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("robot_log.csv");
+    let mut jitter = Jitter(0x9e37_79b9_7f4a_7c15);
+    // 20 006 samples span 2.0005 s, so the 1 kHz grid ends at t0 + 2 s whatever the jitter.
+    let times_ms: Vec<String> = (0..20_006)
+        .map(|i| format!("{:.6}", 12.5 + 0.1 * i as f64 + jitter_ms * jitter.next()))
+        .collect();
+    let t0: f64 = times_ms[0].parse::<f64>().unwrap() / 1000.0;
+    let mut csv = String::from("# logged by rig-7, 10 kHz\n\"Time\";\"X pos\";\"Fz\";\"status\"\n");
+    for t_ms in &times_ms {
+        // The importer reads `t_ms / 1000`; the signals are evaluated at that same instant.
+        let t = t_ms.parse::<f64>().unwrap() / 1000.0;
+        let x_mm = (position_lf(t) + POS_HF_M * hf(t, t0)) * 1e3;
+        let f_mn = (force_lf(t) + FORCE_HF_N * hf(t, t0)) * 1e3;
+        writeln!(csv, "{t_ms};{x_mm};{f_mn};ok").unwrap();
+    }
+    std::fs::write(&input, csv).unwrap();
+    let out = dir.path().join("imported.csv");
+    let o = import(
+        &input,
+        &out,
+        &[
+            "--map",
+            "time_s=Time[ms], tangential_position_m=X pos[mm], normal_force_n=Fz[mN]",
+            "--rate-hz",
+            "1000",
+            "--meta",
+            "surface=sandpaper_400",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("imported 20006 rows") && t.contains("2001 rows at 1000 Hz"),
+        "{t}"
+    );
+    assert!(t.contains("low-pass at 400 Hz"), "{t}");
+
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(c.len(), 2001);
+    assert_eq!(c.time()[0], t0);
+    assert!((c.time()[2000] - (t0 + 2.0)).abs() < 1e-12);
+    let m = c.metadata();
+    assert_eq!((m.device(), m.rate_hz()), ("imported", 1000.0));
+    assert_eq!(m.get("source"), Some("robot_log.csv"));
+    assert_eq!(
+        m.get("map"),
+        Some("time_s=Time[ms],tangential_position_m=Xpos[mm],normal_force_n=Fz[mN]")
+    );
+    let source_rate: f64 = m.get("source_rate_hz").unwrap().parse().unwrap();
+    assert!((source_rate - 10_000.0).abs() < 0.1, "{source_rate}");
+    assert_eq!(m.get("surface"), Some("sandpaper_400"));
+
+    // Away from the ends (50 ms: the filter's edge effects), the residual is what is left of
+    // the vibration plus the error on the slow signals.
+    let pos_error_m = max_error(&c, "tangential_position_m", position_lf, 0.05);
+    let force_error_n = max_error(&c, "normal_force_n", force_lf, 0.05);
+    let d = Downsampled {
+        pos_error_m,
+        force_error_n,
+        pos_residual: pos_error_m / POS_HF_M,
+        force_residual: force_error_n / FORCE_HF_N,
+        pos_edge_residuals: [0.0, 0.005, 0.01, 0.02]
+            .map(|margin| max_error(&c, "tangential_position_m", position_lf, margin) / POS_HF_M),
+    };
+    println!(
+        "10 kHz ± {jitter_ms} ms -> 1 kHz: position error {:.3e} m ({:.2e} of amplitude, {:.2e} of \
+         the 2 kHz amplitude), force error {:.3e} N ({:.2e}, {:.2e}); position residual within \
+         0/5/10/20 ms of the ends {}",
+        d.pos_error_m,
+        d.pos_error_m / POS_AMPLITUDE_M,
+        d.pos_residual,
+        d.force_error_n,
+        d.force_error_n / FORCE_AMPLITUDE_N,
+        d.force_residual,
+        d.pos_edge_residuals.map(|r| format!("{r:.2e}")).join("/")
+    );
+    d
+}
+
+/// A 2 kHz vibration in a 10 kHz log would alias to a constant offset of its full
+/// amplitude on a 1 kHz grid (the signals are phased for that worst case). The
+/// anti-aliasing filter removes it while the slow signals come through.
+#[test]
+fn downsampling_removes_what_would_alias_and_keeps_the_signal() {
+    // Uniform log: the filter alone. Its forward-backward gain at 2 kHz on the 10 kHz grid,
+    // from the bilinear Butterworth design, is 1 / (1 + (tan(π·0.2) / tan(π·0.04))^8).
+    let ratio = (PI * HF_HZ / 10_000.0).tan() / (PI * 400.0 / 10_000.0).tan();
+    let filter_gain = 1.0 / (1.0 + ratio.powi(8));
+    let d = downsample(0.0);
+    println!("filter gain at 2 kHz (forward-backward): {filter_gain:.3e}");
+    assert!(
+        d.pos_residual < 2.0 * filter_gain,
+        "{} vs {filter_gain}",
+        d.pos_residual
+    );
+    assert!(
+        d.force_residual < 2.0 * filter_gain,
+        "{} vs {filter_gain}",
+        d.force_residual
+    );
+    assert!(d.pos_error_m < 1e-6 * POS_AMPLITUDE_M, "{}", d.pos_error_m);
+    assert!(d.force_error_n < 1e-5 * FORCE_AMPLITUDE_N, "{}", d.force_error_n);
+    edges_settle(&d);
+
+    // ±2 µs timestamp jitter: interpolating the vibration between jittered samples turns
+    // part of it into broadband noise. Its peak before filtering is at most
+    // ω² · δ · h / 2 of the amplitude (linear interpolation error at offset δ ≤ 2 µs in an
+    // interval h = 100 µs, 1.6 %); the in-band part that survives is well below that.
+    let before_filter = (2.0 * PI * HF_HZ).powi(2) * 2e-6 * 1e-4 / 2.0;
+    let d = downsample(0.002);
+    println!("jitter bound before filtering: {before_filter:.3e}");
+    assert!(d.pos_residual < before_filter / 2.0, "{}", d.pos_residual);
+    assert!(d.force_residual < before_filter / 2.0, "{}", d.force_residual);
+    assert!(d.pos_residual < 1e-2 && d.force_residual < 1e-2);
+    edges_settle(&d);
+}
+
+/// The filter pads each end with the odd reflection about the end sample, so the vibration's
+/// value at that sample leaks into the first and last milliseconds (here its full amplitude:
+/// the end sample is a peak) and dies out within a few cut-off periods (2.5 ms each).
+fn edges_settle(d: &Downsampled) {
+    let [at_ends, after_5ms, after_10ms, after_20ms] = d.pos_edge_residuals;
+    let floor = d.pos_residual;
+    assert!(at_ends <= 1.0 + 1e-6, "{at_ends}");
+    assert!(after_5ms < 1e-2, "{after_5ms}");
+    assert!(after_10ms < (2.0 * floor).max(1e-4), "{after_10ms}");
+    assert!(after_20ms <= 2.0 * floor, "{after_20ms}");
+}
+
+/// A 100 Hz log upsampled to 1 kHz: linear interpolation, so the error is bounded by
+/// `h² / 8 · max|x''|` and, as the grid hits the midpoints near the peaks, nearly reaches it.
+#[test]
+fn upsampling_interpolates_linearly_within_the_computed_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("slow.csv");
+    let h = 0.01;
+    let mut csv = String::from("t,x_um,force\n");
+    for i in 0..=300 {
+        let t = i as f64 * h;
+        // Positions in µm; the importer divides by 1e6, so the reference does too.
+        writeln!(csv, "{t},{},{}", position_lf(t) * 1e6, force_lf(t)).unwrap();
+    }
+    std::fs::write(&input, csv).unwrap();
+    let out = dir.path().join("fast.csv");
+    let o = import(
+        &input,
+        &out,
+        &[
+            "--map",
+            "time_s=t,tangential_position_m=x_um[µm],normal_force_n=force",
+            "--rate-hz",
+            "1000",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("linear interpolation"), "{}", text(&o));
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(c.len(), 3001);
+    assert_eq!(
+        c.metadata().get("map"),
+        Some("time_s=t,tangential_position_m=x_um[um],normal_force_n=force")
+    );
+
+    let pos_bound = h * h / 8.0 * POS_AMPLITUDE_M * (2.0 * PI * 3.0).powi(2);
+    let force_bound = h * h / 8.0 * FORCE_AMPLITUDE_N * (2.0 * PI * 7.0).powi(2);
+    let pos_error = max_error(&c, "tangential_position_m", position_lf, 0.0);
+    let force_error = max_error(&c, "normal_force_n", force_lf, 0.0);
+    println!(
+        "100 Hz -> 1 kHz: position error {pos_error:.4e} m (bound {pos_bound:.4e}), force error \
+         {force_error:.4e} N (bound {force_bound:.4e})"
+    );
+    // Rounding in the µm round trip is ~1e-18 m, far below the bound's slack.
+    assert!(pos_error <= pos_bound * (1.0 + 1e-9), "{pos_error} > {pos_bound}");
+    assert!(
+        force_error <= force_bound * (1.0 + 1e-9),
+        "{force_error} > {force_bound}"
+    );
+    assert!(pos_error > 0.9 * pos_bound, "{pos_error} vs {pos_bound}");
+    assert!(force_error > 0.9 * force_bound, "{force_error} vs {force_bound}");
+    // At the input's own samples the output is the input.
+    let x = c.column("tangential_position_m").unwrap();
+    for k in (0..c.len()).step_by(10) {
+        let expected = position_lf(k as f64 / 1000.0);
+        assert!((x[k] - expected).abs() <= 1e-15, "{k}: {} vs {expected}", x[k]);
+    }
+}
+
+/// A simulator capture rewritten with other names and units, imported at its own rate,
+/// comes back value for value.
+#[test]
+fn a_capture_in_other_units_passes_through_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = dir.path().join("x.csv");
+    let o = palpus(&[
+        "capture",
+        "--device",
+        "sim",
+        "--protocol",
+        "rubbing",
+        "--surface",
+        "sandpaper_400",
+        "--unpaced",
+        "--quiet",
+        "--out",
+        original.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let capture = Capture::read_file(&original, CaptureKind::Rubbing).unwrap();
+    // (capture column, log name, log unit, factor from SI to the log's unit)
+    let renames: [(&str, &str, &str, f64); 7] = [
+        ("time_s", "Time (ms)", "ms", 1e3),
+        ("tangential_position_m", "x", "mm", 1e3),
+        ("tangential_velocity_mps", "vx", "mm/s", 1e3),
+        ("commanded_velocity_mps", "vx_cmd", "m/s", 1.0),
+        ("normal_position_m", "z", "um", 1e6),
+        ("normal_force_n", "Fz", "mN", 1e3),
+        ("friction_force_n", "Ft", "N", 1.0),
+    ];
+    assert_eq!(capture.columns(), renames.map(|r| r.0));
+    let mut csv = String::from("# exported for the lab\n");
+    let header: Vec<String> = renames.iter().rev().map(|r| format!("\"{}\"", r.1)).collect();
+    writeln!(csv, "{}\tunused", header.join("\t")).unwrap();
+    for i in 0..capture.len() {
+        let row: Vec<String> = renames
+            .iter()
+            .rev()
+            .map(|r| (capture.column(r.0).unwrap()[i] * r.3).to_string())
+            .collect();
+        writeln!(csv, "{}\tn/a", row.join("\t")).unwrap();
+    }
+    let input = dir.path().join("lab export.tsv");
+    std::fs::write(&input, csv).unwrap();
+    let map: Vec<String> = renames
+        .iter()
+        .map(|r| format!("{}={}[{}]", r.0, r.1, r.2))
+        .collect();
+    let map = map.join(",");
+    for rate in [None, Some("1000")] {
+        let out = dir.path().join("back.csv");
+        let mut args = vec!["--map", map.as_str(), "--meta", "surface=sandpaper_400"];
+        if let Some(rate) = rate {
+            args.extend(["--rate-hz", rate]);
+        }
+        let o = import(&input, &out, &args);
+        assert!(o.status.success(), "{}", text(&o));
+        assert!(text(&o).contains("(passed through)"), "{}", text(&o));
+        let back = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+        assert_eq!(back.columns(), capture.columns());
+        assert_eq!(back.len(), capture.len());
+        let mut worst: f64 = 0.0;
+        for (name, (a, b)) in capture
+            .columns()
+            .iter()
+            .zip(capture.data().iter().zip(back.data()))
+        {
+            for (i, (&x, &y)) in a.iter().zip(b).enumerate() {
+                let relative = (x - y).abs() / x.abs().max(y.abs()).max(f64::MIN_POSITIVE);
+                assert!(x == y || relative <= 1e-12, "{name}[{i}]: {x} vs {y}");
+                worst = worst.max(if x == y { 0.0 } else { relative });
+            }
+        }
+        println!("pass-through: largest relative difference {worst:.2e}");
+        let m = back.metadata();
+        assert_eq!(m.rate_hz(), 1000.0);
+        assert_eq!(m.get("source"), Some("lab_export.tsv"));
+        assert_eq!(m.get("source_rate_hz"), Some("1000"));
+        assert_eq!(m.get("surface"), Some("sandpaper_400"));
+    }
+}
+
+/// Mistakes in the map or the log are errors that say where, and leave no output behind.
+#[test]
+fn errors_name_the_problem_and_leave_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("log.csv");
+    let out = dir.path().join("out.csv");
+    let good = "t,x,Fz\n0,1,0.3\n0.001,2,0.3\n0.002,3,0.3\n";
+    let cases: [(&str, &str, &[&str]); 5] = [
+        (
+            good,
+            "time_s=t,tangential_position_m=pos,normal_force_n=Fz",
+            &[
+                "no column `pos`",
+                "its columns: t, x, Fz",
+                "tangential_position_m=pos",
+            ],
+        ),
+        (
+            good,
+            "time_s=t,tangential_position_m=x",
+            &["a rubbing capture needs `normal_force_n`", "log.csv"],
+        ),
+        (
+            "t,x,Fz\n0,1,0.3\n0.001,2,0.3x\n0.002,3,0.3\n",
+            "time_s=t,tangential_position_m=x,normal_force_n=Fz",
+            &["log.csv:3: column `Fz`: `0.3x` is not a number"],
+        ),
+        (
+            "t,x,Fz\n0,1,0.3\n0.002,2,0.3\n0.001,3,0.3\n",
+            "time_s=t,tangential_position_m=x,normal_force_n=Fz",
+            &["log.csv:4: column `t`: time 0.001 s is not after the previous row's 0.002 s"],
+        ),
+        (
+            good,
+            "time_s=t[h],tangential_position_m=x,normal_force_n=Fz",
+            &["--map entry `time_s=t[h]`: unknown unit `h`"],
+        ),
+    ];
+    for (content, map, needles) in cases {
+        std::fs::write(&input, content).unwrap();
+        let o = import(&input, &out, &["--map", map]);
+        let t = text(&o);
+        assert!(!o.status.success(), "{t}");
+        assert!(t.starts_with("error: "), "{t}");
+        for needle in needles {
+            assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
+        }
+        assert!(!out.exists(), "{map}: output left behind");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "only the input remains: {left:?}");
+    }
+    let o = palpus(&["import", "--help"]);
+    let t = text(&o);
+    for needle in [
+        "--map",
+        "--rate-hz",
+        "--input-rate-hz",
+        "--meta",
+        "low-pass",
+        "mm/s",
+    ] {
+        assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
+    }
+}
