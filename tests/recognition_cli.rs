@@ -63,7 +63,10 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert_eq!(file["format"], "palpus-recognizer");
     assert_eq!(file["body"]["method"], "som");
     assert_eq!(file["classes"].as_array().expect("classes").len(), 7);
-    assert_eq!(file["body"]["windowing"]["window_samples"], 1000);
+    // Trained on 1 s windows, deciding on 3 s ones.
+    assert_eq!(file["body"]["windowing"]["window_samples"], 3000);
+    assert_eq!(file["body"]["windowing"]["training_window_samples"], 1000);
+    assert_eq!(file["body"]["som"]["scaling"]["normalization"], "LogWithinClass");
     assert_eq!(
         file["body"]["som"]["reference"].as_array().expect("nodes").len(),
         12
@@ -76,13 +79,16 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert!(out.status.success(), "{}", text(&out));
     let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
     assert_eq!(report["method"], "som");
-    assert_eq!(report["window_s"], 1.0);
-    assert!((report["decision_latency_s"].as_f64().expect("latency") - 1.27).abs() < 1e-12);
+    assert_eq!(report["window_s"], 3.0);
+    assert!((report["decision_latency_s"].as_f64().expect("latency") - 3.27).abs() < 1e-12);
     let accuracy = report["accuracy"].as_f64().expect("accuracy");
-    // One map (seed 0) of the 10 the protocol test pools at 85 %.
-    assert!(accuracy >= 0.75, "{report}");
+    // One map (seed 0) of the 10 the protocol test pools at 99.7 %, worst surface 98.9 %.
+    assert!(accuracy >= 0.95, "{report}");
     let per_class = report["per_class"].as_object().expect("per class");
     assert_eq!(per_class.len(), 7);
+    for (surface, rate) in per_class {
+        assert!(rate.as_f64().expect("rate") >= 0.9, "{surface}: {report}");
+    }
     let confusion = report["confusion"].as_array().expect("confusion");
     let total: u64 = confusion
         .iter()
@@ -92,10 +98,11 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     let diagonal: u64 = (0..7).map(|i| confusion[i][i].as_u64().expect("count")).sum();
     assert!((diagonal as f64 / total as f64 - accuracy).abs() < 1e-12);
     // 14 test runs of 6100 samples; 5 mm of travel is reached at 1.1 s (after the 0.2 s ramp),
-    // so windows start at 1170, 1270, … 4770 (the last that ends 270 samples before the end).
-    assert_eq!(total, 14 * 37, "{report}");
+    // so windows start at 1170, 1270, … 2770 (the last that ends 270 samples before the end).
+    assert_eq!(total, 14 * 17, "{report}");
+    // The first decision comes at 1.17 s + 3 s + 0.27 s; it is right.
     let first = report["time_to_first_correct_s"].as_f64().expect("first correct");
-    assert!((2.0..4.0).contains(&first), "{report}");
+    assert!((4.4..4.5).contains(&first), "{report}");
     assert!(report["flips_per_s"].as_f64().expect("flips") >= 0.0);
 
     // Text output, and a shorter window on the same map.
@@ -211,5 +218,359 @@ fn knn_and_svm_train_and_eval_on_scratch_captures() {
         // One decision per scratch, made when it ends.
         assert_eq!(report["window_s"], report["decision_latency_s"]);
         assert!(report["window_s"].as_f64().expect("window") > 1.0, "{report}");
+        // One behaviour: each (surface, trial) is one scratch, "fused" alone.
+        assert_eq!(report["fused"]["groups"], 12, "{report}");
+        assert_eq!(report["fused"]["multi_scratch_groups"], 0, "{report}");
     }
+}
+
+/// Trial number of a `palpus gen --only sinapov` capture, from its name `<behaviour>_tNN.csv`.
+fn trial_of(path: &Path) -> u32 {
+    let stem = path.file_stem().expect("name").to_string_lossy();
+    stem.rsplit_once("_t")
+        .and_then(|(_, t)| t.parse().ok())
+        .expect("a trial number in the name")
+}
+
+/// Sinapov's protocol through the CLI on `palpus gen --only sinapov` (21 surfaces × 5
+/// behaviours × 10 trials): train on trials 0–6, evaluate on 7–9. Each behaviour's stored
+/// weight is its cross-validated accuracy on the training trials, the SVM's C is picked by the
+/// same cross-validation, and fusing the five behaviours of a trial beats every behaviour alone
+/// (k-NN) or equals the best one (SVM). About 10 s in release on two cores.
+#[test]
+fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
+    let start = std::time::Instant::now();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = palpus(&[
+        "gen",
+        "--out",
+        &dir.path().to_string_lossy(),
+        "--only",
+        "sinapov",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let mut paths = Vec::new();
+    for surface in std::fs::read_dir(dir.path().join("sinapov")).expect("sinapov folder") {
+        for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
+            paths.push(capture.expect("entry").path());
+        }
+    }
+    paths.sort();
+    assert_eq!(paths.len(), 21 * 5 * 10);
+    let (train, test): (Vec<PathBuf>, Vec<PathBuf>) = paths.into_iter().partition(|p| trial_of(p) < 7);
+    let (train_s, test_s) = (strings(&train), strings(&test));
+    let grid = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
+    for method in ["knn", "svm"] {
+        let model = dir.path().join(format!("{method}.json"));
+        let model_s = model.to_string_lossy().into_owned();
+        let out = palpus(&args(
+            &["recognize", "train", "--method", method, "--out", &model_s],
+            &train_s,
+        ));
+        assert!(out.status.success(), "{}", text(&out));
+        let summary = text(&out);
+        assert!(
+            summary.contains("reliability weights") && summary.contains("lateral_slow"),
+            "{summary}"
+        );
+
+        // Each behaviour's weight: a 5-fold (7 trials) cross-validated accuracy on training.
+        let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+        let behaviours = file["body"]["behaviours"].as_array().expect("behaviours");
+        assert_eq!(behaviours.len(), 5);
+        for b in behaviours {
+            let w = b["reliability"].as_f64().expect("a stored weight");
+            assert!(w > 0.0 && w <= 1.0, "{b}");
+            // 147 held-out scratches (21 surfaces × 7 trials): an integer count of them.
+            assert!(((w * 147.0).round() - w * 147.0).abs() < 1e-9, "{w}");
+            if method == "knn" {
+                assert_eq!(b["reliability_folds"], 5);
+                continue;
+            }
+            // The SVM's C: the best of the grid under the same cross-validation, ties to the
+            // smaller C; its accuracy is the weight.
+            let search = &b["c_search"];
+            assert_eq!(search["folds"], 5);
+            let tried: Vec<(f64, f64)> = search["grid"]
+                .as_array()
+                .expect("grid")
+                .iter()
+                .map(|p| {
+                    (
+                        p["c"].as_f64().expect("c"),
+                        p["accuracy"].as_f64().expect("accuracy"),
+                    )
+                })
+                .collect();
+            assert_eq!(tried.iter().map(|p| p.0).collect::<Vec<_>>(), grid);
+            let chosen = search["chosen_c"].as_f64().expect("chosen C");
+            let best = tried.iter().fold(tried[0], |b, p| if p.1 > b.1 { *p } else { b });
+            assert_eq!((chosen, w), best, "{search}");
+            assert!(grid.contains(&chosen));
+            assert_eq!(b["svc"]["params"]["c"].as_f64(), Some(chosen));
+        }
+
+        let out = palpus(&args(&["recognize", "eval", &model_s, "--json"], &test_s));
+        assert!(out.status.success(), "{}", text(&out));
+        let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+        for key in [
+            "method",
+            "accuracy",
+            "per_class",
+            "classes",
+            "confusion",
+            "window_s",
+            "decision_latency_s",
+            "captures",
+        ] {
+            assert!(report.get(key).is_some(), "{key}: {report}");
+        }
+        assert_eq!(report["method"], method);
+        assert_eq!(report["captures"], 315);
+        let fused = &report["fused"];
+        assert_eq!(fused["groups"], 63, "21 surfaces × trials 7–9");
+        assert_eq!(fused["multi_scratch_groups"], 63);
+        assert_eq!(fused["per_class"].as_object().expect("per class").len(), 21);
+        let confusion = fused["confusion"].as_array().expect("confusion");
+        let total: u64 = confusion
+            .iter()
+            .flat_map(|r| r.as_array().expect("row"))
+            .map(|c| c.as_u64().expect("count"))
+            .sum();
+        let diagonal: u64 = (0..21).map(|i| confusion[i][i].as_u64().expect("count")).sum();
+        let accuracy = fused["accuracy"].as_f64().expect("fused accuracy");
+        assert_eq!(total, 63);
+        assert!((diagonal as f64 / 63.0 - accuracy).abs() < 1e-12);
+        // Each behaviour alone: 63 scratches; together they are the per-scratch report.
+        let per_behaviour = fused["per_behaviour"].as_object().expect("per behaviour");
+        assert_eq!(per_behaviour.len(), 5);
+        let mut right = 0.0;
+        let mut single = Vec::new();
+        for (name, b) in per_behaviour {
+            assert_eq!(b["scratches"], 63, "{name}");
+            let a = b["accuracy"].as_f64().expect("accuracy");
+            right += a * 63.0;
+            single.push(a);
+            let stored = behaviours
+                .iter()
+                .find(|s| s["behaviour"] == name.as_str())
+                .expect("a trained behaviour");
+            assert_eq!(b["weight"], stored["reliability"], "{name}");
+        }
+        let scratch_accuracy = report["accuracy"].as_f64().expect("accuracy");
+        assert!((right / 315.0 - scratch_accuracy).abs() < 1e-9, "{report}");
+        let best = single.iter().copied().fold(0.0, f64::max);
+        let mean = single.iter().sum::<f64>() / 5.0;
+        assert_eq!(fused["best_single_accuracy"].as_f64(), Some(best));
+        eprintln!(
+            "{method}: behaviours alone {single:.3?}, per scratch {scratch_accuracy:.3}, fused {accuracy:.3}"
+        );
+        // Measured: k-NN alone 90.5–95.2 %, fused 100 %; SVM alone 92.1–98.4 %, fused 98.4 %
+        // (the one trial it misses, a soft cloth taken for cotton wool, is also the one the best
+        // behaviour misses).
+        if method == "knn" {
+            assert!(accuracy > best, "fused {accuracy} vs best single {best}");
+        } else {
+            assert!(accuracy >= best, "fused {accuracy} vs best single {best}");
+        }
+        assert!(
+            accuracy > mean + 0.03 && accuracy >= 0.98,
+            "fused {accuracy}, mean single {mean}"
+        );
+
+        // Text: the per-scratch matrix, then each behaviour alone and the fused matrix.
+        let out = palpus(&args(&["recognize", "eval", &model_s], &test_s));
+        assert!(out.status.success(), "{}", text(&out));
+        let shown = text(&out);
+        let fused_at = shown
+            .find("fused over behaviours: 63 trials")
+            .expect("a fused section");
+        assert!(shown[..fused_at].contains("each behaviour alone"), "{shown}");
+        assert!(
+            shown[fused_at..].contains("accuracy") && shown[fused_at..].contains("wood"),
+            "{shown}"
+        );
+
+        // A recognizer written before weights were stored still evaluates: equal weights.
+        let mut old = file.clone();
+        for b in old["body"]["behaviours"].as_array_mut().expect("behaviours") {
+            let b = b.as_object_mut().expect("behaviour");
+            for key in ["reliability", "reliability_folds", "c_search"] {
+                b.remove(key);
+            }
+        }
+        let old_path = dir.path().join(format!("{method}_old.json"));
+        std::fs::write(&old_path, old.to_string()).expect("write");
+        let out = palpus(&args(
+            &["recognize", "eval", &old_path.to_string_lossy(), "--json"],
+            &test_s,
+        ));
+        assert!(out.status.success(), "{}", text(&out));
+        let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+        assert!(
+            report["fused"]["per_behaviour"]
+                .as_object()
+                .expect("per behaviour")
+                .values()
+                .all(|b| b["weight"] == 1.0),
+            "{report}"
+        );
+        assert_eq!(report["accuracy"].as_f64(), Some(scratch_accuracy));
+
+        // A weight that is not an accuracy is refused, naming the field.
+        let mut bad = file.clone();
+        bad["body"]["behaviours"][2]["reliability"] = 1.5.into();
+        let bad_path = dir.path().join(format!("{method}_bad.json"));
+        std::fs::write(&bad_path, bad.to_string()).expect("write");
+        let out = palpus(&args(
+            &["recognize", "eval", &bad_path.to_string_lossy()],
+            &test_s,
+        ));
+        assert!(!out.status.success());
+        assert!(
+            text(&out).contains("field `body.behaviours[2].reliability`: 1.5 is not an accuracy in [0, 1]"),
+            "{}",
+            text(&out)
+        );
+    }
+
+    // A C given on the command line is used as it is, with its cross-validated accuracy.
+    let model = dir.path().join("svm_c100.json");
+    let model_s = model.to_string_lossy().into_owned();
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "train",
+            "--method",
+            "svm",
+            "--c",
+            "100",
+            "--out",
+            &model_s,
+        ],
+        &train_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("C = 1e2 (given)"), "{}", text(&out));
+    let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+    for b in file["body"]["behaviours"].as_array().expect("behaviours") {
+        assert_eq!(b["c_search"]["chosen_c"], 100.0);
+        assert_eq!(b["c_search"]["grid"].as_array().expect("grid").len(), 1);
+        assert_eq!(b["reliability"], b["c_search"]["grid"][0]["accuracy"]);
+    }
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "train",
+            "--method",
+            "svm",
+            "--c",
+            "0",
+            "--out",
+            &model_s,
+        ],
+        &train_s,
+    ));
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("`0` is neither `auto` nor a positive number"),
+        "{}",
+        text(&out)
+    );
+    eprintln!("{:.1} s", start.elapsed().as_secs_f64());
+}
+
+/// A researcher's logs read directly: other column names, units, delimiter and rate, laid out
+/// as `SURFACE/RUN.csv`, trained and evaluated through `--map` without converting them.
+#[test]
+fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (train, test) = nakano_runs(dir.path());
+    let logs = dir.path().join("logs");
+    // Each capture as a 2 kHz log (midpoints interpolated) in ms, mm, µm and mN, `;`-separated.
+    let to_log = |path: &Path| -> PathBuf {
+        let capture = identify::capture::Capture::read_file(path, identify::capture::CaptureKind::Rubbing)
+            .expect("capture");
+        let surface = capture.metadata().get("surface").expect("surface").to_owned();
+        let run = path.file_stem().expect("stem").to_string_lossy().into_owned();
+        let col = |n: &str| capture.column(n).expect("column").to_vec();
+        let (t, x, z, n, f) = (
+            col("time_s"),
+            col("tangential_position_m"),
+            col("normal_position_m"),
+            col("normal_force_n"),
+            col("friction_force_n"),
+        );
+        let mut text =
+            String::from("# exported by a lab logger\nt [ms];pos x [mm];height [um];Fn [mN];Ft [mN]\n");
+        for i in 0..t.len() {
+            let row = |k: f64| {
+                let j = (i + 1).min(t.len() - 1);
+                let at = |v: &[f64]| v[i] + k * (v[j] - v[i]);
+                format!(
+                    "{};{};{};{};{}\n",
+                    at(&t) * 1e3,
+                    at(&x) * 1e3,
+                    at(&z) * 1e6,
+                    at(&n) * 1e3,
+                    at(&f) * 1e3
+                )
+            };
+            text.push_str(&row(0.0));
+            if i + 1 < t.len() {
+                text.push_str(&row(0.5));
+            }
+        }
+        let out = logs.join(&surface).join(format!("{run}.csv"));
+        std::fs::create_dir_all(out.parent().expect("folder")).expect("mkdir");
+        std::fs::write(&out, text).expect("log");
+        out
+    };
+    let train_logs: Vec<String> = train
+        .iter()
+        .map(|p| to_log(p).to_string_lossy().into_owned())
+        .collect();
+    let test_logs: Vec<String> = test
+        .iter()
+        .map(|p| to_log(p).to_string_lossy().into_owned())
+        .collect();
+    let map = "time_s=t [ms][ms],tangential_position_m=pos x [mm][mm],normal_position_m=height [um][um],\
+               normal_force_n=Fn [mN][mN],friction_force_n=Ft [mN][mN]";
+    let model = dir.path().join("som.json");
+    let model_s = model.to_string_lossy().into_owned();
+    let mapped = ["--map", map, "--rate-hz", "1000", "--meta", "surface={dir}"];
+    let head: Vec<&str> = ["recognize", "train", "--method", "som", "--out", &model_s]
+        .into_iter()
+        .chain(mapped)
+        .collect();
+    let out = palpus(&args(&head, &train_logs));
+    assert!(out.status.success(), "{}", text(&out));
+    let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+    assert!(
+        file["classes"]
+            .as_array()
+            .expect("classes")
+            .iter()
+            .any(|c| c == "sandpaper_400"),
+        "{}",
+        file["classes"]
+    );
+    let head: Vec<&str> = ["recognize", "eval", &model_s, "--json"]
+        .into_iter()
+        .chain(mapped)
+        .collect();
+    let out = palpus(&args(&head, &test_logs));
+    assert!(out.status.success(), "{}", text(&out));
+    let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+    // Downsampled from 2 kHz through the anti-aliasing filter: the rubbing's roughness
+    // (≤ 20 Hz at 5 mm/s) passes unchanged, so the recognizer does as well as on the captures.
+    for (surface, rate) in report["per_class"].as_object().expect("per class") {
+        assert!(rate.as_f64().expect("rate") >= 0.9, "{surface}: {report}");
+    }
+    assert!(report["accuracy"].as_f64().expect("accuracy") >= 0.95, "{report}");
+    // Without the map the same files are not captures: a clear error naming one.
+    let out = palpus(&args(&["recognize", "eval", &model_s], &test_logs[..1]));
+    assert!(!out.status.success());
+    assert!(text(&out).contains(&test_logs[0]), "{}", text(&out));
 }

@@ -1,5 +1,6 @@
 //! Cost of one sample through the live recognizer (goal ≤ 2 µs): the streaming features on
-//! every sample, a SOM decision every hop (100 samples), over a whole simulated rubbing run.
+//! every sample, a SOM decision every hop (100 samples) on the default 3 s windows, over a whole
+//! simulated rubbing run.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -20,7 +21,7 @@ fn bench(c: &mut Criterion) {
             LabelledCapture::new(capture, Path::new(s.name), String::new()).expect("labelled")
         })
         .collect();
-    let windowing = NakanoWindowing::new(1.0, 0.1, 1000.0).expect("valid");
+    let windowing = NakanoWindowing::protocol(1000.0).expect("valid");
     let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
     let test = rubbing_run(&SurfacePatch::new(&surfaces[2]), 1, 1).expect("run");
     let x = test.column("tangential_position_m").expect("x").to_vec();

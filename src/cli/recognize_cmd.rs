@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
 use identify::recognition::knn::KnnParams;
-use identify::recognition::model::{Evaluation, LabelledCapture, NakanoWindowing, RecognizerFile};
+use identify::recognition::model::{
+    CV_FOLDS, DECISION_WINDOW_S, Evaluation, FusedEvaluation, HOP_S, NakanoWindowing, RecognizerFile, SvmC,
+    TRAINING_WINDOW_S,
+};
 use identify::recognition::som::SomParams;
 use identify::recognition::spectral::CellScale;
 use identify::recognition::svc::SvcParams;
@@ -30,10 +33,16 @@ enum RecognizeWhat {
 /// Train a recognizer on captures and write it as JSON.
 ///
 /// som: Nakano's five rubbing features (roughness and friction) over sliding windows, decided
-/// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes, σ 1.6, 10 000 presentations).
+/// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes, σ 1.6, 10 000 presentations)
+/// trained on short windows (many, varied ones from a single run per surface) and deciding on
+/// long ones (more roughness waves per decision, at the cost of latency).
 /// knn: Sinapov's spectrotemporal histogram of each scratch, k-NN (k = 3) per behaviour.
 /// svm: the same histograms, a one-vs-one C-SVC per behaviour (degree-2 polynomial kernel,
-/// C = 10⁴, pairwise-coupled probabilities).
+/// pairwise-coupled probabilities), C chosen per behaviour by cross-validation (see --c).
+///
+/// knn and svm also store each behaviour's accuracy under a cross-validation by trial (metadata
+/// `trial`; at most 5 folds, trial t of every surface held out together) on the training
+/// captures: its reliability weight when `eval` fuses the behaviours of a trial.
 #[derive(Debug, Args)]
 struct TrainArgs {
     /// Training captures.
@@ -45,11 +54,14 @@ struct TrainArgs {
     /// Write the recognizer here.
     #[arg(long, value_name = "MODEL.json")]
     out: PathBuf,
-    /// som: window length, s.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    /// som: decision window, s (a decision is this old plus the filters' 0.27 s lookahead).
+    #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
     window_s: f64,
-    /// som: time between decisions, s.
-    #[arg(long, default_value_t = 0.1, value_name = "S")]
+    /// som: window of the training vectors, s.
+    #[arg(long, default_value_t = TRAINING_WINDOW_S, value_name = "S")]
+    train_window_s: f64,
+    /// som: time between decisions (and between training windows), s.
+    #[arg(long, default_value_t = HOP_S, value_name = "S")]
     hop_s: f64,
     /// som: seed of the map's initial vectors and presentation order.
     #[arg(long, default_value_t = 0)]
@@ -57,6 +69,29 @@ struct TrainArgs {
     /// knn: neighbours.
     #[arg(long, default_value_t = 3)]
     k: usize,
+    /// svm: the box constraint C, or `auto`: per behaviour, the most accurate of 1, 10, …, 10⁵
+    /// under cross-validation by trial on the training captures (ties to the smaller C; a
+    /// behaviour with fewer than two trials gets 10⁴).
+    #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
+    c: CArg,
+    #[command(flatten)]
+    input: super::import_cmd::MappedCaptures,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum CArg {
+    Auto,
+    Fixed(f64),
+}
+
+fn parse_c(text: &str) -> Result<CArg, String> {
+    if text == "auto" {
+        return Ok(CArg::Auto);
+    }
+    match text.parse::<f64>() {
+        Ok(c) if c.is_finite() && c > 0.0 => Ok(CArg::Fixed(c)),
+        _ => Err(format!("`{text}` is neither `auto` nor a positive number")),
+    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -68,6 +103,11 @@ enum Method {
 
 /// Evaluate a recognizer on labelled captures: accuracy, per-class rates, confusion matrix,
 /// decision latency, time to the first correct and to a stable decision, decision flips.
+///
+/// knn and svm: each scratch is first classified alone by its behaviour's classifier; then the
+/// scratches of one trial (same `surface` and `trial` in the metadata; a capture without a trial
+/// stands alone) are fused, their class probabilities averaged with the behaviours' stored
+/// reliability weights, and each trial gets one decision ("fused over behaviours").
 #[derive(Debug, Args)]
 struct EvalArgs {
     /// The recognizer.
@@ -78,13 +118,15 @@ struct EvalArgs {
     /// Print one JSON object instead of the tables.
     #[arg(long)]
     json: bool,
-    /// som: evaluate with this window length instead of the trained one, s.
+    /// som: decide on windows of this length instead of the recognizer's, s.
     #[arg(long, value_name = "S")]
     window_s: Option<f64>,
     /// Also draw the confusion matrix (and, for a SOM, its topographic map and the
     /// evaluation windows' density over its nodes) as PNGs into this folder.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    #[command(flatten)]
+    input: super::import_cmd::MappedCaptures,
 }
 
 pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
@@ -95,22 +137,17 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
     }
 }
 
-fn read_all(paths: &[PathBuf]) -> anyhow::Result<Vec<LabelledCapture>> {
-    paths
-        .iter()
-        .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
-        .collect()
-}
-
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
-    let captures = read_all(&args.captures)?;
+    let captures = args.input.read(&args.captures)?;
+    let start = std::time::Instant::now();
     let model = match args.method {
         Method::Som => {
             let rate_hz = captures
                 .first()
                 .map(|c| c.capture.metadata().rate_hz())
                 .context("no captures")?;
-            let windowing = NakanoWindowing::new(args.window_s, args.hop_s, rate_hz)?;
+            let windowing = NakanoWindowing::new(args.window_s, args.hop_s, rate_hz)?
+                .with_training_window_s(args.train_window_s)?;
             let params = SomParams {
                 seed: args.seed,
                 ..SomParams::default()
@@ -118,8 +155,15 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
             RecognizerFile::train_som(&captures, windowing, params)?
         }
         Method::Knn => RecognizerFile::train_knn(&captures, KnnParams::default().k(args.k), CellScale::Mean)?,
-        Method::Svm => RecognizerFile::train_svm(&captures, SvcParams::default(), CellScale::Mean)?,
+        Method::Svm => {
+            let c = match args.c {
+                CArg::Auto => SvmC::auto(),
+                CArg::Fixed(c) => SvmC::Fixed(c),
+            };
+            RecognizerFile::train_svm(&captures, SvcParams::default(), &c, CellScale::Mean)?
+        }
     };
+    let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
@@ -132,13 +176,49 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
         model.classes.join(", "),
         args.out.display()
     );
+    print_reliabilities(&model, trained_s);
     Ok(())
+}
+
+/// Each behaviour's cross-validated accuracy (its fusion weight) and, for an SVM, its C.
+fn print_reliabilities(model: &RecognizerFile, trained_s: f64) {
+    let reliabilities = model.reliabilities();
+    if reliabilities.is_empty() {
+        return;
+    }
+    println!(
+        "trained in {trained_s:.2} s; reliability weights (accuracy under cross-validation by trial, at most {CV_FOLDS} folds):"
+    );
+    for r in &reliabilities {
+        let name = r.behaviour.unwrap_or("(no behaviour)");
+        let weight = match (r.reliability, r.folds) {
+            (Some(a), Some(folds)) => format!("{a:.3} ({folds} folds)"),
+            (Some(a), None) => format!("{a:.3}"),
+            _ => "none (too few trials to cross-validate): fused with the mean of the others' weights, or all equal"
+                .to_owned(),
+        };
+        let c = match (r.c, r.c_search) {
+            (Some(c), Some(search)) if search.grid.len() > 1 => {
+                let grid: Vec<String> = search
+                    .grid
+                    .iter()
+                    .map(|p| format!("{:e}: {:.3}", p.c, p.accuracy))
+                    .collect();
+                format!("; C = {c:e} chosen from {}", grid.join(", "))
+            }
+            (Some(c), Some(_)) => format!("; C = {c:e} (given)"),
+            (Some(c), None) => format!("; C = {c:e} (not cross-validated)"),
+            (None, _) => String::new(),
+        };
+        println!("  {name:<16} {weight}{c}");
+    }
 }
 
 fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let model = RecognizerFile::load(&args.model)?;
-    let captures = read_all(&args.captures)?;
+    let captures = args.input.read(&args.captures)?;
     let e = model.evaluate(&captures, args.window_s)?;
+    let fused = model.evaluate_fused(&captures)?;
     let plots = match &args.plots {
         Some(dir) => crate::recognition_plots::write_eval_plots(
             dir,
@@ -158,7 +238,11 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         }
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&to_json(&e))?);
+        let mut json = to_json(&e);
+        if let (Some(f), Some(object)) = (&fused, json.as_object_mut()) {
+            object.insert("fused".to_owned(), fused_json(f));
+        }
+        println!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(());
     }
     println!(
@@ -179,7 +263,74 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         e.not_stable,
         e.flips_per_s
     );
+    if let Some(f) = &fused {
+        print_fused(f);
+    }
     Ok(())
+}
+
+fn percent(a: Option<f64>) -> String {
+    a.map_or_else(|| "-".to_owned(), |a| format!("{:.1} %", 100.0 * a))
+}
+
+fn print_fused(f: &FusedEvaluation) {
+    println!("each behaviour alone:");
+    for b in &f.per_behaviour {
+        println!(
+            "  {:<16} {:>7} of {} scratches (fusion weight {:.3})",
+            b.behaviour.as_deref().unwrap_or("(no behaviour)"),
+            percent(b.confusion.accuracy()),
+            b.confusion.total(),
+            b.weight
+        );
+    }
+    println!(
+        "fused over behaviours: {} trials (surface, trial), {} of more than one scratch",
+        f.groups, f.multi_scratch_groups
+    );
+    print!("{}", f.confusion.to_text());
+    println!(
+        "fused {} vs best single behaviour {}",
+        percent(f.confusion.accuracy()),
+        percent(f.best_single_accuracy())
+    );
+}
+
+fn per_class_json(c: &identify::recognition::eval::ConfusionMatrix<String>) -> serde_json::Value {
+    c.classes()
+        .iter()
+        .zip(c.per_class_rates())
+        .map(|(c, r)| (c.clone(), r.into()))
+        .collect::<serde_json::Map<String, serde_json::Value>>()
+        .into()
+}
+
+fn fused_json(f: &FusedEvaluation) -> serde_json::Value {
+    let per_behaviour: serde_json::Map<String, serde_json::Value> = f
+        .per_behaviour
+        .iter()
+        .map(|b| {
+            (
+                b.behaviour.clone().unwrap_or_default(),
+                serde_json::json!({
+                    "accuracy": b.confusion.accuracy(),
+                    "scratches": b.confusion.total(),
+                    "weight": b.weight,
+                    "per_class": per_class_json(&b.confusion),
+                }),
+            )
+        })
+        .collect();
+    serde_json::json!({
+        "accuracy": f.confusion.accuracy(),
+        "per_class": per_class_json(&f.confusion),
+        "classes": f.confusion.classes(),
+        "confusion": f.confusion.counts(),
+        "groups": f.groups,
+        "multi_scratch_groups": f.multi_scratch_groups,
+        "best_single_accuracy": f.best_single_accuracy(),
+        "per_behaviour": per_behaviour,
+    })
 }
 
 fn to_json(e: &Evaluation) -> serde_json::Value {

@@ -22,11 +22,11 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::eval::{ConfusionMatrix, EvalError};
-use super::knn::{Knn, KnnError, KnnParams};
+use super::knn::{FusionError, Knn, KnnError, KnnParams, argmax, fuse};
 use super::nakano::{FEATURES, NakanoConfig, NakanoError, NakanoSignals};
 use super::som::{Som, SomError, SomParams};
 use super::spectral::{CellScale, SpectralError, SpectrogramPlan};
-use super::svc::{Svc, SvcError, SvcParams};
+use super::svc::{CSearch, Svc, SvcError, SvcParams, select_c};
 use crate::capture::{Capture, CaptureError, CaptureKind, write_atomically};
 use crate::model_file::{CaptureRef, sha256_hex};
 
@@ -38,6 +38,12 @@ pub const RECOGNIZER_VERSION: u32 = 1;
 pub const LABEL_KEY: &str = "surface";
 /// Metadata key of a scratch's exploratory behaviour.
 pub const BEHAVIOUR_KEY: &str = "behaviour";
+/// Metadata key of a scratch's trial: the scratches of one object by several behaviours share
+/// its surface and trial (`palpus gen --only sinapov` writes `trial=0…9`).
+pub const TRIAL_KEY: &str = "trial";
+/// Most folds of the cross-validations run on the training captures of a k-NN or SVM
+/// recognizer (reliability weights, the SVM's C); fewer when there are fewer trials.
+pub const CV_FOLDS: usize = 5;
 
 /// Why a recognizer could not be trained, stored, loaded or evaluated.
 #[derive(Debug, thiserror::Error)]
@@ -189,13 +195,24 @@ impl LabelledCapture {
     }
 }
 
+/// Default decision window of a SOM recognizer, s (15 mm of travel at 5 mm/s).
+pub const DECISION_WINDOW_S: f64 = 3.0;
+/// Default training window of a SOM recognizer, s (5 mm of travel at 5 mm/s).
+pub const TRAINING_WINDOW_S: f64 = 1.0;
+/// Default time between a SOM recognizer's decisions, s.
+pub const HOP_S: f64 = 0.1;
+
 /// How a rubbing stream is cut into the windows the map decides on.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct NakanoWindowing {
     /// The two zero-phase moving averages.
     pub filters: NakanoConfig,
-    /// Samples per window.
+    /// Samples per decision window.
     pub window_samples: usize,
+    /// Samples per window the map was trained on, when not [`NakanoWindowing::window_samples`]
+    /// (see [`NakanoWindowing::with_training_window_s`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub training_window_samples: Option<usize>,
     /// Samples between decisions.
     pub hop_samples: usize,
     /// No decision on a window that starts before this travel from the first sample, m.
@@ -211,6 +228,7 @@ impl NakanoWindowing {
         let windowing = Self {
             filters: NakanoConfig::default(),
             window_samples: samples("window_s", window_s, rate_hz)?,
+            training_window_samples: None,
             hop_samples: samples("hop_s", hop_s, rate_hz)?,
             start_travel_m: 0.005,
             rate_hz,
@@ -225,7 +243,13 @@ impl NakanoWindowing {
         Ok(windowing)
     }
 
-    /// The same windowing with a window of `window_s` instead.
+    /// The defaults at `rate_hz`: [`TRAINING_WINDOW_S`] windows to train on,
+    /// [`DECISION_WINDOW_S`] windows to decide on, every [`HOP_S`].
+    pub fn protocol(rate_hz: f64) -> Result<Self, RecognizerError> {
+        Self::new(DECISION_WINDOW_S, HOP_S, rate_hz)?.with_training_window_s(TRAINING_WINDOW_S)
+    }
+
+    /// The same windowing with a decision window of `window_s` instead.
     pub fn with_window_s(self, window_s: f64) -> Result<Self, RecognizerError> {
         Ok(Self {
             window_samples: samples("window_s", window_s, self.rate_hz)?,
@@ -233,9 +257,48 @@ impl NakanoWindowing {
         })
     }
 
+    /// The same windowing, trained on windows of `training_window_s`.
+    ///
+    /// Trained on one run per surface, a map learns each surface's spread from that run's
+    /// windows only. Short training windows give it many, varied windows (the spread a surface
+    /// shows from place to place), while long decision windows average more roughness waves
+    /// into each decision: a 1 s training window with a 3 s decision window recognizes every
+    /// Nakano surface at ≥ 95 % (`tests/recognition_nakano.rs`) where 1 s / 1 s does not.
+    pub fn with_training_window_s(self, training_window_s: f64) -> Result<Self, RecognizerError> {
+        let windowing = Self {
+            training_window_samples: Some(samples("training_window_s", training_window_s, self.rate_hz)?),
+            ..self
+        };
+        windowing
+            .check()
+            .map_err(|(name, reason)| RecognizerError::Setting {
+                name,
+                value: training_window_s,
+                reason,
+            })?;
+        Ok(windowing)
+    }
+
+    /// The windowing the map was trained with.
+    pub fn training(&self) -> Self {
+        Self {
+            window_samples: self.training_window_samples.unwrap_or(self.window_samples),
+            training_window_samples: None,
+            ..*self
+        }
+    }
+
+    /// Length of the training windows, s.
+    pub fn training_window_s(&self) -> f64 {
+        self.training().window_s()
+    }
+
     fn check(&self) -> Result<(), (&'static str, &'static str)> {
         if self.window_samples < 2 {
             return Err(("window_samples", "at least 2"));
+        }
+        if self.training_window_samples.is_some_and(|n| n < 2) {
+            return Err(("training_window_samples", "at least 2"));
         }
         if self.hop_samples == 0 {
             return Err(("hop_samples", "at least 1"));
@@ -294,6 +357,16 @@ pub struct BehaviourKnn {
     pub behaviour: Option<String>,
     /// Its classifier over spectrotemporal histograms.
     pub knn: Knn,
+    /// Its accuracy under cross-validation by trial on the training captures (see
+    /// [`trial_groups`]): its weight when behaviours are fused. `None` in files written before
+    /// weights were stored, and when the training captures could not be cross-validated (fewer
+    /// than two trials, or fewer than k scratches outside a fold); see
+    /// [`RecognizerFile::fusion_weights`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reliability: Option<f64>,
+    /// Folds of that cross-validation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reliability_folds: Option<usize>,
 }
 
 /// One behaviour's SVC.
@@ -303,11 +376,60 @@ pub struct BehaviourSvc {
     pub behaviour: Option<String>,
     /// Its one-vs-one SVC over spectrotemporal histograms, with probabilities.
     pub svc: Svc,
+    /// Its accuracy, at its C, under cross-validation by trial on the training captures: its
+    /// weight when behaviours are fused (as [`BehaviourKnn::reliability`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reliability: Option<f64>,
+    /// How its C was chosen: every candidate's cross-validated accuracy (one candidate when C
+    /// was given). `None` in older files and when the training captures could not be
+    /// cross-validated (then C is [`SvmC::FALLBACK`] or the one given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c_search: Option<CSearch>,
+}
+
+/// How an SVM recognizer's C is set.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SvmC {
+    /// Per behaviour, the candidate with the best accuracy under cross-validation by trial on
+    /// that behaviour's training captures; ties go to the smaller C.
+    Auto(Vec<f64>),
+    /// This C for every behaviour.
+    Fixed(f64),
+}
+
+impl SvmC {
+    /// C of a behaviour whose training captures cannot be cross-validated (fewer than two
+    /// trials) under [`SvmC::Auto`]: large enough for the hard-margin machine that separable
+    /// histograms get (see [`SvcParams::default`]).
+    pub const FALLBACK: f64 = 1e4;
+
+    /// [`SvmC::Auto`] over [`super::svc::C_GRID`].
+    pub fn auto() -> Self {
+        Self::Auto(super::svc::C_GRID.to_vec())
+    }
+}
+
+/// A behaviour's reliability weight (cross-validated accuracy), as the training summary shows
+/// it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BehaviourReliability<'a> {
+    /// The behaviour.
+    pub behaviour: Option<&'a str>,
+    /// Its cross-validated accuracy, if any.
+    pub reliability: Option<f64>,
+    /// Folds of the cross-validation.
+    pub folds: Option<usize>,
+    /// For an SVM: how C was chosen, and the C in use.
+    pub c_search: Option<&'a CSearch>,
+    /// For an SVM: the C in use.
+    pub c: Option<f64>,
 }
 
 /// The trained classifier and how its features are computed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", rename_all = "snake_case")]
+// One body per recognizer file, never in a hot collection: the SOM variant carries its map inline.
+#[allow(clippy::large_enum_variant)]
 pub enum RecognizerBody {
     /// Nakano: five rubbing features over sliding windows, a 1-D SOM (node labels are class
     /// indices).
@@ -379,6 +501,45 @@ pub struct Decision {
     pub confidence: f64,
 }
 
+/// One behaviour's scratches classified alone, in a [`FusedEvaluation`].
+#[derive(Debug, Clone)]
+pub struct BehaviourScore {
+    /// The behaviour.
+    pub behaviour: Option<String>,
+    /// Its weight in the fusion.
+    pub weight: f64,
+    /// Its scratches, by true and predicted class.
+    pub confusion: ConfusionMatrix<String>,
+}
+
+/// Result of fusing the behaviours of each trial (Sinapov Sec. IV-C).
+///
+/// The evaluated captures are grouped by surface and [`TRIAL_KEY`]: a group is one object
+/// explored by one or more behaviours; a capture without a trial is a group of its own. Each
+/// group gets one decision, the argmax of its scratches' class probabilities averaged with the
+/// behaviours' weights ([`RecognizerFile::fusion_weights`], [`fuse`]).
+#[derive(Debug, Clone)]
+pub struct FusedEvaluation {
+    /// One decision per group, by true and predicted class.
+    pub confusion: ConfusionMatrix<String>,
+    /// Groups (trials) evaluated.
+    pub groups: usize,
+    /// Groups of more than one scratch.
+    pub multi_scratch_groups: usize,
+    /// Each behaviour of the recognizer that occurs in the evaluated captures, alone.
+    pub per_behaviour: Vec<BehaviourScore>,
+}
+
+impl FusedEvaluation {
+    /// The best accuracy of a single behaviour alone.
+    pub fn best_single_accuracy(&self) -> Option<f64> {
+        self.per_behaviour
+            .iter()
+            .filter_map(|b| b.confusion.accuracy())
+            .reduce(f64::max)
+    }
+}
+
 /// Result of evaluating a recognizer on labelled captures.
 #[derive(Debug, Clone)]
 pub struct Evaluation {
@@ -407,7 +568,8 @@ pub struct Evaluation {
 }
 
 impl RecognizerFile {
-    /// Trains Nakano's SOM on the windows of `captures`.
+    /// Trains Nakano's SOM on the training windows of `captures` (see
+    /// [`NakanoWindowing::with_training_window_s`]); it decides on the decision windows.
     pub fn train_som(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
@@ -415,10 +577,11 @@ impl RecognizerFile {
     ) -> Result<Self, RecognizerError> {
         let classes = class_list(captures);
         let (mut data, mut labels) = (Vec::new(), Vec::new());
+        let training = windowing.training();
         for c in captures {
             check_rate(c, windowing.rate_hz)?;
             let label = class_index(&classes, c)?;
-            for (_, features) in windows(c, &windowing)? {
+            for (_, features) in windows(c, &training)? {
                 data.push(features.to_vec());
                 labels.push(label);
             }
@@ -447,16 +610,28 @@ impl RecognizerFile {
     ) -> Result<Self, RecognizerError> {
         let classes = class_list(captures);
         let mut behaviours = Vec::new();
-        for (name, x, y) in histograms_by_behaviour(captures, &classes, cell_scale)? {
+        for (name, x, y, groups) in histograms_by_behaviour(captures, &classes, cell_scale)? {
             let knn = params
                 .fit(&x, &y, classes.len())
                 .map_err(|source| RecognizerError::Knn {
                     behaviour: name.unwrap_or("").to_owned(),
                     source,
                 })?;
+            // The fit above has checked the data, so a failing cross-validation only means
+            // too few trials (or too few scratches outside a fold): no weight, see
+            // `fusion_weights`.
+            let cv = super::knn::group_folds(&groups, CV_FOLDS)
+                .ok()
+                .and_then(|(_, folds)| {
+                    super::knn::cross_validated_accuracy(params, &x, &y, &groups, classes.len(), CV_FOLDS)
+                        .ok()
+                        .map(|accuracy| (accuracy, folds))
+                });
             behaviours.push(BehaviourKnn {
                 behaviour: name.map(str::to_owned),
                 knn,
+                reliability: cv.map(|(a, _)| a),
+                reliability_folds: cv.map(|(_, f)| f),
             });
         }
         if behaviours.is_empty() {
@@ -474,24 +649,81 @@ impl RecognizerFile {
         ))
     }
 
-    /// Trains one SVC per behaviour on one histogram per capture.
+    /// Trains one SVC per behaviour on one histogram per capture, with `params` but the C of
+    /// `c`; each behaviour's C and reliability weight come from cross-validation by trial on
+    /// its training captures (see [`trial_groups`]).
+    ///
+    /// C is chosen per behaviour: each behaviour has its own classifier over its own
+    /// histograms (a fast lateral scratch and a slow poke differ in level and spread), and
+    /// its reliability weight is the same cross-validation's accuracy at the chosen C. A
+    /// behaviour with fewer than two trials cannot be cross-validated: it gets
+    /// [`SvmC::FALLBACK`] (or the fixed C) and no weight.
     pub fn train_svm(
         captures: &[LabelledCapture],
         params: SvcParams,
+        c: &SvmC,
         cell_scale: CellScale,
     ) -> Result<Self, RecognizerError> {
         let classes = class_list(captures);
-        let mut behaviours = Vec::new();
-        for (name, x, y) in histograms_by_behaviour(captures, &classes, cell_scale)? {
-            let svc = Svc::fit(params, &x, &y, classes.len()).map_err(|source| RecognizerError::Svc {
-                behaviour: name.unwrap_or("").to_owned(),
-                source,
-            })?;
-            behaviours.push(BehaviourSvc {
-                behaviour: name.map(str::to_owned),
-                svc,
-            });
-        }
+        let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
+        // One behaviour per thread, as many as the machine has cores.
+        let threads = std::thread::available_parallelism()
+            .map_or(1, usize::from)
+            .clamp(1, data.len().max(1));
+        let fit_one =
+            |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSvc, RecognizerError> {
+                let svc_error = |source| RecognizerError::Svc {
+                    behaviour: name.unwrap_or("").to_owned(),
+                    source,
+                };
+                let grid = match c {
+                    SvmC::Auto(grid) => grid.clone(),
+                    SvmC::Fixed(c) => vec![*c],
+                };
+                let search = match select_c(params, &grid, x, y, groups, classes.len(), CV_FOLDS) {
+                    Ok(search) => Some(search),
+                    Err(SvcError::TooFewGroups { .. }) => None,
+                    Err(e) => return Err(svc_error(e)),
+                };
+                let chosen = match (&search, c) {
+                    (Some(s), _) => s.chosen_c,
+                    (None, SvmC::Fixed(c)) => *c,
+                    (None, SvmC::Auto(_)) => SvmC::FALLBACK,
+                };
+                let svc =
+                    Svc::fit(SvcParams { c: chosen, ..params }, x, y, classes.len()).map_err(svc_error)?;
+                Ok(BehaviourSvc {
+                    behaviour: name.map(str::to_owned),
+                    svc,
+                    reliability: search.as_ref().and_then(CSearch::accuracy),
+                    c_search: search,
+                })
+            };
+        let mut behaviours = Vec::with_capacity(data.len());
+        std::thread::scope(|scope| -> Result<(), RecognizerError> {
+            let workers: Vec<_> = (0..threads)
+                .map(|t| {
+                    let (data, fit_one) = (&data, &fit_one);
+                    scope.spawn(move || {
+                        data.iter()
+                            .enumerate()
+                            .filter(|(i, _)| i % threads == t)
+                            .map(|(i, d)| fit_one(d).map(|b| (i, b)))
+                            .collect::<Result<Vec<_>, _>>()
+                    })
+                })
+                .collect();
+            let mut fitted = Vec::with_capacity(data.len());
+            for w in workers {
+                fitted.extend(
+                    w.join()
+                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?,
+                );
+            }
+            fitted.sort_by_key(|(i, _)| *i);
+            behaviours.extend(fitted.into_iter().map(|(_, b)| b));
+            Ok(())
+        })?;
         if behaviours.is_empty() {
             return Err(RecognizerError::NoTrainingData);
         }
@@ -566,35 +798,177 @@ impl RecognizerFile {
                     })
                     .collect()
             }
+            RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } => {
+                let (_, label, p) = self.scratch_prediction(capture, &SpectrogramPlan::new())?;
+                Ok(vec![whole_capture_decision(capture, label, &p)])
+            }
+        }
+    }
+
+    /// For a k-NN or SVM recognizer: the index of the capture's behaviour among
+    /// [`RecognizerFile::behaviour_names`], its classifier's label and class probabilities.
+    fn scratch_prediction(
+        &self,
+        capture: &LabelledCapture,
+        plan: &SpectrogramPlan,
+    ) -> Result<(usize, usize, Vec<f64>), RecognizerError> {
+        match &self.body {
+            RecognizerBody::Som { .. } => Err(RecognizerError::UnusableCapture {
+                path: capture.reference.path.clone(),
+                reason: "a SOM recognizer does not classify whole scratches".into(),
+            }),
             RecognizerBody::Knn {
                 cell_scale,
                 behaviours,
             } => {
-                let model = for_behaviour(behaviours, |b| &b.behaviour, capture)?;
-                let features = spectral(&SpectrogramPlan::new(), capture, *cell_scale)?;
+                let b = behaviour_index(behaviours, |b| &b.behaviour, capture)?;
+                let features = spectral(plan, capture, *cell_scale)?;
                 let knn_error = |source| RecognizerError::Knn {
                     behaviour: capture.behaviour.clone().unwrap_or_default(),
                     source,
                 };
-                let label = model.knn.predict(&features).map_err(knn_error)?;
-                let p = model.knn.predict_proba(&features).map_err(knn_error)?;
-                Ok(vec![whole_capture_decision(capture, label, &p)])
+                let knn = &behaviours[b].knn;
+                let label = knn.predict(&features).map_err(knn_error)?;
+                Ok((b, label, knn.predict_proba(&features).map_err(knn_error)?))
             }
             RecognizerBody::Svm {
                 cell_scale,
                 behaviours,
             } => {
-                let model = for_behaviour(behaviours, |b| &b.behaviour, capture)?;
-                let features = spectral(&SpectrogramPlan::new(), capture, *cell_scale)?;
+                let b = behaviour_index(behaviours, |b| &b.behaviour, capture)?;
+                let features = spectral(plan, capture, *cell_scale)?;
                 let svc_error = |source| RecognizerError::Svc {
                     behaviour: capture.behaviour.clone().unwrap_or_default(),
                     source,
                 };
-                let label = model.svc.predict(&features).map_err(svc_error)?;
-                let p = model.svc.predict_proba(&features).map_err(svc_error)?;
-                Ok(vec![whole_capture_decision(capture, label, &p)])
+                let svc = &behaviours[b].svc;
+                let label = svc.predict(&features).map_err(svc_error)?;
+                Ok((b, label, svc.predict_proba(&features).map_err(svc_error)?))
             }
         }
+    }
+
+    /// The behaviours of a k-NN or SVM recognizer, in its classifiers' order (empty for a SOM).
+    pub fn behaviour_names(&self) -> Vec<Option<&str>> {
+        self.reliabilities().into_iter().map(|r| r.behaviour).collect()
+    }
+
+    /// Each behaviour's stored reliability (and, for an SVM, its C and how it was chosen), in
+    /// the classifiers' order; empty for a SOM.
+    pub fn reliabilities(&self) -> Vec<BehaviourReliability<'_>> {
+        match &self.body {
+            RecognizerBody::Som { .. } => Vec::new(),
+            RecognizerBody::Knn { behaviours, .. } => behaviours
+                .iter()
+                .map(|b| BehaviourReliability {
+                    behaviour: b.behaviour.as_deref(),
+                    reliability: b.reliability,
+                    folds: b.reliability_folds,
+                    c_search: None,
+                    c: None,
+                })
+                .collect(),
+            RecognizerBody::Svm { behaviours, .. } => behaviours
+                .iter()
+                .map(|b| BehaviourReliability {
+                    behaviour: b.behaviour.as_deref(),
+                    reliability: b.reliability,
+                    folds: b.c_search.as_ref().map(|s| s.folds),
+                    c_search: b.c_search.as_ref(),
+                    c: Some(b.svc.params().c),
+                })
+                .collect(),
+        }
+    }
+
+    /// The weight of each behaviour (in [`RecognizerFile::behaviour_names`] order) when a
+    /// trial's behaviours are fused: its stored reliability, or, where it has none (a file
+    /// written before weights were stored, or a behaviour with too few trials to
+    /// cross-validate), the mean of the others' stored reliabilities, or 1 when none has one
+    /// (every behaviour weighs the same).
+    pub fn fusion_weights(&self) -> Vec<f64> {
+        let stored: Vec<Option<f64>> = self.reliabilities().iter().map(|r| r.reliability).collect();
+        let known: Vec<f64> = stored.iter().flatten().copied().collect();
+        let fallback = if known.is_empty() {
+            1.0
+        } else {
+            known.iter().sum::<f64>() / known.len() as f64
+        };
+        stored.into_iter().map(|w| w.unwrap_or(fallback)).collect()
+    }
+
+    /// Fuses the behaviours of each trial of `captures` (see [`FusedEvaluation`]); `None` for a
+    /// SOM recognizer.
+    ///
+    /// Groups whose behaviours all weigh 0 (each never classified a held-out trial right)
+    /// are fused with equal weights instead.
+    pub fn evaluate_fused(
+        &self,
+        captures: &[LabelledCapture],
+    ) -> Result<Option<FusedEvaluation>, RecognizerError> {
+        if matches!(self.body, RecognizerBody::Som { .. }) {
+            return Ok(None);
+        }
+        let names = self.behaviour_names();
+        let weights = self.fusion_weights();
+        let mut alone: Vec<Option<ConfusionMatrix<String>>> = vec![None; names.len()];
+        let plan = SpectrogramPlan::new();
+        // (surface, trial) → the group's (behaviour, probabilities); trial-less captures alone.
+        let mut trials: std::collections::BTreeMap<(usize, String), TrialScratches> =
+            std::collections::BTreeMap::new();
+        let mut singles: Vec<(usize, TrialScratches)> = Vec::new();
+        for c in captures {
+            let truth = class_index(&self.classes, c)?;
+            let (b, label, p) = self.scratch_prediction(c, &plan)?;
+            let matrix = match &mut alone[b] {
+                Some(m) => m,
+                slot => slot.insert(ConfusionMatrix::new(self.classes.clone())?),
+            };
+            matrix.add(&self.classes[truth], &self.classes[label])?;
+            match trial_of(c) {
+                Some(trial) => trials.entry((truth, trial.to_owned())).or_default().push((b, p)),
+                None => singles.push((truth, vec![(b, p)])),
+            }
+        }
+        let mut confusion = ConfusionMatrix::new(self.classes.clone())?;
+        let mut multi_scratch_groups = 0;
+        let groups: Vec<(usize, TrialScratches)> = trials
+            .into_iter()
+            .map(|((truth, _), members)| (truth, members))
+            .chain(singles)
+            .collect();
+        for (truth, members) in &groups {
+            multi_scratch_groups += usize::from(members.len() > 1);
+            let p: Vec<&[f64]> = members.iter().map(|(_, p)| p.as_slice()).collect();
+            let w: Vec<f64> = members.iter().map(|(b, _)| weights[*b]).collect();
+            let fused = match fuse(&p, &w) {
+                Err(FusionError::ZeroTotalWeight) => fuse(&p, &vec![1.0; p.len()]),
+                other => other,
+            }
+            .map_err(|e| RecognizerError::UnusableCapture {
+                path: PathBuf::from(&self.classes[*truth]),
+                reason: format!("fusing a trial's behaviours: {e}"),
+            })?;
+            let label = argmax(&fused).unwrap_or(0);
+            confusion.add(&self.classes[*truth], &self.classes[label])?;
+        }
+        let per_behaviour = alone
+            .into_iter()
+            .enumerate()
+            .filter_map(|(b, m)| {
+                m.map(|confusion| BehaviourScore {
+                    behaviour: names[b].map(str::to_owned),
+                    weight: weights[b],
+                    confusion,
+                })
+            })
+            .collect();
+        Ok(Some(FusedEvaluation {
+            confusion,
+            groups: groups.len(),
+            multi_scratch_groups,
+            per_behaviour,
+        }))
     }
 
     /// Evaluates on `captures`; `window_s` overrides a SOM's window length.
@@ -755,6 +1129,8 @@ impl RecognizerFile {
                             format!("histograms have {} cells", super::spectral::FEATURE_LEN),
                         );
                     }
+                    check_reliability(b.reliability)
+                        .map_err(|r| (format!("body.behaviours[{i}].reliability"), r))?;
                 }
             }
             RecognizerBody::Svm { behaviours, .. } => {
@@ -776,6 +1152,23 @@ impl RecognizerFile {
                                 super::spectral::FEATURE_LEN
                             ),
                         );
+                    }
+                    check_reliability(b.reliability)
+                        .map_err(|r| (format!("body.behaviours[{i}].reliability"), r))?;
+                    if let Some(search) = &b.c_search {
+                        search
+                            .check()
+                            .map_err(|(f, r)| (format!("body.behaviours[{i}].c_search.{f}"), r))?;
+                        if search.chosen_c != b.svc.params().c {
+                            return bad(
+                                &format!("body.behaviours[{i}].c_search.chosen_c"),
+                                format!(
+                                    "{} is not the classifier's C {}",
+                                    search.chosen_c,
+                                    b.svc.params().c
+                                ),
+                            );
+                        }
                     }
                 }
             }
@@ -860,44 +1253,90 @@ fn spectral(
         })
 }
 
-/// Sinapov's histogram of each capture with its class index, grouped by behaviour (k-NN and SVM
-/// recognizers keep one classifier per behaviour).
-#[allow(clippy::type_complexity)] // one use, read in place
+/// One behaviour's training data: its name, a histogram per capture, their class indices and
+/// cross-validation groups ([`trial_groups`]).
+type BehaviourHistograms<'a> = (
+    Option<&'a str>,
+    Vec<[f64; super::spectral::FEATURE_LEN]>,
+    Vec<usize>,
+    Vec<u64>,
+);
+
+/// The scratches of one trial: each one's behaviour index and class probabilities.
+type TrialScratches = Vec<(usize, Vec<f64>)>;
+
+/// Sinapov's histogram of each capture with its class index and cross-validation group,
+/// grouped by behaviour (k-NN and SVM recognizers keep one classifier per behaviour).
 fn histograms_by_behaviour<'a>(
     captures: &'a [LabelledCapture],
     classes: &[String],
     cell_scale: CellScale,
-) -> Result<
-    Vec<(
-        Option<&'a str>,
-        Vec<[f64; super::spectral::FEATURE_LEN]>,
-        Vec<usize>,
-    )>,
-    RecognizerError,
-> {
+) -> Result<Vec<BehaviourHistograms<'a>>, RecognizerError> {
     let plan = SpectrogramPlan::new();
     let names: BTreeSet<Option<&str>> = captures.iter().map(|c| c.behaviour.as_deref()).collect();
     let mut out = Vec::new();
     for name in names {
-        let (mut x, mut y) = (Vec::new(), Vec::new());
+        let (mut x, mut y, mut members) = (Vec::new(), Vec::new(), Vec::new());
         for c in captures.iter().filter(|c| c.behaviour.as_deref() == name) {
             x.push(spectral(&plan, c, cell_scale)?);
             y.push(class_index(classes, c)?);
+            members.push(c);
         }
-        out.push((name, x, y));
+        out.push((name, x, y, trial_groups(&members)));
     }
     Ok(out)
 }
 
-/// The classifier of the capture's behaviour (k-NN and SVM recognizers keep one per behaviour).
-fn for_behaviour<'a, T>(
-    behaviours: &'a [T],
+/// A capture's trial (metadata [`TRIAL_KEY`]), if it has a non-empty one.
+fn trial_of(c: &LabelledCapture) -> Option<&str> {
+    c.capture.metadata().get(TRIAL_KEY).filter(|t| !t.is_empty())
+}
+
+/// Cross-validation group of each capture inside training: its trial, so that the folds of
+/// [`super::knn::group_folds`] hold out trial `t` of every surface together — a scratch is
+/// never on both sides of a split, and every fold keeps about the same share of each surface.
+/// Groups are numbered in the trials' numeric order (shorter strings first); captures without
+/// a trial are a group each, after them.
+pub fn trial_groups(captures: &[&LabelledCapture]) -> Vec<u64> {
+    let trials: BTreeSet<(usize, &str)> = captures
+        .iter()
+        .filter_map(|c| trial_of(c))
+        .map(|t| (t.len(), t))
+        .collect();
+    let trials: Vec<(usize, &str)> = trials.into_iter().collect();
+    let mut alone = trials.len() as u64;
+    captures
+        .iter()
+        .map(|c| match trial_of(c) {
+            Some(t) => trials.binary_search(&(t.len(), t)).map_or(0, |r| r as u64),
+            None => {
+                alone += 1;
+                alone - 1
+            }
+        })
+        .collect()
+}
+
+/// A stored reliability must be a finite accuracy in `[0, 1]`.
+fn check_reliability(r: Option<f64>) -> Result<(), String> {
+    match r {
+        Some(r) if !(r.is_finite() && (0.0..=1.0).contains(&r)) => {
+            Err(format!("{r} is not an accuracy in [0, 1]"))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Index of the classifier of the capture's behaviour (k-NN and SVM recognizers keep one per
+/// behaviour).
+fn behaviour_index<T>(
+    behaviours: &[T],
     name: impl Fn(&T) -> &Option<String>,
     capture: &LabelledCapture,
-) -> Result<&'a T, RecognizerError> {
+) -> Result<usize, RecognizerError> {
     behaviours
         .iter()
-        .find(|b| *name(b) == capture.behaviour)
+        .position(|b| *name(b) == capture.behaviour)
         .ok_or_else(|| RecognizerError::UnusableCapture {
             path: capture.reference.path.clone(),
             reason: format!(
@@ -983,6 +1422,155 @@ mod tests {
         let first = eval.time_to_first_correct_s.expect("correct decisions");
         assert!((first - 1.839).abs() < 1e-9, "{first}");
         assert_eq!(eval.flips_per_s, 0.0);
+    }
+
+    /// A k-NN and an SVM recognizer over two behaviours of three classes, built without
+    /// captures: `poke` has a reliability weight, `rub` (as in a file written before weights
+    /// were stored, or with too few trials) has none.
+    fn sinapov_recognizers() -> [RecognizerFile; 2] {
+        use super::super::svc::CvPoint;
+        let x: Vec<Vec<f64>> = (0..6)
+            .map(|i| {
+                (0..super::super::spectral::FEATURE_LEN)
+                    .map(|j| (i / 2) as f64 + 0.01 * ((i * 31 + j * 7) % 11) as f64)
+                    .collect()
+            })
+            .collect();
+        let y = [0, 0, 1, 1, 2, 2];
+        let knn = KnnParams::default().fit(&x, &y, 3).expect("k-NN");
+        let params = SvcParams {
+            c: 10.0,
+            probability: false,
+            ..SvcParams::default()
+        };
+        let svc = Svc::fit(params, &x, &y, 3).expect("SVC");
+        let classes: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
+        let knn_body = RecognizerBody::Knn {
+            cell_scale: CellScale::Mean,
+            behaviours: ["poke", "rub"]
+                .iter()
+                .map(|b| BehaviourKnn {
+                    behaviour: Some((*b).to_owned()),
+                    knn: knn.clone(),
+                    reliability: (*b == "poke").then_some(0.8),
+                    reliability_folds: (*b == "poke").then_some(5),
+                })
+                .collect(),
+        };
+        let search = CSearch {
+            folds: 5,
+            grid: vec![
+                CvPoint {
+                    c: 1.0,
+                    accuracy: 0.5,
+                },
+                CvPoint {
+                    c: 10.0,
+                    accuracy: 0.8,
+                },
+            ],
+            chosen_c: 10.0,
+        };
+        let svm_body = RecognizerBody::Svm {
+            cell_scale: CellScale::Mean,
+            behaviours: ["poke", "rub"]
+                .iter()
+                .map(|b| BehaviourSvc {
+                    behaviour: Some((*b).to_owned()),
+                    svc: svc.clone(),
+                    reliability: (*b == "poke").then_some(0.8),
+                    c_search: (*b == "poke").then(|| search.clone()),
+                })
+                .collect(),
+        };
+        [knn_body, svm_body]
+            .map(|body| RecognizerFile::assemble(classes.clone(), histogram_names(), body, &[], 6))
+    }
+
+    #[test]
+    fn reliability_weights_round_trip_and_older_files_without_them_still_load() {
+        for model in sinapov_recognizers() {
+            let method = model.method();
+            let json = serde_json::to_value(&model).expect("serialize");
+            assert_eq!(json["body"]["behaviours"][0]["reliability"], 0.8, "{method}");
+            assert!(
+                json["body"]["behaviours"][1].get("reliability").is_none(),
+                "{method}"
+            );
+            let back = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("valid");
+            assert_eq!(back, model);
+            // `rub` has no weight of its own: it gets the mean of the others' (here `poke`'s).
+            assert_eq!(back.fusion_weights(), [0.8, 0.8], "{method}");
+            assert_eq!(back.behaviour_names(), [Some("poke"), Some("rub")]);
+
+            // A file from before weights were stored: no `reliability`, `reliability_folds`,
+            // `c_search` anywhere. It loads, and every behaviour weighs the same.
+            let mut old = json.clone();
+            for b in old["body"]["behaviours"].as_array_mut().expect("behaviours") {
+                let b = b.as_object_mut().expect("behaviour");
+                for key in ["reliability", "reliability_folds", "c_search"] {
+                    b.remove(key);
+                }
+            }
+            let old = RecognizerFile::from_json(&old.to_string(), Path::new("old.json")).expect("old file");
+            assert!(
+                old.reliabilities()
+                    .iter()
+                    .all(|r| r.reliability.is_none() && r.c_search.is_none())
+            );
+            assert_eq!(old.fusion_weights(), [1.0, 1.0], "{method}");
+
+            // Weights are accuracies.
+            for bad in [serde_json::json!(1.5), serde_json::json!(-0.1)] {
+                let mut edited = json.clone();
+                edited["body"]["behaviours"][0]["reliability"] = bad;
+                let err =
+                    RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("range");
+                assert!(
+                    err.to_string()
+                        .contains("r.json: field `body.behaviours[0].reliability`"),
+                    "{err}"
+                );
+            }
+        }
+        // The SVM's search must name the classifier's C, from its grid.
+        let json = serde_json::to_value(&sinapov_recognizers()[1]).expect("serialize");
+        let mut edited = json.clone();
+        edited["body"]["behaviours"][0]["c_search"]["chosen_c"] = 1.0.into();
+        let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("C");
+        assert!(
+            err.to_string()
+                .contains("field `body.behaviours[0].c_search.chosen_c`: 1 is not the classifier's C 10"),
+            "{err}"
+        );
+        let mut edited = json;
+        edited["body"]["behaviours"][0]["c_search"]["chosen_c"] = 100.0.into();
+        let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("grid");
+        assert!(
+            err.to_string()
+                .contains("c_search.chosen_c`: 100 is not in the grid"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn trials_group_captures_in_numeric_order_and_trial_less_captures_stand_alone() {
+        let with_trial = |trial: Option<&str>| {
+            let mut c = rubbing("fine", 5e-6, 0.3e-3, 0.1, 0.1);
+            let mut meta = c.capture.metadata().clone();
+            if let Some(t) = trial {
+                meta = meta.with(TRIAL_KEY, t);
+            }
+            c.capture =
+                Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec()).expect("capture");
+            c
+        };
+        let captures: Vec<LabelledCapture> = [Some("10"), Some("2"), None, Some("2"), Some("0"), None]
+            .into_iter()
+            .map(with_trial)
+            .collect();
+        let refs: Vec<&LabelledCapture> = captures.iter().collect();
+        assert_eq!(trial_groups(&refs), [2, 1, 3, 1, 0, 4]);
     }
 
     #[test]

@@ -83,6 +83,14 @@ pub enum SvcError {
     /// Probabilities were asked of a classifier fitted without them.
     #[error("the classifier was fitted without probability estimates")]
     NoProbability,
+    /// Cross-validation needs at least two groups (trials) and two folds.
+    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
+    TooFewGroups {
+        /// Distinct groups.
+        groups: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
     /// The solver did not converge within its iteration limit.
     #[error("SMO did not converge in {iterations} iterations (classes {first}, {second})")]
     NotConverged {
@@ -322,6 +330,11 @@ impl Svc {
         self.classes
     }
 
+    /// The hyperparameters it was fitted with.
+    pub fn params(&self) -> &SvcParams {
+        &self.params
+    }
+
     /// The binary machines, in libsvm's pair order.
     pub fn machines(&self) -> &[BinarySvc] {
         &self.machines
@@ -440,6 +453,212 @@ impl Svc {
         }
         Ok(pairwise_coupling(&r))
     }
+}
+
+/// The values of C that [`select_c`] tries by default: 1 to 10⁵ in decades.
+pub const C_GRID: [f64; 6] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
+
+/// One C of a [`CSearch`] and its cross-validated accuracy.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CvPoint {
+    /// The box constraint.
+    pub c: f64,
+    /// Fraction of held-out vectors classified correctly.
+    pub accuracy: f64,
+}
+
+/// How C was chosen: each candidate's accuracy under cross-validation by group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CSearch {
+    /// Folds of the cross-validation (whole groups per fold, see
+    /// [`super::knn::group_folds`]).
+    pub folds: usize,
+    /// Every candidate, in the order tried.
+    pub grid: Vec<CvPoint>,
+    /// The most accurate candidate; ties go to the smaller C (the wider margin).
+    pub chosen_c: f64,
+}
+
+impl CSearch {
+    /// Cross-validated accuracy of the chosen C.
+    pub fn accuracy(&self) -> Option<f64> {
+        self.grid
+            .iter()
+            .find(|p| p.c == self.chosen_c)
+            .map(|p| p.accuracy)
+    }
+
+    /// Checks a search read from a file: `Err((field, reason))`.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        if self.folds < 2 {
+            return Err(("folds", format!("{} folds; cross-validation needs 2", self.folds)));
+        }
+        if self.grid.is_empty() {
+            return Err(("grid", "no candidate".into()));
+        }
+        if let Some(p) = self
+            .grid
+            .iter()
+            .find(|p| !(p.c.is_finite() && p.c > 0.0 && (0.0..=1.0).contains(&p.accuracy)))
+        {
+            return Err((
+                "grid",
+                format!(
+                    "C = {}, accuracy {}: C must be positive, accuracy in [0, 1]",
+                    p.c, p.accuracy
+                ),
+            ));
+        }
+        if self.accuracy().is_none() {
+            return Err(("chosen_c", format!("{} is not in the grid", self.chosen_c)));
+        }
+        Ok(())
+    }
+}
+
+/// Accuracy of an SVC with `params` under cross-validation by group
+/// ([`super::knn::group_folds`]): all vectors of a group (a trial) are held out together.
+///
+/// A training fold that lacks some classes is fitted on the classes it has, and the held-out
+/// vectors of the missing ones count as wrong (the classifier cannot name them); a fold with a
+/// single class predicts it. Probabilities are not fitted (only votes are scored).
+pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
+    params: SvcParams,
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<f64, SvcError> {
+    let (fold, folds) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    let params = SvcParams {
+        probability: false,
+        ..params
+    };
+    let mut correct = 0usize;
+    for f in 0..folds {
+        correct += fold_correct(params, features, labels, &fold, f, classes)?;
+    }
+    Ok(correct as f64 / features.len() as f64)
+}
+
+/// Picks C from `grid` by [`cross_validated_accuracy`] with `params`' other settings: the most
+/// accurate C, ties to the smaller one.
+pub fn select_c<V: AsRef<[f64]>>(
+    params: SvcParams,
+    grid: &[f64],
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<CSearch, SvcError> {
+    let (_, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    let mut order: Vec<f64> = grid.to_vec();
+    order.sort_by(f64::total_cmp);
+    order.dedup();
+    if order.is_empty() {
+        return Err(SvcError::Parameter {
+            name: "c",
+            value: f64::NAN,
+            reason: "an empty grid of C values",
+        });
+    }
+    let mut points = Vec::with_capacity(order.len());
+    for &c in &order {
+        let accuracy = cross_validated_accuracy(
+            SvcParams { c, ..params },
+            features,
+            labels,
+            groups,
+            classes,
+            folds,
+        )?;
+        points.push(CvPoint { c, accuracy });
+    }
+    // Ascending C, so a strict improvement is needed to move to a larger one.
+    let best = points.iter().fold(
+        points[0],
+        |best, p| if p.accuracy > best.accuracy { *p } else { best },
+    );
+    Ok(CSearch {
+        folds: used,
+        grid: points,
+        chosen_c: best.c,
+    })
+}
+
+/// Fold of each vector and the number of folds, after checking the counts.
+fn cv_folds(
+    features: usize,
+    labels: usize,
+    groups: &[u64],
+    folds: usize,
+) -> Result<(Vec<usize>, usize), SvcError> {
+    if features == 0 || features != labels || groups.len() != features {
+        return Err(SvcError::Counts {
+            features,
+            labels: if labels == features { groups.len() } else { labels },
+        });
+    }
+    super::knn::group_folds(groups, folds).map_err(|_| {
+        let mut distinct = groups.to_vec();
+        distinct.sort_unstable();
+        distinct.dedup();
+        SvcError::TooFewGroups {
+            groups: distinct.len(),
+            folds,
+        }
+    })
+}
+
+/// Held-out vectors of fold `f` classified correctly by an SVC fitted on the other folds.
+fn fold_correct<V: AsRef<[f64]>>(
+    params: SvcParams,
+    features: &[V],
+    labels: &[usize],
+    fold: &[usize],
+    f: usize,
+    classes: usize,
+) -> Result<usize, SvcError> {
+    let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
+        .iter()
+        .zip(labels)
+        .zip(fold)
+        .filter(|&(_, &g)| g != f)
+        .map(|((x, &y), _)| (x.as_ref(), y))
+        .unzip();
+    // The classes present in training, relabelled 0..m for the fit.
+    let mut present: Vec<usize> = train_y.clone();
+    present.sort_unstable();
+    present.dedup();
+    if let Some(&label) = present.iter().find(|&&l| l >= classes) {
+        return Err(SvcError::LabelOutOfRange {
+            index: labels.iter().position(|&l| l == label).unwrap_or(0),
+            label,
+            classes,
+        });
+    }
+    let held_out = features
+        .iter()
+        .zip(labels)
+        .zip(fold)
+        .filter(|&(_, &g)| g == f)
+        .map(|((x, &y), _)| (x.as_ref(), y));
+    if present.len() < 2 {
+        let only = present.first().copied();
+        return Ok(held_out.filter(|&(_, y)| Some(y) == only).count());
+    }
+    let compact: Vec<usize> = train_y
+        .iter()
+        .map(|y| present.binary_search(y).unwrap_or(0))
+        .collect();
+    let svc = Svc::fit(params, &train_x, &compact, present.len())?;
+    let mut correct = 0;
+    for (x, y) in held_out {
+        correct += usize::from(present[svc.predict(x)?] == y);
+    }
+    Ok(correct)
 }
 
 fn max_iterations(n: usize) -> usize {
@@ -899,6 +1118,95 @@ mod tests {
         let (a, b) = sigmoid_train(&dec, &y);
         assert!(a < -0.5 && b.abs() < 1e-6, "{a} {b}");
         assert!(sigmoid_predict(2.0, a, b) > 0.75 && sigmoid_predict(-2.0, a, b) < 0.25);
+    }
+
+    /// Three overlapping classes in the plane, `per_group` points of each in each of `groups`
+    /// groups (trials), from a fixed seed.
+    fn overlapping_blobs(groups: u64, per_group: usize) -> (Vec<[f64; 2]>, Vec<usize>, Vec<u64>) {
+        let centres = [[0.0, 0.0], [1.0, 0.2], [0.4, 0.9]];
+        let mut rng = SplitMix64::new(7);
+        let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
+        for group in 0..groups {
+            for (class, centre) in centres.iter().enumerate() {
+                for _ in 0..per_group {
+                    let (a, b) = (rng.next_f64() - 0.5, rng.next_f64() - 0.5);
+                    x.push([centre[0] + 1.2 * a, centre[1] + 1.2 * b]);
+                    y.push(class);
+                    g.push(group);
+                }
+            }
+        }
+        (x, y, g)
+    }
+
+    #[test]
+    fn inner_cross_validation_picks_the_c_of_a_brute_force_search() {
+        let (x, y, groups) = overlapping_blobs(4, 6);
+        let params = SvcParams {
+            kernel: Kernel::Polynomial {
+                gamma: 1.0,
+                coef0: 1.0,
+                degree: 2,
+            },
+            scaling: FeatureScaling::None,
+            ..SvcParams::default()
+        };
+        let grid = [1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3];
+        // Brute force: leave each group out in turn (4 groups, 4 folds), fit on the rest with
+        // every class present, count the held-out points classified right.
+        let brute: Vec<f64> = grid
+            .iter()
+            .map(|&c| {
+                let mut right = 0;
+                for held in 0..4 {
+                    let train: Vec<usize> = (0..x.len()).filter(|&i| groups[i] != held).collect();
+                    let tx: Vec<[f64; 2]> = train.iter().map(|&i| x[i]).collect();
+                    let ty: Vec<usize> = train.iter().map(|&i| y[i]).collect();
+                    let svc = Svc::fit(SvcParams { c, ..params }, &tx, &ty, 3).expect("fit");
+                    right += (0..x.len())
+                        .filter(|&i| groups[i] == held && svc.predict(&x[i]).expect("predict") == y[i])
+                        .count();
+                }
+                right as f64 / x.len() as f64
+            })
+            .collect();
+        let best = brute
+            .iter()
+            .enumerate()
+            .fold(0, |b, (i, &a)| if a > brute[b] { i } else { b });
+        // The grid (given unordered, with a repeat) is searched in ascending order.
+        let unordered = [1e3, 1.0, 1e-2, 100.0, 1e-1, 10.0, 1.0];
+        let search = select_c(params, &unordered, &x, &y, &groups, 3, 4).expect("search");
+        eprintln!("brute force {brute:?}, search {search:?}");
+        assert_eq!(search.folds, 4);
+        assert_eq!(search.grid.iter().map(|p| p.c).collect::<Vec<_>>(), grid);
+        for (p, a) in search.grid.iter().zip(&brute) {
+            assert!((p.accuracy - a).abs() < 1e-15, "{search:?} vs {brute:?}");
+        }
+        assert_eq!(search.chosen_c, grid[best]);
+        assert_eq!(search.accuracy(), Some(brute[best]));
+        assert!(search.check().is_ok());
+        // The problem discriminates: the candidates do not all score the same, and the choice
+        // is an inner one (neither the smallest nor the largest C).
+        assert!(brute.iter().any(|&a| a != brute[0]), "{brute:?}");
+        assert!(best > 0 && best < grid.len() - 1, "{brute:?}");
+        // Measured: C = 100 and 1000 tie at 65/72; the tie goes to the smaller C.
+        assert_eq!(brute[4], brute[5], "{brute:?}");
+        assert_eq!(search.chosen_c, 100.0);
+
+        // One group cannot be cross-validated; a class seen in one group only is held out
+        // once with no training vector of its own and counts as wrong.
+        assert_eq!(
+            select_c(params, &grid, &x, &y, &[0; 72], 3, 4),
+            Err(SvcError::TooFewGroups { groups: 1, folds: 4 })
+        );
+        // Class 2 of group 0 relabelled as a class 3 found nowhere else.
+        let lonely: Vec<usize> = (0..x.len())
+            .map(|i| if groups[i] == 0 && y[i] == 2 { 3 } else { y[i] })
+            .collect();
+        let a = cross_validated_accuracy(SvcParams { c: 1.0, ..params }, &x, &lonely, &groups, 4, 4)
+            .expect("folds without class 3 still fit");
+        assert!(a < brute[2], "{a} vs {}", brute[2]);
     }
 
     #[test]
