@@ -1,12 +1,13 @@
 //! The scene's surface recognizer: a recognizer file (or one trained from a folder of rubbing
-//! captures), fed every sample of a rubbing segment in tick order through the same
-//! allocation-free [`LiveRecognizer`] the haptic side uses.
+//! captures), run by the haptic thread inside each rubbing tick ([`Recognizing`]); its
+//! decisions are read back from the samples' recognizer channels.
 
 use std::path::PathBuf;
 
 use anyhow::Context;
-use haptics::acquire::{self, Protocol};
-use haptics::recognize::LiveRecognizer;
+#[cfg(doc)]
+use haptics::recognize::Recognizing;
+use haptics::recognize::{LiveRecognizer, channel, decision_in};
 use identify::recognition::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
 use identify::recognition::som::SomParams;
 
@@ -40,36 +41,49 @@ impl SceneRecognizer {
         Ok(Some(Self { live }))
     }
 
-    /// The decisions over a rubbing segment, in order (none for other segments).
-    pub fn recognize(&mut self, run: &SegmentRun) -> anyhow::Result<Vec<Recognition>> {
-        let SegmentKind::Surface { surface } = &run.segment.kind else {
-            return Ok(Vec::new());
-        };
-        self.live.reset();
-        let mut out = Vec::new();
-        let mut row = Vec::with_capacity(8);
-        for s in &run.samples {
-            row.clear();
-            // The same rows the captures it was trained on hold: rubbing phase only, at the
-            // device's resolution.
-            if !acquire::row(Protocol::Rubbing, s, &mut row) {
-                continue;
-            }
-            if let Some(d) = self.live.push(row[1], row[4], row[6])? {
-                out.push(Recognition {
-                    object: run.segment.object.clone(),
-                    truth: surface.clone(),
-                    time_s: s.time_s,
-                    label: self.live.classes().get(d.label).cloned().unwrap_or_default(),
-                    confidence: d.confidence,
-                });
-            }
-        }
-        Ok(out)
+    /// A copy of the recognizer for one segment's haptic thread (allocated here, on the
+    /// caller's thread; it is then moved into the tick).
+    pub fn live(&self) -> LiveRecognizer {
+        self.live.clone()
+    }
+
+    /// The decisions a segment's haptic thread made, in order (none for other segments).
+    pub fn recognize(&self, run: &SegmentRun) -> Vec<Recognition> {
+        decisions(self.live.classes(), run)
     }
 }
 
-/// Trains Nakano's SOM on every `*.csv` rubbing capture in `dir` (1 s windows every 0.1 s).
+/// The decisions in a surface segment's samples: one at every sample where the recognizer's
+/// decision count steps.
+pub fn decisions(classes: &[String], run: &SegmentRun) -> Vec<Recognition> {
+    let SegmentKind::Surface { surface } = &run.segment.kind else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let mut made = 0.0;
+    for s in &run.samples {
+        let count = s.channels[channel::DECISIONS];
+        if count == made {
+            continue;
+        }
+        made = count;
+        if let Some((label, confidence)) = decision_in(&s.channels)
+            && count > 0.0
+        {
+            out.push(Recognition {
+                object: run.segment.object.clone(),
+                truth: surface.clone(),
+                time_s: s.time_s,
+                label: classes.get(label).cloned().unwrap_or_default(),
+                confidence,
+            });
+        }
+    }
+    out
+}
+
+/// Trains Nakano's SOM on every `*.csv` rubbing capture in `dir`, with the protocol's windows
+/// ([`NakanoWindowing::protocol`]).
 fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading recognizer captures in {}", dir.display()))?
@@ -85,7 +99,7 @@ fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
         .first()
         .map(|c| c.capture.metadata().rate_hz())
         .with_context(|| format!("no captures in {}", dir.display()))?;
-    let windowing = NakanoWindowing::new(1.0, 0.1, rate_hz)?;
+    let windowing = NakanoWindowing::protocol(rate_hz)?;
     Ok(RecognizerFile::train_som(
         &captures,
         windowing,

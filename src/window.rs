@@ -13,8 +13,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use glam::DVec3;
-use haptics::acquire::{self, Protocol};
-use haptics::recognize::LiveRecognizer;
+use haptics::recognize::{LiveRecognizer, channel, decision_in};
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
 
@@ -59,6 +58,8 @@ struct Session {
     recognizer: Option<LiveRecognizer>,
     consumed: usize,
     recognized: Option<(String, f32)>,
+    /// The recognizer channel's decision count at the last sample read.
+    decisions_seen: f64,
     outcome: WindowOutcome,
     scenes: Vec<PathBuf>,
     error: Option<anyhow::Error>,
@@ -95,6 +96,7 @@ impl Session {
             recognizer,
             consumed: 0,
             recognized: None,
+            decisions_seen: 0.0,
             outcome: WindowOutcome::default(),
             scenes,
             error: None,
@@ -114,17 +116,16 @@ impl Session {
         self.link = LiveLink::new(self.hand_m);
         self.consumed = 0;
         self.recognized = None;
-        if let Some(r) = &mut self.recognizer {
-            r.reset();
-        }
-        let (scene, options, link, n) = (
+        self.decisions_seen = 0.0;
+        let (scene, options, link, n, recognizer) = (
             self.scene.clone(),
             self.options.clone(),
             self.link.clone(),
             self.segments.len(),
+            self.recognizer.clone(),
         );
         self.worker = Some(std::thread::spawn(move || {
-            session::run_segment(&scene, &segment, n, &options, Some(&link))
+            session::run_segment(&scene, &segment, n, &options, Some(&link), recognizer)
         }));
     }
 
@@ -206,22 +207,26 @@ impl WindowApp for Session {
         let object = segment.map(|s| s.object.as_str());
         let (last, mut overlay, ticks) = {
             let samples = self.link.samples.lock().unwrap_or_else(|e| e.into_inner());
-            if let (Some(r), Some(SegmentKind::Surface { .. })) = (&mut self.recognizer, kind) {
-                let mut row = Vec::with_capacity(8);
+            // The haptic thread decides inside its tick; each sample where its decision count
+            // steps carries a new decision.
+            if let (Some(r), Some(SegmentKind::Surface { surface })) = (&self.recognizer, kind) {
                 for s in &samples[self.consumed.min(samples.len())..] {
-                    row.clear();
-                    if acquire::row(Protocol::Rubbing, s, &mut row)
-                        && let Ok(Some(d)) = r.push(row[1], row[4], row[6])
-                        && let (Some(name), Some(SegmentKind::Surface { surface })) =
-                            (r.classes().get(d.label), kind)
+                    let count = s.channels[channel::DECISIONS];
+                    if count == self.decisions_seen {
+                        continue;
+                    }
+                    self.decisions_seen = count;
+                    if count > 0.0
+                        && let Some((label, confidence)) = decision_in(&s.channels)
+                        && let Some(name) = r.classes().get(label)
                     {
-                        self.recognized = Some((name.clone(), d.confidence as f32));
+                        self.recognized = Some((name.clone(), confidence as f32));
                         self.outcome.recognition.push(Decision {
                             object: object.unwrap_or_default().to_owned(),
                             truth: surface.clone(),
                             time_s: s.time_s,
                             label: name.clone(),
-                            confidence: d.confidence,
+                            confidence,
                         });
                     }
                 }

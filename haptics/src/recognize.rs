@@ -8,6 +8,8 @@
 //! ([`Som::decide_into`]); the features come from the streaming sums instead of the batch ones
 //! and agree with them to ~1e-9 relative.
 
+use crate::acquire;
+use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
 use identify::recognition::model::{NakanoWindowing, RecognizerBody, RecognizerFile};
 use identify::recognition::nakano::{FEATURES, NakanoError, NakanoStream};
 use identify::recognition::som::{Som, SomError};
@@ -139,5 +141,85 @@ impl LiveRecognizer {
     /// The windows it decides on.
     pub fn windowing(&self) -> &NakanoWindowing {
         &self.windowing
+    }
+}
+
+/// Channels [`Recognizing`] writes into every sample, after the wrapped controller's eight.
+pub mod channel {
+    /// Class index + 1 of the latest decision; 0 before the stroke's first decision.
+    pub const LABEL: usize = 8;
+    /// Confidence of the latest decision, `[0, 1]` (0 before the first).
+    pub const CONFIDENCE: usize = 9;
+    /// Decisions made since the stroke began: a sample where it steps carries a new decision.
+    pub const DECISIONS: usize = 10;
+}
+
+/// The decision a sample's recognizer channels carry: `(label, confidence)`, or `None` before
+/// the stroke's first decision.
+pub fn decision_in(channels: &[f64; CHANNELS]) -> Option<(usize, f64)> {
+    let label = channels[channel::LABEL];
+    (label >= 1.0 && label.is_finite()).then(|| ((label - 1.0) as usize, channels[channel::CONFIDENCE]))
+}
+
+/// A rubbing controller with the live recognizer inside its tick: each tick the wrapped
+/// controller runs, then the sample it produced (position, height and the RFOB's friction, as a
+/// capture records them: [`acquire::rubbing_signals`]) is pushed into the recognizer, and the
+/// latest decision is written into [`channel`]s of the same sample, so it reaches the recorder
+/// and the UI with the force it was decided beside. A stroke (a run of rubbing-phase ticks)
+/// starts the recognizer afresh, as a capture starts its windows afresh.
+///
+/// Nothing here allocates, locks, logs or does I/O. A non-finite sample leaves the decision as
+/// it was and sets [`crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE`] on the tick.
+#[derive(Debug)]
+pub struct Recognizing<C> {
+    inner: C,
+    live: LiveRecognizer,
+    rubbing: bool,
+    decisions: u64,
+}
+
+impl<C: Controller> Recognizing<C> {
+    /// Wraps `inner` (a rubbing controller) with `live`.
+    pub fn new(inner: C, live: LiveRecognizer) -> Self {
+        Self {
+            inner,
+            live,
+            rubbing: false,
+            decisions: 0,
+        }
+    }
+
+    /// The recognizer (its classes name the labels).
+    pub fn recognizer(&self) -> &LiveRecognizer {
+        &self.live
+    }
+}
+
+impl<C: Controller> Controller for Recognizing<C> {
+    fn tick(&mut self, input: &TickInput<'_>, out: &mut TickOutput) {
+        self.inner.tick(input, out);
+        match acquire::rubbing_signals(input.state, &out.channels) {
+            Some([x, z, f]) => {
+                if !self.rubbing {
+                    self.live.reset();
+                    self.rubbing = true;
+                    self.decisions = 0;
+                }
+                match self.live.push(x, z, f) {
+                    Ok(Some(_)) => self.decisions += 1,
+                    Ok(None) => {}
+                    Err(_) => out.flags |= crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE,
+                }
+            }
+            None => self.rubbing = false,
+        }
+        let current = self.live.current();
+        out.channels[channel::LABEL] = current.map_or(0.0, |d| d.label as f64 + 1.0);
+        out.channels[channel::CONFIDENCE] = current.map_or(0.0, |d| d.confidence);
+        out.channels[channel::DECISIONS] = self.decisions as f64;
+    }
+
+    fn finished(&self) -> bool {
+        self.inner.finished()
     }
 }

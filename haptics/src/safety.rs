@@ -21,6 +21,8 @@ pub mod flag {
     pub const MODEL_INPUT_CLAMPED: u32 = 1 << 4;
     /// A force law's model returned a non-finite value (treated as zero).
     pub const MODEL_OUTPUT_NOT_FINITE: u32 = 1 << 5;
+    /// The live surface recognizer was fed a non-finite sample (its decision stands).
+    pub const RECOGNIZER_INPUT_NOT_FINITE: u32 = 1 << 6;
 }
 
 /// What the safety filter changed, as [`flag`] bits.

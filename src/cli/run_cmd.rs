@@ -107,12 +107,13 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         );
         let mut runs = Vec::new();
         let mut recognition = Vec::new();
-        let mut recognizer = crate::recognizer::SceneRecognizer::for_scene(&scene)?;
+        let recognizer = crate::recognizer::SceneRecognizer::for_scene(&scene)?;
         for segment in &segments {
-            let run = session::run_segment(&scene, segment, segments.len(), &options, None)
+            let live = recognizer.as_ref().map(crate::recognizer::SceneRecognizer::live);
+            let run = session::run_segment(&scene, segment, segments.len(), &options, None, live)
                 .with_context(|| format!("running {}", segment.object))?;
-            if let Some(r) = recognizer.as_mut() {
-                recognition.extend(r.recognize(&run)?);
+            if let Some(r) = &recognizer {
+                recognition.extend(r.recognize(&run));
             }
             runs.push(run);
         }

@@ -28,6 +28,7 @@ use haptics::law::{
     Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig, SoftFriction,
     hard_friction_model, needle_model, soft_friction_models,
 };
+use haptics::recognize::{LiveRecognizer, Recognizing};
 use haptics::recorder::{Recorder, RecorderConfig};
 use haptics::rt::{
     self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, TickInput, TickOutput, WatchdogConfig,
@@ -306,6 +307,9 @@ impl<E: Environment> Controller for Direct<E> {
             env.input,
             -env.force_n.x,
             env.force_n.x,
+            0.0,
+            0.0,
+            0.0,
         ];
     }
 }
@@ -491,13 +495,17 @@ pub fn record_path(record: &Path, object: &str, segments: usize) -> PathBuf {
     record.with_file_name(format!("{stem}.{object}.{ext}"))
 }
 
-/// Runs one segment to its end (the task's, `duration_s`, or the UI's stop).
+/// Runs one segment to its end (the task's, `duration_s`, or the UI's stop). A surface
+/// segment given a `recognizer` runs it inside the haptic tick
+/// ([`haptics::recognize::Recognizing`]): its decisions ride in every sample's
+/// [`haptics::recognize::channel`]s.
 pub fn run_segment(
     scene: &Scene,
     segment: &Segment,
     segments: usize,
     options: &SessionOptions,
     live: Option<&LiveLink>,
+    recognizer: Option<LiveRecognizer>,
 ) -> Result<SegmentRun, SessionError> {
     let started = Instant::now();
     let rate_hz = scene.device.rate_hz;
@@ -560,6 +568,10 @@ pub fn run_segment(
     let device_name = device.name().to_owned();
     let max_force_n = DeviceSpecs::OMEGA7.max_force_n;
     let controller = controller(scene, segment, direct, surface_z_m)?;
+    let controller: Box<dyn Controller> = match (recognizer, &segment.kind) {
+        (Some(r), SegmentKind::Surface { .. }) => Box::new(Recognizing::new(controller, r)),
+        _ => controller,
+    };
 
     let samples = live.map_or_else(|| Arc::new(Mutex::new(Vec::new())), |l| l.samples.clone());
     if let Ok(mut s) = samples.lock() {

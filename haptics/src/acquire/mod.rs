@@ -24,7 +24,8 @@ use crate::device::HapticDevice;
 use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld, Texture};
 use crate::recorder::{RecorderConfig, RecorderError, RecorderSummary, record_to_file};
 use crate::rt::{
-    self, Controller, HapticSample, LoopConfig, LoopError, LoopIo, LoopOutcome, Pacing, RateStats, RtStatus,
+    self, CHANNELS, Controller, HapticSample, LoopConfig, LoopError, LoopIo, LoopOutcome, Pacing, RateStats,
+    RtStatus,
 };
 use crate::sim::world::friction::{HardContact, SoftContact};
 use crate::sim::world::needle::NeedleTissue;
@@ -365,6 +366,22 @@ pub fn row(protocol: Protocol, s: &HapticSample, row: &mut Vec<f64>) -> bool {
             s.channels[rub::PHASE] == crate::control::RubbingPhase::Rub.code()
         }
     }
+}
+
+/// What a rubbing recognizer reads from one tick of [`RubbingController`], exactly as a rubbing
+/// capture records it ([`row`]'s columns 1, 4 and 6: position along x and height at the
+/// encoder's resolution, the RFOB's friction to 0.1 mN): `[x_m, z_m, friction_n]`, or `None`
+/// outside the rubbing phase. No allocation, so the haptic thread can call it.
+pub fn rubbing_signals(state: &crate::device::DeviceState, channels: &[f64; CHANNELS]) -> Option<[f64; 3]> {
+    use crate::control::rubbing::channel as rub;
+    use crate::sim::world::sensor::{Encoder, round_to};
+    (channels[rub::PHASE] == crate::control::RubbingPhase::Rub.code()).then(|| {
+        [
+            round_to(state.position_m.x, Encoder::OMEGA7_QUANTUM_M),
+            round_to(state.position_m.z, Encoder::OMEGA7_QUANTUM_M),
+            round_to(channels[rub::FRICTION_N], 1e-4),
+        ]
+    })
 }
 
 /// Runs `options.protocol` on `device`, recording to `out`. `progress` is called about ten

@@ -202,6 +202,9 @@ impl Controller for InsertionController {
             0.0,
             0.0,
             0.0,
+            0.0,
+            0.0,
+            0.0,
         ];
     }
 

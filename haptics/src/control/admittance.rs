@@ -169,6 +169,9 @@ impl<E: Environment> Controller for Admittance<E> {
             env.input,
             hand.x,
             env.force_n.x,
+            0.0,
+            0.0,
+            0.0,
         ];
     }
 }

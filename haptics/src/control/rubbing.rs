@@ -231,6 +231,9 @@ impl Controller for RubbingController {
             force_cmd,
             self.stroke as f64,
             0.0,
+            0.0,
+            0.0,
+            0.0,
         ];
     }
 

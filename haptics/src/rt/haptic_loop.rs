@@ -19,8 +19,10 @@ use super::watchdog::{Heartbeat, Watchdog, WatchdogConfig};
 use crate::device::{DeviceError, DeviceState, ForceCommand, HapticDevice};
 use crate::safety::SafetyFilter;
 
-/// Controller-defined values carried with each sample (estimated forces, model outputs, …).
-pub const CHANNELS: usize = 8;
+/// Controller-defined values carried with each sample (estimated forces, model outputs, …):
+/// eight for a controller, three more for the live surface recognizer that may wrap it
+/// ([`crate::recognize::channel`]).
+pub const CHANNELS: usize = 11;
 
 /// One tick, as recorded and shown live.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
