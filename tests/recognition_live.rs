@@ -180,7 +180,10 @@ fn only_a_som_at_its_own_rate_runs_live() {
     let knn = RecognizerFile::train_knn(&scratches, KnnParams::default(), CellScale::Mean).expect("knn");
     assert!(matches!(
         LiveRecognizer::new(&knn, 1000.0),
-        Err(LiveRecognizerError::Method { method: "knn" })
+        Err(LiveRecognizerError::Method {
+            method: "knn",
+            features: "spectral"
+        })
     ));
 }
 

@@ -19,10 +19,15 @@ use identify::recognition::som::{Som, SomError};
 #[non_exhaustive]
 pub enum LiveRecognizerError {
     /// Only a SOM over Nakano's rubbing features runs live.
-    #[error("a {method} recognizer cannot run live: only `som` recognizers decide from the rubbing stream")]
+    #[error(
+        "a {method} recognizer over {features} features cannot run live: only a som over nakano \
+         features decides from the rubbing stream"
+    )]
     Method {
         /// The recognizer's method.
         method: &'static str,
+        /// Its features (`nakano`, `spectral`, `both`).
+        features: &'static str,
     },
     /// The loop's rate is not the rate the recognizer's windows are counted at.
     #[error("the loop runs at {loop_hz} Hz but the recognizer's windows are counted at {model_hz} Hz")]
@@ -71,6 +76,7 @@ impl LiveRecognizer {
         let RecognizerBody::Som { windowing, som } = &model.body else {
             return Err(LiveRecognizerError::Method {
                 method: model.method(),
+                features: model.body.feature_set().name(),
             });
         };
         // Written so that a NaN rate is refused too.

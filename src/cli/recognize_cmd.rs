@@ -6,8 +6,8 @@ use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
 use identify::recognition::knn::KnnParams;
 use identify::recognition::model::{
-    CV_FOLDS, DECISION_WINDOW_S, Evaluation, FusedEvaluation, HOP_S, NakanoWindowing, RecognizerFile, SvmC,
-    TRAINING_WINDOW_S,
+    CV_FOLDS, DECISION_WINDOW_S, Evaluation, FeatureSet, FusedEvaluation, HOP_S, NakanoWindowing,
+    RecognizerFile, SCRATCH_SOM_NORMALIZATION, SvmC, TRAINING_WINDOW_S, WINDOW_SVM_FALLBACK_C, som_params,
 };
 use identify::recognition::som::SomParams;
 use identify::recognition::spectral::CellScale;
@@ -43,6 +43,20 @@ enum RecognizeWhat {
 /// knn and svm also store each behaviour's accuracy under a cross-validation by trial (metadata
 /// `trial`; at most 5 folds, trial t of every surface held out together) on the training
 /// captures: its reliability weight when `eval` fuses the behaviours of a trial.
+///
+/// --features crosses methods and features (default: the method's own, as above):
+/// nakano with knn/svm: windowed exactly like the SOM (--window-s, --train-window-s, --hop-s),
+/// one classifier over all windows, each feature log-scaled where positive, centred and divided
+/// by its pooled within-surface standard deviation (the SOM's scaling, without unit length);
+/// k-NN k = 3, or a C-SVC (degree-2 polynomial, γ = 1/5; 1/130 for both) whose C is
+/// cross-validated with whole runs held out (metadata `trial` or `run`) when every surface has
+/// two runs, else 10.
+/// spectral with som: one map per behaviour over whole-scratch histograms (3 nodes per class,
+/// at least 12; cells scaled like the rubbing map's features), one decision per scratch, fused
+/// over a trial's behaviours (one-hot votes weighted by cross-validated reliability).
+/// both: on rubbing captures that also carry accelerometer columns, each window's five Nakano
+/// features followed by the 125-cell histogram of the same window's acceleration (windows of at
+/// least 768 samples).
 #[derive(Debug, Args)]
 struct TrainArgs {
     /// Training captures.
@@ -51,16 +65,22 @@ struct TrainArgs {
     /// Which recognizer.
     #[arg(long, value_enum)]
     method: Method,
+    /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
+    /// (rubbing windows with accelerometer columns). Default: som nakano, knn and svm spectral.
+    #[arg(long, value_enum, value_name = "nakano|spectral|both")]
+    features: Option<Features>,
     /// Write the recognizer here.
     #[arg(long, value_name = "MODEL.json")]
     out: PathBuf,
-    /// som: decision window, s (a decision is this old plus the filters' 0.27 s lookahead).
+    /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
+    /// filters' 0.27 s lookahead).
     #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
     window_s: f64,
-    /// som: window of the training vectors, s.
+    /// Windowed features (nakano, both): window of the training vectors, s.
     #[arg(long, default_value_t = TRAINING_WINDOW_S, value_name = "S")]
     train_window_s: f64,
-    /// som: time between decisions (and between training windows), s.
+    /// Windowed features (nakano, both): time between decisions (and between training
+    /// windows), s.
     #[arg(long, default_value_t = HOP_S, value_name = "S")]
     hop_s: f64,
     /// som: seed of the map's initial vectors and presentation order.
@@ -71,7 +91,8 @@ struct TrainArgs {
     k: usize,
     /// svm: the box constraint C, or `auto`: per behaviour, the most accurate of 1, 10, …, 10⁵
     /// under cross-validation by trial on the training captures (ties to the smaller C; a
-    /// behaviour with fewer than two trials gets 10⁴).
+    /// behaviour with fewer than two trials gets 10⁴). With --features nakano|both: one C, by
+    /// cross-validation by run, or 10 when a surface has a single run.
     #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
     c: CArg,
     #[command(flatten)]
@@ -101,6 +122,23 @@ enum Method {
     Svm,
 }
 
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Features {
+    Nakano,
+    Spectral,
+    Both,
+}
+
+impl From<Features> for FeatureSet {
+    fn from(f: Features) -> Self {
+        match f {
+            Features::Nakano => Self::Nakano,
+            Features::Spectral => Self::Spectral,
+            Features::Both => Self::Both,
+        }
+    }
+}
+
 /// Evaluate a recognizer on labelled captures: accuracy, per-class rates, confusion matrix,
 /// decision latency, time to the first correct and to a stable decision, decision flips.
 ///
@@ -118,7 +156,8 @@ struct EvalArgs {
     /// Print one JSON object instead of the tables.
     #[arg(long)]
     json: bool,
-    /// som: decide on windows of this length instead of the recognizer's, s.
+    /// Windowed recognizers (som, or --features nakano|both): decide on windows of this length
+    /// instead of the recognizer's, s.
     #[arg(long, value_name = "S")]
     window_s: Option<f64>,
     /// Also draw the confusion matrix (and, for a SOM, its topographic map and the
@@ -140,27 +179,64 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures)?;
     let start = std::time::Instant::now();
-    let model = match args.method {
-        Method::Som => {
-            let rate_hz = captures
-                .first()
-                .map(|c| c.capture.metadata().rate_hz())
-                .context("no captures")?;
-            let windowing = NakanoWindowing::new(args.window_s, args.hop_s, rate_hz)?
-                .with_training_window_s(args.train_window_s)?;
+    let features = args.features.map_or(
+        match args.method {
+            Method::Som => FeatureSet::Nakano,
+            Method::Knn | Method::Svm => FeatureSet::Spectral,
+        },
+        FeatureSet::from,
+    );
+    features.check_columns(&captures)?;
+    let windowing = || -> anyhow::Result<NakanoWindowing> {
+        let rate_hz = captures
+            .first()
+            .map(|c| c.capture.metadata().rate_hz())
+            .context("no captures")?;
+        Ok(NakanoWindowing::new(args.window_s, args.hop_s, rate_hz)?
+            .with_training_window_s(args.train_window_s)?)
+    };
+    let c = match args.c {
+        CArg::Auto => SvmC::auto(),
+        CArg::Fixed(c) => SvmC::Fixed(c),
+    };
+    let model = match (args.method, features) {
+        (Method::Som, FeatureSet::Nakano) => {
             let params = SomParams {
                 seed: args.seed,
                 ..SomParams::default()
             };
-            RecognizerFile::train_som(&captures, windowing, params)?
+            RecognizerFile::train_som(&captures, windowing()?, params)?
         }
-        Method::Knn => RecognizerFile::train_knn(&captures, KnnParams::default().k(args.k), CellScale::Mean)?,
-        Method::Svm => {
-            let c = match args.c {
-                CArg::Auto => SvmC::auto(),
-                CArg::Fixed(c) => SvmC::Fixed(c),
+        (Method::Som, FeatureSet::Both) => {
+            let params = SomParams {
+                seed: args.seed,
+                ..SomParams::default()
             };
+            RecognizerFile::train_som_windows(&captures, windowing()?, params, CellScale::Mean)?
+        }
+        (Method::Som, FeatureSet::Spectral) => {
+            let classes = captures
+                .iter()
+                .map(|c| c.label.as_str())
+                .collect::<std::collections::BTreeSet<_>>()
+                .len();
+            let params = SomParams {
+                normalization: SCRATCH_SOM_NORMALIZATION,
+                ..som_params(classes, args.seed)
+            };
+            RecognizerFile::train_som_scratches(&captures, params, CellScale::Mean)?
+        }
+        (Method::Knn, FeatureSet::Spectral) => {
+            RecognizerFile::train_knn(&captures, KnnParams::default().k(args.k), CellScale::Mean)?
+        }
+        (Method::Knn, windowed) => {
+            RecognizerFile::train_knn_windows(&captures, windowing()?, windowed, args.k, CellScale::Mean)?
+        }
+        (Method::Svm, FeatureSet::Spectral) => {
             RecognizerFile::train_svm(&captures, SvcParams::default(), &c, CellScale::Mean)?
+        }
+        (Method::Svm, windowed) => {
+            RecognizerFile::train_svm_windows(&captures, windowing()?, windowed, &c, CellScale::Mean)?
         }
     };
     let trained_s = start.elapsed().as_secs_f64();
@@ -168,8 +244,9 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
         .save(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     println!(
-        "trained {} on {} captures ({} vectors, {} classes: {}); wrote {}",
+        "trained {} over {} features on {} captures ({} vectors, {} classes: {}); wrote {}",
         model.method(),
+        model.feature_set(),
         captures.len(),
         model.n_train,
         model.classes.len(),
@@ -177,7 +254,34 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
         args.out.display()
     );
     print_reliabilities(&model, trained_s);
+    print_window_c(&model);
     Ok(())
+}
+
+/// The C of an SVM over windows, and how it was chosen.
+fn print_window_c(model: &RecognizerFile) {
+    if let identify::recognition::model::RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body {
+        let c = svc.params().c;
+        match c_search {
+            Some(search) if search.grid.len() > 1 => {
+                let grid: Vec<String> = search
+                    .grid
+                    .iter()
+                    .map(|p| format!("{:e}: {:.3}", p.c, p.accuracy))
+                    .collect();
+                println!(
+                    "C = {c:e} chosen by {}-fold cross-validation by run from {}",
+                    search.folds,
+                    grid.join(", ")
+                );
+            }
+            Some(_) => println!("C = {c:e} (given)"),
+            None if c == WINDOW_SVM_FALLBACK_C => {
+                println!("C = {c:e} (not cross-validated: a surface has captures of a single run or trial)")
+            }
+            None => println!("C = {c:e} (given; not cross-validated)"),
+        }
+    }
 }
 
 /// Each behaviour's cross-validated accuracy (its fusion weight) and, for an SVM, its C.
@@ -239,8 +343,11 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     }
     if args.json {
         let mut json = to_json(&e);
-        if let (Some(f), Some(object)) = (&fused, json.as_object_mut()) {
-            object.insert("fused".to_owned(), fused_json(f));
+        if let Some(object) = json.as_object_mut() {
+            object.insert("features".to_owned(), model.feature_set().name().into());
+            if let Some(f) = &fused {
+                object.insert("fused".to_owned(), fused_json(f));
+            }
         }
         println!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(());

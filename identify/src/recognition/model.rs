@@ -30,6 +30,12 @@ use super::svc::{CSearch, Svc, SvcError, SvcParams, select_c};
 use crate::capture::{Capture, CaptureError, CaptureKind, write_atomically};
 use crate::model_file::{CaptureRef, sha256_hex};
 
+mod features;
+pub use features::{
+    BehaviourSom, FeatureSet, SCRATCH_SOM_NORMALIZATION, WINDOW_SVM_FALLBACK_C, WindowScaling, som_nodes,
+    som_params, window_svc_params,
+};
+
 /// Format name in every recognizer file.
 pub const RECOGNIZER_FORMAT: &str = "palpus-recognizer";
 /// Current recognizer file version.
@@ -137,6 +143,16 @@ pub enum RecognizerError {
         value: f64,
         /// What it must be.
         reason: &'static str,
+    },
+    /// The captures lack columns the chosen features need.
+    #[error("{}: `--features {features}` needs the columns {}, which this capture lacks", path.display(), missing.join(", "))]
+    MissingColumns {
+        /// The capture.
+        path: PathBuf,
+        /// The feature set asked for (`nakano`, `spectral`, `both`).
+        features: &'static str,
+        /// The columns it lacks.
+        missing: Vec<String>,
     },
     /// No capture gave a training vector.
     #[error("no training windows: every capture is shorter than one window after the start travel")]
@@ -454,16 +470,83 @@ pub enum RecognizerBody {
         /// One classifier per behaviour seen in training.
         behaviours: Vec<BehaviourSvc>,
     },
+    /// k-NN over rubbing windows (`--features nakano|both`), windowed like the SOM.
+    KnnWindows {
+        /// `nakano` or `both`.
+        features: FeatureSet,
+        /// The windows.
+        windowing: NakanoWindowing,
+        /// For `both`: the window histogram's cell scaling.
+        #[serde(default)]
+        cell_scale: CellScale,
+        /// The feature scaling learned from the training windows.
+        scaling: WindowScaling,
+        /// The classifier over scaled windows.
+        knn: Knn,
+    },
+    /// C-SVC (degree-2 polynomial kernel) over rubbing windows (`--features nakano|both`).
+    SvmWindows {
+        /// `nakano` or `both`.
+        features: FeatureSet,
+        /// The windows.
+        windowing: NakanoWindowing,
+        /// For `both`: the window histogram's cell scaling.
+        #[serde(default)]
+        cell_scale: CellScale,
+        /// The feature scaling learned from the training windows.
+        scaling: WindowScaling,
+        /// The classifier over scaled windows.
+        svc: Svc,
+        /// How C was chosen; `None` when the training captures could not be cross-validated.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        c_search: Option<CSearch>,
+    },
+    /// A SOM over rubbing windows of Nakano's features and the window's histogram
+    /// (`--features both`).
+    SomWindows {
+        /// The windows.
+        windowing: NakanoWindowing,
+        /// The window histogram's cell scaling.
+        #[serde(default)]
+        cell_scale: CellScale,
+        /// The map, with its feature scaling.
+        som: Som<usize>,
+    },
+    /// One SOM per behaviour over the histograms of whole scratches (`--features spectral`).
+    SomScratches {
+        /// The histogram's cell scaling.
+        cell_scale: CellScale,
+        /// One map per behaviour seen in training.
+        behaviours: Vec<BehaviourSom>,
+    },
 }
 
 impl RecognizerBody {
     /// `som`, `knn` or `svm`.
     pub fn method(&self) -> &'static str {
         match self {
-            Self::Som { .. } => "som",
-            Self::Knn { .. } => "knn",
-            Self::Svm { .. } => "svm",
+            Self::Som { .. } | Self::SomWindows { .. } | Self::SomScratches { .. } => "som",
+            Self::Knn { .. } | Self::KnnWindows { .. } => "knn",
+            Self::Svm { .. } | Self::SvmWindows { .. } => "svm",
         }
+    }
+
+    /// The features the body's classifiers take.
+    pub fn feature_set(&self) -> FeatureSet {
+        match self {
+            Self::Som { .. } => FeatureSet::Nakano,
+            Self::Knn { .. } | Self::Svm { .. } | Self::SomScratches { .. } => FeatureSet::Spectral,
+            Self::SomWindows { .. } => FeatureSet::Both,
+            Self::KnnWindows { features, .. } | Self::SvmWindows { features, .. } => *features,
+        }
+    }
+
+    /// Whether it classifies whole scratches, one classifier per behaviour (and fuses them).
+    fn is_scratch(&self) -> bool {
+        matches!(
+            self,
+            Self::Knn { .. } | Self::Svm { .. } | Self::SomScratches { .. }
+        )
     }
 }
 
@@ -476,6 +559,10 @@ pub struct RecognizerFile {
     pub version: u32,
     /// Class names; labels inside the body index this list.
     pub classes: Vec<String>,
+    /// Which features (`nakano`, `spectral`, `both`). Absent in files written before the
+    /// choice existed: then the method's own ([`RecognizerBody::feature_set`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub features: Option<FeatureSet>,
     /// Names of the features, in vector order, with units.
     pub feature_names: Vec<String>,
     /// The classifier.
@@ -752,6 +839,7 @@ impl RecognizerFile {
             format: RECOGNIZER_FORMAT.to_owned(),
             version: RECOGNIZER_VERSION,
             classes,
+            features: Some(body.feature_set()),
             feature_names,
             body,
             training,
@@ -765,11 +853,21 @@ impl RecognizerFile {
         self.body.method()
     }
 
-    /// The windowing, for a SOM recognizer.
+    /// The features its classifiers take (see [`RecognizerFile::features`]).
+    pub fn feature_set(&self) -> FeatureSet {
+        self.features.unwrap_or_else(|| self.body.feature_set())
+    }
+
+    /// The windowing, for a recognizer over rubbing windows.
     pub fn windowing(&self) -> Option<&NakanoWindowing> {
         match &self.body {
-            RecognizerBody::Som { windowing, .. } => Some(windowing),
-            RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } => None,
+            RecognizerBody::Som { windowing, .. }
+            | RecognizerBody::KnnWindows { windowing, .. }
+            | RecognizerBody::SvmWindows { windowing, .. }
+            | RecognizerBody::SomWindows { windowing, .. } => Some(windowing),
+            RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } | RecognizerBody::SomScratches { .. } => {
+                None
+            }
         }
     }
 
@@ -798,11 +896,89 @@ impl RecognizerFile {
                     })
                     .collect()
             }
-            RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } => {
+            RecognizerBody::KnnWindows {
+                features,
+                windowing: own,
+                cell_scale,
+                scaling,
+                knn,
+            } => {
+                let windowing = windowing.unwrap_or(own);
+                self.window_decisions(capture, windowing, *features, *cell_scale, |v| {
+                    let v = scaling.apply(v);
+                    let knn_error = |source| RecognizerError::Knn {
+                        behaviour: String::new(),
+                        source,
+                    };
+                    let label = knn.predict(&v).map_err(knn_error)?;
+                    let p = knn.predict_proba(&v).map_err(knn_error)?;
+                    Ok((label, p.get(label).copied().unwrap_or(0.0)))
+                })
+            }
+            RecognizerBody::SvmWindows {
+                features,
+                windowing: own,
+                cell_scale,
+                scaling,
+                svc,
+                ..
+            } => {
+                let windowing = windowing.unwrap_or(own);
+                self.window_decisions(capture, windowing, *features, *cell_scale, |v| {
+                    let v = scaling.apply(v);
+                    let svc_error = |source| RecognizerError::Svc {
+                        behaviour: String::new(),
+                        source,
+                    };
+                    let label = svc.predict(&v).map_err(svc_error)?;
+                    let p = svc.predict_proba(&v).map_err(svc_error)?;
+                    Ok((label, p.get(label).copied().unwrap_or(0.0)))
+                })
+            }
+            RecognizerBody::SomWindows {
+                windowing: own,
+                cell_scale,
+                som,
+            } => {
+                let windowing = windowing.unwrap_or(own);
+                let mut scratch = vec![0.0; som.dim()];
+                self.window_decisions(capture, windowing, FeatureSet::Both, *cell_scale, |v| {
+                    let d = som.decide_into(v, &mut scratch)?;
+                    Ok((som.node_labels().get(d.node).copied().unwrap_or(0), d.confidence))
+                })
+            }
+            RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } | RecognizerBody::SomScratches { .. } => {
                 let (_, label, p) = self.scratch_prediction(capture, &SpectrogramPlan::new())?;
                 Ok(vec![whole_capture_decision(capture, label, &p)])
             }
         }
+    }
+
+    /// Decisions of a classifier over rubbing windows: `classify` maps a window's raw features
+    /// to a label and a confidence.
+    fn window_decisions(
+        &self,
+        capture: &LabelledCapture,
+        windowing: &NakanoWindowing,
+        features: FeatureSet,
+        cell_scale: CellScale,
+        mut classify: impl FnMut(&[f64]) -> Result<(usize, f64), RecognizerError>,
+    ) -> Result<Vec<Decision>, RecognizerError> {
+        features.check_columns(std::slice::from_ref(capture))?;
+        check_rate(capture, windowing.rate_hz)?;
+        let plan = SpectrogramPlan::new();
+        features::window_vectors(capture, windowing, features, cell_scale, &plan)?
+            .into_iter()
+            .map(|(start, v)| {
+                let (label, confidence) = classify(&v)?;
+                Ok(Decision {
+                    window_start: start,
+                    decided_at: windowing.decided_at(start),
+                    label,
+                    confidence,
+                })
+            })
+            .collect()
     }
 
     /// For a k-NN or SVM recognizer: the index of the capture's behaviour among
@@ -813,10 +989,28 @@ impl RecognizerFile {
         plan: &SpectrogramPlan,
     ) -> Result<(usize, usize, Vec<f64>), RecognizerError> {
         match &self.body {
-            RecognizerBody::Som { .. } => Err(RecognizerError::UnusableCapture {
+            RecognizerBody::Som { .. }
+            | RecognizerBody::SomWindows { .. }
+            | RecognizerBody::KnnWindows { .. }
+            | RecognizerBody::SvmWindows { .. } => Err(RecognizerError::UnusableCapture {
                 path: capture.reference.path.clone(),
-                reason: "a SOM recognizer does not classify whole scratches".into(),
+                reason: "a recognizer over rubbing windows does not classify whole scratches".into(),
             }),
+            RecognizerBody::SomScratches {
+                cell_scale,
+                behaviours,
+            } => {
+                let b = behaviour_index(behaviours, |b| &b.behaviour, capture)?;
+                let features = spectral(plan, capture, *cell_scale)?;
+                let label = *behaviours[b].som.classify(&features)?;
+                // A map answers one class: its "probabilities" are that class's indicator, so a
+                // trial's fusion is a vote weighted by the behaviours' reliabilities.
+                let mut p = vec![0.0; self.classes.len()];
+                if let Some(slot) = p.get_mut(label) {
+                    *slot = 1.0;
+                }
+                Ok((b, label, p))
+            }
             RecognizerBody::Knn {
                 cell_scale,
                 behaviours,
@@ -857,7 +1051,11 @@ impl RecognizerFile {
     /// the classifiers' order; empty for a SOM.
     pub fn reliabilities(&self) -> Vec<BehaviourReliability<'_>> {
         match &self.body {
-            RecognizerBody::Som { .. } => Vec::new(),
+            RecognizerBody::Som { .. }
+            | RecognizerBody::SomWindows { .. }
+            | RecognizerBody::KnnWindows { .. }
+            | RecognizerBody::SvmWindows { .. } => Vec::new(),
+            RecognizerBody::SomScratches { behaviours, .. } => features::som_reliabilities(behaviours),
             RecognizerBody::Knn { behaviours, .. } => behaviours
                 .iter()
                 .map(|b| BehaviourReliability {
@@ -906,7 +1104,7 @@ impl RecognizerFile {
         &self,
         captures: &[LabelledCapture],
     ) -> Result<Option<FusedEvaluation>, RecognizerError> {
-        if matches!(self.body, RecognizerBody::Som { .. }) {
+        if !self.body.is_scratch() {
             return Ok(None);
         }
         let names = self.behaviour_names();
@@ -1172,9 +1370,132 @@ impl RecognizerFile {
                     }
                 }
             }
+            RecognizerBody::KnnWindows {
+                features,
+                windowing,
+                scaling,
+                knn,
+                ..
+            } => {
+                check_window_body(*features, windowing, scaling)?;
+                knn.check_shape().map_err(|(f, r)| (format!("body.knn.{f}"), r))?;
+                if knn.classes() != self.classes.len() || knn.dim() != features.dim() {
+                    return bad(
+                        "body.knn",
+                        format!(
+                            "{} classes over {} features; the file names {} classes over {} ({features})",
+                            knn.classes(),
+                            knn.dim(),
+                            self.classes.len(),
+                            features.dim()
+                        ),
+                    );
+                }
+            }
+            RecognizerBody::SvmWindows {
+                features,
+                windowing,
+                scaling,
+                svc,
+                c_search,
+                ..
+            } => {
+                check_window_body(*features, windowing, scaling)?;
+                svc.check_shape().map_err(|(f, r)| (format!("body.svc.{f}"), r))?;
+                if svc.classes() != self.classes.len() || svc.dim() != features.dim() {
+                    return bad(
+                        "body.svc",
+                        format!(
+                            "{} classes over {} features; the file names {} classes over {} ({features})",
+                            svc.classes(),
+                            svc.dim(),
+                            self.classes.len(),
+                            features.dim()
+                        ),
+                    );
+                }
+                features::check_c_search(c_search.as_ref(), svc.params().c)?;
+            }
+            RecognizerBody::SomWindows { windowing, som, .. } => {
+                windowing
+                    .check()
+                    .map_err(|(f, r)| (format!("body.windowing.{f}"), r.to_owned()))?;
+                som.check_shape(self.classes.len())
+                    .map_err(|(f, r)| (format!("body.som.{f}"), r))?;
+                if som.dim() != FeatureSet::Both.dim() {
+                    return bad(
+                        "body.som.scaling",
+                        format!(
+                            "a map over both feature sets has {} features, not {}",
+                            FeatureSet::Both.dim(),
+                            som.dim()
+                        ),
+                    );
+                }
+            }
+            RecognizerBody::SomScratches { behaviours, .. } => {
+                if behaviours.is_empty() {
+                    return bad("body.behaviours", "no classifier".into());
+                }
+                for (i, b) in behaviours.iter().enumerate() {
+                    b.som
+                        .check_shape(self.classes.len())
+                        .map_err(|(f, r)| (format!("body.behaviours[{i}].som.{f}"), r))?;
+                    if b.som.dim() != super::spectral::FEATURE_LEN {
+                        return bad(
+                            &format!("body.behaviours[{i}].som.scaling"),
+                            format!("histograms have {} cells", super::spectral::FEATURE_LEN),
+                        );
+                    }
+                    check_reliability(b.reliability)
+                        .map_err(|r| (format!("body.behaviours[{i}].reliability"), r))?;
+                }
+            }
+        }
+        if let Some(features) = self.features
+            && features != self.body.feature_set()
+        {
+            return bad(
+                "features",
+                format!(
+                    "`{features}`, but the body is a {} over `{}` features",
+                    self.method(),
+                    self.body.feature_set()
+                ),
+            );
+        }
+        if self.feature_names.len() != self.feature_set().dim() {
+            return bad(
+                "feature_names",
+                format!(
+                    "{} names for {} features",
+                    self.feature_names.len(),
+                    self.feature_set().dim()
+                ),
+            );
         }
         Ok(())
     }
+}
+
+/// Checks the windows, features and scaling of a k-NN or SVM over rubbing windows.
+fn check_window_body(
+    features: FeatureSet,
+    windowing: &NakanoWindowing,
+    scaling: &WindowScaling,
+) -> Result<(), (String, String)> {
+    windowing
+        .check()
+        .map_err(|(f, r)| (format!("body.windowing.{f}"), r.to_owned()))?;
+    if features == FeatureSet::Spectral {
+        return Err((
+            "body.features".into(),
+            "windows carry `nakano` or `both` features".into(),
+        ));
+    }
+    scaling
+        .check(features.dim())
+        .map_err(|r| ("body.scaling".to_owned(), r))
 }
 
 /// Names of the spectrotemporal histogram's cells, time-major.
@@ -1571,6 +1892,62 @@ mod tests {
             .collect();
         let refs: Vec<&LabelledCapture> = captures.iter().collect();
         assert_eq!(trial_groups(&refs), [2, 1, 3, 1, 0, 4]);
+    }
+
+    #[test]
+    fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
+        let train = three_surfaces(4.0);
+        let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+        let knn =
+            RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 3, CellScale::Mean)
+                .expect("k-NN");
+        let svm = RecognizerFile::train_svm_windows(
+            &train,
+            windowing,
+            FeatureSet::Nakano,
+            &SvmC::auto(),
+            CellScale::Mean,
+        )
+        .expect("SVM");
+        for model in [knn, svm] {
+            assert_eq!(model.feature_set(), FeatureSet::Nakano);
+            assert_eq!(model.windowing(), Some(&windowing));
+            let json = serde_json::to_value(&model).expect("serialize");
+            assert_eq!(json["features"], "nakano");
+            let back = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("valid");
+            assert_eq!(back, model);
+            let eval = back.evaluate(&three_surfaces(3.0), None).expect("evaluate");
+            assert_eq!(eval.confusion.accuracy(), Some(1.0), "{}", model.method());
+            // The SOM's windows: the same latency.
+            assert!((eval.decision_latency_s - 0.77).abs() < 1e-12);
+            assert!(
+                back.evaluate_fused(&three_surfaces(3.0))
+                    .expect("fused")
+                    .is_none()
+            );
+            // Shapes are checked on load.
+            let mut edited = json.clone();
+            edited["body"]["scaling"]["scale"][0] = (-1.0).into();
+            let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("scale");
+            assert!(err.to_string().contains("field `body.scaling`"), "{err}");
+            let mut edited = json;
+            edited["features"] = "both".into();
+            let err =
+                RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("features");
+            assert!(err.to_string().contains("field `features`"), "{err}");
+        }
+        // No accelerometer in these captures: `both` names the capture and the columns.
+        let err = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Both, 3, CellScale::Mean)
+            .expect_err("no accelerometer");
+        assert!(
+            matches!(&err, RecognizerError::MissingColumns { missing, .. } if missing.len() == 3),
+            "{err}"
+        );
+        assert!(
+            err.to_string()
+                .starts_with("fine: `--features both` needs the columns accel_x_mps2"),
+            "{err}"
+        );
     }
 
     #[test]
