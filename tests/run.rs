@@ -43,6 +43,32 @@ fn f(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
 
+/// The report of a real-time run, measured again (up to three runs in all, a few seconds apart)
+/// while the first segment's rate misses `rate_tolerance` *and* the run shows ticks over 2 ms
+/// late. A virtual machine is sometimes descheduled for a hundred milliseconds or more, now and
+/// then for seconds on end: the loop then skips the slots it missed, and its mean rate says
+/// nothing about the loop. A slow loop that is never late still fails at once.
+fn real_time_report(rate_tolerance: f64, attempt: impl Fn() -> Value) -> Value {
+    // Gigabytes of build output may still be waiting to be written back: flush them first, so
+    // the kernel's writeback does not compete with the loop being measured.
+    let settle = || {
+        let _ = std::process::Command::new("sync").status();
+    };
+    settle();
+    let mut r = attempt();
+    for _ in 1..3 {
+        let seg = &r["segments"][0];
+        if f(&seg["rate_error"]) < rate_tolerance || f(&seg["late_over_2ms"]) == 0.0 {
+            break;
+        }
+        eprintln!("the machine stalled during the run ({seg}); measuring again");
+        std::thread::sleep(std::time::Duration::from_secs(3));
+        settle();
+        r = attempt();
+    }
+    r
+}
+
 #[test]
 fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
     let _serial = serial();
@@ -61,18 +87,7 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
         );
         report(&out)
     };
-    let mut r = attempt();
-    // A virtual machine is sometimes descheduled for a hundred milliseconds or more: the loop
-    // then skips the slots it missed, and its mean rate over 3 s says nothing about the loop.
-    // Such a run shows ticks over 2 ms late; measure once more.
-    let stalled = |r: &Value| f(&r["segments"][0]["late_over_2ms"]) > 0.0;
-    if f(&r["segments"][0]["rate_error"]) >= 0.01 && stalled(&r) {
-        eprintln!(
-            "the machine stalled during the run ({}); measuring again",
-            r["segments"][0]
-        );
-        r = attempt();
-    }
+    let r = real_time_report(0.01, attempt);
     let seg = &r["segments"][0];
     // Three seconds at 1 kHz, at the nominal rate within 1 %.
     assert!((f(&seg["duration_s"]) - 3.0).abs() < 0.01, "{seg}");
@@ -279,32 +294,36 @@ fn the_window_opens_under_xvfb_and_shows_the_needle() {
     }
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
-    let o = std::process::Command::new("xvfb-run")
-        .args([
-            "-a",
-            "-s",
-            "-screen 0 1280x720x24",
-            env!("CARGO_BIN_EXE_palpus"),
-            "run",
-        ])
-        .args([
-            "--autopilot",
-            "--duration",
-            "2.5",
-            "--report",
-            out.to_str().unwrap(),
-        ])
-        .current_dir(root())
-        .env("PALPUS_CACHE_DIR", dir.path().join("cache"))
-        .output()
-        .unwrap();
-    let printed = text(&o);
-    assert!(o.status.success(), "{printed}");
-    assert!(printed.contains("in a window"), "{printed}");
+    let attempt = || {
+        let o = std::process::Command::new("xvfb-run")
+            .args([
+                "-a",
+                "-s",
+                "-screen 0 1280x720x24",
+                env!("CARGO_BIN_EXE_palpus"),
+                "run",
+            ])
+            .args([
+                "--autopilot",
+                "--duration",
+                "2.5",
+                "--report",
+                out.to_str().unwrap(),
+            ])
+            .current_dir(root())
+            .env("PALPUS_CACHE_DIR", dir.path().join("cache"))
+            .output()
+            .unwrap();
+        let printed = text(&o);
+        assert!(o.status.success(), "{printed}");
+        assert!(printed.contains("in a window"), "{printed}");
+        report(&out)
+    };
+    let r = real_time_report(0.02, attempt);
     let shot = render::Image::load_png(&out.join("window.png")).unwrap();
     assert_eq!((shot.width, shot.height), (1280, 720));
     // The scripted trainee pushed the needle into the capsule while the window drew.
-    let seg = &report(&out)["segments"][0];
+    let seg = &r["segments"][0];
     assert!(f(&seg["max_model_force_n"]) > 0.5, "{seg}");
     assert!(f(&seg["rate_error"]) < 0.02, "{seg}");
 }
