@@ -74,7 +74,10 @@ fn live_decisions_equal_offline_decisions_without_allocating() {
     let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
     let windowing = NakanoWindowing::protocol(1000.0).expect("valid");
     let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
-    let mut live = LiveRecognizer::new(&model, 1000.0).expect("som recognizer");
+    // A copy, as a scene hands each haptic thread: it must have all its storage too.
+    let mut live = LiveRecognizer::new(&model, 1000.0)
+        .expect("som recognizer")
+        .clone();
     assert_eq!(live.classes(), model.classes.as_slice());
     let (mut compared, mut correct) = (0, 0);
     // The counter sees this thread's allocations (a control, so a zero below means something).
@@ -152,11 +155,29 @@ fn only_a_som_at_its_own_rate_runs_live() {
     for i in 0..x.len() {
         live.push(x[i], z[i], f[i]).expect("finite");
     }
-    // A NaN reaches the map one window later and is refused there, not turned into a label.
+    // A NaN is refused at once and never turned into a label; the last decision stands, and
+    // the stroke starts afresh: the samples after it give exactly the decisions a fresh
+    // recognizer makes on them.
     let before = live.current();
-    let refused = (0..2000).any(|i| live.push(x[i], f64::NAN, f[i]).is_err());
-    assert!(refused);
+    assert!(before.is_some());
+    assert!(matches!(
+        live.push(x[0], f64::NAN, f[0]),
+        Err(LiveRecognizerError::NotFinite { .. })
+    ));
     assert_eq!(live.current(), before);
+    let mut fresh = LiveRecognizer::new(&model, 1000.0).expect("som");
+    let mut decided = 0;
+    for i in 0..x.len() {
+        let recovered = live.push(x[i], z[i], f[i]).expect("finite");
+        assert_eq!(
+            recovered,
+            fresh.push(x[i], z[i], f[i]).expect("finite"),
+            "sample {i}"
+        );
+        decided += usize::from(recovered.is_some());
+    }
+    assert!(decided > 10, "{decided}");
+    assert_eq!(live.current(), fresh.current());
     live.reset();
     assert_eq!(live.current(), None);
 
@@ -188,8 +209,9 @@ fn only_a_som_at_its_own_rate_runs_live() {
 }
 
 /// The recognizer inside the haptic tick, on the simulated Omega.7 rubbing a track none of the
-/// committed recognizer's training captures used: the decisions the tick writes into the
-/// samples are exactly the offline pipeline's on the capture recorded from the same samples.
+/// committed recognizer's training captures used: the loop allocates nothing, and the
+/// decisions the tick writes into the samples are exactly the offline pipeline's on the capture
+/// recorded from the same samples.
 #[test]
 fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
     use haptics::acquire::{CaptureOptions, Protocol, controller, row, sim_device};
@@ -206,7 +228,8 @@ fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
         options.surface = surface.to_owned();
         options.track_offset_m = 0.25;
         let mut device = sim_device(&options).expect("sim");
-        let live = LiveRecognizer::new(&model, 1000.0).expect("som");
+        // A copy, as a scene hands each haptic thread.
+        let live = LiveRecognizer::new(&model, 1000.0).expect("som").clone();
         let mut c = Recognizing::new(controller(Protocol::Rubbing), live);
         let config = LoopConfig {
             pacing: Pacing::Unpaced,
@@ -221,7 +244,19 @@ fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
             samples: Some(producer),
             live: None,
         };
-        rt::run(&mut device, &mut c, &mut io, &shared, &config).expect("loop");
+        // The whole loop, recognizer inside every tick, on this thread: nothing may allocate.
+        ALLOCATIONS.store(0, Ordering::Relaxed);
+        THIS_THREAD.with(|t| t.set(true));
+        COUNTING.store(true, Ordering::Relaxed);
+        let run = rt::run(&mut device, &mut c, &mut io, &shared, &config);
+        COUNTING.store(false, Ordering::Relaxed);
+        THIS_THREAD.with(|t| t.set(false));
+        run.expect("loop");
+        assert_eq!(
+            ALLOCATIONS.load(Ordering::Relaxed),
+            0,
+            "{surface}: the haptic loop allocated"
+        );
         let mut samples = Vec::new();
         while let Ok(s) = consumer.pop() {
             samples.push(s);

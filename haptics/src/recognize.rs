@@ -40,6 +40,16 @@ pub enum LiveRecognizerError {
     /// The stream could not be built.
     #[error("feature stream")]
     Stream(#[from] NakanoError),
+    /// A sample was NaN or infinite; the stroke starts afresh from the next one.
+    #[error("non-finite sample (position {position_m} m, height {height_m} m, friction {friction_n} N)")]
+    NotFinite {
+        /// Position along the rubbing direction, m.
+        position_m: f64,
+        /// Height, m.
+        height_m: f64,
+        /// Friction, N.
+        friction_n: f64,
+    },
     /// The map refused a feature vector (a non-finite sample reached it).
     #[error("map")]
     Som(#[from] SomError),
@@ -101,14 +111,26 @@ impl LiveRecognizer {
     /// Feeds one tick: the tip's position along the rubbing direction and its height, m, and
     /// the friction (the RFOB's reaction force along x), N. Returns the new decision when this
     /// sample completes a decision window, `None` otherwise (the previous one stands, see
-    /// [`LiveRecognizer::current`]). A non-finite sample is an error and leaves the decision
-    /// as it was; [`LiveRecognizer::reset`] before the next stroke.
+    /// [`LiveRecognizer::current`]).
+    ///
+    /// A non-finite sample is an error: it would poison the stream's running sums for good, so
+    /// the stroke starts afresh from the next sample (a new window, the start travel counted
+    /// again) while the last decision stands until a new one is made.
     pub fn push(
         &mut self,
         position_m: f64,
         height_m: f64,
         friction_n: f64,
     ) -> Result<Option<LiveDecision>, LiveRecognizerError> {
+        if !(position_m.is_finite() && height_m.is_finite() && friction_n.is_finite()) {
+            self.stream.reset();
+            self.first_position_m = None;
+            return Err(LiveRecognizerError::NotFinite {
+                position_m,
+                height_m,
+                friction_n,
+            });
+        }
         let x0 = *self.first_position_m.get_or_insert(position_m);
         let Some(window) = self.stream.push(position_m, height_m, friction_n) else {
             return Ok(None);
@@ -174,8 +196,9 @@ pub fn decision_in(channels: &[f64; CHANNELS]) -> Option<(usize, f64)> {
 /// and the UI with the force it was decided beside. A stroke (a run of rubbing-phase ticks)
 /// starts the recognizer afresh, as a capture starts its windows afresh.
 ///
-/// Nothing here allocates, locks, logs or does I/O. A non-finite sample leaves the decision as
-/// it was and sets [`crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE`] on the tick.
+/// Nothing here allocates, locks, logs or does I/O. A non-finite sample sets
+/// [`crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE`] on its tick and restarts the
+/// recognizer's stroke from the next sample; the last decision stands until a new one.
 #[derive(Debug)]
 pub struct Recognizing<C> {
     inner: C,

@@ -18,8 +18,8 @@
 //! (a zero-phase high-pass: the moving average is symmetric, so it delays nothing). A moving
 //! average of length `L` has its first null at wavelength `L` and passes wavelengths much longer
 //! than `L` almost unchanged, so subtracting it keeps wavelengths shorter than `L` and removes
-//! longer ones. The default length is 2.5 mm of travel at the thesis's 5 mm/s and 1 kHz
-//! (`H` = 250): that is ISO 4288's standard roughness cut-off `λc` = 2.5 mm, it keeps the
+//! longer ones. The default length is 2.5 mm of travel at the protocol's 5 mm/s (`H` = 250 at
+//! 1 kHz; [`NakanoConfig::at_rate`] keeps the same travel at other rates): that is ISO 4288's standard roughness cut-off `λc` = 2.5 mm, it keeps the
 //! sandpapers' and styrols' roughness (wavelengths ≈ 0.3–2 mm) and removes the sheet's waviness
 //! (≳ 10 mm) and any tilt of the sample. It was chosen by that reasoning, not tuned on test runs.
 //!
@@ -205,7 +205,22 @@ impl Default for NakanoConfig {
     }
 }
 
+/// Roughness cut-off of the default filters, m of travel (ISO 4288's `λc`, see the module doc).
+pub const ROUGHNESS_CUTOFF_M: f64 = 2.5e-3;
+/// Span of the default smoothing before wave counting, m of travel.
+pub const WAVE_SMOOTHING_M: f64 = 0.2e-3;
+/// Rubbing speed of Nakano's protocol, m/s: the default filters' spans in travel become
+/// samples at this speed.
+pub const PROTOCOL_SPEED_MPS: f64 = 5e-3;
+
 impl NakanoConfig {
+    /// The default filters ([`ROUGHNESS_CUTOFF_M`], [`WAVE_SMOOTHING_M`] at
+    /// [`PROTOCOL_SPEED_MPS`]) for samples at `rate_hz`: the same travel at any rate, so a log at
+    /// 100 Hz or 10 kHz is filtered as the 1 kHz captures are (`H` = 250, `S` = 20 there).
+    pub fn at_rate(rate_hz: f64) -> Result<Self, NakanoError> {
+        Self::from_wavelengths(ROUGHNESS_CUTOFF_M, WAVE_SMOOTHING_M, PROTOCOL_SPEED_MPS, rate_hz)
+    }
+
     /// Filters given as wavelengths of travel: the detrending average spans `cutoff_m`, the
     /// smoothing spans `smoothing_m`, at rubbing speed `speed_mps` sampled at `rate_hz`.
     pub fn from_wavelengths(
@@ -376,11 +391,26 @@ pub fn capture_features(
 }
 
 /// A fixed-capacity ring: pushing into a full ring evicts and returns the oldest value.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct Ring<T> {
     buf: Vec<T>,
     capacity: usize,
     head: usize,
+}
+
+/// Reserves the whole capacity, as [`Ring::new`] does: a derived clone would reserve only the
+/// values present, so a copy of an unfed ring (a scene's recognizer, cloned for each haptic
+/// thread) would grow its storage while the haptic thread fills it.
+impl<T: Clone> Clone for Ring<T> {
+    fn clone(&self) -> Self {
+        let mut buf = Vec::with_capacity(self.capacity);
+        buf.extend_from_slice(&self.buf);
+        Self {
+            buf,
+            capacity: self.capacity,
+            head: self.head,
+        }
+    }
 }
 
 impl<T: Copy> Ring<T> {
@@ -755,6 +785,14 @@ mod tests {
         ));
         assert!(NakanoStream::new(config, 1).is_err());
         assert!(NakanoConfig::from_wavelengths(0.0, 1e-4, 5e-3, 1e3).is_err());
+        assert_eq!(
+            NakanoConfig::at_rate(1e3).expect("valid"),
+            NakanoConfig::default()
+        );
+        let slow = NakanoConfig::at_rate(100.0).expect("valid");
+        assert_eq!((slow.highpass_half_width, slow.smoothing_half_width), (25, 2));
+        let fast = NakanoConfig::at_rate(1e4).expect("valid");
+        assert_eq!((fast.highpass_half_width, fast.smoothing_half_width), (2500, 200));
         let c = NakanoConfig::from_wavelengths(2.5e-3, 0.2e-3, 5e-3, 1e3).expect("valid");
         assert_eq!((c.highpass_half_width, c.smoothing_half_width), (250, 20));
     }
@@ -840,5 +878,34 @@ mod tests {
             .last()
             .expect("windows");
         assert!((last.features[2] - 999.0 * 5e-6).abs() < 1e-12, "{last:?}");
+    }
+
+    #[test]
+    fn a_copy_of_an_unfed_stream_has_all_its_storage() {
+        let stream = NakanoStream::new(NakanoConfig::default(), 3000)
+            .expect("valid")
+            .clone();
+        let rings = [
+            (stream.heights.buf.capacity(), stream.heights.capacity),
+            (stream.roughs.buf.capacity(), stream.roughs.capacity),
+            (stream.window_rough.buf.capacity(), stream.window_rough.capacity),
+            (
+                stream.window_position.buf.capacity(),
+                stream.window_position.capacity,
+            ),
+            (
+                stream.window_friction.buf.capacity(),
+                stream.window_friction.capacity,
+            ),
+            (
+                stream.window_crossing.buf.capacity(),
+                stream.window_crossing.capacity,
+            ),
+            (stream.delayed.buf.capacity(), stream.delayed.capacity),
+        ];
+        for (reserved, capacity) in rings {
+            assert!(capacity > 0);
+            assert!(reserved >= capacity, "{reserved} < {capacity}");
+        }
     }
 }
