@@ -497,9 +497,9 @@ mod tests {
             leaves.sort();
             let mut expected: Vec<Vec<usize>> = (0..3).map(|b| members_of(&block_of, b)).collect();
             expected.sort();
+            // Splitting a block of equal similarities costs Ncut 1, above the threshold: the
+            // three blocks are the leaves.
             assert_eq!(leaves, expected, "leak {leak}\n{}", tree.to_text(&[]));
-            // Splitting a block of equal similarities costs Ncut 1, above the threshold.
-            assert!(tree.leaves().len() == 3);
         }
     }
 
