@@ -103,7 +103,105 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     // The first decision comes at 1.17 s + 3 s + 0.27 s; it is right.
     let first = report["time_to_first_correct_s"].as_f64().expect("first correct");
     assert!((4.4..4.5).contains(&first), "{report}");
-    assert!(report["flips_per_s"].as_f64().expect("flips") >= 0.0);
+    assert_flips_agree(&report);
+    // The map's fit to the held-out windows.
+    let qe = report["quantization_error"].as_f64().expect("quantization error");
+    let te = report["topographic_error"].as_f64().expect("topographic error");
+    assert!(qe > 0.0 && qe < 0.5, "{report}");
+    assert!((0.0..0.1).contains(&te), "{report}");
+
+    // Accuracy against window length: one row per window, the latency the window plus 0.27 s.
+    let out = palpus(&args(
+        &["recognize", "eval", &model_s, "--window-s", "0.5,1,2,3", "--json"],
+        &test_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    let table: Value = serde_json::from_slice(&out.stdout).expect("json table");
+    let rows = table["windows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 4);
+    for (row, window_s) in rows.iter().zip([0.5, 1.0, 2.0, 3.0]) {
+        assert_eq!(row["window_s"], window_s);
+        let latency = row["decision_latency_s"].as_f64().expect("latency");
+        assert!((latency - window_s - 0.27).abs() < 1e-12, "{row}");
+    }
+    let acc = |i: usize| rows[i]["accuracy"].as_f64().expect("accuracy");
+    assert_eq!(acc(3), accuracy);
+    assert!(acc(3) > acc(0) + 0.05, "{table}");
+    let out = palpus(&args(
+        &["recognize", "eval", &model_s, "--window-s", "0.5,3"],
+        &test_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    let shown = text(&out);
+    assert!(shown.contains("accuracy against decision window"), "{shown}");
+    assert!(
+        shown.contains("   0.50 s    0.77 s") && shown.contains("   3.00 s    3.27 s"),
+        "{shown}"
+    );
+
+    // Nakano's protocol over all three runs: each run trains in turn and the other two are
+    // held out, three maps per fold, every decision pooled.
+    let all_s = strings(&[train.clone(), test.clone()].concat());
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "cv",
+            "--method",
+            "som",
+            "--split",
+            "train-on-one",
+            "--seeds",
+            "3",
+            "--json",
+        ],
+        &all_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    let cv: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(cv["split"], "train-on-one");
+    assert_eq!(cv["folds"], 3);
+    assert_eq!(cv["rounds"], 9);
+    assert_eq!(cv["captures"], 9 * 14);
+    let total: u64 = cv["confusion"]
+        .as_array()
+        .expect("confusion")
+        .iter()
+        .flat_map(|r| r.as_array().expect("row"))
+        .map(|c| c.as_u64().expect("count"))
+        .sum();
+    assert_eq!(total, 9 * 14 * 17);
+    eprintln!(
+        "som train-on-one x 3 seeds: {:.4}, worst {:.4}",
+        cv["accuracy"].as_f64().expect("accuracy"),
+        worst_class(&cv)
+    );
+    // Measured: 96.1 %, worst surface 80.4 % (sandpaper #120, taken for #80 by the maps
+    // trained on runs 1 and 2: twelve nodes for seven surfaces leave those two without a
+    // boundary on some maps; k-NN on the same windows keeps #120 at 100 %).
+    assert!(cv["accuracy"].as_f64().expect("accuracy") >= 0.94, "{cv}");
+    assert!(worst_class(&cv) >= 0.75, "{cv}");
+    assert_eq!(cv["fused_by_count"].as_array().map(Vec::len), Some(0));
+    // A SOM's seeds matter; a k-NN's do not.
+    let out = palpus(&args(
+        &["recognize", "cv", "--method", "knn", "--seeds", "2"],
+        &all_s,
+    ));
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("--seeds 2 applies to som only"),
+        "{}",
+        text(&out)
+    );
+    let out = palpus(&args(
+        &["recognize", "cv", "--method", "som", "--folds", "4"],
+        &all_s,
+    ));
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("3 recordings") && text(&out).contains("into 4 folds"),
+        "{}",
+        text(&out)
+    );
 
     // Text output, and a shorter window on the same map.
     let out = palpus(&args(
@@ -435,6 +533,52 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         );
     }
 
+    // Sinapov's protocol itself: 10-fold cross-validation by trial over all 1050 scratches,
+    // each behaviour alone (Table II) and every combination of behaviours fused (Fig. 6).
+    let all_s = [train_s.clone(), test_s.clone()].concat();
+    let out = palpus(&args(&["recognize", "cv", "--method", "knn", "--json"], &all_s));
+    assert!(out.status.success(), "{}", text(&out));
+    let cv: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(cv["split"], "k-fold");
+    assert_eq!(
+        (cv["folds"].as_u64(), cv["rounds"].as_u64()),
+        (Some(10), Some(10))
+    );
+    assert_eq!(cv["captures"], 1050, "every scratch held out once");
+    let singles: Vec<f64> = cv["per_behaviour"]
+        .as_object()
+        .expect("per behaviour")
+        .values()
+        .map(|b| {
+            assert_eq!(b["scratches"], 210);
+            b["accuracy"].as_f64().expect("accuracy")
+        })
+        .collect();
+    assert_eq!(singles.len(), 5);
+    let by_count = cv["fused_by_count"].as_array().expect("by count");
+    let combinations: Vec<u64> = by_count
+        .iter()
+        .map(|c| c["combinations"].as_u64().expect("n"))
+        .collect();
+    assert_eq!(combinations, [5, 10, 10, 5, 1]);
+    let mean: Vec<f64> = by_count
+        .iter()
+        .map(|c| c["mean_accuracy"].as_f64().expect("mean"))
+        .collect();
+    let fused_all = cv["fused"]["accuracy"].as_f64().expect("fused");
+    let best_single = singles.iter().copied().fold(0.0, f64::max);
+    eprintln!("knn 10-fold: singles {singles:.3?}, fused by count {mean:.3?}");
+    assert_eq!(cv["fused"]["trials"], 210);
+    assert_eq!(mean[4], fused_all);
+    assert_eq!(cv["fused"]["best_single_accuracy"].as_f64(), Some(best_single));
+    assert!(fused_all > best_single, "{cv}");
+    // More behaviours, better (Fig. 6); near saturation within one trial in 210.
+    assert!(mean[1] > mean[0] + 0.01 && mean[2] > mean[1], "{mean:?}");
+    assert!(
+        mean[3] > mean[2] - 1.0 / 210.0 && mean[4] > mean[3] - 1.0 / 210.0,
+        "{mean:?}"
+    );
+
     // A C given on the command line is used as it is, with its cross-validated accuracy.
     let model = dir.path().join("svm_c100.json");
     let model_s = model.to_string_lossy().into_owned();
@@ -576,6 +720,24 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
 }
 
 /// Runs `palpus recognize eval MODEL CAPTURES --json [EXTRA…]` and returns its report.
+/// Flips and stability must agree with the accuracy: with every decision right nothing
+/// flips and each capture is stable from its first decision; with some wrong and every capture
+/// right at least once, some capture changed its mind.
+fn assert_flips_agree(report: &Value) {
+    let flips = report["flips_per_s"].as_f64().expect("flips");
+    let accuracy = report["accuracy"].as_f64().expect("accuracy");
+    if accuracy == 1.0 {
+        assert_eq!(flips, 0.0, "{report}");
+        assert_eq!(report["not_stable"], 0, "{report}");
+        assert_eq!(
+            report["time_to_stable_s"], report["time_to_first_correct_s"],
+            "{report}"
+        );
+    } else if report["never_correct"] == 0 {
+        assert!(flips > 0.0, "{report}");
+    }
+}
+
 fn eval_json(model: &str, captures: &[String], extra: &[&str]) -> Value {
     let head: Vec<&str> = ["recognize", "eval", model, "--json"]
         .into_iter()
@@ -663,7 +825,7 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
         assert!(worst >= worst_floor, "{method}: {report}");
         let first = report["time_to_first_correct_s"].as_f64().expect("first correct");
         assert!((4.4..4.6).contains(&first), "{report}");
-        assert!(report["flips_per_s"].as_f64().expect("flips") >= 0.0);
+        assert_flips_agree(&report);
         // A shorter decision window on the same classifier.
         let short = eval_json(&model_s, &test_s, &["--window-s", "1"]);
         assert_eq!(short["window_s"], 1.0);

@@ -133,8 +133,13 @@ pub(crate) struct MappedCaptures {
 }
 
 impl MappedCaptures {
-    /// Reads `paths` as labelled rubbing captures: palpus captures, or logs through the map.
-    pub(crate) fn read(&self, paths: &[PathBuf]) -> anyhow::Result<Vec<LabelledCapture>> {
+    /// Reads `paths` as labelled rubbing captures: palpus captures, or logs through the map,
+    /// resampled to `--rate-hz`, else to `default_rate_hz` (a recognizer's own rate) if given.
+    pub(crate) fn read(
+        &self,
+        paths: &[PathBuf],
+        default_rate_hz: Option<f64>,
+    ) -> anyhow::Result<Vec<LabelledCapture>> {
         let Some(spec) = &self.map else {
             return paths
                 .iter()
@@ -152,7 +157,7 @@ impl MappedCaptures {
                 let spec = ImportSpec {
                     kind: CaptureKind::Rubbing,
                     map: map.clone(),
-                    rate_hz: self.rate_hz,
+                    rate_hz: self.rate_hz.or(default_rate_hz),
                     input_rate_hz: self.input_rate_hz,
                     device: "imported".into(),
                     metadata: self

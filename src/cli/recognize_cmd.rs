@@ -9,6 +9,8 @@ use identify::recognition::model::{
     CV_FOLDS, DECISION_WINDOW_S, Evaluation, FeatureSet, FusedEvaluation, HOP_S, NakanoWindowing,
     RecognizerFile, SCRATCH_SOM_NORMALIZATION, SvmC, TRAINING_WINDOW_S, WINDOW_SVM_FALLBACK_C, som_params,
 };
+use identify::recognition::model::{LabelledCapture, RecognizerError};
+use identify::recognition::protocol::{self, SINAPOV_FOLDS, Split};
 use identify::recognition::som::SomParams;
 use identify::recognition::spectral::CellScale;
 use identify::recognition::svc::SvcParams;
@@ -27,6 +29,7 @@ pub(crate) struct RecognizeArgs {
 enum RecognizeWhat {
     Train(TrainArgs),
     Eval(EvalArgs),
+    Cv(CvArgs),
     Categorize(super::categorize_cmd::CategorizeArgs),
 }
 
@@ -62,6 +65,18 @@ struct TrainArgs {
     /// Training captures.
     #[arg(required = true)]
     captures: Vec<PathBuf>,
+    /// Write the recognizer here.
+    #[arg(long, value_name = "MODEL.json")]
+    out: PathBuf,
+    #[command(flatten)]
+    options: TrainOptions,
+    #[command(flatten)]
+    input: super::import_cmd::MappedCaptures,
+}
+
+/// What to train: the method, its features and its settings (`train` and `cv` alike).
+#[derive(Debug, Args)]
+struct TrainOptions {
     /// Which recognizer.
     #[arg(long, value_enum)]
     method: Method,
@@ -69,9 +84,6 @@ struct TrainArgs {
     /// (rubbing windows with accelerometer columns). Default: som nakano, knn and svm spectral.
     #[arg(long, value_enum, value_name = "nakano|spectral|both")]
     features: Option<Features>,
-    /// Write the recognizer here.
-    #[arg(long, value_name = "MODEL.json")]
-    out: PathBuf,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
     /// filters' 0.27 s lookahead).
     #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
@@ -86,6 +98,7 @@ struct TrainArgs {
     /// som: seed of the map's initial vectors and presentation order.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+
     /// knn: neighbours.
     #[arg(long, default_value_t = 3)]
     k: usize,
@@ -95,8 +108,6 @@ struct TrainArgs {
     /// cross-validation by run, or 10 when a surface has a single run.
     #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
     c: CArg,
-    #[command(flatten)]
-    input: super::import_cmd::MappedCaptures,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -157,9 +168,10 @@ struct EvalArgs {
     #[arg(long)]
     json: bool,
     /// Windowed recognizers (som, or --features nakano|both): decide on windows of this length
-    /// instead of the recognizer's, s.
-    #[arg(long, value_name = "S")]
-    window_s: Option<f64>,
+    /// instead of the recognizer's, s. Several, comma-separated (`0.5,1,2,3`), evaluate each
+    /// and print accuracy against window length (the trade of latency for accuracy).
+    #[arg(long, value_name = "S[,S…]", value_delimiter = ',')]
+    window_s: Vec<f64>,
     /// Also draw the confusion matrix (and, for a SOM, its topographic map and the
     /// evaluation windows' density over its nodes) as PNGs into this folder.
     #[arg(long, value_name = "DIR")]
@@ -168,77 +180,60 @@ struct EvalArgs {
     input: super::import_cmd::MappedCaptures,
 }
 
+/// Run a paper's protocol: train and evaluate again and again on captures split by recording,
+/// and pool the decisions.
+///
+/// Recordings are the captures' `trial` (else `run`, else each capture alone), dealt into
+/// --folds folds in numeric order. k-fold (Sinapov): each fold is held out once while the
+/// others train — with `palpus gen --only sinapov` and 10 folds, fold t is trial t of every
+/// surface. train-on-one (Nakano): each fold trains once and the others are held out — with
+/// Nakano's three runs per surface, one run trains and two test. --seeds trains that many maps
+/// per fold (Fig. 4.15 pools 10). Each round trains exactly as `recognize train` would.
+///
+/// For knn and svm over scratches it also scores each behaviour alone (Table II) and every
+/// combination of n behaviours fused, for each n (Fig. 6).
+#[derive(Debug, Args)]
+struct CvArgs {
+    /// All the captures: every recording of every surface.
+    #[arg(required = true)]
+    captures: Vec<PathBuf>,
+    /// How the recordings are split.
+    #[arg(long, value_enum, default_value = "k-fold")]
+    split: SplitArg,
+    /// Folds. Default: 10 for k-fold; one per recording for train-on-one.
+    #[arg(long)]
+    folds: Option<usize>,
+    /// som: maps trained per fold, seeds 0, 1, … (their decisions pooled).
+    #[arg(long, default_value_t = 1)]
+    seeds: u64,
+    /// Print one JSON object instead of the tables.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    options: TrainOptions,
+    #[command(flatten)]
+    input: super::import_cmd::MappedCaptures,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SplitArg {
+    KFold,
+    TrainOnOne,
+}
+
 pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
     match &args.what {
         RecognizeWhat::Train(args) => train(args),
         RecognizeWhat::Eval(args) => eval(args),
+        RecognizeWhat::Cv(args) => cv(args),
         RecognizeWhat::Categorize(args) => super::categorize_cmd::run(args),
     }
 }
 
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
-    let captures = args.input.read(&args.captures)?;
+    let captures = args.input.read(&args.captures, None)?;
     let start = std::time::Instant::now();
-    let features = args.features.map_or(
-        match args.method {
-            Method::Som => FeatureSet::Nakano,
-            Method::Knn | Method::Svm => FeatureSet::Spectral,
-        },
-        FeatureSet::from,
-    );
-    features.check_columns(&captures)?;
-    let windowing = || -> anyhow::Result<NakanoWindowing> {
-        let rate_hz = captures
-            .first()
-            .map(|c| c.capture.metadata().rate_hz())
-            .context("no captures")?;
-        Ok(NakanoWindowing::new(args.window_s, args.hop_s, rate_hz)?
-            .with_training_window_s(args.train_window_s)?)
-    };
-    let c = match args.c {
-        CArg::Auto => SvmC::auto(),
-        CArg::Fixed(c) => SvmC::Fixed(c),
-    };
-    let model = match (args.method, features) {
-        (Method::Som, FeatureSet::Nakano) => {
-            let params = SomParams {
-                seed: args.seed,
-                ..SomParams::default()
-            };
-            RecognizerFile::train_som(&captures, windowing()?, params)?
-        }
-        (Method::Som, FeatureSet::Both) => {
-            let params = SomParams {
-                seed: args.seed,
-                ..SomParams::default()
-            };
-            RecognizerFile::train_som_windows(&captures, windowing()?, params, CellScale::Mean)?
-        }
-        (Method::Som, FeatureSet::Spectral) => {
-            let classes = captures
-                .iter()
-                .map(|c| c.label.as_str())
-                .collect::<std::collections::BTreeSet<_>>()
-                .len();
-            let params = SomParams {
-                normalization: SCRATCH_SOM_NORMALIZATION,
-                ..som_params(classes, args.seed)
-            };
-            RecognizerFile::train_som_scratches(&captures, params, CellScale::Mean)?
-        }
-        (Method::Knn, FeatureSet::Spectral) => {
-            RecognizerFile::train_knn(&captures, KnnParams::default().k(args.k), CellScale::Mean)?
-        }
-        (Method::Knn, windowed) => {
-            RecognizerFile::train_knn_windows(&captures, windowing()?, windowed, args.k, CellScale::Mean)?
-        }
-        (Method::Svm, FeatureSet::Spectral) => {
-            RecognizerFile::train_svm(&captures, SvcParams::default(), &c, CellScale::Mean)?
-        }
-        (Method::Svm, windowed) => {
-            RecognizerFile::train_svm_windows(&captures, windowing()?, windowed, &c, CellScale::Mean)?
-        }
-    };
+    let model = train_model(&args.options, &captures, args.options.seed)?;
     let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)
@@ -253,9 +248,87 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
         model.classes.join(", "),
         args.out.display()
     );
+    if let Some(q) = model.som_quality(&captures, true)? {
+        println!(
+            "map on its {} training windows: quantization error {:.4}, topographic error {:.4}",
+            q.windows, q.quantization_error, q.topographic_error
+        );
+    }
     print_reliabilities(&model, trained_s);
     print_window_c(&model);
     Ok(())
+}
+
+/// Trains the recognizer `options` describe on `captures`, the SOM seeded with `seed`.
+///
+/// The error is boxed: it is large, and [`protocol::run`] passes it on boxed.
+fn train_model(
+    options: &TrainOptions,
+    captures: &[LabelledCapture],
+    seed: u64,
+) -> Result<RecognizerFile, Box<RecognizerError>> {
+    let features = options.feature_set();
+    features.check_columns(captures)?;
+    let windowing = || -> Result<NakanoWindowing, Box<RecognizerError>> {
+        let rate_hz = captures
+            .first()
+            .map(|c| c.capture.metadata().rate_hz())
+            .ok_or(RecognizerError::NoTrainingData)?;
+        Ok(NakanoWindowing::new(options.window_s, options.hop_s, rate_hz)?
+            .with_training_window_s(options.train_window_s)?)
+    };
+    let c = match options.c {
+        CArg::Auto => SvmC::auto(),
+        CArg::Fixed(c) => SvmC::Fixed(c),
+    };
+    let som = SomParams {
+        seed,
+        ..SomParams::default()
+    };
+    let model = match (options.method, features) {
+        (Method::Som, FeatureSet::Nakano) => RecognizerFile::train_som(captures, windowing()?, som),
+        (Method::Som, FeatureSet::Both) => {
+            RecognizerFile::train_som_windows(captures, windowing()?, som, CellScale::Mean)
+        }
+        (Method::Som, FeatureSet::Spectral) => {
+            let classes = captures
+                .iter()
+                .map(|c| c.label.as_str())
+                .collect::<std::collections::BTreeSet<_>>()
+                .len();
+            let params = SomParams {
+                normalization: SCRATCH_SOM_NORMALIZATION,
+                ..som_params(classes, seed)
+            };
+            RecognizerFile::train_som_scratches(captures, params, CellScale::Mean)
+        }
+        (Method::Knn, FeatureSet::Spectral) => {
+            RecognizerFile::train_knn(captures, KnnParams::default().k(options.k), CellScale::Mean)
+        }
+        (Method::Knn, windowed) => {
+            RecognizerFile::train_knn_windows(captures, windowing()?, windowed, options.k, CellScale::Mean)
+        }
+        (Method::Svm, FeatureSet::Spectral) => {
+            RecognizerFile::train_svm(captures, SvcParams::default(), &c, CellScale::Mean)
+        }
+        (Method::Svm, windowed) => {
+            RecognizerFile::train_svm_windows(captures, windowing()?, windowed, &c, CellScale::Mean)
+        }
+    };
+    Ok(model?)
+}
+
+impl TrainOptions {
+    /// The features asked for, else the method's own.
+    fn feature_set(&self) -> FeatureSet {
+        self.features.map_or(
+            match self.method {
+                Method::Som => FeatureSet::Nakano,
+                Method::Knn | Method::Svm => FeatureSet::Spectral,
+            },
+            FeatureSet::from,
+        )
+    }
 }
 
 /// The C of an SVM over windows, and how it was chosen.
@@ -320,16 +393,23 @@ fn print_reliabilities(model: &RecognizerFile, trained_s: f64) {
 
 fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let model = RecognizerFile::load(&args.model)?;
-    let captures = args.input.read(&args.captures)?;
-    let e = model.evaluate(&captures, args.window_s)?;
+    let captures = args
+        .input
+        .read(&args.captures, model.windowing().map(|w| w.rate_hz))?;
+    if args.window_s.len() > 1 {
+        return eval_windows(args, &model, &captures);
+    }
+    let window_s = args.window_s.first().copied();
+    let e = model.evaluate(&captures, window_s)?;
     let fused = model.evaluate_fused(&captures)?;
+    let quality = model.som_quality(&captures, false)?;
     let plots = match &args.plots {
         Some(dir) => crate::recognition_plots::write_eval_plots(
             dir,
             &model,
             &captures,
             &e.confusion.row_percent(),
-            args.window_s,
+            window_s,
         )?,
         None => Vec::new(),
     };
@@ -348,14 +428,83 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
             if let Some(f) = &fused {
                 object.insert("fused".to_owned(), fused_json(f));
             }
+            if let Some(q) = &quality {
+                object.insert("quantization_error".to_owned(), q.quantization_error.into());
+                object.insert("topographic_error".to_owned(), q.topographic_error.into());
+            }
         }
         println!("{}", serde_json::to_string_pretty(&json)?);
         return Ok(());
     }
+    print_evaluation(&e, &format!("{} on {} captures", e.method, e.captures));
+    if let Some(q) = &quality {
+        println!(
+            "map on these {} windows: quantization error {:.4}, topographic error {:.4}",
+            q.windows, q.quantization_error, q.topographic_error
+        );
+    }
+    if let Some(f) = &fused {
+        print_fused(f);
+    }
+    Ok(())
+}
+
+/// Accuracy against decision window: one evaluation per window length.
+fn eval_windows(args: &EvalArgs, model: &RecognizerFile, captures: &[LabelledCapture]) -> anyhow::Result<()> {
+    if model.windowing().is_none() {
+        anyhow::bail!(
+            "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
+            args.model.display(),
+            model.method(),
+            model.feature_set()
+        );
+    }
+    let mut evaluations = Vec::with_capacity(args.window_s.len());
+    for &w in &args.window_s {
+        evaluations.push(model.evaluate(captures, Some(w))?);
+    }
+    if args.json {
+        let rows: Vec<serde_json::Value> = evaluations.iter().map(to_json).collect();
+        let json = serde_json::json!({ "method": model.method(), "windows": rows });
+        println!("{}", serde_json::to_string_pretty(&json)?);
+        return Ok(());
+    }
     println!(
-        "{} on {} captures, {} decisions; window {:.3} s, decision latency {:.3} s",
-        e.method,
-        e.captures,
+        "{} on {} captures, accuracy against decision window:",
+        model.method(),
+        captures.len()
+    );
+    println!(
+        "{:>9} {:>9} {:>10} {:>9} {:>14} {:>14} {:>8} {:>9}",
+        "window", "latency", "accuracy", "worst", "first correct", "stable", "flips/s", "decisions"
+    );
+    let secs = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |s| format!("{s:.2} s"));
+    for e in &evaluations {
+        let worst = e
+            .confusion
+            .per_class_rates()
+            .into_iter()
+            .flatten()
+            .reduce(f64::min);
+        println!(
+            "{:>7.2} s {:>7.2} s {:>10} {:>9} {:>14} {:>14} {:>8.2} {:>9}",
+            e.window_s,
+            e.decision_latency_s,
+            percent(e.confusion.accuracy()),
+            percent(worst),
+            secs(e.time_to_first_correct_s),
+            secs(e.time_to_stable_s),
+            e.flips_per_s,
+            e.confusion.total()
+        );
+    }
+    Ok(())
+}
+
+/// An evaluation's summary line, confusion matrix and timing.
+fn print_evaluation(e: &Evaluation, what: &str) {
+    println!(
+        "{what}, {} decisions; window {:.3} s, decision latency {:.3} s",
         e.confusion.total(),
         e.window_s,
         e.decision_latency_s
@@ -370,8 +519,132 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         e.not_stable,
         e.flips_per_s
     );
-    if let Some(f) = &fused {
-        print_fused(f);
+}
+
+fn cv(args: &CvArgs) -> anyhow::Result<()> {
+    let captures = args.input.read(&args.captures, None)?;
+    if args.seeds > 1 && !matches!(args.options.method, Method::Som) {
+        anyhow::bail!(
+            "--seeds {} applies to som only: knn and svm train the same way every time",
+            args.seeds
+        );
+    }
+    let split = match (args.split, args.folds) {
+        (SplitArg::KFold, folds) => Split::KFold {
+            folds: folds.unwrap_or(SINAPOV_FOLDS),
+        },
+        (SplitArg::TrainOnOne, Some(folds)) => Split::TrainOnOne { folds },
+        (SplitArg::TrainOnOne, None) => Split::TrainOnOne {
+            folds: protocol::recordings(&captures),
+        },
+    };
+    let start = std::time::Instant::now();
+    let result = protocol::run(&captures, split, args.seeds, |train, seed| {
+        train_model(&args.options, train, seed)
+    })?;
+    let elapsed_s = start.elapsed().as_secs_f64();
+    let e = &result.evaluation;
+    let by_count = result.fused_by_count();
+    if args.json {
+        let mut json = to_json(e);
+        if let Some(object) = json.as_object_mut() {
+            object.insert("features".to_owned(), args.options.feature_set().name().into());
+            object.insert("split".to_owned(), split.name().into());
+            object.insert("folds".to_owned(), split.folds().into());
+            object.insert("seeds".to_owned(), result.seeds.into());
+            object.insert("rounds".to_owned(), result.rounds.into());
+            let per_behaviour: serde_json::Map<String, serde_json::Value> = result
+                .per_behaviour
+                .iter()
+                .map(|(b, m)| {
+                    (
+                        b.clone().unwrap_or_default(),
+                        serde_json::json!({
+                            "accuracy": m.accuracy(),
+                            "scratches": m.total(),
+                            "per_class": per_class_json(m),
+                        }),
+                    )
+                })
+                .collect();
+            object.insert("per_behaviour".to_owned(), per_behaviour.into());
+            let counts: Vec<serde_json::Value> = by_count
+                .iter()
+                .map(|c| {
+                    serde_json::json!({
+                        "behaviours": c.behaviours,
+                        "combinations": c.combinations,
+                        "mean_accuracy": c.mean_accuracy,
+                        "min_accuracy": c.min_accuracy,
+                        "max_accuracy": c.max_accuracy,
+                    })
+                })
+                .collect();
+            object.insert("fused_by_count".to_owned(), counts.into());
+            if let Some(all) = result.fused_all() {
+                object.insert(
+                    "fused".to_owned(),
+                    serde_json::json!({
+                        "accuracy": all.confusion.accuracy(),
+                        "per_class": per_class_json(&all.confusion),
+                        "confusion": all.confusion.counts(),
+                        "trials": all.confusion.total(),
+                        "best_single_accuracy": result.best_single_accuracy(),
+                    }),
+                );
+            }
+        }
+        println!("{}", serde_json::to_string_pretty(&json)?);
+        return Ok(());
+    }
+    print_evaluation(
+        e,
+        &format!(
+            "{} over {} features, {} split, {} folds x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} held-out captures",
+            e.method,
+            args.options.feature_set(),
+            split.name(),
+            split.folds(),
+            result.seeds,
+            result.rounds,
+            e.captures
+        ),
+    );
+    if result.per_behaviour.is_empty() {
+        return Ok(());
+    }
+    println!("each behaviour alone:");
+    for (b, m) in &result.per_behaviour {
+        println!(
+            "  {:<16} {:>7} of {} scratches",
+            b.as_deref().unwrap_or("(no behaviour)"),
+            percent(m.accuracy()),
+            m.total()
+        );
+    }
+    println!("behaviours fused, by how many (mean, worst and best of every combination):");
+    for c in &by_count {
+        println!(
+            "  {} ({:>2} combinations): {:>7}  [{} – {}]",
+            c.behaviours,
+            c.combinations,
+            percent(Some(c.mean_accuracy)),
+            percent(Some(c.min_accuracy)),
+            percent(Some(c.max_accuracy))
+        );
+    }
+    if let Some(all) = result.fused_all() {
+        println!(
+            "all {} fused, {} trials:",
+            all.behaviours.len(),
+            all.confusion.total()
+        );
+        print!("{}", all.confusion.to_text());
+        println!(
+            "fused {} vs best single behaviour {}",
+            percent(all.confusion.accuracy()),
+            percent(result.best_single_accuracy())
+        );
     }
     Ok(())
 }

@@ -6,6 +6,7 @@ pub mod eval;
 pub mod knn;
 pub mod model;
 pub mod nakano;
+pub mod protocol;
 pub mod som;
 pub mod spectral;
 pub mod svc;

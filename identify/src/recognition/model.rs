@@ -15,6 +15,7 @@
 //! capture's first sample, as the thesis starts recognising after 5 mm; a live recognizer fed
 //! the same samples makes its decisions on exactly these windows.
 
+use std::borrow::Borrow;
 use std::collections::BTreeSet;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
@@ -238,24 +239,30 @@ pub struct NakanoWindowing {
 }
 
 impl NakanoWindowing {
-    /// The protocol's windowing: `window_s` and `hop_s` at `rate_hz`, the default filters, and
-    /// decisions from 5 mm of travel on (thesis Sec. 4.3).
+    /// The protocol's windowing: `window_s` and `hop_s` at `rate_hz`, the filters at that rate
+    /// ([`NakanoConfig::at_rate`]: the same travel whatever the rate), and decisions from 5 mm
+    /// of travel on (thesis Sec. 4.3).
     pub fn new(window_s: f64, hop_s: f64, rate_hz: f64) -> Result<Self, RecognizerError> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
+            return Err(RecognizerError::Setting {
+                name: "rate_hz",
+                value: rate_hz,
+                reason: "positive and at most 10^6 Hz",
+            });
+        }
         let windowing = Self {
-            filters: NakanoConfig::default(),
+            filters: NakanoConfig::at_rate(rate_hz).map_err(|_| RecognizerError::Setting {
+                name: "rate_hz",
+                value: rate_hz,
+                reason: "a rate at which Nakano's filters span whole samples",
+            })?,
             window_samples: samples("window_s", window_s, rate_hz)?,
             training_window_samples: None,
             hop_samples: samples("hop_s", hop_s, rate_hz)?,
             start_travel_m: 0.005,
             rate_hz,
         };
-        windowing
-            .check()
-            .map_err(|(name, reason)| RecognizerError::Setting {
-                name,
-                value: f64::NAN,
-                reason,
-            })?;
+        windowing.check().map_err(setting_error)?;
         Ok(windowing)
     }
 
@@ -267,10 +274,12 @@ impl NakanoWindowing {
 
     /// The same windowing with a decision window of `window_s` instead.
     pub fn with_window_s(self, window_s: f64) -> Result<Self, RecognizerError> {
-        Ok(Self {
+        let windowing = Self {
             window_samples: samples("window_s", window_s, self.rate_hz)?,
             ..self
-        })
+        };
+        windowing.check().map_err(setting_error)?;
+        Ok(windowing)
     }
 
     /// The same windowing, trained on windows of `training_window_s`.
@@ -285,13 +294,7 @@ impl NakanoWindowing {
             training_window_samples: Some(samples("training_window_s", training_window_s, self.rate_hz)?),
             ..self
         };
-        windowing
-            .check()
-            .map_err(|(name, reason)| RecognizerError::Setting {
-                name,
-                value: training_window_s,
-                reason,
-            })?;
+        windowing.check().map_err(setting_error)?;
         Ok(windowing)
     }
 
@@ -309,21 +312,49 @@ impl NakanoWindowing {
         self.training().window_s()
     }
 
-    fn check(&self) -> Result<(), (&'static str, &'static str)> {
-        if self.window_samples < 2 {
-            return Err(("window_samples", "at least 2"));
+    /// The first setting out of range: its name, its value and what it must be. The bounds
+    /// keep a hand-edited recognizer file from sizing buffers past memory or overflowing the
+    /// filters' sample arithmetic.
+    fn check(&self) -> Result<(), (&'static str, f64, &'static str)> {
+        const MAX_HALF_WIDTH: usize = 1_000_000;
+        const MAX_WINDOW: usize = 10_000_000;
+        let windows = [
+            ("window_samples", Some(self.window_samples)),
+            ("training_window_samples", self.training_window_samples),
+        ];
+        for (name, n) in windows {
+            if let Some(n) = n
+                && !(2..=MAX_WINDOW).contains(&n)
+            {
+                return Err((name, n as f64, "from 2 to 10^7 samples"));
+            }
         }
-        if self.training_window_samples.is_some_and(|n| n < 2) {
-            return Err(("training_window_samples", "at least 2"));
+        if !(1..=MAX_WINDOW).contains(&self.hop_samples) {
+            return Err(("hop_samples", self.hop_samples as f64, "from 1 to 10^7 samples"));
         }
-        if self.hop_samples == 0 {
-            return Err(("hop_samples", "at least 1"));
+        let filters = [
+            ("filters.highpass_half_width", self.filters.highpass_half_width, 1),
+            (
+                "filters.smoothing_half_width",
+                self.filters.smoothing_half_width,
+                0,
+            ),
+        ];
+        for (name, n, least) in filters {
+            if !(least..=MAX_HALF_WIDTH).contains(&n) {
+                let reason = if least == 1 {
+                    "from 1 to 10^6 samples (the rate is too low for the roughness filter)"
+                } else {
+                    "at most 10^6 samples"
+                };
+                return Err((name, n as f64, reason));
+            }
         }
         if !(self.start_travel_m.is_finite() && self.start_travel_m >= 0.0) {
-            return Err(("start_travel_m", "finite and not negative"));
+            return Err(("start_travel_m", self.start_travel_m, "finite and not negative"));
         }
-        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
-            return Err(("rate_hz", "positive and finite"));
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= 1e6) {
+            return Err(("rate_hz", self.rate_hz, "positive and at most 10^6 Hz"));
         }
         Ok(())
     }
@@ -352,6 +383,10 @@ impl NakanoWindowing {
     pub fn decided_at(&self, start: usize) -> usize {
         start + self.window_samples - 1 + self.filters.lookahead_samples()
     }
+}
+
+fn setting_error((name, value, reason): (&'static str, f64, &'static str)) -> RecognizerError {
+    RecognizerError::Setting { name, value, reason }
 }
 
 fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, RecognizerError> {
@@ -625,6 +660,17 @@ impl FusedEvaluation {
             .filter_map(|b| b.confusion.accuracy())
             .reduce(f64::max)
     }
+}
+
+/// A SOM's fit to a set of windows ([`RecognizerFile::som_quality`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SomQuality {
+    /// Mean distance from each scaled window to its winner's reference vector.
+    pub quantization_error: f64,
+    /// Fraction of windows whose two best nodes are not neighbours on the line.
+    pub topographic_error: f64,
+    /// Windows measured.
+    pub windows: usize,
 }
 
 /// Result of evaluating a recognizer on labelled captures.
@@ -1100,9 +1146,9 @@ impl RecognizerFile {
     ///
     /// Groups whose behaviours all weigh 0 (each never classified a held-out trial right)
     /// are fused with equal weights instead.
-    pub fn evaluate_fused(
+    pub fn evaluate_fused<C: Borrow<LabelledCapture>>(
         &self,
-        captures: &[LabelledCapture],
+        captures: &[C],
     ) -> Result<Option<FusedEvaluation>, RecognizerError> {
         if !self.body.is_scratch() {
             return Ok(None);
@@ -1116,6 +1162,7 @@ impl RecognizerFile {
             std::collections::BTreeMap::new();
         let mut singles: Vec<(usize, TrialScratches)> = Vec::new();
         for c in captures {
+            let c = c.borrow();
             let truth = class_index(&self.classes, c)?;
             let (b, label, p) = self.scratch_prediction(c, &plan)?;
             let matrix = match &mut alone[b] {
@@ -1170,9 +1217,9 @@ impl RecognizerFile {
     }
 
     /// Evaluates on `captures`; `window_s` overrides a SOM's window length.
-    pub fn evaluate(
+    pub fn evaluate<C: Borrow<LabelledCapture>>(
         &self,
-        captures: &[LabelledCapture],
+        captures: &[C],
         window_s: Option<f64>,
     ) -> Result<Evaluation, RecognizerError> {
         let windowing = match (self.windowing(), window_s) {
@@ -1183,6 +1230,7 @@ impl RecognizerFile {
         let (mut first, mut stable) = (Vec::new(), Vec::new());
         let (mut flips, mut span_s, mut duration_s) = (0usize, 0.0, 0.0);
         for c in captures {
+            let c = c.borrow();
             let truth = class_index(&self.classes, c)?;
             let rate_hz = c.capture.metadata().rate_hz();
             duration_s += c.capture.len() as f64 / rate_hz;
@@ -1223,6 +1271,39 @@ impl RecognizerFile {
             never_correct: captures.len() - first.len(),
             not_stable: captures.len() - stable.len(),
         })
+    }
+
+    /// How well a SOM recognizer's map fits the windows of `captures` — its training windows
+    /// when `training`, else its decision windows: the quantization and topographic errors
+    /// (Kohonen's measures of fit and of order). `None` for other recognizers, or when no
+    /// capture is long enough for a window.
+    pub fn som_quality<C: Borrow<LabelledCapture>>(
+        &self,
+        captures: &[C],
+        training: bool,
+    ) -> Result<Option<SomQuality>, RecognizerError> {
+        let RecognizerBody::Som { windowing, som } = &self.body else {
+            return Ok(None);
+        };
+        let windowing = if training {
+            windowing.training()
+        } else {
+            *windowing
+        };
+        let mut data = Vec::new();
+        for c in captures {
+            let c = c.borrow();
+            check_rate(c, windowing.rate_hz)?;
+            data.extend(windows(c, &windowing)?.into_iter().map(|(_, f)| f.to_vec()));
+        }
+        if data.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(SomQuality {
+            quantization_error: som.quantization_error(&data)?,
+            topographic_error: som.topographic_error(&data)?,
+            windows: data.len(),
+        }))
     }
 
     /// Writes the recognizer atomically as pretty JSON.
@@ -1293,7 +1374,7 @@ impl RecognizerFile {
             RecognizerBody::Som { windowing, som } => {
                 windowing
                     .check()
-                    .map_err(|(f, r)| (format!("body.windowing.{f}"), r.to_owned()))?;
+                    .map_err(|(f, v, r)| (format!("body.windowing.{f}"), format!("{v} is not {r}")))?;
                 som.check_shape(self.classes.len())
                     .map_err(|(f, r)| (format!("body.som.{f}"), r))?;
                 if som.dim() != FEATURES || self.feature_names.len() != FEATURES {
@@ -1419,7 +1500,7 @@ impl RecognizerFile {
             RecognizerBody::SomWindows { windowing, som, .. } => {
                 windowing
                     .check()
-                    .map_err(|(f, r)| (format!("body.windowing.{f}"), r.to_owned()))?;
+                    .map_err(|(f, v, r)| (format!("body.windowing.{f}"), format!("{v} is not {r}")))?;
                 som.check_shape(self.classes.len())
                     .map_err(|(f, r)| (format!("body.som.{f}"), r))?;
                 if som.dim() != FeatureSet::Both.dim() {
@@ -1486,7 +1567,7 @@ fn check_window_body(
 ) -> Result<(), (String, String)> {
     windowing
         .check()
-        .map_err(|(f, r)| (format!("body.windowing.{f}"), r.to_owned()))?;
+        .map_err(|(f, v, r)| (format!("body.windowing.{f}"), format!("{v} is not {r}")))?;
     if features == FeatureSet::Spectral {
         return Err((
             "body.features".into(),
@@ -1630,6 +1711,30 @@ pub fn trial_groups(captures: &[&LabelledCapture]) -> Vec<u64> {
         .iter()
         .map(|c| match trial_of(c) {
             Some(t) => trials.binary_search(&(t.len(), t)).map_or(0, |r| r as u64),
+            None => {
+                alone += 1;
+                alone - 1
+            }
+        })
+        .collect()
+}
+
+/// Recording of each capture: its `trial`, else its `run` (both in numeric order), else a
+/// recording of its own — numbered densely from 0 — so that all windows of one recording, and
+/// all recordings of one run or trial, are held out together.
+pub fn recording_groups(captures: &[LabelledCapture]) -> Vec<u64> {
+    let key = |c: &LabelledCapture| -> Option<String> {
+        trial_of(c)
+            .or_else(|| c.capture.metadata().get("run").filter(|r| !r.is_empty()))
+            .map(str::to_owned)
+    };
+    let keys: BTreeSet<(usize, String)> = captures.iter().filter_map(key).map(|k| (k.len(), k)).collect();
+    let keys: Vec<(usize, String)> = keys.into_iter().collect();
+    let mut alone = keys.len() as u64;
+    captures
+        .iter()
+        .map(|c| match key(c) {
+            Some(k) => keys.binary_search(&(k.len(), k)).map_or(0, |r| r as u64),
             None => {
                 alone += 1;
                 alone - 1
@@ -1967,6 +2072,41 @@ mod tests {
         json["body"]["som"]["reference"][0] = serde_json::json!([1.0, 0.0]);
         let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err("shape");
         assert!(err.to_string().contains("field `body.som.reference`"), "{err}");
+        // Sizes past memory or past the filters' sample arithmetic are refused on load, with
+        // the value, not allocated or overflowed.
+        for (field, value, message) in [
+            (
+                "highpass_half_width",
+                1e18,
+                "body.windowing.filters.highpass_half_width`: 1000000000000000000 is not from 1 to 10^6",
+            ),
+            (
+                "smoothing_half_width",
+                2e6,
+                "body.windowing.filters.smoothing_half_width`: 2000000 is not at most 10^6",
+            ),
+        ] {
+            let mut json = serde_json::to_value(&model).expect("serialize");
+            json["body"]["windowing"]["filters"][field] = (value as u64).into();
+            let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err(field);
+            assert!(err.to_string().contains(message), "{err}");
+        }
+        let mut json = serde_json::to_value(&model).expect("serialize");
+        json["body"]["windowing"]["window_samples"] = 100_000_000.into();
+        let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err("window");
+        assert!(
+            err.to_string()
+                .contains("`body.windowing.window_samples`: 100000000 is not from 2 to 10^7"),
+            "{err}"
+        );
+        let err = NakanoWindowing::new(0.5, 0.1, 1000.0)
+            .and_then(|w| w.with_training_window_s(0.001))
+            .expect_err("one sample");
+        assert!(
+            err.to_string()
+                .contains("training_window_samples = 1: from 2 to 10^7"),
+            "{err}"
+        );
         let err = RecognizerFile::from_json("{\"format\": 1", Path::new("r.json")).expect_err("parse");
         assert!(matches!(err, RecognizerError::Parse { line: 1, .. }), "{err}");
         // A capture of a surface the map does not know.

@@ -27,7 +27,7 @@ use super::super::spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramP
 use super::super::svc::{CSearch, Svc, SvcError, SvcParams, select_c};
 use super::{
     BehaviourReliability, CV_FOLDS, LabelledCapture, NakanoWindowing, RecognizerBody, RecognizerError,
-    RecognizerFile, SvmC, check_rate, class_index, class_list, histogram_names, trial_of, windows,
+    RecognizerFile, SvmC, check_rate, class_index, class_list, histogram_names, windows,
 };
 use crate::svr::Kernel;
 
@@ -320,30 +320,6 @@ pub(super) fn window_vectors(
         .collect()
 }
 
-/// Cross-validation group of each capture: its `trial`, else its `run` (both in numeric
-/// order), else a group of its own — so that all windows of one recording, and all recordings of
-/// one run, are held out together.
-fn run_groups(captures: &[LabelledCapture]) -> Vec<u64> {
-    let key = |c: &LabelledCapture| -> Option<String> {
-        trial_of(c)
-            .or_else(|| c.capture.metadata().get("run").filter(|r| !r.is_empty()))
-            .map(str::to_owned)
-    };
-    let keys: BTreeSet<(usize, String)> = captures.iter().filter_map(key).map(|k| (k.len(), k)).collect();
-    let keys: Vec<(usize, String)> = keys.into_iter().collect();
-    let mut alone = keys.len() as u64;
-    captures
-        .iter()
-        .map(|c| match key(c) {
-            Some(k) => keys.binary_search(&(k.len(), k)).map_or(0, |r| r as u64),
-            None => {
-                alone += 1;
-                alone - 1
-            }
-        })
-        .collect()
-}
-
 /// Training windows of every capture: vectors, class indices, and the cross-validation group
 /// of each window (its capture's, see [`run_groups`]).
 type WindowData = (Vec<Vec<f64>>, Vec<usize>, Vec<u64>);
@@ -357,7 +333,7 @@ fn training_windows(
 ) -> Result<WindowData, RecognizerError> {
     features.check_columns(captures)?;
     let plan = SpectrogramPlan::new();
-    let groups = run_groups(captures);
+    let groups = super::recording_groups(captures);
     let training = windowing.training();
     let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
     for (c, &group) in captures.iter().zip(&groups) {
