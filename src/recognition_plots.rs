@@ -5,8 +5,11 @@
 //! * For a SOM recognizer, `som_map.png`: the 1-D map's nodes in line order coloured by their
 //!   label, the U-distance between neighbouring reference vectors above them (a peak marks a
 //!   boundary between clusters, thesis Fig. 4.12) and each node's training hits below them;
-//!   and `som_density.png`: per true class, on which nodes the evaluation windows landed
-//!   (thesis Fig. 4.13, for the evaluation data).
+//!   `som_components.png`: the map for each feature value (thesis Fig. 4.12's component
+//!   planes), each node's reference vector component by component, so a feature whose row
+//!   changes smoothly and tracks the labels dominates and two rows that rise together are
+//!   correlated; and `som_density.png`: per true class, on which nodes the evaluation windows
+//!   landed (thesis Fig. 4.13, for the evaluation data).
 //!
 //! Everything is drawn in pixel coordinates so the map's cells, the U-distance points between
 //! them and the density bars line up column for column.
@@ -113,6 +116,15 @@ pub fn write_eval_plots(
             som.node_labels(),
             som.reference_vectors(),
             &hits,
+        )?;
+        written.push(path);
+        let path = dir.join("som_components.png");
+        write_som_components(
+            &path,
+            &model.classes,
+            &model.feature_names,
+            som.node_labels(),
+            som.reference_vectors(),
         )?;
         written.push(path);
         let path = dir.join("som_density.png");
@@ -386,6 +398,104 @@ pub fn write_som_map(
         }
 
         legend(root, classes, 490, size.0 as i32)
+    })
+}
+
+const COMPONENT_TOP: i32 = 90;
+const COMPONENT_ROW: i32 = 56;
+
+/// The size of `som_components.png` for `features` features and `nodes` nodes.
+pub fn som_components_size(features: usize, nodes: usize) -> (u32, u32) {
+    (
+        som_width(nodes) + 140,
+        (COMPONENT_TOP + features.max(1) as i32 * COMPONENT_ROW + 60) as u32,
+    )
+}
+
+/// Diverging colour for `v` in `[-1, 1]`: blue below zero, white at zero, red above.
+fn diverging(v: f64) -> RGBColor {
+    let t = v.clamp(-1.0, 1.0);
+    let fade = |c: u8| (255.0 - (255.0 - f64::from(c)) * t.abs()).round() as u8;
+    if t < 0.0 {
+        RGBColor(fade(33), fade(102), fade(172))
+    } else {
+        RGBColor(fade(178), fade(24), fade(43))
+    }
+}
+
+/// Draws the component planes: one row per feature, one cell per node, coloured by the
+/// reference vector's component (the map's scaled, unit-length space; each row on its own
+/// scale, its largest magnitude printed at the right), node labels across the top.
+pub fn write_som_components(
+    path: &Path,
+    classes: &[String],
+    feature_names: &[String],
+    labels: &[usize],
+    reference: &[Vec<f64>],
+) -> Result<(), ReportError> {
+    let size = som_components_size(feature_names.len(), labels.len());
+    let left = SOM_LEFT + 90;
+    render(path, size, |root| {
+        let cw = SOM_CELL_W;
+        let n = labels.len() as i32;
+        let x_mid = |q: i32| left + q * cw + cw / 2;
+        text(
+            root,
+            "SOM map for each feature value (reference vector components)",
+            (size.0 as i32 / 2, 10),
+            &text_style(22, BLACK, HPos::Center, VPos::Top),
+        )?;
+        for (q, &label) in labels.iter().enumerate() {
+            let q = q as i32;
+            let bg = class_colour(label);
+            rect(root, (left + q * cw, 50), (left + (q + 1) * cw, 80), bg.filled())?;
+            text(
+                root,
+                classes.get(label).map_or("?", String::as_str),
+                (x_mid(q), 65),
+                &text_style(13, ink_on(bg), HPos::Center, VPos::Center),
+            )?;
+        }
+        let side = text_style(14, BLACK, HPos::Right, VPos::Center);
+        for (j, name) in feature_names.iter().enumerate() {
+            let top = COMPONENT_TOP + j as i32 * COMPONENT_ROW;
+            let bottom = top + COMPONENT_ROW - 6;
+            let values: Vec<f64> = reference
+                .iter()
+                .map(|m| m.get(j).copied().unwrap_or(0.0))
+                .collect();
+            let scale = values.iter().fold(0.0_f64, |a, v| a.max(v.abs())).max(1e-12);
+            text(root, name, (left - 10, (top + bottom) / 2), &side)?;
+            for (q, v) in values.iter().enumerate() {
+                let q = q as i32;
+                let bg = diverging(v / scale);
+                rect(
+                    root,
+                    (left + q * cw, top),
+                    (left + (q + 1) * cw, bottom),
+                    bg.filled(),
+                )?;
+                text(
+                    root,
+                    &format!("{v:+.2}"),
+                    (x_mid(q), (top + bottom) / 2),
+                    &text_style(14, ink_on(bg), HPos::Center, VPos::Center),
+                )?;
+            }
+            text(
+                root,
+                &format!("±{scale:.2}"),
+                (left + n * cw + 8, (top + bottom) / 2),
+                &text_style(13, BLACK, HPos::Left, VPos::Center),
+            )?;
+        }
+        let note_y = COMPONENT_TOP + feature_names.len() as i32 * COMPONENT_ROW + 20;
+        text(
+            root,
+            "blue: negative component, red: positive; each row scaled to its largest magnitude (right)",
+            (20, note_y),
+            &text_style(14, BLACK, HPos::Left, VPos::Center),
+        )
     })
 }
 

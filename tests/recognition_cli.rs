@@ -181,6 +181,51 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert!(cv["accuracy"].as_f64().expect("accuracy") >= 0.94, "{cv}");
     assert!(worst_class(&cv) >= 0.75, "{cv}");
     assert_eq!(cv["fused_by_count"].as_array().map(Vec::len), Some(0));
+    // Nakano's own protocol: the first run trains, the other two test, maps pooled.
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "cv",
+            "--method",
+            "som",
+            "--split",
+            "train-on-one",
+            "--fold",
+            "1",
+            "--seeds",
+            "3",
+            "--json",
+        ],
+        &all_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    let thesis: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(
+        (thesis["rounds"].as_u64(), thesis["fold"].as_u64()),
+        (Some(3), Some(1))
+    );
+    assert_eq!(thesis["captures"], 3 * 14);
+    assert!(thesis["accuracy"].as_f64().expect("accuracy") >= 0.95, "{thesis}");
+    assert!(worst_class(&thesis) >= 0.95, "{thesis}");
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "cv",
+            "--method",
+            "som",
+            "--split",
+            "train-on-one",
+            "--fold",
+            "4",
+        ],
+        &all_s,
+    ));
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("fold 4 asked for, but there are 3 folds"),
+        "{}",
+        text(&out)
+    );
     // A SOM's seeds matter; a k-NN's do not.
     let out = palpus(&args(
         &["recognize", "cv", "--method", "knn", "--seeds", "2"],
@@ -234,6 +279,10 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
             palpus::recognition_plots::confusion_size(classes),
         ),
         ("som_map.png", palpus::recognition_plots::som_map_size(nodes)),
+        (
+            "som_components.png",
+            palpus::recognition_plots::som_components_size(5, nodes),
+        ),
         (
             "som_density.png",
             palpus::recognition_plots::som_density_size(classes, nodes),

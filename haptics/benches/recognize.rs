@@ -1,6 +1,7 @@
 //! Cost of one sample through the live recognizer (goal ≤ 2 µs): the streaming features on
 //! every sample, a SOM decision every hop (100 samples) on the default 3 s windows, over a whole
-//! simulated rubbing run.
+//! simulated rubbing run; and the dearest sample alone, the one that completes a window and asks
+//! the map.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -41,6 +42,32 @@ fn bench(c: &mut Criterion) {
             }
             black_box(last)
         });
+    });
+    // The dearest sample: the one that completes a decision window and asks the map, with
+    // every window full. The recognizer is fed up to just before it (untimed), then that sample
+    // alone is timed.
+    let decisions: Vec<usize> = {
+        let mut probe = LiveRecognizer::new(&model, 1000.0).expect("som");
+        (0..x.len())
+            .filter(|&i| matches!(probe.push(x[i], z[i], f[i]), Ok(Some(_))))
+            .collect()
+    };
+    let at = decisions[decisions.len() / 2];
+    let mut before = LiveRecognizer::new(&model, 1000.0).expect("som");
+    for i in 0..at {
+        let _ = before.push(x[i], z[i], f[i]);
+    }
+    group.throughput(Throughput::Elements(1));
+    group.bench_function("deciding_sample", |b| {
+        b.iter_batched_ref(
+            || before.clone(),
+            |r| {
+                let d = r.push(black_box(x[at]), black_box(z[at]), black_box(f[at]));
+                assert!(matches!(d, Ok(Some(_))));
+                black_box(d)
+            },
+            criterion::BatchSize::LargeInput,
+        );
     });
     group.finish();
 }

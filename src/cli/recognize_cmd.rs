@@ -11,7 +11,7 @@ use identify::recognition::model::{
 };
 use identify::recognition::model::{LabelledCapture, RecognizerError};
 use identify::recognition::protocol::{self, SINAPOV_FOLDS, Split};
-use identify::recognition::som::SomParams;
+use identify::recognition::som::{Normalization, SomParams};
 use identify::recognition::spectral::CellScale;
 use identify::recognition::svc::SvcParams;
 
@@ -98,6 +98,12 @@ struct TrainOptions {
     /// som: seed of the map's initial vectors and presentation order.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// som over nakano features: how features are scaled before the map. log-within-class:
+    /// scales on a log scale, each divided by its pooled within-surface spread, unit length
+    /// (default); standardize: z-scores, unit length; thesis: Eq. 2.26, each feature divided
+    /// by its column's norm.
+    #[arg(long, value_enum, default_value = "log-within-class")]
+    scaling: ScalingArg,
 
     /// knn: neighbours.
     #[arg(long, default_value_t = 3)]
@@ -124,6 +130,13 @@ fn parse_c(text: &str) -> Result<CArg, String> {
         Ok(c) if c.is_finite() && c > 0.0 => Ok(CArg::Fixed(c)),
         _ => Err(format!("`{text}` is neither `auto` nor a positive number")),
     }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ScalingArg {
+    LogWithinClass,
+    Standardize,
+    Thesis,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -203,6 +216,10 @@ struct CvArgs {
     /// Folds. Default: 10 for k-fold; one per recording for train-on-one.
     #[arg(long)]
     folds: Option<usize>,
+    /// Run only this fold (from 1): with train-on-one, `--fold 1 --seeds 10` is Nakano's own
+    /// protocol (the first run trains, 10 maps).
+    #[arg(long)]
+    fold: Option<usize>,
     /// som: maps trained per fold, seeds 0, 1, … (their decisions pooled).
     #[arg(long, default_value_t = 1)]
     seeds: u64,
@@ -283,6 +300,11 @@ fn train_model(
     };
     let som = SomParams {
         seed,
+        normalization: match options.scaling {
+            ScalingArg::LogWithinClass => Normalization::LogWithinClass,
+            ScalingArg::Standardize => Normalization::Standardize,
+            ScalingArg::Thesis => Normalization::ThesisColumnNorm,
+        },
         ..SomParams::default()
     };
     let model = match (options.method, features) {
@@ -539,7 +561,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
         },
     };
     let start = std::time::Instant::now();
-    let result = protocol::run(&captures, split, args.seeds, |train, seed| {
+    let result = protocol::run(&captures, split, args.seeds, args.fold, |train, seed| {
         train_model(&args.options, train, seed)
     })?;
     let elapsed_s = start.elapsed().as_secs_f64();
@@ -551,6 +573,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
             object.insert("features".to_owned(), args.options.feature_set().name().into());
             object.insert("split".to_owned(), split.name().into());
             object.insert("folds".to_owned(), split.folds().into());
+            object.insert("fold".to_owned(), args.fold.into());
             object.insert("seeds".to_owned(), result.seeds.into());
             object.insert("rounds".to_owned(), result.rounds.into());
             let per_behaviour: serde_json::Map<String, serde_json::Value> = result
@@ -581,6 +604,18 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
                 })
                 .collect();
             object.insert("fused_by_count".to_owned(), counts.into());
+            let combinations: Vec<serde_json::Value> = result
+                .combinations
+                .iter()
+                .map(|c| {
+                    serde_json::json!({
+                        "behaviours": c.behaviours,
+                        "accuracy": c.confusion.accuracy(),
+                        "trials": c.confusion.total(),
+                    })
+                })
+                .collect();
+            object.insert("combinations".to_owned(), combinations.into());
             if let Some(all) = result.fused_all() {
                 object.insert(
                     "fused".to_owned(),
@@ -600,11 +635,14 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     print_evaluation(
         e,
         &format!(
-            "{} over {} features, {} split, {} folds x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} held-out captures",
+            "{} over {} features, {} split, {} x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} held-out captures",
             e.method,
             args.options.feature_set(),
             split.name(),
-            split.folds(),
+            args.fold.map_or_else(
+                || format!("{} folds", split.folds()),
+                |f| format!("fold {f} of {}", split.folds())
+            ),
             result.seeds,
             result.rounds,
             e.captures

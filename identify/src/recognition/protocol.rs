@@ -47,6 +47,14 @@ pub enum ProtocolError {
         /// Folds asked for.
         folds: usize,
     },
+    /// The fold asked for alone does not exist.
+    #[error("fold {fold} asked for, but there are {folds} folds (numbered from 1)")]
+    NoSuchFold {
+        /// The fold asked for (from 1).
+        fold: usize,
+        /// Folds in all.
+        folds: usize,
+    },
     /// At least one seed is needed.
     #[error("at least one seed is needed")]
     NoSeeds,
@@ -212,15 +220,17 @@ impl ProtocolResult {
     }
 }
 
-/// Runs `split` over `captures`, training each round's recognizer with `train(training
-/// captures, seed)` for seeds `0..seeds`.
+/// Runs `split` over `captures` — every fold, or only fold `only` (from 1) — training each
+/// round's recognizer with `train(training captures, seed)` for seeds `0..seeds`.
 ///
 /// `train` is the same call `palpus recognize train` makes, so the protocol measures exactly
-/// the recognizer a user would train.
+/// the recognizer a user would train. Nakano's own protocol is train-on-one with `only` the
+/// fold of the first run and 10 seeds.
 pub fn run<F>(
     captures: &[LabelledCapture],
     split: Split,
     seeds: u64,
+    only: Option<usize>,
     mut train: F,
 ) -> Result<ProtocolResult, ProtocolError>
 where
@@ -231,11 +241,16 @@ where
     }
     let folds = split.folds();
     let fold_of = fold_of_each(captures, folds)?;
+    if let Some(fold) = only
+        && !(1..=folds).contains(&fold)
+    {
+        return Err(ProtocolError::NoSuchFold { fold, folds });
+    }
     let mut evaluations = Vec::new();
     let mut per_behaviour: Vec<(Option<String>, ConfusionMatrix<String>)> = Vec::new();
     let mut combinations: Vec<Combination> = Vec::new();
     let mut classes: Option<Vec<String>> = None;
-    for fold in 0..folds {
+    for fold in (0..folds).filter(|f| only.is_none_or(|o| o == f + 1)) {
         let trains = |i: usize| match split {
             Split::KFold { .. } => fold_of[i] != fold,
             Split::TrainOnOne { .. } => fold_of[i] == fold,
