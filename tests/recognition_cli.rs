@@ -628,6 +628,60 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         "{mean:?}"
     );
 
+    // Sinapov's categories: each surface left out of training in turn, so every one of its
+    // 50 scratches is an error naming the known surface it resembles.
+    let categories = dir.path().join("categories");
+    let categories_s = categories.to_string_lossy().into_owned();
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "categorize",
+            "--leave-surface-out",
+            "--method",
+            "knn",
+            "--out",
+            &categories_s,
+        ],
+        &all_s,
+    ));
+    assert!(out.status.success(), "{}", text(&out));
+    let tree: Value =
+        serde_json::from_slice(&std::fs::read(categories.join("categories.json")).expect("categories"))
+            .expect("json");
+    assert_eq!(tree["decisions"], 1050);
+    assert_eq!(tree["accuracy"], 0.0, "a left-out surface can never be named");
+    let similarity = tree["similarity"].as_array().expect("similarity");
+    assert_eq!(similarity.len(), 21);
+    // Each row: its 50 errors spread over the others, symmetrised; the diagonal 1.
+    for (i, row) in similarity.iter().enumerate() {
+        assert_eq!(row[i], 1.0);
+    }
+    let leaves = leaves(&tree["tree"]);
+    let together = |a: &str, b: &str| {
+        leaves
+            .iter()
+            .any(|l| l.contains(&a.to_owned()) && l.contains(&b.to_owned()))
+    };
+    // Measured: 7 leaves, among them {air, paper_white, paper_yellow, table} and
+    // {cotton_wool, soft_cloth}.
+    assert!((4..=10).contains(&leaves.len()), "{leaves:?}");
+    assert!(together("paper_white", "paper_yellow"), "{leaves:?}");
+    assert!(together("cotton_wool", "soft_cloth"), "{leaves:?}");
+    assert!(!together("paper_white", "cotton_wool"), "{leaves:?}");
+    let out = palpus(&args(
+        &[
+            "recognize",
+            "categorize",
+            "--method",
+            "knn",
+            "--out",
+            &categories_s,
+        ],
+        &all_s,
+    ));
+    assert!(!out.status.success());
+    assert!(text(&out).contains("--leave-surface-out"), "{}", text(&out));
+
     // A C given on the command line is used as it is, with its cross-validated accuracy.
     let model = dir.path().join("svm_c100.json");
     let model_s = model.to_string_lossy().into_owned();
@@ -769,6 +823,21 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
 }
 
 /// Runs `palpus recognize eval MODEL CAPTURES --json [EXTRA…]` and returns its report.
+/// The leaf categories of a `categories.json` tree, each as its member names.
+fn leaves(node: &Value) -> Vec<Vec<String>> {
+    let children = node["children"].as_array().expect("children");
+    if children.is_empty() {
+        let members = node["members"].as_array().expect("members");
+        return vec![
+            members
+                .iter()
+                .map(|m| m.as_str().expect("name").to_owned())
+                .collect(),
+        ];
+    }
+    children.iter().flat_map(leaves).collect()
+}
+
 /// Flips and stability must agree with the accuracy: with every decision right nothing
 /// flips and each capture is stable from its first decision; with some wrong and every capture
 /// right at least once, some capture changed its mind.

@@ -10,23 +10,35 @@ use identify::recognition::category::{
     similarity_from_confusion,
 };
 use identify::recognition::model::{LabelledCapture, RecognizerFile};
+use identify::recognition::protocol::surface_confusion;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
 /// Group surfaces into a hierarchy of categories by how often the recognizer confuses them.
 ///
-/// Evaluates the recognizer on the captures, turns its confusion matrix into a similarity
+/// Evaluates the recognizer MODEL.json on the captures (or, with --leave-surface-out, trains
+/// one recognizer per surface on all the others and classifies the one left out, Sinapov's
+/// surface-based cross-validation), turns the confusion matrix into a similarity
 /// (symmetrised row rates, 1 on the diagonal), splits the surfaces recursively by Shi & Malik's
 /// normalized cut, and writes `similarity.csv`, `categories.json` and `mds.png` (ISOMAP of
 /// `1 − similarity`, or classical MDS when the neighbour graph is disconnected) to `--out`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct CategorizeArgs {
-    /// Recognizer file (`palpus recognize train`).
-    #[arg(value_name = "MODEL.json")]
-    model: PathBuf,
-    /// Labelled captures to evaluate on (captures it was not trained on, so it errs).
-    #[arg(required = true)]
-    captures: Vec<PathBuf>,
+    /// The recognizer file (`palpus recognize train`) followed by labelled captures to
+    /// evaluate it on (captures it was not trained on, so it errs); with --leave-surface-out,
+    /// the captures only.
+    #[arg(required = true, value_name = "MODEL.json] [CAPTURES")]
+    inputs: Vec<PathBuf>,
+    /// Sinapov's similarity: for each surface, train on every other surface (with --method
+    /// and the other training options of `recognize train`) and classify each scratch of the
+    /// one left out, so every decision names the known surface it resembles most.
+    #[arg(long, requires = "method")]
+    leave_surface_out: bool,
+    /// With --leave-surface-out: which recognizer to train.
+    #[arg(long, value_enum, requires = "leave_surface_out")]
+    method: Option<super::recognize_cmd::Method>,
+    #[command(flatten)]
+    training: super::recognize_cmd::TrainOptions,
     /// Folder for similarity.csv, categories.json and mds.png (created if missing).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
@@ -43,15 +55,37 @@ pub(crate) struct CategorizeArgs {
 }
 
 pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
-    let model = RecognizerFile::load(&args.model)?;
-    let captures: Vec<LabelledCapture> = args
-        .captures
-        .iter()
-        .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
-        .collect::<anyhow::Result<_>>()?;
-    let e = model.evaluate(&captures, None)?;
-    let names = e.confusion.classes().to_vec();
-    let similarity = similarity_from_confusion(e.confusion.counts())?;
+    let read = |paths: &[PathBuf]| -> anyhow::Result<Vec<LabelledCapture>> {
+        paths
+            .iter()
+            .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
+            .collect()
+    };
+    let (method, confusion) = match args.method {
+        Some(method) => {
+            let captures = read(&args.inputs)?;
+            let confusion = surface_confusion(&captures, |train, seed| {
+                super::recognize_cmd::train_model(method, &args.training, train, seed)
+            })?;
+            (
+                format!("{} trained leaving each surface out", method.name()),
+                confusion,
+            )
+        }
+        None => {
+            let [model, captures @ ..] = args.inputs.as_slice() else {
+                anyhow::bail!("give MODEL.json and captures");
+            };
+            if captures.is_empty() {
+                anyhow::bail!("give captures after {} to evaluate it on", model.display());
+            }
+            let model = RecognizerFile::load(model)?;
+            let e = model.evaluate(&read(captures)?, None)?;
+            (e.method.to_owned(), e.confusion)
+        }
+    };
+    let names = confusion.classes().to_vec();
+    let similarity = similarity_from_confusion(confusion.counts())?;
     let tree = recursive_ncut(
         &similarity,
         StopRule {
@@ -74,9 +108,9 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     write_similarity(&args.out.join("similarity.csv"), &names, &similarity)?;
     let json = serde_json::json!({
-        "method": e.method,
-        "decisions": e.confusion.total(),
-        "accuracy": e.confusion.accuracy(),
+        "method": method,
+        "decisions": confusion.total(),
+        "accuracy": confusion.accuracy(),
         "classes": names,
         "similarity": similarity,
         "stop": { "max_ncut": args.max_ncut, "min_size": args.min_size },
@@ -94,11 +128,9 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
     .with_context(|| format!("writing {}", json_path.display()))?;
     write_scatter(&args.out.join("mds.png"), &names, &points, &tree, &embedding)?;
     println!(
-        "{} on {} captures, {} decisions, accuracy {}",
-        e.method,
-        e.captures,
-        e.confusion.total(),
-        e.confusion
+        "{method}: {} decisions, accuracy {}",
+        confusion.total(),
+        confusion
             .accuracy()
             .map_or_else(|| "-".to_owned(), |a| format!("{:.1} %", 100.0 * a))
     );
@@ -376,15 +408,17 @@ mod tests {
         let model_path = dir.path().join("knn.json");
         model.save(&model_path).unwrap();
         let out = dir.path().join("cat");
-        run(&CategorizeArgs {
-            model: model_path,
-            captures: test,
-            out: out.clone(),
-            max_ncut: 0.5,
-            min_size: 2,
-            isomap_k: 3,
-        })
-        .unwrap();
+        #[derive(clap::Parser)]
+        struct Command {
+            #[command(flatten)]
+            args: CategorizeArgs,
+        }
+        let mut argv: Vec<std::ffi::OsString> = vec!["categorize".into(), model_path.into()];
+        argv.extend(test.into_iter().map(Into::into));
+        argv.extend(["--out".into(), out.clone().into()]);
+        argv.extend(["--min-size", "2", "--isomap-k", "3"].map(Into::into));
+        let command = <Command as clap::Parser>::try_parse_from(argv).unwrap();
+        run(&command.args).unwrap();
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("categories.json")).unwrap()).unwrap();
         let classes = json["classes"].as_array().unwrap();

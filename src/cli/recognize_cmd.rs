@@ -68,18 +68,19 @@ struct TrainArgs {
     /// Write the recognizer here.
     #[arg(long, value_name = "MODEL.json")]
     out: PathBuf,
+    /// Which recognizer.
+    #[arg(long, value_enum)]
+    method: Method,
     #[command(flatten)]
     options: TrainOptions,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
 
-/// What to train: the method, its features and its settings (`train` and `cv` alike).
+/// How to train, besides the method: features and settings (`train`, `cv` and `categorize`
+/// alike).
 #[derive(Debug, Args)]
-struct TrainOptions {
-    /// Which recognizer.
-    #[arg(long, value_enum)]
-    method: Method,
+pub(crate) struct TrainOptions {
     /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
     /// (rubbing windows with accelerometer columns). Default: som nakano, knn and svm spectral.
     #[arg(long, value_enum, value_name = "nakano|spectral|both")]
@@ -140,7 +141,7 @@ enum ScalingArg {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum Method {
+pub(crate) enum Method {
     Som,
     Knn,
     Svm,
@@ -226,6 +227,9 @@ struct CvArgs {
     /// Print one JSON object instead of the tables.
     #[arg(long)]
     json: bool,
+    /// Which recognizer.
+    #[arg(long, value_enum)]
+    method: Method,
     #[command(flatten)]
     options: TrainOptions,
     #[command(flatten)]
@@ -250,7 +254,7 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures, None)?;
     let start = std::time::Instant::now();
-    let model = train_model(&args.options, &captures, args.options.seed)?;
+    let model = train_model(args.method, &args.options, &captures, args.options.seed)?;
     let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)
@@ -279,12 +283,13 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
 /// Trains the recognizer `options` describe on `captures`, the SOM seeded with `seed`.
 ///
 /// The error is boxed: it is large, and [`protocol::run`] passes it on boxed.
-fn train_model(
+pub(crate) fn train_model(
+    method: Method,
     options: &TrainOptions,
     captures: &[LabelledCapture],
     seed: u64,
 ) -> Result<RecognizerFile, Box<RecognizerError>> {
-    let features = options.feature_set();
+    let features = options.feature_set(method);
     features.check_columns(captures)?;
     let windowing = || -> Result<NakanoWindowing, Box<RecognizerError>> {
         let rate_hz = captures
@@ -307,7 +312,7 @@ fn train_model(
         },
         ..SomParams::default()
     };
-    let model = match (options.method, features) {
+    let model = match (method, features) {
         (Method::Som, FeatureSet::Nakano) => RecognizerFile::train_som(captures, windowing()?, som),
         (Method::Som, FeatureSet::Both) => {
             RecognizerFile::train_som_windows(captures, windowing()?, som, CellScale::Mean)
@@ -340,11 +345,22 @@ fn train_model(
     Ok(model?)
 }
 
+impl Method {
+    /// The method's name, as `--method` spells it.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Self::Som => "som",
+            Self::Knn => "knn",
+            Self::Svm => "svm",
+        }
+    }
+}
+
 impl TrainOptions {
-    /// The features asked for, else the method's own.
-    fn feature_set(&self) -> FeatureSet {
+    /// The features asked for, else `method`'s own.
+    fn feature_set(&self, method: Method) -> FeatureSet {
         self.features.map_or(
-            match self.method {
+            match method {
                 Method::Som => FeatureSet::Nakano,
                 Method::Knn | Method::Svm => FeatureSet::Spectral,
             },
@@ -545,7 +561,7 @@ fn print_evaluation(e: &Evaluation, what: &str) {
 
 fn cv(args: &CvArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures, None)?;
-    if args.seeds > 1 && !matches!(args.options.method, Method::Som) {
+    if args.seeds > 1 && !matches!(args.method, Method::Som) {
         anyhow::bail!(
             "--seeds {} applies to som only: knn and svm train the same way every time",
             args.seeds
@@ -562,7 +578,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     };
     let start = std::time::Instant::now();
     let result = protocol::run(&captures, split, args.seeds, args.fold, |train, seed| {
-        train_model(&args.options, train, seed)
+        train_model(args.method, &args.options, train, seed)
     })?;
     let elapsed_s = start.elapsed().as_secs_f64();
     let e = &result.evaluation;
@@ -570,7 +586,10 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     if args.json {
         let mut json = to_json(e);
         if let Some(object) = json.as_object_mut() {
-            object.insert("features".to_owned(), args.options.feature_set().name().into());
+            object.insert(
+                "features".to_owned(),
+                args.options.feature_set(args.method).name().into(),
+            );
             object.insert("split".to_owned(), split.name().into());
             object.insert("folds".to_owned(), split.folds().into());
             object.insert("fold".to_owned(), args.fold.into());
@@ -637,7 +656,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
         &format!(
             "{} over {} features, {} split, {} x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} held-out captures",
             e.method,
-            args.options.feature_set(),
+            args.options.feature_set(args.method),
             split.name(),
             args.fold.map_or_else(
                 || format!("{} folds", split.folds()),

@@ -55,6 +55,12 @@ pub enum ProtocolError {
         /// Folds in all.
         folds: usize,
     },
+    /// Leaving one surface out needs at least three (two to train on).
+    #[error("{surfaces} surfaces: leaving one out needs at least 3")]
+    Surfaces {
+        /// Surfaces found.
+        surfaces: usize,
+    },
     /// At least one seed is needed.
     #[error("at least one seed is needed")]
     NoSeeds,
@@ -308,6 +314,63 @@ where
     })
 }
 
+/// Sinapov's surface-based cross-validation (Sec. IV-D): for each surface, a recognizer is
+/// trained with `train` on every other surface and classifies each decision of the left-out
+/// surface's captures, so every decision is an error and shows which known surface the unknown
+/// one resembles. Returns the confusion over all surfaces (rows: the left-out surface; its
+/// diagonal is empty), the input of [`super::category::similarity_from_confusion`].
+pub fn surface_confusion<F>(
+    captures: &[LabelledCapture],
+    mut train: F,
+) -> Result<ConfusionMatrix<String>, ProtocolError>
+where
+    F: FnMut(&[LabelledCapture], u64) -> Result<RecognizerFile, Box<RecognizerError>>,
+{
+    let surfaces: Vec<String> = captures
+        .iter()
+        .map(|c| c.label.clone())
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    if surfaces.len() < 3 {
+        return Err(ProtocolError::Surfaces {
+            surfaces: surfaces.len(),
+        });
+    }
+    let folds = surfaces.len();
+    let mut confusion = ConfusionMatrix::new(surfaces.clone()).map_err(|e| ProtocolError::Fold {
+        fold: 1,
+        folds,
+        seed: 0,
+        source: Box::new(e.into()),
+    })?;
+    for (fold, surface) in surfaces.iter().enumerate() {
+        let at = |source: Box<RecognizerError>| ProtocolError::Fold {
+            fold: fold + 1,
+            folds,
+            seed: 0,
+            source,
+        };
+        let training: Vec<LabelledCapture> =
+            captures.iter().filter(|c| c.label != *surface).cloned().collect();
+        let model = train(&training, 0).map_err(at)?;
+        for c in captures.iter().filter(|c| c.label == *surface) {
+            for d in model.decisions(c, None).map_err(|e| at(Box::new(e)))? {
+                let predicted = model.classes.get(d.label).ok_or_else(|| {
+                    at(Box::new(RecognizerError::UnusableCapture {
+                        path: c.reference.path.clone(),
+                        reason: format!("decision names class {} of {}", d.label, model.classes.len()),
+                    }))
+                })?;
+                confusion
+                    .add(surface, predicted)
+                    .map_err(|e| at(Box::new(e.into())))?;
+            }
+        }
+    }
+    Ok(confusion)
+}
+
 /// Scores a fused recognizer's behaviours on the held-out captures: each alone, and every
 /// combination fused; merged into the running totals.
 fn score_behaviours(
@@ -493,6 +556,29 @@ mod tests {
         assert!(matches!(
             fold_of_each(&runs, 1),
             Err(ProtocolError::Folds { folds: 1, .. })
+        ));
+    }
+
+    #[test]
+    fn leaving_a_surface_out_needs_three() {
+        let two = [capture("a", None), capture("b", None)];
+        let mut trained = 0;
+        let result = surface_confusion(&two, |_, _| {
+            trained += 1;
+            Err(Box::new(RecognizerError::NoTrainingData))
+        });
+        assert!(matches!(result, Err(ProtocolError::Surfaces { surfaces: 2 })));
+        assert_eq!(trained, 0);
+        // With three, a training failure names its fold.
+        let three = [capture("a", None), capture("b", None), capture("c", None)];
+        let result = surface_confusion(&three, |_, _| Err(Box::new(RecognizerError::NoTrainingData)));
+        assert!(matches!(
+            result,
+            Err(ProtocolError::Fold {
+                fold: 1,
+                folds: 3,
+                ..
+            })
         ));
     }
 
