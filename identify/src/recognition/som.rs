@@ -643,6 +643,48 @@ fn reindex(e: SomError, index: usize) -> SomError {
 mod tests {
     use super::*;
 
+    /// One presentation by hand, Eqs. 2.27–2.29 with α_i = 0.3(1 − i/Z): with Z = 2 the first
+    /// presentation moves the map with α₁ = 0.15 and the second with α₂ = 0, so the trained map
+    /// is the seeded random unit vectors after exactly one update of the thesis's rule.
+    #[test]
+    fn one_presentation_follows_the_thesis_update_rule() {
+        let data = vec![vec![1.0, 2.0, 0.5], vec![3.0, -1.0, 2.5]];
+        let params = SomParams {
+            nodes: 5,
+            iterations: 2,
+            normalization: Normalization::Standardize,
+            seed: 42,
+            ..SomParams::default()
+        };
+        let som = Som::train(params, &data, &[0u8, 1]).expect("train");
+        // The generator's draws in training's order: the initial vectors, then the input.
+        let mut rng = SplitMix64::new(42);
+        let mut reference: Vec<Vec<f64>> = (0..5)
+            .map(|_| {
+                let mut m: Vec<f64> = (0..3).map(|_| 2.0 * rng.next_f64() - 1.0).collect();
+                assert!(normalize(&mut m));
+                m
+            })
+            .collect();
+        let p = som.scaling().apply(&data[rng.below(2)]);
+        let winner = (0..5)
+            .max_by(|&a, &b| dot(&reference[a], &p).total_cmp(&dot(&reference[b], &p)))
+            .expect("nodes");
+        let alpha = 0.3 * (1.0 - 1.0 / 2.0);
+        for (q, m) in reference.iter_mut().enumerate() {
+            let d = q as f64 - winner as f64;
+            let h = alpha * (-d * d / (2.0 * 1.6 * 1.6)).exp();
+            let moved: Vec<f64> = m.iter().zip(&p).map(|(mi, pi)| mi + h * pi).collect();
+            let norm = moved.iter().map(|x| x * x).sum::<f64>().sqrt();
+            *m = moved.iter().map(|x| x / norm).collect();
+        }
+        for (q, (got, want)) in som.reference_vectors().iter().zip(&reference).enumerate() {
+            for (g, w) in got.iter().zip(want) {
+                assert!((g - w).abs() < 1e-12, "node {q}: {got:?} vs {want:?}");
+            }
+        }
+    }
+
     /// Three well-separated clusters in 3-D with features on very different scales.
     fn clusters(seed: u64, per: usize) -> (Vec<Vec<f64>>, Vec<u8>) {
         let mut rng = SplitMix64::new(seed);
