@@ -11,7 +11,6 @@ use std::sync::atomic::Ordering;
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-use anyhow::Context;
 use glam::DVec3;
 use haptics::recognize::{LiveRecognizer, channel, decision_in};
 use render::window::{Input, Key, WindowApp, WindowConfig};
@@ -181,17 +180,10 @@ impl Session {
     }
 }
 
+/// The scene's recognizer as the headless run resolves it: its file, or one trained from its
+/// folder of captures.
 fn live_recognizer(scene: &Scene) -> anyhow::Result<Option<LiveRecognizer>> {
-    let Some(section) = &scene.recognizer else {
-        return Ok(None);
-    };
-    let Some(file) = &section.file else {
-        return Ok(None);
-    };
-    let path = scene.resolve(file);
-    let model = identify::recognition::model::RecognizerFile::load(&path)
-        .with_context(|| format!("loading recognizer {}", path.display()))?;
-    Ok(Some(LiveRecognizer::new(&model, scene.device.rate_hz)?))
+    Ok(crate::recognizer::SceneRecognizer::for_scene(scene)?.map(|r| r.live()))
 }
 
 impl WindowApp for Session {

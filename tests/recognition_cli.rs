@@ -628,6 +628,16 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         "{mean:?}"
     );
 
+    // A whole-scratch recognizer has no window to change.
+    let knn_s = dir.path().join("knn.json").to_string_lossy().into_owned();
+    let out = palpus(&args(&["recognize", "eval", &knn_s, "--window-s", "1"], &test_s));
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("decides on whole captures: --window-s does not apply"),
+        "{}",
+        text(&out)
+    );
+
     // Sinapov's categories: each surface left out of training in turn, so every one of its
     // 50 scratches is an error naming the known surface it resembles.
     let categories = dir.path().join("categories");

@@ -434,6 +434,14 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let captures = args
         .input
         .read(&args.captures, model.windowing().map(|w| w.rate_hz))?;
+    if !args.window_s.is_empty() && model.windowing().is_none() {
+        anyhow::bail!(
+            "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
+            args.model.display(),
+            model.method(),
+            model.feature_set()
+        );
+    }
     if args.window_s.len() > 1 {
         return eval_windows(args, &model, &captures);
     }
@@ -489,14 +497,6 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
 
 /// Accuracy against decision window: one evaluation per window length.
 fn eval_windows(args: &EvalArgs, model: &RecognizerFile, captures: &[LabelledCapture]) -> anyhow::Result<()> {
-    if model.windowing().is_none() {
-        anyhow::bail!(
-            "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
-            args.model.display(),
-            model.method(),
-            model.feature_set()
-        );
-    }
     let mut evaluations = Vec::with_capacity(args.window_s.len());
     for &w in &args.window_s {
         evaluations.push(model.evaluate(captures, Some(w))?);
