@@ -1700,40 +1700,37 @@ fn trial_of(c: &LabelledCapture) -> Option<&str> {
 /// Groups are numbered in the trials' numeric order (shorter strings first); captures without
 /// a trial are a group each, after them.
 pub fn trial_groups(captures: &[&LabelledCapture]) -> Vec<u64> {
-    let trials: BTreeSet<(usize, &str)> = captures
-        .iter()
-        .filter_map(|c| trial_of(c))
-        .map(|t| (t.len(), t))
-        .collect();
-    let trials: Vec<(usize, &str)> = trials.into_iter().collect();
-    let mut alone = trials.len() as u64;
-    captures
-        .iter()
-        .map(|c| match trial_of(c) {
-            Some(t) => trials.binary_search(&(t.len(), t)).map_or(0, |r| r as u64),
-            None => {
-                alone += 1;
-                alone - 1
-            }
-        })
-        .collect()
+    groups_by(captures, trial_of)
 }
 
 /// Recording of each capture: its `trial`, else its `run` (both in numeric order), else a
 /// recording of its own — numbered densely from 0 — so that all windows of one recording, and
 /// all recordings of one run or trial, are held out together.
 pub fn recording_groups(captures: &[LabelledCapture]) -> Vec<u64> {
-    let key = |c: &LabelledCapture| -> Option<String> {
-        trial_of(c)
-            .or_else(|| c.capture.metadata().get("run").filter(|r| !r.is_empty()))
-            .map(str::to_owned)
-    };
-    let keys: BTreeSet<(usize, String)> = captures.iter().filter_map(key).map(|k| (k.len(), k)).collect();
-    let keys: Vec<(usize, String)> = keys.into_iter().collect();
+    groups_by(captures, recording_of)
+}
+
+/// A capture's recording: its trial, else its `run`.
+fn recording_of(c: &LabelledCapture) -> Option<&str> {
+    trial_of(c).or_else(|| c.capture.metadata().get("run").filter(|r| !r.is_empty()))
+}
+
+/// Numbers captures by `key`, densely from 0 in the keys' numeric order (shorter strings
+/// first, so trial 10 follows 9); a capture without a key is a group of its own, after them.
+fn groups_by<C: Borrow<LabelledCapture>>(
+    captures: &[C],
+    key: fn(&LabelledCapture) -> Option<&str>,
+) -> Vec<u64> {
+    let keys: BTreeSet<(usize, &str)> = captures
+        .iter()
+        .filter_map(|c| key(c.borrow()))
+        .map(|k| (k.len(), k))
+        .collect();
+    let keys: Vec<(usize, &str)> = keys.into_iter().collect();
     let mut alone = keys.len() as u64;
     captures
         .iter()
-        .map(|c| match key(c) {
+        .map(|c| match key(c.borrow()) {
             Some(k) => keys.binary_search(&(k.len(), k)).map_or(0, |r| r as u64),
             None => {
                 alone += 1;
