@@ -50,7 +50,7 @@ pub enum LiveRecognizerError {
         /// Friction, N.
         friction_n: f64,
     },
-    /// The map refused a feature vector (a non-finite sample reached it).
+    /// The map refused a feature vector.
     #[error("map")]
     Som(#[from] SomError),
 }
@@ -63,7 +63,8 @@ pub struct LiveDecision {
     /// Confidence in `[0, 1]`: half the SOM's inner-product margin over the best node of
     /// another surface.
     pub confidence: f64,
-    /// First sample (counted from 0 since construction or [`LiveRecognizer::reset`]) of the
+    /// First sample (counted from 0 since construction, [`LiveRecognizer::reset`] or a
+    /// non-finite sample, each of which starts a stroke) of the
     /// window decided on.
     pub window_start: u64,
 }

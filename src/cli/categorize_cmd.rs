@@ -34,7 +34,8 @@ pub(crate) struct CategorizeArgs {
     /// one left out, so every decision names the known surface it resembles most.
     #[arg(long, requires = "method")]
     leave_surface_out: bool,
-    /// With --leave-surface-out: which recognizer to train.
+    /// With --leave-surface-out: which recognizer to train (the training options below apply
+    /// only then).
     #[arg(long, value_enum, requires = "leave_surface_out")]
     method: Option<super::recognize_cmd::Method>,
     #[command(flatten)]
@@ -64,8 +65,9 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
     let (method, confusion) = match args.method {
         Some(method) => {
             let captures = read(&args.inputs)?;
-            let confusion = surface_confusion(&captures, |train, seed| {
-                super::recognize_cmd::train_model(method, &args.training, train, seed)
+            // One recognizer per surface, each with the given seed.
+            let confusion = surface_confusion(&captures, |train, _| {
+                super::recognize_cmd::train_model(method, &args.training, train, args.training.seed)
             })?;
             (
                 format!("{} trained leaving each surface out", method.name()),

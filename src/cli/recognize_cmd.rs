@@ -98,7 +98,7 @@ pub(crate) struct TrainOptions {
     hop_s: f64,
     /// som: seed of the map's initial vectors and presentation order.
     #[arg(long, default_value_t = 0)]
-    seed: u64,
+    pub(crate) seed: u64,
     /// som over nakano features: how features are scaled before the map. log-within-class:
     /// scales on a log scale, each divided by its pooled within-surface spread, unit length
     /// (default); standardize: z-scores, unit length; thesis: Eq. 2.26, each feature divided
@@ -221,7 +221,7 @@ struct CvArgs {
     /// protocol (the first run trains, 10 maps).
     #[arg(long)]
     fold: Option<usize>,
-    /// som: maps trained per fold, seeds 0, 1, … (their decisions pooled).
+    /// som: maps trained per fold, seeds --seed, --seed + 1, … (their decisions pooled).
     #[arg(long, default_value_t = 1)]
     seeds: u64,
     /// Print one JSON object instead of the tables.
@@ -269,7 +269,7 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
         model.classes.join(", "),
         args.out.display()
     );
-    if let Some(q) = model.som_quality(&captures, true)? {
+    if let Some(q) = model.som_quality(&captures, true, None)? {
         println!(
             "map on its {} training windows: quantization error {:.4}, topographic error {:.4}",
             q.windows, q.quantization_error, q.topographic_error
@@ -443,12 +443,15 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         );
     }
     if args.window_s.len() > 1 {
+        if args.plots.is_some() {
+            anyhow::bail!("--plots draws one evaluation: give a single --window-s with it");
+        }
         return eval_windows(args, &model, &captures);
     }
     let window_s = args.window_s.first().copied();
     let e = model.evaluate(&captures, window_s)?;
     let fused = model.evaluate_fused(&captures)?;
-    let quality = model.som_quality(&captures, false)?;
+    let quality = model.som_quality(&captures, false, window_s)?;
     let plots = match &args.plots {
         Some(dir) => crate::recognition_plots::write_eval_plots(
             dir,
@@ -578,7 +581,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     };
     let start = std::time::Instant::now();
     let result = protocol::run(&captures, split, args.seeds, args.fold, |train, seed| {
-        train_model(args.method, &args.options, train, seed)
+        train_model(args.method, &args.options, train, args.options.seed + seed)
     })?;
     let elapsed_s = start.elapsed().as_secs_f64();
     let e = &result.evaluation;
@@ -654,7 +657,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     print_evaluation(
         e,
         &format!(
-            "{} over {} features, {} split, {} x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} held-out captures",
+            "{} over {} features, {} split, {} x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} evaluations of held-out captures",
             e.method,
             args.options.feature_set(args.method),
             split.name(),

@@ -391,11 +391,11 @@ fn setting_error((name, value, reason): (&'static str, f64, &'static str)) -> Re
 
 fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, RecognizerError> {
     let n = (seconds * rate_hz).round();
-    if !(seconds.is_finite() && seconds > 0.0 && (1.0..=1e8).contains(&n)) {
+    if !(seconds.is_finite() && seconds > 0.0 && (1.0..=1e7).contains(&n)) {
         return Err(RecognizerError::Setting {
             name,
             value: seconds,
-            reason: "positive, at least one sample and at most 10^8 samples",
+            reason: "positive, at least one sample and at most 10^7 samples",
         });
     }
     Ok(n as usize)
@@ -1274,21 +1274,23 @@ impl RecognizerFile {
     }
 
     /// How well a SOM recognizer's map fits the windows of `captures` — its training windows
-    /// when `training`, else its decision windows: the quantization and topographic errors
+    /// when `training`, else its decision windows (of `window_s` when given, as
+    /// [`RecognizerFile::evaluate`] takes them): the quantization and topographic errors
     /// (Kohonen's measures of fit and of order). `None` for other recognizers, or when no
     /// capture is long enough for a window.
     pub fn som_quality<C: Borrow<LabelledCapture>>(
         &self,
         captures: &[C],
         training: bool,
+        window_s: Option<f64>,
     ) -> Result<Option<SomQuality>, RecognizerError> {
         let RecognizerBody::Som { windowing, som } = &self.body else {
             return Ok(None);
         };
-        let windowing = if training {
-            windowing.training()
-        } else {
-            *windowing
+        let windowing = match (training, window_s) {
+            (true, _) => windowing.training(),
+            (false, Some(s)) => windowing.with_window_s(s)?,
+            (false, None) => *windowing,
         };
         let mut data = Vec::new();
         for c in captures {

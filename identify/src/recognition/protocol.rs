@@ -596,8 +596,8 @@ mod tests {
             Evaluation {
                 method: "som",
                 confusion,
-                window_s: 3.0,
-                decision_latency_s: 3.27,
+                window_s: captures as f64,
+                decision_latency_s: captures as f64 + 0.27,
                 time_to_first_correct_s: first_s,
                 time_to_stable_s: first_s,
                 flips_per_s: 0.1 * captures as f64,
@@ -620,6 +620,8 @@ mod tests {
         assert!((pooled.time_to_first_correct_s.expect("some") - 5.5).abs() < 1e-12);
         // (2 × 0.2 + 4 × 0.4 + 1 × 0.1) / 7.
         assert!((pooled.flips_per_s - 2.1 / 7.0).abs() < 1e-12);
+        // Windows of 2, 4 and 1 s, weighted by their 2, 4 and 1 captures: 21 / 7 s.
+        assert!((pooled.window_s - 3.0).abs() < 1e-12);
         assert!((pooled.decision_latency_s - 3.27).abs() < 1e-12);
         assert!(pool::<Evaluation>(&[]).expect("nothing to merge").is_none());
     }

@@ -321,7 +321,7 @@ pub(super) fn window_vectors(
 }
 
 /// Training windows of every capture: vectors, class indices, and the cross-validation group
-/// of each window (its capture's, see [`run_groups`]).
+/// of each window (its capture's, see [`super::recording_groups`]).
 type WindowData = (Vec<Vec<f64>>, Vec<usize>, Vec<u64>);
 
 fn training_windows(
