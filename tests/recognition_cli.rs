@@ -207,45 +207,30 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert_eq!(thesis["captures"], 3 * 14);
     assert!(thesis["accuracy"].as_f64().expect("accuracy") >= 0.95, "{thesis}");
     assert!(worst_class(&thesis) >= 0.95, "{thesis}");
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "cv",
-            "--method",
-            "som",
-            "--split",
-            "train-on-one",
-            "--fold",
-            "4",
-        ],
-        &all_s,
-    ));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("fold 4 asked for, but there are 3 folds"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(
+            &[
+                "recognize",
+                "cv",
+                "--method",
+                "som",
+                "--split",
+                "train-on-one",
+                "--fold",
+                "4",
+            ],
+            &all_s,
+        ),
+        &["fold 4 asked for, but there are 3 folds"],
     );
     // A SOM's seeds matter; a k-NN's do not.
-    let out = palpus(&args(
-        &["recognize", "cv", "--method", "knn", "--seeds", "2"],
-        &all_s,
-    ));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("--seeds 2 applies to som only"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(&["recognize", "cv", "--method", "knn", "--seeds", "2"], &all_s),
+        &["--seeds 2 applies to som only"],
     );
-    let out = palpus(&args(
-        &["recognize", "cv", "--method", "som", "--folds", "4"],
-        &all_s,
-    ));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("3 recordings") && text(&out).contains("into 4 folds"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(&["recognize", "cv", "--method", "som", "--folds", "4"], &all_s),
+        &["3 recordings", "into 4 folds"],
     );
 
     // Text output, and a shorter window on the same map.
@@ -307,27 +292,18 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     newer["version"] = 99.into();
     let bad = dir.path().join("newer.json");
     std::fs::write(&bad, newer.to_string()).expect("write");
-    let out = palpus(&args(
-        &["recognize", "eval", &bad.to_string_lossy(), "--json"],
-        &test_s,
-    ));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("newer.json: field `version`: 99 is not supported"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(&["recognize", "eval", &bad.to_string_lossy(), "--json"], &test_s),
+        &["newer.json: field `version`: 99 is not supported"],
     );
 
     // A capture without a surface label cannot be evaluated.
     let capture = std::fs::read_to_string(&test[0]).expect("capture");
     let unlabelled = dir.path().join("unlabelled.csv");
     std::fs::write(&unlabelled, capture.replacen(" surface=", " material=", 1)).expect("write");
-    let out = palpus(&["recognize", "eval", &model_s, &unlabelled.to_string_lossy()]);
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("unlabelled.csv: metadata has no `surface`"),
-        "{}",
-        text(&out)
+    fails_with(
+        &["recognize", "eval", &model_s, &unlabelled.to_string_lossy()],
+        &["unlabelled.csv: metadata has no `surface`"],
     );
 }
 
@@ -570,15 +546,9 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         bad["body"]["behaviours"][2]["reliability"] = 1.5.into();
         let bad_path = dir.path().join(format!("{method}_bad.json"));
         std::fs::write(&bad_path, bad.to_string()).expect("write");
-        let out = palpus(&args(
-            &["recognize", "eval", &bad_path.to_string_lossy()],
-            &test_s,
-        ));
-        assert!(!out.status.success());
-        assert!(
-            text(&out).contains("field `body.behaviours[2].reliability`: 1.5 is not an accuracy in [0, 1]"),
-            "{}",
-            text(&out)
+        fails_with(
+            &args(&["recognize", "eval", &bad_path.to_string_lossy()], &test_s),
+            &["field `body.behaviours[2].reliability`: 1.5 is not an accuracy in [0, 1]"],
         );
     }
 
@@ -628,12 +598,9 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
 
     // A whole-scratch recognizer has no window to change.
     let knn_s = dir.path().join("knn.json").to_string_lossy().into_owned();
-    let out = palpus(&args(&["recognize", "eval", &knn_s, "--window-s", "1"], &test_s));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("decides on whole captures: --window-s does not apply"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(&["recognize", "eval", &knn_s, "--window-s", "1"], &test_s),
+        &["decides on whole captures: --window-s does not apply"],
     );
 
     // Sinapov's categories: each surface left out of training in turn, so every one of its
@@ -709,24 +676,21 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         assert_eq!(b["c_search"]["grid"].as_array().expect("grid").len(), 1);
         assert_eq!(b["reliability"], b["c_search"]["grid"][0]["accuracy"]);
     }
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "train",
-            "--method",
-            "svm",
-            "--c",
-            "0",
-            "--out",
-            &model_s,
-        ],
-        &train_s,
-    ));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("`0` is neither `auto` nor a positive number"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(
+            &[
+                "recognize",
+                "train",
+                "--method",
+                "svm",
+                "--c",
+                "0",
+                "--out",
+                &model_s,
+            ],
+            &train_s,
+        ),
+        &["`0` is neither `auto` nor a positive number"],
     );
     eprintln!("{:.1} s", start.elapsed().as_secs_f64());
 }
@@ -826,6 +790,16 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
 }
 
 /// Runs `palpus recognize eval MODEL CAPTURES --json [EXTRA…]` and returns its report.
+/// Runs palpus with `argv`, which must fail, printing each of `expected`.
+fn fails_with(argv: &[&str], expected: &[&str]) {
+    let out = palpus(argv);
+    assert!(!out.status.success(), "{argv:?} succeeded");
+    let shown = text(&out);
+    for e in expected {
+        assert!(shown.contains(e), "{e}: {shown}");
+    }
+}
+
 /// The leaf categories of a `categories.json` tree, each as its member names.
 fn leaves(node: &Value) -> Vec<Vec<String>> {
     let children = node["children"].as_array().expect("children");
@@ -1231,24 +1205,21 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
         );
     }
     // The generated captures alone lack the accelerometer.
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "train",
-            "--method",
-            "svm",
-            "--features",
-            "both",
-            "--out",
-            &dir.path().join("x.json").to_string_lossy(),
-        ],
-        &strings(&train),
-    ));
-    assert!(!out.status.success());
-    assert!(
-        text(&out).contains("`--features both` needs the columns accel_x_mps2"),
-        "{}",
-        text(&out)
+    fails_with(
+        &args(
+            &[
+                "recognize",
+                "train",
+                "--method",
+                "svm",
+                "--features",
+                "both",
+                "--out",
+                &dir.path().join("x.json").to_string_lossy(),
+            ],
+            &strings(&train),
+        ),
+        &["`--features both` needs the columns accel_x_mps2"],
     );
     eprintln!("took {:.1} s", start.elapsed().as_secs_f64());
 }
