@@ -90,11 +90,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
         assert!(rate.as_f64().expect("rate") >= 0.9, "{surface}: {report}");
     }
     let confusion = report["confusion"].as_array().expect("confusion");
-    let total: u64 = confusion
-        .iter()
-        .flat_map(|r| r.as_array().expect("row"))
-        .map(|c| c.as_u64().expect("count"))
-        .sum();
+    let total = decisions(confusion);
     let diagonal: u64 = (0..7).map(|i| confusion[i][i].as_u64().expect("count")).sum();
     assert!((diagonal as f64 / total as f64 - accuracy).abs() < 1e-12);
     // 14 test runs of 6100 samples; 5 mm of travel is reached at 1.1 s (after the 0.2 s ramp),
@@ -162,13 +158,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert_eq!(cv["folds"], 3);
     assert_eq!(cv["rounds"], 9);
     assert_eq!(cv["captures"], 9 * 14);
-    let total: u64 = cv["confusion"]
-        .as_array()
-        .expect("confusion")
-        .iter()
-        .flat_map(|r| r.as_array().expect("row"))
-        .map(|c| c.as_u64().expect("count"))
-        .sum();
+    let total = decisions(cv["confusion"].as_array().expect("confusion"));
     assert_eq!(total, 9 * 14 * 17);
     eprintln!(
         "som train-on-one x 3 seeds: {:.4}, worst {:.4}",
@@ -456,11 +446,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         assert_eq!(fused["multi_scratch_groups"], 63);
         assert_eq!(fused["per_class"].as_object().expect("per class").len(), 21);
         let confusion = fused["confusion"].as_array().expect("confusion");
-        let total: u64 = confusion
-            .iter()
-            .flat_map(|r| r.as_array().expect("row"))
-            .map(|c| c.as_u64().expect("count"))
-            .sum();
+        let total = decisions(confusion);
         let diagonal: u64 = (0..21).map(|i| confusion[i][i].as_u64().expect("count")).sum();
         let accuracy = fused["accuracy"].as_f64().expect("fused accuracy");
         assert_eq!(total, 63);
@@ -790,6 +776,15 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
 }
 
 /// Runs `palpus recognize eval MODEL CAPTURES --json [EXTRA…]` and returns its report.
+/// Decisions in a JSON confusion matrix: the sum of its counts.
+fn decisions(confusion: &[Value]) -> u64 {
+    confusion
+        .iter()
+        .flat_map(|r| r.as_array().expect("row"))
+        .map(|c| c.as_u64().expect("count"))
+        .sum()
+}
+
 /// Runs palpus with `argv`, which must fail, printing each of `expected`.
 fn fails_with(argv: &[&str], expected: &[&str]) {
     let out = palpus(argv);
@@ -904,11 +899,7 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
         assert_eq!(report["captures"], 14);
         assert!(report.get("fused").is_none(), "{report}");
         let confusion = report["confusion"].as_array().expect("confusion");
-        let total: u64 = confusion
-            .iter()
-            .flat_map(|r| r.as_array().expect("row"))
-            .map(|c| c.as_u64().expect("count"))
-            .sum();
+        let total = decisions(confusion);
         // The SOM's decision windows: 17 per test run.
         assert_eq!(total, 14 * 17, "{report}");
         let (accuracy, worst) = (
