@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use identify::capture::{Capture, CaptureKind};
+use capture::{Capture, CaptureKind};
 use identify::identification::{IdentifyOptions, identify};
 use identify::model_file::{ModelFile, ModelKind};
 use sha2::{Digest, Sha256};
@@ -43,7 +43,7 @@ pub enum ModelError {
         /// The scene's name for the model.
         model: String,
         /// Why.
-        source: identify::capture::CaptureError,
+        source: capture::CaptureError,
     },
     /// The model file is not valid.
     #[error("model `{model}`: {source}")]

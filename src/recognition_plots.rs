@@ -17,11 +17,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use identify::recognition::model::{LabelledCapture, RecognizerBody, RecognizerFile};
-use identify::recognition::nakano::NakanoSignals;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+use recognize::model::{LabelledCapture, RecognizerBody, RecognizerFile};
+use recognize::nakano::NakanoSignals;
 
 use crate::session::report::{ReportError, font, write_png_rgb};
 

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 #[cfg(doc)]
-use haptics::recognize::Recognizing;
-use haptics::recognize::{LiveRecognizer, channel, decision_in};
-use identify::recognition::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
-use identify::recognition::som::SomParams;
+use haptics::live_recognizer::Recognizing;
+use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
+use recognize::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
+use recognize::som::SomParams;
 
 use crate::scene::Scene;
 use crate::session::report::Recognition;

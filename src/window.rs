@@ -12,7 +12,7 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use glam::DVec3;
-use haptics::recognize::{LiveRecognizer, channel, decision_in};
+use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
 

@@ -9,8 +9,8 @@ use std::path::Path;
 
 mod common;
 
+use capture::{Capture, CaptureKind};
 use common::{palpus, text};
-use identify::capture::{Capture, CaptureKind};
 
 /// Runs `palpus import IN --kind rubbing --out OUT ARGS...` and returns the output.
 fn import(input: &Path, out: &Path, args: &[&str]) -> std::process::Output {

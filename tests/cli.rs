@@ -7,7 +7,7 @@ mod common;
 
 use common::{palpus, text};
 
-use identify::capture::{Capture, CaptureKind};
+use capture::{Capture, CaptureKind};
 
 #[test]
 fn help_explains_the_commands() {

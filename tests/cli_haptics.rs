@@ -6,7 +6,7 @@ mod common;
 
 use common::{palpus, text};
 
-use identify::capture::{Capture, CaptureKind};
+use capture::{Capture, CaptureKind};
 
 #[test]
 fn devices_reports_none_found_and_succeeds() {

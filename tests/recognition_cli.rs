@@ -690,8 +690,7 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
     let logs = dir.path().join("logs");
     // Each capture as a 2 kHz log (midpoints interpolated) in ms, mm, µm and mN, `;`-separated.
     let to_log = |path: &Path| -> PathBuf {
-        let capture = identify::capture::Capture::read_file(path, identify::capture::CaptureKind::Rubbing)
-            .expect("capture");
+        let capture = capture::Capture::read_file(path, capture::CaptureKind::Rubbing).expect("capture");
         let surface = capture.metadata().get("surface").expect("surface").to_owned();
         let run = path.file_stem().expect("stem").to_string_lossy().into_owned();
         let col = |n: &str| capture.column(n).expect("column").to_vec();
@@ -1065,7 +1064,7 @@ fn som_over_spectral_histograms_of_generated_scratch_trials() {
 /// 60 + 25 · `surface_id` Hz, amplitude-modulated with the tangential speed so it starts with
 /// the motion, and ±0.05 m/s² of deterministic noise); `accel_x` and `accel_y` are zero.
 fn with_accelerometer(src: &Path, dst: &Path) {
-    use identify::capture::{Capture, CaptureKind};
+    use capture::{Capture, CaptureKind};
     let capture = Capture::read_file(src, CaptureKind::Rubbing).expect("capture");
     let meta = capture.metadata().clone();
     let rate = meta.rate_hz();

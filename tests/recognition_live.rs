@@ -6,13 +6,13 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use haptics::recognize::{LiveRecognizer, LiveRecognizerError};
+use haptics::live_recognizer::{LiveRecognizer, LiveRecognizerError};
 use haptics::sim::protocols::nakano::{RUNS, rubbing_run};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use identify::recognition::knn::KnnParams;
-use identify::recognition::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
-use identify::recognition::som::SomParams;
-use identify::recognition::spectral::CellScale;
+use recognize::knn::KnnParams;
+use recognize::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
+use recognize::som::SomParams;
+use recognize::spectral::CellScale;
 
 /// Counts allocations made by the thread that set [`COUNTING`].
 struct CountingAllocator;
@@ -214,10 +214,10 @@ fn only_a_som_at_its_own_rate_runs_live() {
 /// recorded from the same samples.
 #[test]
 fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
+    use capture::{Capture, Metadata};
     use haptics::acquire::{CaptureOptions, Protocol, controller, row, sim_device};
-    use haptics::recognize::{Recognizing, channel, decision_in};
+    use haptics::live_recognizer::{Recognizing, channel, decision_in};
     use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest};
-    use identify::capture::{Capture, Metadata};
 
     let model_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/nakano_som.json");
     let model = RecognizerFile::load(&model_path).expect("committed recognizer");
@@ -276,8 +276,8 @@ fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
                 tick_decisions.push((data.len() - 1, decision_in(&s.channels).expect("decided")));
             }
         }
-        let meta = Metadata::new(identify::capture::CaptureKind::Rubbing, "sim-omega7", 1000.0)
-            .with("surface", surface);
+        let meta =
+            Metadata::new(capture::CaptureKind::Rubbing, "sim-omega7", 1000.0).with("surface", surface);
         let columns = Protocol::Rubbing
             .columns()
             .iter()

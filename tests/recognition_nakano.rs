@@ -6,18 +6,18 @@
 //!
 //! The training window (1000 samples = 5 mm of travel = 1 s) and the filters (2.5 mm cut-off,
 //! 0.2 mm smoothing) were chosen by reasoning before looking at the test runs (see
-//! `identify::recognition::nakano`). The map decides on longer windows (3000 samples, the
+//! `recognize::nakano`). The map decides on longer windows (3000 samples, the
 //! recognizer's default): the table of accuracy against the decision window and the feature
 //! scaling shows what that trade of latency for accuracy buys.
 #![allow(clippy::print_stdout)] // the tables are this test's report
 
 use std::sync::OnceLock;
 
+use capture::{Capture, CaptureKind};
 use haptics::sim::protocols::{CaptureSet, generate};
-use identify::capture::{Capture, CaptureKind};
-use identify::recognition::eval::ConfusionMatrix;
-use identify::recognition::nakano::{FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
-use identify::recognition::som::{Normalization, Som, SomParams};
+use recognize::eval::ConfusionMatrix;
+use recognize::nakano::{FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
+use recognize::som::{Normalization, Som, SomParams};
 
 /// Recognition starts after this much travel (thesis Sec. 4.3), m.
 const START_TRAVEL_M: f64 = 0.005;

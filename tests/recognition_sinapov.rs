@@ -8,9 +8,9 @@ use std::time::Instant;
 
 use haptics::sim::protocols::sinapov::{TRIALS, scratch_capture};
 use haptics::sim::world::scratch::{Behaviour, household_surfaces};
-use identify::recognition::knn::{BehaviourData, FeatureScaling, KnnParams, ReliabilityFusion, argmax, fuse};
-use identify::recognition::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
-use identify::recognition::svc::{Svc, SvcParams};
+use recognize::knn::{BehaviourData, FeatureScaling, KnnParams, ReliabilityFusion, argmax, fuse};
+use recognize::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
+use recognize::svc::{Svc, SvcParams};
 
 const SEED: u64 = 1;
 const FOLDS: usize = 10;

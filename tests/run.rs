@@ -174,8 +174,7 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
     // The two models agree along the trajectory the trainee took.
     let original = ModelFile::load(Path::new(report(&first)["models"][0]["path"].as_str().unwrap())).unwrap();
     let re = ModelFile::load(&reidentified).unwrap();
-    let capture =
-        identify::capture::Capture::read_file(&session, identify::capture::CaptureKind::Insertion).unwrap();
+    let capture = capture::Capture::read_file(&session, capture::CaptureKind::Insertion).unwrap();
     let (depth, velocity) = (
         capture.column("depth_m").unwrap(),
         capture.column("velocity_mps").unwrap(),

@@ -7,11 +7,11 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use haptics::recognize::LiveRecognizer;
+use haptics::live_recognizer::LiveRecognizer;
 use haptics::sim::protocols::nakano::rubbing_run;
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use identify::recognition::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
-use identify::recognition::som::SomParams;
+use recognize::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
+use recognize::som::SomParams;
 
 fn bench(c: &mut Criterion) {
     let surfaces = nakano_surfaces();

@@ -9,7 +9,7 @@
 //!   (Li & Bi Fig. 11), the rubbing controller (Nakano Table 3.1);
 //! - [`law`]: force laws over identified models (needle puncture, hard and soft friction);
 //! - [`safety`]: force limits, the NaN guard, the force gate;
-//! - [`recognize`]: the live surface recognizer (Nakano's SOM on the rubbing stream);
+//! - [`live_recognizer`]: the live surface recognizer (Nakano's SOM on the rubbing stream);
 //! - [`recorder`]: samples to capture files through a lock-free ring;
 //! - [`acquire`]: the protocols `palpus capture` runs through a device;
 //! - [`sim`]: the ground-truth world, the papers' protocols, the simulated hand.
@@ -18,7 +18,7 @@ pub mod acquire;
 pub mod control;
 pub mod device;
 pub mod law;
-pub mod recognize;
+pub mod live_recognizer;
 pub mod recorder;
 pub mod rt;
 pub mod safety;

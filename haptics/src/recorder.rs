@@ -21,7 +21,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use identify::capture::{CaptureError, CaptureErrorKind, CaptureReader, CaptureWriter, Metadata};
+use capture::{CaptureError, CaptureErrorKind, CaptureReader, CaptureWriter, Metadata};
 
 use crate::rt::HapticSample;
 
@@ -271,7 +271,7 @@ fn read_recording_from<R: BufRead>(inner: R, path: &Path) -> Result<Recording, C
 #[cfg(test)]
 mod tests {
     use super::*;
-    use identify::capture::CaptureKind;
+    use capture::CaptureKind;
 
     fn meta() -> Metadata {
         Metadata::new(CaptureKind::Insertion, "sim-omega7", 1000.0)

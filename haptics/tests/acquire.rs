@@ -4,12 +4,12 @@
 
 #![allow(clippy::unwrap_used)]
 
+use capture::Capture;
 use haptics::acquire::{CaptureOptions, Protocol, controller, run_capture, sim_device};
 use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest};
 use haptics::sim::world::friction::HardContact;
 use haptics::sim::world::needle::NeedleTissue;
 use haptics::sim::world::surface::nakano_surfaces;
-use identify::capture::Capture;
 
 fn capture(protocol: Protocol) -> Capture {
     let dir = tempfile::tempdir().unwrap();

@@ -235,7 +235,7 @@ fn rendered_needle_force_follows_the_truth_along_the_same_path() {
 /// curve.
 #[test]
 fn identified_needle_model_rendered_follows_the_truth() {
-    use identify::capture::{Capture, CaptureKind};
+    use capture::{Capture, CaptureKind};
     use identify::identification::{IdentifyOptions, identify};
     use identify::model_file::ModelKind;
     let captures = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/captures/li_bi");

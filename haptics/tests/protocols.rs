@@ -4,9 +4,9 @@
 //! the capture format (as every consumer will) and compares what is in the data with the ground
 //! truth written in the metadata.
 
+use capture::{Capture, CaptureKind};
 use haptics::sim::protocols::{CaptureSet, Split, generate, li_bi, nakano};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use identify::capture::{Capture, CaptureKind};
 
 fn truth(c: &Capture, key: &str) -> f64 {
     c.metadata()

@@ -11,10 +11,10 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use capture::{CaptureKind, Metadata};
 use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use haptics::recorder::{RecorderConfig, read_recording, record_to_file};
 use haptics::rt::{self, HapticSample, LoopConfig, LoopIo, RtRequest, ZeroForce};
-use identify::capture::{CaptureKind, Metadata};
 
 const CHILD_ENV: &str = "PALPUS_RECORDER_CHILD";
 

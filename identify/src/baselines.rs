@@ -16,10 +16,11 @@
 //! equations, which square the condition number: pressures of ~10 N next to velocities of
 //! ~0.01 m/s already give a condition number of ~10³ before squaring).
 
+use capture::rng::SplitMix64;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::svr::InputScaling;
+use svm::InputScaling;
 
 /// Why a baseline could not be fitted or evaluated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -452,30 +453,12 @@ fn grid_centres(dim: usize, k: usize) -> Result<Vec<f64>, BaselineError> {
     Ok(centres)
 }
 
-/// SplitMix64: a tiny, well-mixed generator, enough for reproducible k-means++ draws.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
 /// k-means++ seeding then Lloyd iterations on row-major `x`. Returns at most `k` centres: fewer
 /// when the data has fewer distinct points.
 fn kmeans(x: &[f64], dim: usize, k: usize, seed: u64, max_iterations: usize) -> Vec<f64> {
     let n = x.len() / dim;
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
-    let mut rng = SplitMix64(seed);
+    let mut rng = SplitMix64::new(seed);
     let first = ((rng.next_f64() * n as f64) as usize).min(n - 1);
     let mut centres: Vec<f64> = row(first).to_vec();
     let mut d2: Vec<f64> = (0..n).map(|i| squared_distance(row(i), row(first))).collect();

@@ -18,14 +18,16 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::baselines::{CoulombViscous, RbfNetwork, RbfNetworkParams};
-use crate::capture::{Capture, CaptureKind};
 use crate::metrics::Metrics;
+use capture::{Capture, CaptureKind};
+use capture::{CaptureRef, sha256_hex};
+
 use crate::model_file::{
-    CaptureRef, Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity,
-    ScaledSvr, SvrHyper, sha256_hex,
+    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity, ScaledSvr,
+    SvrHyper,
 };
-use crate::signal::pseudo_differentiate;
-use crate::svr::{InputScaling, Kernel, SvrFit, SvrParams, fit};
+use capture::signal::pseudo_differentiate;
+use svm::{InputScaling, Kernel, SvrFit, SvrParams, fit};
 
 /// Standard gravity, to express the paper's kgf hyperparameters in SI.
 pub(crate) const KGF_N: f64 = 9.806_65;
@@ -116,7 +118,7 @@ pub struct Identified {
 pub enum IdentifyError {
     /// A capture lacks what this model needs.
     #[error(transparent)]
-    Capture(#[from] crate::capture::CaptureError),
+    Capture(#[from] capture::CaptureError),
     /// The data cannot make this model.
     #[error("{}: {reason}", path.display())]
     Data {
@@ -132,7 +134,7 @@ pub enum IdentifyError {
         what: String,
         /// Why.
         #[source]
-        source: crate::svr::SvrError,
+        source: svm::SvrError,
     },
     /// A baseline failed.
     #[error("baseline {what}: {reason}")]
@@ -222,7 +224,7 @@ fn capture_ref(path: &Path) -> CaptureRef {
     }
 }
 
-fn scaled(svr: crate::svr::SvrModel, scaling: InputScaling) -> ScaledSvr {
+fn scaled(svr: svm::SvrModel, scaling: InputScaling) -> ScaledSvr {
     ScaledSvr {
         scaling,
         output_scale: 1.0,

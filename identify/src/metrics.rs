@@ -26,8 +26,8 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::signal::PAUSE_FACTOR;
-use crate::signal::median_interval_s;
+pub use capture::signal::PAUSE_FACTOR;
+use capture::signal::median_interval_s;
 
 /// The paper's observation duration T for AISE, s.
 pub const PAPER_DURATION_S: f64 = 10.0;

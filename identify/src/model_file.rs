@@ -11,11 +11,11 @@ use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 
-use crate::capture::write_atomically;
+use capture::{CaptureRef, sha256_hex, write_atomically};
+
 use crate::metrics::Metrics;
-use crate::svr::{InputScaling, Kernel, SvrModel};
+use svm::{InputScaling, Kernel, SvrModel};
 
 /// Format name in every model file.
 pub const MODEL_FORMAT: &str = "palpus-model";
@@ -92,15 +92,6 @@ pub enum ModelBody {
 pub struct Quantity {
     /// Name with unit suffix, as the capture column it comes from.
     pub name: String,
-}
-
-/// A capture a model was trained on.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CaptureRef {
-    /// Where it was read from.
-    pub path: PathBuf,
-    /// SHA-256 of its bytes.
-    pub sha256: String,
 }
 
 /// Hyperparameters, as used.
@@ -319,9 +310,4 @@ pub enum ModelFileError {
         /// Why.
         reason: String,
     },
-}
-
-/// Hex SHA-256 of `bytes`.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -10,13 +10,13 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::capture::Capture;
 use crate::identification::{
     FrictionData, IdentifyError, KGF_N, friction_data, needle_data, spread, stage_one, svr,
 };
 use crate::metrics::Metrics;
 use crate::model_file::ModelKind;
-use crate::svr::{InputScaling, Kernel};
+use capture::Capture;
+use svm::{InputScaling, Kernel};
 
 /// The grid to explore.
 #[derive(Debug, Clone, PartialEq)]

@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
-use identify::capture::{Capture, CaptureKind};
+use capture::{Capture, CaptureKind};
 use identify::identification::{IdentifyOptions, identify};
 use identify::model_file::{ModelFile, ModelFileError, ModelKind};
 

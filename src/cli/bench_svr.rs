@@ -3,20 +3,20 @@
 use std::time::Instant;
 
 use clap::Args;
-use identify::svr::{Kernel, Solver, SvrParams, fit};
 use serde_json::Value;
+use svm::{Kernel, Solver, SvrParams, fit};
 
-/// The fixtures with libsvm timings (made by identify/fixtures/make_svr_fixtures.py on this
+/// The fixtures with libsvm timings (made by svm/fixtures/make_svr_fixtures.py on this
 /// project's development machine: scikit-learn's libsvm at tol 1e-3, its default, and 1e-9).
 const FIXTURES: [&str; 3] = [
-    include_str!("../../identify/fixtures/svr_needle_c1e2.json"),
-    include_str!("../../identify/fixtures/svr_needle_c1e3.json"),
-    include_str!("../../identify/fixtures/svr_needle_c1e4.json"),
+    include_str!("../../svm/fixtures/svr_needle_c1e2.json"),
+    include_str!("../../svm/fixtures/svr_needle_c1e3.json"),
+    include_str!("../../svm/fixtures/svr_needle_c1e4.json"),
 ];
 
 /// Time ε-SVR fits on needle-like problems (n = 350, C = 1e2, 1e3, 1e4) against libsvm.
 ///
-/// libsvm's times and objectives were recorded by identify/fixtures/make_svr_fixtures.py
+/// libsvm's times and objectives were recorded by svm/fixtures/make_svr_fixtures.py
 /// (scikit-learn 1.9.1); rerun that script on the machine you benchmark on for ratios that
 /// compare like with like. Our time is the median of --repeats fits with the interior point;
 /// the objective columns show both reach the same optimum (ours is certified by its duality

@@ -5,14 +5,14 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use identify::recognition::category::{
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use recognize::category::{
     CategoryError, CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,
     similarity_from_confusion,
 };
-use identify::recognition::model::{LabelledCapture, RecognizerFile};
-use identify::recognition::protocol::surface_confusion;
-use plotters::prelude::*;
-use plotters::style::FontStyle;
+use recognize::model::{LabelledCapture, RecognizerFile};
+use recognize::protocol::surface_confusion;
 
 /// Group surfaces into a hierarchy of categories by how often the recognizer confuses them.
 ///
@@ -123,7 +123,7 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
         },
     });
     let json_path = args.out.join("categories.json");
-    identify::capture::write_atomically(&json_path, |w| {
+    capture::write_atomically(&json_path, |w| {
         serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
         std::io::Write::write_all(w, b"\n")
     })
@@ -169,7 +169,7 @@ fn write_similarity(path: &Path, names: &[String], s: &[Vec<f64>]) -> anyhow::Re
         }
         text.push('\n');
     }
-    identify::capture::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+    capture::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
         .with_context(|| format!("writing {}", path.display()))
 }
 
@@ -272,7 +272,7 @@ fn write_scatter(
         }
         root.present().map_err(|e| plot(e.to_string()))?;
     }
-    identify::capture::write_atomically(path, |out| {
+    capture::write_atomically(path, |out| {
         let mut encoder = png::Encoder::new(out, w, h);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
@@ -388,8 +388,8 @@ mod tests {
     }
     use haptics::sim::protocols::sinapov::scratch_capture;
     use haptics::sim::world::scratch::{Behaviour, household_surfaces};
-    use identify::recognition::knn::KnnParams;
-    use identify::recognition::spectral::CellScale;
+    use recognize::knn::KnnParams;
+    use recognize::spectral::CellScale;
 
     #[test]
     fn categorizes_knn_confusions_on_generated_scratches() {

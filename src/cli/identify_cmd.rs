@@ -3,14 +3,14 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use capture::{Capture, CaptureKind};
 use clap::{Args, ValueEnum};
-use identify::capture::{Capture, CaptureKind};
 use identify::identification::{IdentifyOptions, Report, identify};
 use identify::metrics::Metrics;
 use identify::model_file::{ModelBody, ModelKind, ScaledSvr};
 use identify::search::{SearchGrid, SearchPoint, best, search};
-use identify::svr::write_libsvm_model;
 use indicatif::{ProgressBar, ProgressStyle};
+use svm::write_libsvm_model;
 
 /// Identify a model from a capture with ε-SVR and compare it with the baselines.
 ///
@@ -150,7 +150,7 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
 }
 
 fn write_libsvm(m: &ScaledSvr, path: &Path) -> anyhow::Result<()> {
-    identify::capture::write_atomically(path, |w| {
+    capture::write_atomically(path, |w| {
         write_libsvm_model(&m.svr, w).map_err(|e| std::io::Error::other(e.to_string()))
     })
     .with_context(|| format!("writing {}", path.display()))

@@ -3,11 +3,11 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
+use capture::CaptureKind;
+use capture::import::{ColumnMap, ImportSpec, import_csv, import_csv_report};
+use capture::sha256_hex;
 use clap::Args;
-use identify::capture::CaptureKind;
-use identify::capture::import::{ColumnMap, ImportSpec, import_csv, import_csv_report};
-use identify::model_file::sha256_hex;
-use identify::recognition::model::LabelledCapture;
+use recognize::model::LabelledCapture;
 
 /// Import a CSV log recorded with another tool as a capture.
 ///
@@ -64,8 +64,7 @@ pub(crate) struct ImportArgs {
 }
 
 fn parse_kind(s: &str) -> Result<CaptureKind, String> {
-    s.parse()
-        .map_err(|e: identify::capture::UnknownKind| e.to_string())
+    s.parse().map_err(|e: capture::UnknownKind| e.to_string())
 }
 
 fn parse_meta(s: &str) -> Result<(String, String), String> {

@@ -4,16 +4,16 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
-use identify::recognition::knn::KnnParams;
-use identify::recognition::model::{
+use recognize::knn::KnnParams;
+use recognize::model::{
     CV_FOLDS, DECISION_WINDOW_S, Evaluation, FeatureSet, FusedEvaluation, HOP_S, NakanoWindowing,
     RecognizerFile, SCRATCH_SOM_NORMALIZATION, SvmC, TRAINING_WINDOW_S, WINDOW_SVM_FALLBACK_C, som_params,
 };
-use identify::recognition::model::{LabelledCapture, RecognizerError};
-use identify::recognition::protocol::{self, SINAPOV_FOLDS, Split};
-use identify::recognition::som::{Normalization, SomParams};
-use identify::recognition::spectral::CellScale;
-use identify::recognition::svc::SvcParams;
+use recognize::model::{LabelledCapture, RecognizerError};
+use recognize::protocol::{self, SINAPOV_FOLDS, Split};
+use recognize::som::{Normalization, SomParams};
+use recognize::spectral::CellScale;
+use recognize::svc::SvcParams;
 
 /// Train and evaluate surface recognizers.
 ///
@@ -371,7 +371,7 @@ impl TrainOptions {
 
 /// The C of an SVM over windows, and how it was chosen.
 fn print_window_c(model: &RecognizerFile) {
-    if let identify::recognition::model::RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body {
+    if let recognize::model::RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body {
         let c = svc.params().c;
         match c_search {
             Some(search) if search.grid.len() > 1 => {
@@ -736,7 +736,7 @@ fn print_fused(f: &FusedEvaluation) {
     );
 }
 
-fn per_class_json(c: &identify::recognition::eval::ConfusionMatrix<String>) -> serde_json::Value {
+fn per_class_json(c: &recognize::eval::ConfusionMatrix<String>) -> serde_json::Value {
     c.classes()
         .iter()
         .zip(c.per_class_rates())

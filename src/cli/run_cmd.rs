@@ -158,7 +158,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     if let Err(why) = &frame {
         let path = dir.join("frame.txt");
-        identify::capture::write_atomically(&path, |w| {
+        capture::write_atomically(&path, |w| {
             use std::io::Write;
             writeln!(w, "no frame could be rendered: {why}")
         })

@@ -17,6 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use capture::{Capture, CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
 use haptics::acquire::{self, CaptureOptions, Protocol};
 use haptics::control::{Admittance, AdmittanceConfig};
@@ -28,14 +29,13 @@ use haptics::law::{
     Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig, SoftFriction,
     hard_friction_model, needle_model, soft_friction_models,
 };
-use haptics::recognize::{LiveRecognizer, Recognizing};
+use haptics::live_recognizer::{LiveRecognizer, Recognizing};
 use haptics::recorder::{Recorder, RecorderConfig};
 use haptics::rt::{
     self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, TickInput, TickOutput, WatchdogConfig,
 };
 use haptics::sim::hand::{HandImpedance, HandScript, LiveHand};
 use haptics::{DeviceSpecs, HapticSample};
-use identify::capture::{Capture, CaptureKind, CaptureWriter, Metadata};
 use identify::model_file::{ModelFile, ModelKind};
 
 use crate::models::ResolvedModel;
@@ -159,7 +159,7 @@ pub enum SessionError {
     Device(#[from] haptics::DeviceError),
     /// The replay capture is unreadable.
     #[error(transparent)]
-    Replay(#[from] identify::capture::CaptureError),
+    Replay(#[from] capture::CaptureError),
     /// The loop could not run.
     #[error(transparent)]
     Loop(#[from] haptics::LoopError),
@@ -497,8 +497,8 @@ pub fn record_path(record: &Path, object: &str, segments: usize) -> PathBuf {
 
 /// Runs one segment to its end (the task's, `duration_s`, or the UI's stop). A surface
 /// segment given a `recognizer` runs it inside the haptic tick
-/// ([`haptics::recognize::Recognizing`]): its decisions ride in every sample's
-/// [`haptics::recognize::channel`]s.
+/// ([`haptics::live_recognizer::Recognizing`]): its decisions ride in every sample's
+/// [`haptics::live_recognizer::channel`]s.
 pub fn run_segment(
     scene: &Scene,
     segment: &Segment,

@@ -218,16 +218,15 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
 pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportError> {
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     let text = dir.join("summary.txt");
-    identify::capture::write_atomically(&text, |w| w.write_all(report.to_text().as_bytes()))
-        .map_err(io(&text))?;
+    capture::write_atomically(&text, |w| w.write_all(report.to_text().as_bytes())).map_err(io(&text))?;
     let json = dir.join("report.json");
-    identify::capture::write_atomically(&json, |w| {
+    capture::write_atomically(&json, |w| {
         serde_json::to_writer_pretty(&mut *w, report).map_err(std::io::Error::other)
     })
     .map_err(io(&json))?;
     if !report.recognition.is_empty() {
         let csv = dir.join("timeline.csv");
-        identify::capture::write_atomically(&csv, |w| {
+        capture::write_atomically(&csv, |w| {
             writeln!(w, "object,truth,time_s,label,confidence")?;
             for r in &report.recognition {
                 writeln!(
@@ -339,7 +338,7 @@ fn line_chart(
 
 /// Writes an RGB8 image as PNG, through a temporary file.
 pub fn write_png_rgb(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), ReportError> {
-    identify::capture::write_atomically(path, |out| {
+    capture::write_atomically(path, |out| {
         let mut encoder = png::Encoder::new(out, w, h);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 
-use identify::capture::{CaptureKind, Metadata};
+use capture::{CaptureKind, Metadata};
 
 use crate::control::{MotionGains, RubbingController, RubbingPlan};
 use crate::device::HapticDevice;

@@ -9,8 +9,8 @@
 
 use std::sync::Arc;
 
+use capture::{Capture, CaptureKind};
 use glam::DVec3;
-use identify::capture::{Capture, CaptureKind};
 
 use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
 use crate::safety::{ForceGate, ForceOverride};
@@ -154,7 +154,7 @@ impl HapticDevice for ReplayDevice {
 mod tests {
     use super::*;
     use crate::rt::{self, LoopConfig, LoopIo, Pacing, RtRequest, StopReason, ZeroForce};
-    use identify::capture::Metadata;
+    use capture::Metadata;
 
     #[test]
     fn plays_at_the_recorded_rate_and_ends_cleanly() {

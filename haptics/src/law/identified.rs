@@ -2,7 +2,7 @@
 //! path, with the box it was trained on.
 
 use identify::model_file::{ModelBody, ModelFile, ModelKind, ScaledSvr};
-use identify::svr::{FastSvr, FastSvrError};
+use svm::{FastSvr, FastSvrError};
 
 use super::model::{BadInputBox, InputBox, ScalarModel};
 

@@ -8,8 +8,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use capture::{CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
-use identify::capture::{CaptureKind, CaptureWriter, Metadata};
 
 use super::{LoopConfig, LoopError, LoopIo, RateStats, RtStatus, StopReason, spawn};
 use crate::control::{Admittance, AdmittanceConfig};

@@ -21,7 +21,7 @@ use crate::safety::SafetyFilter;
 
 /// Controller-defined values carried with each sample (estimated forces, model outputs, …):
 /// eight for a controller, three more for the live surface recognizer that may wrap it
-/// ([`crate::recognize::channel`]).
+/// ([`crate::live_recognizer::channel`]).
 pub const CHANNELS: usize = 11;
 
 /// One tick, as recorded and shown live.

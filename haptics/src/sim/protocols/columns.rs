@@ -1,6 +1,6 @@
 //! A capture under construction: named columns filled row by row.
 
-use identify::capture::{Capture, CaptureError, Metadata};
+use capture::{Capture, CaptureError, Metadata};
 
 pub(crate) struct Columns {
     names: Vec<String>,

@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-use identify::capture::{Capture, CaptureError, write_atomically};
+use capture::{Capture, CaptureError, write_atomically};
 
 use super::{Split, li_bi, nakano, sinapov};
 use crate::sim::world::scratch::{Behaviour, household_surfaces};

@@ -11,7 +11,7 @@
 
 use std::f64::consts::PI;
 
-use identify::capture::{Capture, CaptureError, CaptureKind, Metadata};
+use capture::{Capture, CaptureError, CaptureKind, Metadata};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

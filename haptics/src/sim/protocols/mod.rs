@@ -35,22 +35,7 @@ impl Split {
     }
 }
 
-/// Derives an independent stream seed from a user seed and a path of tags (splitmix64 over
-/// the sequence), so that adding a protocol or a trial never shifts another one's noise.
-pub fn derive_seed(seed: u64, tags: &[u64]) -> u64 {
-    let mut state = seed;
-    for &tag in tags {
-        state = splitmix64(state ^ splitmix64(tag));
-    }
-    splitmix64(state)
-}
-
-fn splitmix64(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
-}
+pub use capture::rng::derive_seed;
 
 /// Tags for [`derive_seed`], one per protocol.
 pub(crate) mod tag {

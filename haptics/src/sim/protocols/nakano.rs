@@ -7,7 +7,7 @@
 //!
 //! Logged at 1 kHz (the thesis samples at 0.3 ms; 1 kHz is the Omega.7's usual servo rate).
 
-use identify::capture::{Capture, CaptureError, CaptureKind, Metadata};
+use capture::{Capture, CaptureError, CaptureKind, Metadata};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -3,7 +3,7 @@
 //! trials each; the accelerometer is read at 400 Hz. The physics lives in
 //! [`crate::sim::world::scratch`]; this module turns a trial into a capture.
 
-use identify::capture::{Capture, CaptureError, CaptureKind, Metadata};
+use capture::{Capture, CaptureError, CaptureKind, Metadata};
 
 use crate::sim::world::scratch::{ACCEL_RATE_HZ, Behaviour, ScratchSurface, scratch_trial};
 

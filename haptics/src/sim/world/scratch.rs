@@ -66,6 +66,7 @@ use std::f64::consts::{FRAC_PI_2, FRAC_PI_3, PI, TAU};
 use std::fmt;
 use std::sync::Arc;
 
+use capture::rng::stream_seed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -561,23 +562,6 @@ fn synthesize_layer(band: Band, rng: &mut ChaCha8Rng) -> Profile {
 const TAG_RELIEF: u64 = 1;
 const TAG_PLACEMENT: u64 = 2;
 const TAG_TRIAL: u64 = 3;
-
-/// SplitMix64 finaliser (Steele, Lea & Flood 2014): a bijective 64-bit mixer.
-fn splitmix64(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// A seed for one random stream from a tuple of integers. Each part goes through the mixer
-/// before it is combined, so (1, 2) and (2, 1), or (seed, trial) and (seed + 1, trial − 1),
-/// land far apart.
-fn stream_seed(parts: &[u64]) -> u64 {
-    parts
-        .iter()
-        .fold(0x6A09_E667_F3BC_C908, |h, &p| splitmix64(h ^ splitmix64(p)))
-}
 
 // ---------------------------------------------------------------------------------------------
 // Stroke kinematics

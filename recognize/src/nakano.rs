@@ -1,0 +1,911 @@
+//! Nakano's five rubbing features (thesis Sec. 2.2, Eqs. 2.18–2.23), in batch over a window of a
+//! capture and streaming with O(1) work per sample.
+//!
+//! The tip rubs along x (`tangential_position_m`) while force control holds it on the surface;
+//! its height (`normal_position_m`) carries the surface's waviness and roughness, and the
+//! reaction force along x (`friction_force_n`, the RFOB's estimate) is the friction. Per window of
+//! `n` samples the feature vector is
+//!
+//! ```text
+//! P = [ mean|z_r|   (Eq. 2.18, m)
+//!       S²_rough    (Eq. 2.19, m²)
+//!       λ̄ = x / k   (Eq. 2.20, m)
+//!       mean f_x    (Eq. 2.21, N)
+//!       S²_fric     (Eq. 2.22, N²) ]
+//! ```
+//!
+//! **Roughness** `z_r` is the height minus its centred moving average over `2H + 1` samples
+//! (a zero-phase high-pass: the moving average is symmetric, so it delays nothing). A moving
+//! average of length `L` has its first null at wavelength `L` and passes wavelengths much longer
+//! than `L` almost unchanged, so subtracting it keeps wavelengths shorter than `L` and removes
+//! longer ones. The default length is 2.5 mm of travel at the protocol's 5 mm/s (`H` = 250 at
+//! 1 kHz; [`NakanoConfig::at_rate`] keeps the same travel at other rates): that is ISO 4288's standard roughness cut-off `λc` = 2.5 mm, it keeps the
+//! sandpapers' and styrols' roughness (wavelengths ≈ 0.3–2 mm) and removes the sheet's waviness
+//! (≳ 10 mm) and any tilt of the sample. It was chosen by that reasoning, not tuned on test runs.
+//!
+//! **Variance of roughness** (Eq. 2.19): the thesis prints `(mean|z_r| − z_r[i])²`, which reads
+//! as a typo for the sample variance the text names; we use the variance of `z_r` about its own
+//! mean (divided by `n`, as Eq. 2.19).
+//!
+//! **Mean wavelength** (Eq. 2.20): the roughness is smoothed by a second centred moving average
+//! over `2S + 1` samples (default `S` = 20: 0.2 mm, below the finest roughness wavelength, above
+//! the encoder's quantization steps, which would otherwise count as waves), then `k` is the
+//! number of upward zero crossings inside the window and `x` the window's travel. With no
+//! crossing the wavelength is at least the travel, so `λ̄ = x` (k taken as 1). A crossing is
+//! counted between consecutive samples going from below `−CROSSING_GUARD_M` to at or above it:
+//! the tiny guard (1 pm) keeps a flat signal, whose smoothed roughness is zero up to rounding,
+//! from counting rounding noise as waves, and makes batch and streaming agree.
+//!
+//! **Lookahead**: a zero-phase filter needs future samples. The roughness at sample `i` needs the
+//! height up to `i + H`, its smoothed value up to `i + H + S`; so a window ending at sample `e` can
+//! be evaluated only once sample `e + H + S` has arrived ([`NakanoConfig::lookahead_samples`],
+//! 270 samples = 0.27 s by default). A live decision's latency is the window plus that lookahead.
+//! The batch function needs the same margin before the window (`H + S` samples) and after it.
+
+use std::borrow::Cow;
+
+use capture::signal::{SignalError, pseudo_differentiate};
+use capture::{Capture, CaptureError};
+
+/// Number of features in a Nakano feature vector (thesis Eq. 2.23: r = 5).
+pub const FEATURES: usize = 5;
+
+/// Names of the features, in vector order, with their units.
+pub const FEATURE_NAMES: [&str; FEATURES] = [
+    "roughness_mean_abs_m",
+    "roughness_variance_m2",
+    "roughness_wavelength_m",
+    "friction_mean_n",
+    "friction_variance_n2",
+];
+
+/// Smoothed roughness must rise from below minus this to count a wave, m (see the module doc).
+pub const CROSSING_GUARD_M: f64 = 1e-12;
+
+/// Column of the tip's position along the rubbing direction.
+pub const POSITION_COLUMN: &str = "tangential_position_m";
+/// Column of the tip's height.
+pub const HEIGHT_COLUMN: &str = "normal_position_m";
+/// Column of the friction (reaction force along x).
+pub const FRICTION_COLUMN: &str = "friction_force_n";
+/// Column of the force commanded along x, for the reaction-force observer.
+pub const COMMAND_FORCE_COLUMN: &str = "tangential_command_force_n";
+/// Column of the measured velocity along x (pseudo-differentiated from position when absent).
+pub const VELOCITY_COLUMN: &str = "tangential_velocity_mps";
+
+/// Why features could not be computed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum NakanoError {
+    /// The capture lacks a column the features need.
+    #[error("capture lacks a column Nakano's features need")]
+    Column(#[from] CaptureError),
+    /// The signals passed in differ in length.
+    #[error("signals differ in length: position {position}, height {height}, friction {friction}")]
+    LengthMismatch {
+        /// Samples of position.
+        position: usize,
+        /// Samples of height.
+        height: usize,
+        /// Samples of friction.
+        friction: usize,
+    },
+    /// A window (with the filter's margin each side) does not fit in the signal.
+    #[error(
+        "window of {len} samples at {start} needs samples {start}-{margin}..{start}+{len}+{margin} \
+         (filter margin {margin}), but the signal has {samples}"
+    )]
+    WindowOutOfRange {
+        /// First sample of the window.
+        start: usize,
+        /// Samples in the window.
+        len: usize,
+        /// Filter margin needed on each side.
+        margin: usize,
+        /// Samples available.
+        samples: usize,
+    },
+    /// A window needs at least two samples (a variance and a travel).
+    #[error("window of {len} samples: at least 2 needed")]
+    WindowTooShort {
+        /// Samples asked for.
+        len: usize,
+    },
+    /// A filter or speed setting is not usable.
+    #[error("invalid Nakano configuration: {0}")]
+    Config(&'static str),
+    /// The velocity for the reaction-force observer could not be derived from position.
+    #[error("cannot derive velocity for the reaction-force observer")]
+    Velocity(#[from] SignalError),
+}
+
+/// The reaction-force observer (RFOB, thesis Sec. 2.1) that estimates friction for captures
+/// without a `friction_force_n` column, from the commanded force and the velocity along x.
+///
+/// With nominal mass `M` and cut-off `g`, `F̂ = g/(s + g) · (F_cmd − M s v)`, implemented without
+/// differentiating the velocity as `F̂ = LPF_g(F_cmd + M g v) − M g v` (exact discretisation of
+/// the first-order low-pass). The device's own friction and gravity are not modelled (the
+/// thesis identifies and subtracts them; a capture carries no model of them), so they end up in
+/// the estimate. Friction is reported positive against the motion: the estimate is negated
+/// where the velocity is negative.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Rfob {
+    /// Nominal mass along x, kg (Table 3.1: 0.3 kg).
+    pub nominal_mass_kg: f64,
+    /// Observer cut-off, rad/s (Table 3.1: 50 rad/s).
+    pub cutoff_radps: f64,
+    /// Time constant of the pseudo-differentiator used when the capture has no velocity, s.
+    pub velocity_tau_s: f64,
+}
+
+impl Default for Rfob {
+    fn default() -> Self {
+        Self {
+            nominal_mass_kg: 0.3,
+            cutoff_radps: 50.0,
+            velocity_tau_s: 0.005,
+        }
+    }
+}
+
+impl Rfob {
+    /// Friction estimated from `capture`'s `tangential_command_force_n` and velocity
+    /// (`tangential_velocity_mps`, or position pseudo-differentiated when that is absent).
+    pub fn friction_n(&self, capture: &Capture) -> Result<Vec<f64>, NakanoError> {
+        let usable = [self.nominal_mass_kg, self.cutoff_radps, self.velocity_tau_s]
+            .iter()
+            .all(|v| v.is_finite() && *v > 0.0);
+        if !usable {
+            return Err(NakanoError::Config(
+                "RFOB mass, cut-off and time constant must be positive",
+            ));
+        }
+        let command = capture.column(COMMAND_FORCE_COLUMN)?;
+        let time = capture.time();
+        let velocity: Cow<'_, [f64]> = match capture.column(VELOCITY_COLUMN) {
+            Ok(v) => Cow::Borrowed(v),
+            Err(_) => Cow::Owned(pseudo_differentiate(
+                time,
+                capture.column(POSITION_COLUMN)?,
+                self.velocity_tau_s,
+            )?),
+        };
+        let mg = self.nominal_mass_kg * self.cutoff_radps;
+        let mut state = command[0] + mg * velocity[0];
+        let mut out = Vec::with_capacity(command.len());
+        for k in 0..command.len() {
+            let input = command[k] + mg * velocity[k];
+            if k > 0 {
+                let dt = time[k] - time[k - 1];
+                state += (1.0 - (-self.cutoff_radps * dt).exp()) * (input - state);
+            }
+            let reaction = state - mg * velocity[k];
+            out.push(if velocity[k] < 0.0 { -reaction } else { reaction });
+        }
+        Ok(out)
+    }
+}
+
+/// The two zero-phase moving averages, as half-widths in samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct NakanoConfig {
+    /// Half-width `H` of the detrending average: roughness = height − mean of `2H + 1` samples.
+    pub highpass_half_width: usize,
+    /// Half-width `S` of the smoothing before wave counting (mean of `2S + 1` samples).
+    pub smoothing_half_width: usize,
+}
+
+impl Default for NakanoConfig {
+    /// 2.5 mm cut-off and 0.2 mm smoothing at 5 mm/s and 1 kHz (`H` = 250, `S` = 20).
+    fn default() -> Self {
+        Self {
+            highpass_half_width: 250,
+            smoothing_half_width: 20,
+        }
+    }
+}
+
+/// Roughness cut-off of the default filters, m of travel (ISO 4288's `λc`, see the module doc).
+pub const ROUGHNESS_CUTOFF_M: f64 = 2.5e-3;
+/// Span of the default smoothing before wave counting, m of travel.
+pub const WAVE_SMOOTHING_M: f64 = 0.2e-3;
+/// Rubbing speed of Nakano's protocol, m/s: the default filters' spans in travel become
+/// samples at this speed.
+pub const PROTOCOL_SPEED_MPS: f64 = 5e-3;
+
+impl NakanoConfig {
+    /// The default filters ([`ROUGHNESS_CUTOFF_M`], [`WAVE_SMOOTHING_M`] at
+    /// [`PROTOCOL_SPEED_MPS`]) for samples at `rate_hz`: the same travel at any rate, so a log at
+    /// 100 Hz or 10 kHz is filtered as the 1 kHz captures are (`H` = 250, `S` = 20 there).
+    pub fn at_rate(rate_hz: f64) -> Result<Self, NakanoError> {
+        Self::from_wavelengths(ROUGHNESS_CUTOFF_M, WAVE_SMOOTHING_M, PROTOCOL_SPEED_MPS, rate_hz)
+    }
+
+    /// Filters given as wavelengths of travel: the detrending average spans `cutoff_m`, the
+    /// smoothing spans `smoothing_m`, at rubbing speed `speed_mps` sampled at `rate_hz`.
+    pub fn from_wavelengths(
+        cutoff_m: f64,
+        smoothing_m: f64,
+        speed_mps: f64,
+        rate_hz: f64,
+    ) -> Result<Self, NakanoError> {
+        let all_positive = [cutoff_m, smoothing_m, speed_mps, rate_hz]
+            .iter()
+            .all(|v| v.is_finite() && *v > 0.0);
+        if !all_positive {
+            return Err(NakanoError::Config(
+                "wavelengths, speed and rate must be positive and finite",
+            ));
+        }
+        let step_m = speed_mps / rate_hz;
+        let half = |span_m: f64| (span_m / step_m / 2.0).round();
+        let (h, s) = (half(cutoff_m), half(smoothing_m));
+        if h > 1e7 || s > 1e7 {
+            return Err(NakanoError::Config("filter spans more than 10^7 samples"));
+        }
+        Ok(Self {
+            highpass_half_width: h as usize,
+            smoothing_half_width: s as usize,
+        })
+    }
+
+    /// Samples the filters need beyond a window's last sample (and before its first): `H + S`.
+    pub fn lookahead_samples(&self) -> usize {
+        self.highpass_half_width + self.smoothing_half_width
+    }
+}
+
+/// The three signals Nakano's features read, borrowed from a capture or from slices.
+#[derive(Debug, Clone)]
+pub struct NakanoSignals<'a> {
+    position_m: &'a [f64],
+    height_m: &'a [f64],
+    friction_n: Cow<'a, [f64]>,
+}
+
+impl<'a> NakanoSignals<'a> {
+    /// The columns `tangential_position_m`, `normal_position_m` and `friction_force_n`; without
+    /// a friction column, friction is estimated by the default [`Rfob`] from
+    /// `tangential_command_force_n` (an error names that column if it is missing too).
+    pub fn from_capture(capture: &'a Capture) -> Result<Self, NakanoError> {
+        let friction_n = match capture.column(FRICTION_COLUMN) {
+            Ok(f) => Cow::Borrowed(f),
+            Err(_) => Cow::Owned(Rfob::default().friction_n(capture)?),
+        };
+        Ok(Self {
+            position_m: capture.column(POSITION_COLUMN)?,
+            height_m: capture.column(HEIGHT_COLUMN)?,
+            friction_n,
+        })
+    }
+
+    /// Signals from slices of equal length.
+    pub fn new(
+        position_m: &'a [f64],
+        height_m: &'a [f64],
+        friction_n: &'a [f64],
+    ) -> Result<Self, NakanoError> {
+        if position_m.len() != height_m.len() || position_m.len() != friction_n.len() {
+            return Err(NakanoError::LengthMismatch {
+                position: position_m.len(),
+                height: height_m.len(),
+                friction: friction_n.len(),
+            });
+        }
+        Ok(Self {
+            position_m,
+            height_m,
+            friction_n: Cow::Borrowed(friction_n),
+        })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.position_m.len()
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.position_m.is_empty()
+    }
+
+    /// Position along the rubbing direction, m.
+    pub fn position_m(&self) -> &'a [f64] {
+        self.position_m
+    }
+
+    /// Features (Eq. 2.23) of the window of `len` samples starting at `start`. The window needs
+    /// [`NakanoConfig::lookahead_samples`] samples of margin on each side for the filters.
+    pub fn features(
+        &self,
+        start: usize,
+        len: usize,
+        config: &NakanoConfig,
+    ) -> Result<[f64; FEATURES], NakanoError> {
+        if len < 2 {
+            return Err(NakanoError::WindowTooShort { len });
+        }
+        let margin = config.lookahead_samples();
+        let out_of_range = NakanoError::WindowOutOfRange {
+            start,
+            len,
+            margin,
+            samples: self.len(),
+        };
+        let (Some(first), Some(end)) = (start.checked_sub(margin), start.checked_add(len)) else {
+            return Err(out_of_range);
+        };
+        match end.checked_add(margin) {
+            Some(last) if last <= self.len() => {}
+            _ => return Err(out_of_range),
+        }
+        let (h, s) = (config.highpass_half_width, config.smoothing_half_width);
+        // Prefix sums of the height relative to the first sample used (keeps the sums small).
+        let z = &self.height_m[first..end + margin];
+        let z_ref = z[0];
+        let mut prefix = Vec::with_capacity(z.len() + 1);
+        prefix.push(0.0);
+        let mut acc = 0.0;
+        for &v in z {
+            acc += v - z_ref;
+            prefix.push(acc);
+        }
+        let span = (2 * h + 1) as f64;
+        // Roughness at local index j of `z` (needs j − h ≥ 0 and j + h < z.len()).
+        let rough = |j: usize| (z[j] - z_ref) - (prefix[j + h + 1] - prefix[j - h]) / span;
+        // Roughness over the window and S samples each side, for the smoothing.
+        let offset = margin - s; // local index of sample start − S
+        let r: Vec<f64> = (offset..offset + len + 2 * s).map(rough).collect();
+        let window = &r[s..s + len];
+        let n = len as f64;
+        let mean_abs = window.iter().map(|v| v.abs()).sum::<f64>() / n;
+        let mean = window.iter().sum::<f64>() / n;
+        let var = window.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+        // Smoothed roughness at each window sample, then upward crossings between neighbours.
+        let smooth_span = (2 * s + 1) as f64;
+        let smoothed: Vec<f64> = (0..len)
+            .map(|i| r[i..=i + 2 * s].iter().sum::<f64>() / smooth_span)
+            .collect();
+        let waves = smoothed
+            .windows(2)
+            .filter(|p| p[0] < -CROSSING_GUARD_M && p[1] >= -CROSSING_GUARD_M)
+            .count();
+        let travel = (self.position_m[end - 1] - self.position_m[start]).abs();
+        let wavelength = travel / waves.max(1) as f64;
+        let f = &self.friction_n[start..end];
+        let f_mean = f.iter().sum::<f64>() / n;
+        let f_var = f.iter().map(|v| (v - f_mean).powi(2)).sum::<f64>() / n;
+        Ok([mean_abs, var, wavelength, f_mean, f_var])
+    }
+}
+
+/// Features of the window of `len` samples starting at `start` of `capture` (see
+/// [`NakanoSignals::features`]).
+pub fn capture_features(
+    capture: &Capture,
+    start: usize,
+    len: usize,
+    config: &NakanoConfig,
+) -> Result<[f64; FEATURES], NakanoError> {
+    NakanoSignals::from_capture(capture)?.features(start, len, config)
+}
+
+/// A fixed-capacity ring: pushing into a full ring evicts and returns the oldest value.
+#[derive(Debug)]
+struct Ring<T> {
+    buf: Vec<T>,
+    capacity: usize,
+    head: usize,
+}
+
+/// Reserves the whole capacity, as [`Ring::new`] does: a derived clone would reserve only the
+/// values present, so a copy of an unfed ring (a scene's recognizer, cloned for each haptic
+/// thread) would grow its storage while the haptic thread fills it.
+impl<T: Clone> Clone for Ring<T> {
+    fn clone(&self) -> Self {
+        let mut buf = Vec::with_capacity(self.capacity);
+        buf.extend_from_slice(&self.buf);
+        Self {
+            buf,
+            capacity: self.capacity,
+            head: self.head,
+        }
+    }
+}
+
+impl<T: Copy> Ring<T> {
+    fn new(capacity: usize) -> Self {
+        Self {
+            buf: Vec::with_capacity(capacity),
+            capacity,
+            head: 0,
+        }
+    }
+
+    fn is_full(&self) -> bool {
+        self.buf.len() == self.capacity
+    }
+
+    /// Empties the ring, keeping its storage.
+    fn clear(&mut self) {
+        self.buf.clear();
+        self.head = 0;
+    }
+
+    /// Pushes `value`; returns the evicted oldest value when the ring was full.
+    fn push(&mut self, value: T) -> Option<T> {
+        if self.buf.len() < self.capacity {
+            self.buf.push(value);
+            return None;
+        }
+        let old = std::mem::replace(&mut self.buf[self.head], value);
+        self.head = (self.head + 1) % self.capacity;
+        Some(old)
+    }
+
+    /// The `k`-th oldest value (0 = oldest); `None` past the end.
+    fn get(&self, k: usize) -> Option<T> {
+        if k >= self.buf.len() {
+            return None;
+        }
+        let at = if self.is_full() {
+            (self.head + k) % self.capacity
+        } else {
+            k
+        };
+        self.buf.get(at).copied()
+    }
+}
+
+/// One window's features from the stream.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamWindow {
+    /// Index (from 0, counting pushed samples) of the window's first sample.
+    pub start: u64,
+    /// Position along the rubbing direction at the window's first sample, m (as pushed).
+    pub start_position_m: f64,
+    /// The features, as [`NakanoSignals::features`] gives for that window.
+    pub features: [f64; FEATURES],
+}
+
+/// Nakano's features over a sliding window, updated in O(1) per sample.
+///
+/// Running sums replace every sum of the batch computation: the two centred moving averages,
+/// the window's sum of `|z_r|` and count of upward crossings, and the window's mean and variance
+/// of `z_r` and of the friction (Welford's sliding update; friction relative to its first sample).
+/// After each push the window ending [`NakanoConfig::lookahead_samples`] samples ago is
+/// complete, so its features are returned; memory is `O(window + H + S)`.
+#[derive(Debug, Clone)]
+pub struct NakanoStream {
+    config: NakanoConfig,
+    window_len: usize,
+    pushed: u64,
+    z_ref: Option<f64>,
+    f_ref: Option<f64>,
+    heights: Ring<f64>,
+    height_sum: f64,
+    roughs: Ring<f64>,
+    rough_sum: f64,
+    delayed: Ring<(f64, f64)>,
+    previous_smoothed: Option<f64>,
+    window_rough: Ring<f64>,
+    window_position: Ring<f64>,
+    window_friction: Ring<f64>,
+    window_crossing: Ring<bool>,
+    sum_abs_r: f64,
+    rough_stats: SlidingMoments,
+    friction_stats: SlidingMoments,
+    crossings: usize,
+}
+
+/// Mean and sum of squared deviations over a sliding window, updated in O(1) per sample with
+/// Welford's update (and its sliding form on eviction), which avoids the cancellation of
+/// `Σx²/n − mean²` when the variance is small against the mean.
+#[derive(Debug, Clone, Copy, Default)]
+struct SlidingMoments {
+    count: f64,
+    mean: f64,
+    m2: f64,
+}
+
+impl SlidingMoments {
+    /// Adds `x`; if `evicted` is given, it leaves the window at the same time.
+    fn update(&mut self, x: f64, evicted: Option<f64>) {
+        match evicted {
+            None => {
+                self.count += 1.0;
+                let delta = x - self.mean;
+                self.mean += delta / self.count;
+                self.m2 += delta * (x - self.mean);
+            }
+            Some(old) => {
+                let old_mean = self.mean;
+                self.mean += (x - old) / self.count;
+                self.m2 += (x - old) * (x - self.mean + old - old_mean);
+            }
+        }
+    }
+
+    /// Variance (divided by the count), clamped at 0 against rounding.
+    fn variance(&self) -> f64 {
+        (self.m2 / self.count).max(0.0)
+    }
+}
+
+impl NakanoStream {
+    /// A stream over windows of `window_len` samples.
+    pub fn new(config: NakanoConfig, window_len: usize) -> Result<Self, NakanoError> {
+        if window_len < 2 {
+            return Err(NakanoError::WindowTooShort { len: window_len });
+        }
+        let (h, s) = (config.highpass_half_width, config.smoothing_half_width);
+        Ok(Self {
+            config,
+            window_len,
+            pushed: 0,
+            z_ref: None,
+            f_ref: None,
+            heights: Ring::new(2 * h + 1),
+            height_sum: 0.0,
+            roughs: Ring::new(2 * s + 1),
+            rough_sum: 0.0,
+            delayed: Ring::new(h + s + 1),
+            previous_smoothed: None,
+            window_rough: Ring::new(window_len),
+            window_position: Ring::new(window_len),
+            window_friction: Ring::new(window_len),
+            window_crossing: Ring::new(window_len - 1),
+            sum_abs_r: 0.0,
+            rough_stats: SlidingMoments::default(),
+            friction_stats: SlidingMoments::default(),
+            crossings: 0,
+        })
+    }
+
+    /// The filters' configuration.
+    pub fn config(&self) -> &NakanoConfig {
+        &self.config
+    }
+
+    /// Samples per window.
+    pub fn window_len(&self) -> usize {
+        self.window_len
+    }
+
+    /// Samples from a window's last sample to the sample that completes it: the window plus
+    /// this is the decision latency.
+    pub fn lookahead_samples(&self) -> usize {
+        self.config.lookahead_samples()
+    }
+
+    /// Forgets every sample, as at the start of a new stroke; keeps the buffers (no allocation).
+    pub fn reset(&mut self) {
+        self.pushed = 0;
+        self.z_ref = None;
+        self.f_ref = None;
+        self.heights.clear();
+        self.height_sum = 0.0;
+        self.roughs.clear();
+        self.rough_sum = 0.0;
+        self.delayed.clear();
+        self.previous_smoothed = None;
+        self.window_rough.clear();
+        self.window_position.clear();
+        self.window_friction.clear();
+        self.window_crossing.clear();
+        self.sum_abs_r = 0.0;
+        self.rough_stats = SlidingMoments::default();
+        self.friction_stats = SlidingMoments::default();
+        self.crossings = 0;
+    }
+
+    /// Pushes one sample; returns the features of the window that it completes, if any.
+    pub fn push(&mut self, position_m: f64, height_m: f64, friction_n: f64) -> Option<StreamWindow> {
+        self.pushed += 1;
+        let (h, s) = (self.config.highpass_half_width, self.config.smoothing_half_width);
+        let z = height_m - *self.z_ref.get_or_insert(height_m);
+        self.delayed.push((position_m, friction_n));
+        self.height_sum += z - self.heights.push(z).unwrap_or(0.0);
+        if !self.heights.is_full() {
+            return None;
+        }
+        let centre = self.heights.get(h)?;
+        let rough = centre - self.height_sum / (2 * h + 1) as f64;
+        self.rough_sum += rough - self.roughs.push(rough).unwrap_or(0.0);
+        if !self.roughs.is_full() {
+            return None;
+        }
+        let r = self.roughs.get(s)?;
+        let smoothed = self.rough_sum / (2 * s + 1) as f64;
+        let previous = self.previous_smoothed.replace(smoothed);
+        // The sample H + S back is the newest one whose smoothed roughness is now known; the
+        // delay line holds exactly H + S + 1 samples, so it is the oldest there.
+        let (position, friction) = self.delayed.get(0)?;
+        let f = friction - *self.f_ref.get_or_insert(friction);
+        let evicted = self.window_rough.push(r);
+        self.sum_abs_r += r.abs() - evicted.map_or(0.0, f64::abs);
+        self.rough_stats.update(r, evicted);
+        let evicted = self.window_friction.push(f);
+        self.friction_stats.update(f, evicted);
+        self.window_position.push(position);
+        if let Some(previous) = previous {
+            let crossing = previous < -CROSSING_GUARD_M && smoothed >= -CROSSING_GUARD_M;
+            if self.window_crossing.push(crossing) == Some(true) {
+                self.crossings -= 1;
+            }
+            self.crossings += usize::from(crossing);
+        }
+        if !self.window_rough.is_full() {
+            return None;
+        }
+        let n = self.window_len as f64;
+        let travel = (self.window_position.get(self.window_len - 1)? - self.window_position.get(0)?).abs();
+        let wavelength = travel / self.crossings.max(1) as f64;
+        let lag = (h + s + self.window_len) as u64;
+        Some(StreamWindow {
+            start: self.pushed - lag,
+            start_position_m: self.window_position.get(0)?,
+            features: [
+                self.sum_abs_r / n,
+                self.rough_stats.variance(),
+                wavelength,
+                self.friction_stats.mean + self.f_ref.unwrap_or(0.0),
+                self.friction_stats.variance(),
+            ],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rough, wavy, tilted profile with noisy friction, sampled like the thesis's rubbing.
+    fn signals(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let mut state = 7u64;
+        let mut noise = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let step_m = 5e-6;
+        let mut x = Vec::new();
+        let mut z = Vec::new();
+        let mut f = Vec::new();
+        for i in 0..n {
+            let xi = i as f64 * step_m;
+            x.push(xi);
+            let height = 20e-6 * (xi * std::f64::consts::TAU / 15e-3).sin()
+                + 12e-6 * (xi * std::f64::consts::TAU / 0.5e-3).sin()
+                + 1e-3 * xi
+                + 0.1;
+            z.push((height / 1e-5).round() * 1e-5 + 1e-6 * noise());
+            f.push(0.15 + 0.01 * noise());
+        }
+        (x, z, f)
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-9 * a.abs().max(b.abs()) + 1e-300
+    }
+
+    #[test]
+    fn a_sine_roughness_gives_its_amplitude_wavelength_and_friction_statistics() {
+        let n = 4000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 * 5e-6).collect();
+        // 10 µm amplitude, 0.5 mm wavelength on 20 µm of 15 mm waviness.
+        let z: Vec<f64> = x
+            .iter()
+            .map(|&x| {
+                10e-6 * (x * std::f64::consts::TAU / 0.5e-3).sin()
+                    + 20e-6 * (x * std::f64::consts::TAU / 15e-3).sin()
+            })
+            .collect();
+        let f: Vec<f64> = (0..n).map(|i| if i % 2 == 0 { 0.2 } else { 0.1 }).collect();
+        let sig = NakanoSignals::new(&x, &z, &f).expect("equal lengths");
+        let p = sig
+            .features(1000, 2000, &NakanoConfig::default())
+            .expect("in range");
+        // Mean |sin| = 2/π of the amplitude; variance = A²/2 (the 2.5 mm average leaves a few %).
+        assert!(
+            (p[0] / (10e-6 * 2.0 / std::f64::consts::PI) - 1.0).abs() < 0.05,
+            "{p:?}"
+        );
+        assert!((p[1] / (10e-6f64.powi(2) / 2.0) - 1.0).abs() < 0.1, "{p:?}");
+        // 10 mm of travel holds 20 waves.
+        assert!((p[2] - 0.5e-3).abs() < 0.03e-3, "{p:?}");
+        assert!(
+            (p[3] - 0.15).abs() < 1e-12 && (p[4] - 0.0025).abs() < 1e-12,
+            "{p:?}"
+        );
+    }
+
+    #[test]
+    fn streaming_equals_batch_on_every_window() {
+        let (x, z, f) = signals(5000);
+        let config = NakanoConfig::default();
+        let sig = NakanoSignals::new(&x, &z, &f).expect("equal lengths");
+        for len in [2, 500, 1000] {
+            let mut stream = NakanoStream::new(config, len).expect("valid");
+            let mut compared = 0;
+            for i in 0..x.len() {
+                let Some(w) = stream.push(x[i], z[i], f[i]) else {
+                    continue;
+                };
+                // The window completed by sample i ends lookahead samples before it.
+                assert_eq!(w.start as usize + len - 1 + config.lookahead_samples(), i);
+                let start = w.start as usize;
+                if start < config.lookahead_samples() {
+                    continue; // the batch needs a margin before the window
+                }
+                let batch = sig.features(start, len, &config).expect("in range");
+                // Variances to 1e-9 relative, or to 1e-12 of the squared level the signal varies
+                // about — (10 µm)² for the roughness, the mean² for friction: the running sums'
+                // rounding is of order ε × that level, which only shows in a nearly constant
+                // window of two samples.
+                let floors = [0.0, 1e-12 * 1e-10, 0.0, 0.0, 1e-12 * batch[3].powi(2)];
+                for (k, (a, b)) in w.features.iter().zip(&batch).enumerate() {
+                    assert!(
+                        close(*a, *b) || (a - b).abs() <= floors[k],
+                        "len {len} start {start} feature {k}: {a} vs {b}"
+                    );
+                }
+                compared += 1;
+            }
+            assert!(compared > 2000, "{compared}");
+        }
+    }
+
+    #[test]
+    fn bad_windows_and_signals_are_errors() {
+        let (x, z, f) = signals(1000);
+        let sig = NakanoSignals::new(&x, &z, &f).expect("equal lengths");
+        let config = NakanoConfig::default();
+        assert!(matches!(
+            sig.features(100, 200, &config),
+            Err(NakanoError::WindowOutOfRange { margin: 270, .. })
+        ));
+        assert!(matches!(
+            sig.features(600, 200, &config),
+            Err(NakanoError::WindowOutOfRange { .. })
+        ));
+        assert!(sig.features(270, 460, &config).is_ok());
+        assert!(matches!(
+            sig.features(300, 1, &config),
+            Err(NakanoError::WindowTooShort { len: 1 })
+        ));
+        assert!(matches!(
+            sig.features(usize::MAX, 2, &config),
+            Err(NakanoError::WindowOutOfRange { .. })
+        ));
+        assert!(matches!(
+            NakanoSignals::new(&x, &z[1..], &f),
+            Err(NakanoError::LengthMismatch { height: 999, .. })
+        ));
+        assert!(NakanoStream::new(config, 1).is_err());
+        assert!(NakanoConfig::from_wavelengths(0.0, 1e-4, 5e-3, 1e3).is_err());
+        assert_eq!(
+            NakanoConfig::at_rate(1e3).expect("valid"),
+            NakanoConfig::default()
+        );
+        let slow = NakanoConfig::at_rate(100.0).expect("valid");
+        assert_eq!((slow.highpass_half_width, slow.smoothing_half_width), (25, 2));
+        let fast = NakanoConfig::at_rate(1e4).expect("valid");
+        assert_eq!((fast.highpass_half_width, fast.smoothing_half_width), (2500, 200));
+        let c = NakanoConfig::from_wavelengths(2.5e-3, 0.2e-3, 5e-3, 1e3).expect("valid");
+        assert_eq!((c.highpass_half_width, c.smoothing_half_width), (250, 20));
+    }
+
+    #[test]
+    fn the_rfob_recovers_friction_from_the_commanded_force() {
+        use capture::{CaptureKind, Metadata};
+        // Accelerating sinusoidally on top of 5 mm/s against a friction of 0.15 + 0.02 sin N.
+        let n = 3000;
+        let dt = 1e-3;
+        let mass_kg = 0.3;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
+        let w = std::f64::consts::TAU * 2.0;
+        let x: Vec<f64> = t.iter().map(|t| 5e-3 * t + 1e-4 * (w * t).sin()).collect();
+        let v: Vec<f64> = t.iter().map(|t| 5e-3 + 1e-4 * w * (w * t).cos()).collect();
+        let friction: Vec<f64> = t.iter().map(|t| 0.15 + 0.02 * (3.0 * t).sin()).collect();
+        let command: Vec<f64> = t
+            .iter()
+            .zip(&friction)
+            .map(|(t, f)| mass_kg * (-1e-4 * w * w * (w * t).sin()) + f)
+            .collect();
+        let columns = [
+            "time_s",
+            "tangential_position_m",
+            "normal_force_n",
+            "tangential_velocity_mps",
+        ];
+        let columns: Vec<String> = columns.iter().map(|c| (*c).to_owned()).collect();
+        let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0);
+        let mut data = vec![t.clone(), x.clone(), vec![0.3; n], v];
+        let no_command = Capture::new(meta.clone(), columns.clone(), data.clone()).expect("valid");
+        assert!(matches!(
+            NakanoSignals::from_capture(&no_command),
+            Err(NakanoError::Column(_))
+        ));
+        let mut columns = columns;
+        columns.push("tangential_command_force_n".into());
+        data.push(command);
+        let capture = Capture::new(meta, columns, data).expect("valid");
+        let estimate = Rfob::default().friction_n(&capture).expect("columns");
+        // After the observer's transient (5 time constants of 20 ms) it lags the slow friction
+        // by ~20 ms: 3 rad/s × 0.02 N × 0.02 s ≈ 1.2 mN.
+        for k in 100..n {
+            assert!(
+                (estimate[k] - friction[k]).abs() < 3e-3,
+                "{k}: {} vs {}",
+                estimate[k],
+                friction[k]
+            );
+        }
+        // Without a velocity column it pseudo-differentiates the position.
+        let mut columns = capture.columns().to_vec();
+        let mut data = capture.data().to_vec();
+        columns.remove(3);
+        data.remove(3);
+        let capture = Capture::new(capture.metadata().clone(), columns, data).expect("valid");
+        let estimate = Rfob::default().friction_n(&capture).expect("columns");
+        for k in 200..n {
+            assert!(
+                (estimate[k] - friction[k]).abs() < 5e-3,
+                "{k}: {} vs {}",
+                estimate[k],
+                friction[k]
+            );
+        }
+    }
+
+    #[test]
+    fn a_flat_surface_counts_no_waves() {
+        let n = 2000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 * 5e-6).collect();
+        let z = vec![0.123; n];
+        let f = vec![0.2; n];
+        let sig = NakanoSignals::new(&x, &z, &f).expect("equal lengths");
+        let p = sig
+            .features(500, 1000, &NakanoConfig::default())
+            .expect("in range");
+        assert!(p[0] < 1e-15 && p[1] < 1e-30, "{p:?}");
+        assert!((p[2] - 999.0 * 5e-6).abs() < 1e-12, "{p:?}");
+        let mut stream = NakanoStream::new(NakanoConfig::default(), 1000).expect("valid");
+        let last = (0..n)
+            .filter_map(|i| stream.push(x[i], z[i], f[i]))
+            .last()
+            .expect("windows");
+        assert!((last.features[2] - 999.0 * 5e-6).abs() < 1e-12, "{last:?}");
+    }
+
+    #[test]
+    fn a_copy_of_an_unfed_stream_has_all_its_storage() {
+        let stream = NakanoStream::new(NakanoConfig::default(), 3000)
+            .expect("valid")
+            .clone();
+        let rings = [
+            (stream.heights.buf.capacity(), stream.heights.capacity),
+            (stream.roughs.buf.capacity(), stream.roughs.capacity),
+            (stream.window_rough.buf.capacity(), stream.window_rough.capacity),
+            (
+                stream.window_position.buf.capacity(),
+                stream.window_position.capacity,
+            ),
+            (
+                stream.window_friction.buf.capacity(),
+                stream.window_friction.capacity,
+            ),
+            (
+                stream.window_crossing.buf.capacity(),
+                stream.window_crossing.capacity,
+            ),
+            (stream.delayed.buf.capacity(), stream.delayed.capacity),
+        ];
+        for (reserved, capacity) in rings {
+            assert!(capacity > 0);
+            assert!(reserved >= capacity, "{reserved} < {capacity}");
+        }
+    }
+}

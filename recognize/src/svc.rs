@@ -1,0 +1,1264 @@
+//! Multi-class support vector classification as libsvm does it (Sinapov et al. used WEKA's SMO
+//! with a degree-2 polynomial kernel): one C-SVC per pair of classes, prediction by their
+//! votes, and class probabilities by pairwise coupling (Wu, Lin & Weng 2004, method 2) of each
+//! pair's Platt sigmoid (Lin, Lin & Weng 2007's Newton fit) on cross-validated decision values.
+//!
+//! **Solver.** The C-SVC dual `min ½ αᵀQα − eᵀα, yᵀα = 0, 0 ≤ α ≤ C`, `Q_ij = y_i y_j K_ij`, is
+//! solved by SMO with the second-order working-set selection of Fan, Chen & Lin (2005), the
+//! pair update and the bias (`ρ`, averaged over free vectors) of libsvm's `Solver`, so decision
+//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. It is a
+//! separate, short solver rather than a generalisation of the ε-SVR's [`svm`] SMO: that
+//! one is built around the ε-SVR's 2n split variables, row caching and shrinking for tens of
+//! thousands of samples, while a pair of surface classes has tens of training vectors, whose
+//! whole Gram matrix is smaller than one cached SVR row.
+//!
+//! **Probabilities.** For each pair, decision values from a 5-fold cross-validation on that
+//! pair's training vectors (folds from a seeded shuffle, as libsvm's) are fitted by Platt's
+//! sigmoid; at query time the sigmoids give `r_ij ≈ P(i | i or j, x)`, and method 2 finds the
+//! `p` minimising `Σ_i Σ_{j≠i} (r_ji p_i − r_ij p_j)²` with `Σ p = 1`. libsvm stops that
+//! fixed-point iteration at a loose tolerance (0.005/k); we iterate to 1e-12 so that the result
+//! is the minimiser itself, which is what the reference fixture computes by a direct solve.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use super::knn::FeatureScaling;
+use capture::rng::SplitMix64;
+use svm::Kernel;
+
+/// Why a classifier could not be fitted or queried.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum SvcError {
+    /// A hyperparameter is out of range.
+    #[error("invalid SVC parameter {name} = {value}: {reason}")]
+    Parameter {
+        /// The parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        reason: &'static str,
+    },
+    /// Features and labels differ in count, or there are none.
+    #[error("{features} feature vectors and {labels} labels: need equal, non-zero counts")]
+    Counts {
+        /// Feature vectors given.
+        features: usize,
+        /// Labels given.
+        labels: usize,
+    },
+    /// A vector has the wrong dimension.
+    #[error("vector {index} has {got} values, expected {expected}")]
+    Dimension {
+        /// Index of the vector (0 for a query).
+        index: usize,
+        /// Dimension expected.
+        expected: usize,
+        /// Dimension found.
+        got: usize,
+    },
+    /// A value is NaN or infinite.
+    #[error("vector {index} has a value that is not finite")]
+    NonFinite {
+        /// Index of the vector (0 for a query).
+        index: usize,
+    },
+    /// A label is not below the class count.
+    #[error("label {label} of point {index} is not below the class count {classes}")]
+    LabelOutOfRange {
+        /// Index of the point.
+        index: usize,
+        /// The label.
+        label: usize,
+        /// Number of classes.
+        classes: usize,
+    },
+    /// A class has no training vector.
+    #[error("class {class} has no training vector")]
+    EmptyClass {
+        /// The class.
+        class: usize,
+    },
+    /// Probabilities were asked of a classifier fitted without them.
+    #[error("the classifier was fitted without probability estimates")]
+    NoProbability,
+    /// Cross-validation needs at least two groups (trials) and two folds.
+    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
+    TooFewGroups {
+        /// Distinct groups.
+        groups: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
+    /// The solver did not converge within its iteration limit.
+    #[error("SMO did not converge in {iterations} iterations (classes {first}, {second})")]
+    NotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// First class of the pair.
+        first: usize,
+        /// Second class of the pair.
+        second: usize,
+    },
+}
+
+/// Hyperparameters, checked when fitting.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SvcParams {
+    /// Box constraint C > 0.
+    pub c: f64,
+    /// The kernel (libsvm's parameterisation).
+    pub kernel: Kernel,
+    /// Stopping tolerance on the maximal KKT violation (libsvm's ε, default 1e-3).
+    pub tolerance: f64,
+    /// Feature scaling learned from the training set.
+    pub scaling: FeatureScaling,
+    /// Fit Platt sigmoids for class probabilities (5 more fits per pair).
+    pub probability: bool,
+    /// Seed of the probability cross-validation's folds.
+    pub seed: u64,
+}
+
+impl Default for SvcParams {
+    /// C = 10⁴, `(a·b / 125 + 1)²` (degree 2, γ = 1/125 for Sinapov's 125-cell histograms),
+    /// tolerance 1e-3, min–max scaling, probabilities on, seed 0.
+    ///
+    /// C: two surfaces' min–max-scaled histograms are (nearly always) separable by this kernel,
+    /// so a large C gives the hard-margin machine. With C = 1 every vector of a pair ends at the
+    /// bound; the machine still votes well, but its cross-validated decision values are
+    /// anti-correlated with the labels (leaving a vector out tips the balance of the bounded
+    /// rest), Platt's sigmoid fits the wrong sign and the coupled probabilities are useless.
+    fn default() -> Self {
+        Self {
+            c: 1e4,
+            kernel: Kernel::Polynomial {
+                gamma: 1.0 / 125.0,
+                coef0: 1.0,
+                degree: 2,
+            },
+            tolerance: 1e-3,
+            scaling: FeatureScaling::MinMax,
+            probability: true,
+            seed: 0,
+        }
+    }
+}
+
+impl SvcParams {
+    fn check(&self) -> Result<(), SvcError> {
+        let bad = |name, value, reason| Err(SvcError::Parameter { name, value, reason });
+        if !(self.c.is_finite() && self.c > 0.0) {
+            return bad("c", self.c, "positive and finite");
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return bad("tolerance", self.tolerance, "positive and finite");
+        }
+        match self.kernel {
+            Kernel::Rbf { gamma } | Kernel::Polynomial { gamma, .. }
+                if !(gamma.is_finite() && gamma > 0.0) =>
+            {
+                bad("gamma", gamma, "positive and finite")
+            }
+            Kernel::Polynomial { degree: 0, .. } => bad("degree", 0.0, "at least 1"),
+            Kernel::Polynomial { coef0, .. } if !coef0.is_finite() => bad("coef0", coef0, "finite"),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Curvature floor for pairs whose kernel is not positive definite (libsvm's τ).
+const TAU: f64 = 1e-12;
+/// Folds of the cross-validation behind each pair's sigmoid (libsvm's).
+const PROBABILITY_FOLDS: usize = 5;
+
+/// One binary C-SVC: `f(x) = Σ coef_t K(x_t, x) − ρ`, positive for the pair's first class.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BinarySvc {
+    /// The pair `(i, j)`, `i < j`; positive decisions vote for `i`.
+    pub classes: (usize, usize),
+    /// Support vectors: (training point index, `y_t α_t`).
+    pub support: Vec<(usize, f64)>,
+    /// Bias ρ.
+    pub rho: f64,
+    /// Platt sigmoid `P(i | x) = 1 / (1 + exp(A f + B))`, if fitted.
+    pub sigmoid: Option<(f64, f64)>,
+}
+
+/// A fitted one-vs-one multi-class SVC.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Svc {
+    params: SvcParams,
+    classes: usize,
+    dim: usize,
+    /// Per feature `(offset, factor)`: scaled = (x − offset)·factor.
+    scale: Vec<(f64, f64)>,
+    /// Scaled training points, row-major.
+    points: Vec<f64>,
+    /// The `k(k − 1)/2` binary machines in libsvm's order: (0,1), (0,2), …, (1,2), …
+    machines: Vec<BinarySvc>,
+}
+
+impl Svc {
+    /// Fits on `features` with `labels` in `0..classes`; every class needs a vector.
+    pub fn fit<V: AsRef<[f64]>>(
+        params: SvcParams,
+        features: &[V],
+        labels: &[usize],
+        classes: usize,
+    ) -> Result<Self, SvcError> {
+        params.check()?;
+        if features.is_empty() || features.len() != labels.len() {
+            return Err(SvcError::Counts {
+                features: features.len(),
+                labels: labels.len(),
+            });
+        }
+        let dim = features[0].as_ref().len();
+        for (index, (f, &label)) in features.iter().zip(labels).enumerate() {
+            let f = f.as_ref();
+            if f.len() != dim {
+                return Err(SvcError::Dimension {
+                    index,
+                    expected: dim,
+                    got: f.len(),
+                });
+            }
+            if f.iter().any(|v| !v.is_finite()) {
+                return Err(SvcError::NonFinite { index });
+            }
+            if label >= classes {
+                return Err(SvcError::LabelOutOfRange {
+                    index,
+                    label,
+                    classes,
+                });
+            }
+        }
+        if let Some(class) = (0..classes).find(|c| !labels.contains(c)) {
+            return Err(SvcError::EmptyClass { class });
+        }
+        let scale: Vec<(f64, f64)> = match params.scaling {
+            FeatureScaling::None => vec![(0.0, 1.0); dim],
+            FeatureScaling::MinMax => (0..dim)
+                .map(|j| {
+                    let (lo, hi) = features
+                        .iter()
+                        .map(|f| f.as_ref()[j])
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                            (lo.min(v), hi.max(v))
+                        });
+                    (lo, if hi > lo { 1.0 / (hi - lo) } else { 0.0 })
+                })
+                .collect(),
+        };
+        let mut points = Vec::with_capacity(features.len() * dim);
+        for f in features {
+            points.extend(f.as_ref().iter().zip(&scale).map(|(v, (o, s))| (v - o) * s));
+        }
+        let row = |t: usize| &points[t * dim..(t + 1) * dim];
+        let mut rng = SplitMix64::new(params.seed);
+        let mut machines = Vec::with_capacity(classes * classes.saturating_sub(1) / 2);
+        for i in 0..classes {
+            for j in i + 1..classes {
+                let members: Vec<usize> = (0..labels.len())
+                    .filter(|&t| labels[t] == i || labels[t] == j)
+                    .collect();
+                let y: Vec<f64> = members
+                    .iter()
+                    .map(|&t| if labels[t] == i { 1.0 } else { -1.0 })
+                    .collect();
+                let gram = |subset: &[usize]| -> Vec<f64> {
+                    let n = subset.len();
+                    let mut k = vec![0.0; n * n];
+                    for a in 0..n {
+                        for b in a..n {
+                            let v = params
+                                .kernel
+                                .eval(row(members[subset[a]]), row(members[subset[b]]));
+                            k[a * n + b] = v;
+                            k[b * n + a] = v;
+                        }
+                    }
+                    k
+                };
+                let all: Vec<usize> = (0..members.len()).collect();
+                let (alpha, rho) =
+                    solve(&gram(&all), &y, params.c, params.tolerance).ok_or(SvcError::NotConverged {
+                        iterations: max_iterations(members.len()),
+                        first: i,
+                        second: j,
+                    })?;
+                let support = members
+                    .iter()
+                    .zip(alpha.iter().zip(&y))
+                    .filter(|(_, (a, _))| **a > 0.0)
+                    .map(|(&t, (a, yt))| (t, a * yt))
+                    .collect();
+                let sigmoid = if params.probability {
+                    let dec = cross_validated_decisions(&members, &y, &params, &row, &mut rng).ok_or(
+                        SvcError::NotConverged {
+                            iterations: max_iterations(members.len()),
+                            first: i,
+                            second: j,
+                        },
+                    )?;
+                    Some(sigmoid_train(&dec, &y))
+                } else {
+                    None
+                };
+                machines.push(BinarySvc {
+                    classes: (i, j),
+                    support,
+                    rho,
+                    sigmoid,
+                });
+            }
+        }
+        Ok(Self {
+            params,
+            classes,
+            dim,
+            scale,
+            points,
+            machines,
+        })
+    }
+
+    /// Number of classes.
+    pub fn classes(&self) -> usize {
+        self.classes
+    }
+
+    /// The hyperparameters it was fitted with.
+    pub fn params(&self) -> &SvcParams {
+        &self.params
+    }
+
+    /// The binary machines, in libsvm's pair order.
+    pub fn machines(&self) -> &[BinarySvc] {
+        &self.machines
+    }
+
+    /// Dimension of the feature vectors.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Checks the shapes and values of a classifier read from a file: `Err((field, reason))`.
+    pub fn check_shape(&self) -> Result<(), (&'static str, String)> {
+        if let Err(e) = self.params.check() {
+            return Err(("params", e.to_string()));
+        }
+        if self.dim == 0 || self.scale.len() != self.dim || !self.points.len().is_multiple_of(self.dim) {
+            return Err(("points", format!("not whole vectors of dimension {}", self.dim)));
+        }
+        let n = self.points.len() / self.dim;
+        let pairs: Vec<(usize, usize)> = (0..self.classes)
+            .flat_map(|i| (i + 1..self.classes).map(move |j| (i, j)))
+            .collect();
+        if self.machines.len() != pairs.len()
+            || self.machines.iter().zip(&pairs).any(|(m, p)| m.classes != *p)
+        {
+            return Err((
+                "machines",
+                format!(
+                    "expected the {} pairs of {} classes in order",
+                    pairs.len(),
+                    self.classes
+                ),
+            ));
+        }
+        for m in &self.machines {
+            if m.support.iter().any(|&(t, c)| t >= n || !c.is_finite()) || !m.rho.is_finite() {
+                return Err((
+                    "machines",
+                    format!(
+                        "pair {:?}: a support index past {n} or a non-finite value",
+                        m.classes
+                    ),
+                ));
+            }
+            if m.sigmoid.is_some_and(|(a, b)| !(a.is_finite() && b.is_finite())) {
+                return Err(("machines", format!("pair {:?}: non-finite sigmoid", m.classes)));
+            }
+        }
+        let finite = self.points.iter().all(|v| v.is_finite())
+            && self.scale.iter().all(|(o, s)| o.is_finite() && s.is_finite());
+        if !finite {
+            return Err(("points", "contains a non-finite value".into()));
+        }
+        Ok(())
+    }
+
+    fn scaled(&self, query: &[f64]) -> Result<Vec<f64>, SvcError> {
+        if query.len() != self.dim {
+            return Err(SvcError::Dimension {
+                index: 0,
+                expected: self.dim,
+                got: query.len(),
+            });
+        }
+        if query.iter().any(|v| !v.is_finite()) {
+            return Err(SvcError::NonFinite { index: 0 });
+        }
+        Ok(query
+            .iter()
+            .zip(&self.scale)
+            .map(|(v, (o, s))| (v - o) * s)
+            .collect())
+    }
+
+    /// Decision values of every pair, in [`Svc::machines`] order (scikit-learn's
+    /// `decision_function` with `decision_function_shape='ovo'`).
+    pub fn decision_values(&self, query: &[f64]) -> Result<Vec<f64>, SvcError> {
+        let q = self.scaled(query)?;
+        let dim = self.dim;
+        Ok(self
+            .machines
+            .iter()
+            .map(|m| {
+                m.support
+                    .iter()
+                    .map(|&(t, coef)| {
+                        coef * self.params.kernel.eval(&self.points[t * dim..(t + 1) * dim], &q)
+                    })
+                    .sum::<f64>()
+                    - m.rho
+            })
+            .collect())
+    }
+
+    /// The class with most pairwise votes; ties to the lowest class (libsvm's rule).
+    pub fn predict(&self, query: &[f64]) -> Result<usize, SvcError> {
+        let dec = self.decision_values(query)?;
+        let mut votes = vec![0usize; self.classes];
+        for (m, d) in self.machines.iter().zip(&dec) {
+            votes[if *d > 0.0 { m.classes.0 } else { m.classes.1 }] += 1;
+        }
+        let best = votes.iter().copied().max().unwrap_or(0);
+        Ok(votes.iter().position(|&v| v == best).unwrap_or(0))
+    }
+
+    /// Class probabilities by pairwise coupling of the pairs' sigmoids.
+    pub fn predict_proba(&self, query: &[f64]) -> Result<Vec<f64>, SvcError> {
+        let dec = self.decision_values(query)?;
+        let k = self.classes;
+        let mut r = vec![vec![0.0; k]; k];
+        for (m, d) in self.machines.iter().zip(&dec) {
+            let (a, b) = m.sigmoid.ok_or(SvcError::NoProbability)?;
+            let p = sigmoid_predict(*d, a, b).clamp(1e-7, 1.0 - 1e-7);
+            r[m.classes.0][m.classes.1] = p;
+            r[m.classes.1][m.classes.0] = 1.0 - p;
+        }
+        Ok(pairwise_coupling(&r))
+    }
+}
+
+/// The values of C that [`select_c`] tries by default: 1 to 10⁵ in decades.
+pub const C_GRID: [f64; 6] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
+
+/// One C of a [`CSearch`] and its cross-validated accuracy.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CvPoint {
+    /// The box constraint.
+    pub c: f64,
+    /// Fraction of held-out vectors classified correctly.
+    pub accuracy: f64,
+}
+
+/// How C was chosen: each candidate's accuracy under cross-validation by group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CSearch {
+    /// Folds of the cross-validation (whole groups per fold, see
+    /// [`super::knn::group_folds`]).
+    pub folds: usize,
+    /// Every candidate, in the order tried.
+    pub grid: Vec<CvPoint>,
+    /// The most accurate candidate; ties go to the smaller C (the wider margin).
+    pub chosen_c: f64,
+}
+
+impl CSearch {
+    /// Cross-validated accuracy of the chosen C.
+    pub fn accuracy(&self) -> Option<f64> {
+        self.grid
+            .iter()
+            .find(|p| p.c == self.chosen_c)
+            .map(|p| p.accuracy)
+    }
+
+    /// Checks a search read from a file: `Err((field, reason))`.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        if self.folds < 2 {
+            return Err(("folds", format!("{} folds; cross-validation needs 2", self.folds)));
+        }
+        if self.grid.is_empty() {
+            return Err(("grid", "no candidate".into()));
+        }
+        if let Some(p) = self
+            .grid
+            .iter()
+            .find(|p| !(p.c.is_finite() && p.c > 0.0 && (0.0..=1.0).contains(&p.accuracy)))
+        {
+            return Err((
+                "grid",
+                format!(
+                    "C = {}, accuracy {}: C must be positive, accuracy in [0, 1]",
+                    p.c, p.accuracy
+                ),
+            ));
+        }
+        if self.accuracy().is_none() {
+            return Err(("chosen_c", format!("{} is not in the grid", self.chosen_c)));
+        }
+        Ok(())
+    }
+}
+
+/// Accuracy of an SVC with `params` under cross-validation by group
+/// ([`super::knn::group_folds`]): all vectors of a group (a trial) are held out together.
+///
+/// A training fold that lacks some classes is fitted on the classes it has, and the held-out
+/// vectors of the missing ones count as wrong (the classifier cannot name them); a fold with a
+/// single class predicts it. Probabilities are not fitted (only votes are scored).
+pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
+    params: SvcParams,
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<f64, SvcError> {
+    let (fold, folds) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    let params = SvcParams {
+        probability: false,
+        ..params
+    };
+    let mut correct = 0usize;
+    for f in 0..folds {
+        correct += fold_correct(params, features, labels, &fold, f, classes)?;
+    }
+    Ok(correct as f64 / features.len() as f64)
+}
+
+/// Picks C from `grid` by [`cross_validated_accuracy`] with `params`' other settings: the most
+/// accurate C, ties to the smaller one.
+pub fn select_c<V: AsRef<[f64]>>(
+    params: SvcParams,
+    grid: &[f64],
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<CSearch, SvcError> {
+    let (_, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    let mut order: Vec<f64> = grid.to_vec();
+    order.sort_by(f64::total_cmp);
+    order.dedup();
+    if order.is_empty() {
+        return Err(SvcError::Parameter {
+            name: "c",
+            value: f64::NAN,
+            reason: "an empty grid of C values",
+        });
+    }
+    let mut points = Vec::with_capacity(order.len());
+    for &c in &order {
+        let accuracy = cross_validated_accuracy(
+            SvcParams { c, ..params },
+            features,
+            labels,
+            groups,
+            classes,
+            folds,
+        )?;
+        points.push(CvPoint { c, accuracy });
+    }
+    // Ascending C, so a strict improvement is needed to move to a larger one.
+    let best = points.iter().fold(
+        points[0],
+        |best, p| if p.accuracy > best.accuracy { *p } else { best },
+    );
+    Ok(CSearch {
+        folds: used,
+        grid: points,
+        chosen_c: best.c,
+    })
+}
+
+/// Fold of each vector and the number of folds, after checking the counts.
+fn cv_folds(
+    features: usize,
+    labels: usize,
+    groups: &[u64],
+    folds: usize,
+) -> Result<(Vec<usize>, usize), SvcError> {
+    if features == 0 || features != labels || groups.len() != features {
+        return Err(SvcError::Counts {
+            features,
+            labels: if labels == features { groups.len() } else { labels },
+        });
+    }
+    super::knn::group_folds(groups, folds).map_err(|_| {
+        let mut distinct = groups.to_vec();
+        distinct.sort_unstable();
+        distinct.dedup();
+        SvcError::TooFewGroups {
+            groups: distinct.len(),
+            folds,
+        }
+    })
+}
+
+/// Held-out vectors of fold `f` classified correctly by an SVC fitted on the other folds.
+fn fold_correct<V: AsRef<[f64]>>(
+    params: SvcParams,
+    features: &[V],
+    labels: &[usize],
+    fold: &[usize],
+    f: usize,
+    classes: usize,
+) -> Result<usize, SvcError> {
+    let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
+        .iter()
+        .zip(labels)
+        .zip(fold)
+        .filter(|&(_, &g)| g != f)
+        .map(|((x, &y), _)| (x.as_ref(), y))
+        .unzip();
+    // The classes present in training, relabelled 0..m for the fit.
+    let mut present: Vec<usize> = train_y.clone();
+    present.sort_unstable();
+    present.dedup();
+    if let Some(&label) = present.iter().find(|&&l| l >= classes) {
+        return Err(SvcError::LabelOutOfRange {
+            index: labels.iter().position(|&l| l == label).unwrap_or(0),
+            label,
+            classes,
+        });
+    }
+    let held_out = features
+        .iter()
+        .zip(labels)
+        .zip(fold)
+        .filter(|&(_, &g)| g == f)
+        .map(|((x, &y), _)| (x.as_ref(), y));
+    if present.len() < 2 {
+        let only = present.first().copied();
+        return Ok(held_out.filter(|&(_, y)| Some(y) == only).count());
+    }
+    let compact: Vec<usize> = train_y
+        .iter()
+        .map(|y| present.binary_search(y).unwrap_or(0))
+        .collect();
+    let svc = Svc::fit(params, &train_x, &compact, present.len())?;
+    let mut correct = 0;
+    for (x, y) in held_out {
+        correct += usize::from(present[svc.predict(x)?] == y);
+    }
+    Ok(correct)
+}
+
+fn max_iterations(n: usize) -> usize {
+    (100 * n).max(10_000_000)
+}
+
+/// SMO on the C-SVC dual with Gram matrix `k` (row-major, n × n) and labels ±1; returns α and ρ,
+/// or `None` if it did not converge.
+fn solve(k: &[f64], y: &[f64], c: f64, tolerance: f64) -> Option<(Vec<f64>, f64)> {
+    let n = y.len();
+    let q = |a: usize, b: usize| y[a] * y[b] * k[a * n + b];
+    let mut alpha = vec![0.0; n];
+    let mut grad = vec![-1.0; n];
+    let in_up = |a: f64, y: f64| (y > 0.0 && a < c) || (y < 0.0 && a > 0.0);
+    let in_low = |a: f64, y: f64| (y > 0.0 && a > 0.0) || (y < 0.0 && a < c);
+    let mut converged = false;
+    for _ in 0..max_iterations(n) {
+        // First index: the most violating in I_up; second: the best second-order gain in I_low.
+        let (mut g_max, mut i) = (f64::NEG_INFINITY, usize::MAX);
+        for t in 0..n {
+            if in_up(alpha[t], y[t]) && -y[t] * grad[t] >= g_max {
+                g_max = -y[t] * grad[t];
+                i = t;
+            }
+        }
+        let (mut g_max2, mut j, mut obj_min) = (f64::NEG_INFINITY, usize::MAX, f64::INFINITY);
+        for t in 0..n {
+            if !in_low(alpha[t], y[t]) {
+                continue;
+            }
+            let yg = y[t] * grad[t];
+            g_max2 = g_max2.max(yg);
+            if i == usize::MAX {
+                continue;
+            }
+            let b = g_max + yg;
+            if b > 0.0 {
+                let quad = k[i * n + i] + k[t * n + t] - 2.0 * k[i * n + t];
+                let obj = -(b * b) / if quad > 0.0 { quad } else { TAU };
+                if obj <= obj_min {
+                    obj_min = obj;
+                    j = t;
+                }
+            }
+        }
+        if g_max + g_max2 < tolerance || i == usize::MAX || j == usize::MAX {
+            converged = true;
+            break;
+        }
+        let (old_i, old_j) = (alpha[i], alpha[j]);
+        let quad = (k[i * n + i] + k[j * n + j] - 2.0 * k[i * n + j]).max(TAU);
+        if y[i] != y[j] {
+            let delta = (-grad[i] - grad[j]) / quad;
+            let diff = alpha[i] - alpha[j];
+            alpha[i] += delta;
+            alpha[j] += delta;
+            if diff > 0.0 {
+                if alpha[j] < 0.0 {
+                    alpha[j] = 0.0;
+                    alpha[i] = diff;
+                }
+            } else if alpha[i] < 0.0 {
+                alpha[i] = 0.0;
+                alpha[j] = -diff;
+            }
+            if diff > 0.0 {
+                if alpha[i] > c {
+                    alpha[i] = c;
+                    alpha[j] = c - diff;
+                }
+            } else if alpha[j] > c {
+                alpha[j] = c;
+                alpha[i] = c + diff;
+            }
+        } else {
+            let delta = (grad[i] - grad[j]) / quad;
+            let sum = alpha[i] + alpha[j];
+            alpha[i] -= delta;
+            alpha[j] += delta;
+            if sum > c {
+                if alpha[i] > c {
+                    alpha[i] = c;
+                    alpha[j] = sum - c;
+                }
+            } else if alpha[j] < 0.0 {
+                alpha[j] = 0.0;
+                alpha[i] = sum;
+            }
+            if sum > c {
+                if alpha[j] > c {
+                    alpha[j] = c;
+                    alpha[i] = sum - c;
+                }
+            } else if alpha[i] < 0.0 {
+                alpha[i] = 0.0;
+                alpha[j] = sum;
+            }
+        }
+        let (di, dj) = (alpha[i] - old_i, alpha[j] - old_j);
+        for (t, g) in grad.iter_mut().enumerate() {
+            *g += q(t, i) * di + q(t, j) * dj;
+        }
+    }
+    if !converged {
+        return None;
+    }
+    // ρ: the mean of y∇ over free vectors, else the middle of the feasible interval.
+    let (mut upper, mut lower, mut free, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0usize, 0.0);
+    for t in 0..n {
+        let yg = y[t] * grad[t];
+        if alpha[t] >= c {
+            if y[t] < 0.0 {
+                upper = upper.min(yg);
+            } else {
+                lower = lower.max(yg);
+            }
+        } else if alpha[t] <= 0.0 {
+            if y[t] > 0.0 {
+                upper = upper.min(yg);
+            } else {
+                lower = lower.max(yg);
+            }
+        } else {
+            free += 1;
+            sum += yg;
+        }
+    }
+    let rho = if free > 0 {
+        sum / free as f64
+    } else {
+        (upper + lower) / 2.0
+    };
+    Some((alpha, rho))
+}
+
+/// Decision values of each of a pair's points from a machine trained without its fold.
+fn cross_validated_decisions<'a>(
+    members: &[usize],
+    y: &[f64],
+    params: &SvcParams,
+    row: &impl Fn(usize) -> &'a [f64],
+    rng: &mut SplitMix64,
+) -> Option<Vec<f64>> {
+    let n = members.len();
+    // A Fisher–Yates shuffle, then folds of consecutive positions (libsvm's layout).
+    let mut order: Vec<usize> = (0..n).collect();
+    for a in (1..n).rev() {
+        order.swap(a, rng.below(a + 1));
+    }
+    let mut dec = vec![0.0; n];
+    for fold in 0..PROBABILITY_FOLDS {
+        let (begin, end) = (fold * n / PROBABILITY_FOLDS, (fold + 1) * n / PROBABILITY_FOLDS);
+        let test = &order[begin..end];
+        let train: Vec<usize> = order[..begin].iter().chain(&order[end..]).copied().collect();
+        let (positive, negative) = (
+            train.iter().filter(|&&t| y[t] > 0.0).count(),
+            train.iter().filter(|&&t| y[t] < 0.0).count(),
+        );
+        // One class only in training: libsvm's fallback, a constant decision of that sign.
+        if positive == 0 || negative == 0 {
+            let v = if positive > 0 {
+                1.0
+            } else if negative > 0 {
+                -1.0
+            } else {
+                0.0
+            };
+            test.iter().for_each(|&t| dec[t] = v);
+            continue;
+        }
+        let m = train.len();
+        let mut k = vec![0.0; m * m];
+        for a in 0..m {
+            for b in a..m {
+                let v = params.kernel.eval(row(members[train[a]]), row(members[train[b]]));
+                k[a * m + b] = v;
+                k[b * m + a] = v;
+            }
+        }
+        let ty: Vec<f64> = train.iter().map(|&t| y[t]).collect();
+        let (alpha, rho) = solve(&k, &ty, params.c, params.tolerance)?;
+        for &t in test {
+            let x = row(members[t]);
+            dec[t] = train
+                .iter()
+                .zip(alpha.iter().zip(&ty))
+                .filter(|(_, (a, _))| **a > 0.0)
+                .map(|(&s, (a, ys))| a * ys * params.kernel.eval(row(members[s]), x))
+                .sum::<f64>()
+                - rho;
+        }
+    }
+    Some(dec)
+}
+
+/// Platt's sigmoid `1 / (1 + exp(A f + B))` fitted to decision values `dec` with labels ±1 by
+/// Lin, Lin & Weng's Newton method with backtracking (libsvm's `sigmoid_train`).
+pub fn sigmoid_train(dec: &[f64], y: &[f64]) -> (f64, f64) {
+    let prior1 = y.iter().filter(|&&v| v > 0.0).count() as f64;
+    let prior0 = y.len() as f64 - prior1;
+    let (max_iter, min_step, sigma, eps) = (100, 1e-10, 1e-12, 1e-5);
+    let hi = (prior1 + 1.0) / (prior1 + 2.0);
+    let lo = 1.0 / (prior0 + 2.0);
+    let t: Vec<f64> = y.iter().map(|&v| if v > 0.0 { hi } else { lo }).collect();
+    let objective = |a: f64, b: f64| -> f64 {
+        dec.iter()
+            .zip(&t)
+            .map(|(d, ti)| {
+                let f = d * a + b;
+                if f >= 0.0 {
+                    ti * f + (-f).exp().ln_1p()
+                } else {
+                    (ti - 1.0) * f + f.exp().ln_1p()
+                }
+            })
+            .sum()
+    };
+    let (mut a, mut b) = (0.0, ((prior0 + 1.0) / (prior1 + 1.0)).ln());
+    let mut fval = objective(a, b);
+    for _ in 0..max_iter {
+        let (mut h11, mut h22, mut h21, mut g1, mut g2) = (sigma, sigma, 0.0, 0.0, 0.0);
+        for (d, ti) in dec.iter().zip(&t) {
+            let f = d * a + b;
+            let (p, q) = if f >= 0.0 {
+                let e = (-f).exp();
+                (e / (1.0 + e), 1.0 / (1.0 + e))
+            } else {
+                let e = f.exp();
+                (1.0 / (1.0 + e), e / (1.0 + e))
+            };
+            let d2 = p * q;
+            h11 += d * d * d2;
+            h22 += d2;
+            h21 += d * d2;
+            let d1 = ti - p;
+            g1 += d * d1;
+            g2 += d1;
+        }
+        if g1.abs() < eps && g2.abs() < eps {
+            break;
+        }
+        let det = h11 * h22 - h21 * h21;
+        let da = -(h22 * g1 - h21 * g2) / det;
+        let db = -(-h21 * g1 + h11 * g2) / det;
+        let gd = g1 * da + g2 * db;
+        let mut step = 1.0;
+        while step >= min_step {
+            let (na, nb) = (a + step * da, b + step * db);
+            let nf = objective(na, nb);
+            if nf < fval + 1e-4 * step * gd {
+                (a, b, fval) = (na, nb, nf);
+                break;
+            }
+            step /= 2.0;
+        }
+        if step < min_step {
+            break;
+        }
+    }
+    (a, b)
+}
+
+/// `1 / (1 + exp(A f + B))`, computed without overflow.
+pub fn sigmoid_predict(dec: f64, a: f64, b: f64) -> f64 {
+    let f = dec * a + b;
+    if f >= 0.0 {
+        let e = (-f).exp();
+        e / (1.0 + e)
+    } else {
+        1.0 / (1.0 + f.exp())
+    }
+}
+
+/// Wu, Lin & Weng's method 2: `p` minimising `Σ_i Σ_{j≠i} (r_ji p_i − r_ij p_j)²` with
+/// `Σ p = 1`, from pairwise probabilities `r[i][j] ≈ P(i | i or j)` (`r[i][j] + r[j][i] = 1`).
+/// libsvm's fixed-point iteration, run to a tight tolerance (see the module doc).
+pub fn pairwise_coupling(r: &[Vec<f64>]) -> Vec<f64> {
+    let k = r.len();
+    if k == 0 {
+        return Vec::new();
+    }
+    let mut q = vec![vec![0.0; k]; k];
+    for t in 0..k {
+        for j in 0..k {
+            if j != t {
+                q[t][t] += r[j][t] * r[j][t];
+                q[t][j] = -r[j][t] * r[t][j];
+            }
+        }
+    }
+    let mut p = vec![1.0 / k as f64; k];
+    let mut qp = vec![0.0; k];
+    let eps = 1e-12 / k as f64;
+    for _ in 0..(1000 * k).max(1000) {
+        let mut pqp = 0.0;
+        for t in 0..k {
+            qp[t] = (0..k).map(|j| q[t][j] * p[j]).sum();
+            pqp += p[t] * qp[t];
+        }
+        let max_error = qp.iter().map(|v| (v - pqp).abs()).fold(0.0, f64::max);
+        if max_error < eps {
+            break;
+        }
+        for t in 0..k {
+            if q[t][t] <= 0.0 {
+                continue;
+            }
+            let diff = (-qp[t] + pqp) / q[t][t];
+            p[t] += diff;
+            pqp = (pqp + diff * (diff * q[t][t] + 2.0 * qp[t])) / (1.0 + diff) / (1.0 + diff);
+            for j in 0..k {
+                qp[j] = (qp[j] + diff * q[t][j]) / (1.0 + diff);
+                p[j] /= 1.0 + diff;
+            }
+        }
+    }
+    p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(serde::Deserialize)]
+    struct Fixture {
+        c: f64,
+        gamma: f64,
+        coef0: f64,
+        classes: usize,
+        x_train: Vec<Vec<f64>>,
+        y_train: Vec<usize>,
+        x_test: Vec<Vec<f64>>,
+        decision_ovo: Vec<Vec<f64>>,
+        predicted: Vec<usize>,
+        n_support: Vec<usize>,
+        coupling: Vec<Coupling>,
+    }
+
+    #[derive(serde::Deserialize)]
+    struct Coupling {
+        r: Vec<Vec<f64>>,
+        p: Vec<f64>,
+    }
+
+    fn fixture() -> Fixture {
+        serde_json::from_str(include_str!("../fixtures/svc_poly2_4class.json")).expect("fixture")
+    }
+
+    #[test]
+    fn decision_values_and_predictions_match_scikit_learn() {
+        let f = fixture();
+        let params = SvcParams {
+            c: f.c,
+            kernel: Kernel::Polynomial {
+                gamma: f.gamma,
+                coef0: f.coef0,
+                degree: 2,
+            },
+            tolerance: 1e-10,
+            scaling: FeatureScaling::None,
+            probability: false,
+            seed: 0,
+        };
+        let svc = Svc::fit(params, &f.x_train, &f.y_train, f.classes).expect("fit");
+        let mut worst: f64 = 0.0;
+        for ((x, expected), label) in f.x_test.iter().zip(&f.decision_ovo).zip(&f.predicted) {
+            let dec = svc.decision_values(x).expect("query");
+            for (a, b) in dec.iter().zip(expected) {
+                worst = worst.max((a - b).abs());
+            }
+            assert_eq!(svc.predict(x).expect("query"), *label, "{dec:?} vs {expected:?}");
+        }
+        // libsvm caches the kernel matrix in single precision (`Qfloat`), so its decision
+        // values carry errors of ~1e-7 relative per kernel entry; ours are in double.
+        assert!(worst < 1e-5, "largest decision difference {worst}");
+        // Support vectors per class, counted as libsvm does (a point is one if any pair uses it).
+        let mut is_sv = vec![false; f.x_train.len()];
+        for m in svc.machines() {
+            for &(t, _) in &m.support {
+                is_sv[t] = true;
+            }
+        }
+        let per_class: Vec<usize> = (0..f.classes)
+            .map(|c| {
+                (0..is_sv.len())
+                    .filter(|&t| is_sv[t] && f.y_train[t] == c)
+                    .count()
+            })
+            .collect();
+        assert_eq!(per_class, f.n_support);
+    }
+
+    #[test]
+    fn pairwise_coupling_finds_the_method_2_minimiser() {
+        for case in fixture().coupling {
+            let p = pairwise_coupling(&case.r);
+            assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            for (a, b) in p.iter().zip(&case.p) {
+                assert!((a - b).abs() < 1e-9, "{p:?} vs {:?}", case.p);
+            }
+        }
+        // Consistent pairwise probabilities r_ij = p_i / (p_i + p_j) give p back exactly.
+        let truth = [0.5, 0.3, 0.2];
+        let r: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                (0..3)
+                    .map(|j| {
+                        if i == j {
+                            0.0
+                        } else {
+                            truth[i] / (truth[i] + truth[j])
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let p = pairwise_coupling(&r);
+        for (a, b) in p.iter().zip(truth) {
+            assert!((a - b).abs() < 1e-10, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn probabilities_follow_the_classes_and_platt_fits_a_separable_sample() {
+        let f = fixture();
+        let svc = Svc::fit(
+            SvcParams {
+                c: f.c,
+                kernel: Kernel::Polynomial {
+                    gamma: f.gamma,
+                    coef0: f.coef0,
+                    degree: 2,
+                },
+                scaling: FeatureScaling::None,
+                ..SvcParams::default()
+            },
+            &f.x_train,
+            &f.y_train,
+            f.classes,
+        )
+        .expect("fit");
+        let mut agree = 0;
+        for x in &f.x_test {
+            let p = svc.predict_proba(x).expect("probabilities");
+            assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9 && p.iter().all(|v| (0.0..=1.0).contains(v)));
+            let best = p
+                .iter()
+                .enumerate()
+                .fold(0, |b, (i, v)| if *v > p[b] { i } else { b });
+            agree += usize::from(best == svc.predict(x).expect("predict"));
+        }
+        assert!(agree * 10 >= f.x_test.len() * 8, "{agree} of {}", f.x_test.len());
+        // Separable decisions: a sigmoid falling through 0 (A < 0, B ≈ 0 by symmetry), kept
+        // from a step by the fit's regularised targets (3 + 1)/(3 + 2) and 1/(3 + 2).
+        let dec = [-2.0, -1.5, -1.0, 1.0, 1.5, 2.0];
+        let y = [-1.0, -1.0, -1.0, 1.0, 1.0, 1.0];
+        let (a, b) = sigmoid_train(&dec, &y);
+        assert!(a < -0.5 && b.abs() < 1e-6, "{a} {b}");
+        assert!(sigmoid_predict(2.0, a, b) > 0.75 && sigmoid_predict(-2.0, a, b) < 0.25);
+    }
+
+    /// Three overlapping classes in the plane, `per_group` points of each in each of `groups`
+    /// groups (trials), from a fixed seed.
+    fn overlapping_blobs(groups: u64, per_group: usize) -> (Vec<[f64; 2]>, Vec<usize>, Vec<u64>) {
+        let centres = [[0.0, 0.0], [1.0, 0.2], [0.4, 0.9]];
+        let mut rng = SplitMix64::new(7);
+        let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
+        for group in 0..groups {
+            for (class, centre) in centres.iter().enumerate() {
+                for _ in 0..per_group {
+                    let (a, b) = (rng.next_f64() - 0.5, rng.next_f64() - 0.5);
+                    x.push([centre[0] + 1.2 * a, centre[1] + 1.2 * b]);
+                    y.push(class);
+                    g.push(group);
+                }
+            }
+        }
+        (x, y, g)
+    }
+
+    #[test]
+    fn inner_cross_validation_picks_the_c_of_a_brute_force_search() {
+        let (x, y, groups) = overlapping_blobs(4, 6);
+        let params = SvcParams {
+            kernel: Kernel::Polynomial {
+                gamma: 1.0,
+                coef0: 1.0,
+                degree: 2,
+            },
+            scaling: FeatureScaling::None,
+            ..SvcParams::default()
+        };
+        let grid = [1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3];
+        // Brute force: leave each group out in turn (4 groups, 4 folds), fit on the rest with
+        // every class present, count the held-out points classified right.
+        let brute: Vec<f64> = grid
+            .iter()
+            .map(|&c| {
+                let mut right = 0;
+                for held in 0..4 {
+                    let train: Vec<usize> = (0..x.len()).filter(|&i| groups[i] != held).collect();
+                    let tx: Vec<[f64; 2]> = train.iter().map(|&i| x[i]).collect();
+                    let ty: Vec<usize> = train.iter().map(|&i| y[i]).collect();
+                    let svc = Svc::fit(SvcParams { c, ..params }, &tx, &ty, 3).expect("fit");
+                    right += (0..x.len())
+                        .filter(|&i| groups[i] == held && svc.predict(&x[i]).expect("predict") == y[i])
+                        .count();
+                }
+                right as f64 / x.len() as f64
+            })
+            .collect();
+        let best = brute
+            .iter()
+            .enumerate()
+            .fold(0, |b, (i, &a)| if a > brute[b] { i } else { b });
+        // The grid (given unordered, with a repeat) is searched in ascending order.
+        let unordered = [1e3, 1.0, 1e-2, 100.0, 1e-1, 10.0, 1.0];
+        let search = select_c(params, &unordered, &x, &y, &groups, 3, 4).expect("search");
+        eprintln!("brute force {brute:?}, search {search:?}");
+        assert_eq!(search.folds, 4);
+        assert_eq!(search.grid.iter().map(|p| p.c).collect::<Vec<_>>(), grid);
+        for (p, a) in search.grid.iter().zip(&brute) {
+            assert!((p.accuracy - a).abs() < 1e-15, "{search:?} vs {brute:?}");
+        }
+        assert_eq!(search.chosen_c, grid[best]);
+        assert_eq!(search.accuracy(), Some(brute[best]));
+        assert!(search.check().is_ok());
+        // The problem discriminates: the candidates do not all score the same, and the choice
+        // is an inner one (neither the smallest nor the largest C).
+        assert!(brute.iter().any(|&a| a != brute[0]), "{brute:?}");
+        assert!(best > 0 && best < grid.len() - 1, "{brute:?}");
+        // Measured: C = 100 and 1000 tie at 65/72; the tie goes to the smaller C.
+        assert_eq!(brute[4], brute[5], "{brute:?}");
+        assert_eq!(search.chosen_c, 100.0);
+
+        // One group cannot be cross-validated; a class seen in one group only is held out
+        // once with no training vector of its own and counts as wrong.
+        assert_eq!(
+            select_c(params, &grid, &x, &y, &[0; 72], 3, 4),
+            Err(SvcError::TooFewGroups { groups: 1, folds: 4 })
+        );
+        // Class 2 of group 0 relabelled as a class 3 found nowhere else.
+        let lonely: Vec<usize> = (0..x.len())
+            .map(|i| if groups[i] == 0 && y[i] == 2 { 3 } else { y[i] })
+            .collect();
+        let a = cross_validated_accuracy(SvcParams { c: 1.0, ..params }, &x, &lonely, &groups, 4, 4)
+            .expect("folds without class 3 still fit");
+        assert!(a < brute[2], "{a} vs {}", brute[2]);
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let x = [vec![0.0, 1.0], vec![1.0, 0.0]];
+        let fit = |p: SvcParams, labels: &[usize], classes| Svc::fit(p, &x, labels, classes).err();
+        assert!(matches!(
+            fit(
+                SvcParams {
+                    c: 0.0,
+                    ..SvcParams::default()
+                },
+                &[0, 1],
+                2
+            ),
+            Some(SvcError::Parameter { name: "c", .. })
+        ));
+        assert_eq!(
+            fit(SvcParams::default(), &[0, 2], 2),
+            Some(SvcError::LabelOutOfRange {
+                index: 1,
+                label: 2,
+                classes: 2
+            })
+        );
+        assert_eq!(
+            fit(SvcParams::default(), &[0, 0], 2),
+            Some(SvcError::EmptyClass { class: 1 })
+        );
+        assert!(matches!(
+            fit(SvcParams::default(), &[0], 2),
+            Some(SvcError::Counts { .. })
+        ));
+        let svc = Svc::fit(
+            SvcParams {
+                probability: false,
+                ..SvcParams::default()
+            },
+            &x,
+            &[0, 1],
+            2,
+        )
+        .expect("fit");
+        assert_eq!(svc.predict_proba(&[0.0, 1.0]), Err(SvcError::NoProbability));
+        assert!(matches!(
+            svc.predict(&[0.0]),
+            Err(SvcError::Dimension { got: 1, .. })
+        ));
+        assert_eq!(
+            svc.predict(&[f64::NAN, 0.0]),
+            Err(SvcError::NonFinite { index: 0 })
+        );
+        assert_eq!(svc.predict(&[0.0, 1.0]), Ok(0));
+    }
+}

@@ -1,0 +1,30 @@
+//! ε-support-vector regression (Li & Bi Sec. II, Eqs. 8–10).
+//!
+//! Primal: `min ½‖w‖² + C Σ(ξᵢ + ξᵢ*)` subject to `|yᵢ − f(xᵢ)| ≤ ε + ξ`, `ξ, ξ* ≥ 0`.
+//! Dual (what is solved): `min ½ βᵀKβ + ε Σ|βᵢ| − yᵀβ` subject to `Σ βᵢ = 0`, `−C ≤ βᵢ ≤ C`,
+//! with `f(x) = Σ βᵢ K(xᵢ, x) + b`.
+//!
+//! Imports no other palpus crate: identification (`identify`) and surface recognition
+//! (`recognize`) both build on it.
+
+mod error;
+mod export;
+mod fast;
+mod fit;
+mod ipm;
+mod kernel;
+mod model;
+mod params;
+mod polish;
+mod smo;
+
+pub use error::SvrError;
+pub use export::{
+    LibsvmError, LibsvmParseError, read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string,
+    write_libsvm_model,
+};
+pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, FastSvrError, LANES, fast_exp2};
+pub use fit::{ACCEPT_GAP, SvrFit, fit, slack};
+pub use kernel::Kernel;
+pub use model::{InputScaling, SvrModel};
+pub use params::{Solver, SvrParams, SvrParamsBuilder};
