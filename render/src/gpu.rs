@@ -4,6 +4,9 @@ use std::sync::{Arc, Mutex};
 
 use crate::error::RenderError;
 
+/// The depth buffer's format: every render pass and the adapter check share it.
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
 /// A graphics API wgpu may use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Backend {
@@ -135,7 +138,7 @@ impl Gpu {
         let flags = self.adapter.get_texture_format_features(format).flags;
         let depth = self
             .adapter
-            .get_texture_format_features(crate::renderer::DEPTH_FORMAT)
+            .get_texture_format_features(DEPTH_FORMAT)
             .flags;
         if requested >= 4 && flags.sample_count_supported(4) && depth.sample_count_supported(4) {
             4

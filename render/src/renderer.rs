@@ -12,12 +12,11 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::{Frame, MAX_DIMPLES, Object, UiAction};
-use crate::gpu::{Gpu, GpuOptions};
+use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions};
 use crate::image::Image;
 use crate::mesh::MeshData;
 use crate::overlay::OverlayLayer;
 
-pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Offscreen images: 8-bit sRGB so lighting computed in linear space is encoded on store.
 pub const HEADLESS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// Uniform slots must start at multiples of the device's offset alignment (256 on every backend).
