@@ -345,6 +345,33 @@ fn trial_of(path: &Path) -> u32 {
         .expect("a trial number in the name")
 }
 
+/// `palpus gen --only sinapov` into `dir`: every scratch capture, sorted.
+fn generated_scratches(dir: &Path) -> Vec<PathBuf> {
+    let out = palpus(&[
+        "gen",
+        "--out",
+        &dir.to_string_lossy(),
+        "--only",
+        "sinapov",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let mut paths = Vec::new();
+    for surface in std::fs::read_dir(dir.join("sinapov")).expect("sinapov folder") {
+        for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
+            paths.push(capture.expect("entry").path());
+        }
+    }
+    paths.sort();
+    paths
+}
+
+/// Sinapov's split of generated scratches: trials 0–6 train, 7–9 test.
+fn sinapov_split(paths: Vec<PathBuf>) -> (Vec<String>, Vec<String>) {
+    let (train, test): (Vec<PathBuf>, Vec<PathBuf>) = paths.into_iter().partition(|p| trial_of(p) < 7);
+    (strings(&train), strings(&test))
+}
+
 /// Sinapov's protocol through the CLI on `palpus gen --only sinapov` (21 surfaces × 5
 /// behaviours × 10 trials): train on trials 0–6, evaluate on 7–9. Each behaviour's stored
 /// weight is its cross-validated accuracy on the training trials, the SVM's C is picked by the
@@ -354,25 +381,9 @@ fn trial_of(path: &Path) -> u32 {
 fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
     let start = std::time::Instant::now();
     let dir = tempfile::tempdir().expect("tempdir");
-    let out = palpus(&[
-        "gen",
-        "--out",
-        &dir.path().to_string_lossy(),
-        "--only",
-        "sinapov",
-        "--quiet",
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
-    let mut paths = Vec::new();
-    for surface in std::fs::read_dir(dir.path().join("sinapov")).expect("sinapov folder") {
-        for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
-            paths.push(capture.expect("entry").path());
-        }
-    }
-    paths.sort();
+    let paths = generated_scratches(dir.path());
     assert_eq!(paths.len(), 21 * 5 * 10);
-    let (train, test): (Vec<PathBuf>, Vec<PathBuf>) = paths.into_iter().partition(|p| trial_of(p) < 7);
-    let (train_s, test_s) = (strings(&train), strings(&test));
+    let (train_s, test_s) = sinapov_split(paths);
     let grid = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
     for method in ["knn", "svm"] {
         let model = dir.path().join(format!("{method}.json"));
@@ -974,24 +985,7 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
 fn som_over_spectral_histograms_of_generated_scratch_trials() {
     let start = std::time::Instant::now();
     let dir = tempfile::tempdir().expect("tempdir");
-    let out = palpus(&[
-        "gen",
-        "--out",
-        &dir.path().to_string_lossy(),
-        "--only",
-        "sinapov",
-        "--quiet",
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
-    let mut paths = Vec::new();
-    for surface in std::fs::read_dir(dir.path().join("sinapov")).expect("sinapov folder") {
-        for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
-            paths.push(capture.expect("entry").path());
-        }
-    }
-    paths.sort();
-    let (train, test): (Vec<PathBuf>, Vec<PathBuf>) = paths.into_iter().partition(|p| trial_of(p) < 7);
-    let (train_s, test_s) = (strings(&train), strings(&test));
+    let (train_s, test_s) = sinapov_split(generated_scratches(dir.path()));
     let model = dir.path().join("som_spectral.json");
     let model_s = model.to_string_lossy().into_owned();
     let out = palpus(&args(
