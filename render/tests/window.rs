@@ -4,11 +4,9 @@
 
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
-use std::sync::Arc;
-
-use render::demo::{NeedleState, demo_overlay, tissue_scene};
+use render::bench::bench_frame;
 use render::window::{Input, WindowApp, WindowConfig, run};
-use render::{Frame, Image, RenderError, UiAction, shapes};
+use render::{Frame, Image, RenderError, UiAction};
 
 struct App {
     frames: u32,
@@ -19,18 +17,8 @@ impl WindowApp for App {
     fn frame(&mut self, input: &Input, _dt_s: f32) -> Frame {
         self.frames += 1;
         self.last_size = input.window_size_px;
-        let tissue: Vec<_> = shapes::tissue_block().into_iter().map(Arc::new).collect();
-        let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
-        let mut frame = tissue_scene(
-            &tissue,
-            &needle,
-            NeedleState::Pressing {
-                depth_m: 0.008,
-                radius_m: 0.012,
-            },
-        );
-        frame.overlay = Some(demo_overlay());
-        frame
+        // The benchmark scene with its overlay: layered tissue, the needle pressing.
+        bench_frame(true)
     }
 
     fn action(&mut self, _action: UiAction) {}
