@@ -6,11 +6,10 @@
 //! **Solver.** The C-SVC dual `min ½ αᵀQα − eᵀα, yᵀα = 0, 0 ≤ α ≤ C`, `Q_ij = y_i y_j K_ij`, is
 //! solved by SMO with the second-order working-set selection of Fan, Chen & Lin (2005), the
 //! pair update and the bias (`ρ`, averaged over free vectors) of libsvm's `Solver`, so decision
-//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. It is a
-//! separate, short solver rather than a generalisation of the ε-SVR's [`svm`] SMO: that
-//! one is built around the ε-SVR's 2n split variables, row caching and shrinking for tens of
-//! thousands of samples, while a pair of surface classes has tens of training vectors, whose
-//! whole Gram matrix is smaller than one cached SVR row.
+//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. The solver is
+//! [`svm::solve_smo`], the core the ε-SVR uses too, here on a precomputed Gram matrix without
+//! shrinking: a pair of surface classes has tens of training vectors, whose whole Gram matrix
+//! is smaller than one cached SVR row.
 //!
 //! **Probabilities.** For each pair, decision values from a 5-fold cross-validation on that
 //! pair's training vectors (folds from a seeded shuffle, as libsvm's) are fitted by Platt's
@@ -24,7 +23,7 @@ use thiserror::Error;
 
 use super::knn::FeatureScaling;
 use capture::rng::SplitMix64;
-use svm::Kernel;
+use svm::{GramRows, Kernel, SelectionCurvature, SmoSettings, SmoSolution};
 
 /// Why a classifier could not be fitted or queried.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -146,6 +145,27 @@ impl Default for SvcParams {
 }
 
 impl SvcParams {
+    /// The SMO core's settings: libsvm's C-SVC solver (no shrinking, its selection rule, its
+    /// iteration budget), stopping at [`SvcParams::tolerance`].
+    fn smo_settings(&self) -> Result<SmoSettings, SvcError> {
+        self.check()?;
+        SmoSettings::builder()
+            .c(self.c)
+            .stop(self.tolerance)
+            .selection(SelectionCurvature::NonPositiveToTau)
+            .build()
+            .map_err(|e| match e {
+                svm::SvrError::InvalidHyperparameter { name, value, reason } => {
+                    SvcError::Parameter { name, value, reason }
+                }
+                _ => SvcError::Parameter {
+                    name: "c",
+                    value: self.c,
+                    reason: "positive and finite",
+                },
+            })
+    }
+
     fn check(&self) -> Result<(), SvcError> {
         let bad = |name, value, reason| Err(SvcError::Parameter { name, value, reason });
         if !(self.c.is_finite() && self.c > 0.0) {
@@ -167,8 +187,6 @@ impl SvcParams {
     }
 }
 
-/// Curvature floor for pairs whose kernel is not positive definite (libsvm's τ).
-const TAU: f64 = 1e-12;
 /// Folds of the cross-validation behind each pair's sigmoid (libsvm's).
 const PROBABILITY_FOLDS: usize = 5;
 
@@ -207,7 +225,7 @@ impl Svc {
         labels: &[usize],
         classes: usize,
     ) -> Result<Self, SvcError> {
-        params.check()?;
+        let settings = params.smo_settings()?;
         if features.is_empty() || features.len() != labels.len() {
             return Err(SvcError::Counts {
                 features: features.len(),
@@ -283,12 +301,13 @@ impl Svc {
                     k
                 };
                 let all: Vec<usize> = (0..members.len()).collect();
-                let (alpha, rho) =
-                    solve(&gram(&all), &y, params.c, params.tolerance).ok_or(SvcError::NotConverged {
-                        iterations: max_iterations(members.len()),
-                        first: i,
-                        second: j,
-                    })?;
+                let not_converged = SvcError::NotConverged {
+                    iterations: settings.iteration_budget(members.len()),
+                    first: i,
+                    second: j,
+                };
+                let SmoSolution { alpha, rho, .. } =
+                    solve(&gram(&all), &y, &settings).ok_or(not_converged.clone())?;
                 let support = members
                     .iter()
                     .zip(alpha.iter().zip(&y))
@@ -296,13 +315,8 @@ impl Svc {
                     .map(|(&t, (a, yt))| (t, a * yt))
                     .collect();
                 let sigmoid = if params.probability {
-                    let dec = cross_validated_decisions(&members, &y, &params, &row, &mut rng).ok_or(
-                        SvcError::NotConverged {
-                            iterations: max_iterations(members.len()),
-                            first: i,
-                            second: j,
-                        },
-                    )?;
+                    let dec = cross_validated_decisions(&members, &y, &params, &settings, &row, &mut rng)
+                        .ok_or(not_converged)?;
                     Some(sigmoid_train(&dec, &y))
                 } else {
                     None
@@ -661,137 +675,12 @@ fn fold_correct<V: AsRef<[f64]>>(
     Ok(correct)
 }
 
-fn max_iterations(n: usize) -> usize {
-    (100 * n).max(10_000_000)
-}
-
-/// SMO on the C-SVC dual with Gram matrix `k` (row-major, n × n) and labels ±1; returns α and ρ,
-/// or `None` if it did not converge.
-fn solve(k: &[f64], y: &[f64], c: f64, tolerance: f64) -> Option<(Vec<f64>, f64)> {
-    let n = y.len();
-    let q = |a: usize, b: usize| y[a] * y[b] * k[a * n + b];
-    let mut alpha = vec![0.0; n];
-    let mut grad = vec![-1.0; n];
-    let in_up = |a: f64, y: f64| (y > 0.0 && a < c) || (y < 0.0 && a > 0.0);
-    let in_low = |a: f64, y: f64| (y > 0.0 && a > 0.0) || (y < 0.0 && a < c);
-    let mut converged = false;
-    for _ in 0..max_iterations(n) {
-        // First index: the most violating in I_up; second: the best second-order gain in I_low.
-        let (mut g_max, mut i) = (f64::NEG_INFINITY, usize::MAX);
-        for t in 0..n {
-            if in_up(alpha[t], y[t]) && -y[t] * grad[t] >= g_max {
-                g_max = -y[t] * grad[t];
-                i = t;
-            }
-        }
-        let (mut g_max2, mut j, mut obj_min) = (f64::NEG_INFINITY, usize::MAX, f64::INFINITY);
-        for t in 0..n {
-            if !in_low(alpha[t], y[t]) {
-                continue;
-            }
-            let yg = y[t] * grad[t];
-            g_max2 = g_max2.max(yg);
-            if i == usize::MAX {
-                continue;
-            }
-            let b = g_max + yg;
-            if b > 0.0 {
-                let quad = k[i * n + i] + k[t * n + t] - 2.0 * k[i * n + t];
-                let obj = -(b * b) / if quad > 0.0 { quad } else { TAU };
-                if obj <= obj_min {
-                    obj_min = obj;
-                    j = t;
-                }
-            }
-        }
-        if g_max + g_max2 < tolerance || i == usize::MAX || j == usize::MAX {
-            converged = true;
-            break;
-        }
-        let (old_i, old_j) = (alpha[i], alpha[j]);
-        let quad = (k[i * n + i] + k[j * n + j] - 2.0 * k[i * n + j]).max(TAU);
-        if y[i] != y[j] {
-            let delta = (-grad[i] - grad[j]) / quad;
-            let diff = alpha[i] - alpha[j];
-            alpha[i] += delta;
-            alpha[j] += delta;
-            if diff > 0.0 {
-                if alpha[j] < 0.0 {
-                    alpha[j] = 0.0;
-                    alpha[i] = diff;
-                }
-            } else if alpha[i] < 0.0 {
-                alpha[i] = 0.0;
-                alpha[j] = -diff;
-            }
-            if diff > 0.0 {
-                if alpha[i] > c {
-                    alpha[i] = c;
-                    alpha[j] = c - diff;
-                }
-            } else if alpha[j] > c {
-                alpha[j] = c;
-                alpha[i] = c + diff;
-            }
-        } else {
-            let delta = (grad[i] - grad[j]) / quad;
-            let sum = alpha[i] + alpha[j];
-            alpha[i] -= delta;
-            alpha[j] += delta;
-            if sum > c {
-                if alpha[i] > c {
-                    alpha[i] = c;
-                    alpha[j] = sum - c;
-                }
-            } else if alpha[j] < 0.0 {
-                alpha[j] = 0.0;
-                alpha[i] = sum;
-            }
-            if sum > c {
-                if alpha[j] > c {
-                    alpha[j] = c;
-                    alpha[i] = sum - c;
-                }
-            } else if alpha[i] < 0.0 {
-                alpha[i] = 0.0;
-                alpha[j] = sum;
-            }
-        }
-        let (di, dj) = (alpha[i] - old_i, alpha[j] - old_j);
-        for (t, g) in grad.iter_mut().enumerate() {
-            *g += q(t, i) * di + q(t, j) * dj;
-        }
-    }
-    if !converged {
-        return None;
-    }
-    // ρ: the mean of y∇ over free vectors, else the middle of the feasible interval.
-    let (mut upper, mut lower, mut free, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0usize, 0.0);
-    for t in 0..n {
-        let yg = y[t] * grad[t];
-        if alpha[t] >= c {
-            if y[t] < 0.0 {
-                upper = upper.min(yg);
-            } else {
-                lower = lower.max(yg);
-            }
-        } else if alpha[t] <= 0.0 {
-            if y[t] > 0.0 {
-                upper = upper.min(yg);
-            } else {
-                lower = lower.max(yg);
-            }
-        } else {
-            free += 1;
-            sum += yg;
-        }
-    }
-    let rho = if free > 0 {
-        sum / free as f64
-    } else {
-        (upper + lower) / 2.0
-    };
-    Some((alpha, rho))
+/// SMO on the C-SVC dual with Gram matrix `k` (row-major, n × n) and labels ±1 (`p = −1`), by
+/// svm's core; `None` if it did not converge.
+fn solve(k: &[f64], y: &[f64], settings: &SmoSettings) -> Option<SmoSolution> {
+    let mut rows = GramRows::new(k, y.len())?;
+    let linear = vec![-1.0; y.len()];
+    svm::solve_smo(&mut rows, y, &linear, settings).ok()
 }
 
 /// Decision values of each of a pair's points from a machine trained without its fold.
@@ -799,6 +688,7 @@ fn cross_validated_decisions<'a>(
     members: &[usize],
     y: &[f64],
     params: &SvcParams,
+    settings: &SmoSettings,
     row: &impl Fn(usize) -> &'a [f64],
     rng: &mut SplitMix64,
 ) -> Option<Vec<f64>> {
@@ -839,7 +729,7 @@ fn cross_validated_decisions<'a>(
             }
         }
         let ty: Vec<f64> = train.iter().map(|&t| y[t]).collect();
-        let (alpha, rho) = solve(&k, &ty, params.c, params.tolerance)?;
+        let SmoSolution { alpha, rho, .. } = solve(&k, &ty, settings)?;
         for &t in test {
             let x = row(members[t]);
             dec[t] = train

@@ -8,7 +8,7 @@ use super::error::SvrError;
 use super::ipm;
 use super::kernel::Kernel;
 use super::model::SvrModel;
-use super::params::{Solver, SvrParams};
+use super::params::{DualSettings, Solver, SvrParams};
 use super::polish::{self, Side};
 use super::smo;
 
@@ -54,135 +54,202 @@ impl SvrFit {
     }
 }
 
+/// Training data of an ε-SVR, checked once: `x` is `n × dim` row-major, `y` has `n` targets,
+/// every value finite.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SvrData<'a> {
+    /// Inputs, row-major.
+    pub x: &'a [f64],
+    /// Input dimension.
+    pub dim: usize,
+    /// Targets.
+    pub y: &'a [f64],
+}
+
+impl<'a> SvrData<'a> {
+    /// Checks the shapes and values.
+    pub fn new(x: &'a [f64], dim: usize, y: &'a [f64]) -> Result<Self, SvrError> {
+        let n = y.len();
+        if n == 0 {
+            return Err(SvrError::NoSamples);
+        }
+        if dim == 0 || x.len() != n * dim {
+            return Err(SvrError::Shape {
+                inputs: x.len(),
+                targets: n,
+                dim,
+            });
+        }
+        for (row, chunk) in x.chunks_exact(dim).enumerate() {
+            if let Some(k) = chunk.iter().position(|v| !v.is_finite()) {
+                return Err(SvrError::NonFinite {
+                    row,
+                    what: format!("input {k}"),
+                });
+            }
+        }
+        if let Some(row) = y.iter().position(|v| !v.is_finite()) {
+            return Err(SvrError::NonFinite {
+                row,
+                what: "target".into(),
+            });
+        }
+        Ok(Self { x, dim, y })
+    }
+}
+
+/// A solved dual, before its certificate: what the solvers hand to [`fit`]'s final check.
+#[derive(Debug, Clone)]
+struct DualSolution {
+    /// `β = α − α*`, one per sample.
+    beta: Vec<f64>,
+    /// The bias b.
+    bias: f64,
+    /// Which solver produced it.
+    solver: &'static str,
+    /// Iterations of that solver.
+    iterations: usize,
+    /// Whether the exact active-set polish produced it.
+    polished: bool,
+    /// The dense kernel matrix, where the solver built one.
+    kernel_matrix: Option<Mat<f64>>,
+    /// Exact primal weights (linear kernel, polished).
+    weights: Option<Vec<f64>>,
+}
+
 /// Fits an ε-SVR to `n` samples: `x` is `n × dim` row-major, `y` has `n` targets.
 pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFit, SvrError> {
     let started = Instant::now();
-    let n = y.len();
-    if n == 0 {
-        return Err(SvrError::NoSamples);
-    }
-    if dim == 0 || x.len() != n * dim {
-        return Err(SvrError::Shape {
-            inputs: x.len(),
-            targets: n,
-            dim,
-        });
-    }
-    for (row, chunk) in x.chunks_exact(dim).enumerate() {
-        if let Some(k) = chunk.iter().position(|v| !v.is_finite()) {
-            return Err(SvrError::NonFinite {
-                row,
-                what: format!("input {k}"),
-            });
-        }
-    }
-    if let Some(row) = y.iter().position(|v| !v.is_finite()) {
-        return Err(SvrError::NonFinite {
-            row,
-            what: "target".into(),
-        });
-    }
-    let (c, epsilon, kernel) = (params.c(), params.epsilon(), params.kernel());
-    let budget_s = params.time_budget().as_secs_f64();
+    let data = SvrData::new(x, dim, y)?;
+    let settings = params.dual_settings(started);
+    let kernel = params.kernel();
     let use_smo = match params.solver() {
         Solver::Smo => true,
         Solver::InteriorPoint => false,
-        Solver::Auto => n > SvrParams::DENSE_LIMIT,
+        Solver::Auto => y.len() > SvrParams::DENSE_LIMIT,
     };
-
-    let (beta, bias, solver, iterations, polished, k, weights) = if use_smo {
-        let sol = smo::solve(
-            &kernel,
-            x,
-            dim,
-            y,
-            c,
-            epsilon,
-            params.tolerance(),
-            params.max_iterations(),
-            started,
-            budget_s,
-        )?;
-        (sol.beta, sol.bias, smo::NAME, sol.iterations, false, None, None)
+    let solution = if use_smo {
+        let sol = smo::solve_svr(&kernel, &data, &settings)?;
+        DualSolution {
+            beta: sol.beta,
+            bias: sol.bias,
+            solver: smo::NAME,
+            iterations: sol.iterations,
+            polished: false,
+            kernel_matrix: None,
+            weights: None,
+        }
     } else {
-        let k = kernel_matrix(&kernel, x, dim).ok_or_else(|| SvrError::Numerical {
-            solver: "kernel",
-            reason: "kernel values overflow; scale the inputs or lower gamma/degree".into(),
-        })?;
-        // Accept a polished iterate only when its own duality gap certifies it.
-        let certify_below = (10.0 * params.tolerance()).max(1e-12);
-        let mut certified: Option<polish::Polished> = None;
-        let linear = kernel == Kernel::Linear;
-        let run_polish = |sides: Vec<Side>, rounds: usize| {
-            if linear {
-                polish::polish_linear(x, dim, y, c, epsilon, sides, rounds)
-            } else {
-                polish::polish(&k, y, c, epsilon, sides, rounds)
-            }
-        };
-        // Early attempts are cheap ones: a few active-set moves, and only once the gap has
-        // shrunk tenfold since the last attempt (each round is a dense solve).
-        let mut last_attempt_gap = f64::INFINITY;
-        let mut accept = |sol: &ipm::IpmSolution| {
-            if sol.gap > 0.1 * last_attempt_gap {
-                return false;
-            }
-            last_attempt_gap = sol.gap;
-            let rounds = if linear { usize::MAX } else { EARLY_POLISH_ROUNDS };
-            let Some(p) = run_polish(classify(sol), rounds) else {
-                return false;
-            };
-            let ok = certified_optimal(&k, x, dim, y, c, epsilon, &p, certify_below);
-            if ok {
-                certified = Some(p);
-            }
-            ok
-        };
-        let sol = ipm::solve(
-            &k,
-            y,
-            c,
-            epsilon,
-            params.tolerance(),
-            params.max_iterations(),
-            started,
-            budget_s,
-            &mut accept,
-        )?;
-        let iterations = sol.iterations;
-        let polished = certified.or_else(|| {
-            run_polish(classify(&sol), usize::MAX)
-                .filter(|p| certified_optimal(&k, x, dim, y, c, epsilon, p, certify_below))
-        });
-        match polished {
-            Some(p) => (
-                p.beta,
-                p.bias,
-                "interior point + polish",
-                iterations,
-                true,
-                Some(k),
-                p.weights,
-            ),
-            None if !sol.converged => {
-                return Err(SvrError::NotConverged {
-                    solver: "interior point",
-                    iterations,
-                    gap: sol.gap,
-                    tolerance: params.tolerance(),
-                });
-            }
-            None => {
-                let beta = sol
-                    .alpha
-                    .iter()
-                    .zip(&sol.alpha_star)
-                    .map(|(a, s)| a - s)
-                    .collect();
-                (beta, sol.bias, "interior point", iterations, false, Some(k), None)
-            }
+        solve_dense(&kernel, &data, &settings)?
+    };
+    let mut fit = certify(&kernel, &data, &settings, solution)?;
+    fit.fit_seconds = started.elapsed().as_secs_f64();
+    Ok(fit)
+}
+
+/// The interior point on the dense kernel matrix, with the polish tried on its late iterates.
+fn solve_dense(
+    kernel: &Kernel,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+) -> Result<DualSolution, SvrError> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let k = kernel_matrix(kernel, x, dim).ok_or_else(|| SvrError::Numerical {
+        solver: "kernel",
+        reason: "kernel values overflow; scale the inputs or lower gamma/degree".into(),
+    })?;
+    // Accept a polished iterate only when its own duality gap certifies it.
+    let certify_below = (10.0 * settings.tolerance).max(1e-12);
+    let mut certified: Option<polish::Polished> = None;
+    let linear = *kernel == Kernel::Linear;
+    let run_polish = |sides: Vec<Side>, rounds: usize| {
+        if linear {
+            polish::polish_linear(data, settings, sides, rounds)
+        } else {
+            polish::polish(&k, y, settings, sides, rounds)
         }
     };
+    // Early attempts are cheap ones: a few active-set moves, and only once the gap has
+    // shrunk tenfold since the last attempt (each round is a dense solve).
+    let mut last_attempt_gap = f64::INFINITY;
+    let mut accept = |sol: &ipm::IpmSolution| {
+        if sol.gap > 0.1 * last_attempt_gap {
+            return false;
+        }
+        last_attempt_gap = sol.gap;
+        let rounds = if linear { usize::MAX } else { EARLY_POLISH_ROUNDS };
+        let Some(p) = run_polish(classify(sol), rounds) else {
+            return false;
+        };
+        let ok = certified_optimal(&k, data, settings, &p, certify_below);
+        if ok {
+            certified = Some(p);
+        }
+        ok
+    };
+    let sol = ipm::solve(&k, y, settings, &mut accept)?;
+    let iterations = sol.iterations;
+    let polished = certified.or_else(|| {
+        run_polish(classify(&sol), usize::MAX)
+            .filter(|p| certified_optimal(&k, data, settings, p, certify_below))
+    });
+    match polished {
+        Some(p) => Ok(DualSolution {
+            beta: p.beta,
+            bias: p.bias,
+            solver: "interior point + polish",
+            iterations,
+            polished: true,
+            kernel_matrix: Some(k),
+            weights: p.weights,
+        }),
+        None if !sol.converged => Err(SvrError::NotConverged {
+            solver: "interior point",
+            iterations,
+            gap: sol.gap,
+            tolerance: settings.tolerance,
+        }),
+        None => {
+            let beta = sol
+                .alpha
+                .iter()
+                .zip(&sol.alpha_star)
+                .map(|(a, s)| a - s)
+                .collect();
+            Ok(DualSolution {
+                beta,
+                bias: sol.bias,
+                solver: "interior point",
+                iterations,
+                polished: false,
+                kernel_matrix: Some(k),
+                weights: None,
+            })
+        }
+    }
+}
+
+/// Packages a solution as a model with its objectives, or refuses it when its own duality gap
+/// does not vouch for it.
+fn certify(
+    kernel: &Kernel,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+    solution: DualSolution,
+) -> Result<SvrFit, SvrError> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let (c, epsilon) = (settings.c, settings.epsilon);
+    let n = y.len();
+    let DualSolution {
+        beta,
+        bias,
+        solver,
+        iterations,
+        polished,
+        kernel_matrix: k,
+        weights,
+    } = solution;
+    let kernel = *kernel;
 
     // Objectives: from exact primal weights when we have them, else from K, else from kernel
     // evaluations.
@@ -260,29 +327,37 @@ pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFi
         solver,
         iterations,
         polished,
-        fit_seconds: started.elapsed().as_secs_f64(),
+        fit_seconds: 0.0,
     })
 }
 
 /// Whether a polished (β, b) is provably optimal: β is dual feasible (Σβ = 0, |β| ≤ C) and the
 /// duality gap is below `relative_gap`. By weak duality no primal point can then do better
 /// than `relative_gap`, whatever produced (β, b).
-#[allow(clippy::too_many_arguments)]
 fn certified_optimal(
     k: &Mat<f64>,
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
-    c: f64,
-    epsilon: f64,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
     p: &polish::Polished,
     relative_gap: f64,
 ) -> bool {
+    let c = settings.c;
     let total: f64 = p.beta.iter().map(|b| b.abs()).sum();
     let feasible =
         p.beta.iter().sum::<f64>().abs() <= 1e-12 * (1.0 + total) && p.beta.iter().all(|b| b.abs() <= c);
-    let (primal, dual, rounding) = objectives(k, x, dim, y, c, epsilon, p);
-    feasible && (primal + dual).abs() <= relative_gap * primal.abs().max(1.0) + rounding
+    let o = objectives(k, data, settings, p);
+    feasible && (o.primal + o.dual).abs() <= relative_gap * o.primal.abs().max(1.0) + o.rounding
+}
+
+/// Primal and dual objectives of a solution, and a bound on the rounding error of their sum.
+#[derive(Debug, Clone, Copy)]
+struct Objectives {
+    /// `½‖w‖² + C Σ max(0, |yᵢ − f(xᵢ)| − ε)`.
+    primal: f64,
+    /// `½βᵀKβ + εΣ|β| − yᵀβ`.
+    dual: f64,
+    /// Bound on the rounding error of `primal + dual`.
+    rounding: f64,
 }
 
 /// Primal and dual objectives of a polished solution, and a bound on the rounding error of
@@ -292,16 +367,9 @@ fn certified_optimal(
 /// the entries of Kβ cancel to O(1) and carry errors ~ε_mach·|K||β| that βᵀ multiplies back up;
 /// for a linear kernel it is evaluated through the feature map as `½‖Σβᵢxᵢ‖²`, which does not
 /// amplify, and otherwise the rounding bound says how far the gap can be trusted.
-#[allow(clippy::too_many_arguments)]
-fn objectives(
-    k: &Mat<f64>,
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
-    c: f64,
-    epsilon: f64,
-    p: &polish::Polished,
-) -> (f64, f64, f64) {
+fn objectives(k: &Mat<f64>, data: &SvrData<'_>, settings: &DualSettings, p: &polish::Polished) -> Objectives {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let abs_beta: Vec<f64> = p.beta.iter().map(|b| b.abs()).collect();
     let linear_term =
@@ -357,7 +425,11 @@ fn objectives(
             )
         }
     };
-    (primal, dual_quad + linear_term, rounding)
+    Objectives {
+        primal,
+        dual: dual_quad + linear_term,
+        rounding,
+    }
 }
 
 /// The ε-insensitive loss `max(0, |y − f| − ε)`, with a residual that exceeds ε by less than

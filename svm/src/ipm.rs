@@ -15,12 +15,11 @@
 //! the equality `1ᵀΔβ = −Σβ`. One Cholesky of `K + H` per iteration serves both the predictor
 //! and the corrector.
 
-use std::time::Instant;
-
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 
 use super::error::SvrError;
+use super::params::DualSettings;
 
 const NAME: &str = "interior point";
 
@@ -73,20 +72,19 @@ struct Direction {
 ///
 /// Once the gap is below [`EARLY_GAP`], `accept` is shown each iterate; when it returns true
 /// (the caller polished that iterate into a certified optimum) the solve stops there.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     k: &Mat<f64>,
     y: &[f64],
-    c: f64,
-    epsilon: f64,
-    tolerance: f64,
-    max_iterations: usize,
-    started: Instant,
-    budget_s: f64,
+    settings: &DualSettings,
     accept: &mut dyn FnMut(&IpmSolution) -> bool,
 ) -> Result<IpmSolution, SvrError> {
     let n = y.len();
-    let max_iterations = if max_iterations == 0 { 200 } else { max_iterations };
+    let (c, epsilon, tolerance) = (settings.c, settings.epsilon, settings.tolerance);
+    let max_iterations = if settings.max_iterations == 0 {
+        200
+    } else {
+        settings.max_iterations
+    };
     // p for each half: α carries ε − y, α* carries ε + y.
     let p = [
         y.iter().map(|yi| epsilon - yi).collect::<Vec<_>>(),
@@ -188,10 +186,10 @@ pub(crate) fn solve(
                 return Ok(snapshot);
             }
         }
-        if started.elapsed().as_secs_f64() > budget_s {
+        if settings.over_budget() {
             return Err(SvrError::Budget {
                 solver: NAME,
-                budget_s,
+                budget_s: settings.budget_s(),
                 iterations: iteration,
                 gap,
             });

@@ -4,6 +4,8 @@
 //! Dual (what is solved): `min ½ βᵀKβ + ε Σ|βᵢ| − yᵀβ` subject to `Σ βᵢ = 0`, `−C ≤ βᵢ ≤ C`,
 //! with `f(x) = Σ βᵢ K(xᵢ, x) + b`.
 //!
+//! One SMO core ([`solve_smo`]) serves the ε-SVR here and the C-SVC of `recognize`.
+//!
 //! Imports no other palpus crate: identification (`identify`) and surface recognition
 //! (`recognize`) both build on it.
 
@@ -28,3 +30,6 @@ pub use fit::{ACCEPT_GAP, SvrFit, fit, slack};
 pub use kernel::Kernel;
 pub use model::{InputScaling, SvrModel};
 pub use params::{Solver, SvrParams, SvrParamsBuilder};
+pub use smo::{
+    GramRows, KernelRows, SelectionCurvature, SmoSettings, SmoSettingsBuilder, SmoSolution, solve_smo,
+};

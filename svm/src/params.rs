@@ -1,7 +1,7 @@
 //! Hyperparameters, validated once into a checked type (the linfa convention): a value that
 //! could make the solver misbehave is a typed error before any work is done.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use super::error::SvrError;
 use super::kernel::Kernel;
@@ -189,6 +189,51 @@ impl SvrParams {
     /// Wall-clock budget.
     pub fn time_budget(&self) -> Duration {
         self.time_budget
+    }
+}
+
+/// What the dual solvers of one fit need, taken once from checked [`SvrParams`]: the box, the
+/// tube, the tolerance and the budgets, with the instant the fit started (budgets count from
+/// it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct DualSettings {
+    /// C.
+    pub c: f64,
+    /// ε, in the units of the targets.
+    pub epsilon: f64,
+    /// Relative tolerance of the solver.
+    pub tolerance: f64,
+    /// Iteration budget (0: the solver's default).
+    pub max_iterations: usize,
+    /// When the fit started.
+    pub started: Instant,
+    /// Wall-clock budget of the whole fit.
+    pub time_budget: Duration,
+}
+
+impl DualSettings {
+    /// The time budget in seconds.
+    pub fn budget_s(&self) -> f64 {
+        self.time_budget.as_secs_f64()
+    }
+
+    /// Whether the time budget has run out.
+    pub fn over_budget(&self) -> bool {
+        self.started.elapsed().as_secs_f64() > self.budget_s()
+    }
+}
+
+impl SvrParams {
+    /// The solvers' settings for a fit that started at `started`.
+    pub(crate) fn dual_settings(&self, started: Instant) -> DualSettings {
+        DualSettings {
+            c: self.c,
+            epsilon: self.epsilon,
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            started,
+            time_budget: self.time_budget,
+        }
     }
 }
 

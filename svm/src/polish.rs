@@ -11,6 +11,9 @@
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
+use super::fit::SvrData;
+use super::params::DualSettings;
+
 /// Where a sample sits at the optimum.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Side {
@@ -39,11 +42,11 @@ pub(crate) struct Polished {
 pub(crate) fn polish(
     k: &Mat<f64>,
     y: &[f64],
-    c: f64,
-    epsilon: f64,
+    settings: &DualSettings,
     mut sides: Vec<Side>,
     max_rounds: usize,
 ) -> Option<Polished> {
+    let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for _round in 0..max_rounds.min(2 * n + 20) {
@@ -208,16 +211,14 @@ fn worst_violation(
 /// (minimum norm when underdetermined); its cancellation error is far below the C-relative
 /// tolerance it is checked with. With fewer free samples (moderate C), the full square system
 /// is solved at once.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn polish_linear(
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
-    c: f64,
-    epsilon: f64,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
     mut sides: Vec<Side>,
     max_rounds: usize,
 ) -> Option<Polished> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let d = dim;
     let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -248,77 +249,84 @@ pub(crate) fn polish_linear(
                 }
             }
         }
-        let (w, b, beta_free) =
-            if free.len() > d {
-                // (w, b) from the free samples' equations.
-                let a = nalgebra::DMatrix::from_fn(free.len(), d + 1, |r, col| {
+        let (w, b, beta_free) = if free.len() > d {
+            // (w, b) from the free samples' equations.
+            let a = Mat::<f64>::from_fn(
+                free.len(),
+                d + 1,
+                |r, col| {
                     if col < d { row(free[r])[col] } else { 1.0 }
-                });
-                let t = nalgebra::DVector::from_fn(free.len(), |r, _| target(free[r]));
-                let svd = a.clone().svd(true, true);
-                let wb = svd.solve(&t, 1e-12 * svd.singular_values.max()).ok()?;
-                let w: Vec<f64> = wb.iter().take(d).copied().collect();
-                let b = wb[d];
-                // β_F: [x_F; 1]ᵀ β_F = [w − Σ_U βx; −Σ_U β], minimum norm.
-                let s = nalgebra::DMatrix::from_fn(d + 1, free.len(), |r, col| {
+                },
+            );
+            let t: Vec<f64> = free.iter().map(|&i| target(i)).collect();
+            let wb = svd_solve(&a, &t)?;
+            let w: Vec<f64> = wb.iter().take(d).copied().collect();
+            let b = wb[d];
+            // β_F: [x_F; 1]ᵀ β_F = [w − Σ_U βx; −Σ_U β], minimum norm.
+            let s = Mat::<f64>::from_fn(
+                d + 1,
+                free.len(),
+                |r, col| {
                     if r < d { row(free[col])[r] } else { 1.0 }
-                });
-                let rhs = nalgebra::DVector::from_fn(d + 1, |r, _| {
+                },
+            );
+            let rhs: Vec<f64> = (0..=d)
+                .map(|r| {
                     if r < d {
                         w[r] - bounded_moment[r]
                     } else {
                         -bounded_sum
                     }
-                });
-                let svd = s.svd(true, true);
-                let bf = svd.solve(&rhs, 1e-12 * svd.singular_values.max()).ok()?;
-                (w, b, bf.iter().copied().collect::<Vec<f64>>())
-            } else {
-                // Square system in (w, b, β_F).
-                let m = free.len();
-                let size = d + 1 + m;
-                let a = nalgebra::DMatrix::from_fn(size, size, |r, col| {
-                    if r < m {
-                        // xᵢ·w + b = tᵢ
-                        if col < d {
-                            row(free[r])[col]
-                        } else if col == d {
-                            1.0
-                        } else {
-                            0.0
-                        }
-                    } else if r < m + d {
-                        // w_k − Σ_F βᵢ x_ik = moment_k
-                        let k = r - m;
-                        if col == k {
-                            1.0
-                        } else if col > d {
-                            -row(free[col - d - 1])[k]
-                        } else {
-                            0.0
-                        }
-                    } else if col > d {
+                })
+                .collect();
+            (w, b, svd_solve(&s, &rhs)?)
+        } else {
+            // Square system in (w, b, β_F).
+            let m = free.len();
+            let size = d + 1 + m;
+            let a = Mat::<f64>::from_fn(size, size, |r, col| {
+                if r < m {
+                    // xᵢ·w + b = tᵢ
+                    if col < d {
+                        row(free[r])[col]
+                    } else if col == d {
                         1.0
                     } else {
                         0.0
                     }
-                });
-                let rhs = nalgebra::DVector::from_fn(size, |r, _| {
-                    if r < m {
-                        target(free[r])
-                    } else if r < m + d {
-                        bounded_moment[r - m]
+                } else if r < m + d {
+                    // w_k − Σ_F βᵢ x_ik = moment_k
+                    let k = r - m;
+                    if col == k {
+                        1.0
+                    } else if col > d {
+                        -row(free[col - d - 1])[k]
                     } else {
-                        -bounded_sum
+                        0.0
                     }
-                });
-                let sol = a.full_piv_lu().solve(&rhs)?;
-                (
-                    sol.iter().take(d).copied().collect(),
-                    sol[d],
-                    sol.iter().skip(d + 1).copied().collect(),
-                )
-            };
+                } else if col > d {
+                    1.0
+                } else {
+                    0.0
+                }
+            });
+            let rhs = Mat::<f64>::from_fn(size, 1, |r, _| {
+                if r < m {
+                    target(free[r])
+                } else if r < m + d {
+                    bounded_moment[r - m]
+                } else {
+                    -bounded_sum
+                }
+            });
+            // A singular system gives non-finite values, refused below.
+            let sol = a.full_piv_lu().solve(&rhs);
+            (
+                (0..d).map(|r| sol[(r, 0)]).collect(),
+                sol[(d, 0)],
+                (d + 1..size).map(|r| sol[(r, 0)]).collect(),
+            )
+        };
         if !b.is_finite() || w.iter().chain(&beta_free).any(|v| !v.is_finite()) {
             return None;
         }
@@ -366,9 +374,14 @@ fn pivot<'a>(
 ) -> Option<()> {
     let m = free.len();
     let d = m - 1;
-    let a = nalgebra::DMatrix::from_fn(m, m, |r, col| if r < d { row(free[col])[r] } else { 1.0 });
-    let ai = nalgebra::DVector::from_fn(m, |r, _| if r < d { row(entering)[r] } else { 1.0 });
-    let delta = a.lu().solve(&(-ai))?;
+    let a = Mat::<f64>::from_fn(m, m, |r, col| if r < d { row(free[col])[r] } else { 1.0 });
+    let minus_ai = Mat::<f64>::from_fn(m, 1, |r, _| if r < d { -row(entering)[r] } else { -1.0 });
+    let solved = a.partial_piv_lu().solve(&minus_ai);
+    let delta: Vec<f64> = (0..m).map(|r| solved[(r, 0)]).collect();
+    // A singular basis gives non-finite values: no pivot.
+    if delta.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
     // Direction of the entering β: off its current value into the side it is entering.
     let sign = if to == Side::UpperFree { 1.0 } else { -1.0 };
     let from_bound = matches!(sides[entering], Side::Above | Side::Below);
@@ -433,14 +446,29 @@ fn solve_bordered(a: &Mat<f64>, rhs: &Mat<f64>) -> Option<Vec<f64>> {
     if (0..m).all(|r| x[(r, 0)].is_finite()) && residual <= 1e-10 * scale {
         return Some((0..m).map(|r| x[(r, 0)]).collect());
     }
-    let dense = nalgebra::DMatrix::from_fn(m, m, |r, col| a[(r, col)]);
-    let b = nalgebra::DVector::from_fn(m, |r, _| rhs[(r, 0)]);
-    let svd = dense.svd(true, true);
-    let cutoff = 1e-12 * svd.singular_values.max();
-    let x = svd.solve(&b, cutoff).ok()?;
-    x.iter()
-        .all(|v| v.is_finite())
-        .then(|| x.iter().copied().collect())
+    let b: Vec<f64> = (0..m).map(|r| rhs[(r, 0)]).collect();
+    let x = svd_solve(a, &b)?;
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Minimum-norm least-squares solution of `a x = b` by the thin SVD, singular values up to
+/// `1e-12 ×` the largest counted as zero.
+fn svd_solve(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let svd = a.thin_svd().ok()?;
+    let (u, v) = (svd.U(), svd.V());
+    let s = svd.S().column_vector();
+    let largest = (0..s.nrows()).fold(0.0f64, |m, i| m.max(s[i]));
+    let cutoff = 1e-12 * largest;
+    let mut x = vec![0.0; a.ncols()];
+    for i in 0..s.nrows() {
+        if s[i] > cutoff {
+            let coefficient = (0..a.nrows()).map(|r| u[(r, i)] * b[r]).sum::<f64>() / s[i];
+            for (col, xc) in x.iter_mut().enumerate() {
+                *xc += v[(col, i)] * coefficient;
+            }
+        }
+    }
+    Some(x)
 }
 
 /// How far a bounded sample's residual sits on the wrong side of its tube boundary.

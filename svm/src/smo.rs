@@ -1,24 +1,230 @@
-//! Sequential minimal optimisation for the ε-SVR dual (Fan, Chen & Lin, "Working set selection
-//! using second order information", JMLR 6, 2005 — libsvm's algorithm).
+//! Sequential minimal optimisation (Fan, Chen & Lin, "Working set selection using second order
+//! information", JMLR 6, 2005 — libsvm's algorithm): one core for the ε-SVR and the C-SVC.
 //!
-//! Each iteration changes two of the 2n variables of the split dual analytically, chosen by the
-//! second-order rule, so an iteration costs two kernel rows and O(n) gradient updates. That
-//! scales to n where the dense interior point's n² memory and n³ factorisations do not; its
-//! weakness is the iteration count at large C, which is why [`super::Solver::Auto`] uses it only
-//! beyond [`super::SvrParams::DENSE_LIMIT`] samples. Kernel rows are cached (least recently used
-//! slots within a memory budget).
+//! Both duals have libsvm's form `min ½ αᵀQα + pᵀα` subject to `yᵀα = 0`, `0 ≤ α ≤ C`, with
+//! labels `yₜ = ±1` and `Qₜₛ = yₜ yₛ K(sample(t), sample(s))`:
+//! * C-SVC: one variable per sample, its class label, `p = −1`;
+//! * ε-SVR: two variables per sample (the split dual), `αₜ` with label +1 and `p = ε − yₜ`, then
+//!   `α*ₜ` with label −1 and `p = ε + yₜ`.
+//!
+//! Each iteration changes two variables analytically, chosen by the second-order rule, so an
+//! iteration costs two kernel rows and O(n) gradient updates. That scales to n where the dense
+//! interior point's n² memory and n³ factorisations do not; its weakness is the iteration count
+//! at large C, which is why [`super::Solver::Auto`] uses it for the ε-SVR only beyond
+//! [`super::SvrParams::DENSE_LIMIT`] samples. Kernel rows come from a [`KernelRows`]: a
+//! precomputed Gram matrix ([`GramRows`], the C-SVC's pairs of tens of vectors) or a cache of
+//! least recently used rows within a memory budget (the ε-SVR).
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::error::SvrError;
 use super::kernel::Kernel;
 
+/// The solver's name in errors.
 pub(crate) const NAME: &str = "SMO";
 
 /// Memory for cached kernel rows.
 const CACHE_BYTES: usize = 256 << 20;
 /// Curvature floor for non-positive-definite pairs (libsvm's τ).
 const TAU: f64 = 1e-12;
+
+/// Rows of the kernel matrix over the samples, as the solver asks for them.
+pub trait KernelRows {
+    /// Number of samples.
+    fn samples(&self) -> usize;
+    /// `K(xₛ, xₛ)`.
+    fn diagonal(&self, s: usize) -> f64;
+    /// Row `s` of K: `K(xₛ, xᵣ)` for every sample `r`.
+    fn row(&mut self, s: usize) -> &[f64];
+}
+
+/// A precomputed, symmetric Gram matrix (row-major, n × n).
+#[derive(Debug, Clone, Copy)]
+pub struct GramRows<'a> {
+    k: &'a [f64],
+    n: usize,
+}
+
+impl<'a> GramRows<'a> {
+    /// Wraps `k`, which must hold `n²` values; `None` if it does not.
+    pub fn new(k: &'a [f64], n: usize) -> Option<Self> {
+        (n.checked_mul(n) == Some(k.len())).then_some(Self { k, n })
+    }
+}
+
+impl KernelRows for GramRows<'_> {
+    fn samples(&self) -> usize {
+        self.n
+    }
+    fn diagonal(&self, s: usize) -> f64 {
+        self.k[s * self.n + s]
+    }
+    fn row(&mut self, s: usize) -> &[f64] {
+        &self.k[s * self.n..(s + 1) * self.n]
+    }
+}
+
+/// Which curvature the second-order working-set selection divides by when a pair's
+/// `Kᵢᵢ + Kₜₜ − 2Kᵢₜ` is at most τ. The pair update itself always uses `max(·, τ)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SelectionCurvature {
+    /// `max(·, τ)`, as in the update.
+    #[default]
+    Clamped,
+    /// libsvm's selection rule: only a non-positive curvature becomes τ.
+    NonPositiveToTau,
+}
+
+/// Unchecked SMO settings; [`SmoSettingsBuilder::build`] validates them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SmoSettingsBuilder {
+    c: f64,
+    stop: f64,
+    max_iterations: usize,
+    shrinking: bool,
+    budget: Option<(Instant, Duration)>,
+    selection: SelectionCurvature,
+}
+
+/// Checked SMO settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SmoSettings {
+    c: f64,
+    stop: f64,
+    max_iterations: usize,
+    shrinking: bool,
+    budget: Option<(Instant, f64)>,
+    selection: SelectionCurvature,
+}
+
+impl Default for SmoSettingsBuilder {
+    fn default() -> Self {
+        Self {
+            c: 1.0,
+            stop: 1e-3,
+            max_iterations: 0,
+            shrinking: false,
+            budget: None,
+            selection: SelectionCurvature::Clamped,
+        }
+    }
+}
+
+impl SmoSettingsBuilder {
+    /// Box constraint C > 0.
+    pub fn c(mut self, c: f64) -> Self {
+        self.c = c;
+        self
+    }
+
+    /// The solve stops once the maximal KKT violation `max_{I_up} −yₜ∇ₜ + max_{I_low} yₜ∇ₜ`
+    /// is below this (> 0; libsvm's ε, in the units of the gradient).
+    pub fn stop(mut self, stop: f64) -> Self {
+        self.stop = stop;
+        self
+    }
+
+    /// Iteration budget; 0 picks `max(100 · variables, 10⁷)`.
+    pub fn max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+
+    /// libsvm's shrinking heuristic (worth it for thousands of variables; it changes the cost,
+    /// never the answer).
+    pub fn shrinking(mut self, shrinking: bool) -> Self {
+        self.shrinking = shrinking;
+        self
+    }
+
+    /// Wall-clock budget counted from `started`; exceeding it is [`SvrError::Budget`].
+    pub fn time_budget(mut self, started: Instant, budget: Duration) -> Self {
+        self.budget = Some((started, budget));
+        self
+    }
+
+    /// The selection's curvature floor.
+    pub fn selection(mut self, selection: SelectionCurvature) -> Self {
+        self.selection = selection;
+        self
+    }
+
+    /// Validates into [`SmoSettings`].
+    pub fn build(self) -> Result<SmoSettings, SvrError> {
+        let bad = |name: &'static str, value: f64, reason: &'static str| SvrError::InvalidHyperparameter {
+            name,
+            value,
+            reason,
+        };
+        if !(self.c.is_finite() && self.c > 0.0) {
+            return Err(bad("C", self.c, "must be finite and > 0"));
+        }
+        if !(self.stop.is_finite() && self.stop > 0.0) {
+            return Err(bad("stop", self.stop, "must be finite and > 0"));
+        }
+        if let Some((_, budget)) = self.budget
+            && budget.is_zero()
+        {
+            return Err(bad("time_budget", 0.0, "must be > 0"));
+        }
+        Ok(SmoSettings {
+            c: self.c,
+            stop: self.stop,
+            max_iterations: self.max_iterations,
+            shrinking: self.shrinking,
+            budget: self.budget.map(|(started, b)| (started, b.as_secs_f64())),
+            selection: self.selection,
+        })
+    }
+}
+
+impl SmoSettings {
+    /// Starts a builder (C = 1, stop 1e-3, default iteration budget, no shrinking, no time
+    /// budget, clamped selection curvature).
+    pub fn builder() -> SmoSettingsBuilder {
+        SmoSettingsBuilder::default()
+    }
+
+    /// The iteration budget for `variables` variables.
+    pub fn iteration_budget(&self, variables: usize) -> usize {
+        if self.max_iterations == 0 {
+            (100 * variables).max(10_000_000)
+        } else {
+            self.max_iterations
+        }
+    }
+}
+
+/// The solution of an SMO solve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SmoSolution {
+    /// The dual variables α, one per variable, in `[0, C]`.
+    pub alpha: Vec<f64>,
+    /// libsvm's ρ (the decision function is `Σ yₜαₜK(xₜ, x) − ρ`): the mean of `yₜ∇ₜ` over free
+    /// variables, else the middle of the interval the bounded ones allow.
+    pub rho: f64,
+    /// Pair updates made.
+    pub iterations: usize,
+    /// The maximal KKT violation at the last selection (below the stop value when converged).
+    pub violation: f64,
+}
+
+/// Labels and linear term of the dual's variables, and how they map to samples.
+struct Variables<'a> {
+    labels: &'a [f64],
+    linear: &'a [f64],
+    /// Samples: variable t is sample t, or t − n for the second half of a split dual.
+    n: usize,
+}
+
+impl Variables<'_> {
+    fn label(&self, t: usize) -> f64 {
+        self.labels[t]
+    }
+    fn sample(&self, t: usize) -> usize {
+        if t < self.n { t } else { t - self.n }
+    }
+}
 
 /// The largest KKT values over the active set: max over I_up of −yₜ∇ₜ and over I_low of yₜ∇ₜ.
 fn extremes(
@@ -44,17 +250,14 @@ fn extremes(
 
 /// Recomputes the gradient of every variable outside `active` from scratch,
 /// `∇ₜ = pₜ + Σⱼ yₜ yⱼ K(sₜ, sⱼ) αⱼ`, over the non-zero α only.
-#[allow(clippy::too_many_arguments)]
-fn rebuild_gradient(
+fn rebuild_gradient<R: KernelRows>(
     grad: &mut [f64],
     alpha: &[f64],
     active: &[usize],
-    cache: &mut RowCache<'_>,
-    y: &[f64],
-    epsilon: f64,
-    n: usize,
+    rows: &mut R,
+    vars: &Variables<'_>,
 ) {
-    let m = 2 * n;
+    let m = grad.len();
     let mut inactive = vec![true; m];
     for &t in active {
         inactive[t] = false;
@@ -63,117 +266,48 @@ fn rebuild_gradient(
         return;
     }
     for t in (0..m).filter(|&t| inactive[t]) {
-        grad[t] = if t < n { epsilon - y[t] } else { epsilon + y[t - n] };
+        grad[t] = vars.linear[t];
     }
     for (j, &aj) in alpha.iter().enumerate() {
         if aj == 0.0 {
             continue;
         }
-        let (yj, sj) = if j < n { (1.0, j) } else { (-1.0, j - n) };
-        let row = cache.row(sj);
+        let (yj, sj) = (vars.label(j), vars.sample(j));
+        let row = rows.row(sj);
         for t in (0..m).filter(|&t| inactive[t]) {
-            let (yt, st) = if t < n { (1.0, t) } else { (-1.0, t - n) };
+            let (yt, st) = (vars.label(t), vars.sample(t));
             grad[t] += yt * yj * row[st] * aj;
         }
     }
 }
 
-pub(crate) struct SmoSolution {
-    pub beta: Vec<f64>,
-    pub bias: f64,
-    pub iterations: usize,
-}
-
-struct RowCache<'a> {
-    kernel: &'a Kernel,
-    x: &'a [f64],
-    dim: usize,
-    n: usize,
-    slot_of: Vec<Option<usize>>,
-    owner: Vec<usize>,
-    last_used: Vec<u64>,
-    rows: Vec<f64>,
-    clock: u64,
-}
-
-impl<'a> RowCache<'a> {
-    fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize) -> Self {
-        let slots = (CACHE_BYTES / (8 * n.max(1))).clamp(2, n.max(2));
-        Self {
-            kernel,
-            x,
-            dim,
-            n,
-            slot_of: vec![None; n],
-            owner: vec![usize::MAX; slots],
-            last_used: vec![0; slots],
-            rows: vec![0.0; slots * n],
-            clock: 0,
-        }
-    }
-
-    /// Row i of K (all n samples).
-    fn row(&mut self, i: usize) -> &[f64] {
-        self.clock += 1;
-        let n = self.n;
-        let slot = match self.slot_of[i] {
-            Some(s) => s,
-            None => {
-                let s = (0..self.owner.len())
-                    .min_by_key(|&s| self.last_used[s])
-                    .unwrap_or(0);
-                if self.owner[s] != usize::MAX {
-                    self.slot_of[self.owner[s]] = None;
-                }
-                self.owner[s] = i;
-                self.slot_of[i] = Some(s);
-                let xi = &self.x[i * self.dim..(i + 1) * self.dim];
-                for j in 0..n {
-                    self.rows[s * n + j] = self.kernel.eval(xi, &self.x[j * self.dim..(j + 1) * self.dim]);
-                }
-                s
-            }
-        };
-        self.last_used[slot] = self.clock;
-        &self.rows[slot * n..(slot + 1) * n]
-    }
-}
-
-/// Solves the dual until the maximal KKT violation is below `1e2 · tolerance · (1 + max|y|)`
-/// (1e-8 relative at the default tolerance 1e-10, which keeps the duality gap under
-/// [`super::ACCEPT_GAP`]).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn solve(
-    kernel: &Kernel,
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
-    c: f64,
-    epsilon: f64,
-    tolerance: f64,
-    max_iterations: usize,
-    started: Instant,
-    budget_s: f64,
+/// Solves `min ½ αᵀQα + pᵀα`, `yᵀα = 0`, `0 ≤ α ≤ C` (see the module doc) for `labels` (±1)
+/// and `linear` (p), one entry per variable; there are as many variables as samples in `rows`,
+/// or twice as many (a split dual).
+///
+/// # Panics
+/// If `labels` and `linear` differ in length or do not cover the samples once or twice.
+pub fn solve_smo<R: KernelRows>(
+    rows: &mut R,
+    labels: &[f64],
+    linear: &[f64],
+    settings: &SmoSettings,
 ) -> Result<SmoSolution, SvrError> {
-    let n = y.len();
-    let m = 2 * n;
-    let stop = 1e2 * tolerance * (1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs())));
-    let max_iterations = if max_iterations == 0 {
-        (100 * m).max(10_000_000)
-    } else {
-        max_iterations
-    };
-    // Variable t < n is αₜ (label +1, p = ε − y), t ≥ n is α*ₜ₋ₙ (label −1, p = ε + y).
-    let label = |t: usize| if t < n { 1.0 } else { -1.0 };
-    let sample = |t: usize| if t < n { t } else { t - n };
+    let n = rows.samples();
+    let m = labels.len();
+    assert!(
+        linear.len() == m && (m == n || m == 2 * n),
+        "SMO: {m} labels and {} linear terms for {n} samples",
+        linear.len()
+    );
+    let vars = Variables { labels, linear, n };
+    let (c, stop) = (settings.c, settings.stop);
+    let max_iterations = settings.iteration_budget(m);
+    let label = |t: usize| vars.label(t);
+    let sample = |t: usize| vars.sample(t);
     let mut alpha = vec![0.0; m];
-    let mut grad: Vec<f64> = (0..m)
-        .map(|t| if t < n { epsilon - y[t] } else { epsilon + y[t - n] })
-        .collect();
-    let diag: Vec<f64> = (0..n)
-        .map(|i| kernel.eval(&x[i * dim..(i + 1) * dim], &x[i * dim..(i + 1) * dim]))
-        .collect();
-    let mut cache = RowCache::new(kernel, x, dim, n);
+    let mut grad: Vec<f64> = linear.to_vec();
+    let diag: Vec<f64> = (0..n).map(|s| rows.diagonal(s)).collect();
     let in_up = |a: f64, yt: f64| (yt > 0.0 && a < c) || (yt < 0.0 && a > 0.0);
     let in_low = |a: f64, yt: f64| (yt > 0.0 && a > 0.0) || (yt < 0.0 && a < c);
 
@@ -190,7 +324,10 @@ pub(crate) fn solve(
     let mut iterations = 0;
     let mut violation = f64::INFINITY;
     while iterations < max_iterations {
-        if iterations % 1000 == 0 && started.elapsed().as_secs_f64() > budget_s {
+        if let Some((started, budget_s)) = settings.budget
+            && iterations % 1000 == 0
+            && started.elapsed().as_secs_f64() > budget_s
+        {
             return Err(SvrError::Budget {
                 solver: NAME,
                 budget_s,
@@ -198,25 +335,27 @@ pub(crate) fn solve(
                 gap: violation,
             });
         }
-        counter -= 1;
-        if counter == 0 {
-            counter = shrink_every;
-            let (g_up, g_low) = extremes(&active, &alpha, &grad, label, in_up, in_low);
-            if !unshrunk && g_up + g_low <= 10.0 * stop {
-                // Close to the end: bring everything back once, with exact gradients.
-                unshrunk = true;
-                rebuild_gradient(&mut grad, &alpha, &active, &mut cache, y, epsilon, n);
-                active = (0..m).collect();
+        if settings.shrinking {
+            counter -= 1;
+            if counter == 0 {
+                counter = shrink_every;
+                let (g_up, g_low) = extremes(&active, &alpha, &grad, label, in_up, in_low);
+                if !unshrunk && g_up + g_low <= 10.0 * stop {
+                    // Close to the end: bring everything back once, with exact gradients.
+                    unshrunk = true;
+                    rebuild_gradient(&mut grad, &alpha, &active, rows, &vars);
+                    active = (0..m).collect();
+                }
+                active.retain(|&t| {
+                    let (a, yt, g) = (alpha[t], label(t), grad[t]);
+                    let at_upper = a >= c;
+                    let at_lower = a <= 0.0;
+                    !((at_upper && yt > 0.0 && -g > g_up)
+                        || (at_upper && yt < 0.0 && -g > g_low)
+                        || (at_lower && yt > 0.0 && g > g_low)
+                        || (at_lower && yt < 0.0 && g > g_up))
+                });
             }
-            active.retain(|&t| {
-                let (a, yt, g) = (alpha[t], label(t), grad[t]);
-                let at_upper = a >= c;
-                let at_lower = a <= 0.0;
-                !((at_upper && yt > 0.0 && -g > g_up)
-                    || (at_upper && yt < 0.0 && -g > g_low)
-                    || (at_lower && yt > 0.0 && g > g_low)
-                    || (at_lower && yt < 0.0 && g > g_up))
-            });
         }
         // i: the most violating variable from I_up.
         let mut gmax = f64::NEG_INFINITY;
@@ -232,7 +371,7 @@ pub(crate) fn solve(
         let mut best = f64::INFINITY;
         let mut j_sel = usize::MAX;
         if i_sel != usize::MAX {
-            ki.copy_from_slice(cache.row(sample(i_sel)));
+            ki.copy_from_slice(rows.row(sample(i_sel)));
             let si = sample(i_sel);
             // j: the largest second-order decrease among I_low.
             for &t in &active {
@@ -244,7 +383,17 @@ pub(crate) fn solve(
                 let b = gmax + yt * grad[t];
                 if b > 0.0 {
                     let st = sample(t);
-                    let a = (diag[si] + diag[st] - 2.0 * ki[st]).max(TAU);
+                    let a = diag[si] + diag[st] - 2.0 * ki[st];
+                    let a = match settings.selection {
+                        SelectionCurvature::Clamped => a.max(TAU),
+                        SelectionCurvature::NonPositiveToTau => {
+                            if a > 0.0 {
+                                a
+                            } else {
+                                TAU
+                            }
+                        }
+                    };
                     let decrease = -b * b / a;
                     if decrease <= best {
                         best = decrease;
@@ -257,7 +406,7 @@ pub(crate) fn solve(
         if i_sel == usize::MAX || violation < stop || j_sel == usize::MAX {
             if active.len() < m {
                 // Converged on the active set: check everything with exact gradients.
-                rebuild_gradient(&mut grad, &alpha, &active, &mut cache, y, epsilon, n);
+                rebuild_gradient(&mut grad, &alpha, &active, rows, &vars);
                 active = (0..m).collect();
                 counter = shrink_every;
                 continue;
@@ -268,7 +417,7 @@ pub(crate) fn solve(
         let si = sample(i_sel);
         let yj = label(j_sel);
         let sj = sample(j_sel);
-        kj.copy_from_slice(cache.row(sj));
+        kj.copy_from_slice(rows.row(sj));
         // Analytic two-variable step, clipped to the box (libsvm's update).
         let qii = diag[si];
         let qjj = diag[sj];
@@ -341,8 +490,8 @@ pub(crate) fn solve(
         });
     }
 
-    // Bias: average over free variables of yₜ∇ₜ (libsvm's ρ, b = −ρ), else the middle of the
-    // interval the bounded ones allow.
+    // ρ: average over free variables of yₜ∇ₜ, else the middle of the interval the bounded
+    // ones allow.
     let (mut ub, mut lb, mut sum_free, mut n_free) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
     for t in 0..m {
         let yg = label(t) * grad[t];
@@ -368,10 +517,126 @@ pub(crate) fn solve(
     } else {
         0.5 * (ub + lb)
     };
-    let beta = (0..n).map(|i| alpha[i] - alpha[i + n]).collect();
     Ok(SmoSolution {
-        beta,
-        bias: -rho,
+        alpha,
+        rho,
         iterations,
+        violation,
+    })
+}
+
+/// Kernel rows computed on demand and cached (least recently used slots within
+/// [`CACHE_BYTES`]).
+struct RowCache<'a> {
+    kernel: &'a Kernel,
+    x: &'a [f64],
+    dim: usize,
+    n: usize,
+    diag: Vec<f64>,
+    slot_of: Vec<Option<usize>>,
+    owner: Vec<usize>,
+    last_used: Vec<u64>,
+    rows: Vec<f64>,
+    clock: u64,
+}
+
+impl<'a> RowCache<'a> {
+    fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize) -> Self {
+        let slots = (CACHE_BYTES / (8 * n.max(1))).clamp(2, n.max(2));
+        Self {
+            kernel,
+            x,
+            dim,
+            n,
+            diag: (0..n)
+                .map(|i| kernel.eval(&x[i * dim..(i + 1) * dim], &x[i * dim..(i + 1) * dim]))
+                .collect(),
+            slot_of: vec![None; n],
+            owner: vec![usize::MAX; slots],
+            last_used: vec![0; slots],
+            rows: vec![0.0; slots * n],
+            clock: 0,
+        }
+    }
+}
+
+impl KernelRows for RowCache<'_> {
+    fn samples(&self) -> usize {
+        self.n
+    }
+
+    fn diagonal(&self, s: usize) -> f64 {
+        self.diag[s]
+    }
+
+    fn row(&mut self, i: usize) -> &[f64] {
+        self.clock += 1;
+        let n = self.n;
+        let slot = match self.slot_of[i] {
+            Some(s) => s,
+            None => {
+                let s = (0..self.owner.len())
+                    .min_by_key(|&s| self.last_used[s])
+                    .unwrap_or(0);
+                if self.owner[s] != usize::MAX {
+                    self.slot_of[self.owner[s]] = None;
+                }
+                self.owner[s] = i;
+                self.slot_of[i] = Some(s);
+                let xi = &self.x[i * self.dim..(i + 1) * self.dim];
+                for j in 0..n {
+                    self.rows[s * n + j] = self.kernel.eval(xi, &self.x[j * self.dim..(j + 1) * self.dim]);
+                }
+                s
+            }
+        };
+        self.last_used[slot] = self.clock;
+        &self.rows[slot * n..(slot + 1) * n]
+    }
+}
+
+/// An ε-SVR solved by SMO.
+#[derive(Debug, Clone)]
+pub(crate) struct SvrSmoSolution {
+    /// `β = α − α*`, one per sample.
+    pub beta: Vec<f64>,
+    /// The bias b = −ρ.
+    pub bias: f64,
+    /// Pair updates made.
+    pub iterations: usize,
+}
+
+/// Solves the ε-SVR dual of `data` by SMO with shrinking, until the maximal KKT violation is
+/// below `1e2 · tolerance · (1 + max|y|)` (1e-8 relative at the default tolerance 1e-10, which
+/// keeps the duality gap under [`super::ACCEPT_GAP`]).
+pub(crate) fn solve_svr(
+    kernel: &Kernel,
+    data: &super::fit::SvrData<'_>,
+    settings: &super::params::DualSettings,
+) -> Result<SvrSmoSolution, SvrError> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let n = y.len();
+    let epsilon = settings.epsilon;
+    let stop = 1e2 * settings.tolerance * (1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs())));
+    let smo = SmoSettings::builder()
+        .c(settings.c)
+        .stop(stop)
+        .max_iterations(settings.max_iterations)
+        .shrinking(true)
+        .time_budget(settings.started, settings.time_budget)
+        .selection(SelectionCurvature::Clamped)
+        .build()?;
+    // Variable t < n is αₜ (label +1, p = ε − y), t ≥ n is α*ₜ₋ₙ (label −1, p = ε + y).
+    let labels: Vec<f64> = (0..2 * n).map(|t| if t < n { 1.0 } else { -1.0 }).collect();
+    let linear: Vec<f64> = (0..2 * n)
+        .map(|t| if t < n { epsilon - y[t] } else { epsilon + y[t - n] })
+        .collect();
+    let mut cache = RowCache::new(kernel, x, dim, n);
+    let sol = solve_smo(&mut cache, &labels, &linear, &smo)?;
+    let beta = (0..n).map(|i| sol.alpha[i] - sol.alpha[i + n]).collect();
+    Ok(SvrSmoSolution {
+        beta,
+        bias: -sol.rho,
+        iterations: sol.iterations,
     })
 }
