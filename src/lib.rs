@@ -3,11 +3,12 @@
 //! `identify` (models from captures) and `haptics` (the simulated world, devices, the haptic
 //! loop) know nothing of each other's threads or files; this crate is the only place that joins
 //! them: scenes say what a session contains ([`scene`]), [`models`] loads or identifies exactly
-//! the models a scene needs, [`session`] runs them on the haptic thread and reports.
+//! the models a scene needs, [`session`] runs them on the haptic thread and reports, and
+//! [`plots`] draws every figure.
 
 pub mod cli;
 pub mod models;
-pub mod recognition_plots;
+pub mod plots;
 pub mod recognizer;
 pub mod scene;
 pub mod session;

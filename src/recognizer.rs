@@ -8,8 +8,7 @@ use anyhow::Context;
 #[cfg(doc)]
 use haptics::live_recognizer::Recognizing;
 use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
-use recognize::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
-use recognize::som::SomParams;
+use recognize::{LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
 
 use crate::scene::Scene;
 use crate::session::report::Recognition;

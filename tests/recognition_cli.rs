@@ -249,19 +249,10 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert!(out.status.success(), "{}", text(&out));
     let (nodes, classes) = (12, 7);
     for (name, size) in [
-        (
-            "confusion.png",
-            palpus::recognition_plots::confusion_size(classes),
-        ),
-        ("som_map.png", palpus::recognition_plots::som_map_size(nodes)),
-        (
-            "som_components.png",
-            palpus::recognition_plots::som_components_size(5, nodes),
-        ),
-        (
-            "som_density.png",
-            palpus::recognition_plots::som_density_size(classes, nodes),
-        ),
+        ("confusion.png", palpus::plots::confusion_size(classes)),
+        ("som_map.png", palpus::plots::som_map_size(nodes)),
+        ("som_components.png", palpus::plots::som_components_size(5, nodes)),
+        ("som_density.png", palpus::plots::som_density_size(classes, nodes)),
     ] {
         let path = plots.join(name);
         assert!(text(&out).contains(&path.display().to_string()), "{}", text(&out));

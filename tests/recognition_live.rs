@@ -9,10 +9,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use haptics::live_recognizer::{LiveRecognizer, LiveRecognizerError};
 use haptics::sim::protocols::nakano::{RUNS, rubbing_run};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use recognize::knn::KnnParams;
-use recognize::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
-use recognize::som::SomParams;
-use recognize::spectral::CellScale;
+use recognize::{CellScale, KnnParams, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
 
 /// Counts allocations made by the thread that set [`COUNTING`].
 struct CountingAllocator;

@@ -15,9 +15,9 @@ use std::sync::OnceLock;
 
 use capture::{Capture, CaptureKind};
 use haptics::sim::protocols::{CaptureSet, generate};
-use recognize::eval::ConfusionMatrix;
-use recognize::nakano::{FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
-use recognize::som::{Normalization, Som, SomParams};
+use recognize::{
+    ConfusionMatrix, FEATURES, NakanoConfig, NakanoSignals, NakanoStream, Normalization, Som, SomParams,
+};
 
 /// Recognition starts after this much travel (thesis Sec. 4.3), m.
 const START_TRAVEL_M: f64 = 0.005;

@@ -8,9 +8,10 @@ use std::time::Instant;
 
 use haptics::sim::protocols::sinapov::{TRIALS, scratch_capture};
 use haptics::sim::world::scratch::{Behaviour, household_surfaces};
-use recognize::knn::{BehaviourData, FeatureScaling, KnnParams, ReliabilityFusion, argmax, fuse};
-use recognize::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
-use recognize::svc::{Svc, SvcParams};
+use recognize::{
+    BehaviourData, CellScale, FEATURE_LEN, FeatureScaling, KnnParams, ReliabilityFusion, SpectrogramPlan,
+    Svc, SvcParams, argmax, fuse,
+};
 
 const SEED: u64 = 1;
 const FOLDS: usize = 10;

@@ -10,8 +10,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use haptics::live_recognizer::LiveRecognizer;
 use haptics::sim::protocols::nakano::rubbing_run;
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use recognize::model::{LabelledCapture, NakanoWindowing, RecognizerFile};
-use recognize::som::SomParams;
+use recognize::{LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
 
 fn bench(c: &mut Criterion) {
     let surfaces = nakano_surfaces();

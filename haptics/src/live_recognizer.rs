@@ -10,9 +10,9 @@
 
 use crate::acquire;
 use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
-use recognize::model::{NakanoWindowing, RecognizerBody, RecognizerFile};
-use recognize::nakano::{FEATURES, NakanoError, NakanoStream};
-use recognize::som::{Som, SomError};
+use recognize::{
+    FEATURES, NakanoError, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile, Som, SomError,
+};
 
 /// Why a live recognizer could not be built or fed.
 #[derive(Debug, thiserror::Error)]

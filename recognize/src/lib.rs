@@ -1,14 +1,46 @@
 //! Surface recognition from rubbing and scratching: Nakano's roughness and friction features
-//! with a 1-D self-organizing map, and Sinapov's spectrotemporal features with k-NN and a one-vs-one SVC; recognizer
-//! files ([`model`]) train, store and evaluate either.
+//! with a 1-D self-organizing map, and Sinapov's spectrotemporal features with k-NN and a
+//! one-vs-one SVC; recognizer files ([`RecognizerFile`]) train, store and evaluate either.
 //!
 //! May import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
+//!
+//! This file is the crate's door: other crates name what they use as `recognize::X`.
+//!
+//! - [`features`]: Nakano's rubbing features, Sinapov's spectrotemporal histogram, and how a
+//!   capture is cut into windows.
+//! - [`som`], [`knn`], [`svc`]: the classifiers.
+//! - [`recognizer`]: the recognizer file, its training, decisions and evaluation.
+//! - [`protocol`]: the papers' cross-validations; [`category`]: surface categories;
+//!   [`eval`]: confusion matrices.
 pub mod category;
+mod error;
 pub mod eval;
+pub mod features;
 pub mod knn;
-pub mod model;
-pub mod nakano;
 pub mod protocol;
+pub mod recognizer;
 pub mod som;
-pub mod spectral;
 pub mod svc;
+
+pub use category::{
+    CategoryError, CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,
+    similarity_from_confusion,
+};
+pub use error::RecognizerError;
+pub use eval::{ConfusionMatrix, EvalError};
+pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoError, NakanoSignals, NakanoStream};
+pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectralError, SpectrogramPlan};
+pub use features::{DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling};
+pub use knn::{
+    BehaviourData, FeatureScaling, FusionError, Knn, KnnError, KnnParams, ReliabilityFusion, argmax, fuse,
+};
+pub use protocol::{ProtocolError, ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
+pub use recognizer::{
+    BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,
+    Decision, Evaluation, FusedEvaluation, KnnTrainer, LABEL_KEY, LabelledCapture, Method, RECOGNIZER_FORMAT,
+    RECOGNIZER_VERSION, RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer,
+    SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, WINDOW_SVM_FALLBACK_C, recording_groups, som_nodes,
+    som_params, train, trial_groups, window_svc_params,
+};
+pub use som::{Normalization, Som, SomError, SomParams};
+pub use svc::{CSearch, Svc, SvcError, SvcParams};

@@ -19,7 +19,8 @@ use std::borrow::Borrow;
 use std::collections::BTreeSet;
 
 use super::eval::{ConfusionMatrix, EvalError};
-use super::model::{Evaluation, LabelledCapture, RecognizerError, RecognizerFile, recording_groups};
+use crate::RecognizerError;
+use crate::recognizer::{Evaluation, LabelledCapture, RecognizerFile, recording_groups};
 
 /// Folds of Sinapov's cross-validation.
 pub const SINAPOV_FOLDS: usize = 10;

@@ -7,7 +7,7 @@ use capture::CaptureKind;
 use capture::import::{ColumnMap, ImportSpec, import_csv, import_csv_report};
 use capture::sha256_hex;
 use clap::Args;
-use recognize::model::LabelledCapture;
+use recognize::LabelledCapture;
 
 /// Import a CSV log recorded with another tool as a capture.
 ///

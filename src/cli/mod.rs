@@ -14,6 +14,7 @@ mod import_cmd;
 mod recognize_cmd;
 mod render_cmd;
 mod run_cmd;
+mod train_args;
 
 use clap::{Parser, Subcommand};
 

@@ -4,16 +4,13 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
-use recognize::knn::KnnParams;
-use recognize::model::{
-    CV_FOLDS, DECISION_WINDOW_S, Evaluation, FeatureSet, FusedEvaluation, HOP_S, NakanoWindowing,
-    RecognizerFile, SCRATCH_SOM_NORMALIZATION, SvmC, TRAINING_WINDOW_S, WINDOW_SVM_FALLBACK_C, som_params,
-};
-use recognize::model::{LabelledCapture, RecognizerError};
 use recognize::protocol::{self, SINAPOV_FOLDS, Split};
-use recognize::som::{Normalization, SomParams};
-use recognize::spectral::CellScale;
-use recognize::svc::SvcParams;
+use recognize::{
+    CV_FOLDS, ConfusionMatrix, Evaluation, FusedEvaluation, LabelledCapture, RecognizerBody, RecognizerFile,
+    WINDOW_SVM_FALLBACK_C,
+};
+
+use super::train_args::{Method, TrainOptions};
 
 /// Train and evaluate surface recognizers.
 ///
@@ -75,93 +72,6 @@ struct TrainArgs {
     options: TrainOptions,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
-}
-
-/// How to train, besides the method: features and settings (`train`, `cv` and `categorize`
-/// alike).
-#[derive(Debug, Args)]
-pub(crate) struct TrainOptions {
-    /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
-    /// (rubbing windows with accelerometer columns). Default: som nakano, knn and svm spectral.
-    #[arg(long, value_enum, value_name = "nakano|spectral|both")]
-    features: Option<Features>,
-    /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
-    /// filters' 0.27 s lookahead).
-    #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
-    window_s: f64,
-    /// Windowed features (nakano, both): window of the training vectors, s.
-    #[arg(long, default_value_t = TRAINING_WINDOW_S, value_name = "S")]
-    train_window_s: f64,
-    /// Windowed features (nakano, both): time between decisions (and between training
-    /// windows), s.
-    #[arg(long, default_value_t = HOP_S, value_name = "S")]
-    hop_s: f64,
-    /// som: seed of the map's initial vectors and presentation order.
-    #[arg(long, default_value_t = 0)]
-    pub(crate) seed: u64,
-    /// som over nakano features: how features are scaled before the map. log-within-class:
-    /// scales on a log scale, each divided by its pooled within-surface spread, unit length
-    /// (default); standardize: z-scores, unit length; thesis: Eq. 2.26, each feature divided
-    /// by its column's norm.
-    #[arg(long, value_enum, default_value = "log-within-class")]
-    scaling: ScalingArg,
-
-    /// knn: neighbours.
-    #[arg(long, default_value_t = 3)]
-    k: usize,
-    /// svm: the box constraint C, or `auto`: per behaviour, the most accurate of 1, 10, …, 10⁵
-    /// under cross-validation by trial on the training captures (ties to the smaller C; a
-    /// behaviour with fewer than two trials gets 10⁴). With --features nakano|both: one C, by
-    /// cross-validation by run, or 10 when a surface has a single run.
-    #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
-    c: CArg,
-}
-
-#[derive(Debug, Clone, Copy)]
-enum CArg {
-    Auto,
-    Fixed(f64),
-}
-
-fn parse_c(text: &str) -> Result<CArg, String> {
-    if text == "auto" {
-        return Ok(CArg::Auto);
-    }
-    match text.parse::<f64>() {
-        Ok(c) if c.is_finite() && c > 0.0 => Ok(CArg::Fixed(c)),
-        _ => Err(format!("`{text}` is neither `auto` nor a positive number")),
-    }
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum ScalingArg {
-    LogWithinClass,
-    Standardize,
-    Thesis,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum Method {
-    Som,
-    Knn,
-    Svm,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum Features {
-    Nakano,
-    Spectral,
-    Both,
-}
-
-impl From<Features> for FeatureSet {
-    fn from(f: Features) -> Self {
-        match f {
-            Features::Nakano => Self::Nakano,
-            Features::Spectral => Self::Spectral,
-            Features::Both => Self::Both,
-        }
-    }
 }
 
 /// Evaluate a recognizer on labelled captures: accuracy, per-class rates, confusion matrix,
@@ -254,7 +164,7 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures, None)?;
     let start = std::time::Instant::now();
-    let model = train_model(args.method, &args.options, &captures, args.options.seed)?;
+    let model = recognize::train(&captures, &args.options.settings(args.method))?;
     let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)
@@ -280,98 +190,9 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Trains the recognizer `options` describe on `captures`, the SOM seeded with `seed`.
-///
-/// The error is boxed: it is large, and [`protocol::run`] passes it on boxed.
-pub(crate) fn train_model(
-    method: Method,
-    options: &TrainOptions,
-    captures: &[LabelledCapture],
-    seed: u64,
-) -> Result<RecognizerFile, Box<RecognizerError>> {
-    let features = options.feature_set(method);
-    features.check_columns(captures)?;
-    let windowing = || -> Result<NakanoWindowing, Box<RecognizerError>> {
-        let rate_hz = captures
-            .first()
-            .map(|c| c.capture.metadata().rate_hz())
-            .ok_or(RecognizerError::NoTrainingData)?;
-        Ok(NakanoWindowing::new(options.window_s, options.hop_s, rate_hz)?
-            .with_training_window_s(options.train_window_s)?)
-    };
-    let c = match options.c {
-        CArg::Auto => SvmC::auto(),
-        CArg::Fixed(c) => SvmC::Fixed(c),
-    };
-    let som = SomParams {
-        seed,
-        normalization: match options.scaling {
-            ScalingArg::LogWithinClass => Normalization::LogWithinClass,
-            ScalingArg::Standardize => Normalization::Standardize,
-            ScalingArg::Thesis => Normalization::ThesisColumnNorm,
-        },
-        ..SomParams::default()
-    };
-    let model = match (method, features) {
-        (Method::Som, FeatureSet::Nakano) => RecognizerFile::train_som(captures, windowing()?, som),
-        (Method::Som, FeatureSet::Both) => {
-            RecognizerFile::train_som_windows(captures, windowing()?, som, CellScale::Mean)
-        }
-        (Method::Som, FeatureSet::Spectral) => {
-            let classes = captures
-                .iter()
-                .map(|c| c.label.as_str())
-                .collect::<std::collections::BTreeSet<_>>()
-                .len();
-            let params = SomParams {
-                normalization: SCRATCH_SOM_NORMALIZATION,
-                ..som_params(classes, seed)
-            };
-            RecognizerFile::train_som_scratches(captures, params, CellScale::Mean)
-        }
-        (Method::Knn, FeatureSet::Spectral) => {
-            RecognizerFile::train_knn(captures, KnnParams::default().k(options.k), CellScale::Mean)
-        }
-        (Method::Knn, windowed) => {
-            RecognizerFile::train_knn_windows(captures, windowing()?, windowed, options.k, CellScale::Mean)
-        }
-        (Method::Svm, FeatureSet::Spectral) => {
-            RecognizerFile::train_svm(captures, SvcParams::default(), &c, CellScale::Mean)
-        }
-        (Method::Svm, windowed) => {
-            RecognizerFile::train_svm_windows(captures, windowing()?, windowed, &c, CellScale::Mean)
-        }
-    };
-    Ok(model?)
-}
-
-impl Method {
-    /// The method's name, as `--method` spells it.
-    pub(crate) fn name(self) -> &'static str {
-        match self {
-            Self::Som => "som",
-            Self::Knn => "knn",
-            Self::Svm => "svm",
-        }
-    }
-}
-
-impl TrainOptions {
-    /// The features asked for, else `method`'s own.
-    fn feature_set(&self, method: Method) -> FeatureSet {
-        self.features.map_or(
-            match method {
-                Method::Som => FeatureSet::Nakano,
-                Method::Knn | Method::Svm => FeatureSet::Spectral,
-            },
-            FeatureSet::from,
-        )
-    }
-}
-
 /// The C of an SVM over windows, and how it was chosen.
 fn print_window_c(model: &RecognizerFile) {
-    if let recognize::model::RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body {
+    if let RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body {
         let c = svc.params().c;
         match c_search {
             Some(search) if search.grid.len() > 1 => {
@@ -453,13 +274,9 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let fused = model.evaluate_fused(&captures)?;
     let quality = model.som_quality(&captures, false, window_s)?;
     let plots = match &args.plots {
-        Some(dir) => crate::recognition_plots::write_eval_plots(
-            dir,
-            &model,
-            &captures,
-            &e.confusion.row_percent(),
-            window_s,
-        )?,
+        Some(dir) => {
+            crate::plots::write_eval_plots(dir, &model, &captures, &e.confusion.row_percent(), window_s)?
+        }
         None => Vec::new(),
     };
     // With --json, stdout holds only the JSON object, so the plots are named on stderr.
@@ -580,8 +397,13 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
         },
     };
     let start = std::time::Instant::now();
+    let settings = args.options.settings(args.method);
     let result = protocol::run(&captures, split, args.seeds, args.fold, |train, seed| {
-        train_model(args.method, &args.options, train, args.options.seed + seed)
+        let settings = recognize::TrainSettings {
+            seed: settings.seed + seed,
+            ..settings.clone()
+        };
+        recognize::train(train, &settings).map_err(Box::new)
     })?;
     let elapsed_s = start.elapsed().as_secs_f64();
     let e = &result.evaluation;
@@ -589,10 +411,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     if args.json {
         let mut json = to_json(e);
         if let Some(object) = json.as_object_mut() {
-            object.insert(
-                "features".to_owned(),
-                args.options.feature_set(args.method).name().into(),
-            );
+            object.insert("features".to_owned(), settings.features.name().into());
             object.insert("split".to_owned(), split.name().into());
             object.insert("folds".to_owned(), split.folds().into());
             object.insert("fold".to_owned(), args.fold.into());
@@ -659,7 +478,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
         &format!(
             "{} over {} features, {} split, {} x {} seed(s) = {} recognizers in {elapsed_s:.1} s; pooled over {} evaluations of held-out captures",
             e.method,
-            args.options.feature_set(args.method),
+            settings.features,
             split.name(),
             args.fold.map_or_else(
                 || format!("{} folds", split.folds()),
@@ -736,7 +555,7 @@ fn print_fused(f: &FusedEvaluation) {
     );
 }
 
-fn per_class_json(c: &recognize::eval::ConfusionMatrix<String>) -> serde_json::Value {
+fn per_class_json(c: &ConfusionMatrix<String>) -> serde_json::Value {
     c.classes()
         .iter()
         .zip(c.per_class_rates())

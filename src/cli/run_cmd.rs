@@ -141,7 +141,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     let dir = dir(&scene);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    report::write_force_plot(&dir.join("force.png"), &runs)?;
+    crate::plots::write_force_plot(&dir.join("force.png"), &runs)?;
     let frame = crate::view::render_session_frame(&scene, &runs, &recognition, &dir.join("frame.png"));
     // A report folder holds one session: nothing of an earlier one may remain beside it.
     let stale: &[&str] = if frame.is_ok() {

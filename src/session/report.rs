@@ -1,14 +1,13 @@
-//! The session report: a folder with the summary (text and JSON), force plots (PNG), a
-//! rendered frame (or why none could be made) and the recognized-surface timeline.
+//! The session report: a folder with the summary (text and JSON), force plots (PNG, drawn by
+//! [`crate::plots::session`]), a rendered frame (or why none could be made) and the
+//! recognized-surface timeline.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use plotters::prelude::*;
 use serde::Serialize;
 
 use super::analysis::SegmentSummary;
-use super::{SegmentKind, SegmentRun};
 use crate::models::{Origin, ResolvedModel};
 
 /// Why a report could not be written.
@@ -21,14 +20,6 @@ pub enum ReportError {
         path: PathBuf,
         /// Why.
         source: std::io::Error,
-    },
-    /// Drawing a plot failed.
-    #[error("drawing {}: {reason}", path.display())]
-    Plot {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        reason: String,
     },
 }
 
@@ -243,108 +234,3 @@ pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportErr
 }
 
 use std::io::Write;
-
-/// Registers the bundled font with plotters once.
-pub(crate) fn font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
-    });
-}
-
-/// Draws `force.png`: per segment, force against depth (needle) or position (rubbing), and
-/// against time.
-pub fn write_force_plot(path: &Path, runs: &[SegmentRun]) -> Result<(), ReportError> {
-    font();
-    let (w, h) = (1200u32, 420 * runs.len().max(1) as u32);
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    let plot_err = |e: String| ReportError::Plot {
-        path: path.to_owned(),
-        reason: e,
-    };
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| plot_err(e.to_string()))?;
-        let rows = root.split_evenly((runs.len().max(1), 2));
-        for (i, run) in runs.iter().enumerate() {
-            let (position, force, quantity) = super::traces(Some(&run.segment.kind));
-            let what = match run.segment.kind {
-                SegmentKind::Needle { .. } => "axial force",
-                SegmentKind::Friction { .. } => "friction",
-                SegmentKind::Surface { .. } => "friction (RFOB)",
-            };
-            let x_label = format!("{quantity} [mm]");
-            let xs: Vec<f64> = run.samples.iter().map(|s| position(s) * 1e3).collect();
-            let ys: Vec<f64> = run.samples.iter().map(force).collect();
-            let title = format!("{}: {what} vs {quantity}", run.segment.object);
-            let ts: Vec<f64> = run.samples.iter().map(|s| s.time_s).collect();
-            line_chart(&rows[2 * i], &title, &x_label, &xs, &ys).map_err(plot_err)?;
-            let title_t = format!("{}: force vs time", run.segment.object);
-            line_chart(&rows[2 * i + 1], &title_t, "time [s]", &ts, &ys).map_err(plot_err)?;
-        }
-        root.present().map_err(|e| plot_err(e.to_string()))?;
-    }
-    write_png_rgb(path, w, h, &rgb)
-}
-
-fn line_chart(
-    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
-    title: &str,
-    x_label: &str,
-    xs: &[f64],
-    ys: &[f64],
-) -> Result<(), String> {
-    let range = |v: &[f64]| {
-        let (lo, hi) = v
-            .iter()
-            .filter(|x| x.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        if lo.is_finite() && hi > lo {
-            let pad = 0.05 * (hi - lo);
-            (lo - pad)..(hi + pad)
-        } else {
-            -1.0..1.0
-        }
-    };
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(52)
-        .build_cartesian_2d(range(xs), range(ys))
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc("force [N]")
-        .draw()
-        .map_err(|e| e.to_string())?;
-    // A plot needs no more points than pixels across.
-    let step = (xs.len() / 4000).max(1);
-    chart
-        .draw_series(LineSeries::new(
-            xs.iter().zip(ys).step_by(step).map(|(&x, &y)| (x, y)),
-            &RGBColor(180, 40, 40),
-        ))
-        .map_err(|e| e.to_string())?;
-    Ok(())
-}
-
-/// Writes an RGB8 image as PNG, through a temporary file.
-pub fn write_png_rgb(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), ReportError> {
-    capture::write_atomically(path, |out| {
-        let mut encoder = png::Encoder::new(out, w, h);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
-        writer.write_image_data(rgb).map_err(std::io::Error::other)?;
-        writer.finish().map_err(std::io::Error::other)
-    })
-    .map_err(io(path))
-}

@@ -63,15 +63,15 @@ pub const FEATURE_NAMES: [&str; FEATURES] = [
 pub const CROSSING_GUARD_M: f64 = 1e-12;
 
 /// Column of the tip's position along the rubbing direction.
-pub const POSITION_COLUMN: &str = "tangential_position_m";
+pub const POSITION_COLUMN: &str = capture::kind::TANGENTIAL_POSITION_M;
 /// Column of the tip's height.
-pub const HEIGHT_COLUMN: &str = "normal_position_m";
+pub const HEIGHT_COLUMN: &str = capture::kind::NORMAL_POSITION_M;
 /// Column of the friction (reaction force along x).
-pub const FRICTION_COLUMN: &str = "friction_force_n";
+pub const FRICTION_COLUMN: &str = capture::kind::FRICTION_FORCE_N;
 /// Column of the force commanded along x, for the reaction-force observer.
-pub const COMMAND_FORCE_COLUMN: &str = "tangential_command_force_n";
+pub const COMMAND_FORCE_COLUMN: &str = capture::kind::TANGENTIAL_COMMAND_FORCE_N;
 /// Column of the measured velocity along x (pseudo-differentiated from position when absent).
-pub const VELOCITY_COLUMN: &str = "tangential_velocity_mps";
+pub const VELOCITY_COLUMN: &str = capture::kind::TANGENTIAL_VELOCITY_MPS;
 
 /// Why features could not be computed.
 #[derive(Debug, thiserror::Error)]

@@ -41,7 +41,11 @@ pub const MIN_FRAMES: usize = TIME_BINS;
 pub const MIN_SAMPLES: usize = FRAME_LEN + (MIN_FRAMES - 1) * HOP_LEN;
 
 /// The accelerometer columns of a scratch capture.
-pub const ACCEL_COLUMNS: [&str; 3] = ["accel_x_mps2", "accel_y_mps2", "accel_z_mps2"];
+pub const ACCEL_COLUMNS: [&str; 3] = [
+    capture::kind::ACCEL_X_MPS2,
+    capture::kind::ACCEL_Y_MPS2,
+    capture::kind::ACCEL_Z_MPS2,
+];
 
 /// Why features could not be computed.
 #[derive(Debug, Error)]

@@ -17,15 +17,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use recognize::model::{LabelledCapture, RecognizerBody, RecognizerFile};
-use recognize::nakano::NakanoSignals;
+use recognize::{LabelledCapture, NakanoSignals, RecognizerBody, RecognizerFile};
 
-use crate::session::report::{ReportError, font, write_png_rgb};
-
-type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+use super::{Area, PlotError, render};
 
 /// Class colours (Tableau 10), distinguishable on screen and in print; classes beyond ten
 /// reuse them, which the names in the cells disambiguate.
@@ -134,27 +130,6 @@ pub fn write_eval_plots(
     Ok(written)
 }
 
-/// Renders `w`×`h` pixels with `draw` and writes them as PNG to `path`.
-fn render(
-    path: &Path,
-    (w, h): (u32, u32),
-    draw: impl FnOnce(&Area<'_>) -> Result<(), String>,
-) -> Result<(), ReportError> {
-    font();
-    let plot_err = |reason: String| ReportError::Plot {
-        path: path.to_owned(),
-        reason,
-    };
-    let mut rgb = vec![255u8; (w as usize) * (h as usize) * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| plot_err(e.to_string()))?;
-        draw(&root).map_err(plot_err)?;
-        root.present().map_err(|e| plot_err(e.to_string()))?;
-    }
-    write_png_rgb(path, w, h, &rgb)
-}
-
 fn text(area: &Area<'_>, s: &str, at: (i32, i32), style: &TextStyle<'_>) -> Result<(), String> {
     area.draw(&Text::new(s.to_owned(), at, style.clone()))
         .map_err(|e| e.to_string())
@@ -180,7 +155,7 @@ pub fn confusion_size(classes: usize) -> (u32, u32) {
 }
 
 /// Draws the row-normalised confusion matrix (`percent[truth][predicted]`).
-pub fn write_confusion(path: &Path, classes: &[String], percent: &[Vec<f64>]) -> Result<(), ReportError> {
+pub fn write_confusion(path: &Path, classes: &[String], percent: &[Vec<f64>]) -> Result<(), PlotError> {
     let size = confusion_size(classes.len());
     render(path, size, |root| {
         let (cw, ch) = CM_CELL;
@@ -292,7 +267,7 @@ pub fn write_som_map(
     labels: &[usize],
     reference: &[Vec<f64>],
     hits: &[u64],
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     let size = som_map_size(labels.len());
     let u = u_distances(reference);
     render(path, size, |root| {
@@ -432,7 +407,7 @@ pub fn write_som_components(
     feature_names: &[String],
     labels: &[usize],
     reference: &[Vec<f64>],
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     let size = som_components_size(feature_names.len(), labels.len());
     let left = SOM_LEFT + 90;
     render(path, size, |root| {
@@ -524,7 +499,7 @@ pub fn write_som_density(
     classes: &[String],
     labels: &[usize],
     density: &[Vec<u64>],
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     let size = som_density_size(classes.len(), labels.len());
     render(path, size, |root| {
         let cw = SOM_CELL_W;

@@ -1,0 +1,147 @@
+//! Features: Nakano's rubbing features ([`nakano`]), Sinapov's spectrotemporal histogram
+//! ([`spectral`]), the windows a rubbing capture is cut into ([`NakanoWindowing`]) and the scaling of
+//! windowed features ([`WindowScaling`]); and `--features`, which of them a recognizer computes,
+//! independently of its classifier.
+//!
+//! Each method has its own features by default — the SOM Nakano's five rubbing features over
+//! sliding windows, k-NN and SVM Sinapov's spectrotemporal histogram of a whole scratch — and
+//! [`FeatureSet`] crosses them:
+//!
+//! - **k-NN / SVM on `nakano`** ([`RecognizerBody::KnnWindows`](crate::RecognizerBody::KnnWindows), [`RecognizerBody::SvmWindows`](crate::RecognizerBody::SvmWindows)):
+//!   windowed exactly like the SOM (the same [`NakanoWindowing`]: trained on the training
+//!   windows, deciding on the decision windows every hop from 5 mm of travel on), one
+//!   classifier over all windows (rubbing has no behaviours), features scaled by
+//!   [`WindowScaling`] (the SOM's `LogWithinClass`, without the unit length).
+//! - **SOM on `spectral`** ([`RecognizerBody::SomScratches`](crate::RecognizerBody::SomScratches)): one map per behaviour over the
+//!   histograms of whole scratches, one decision per scratch, fused over a trial's behaviours
+//!   like k-NN and SVM (reliability from cross-validation by trial).
+//! - **`both`** (k-NN, SVM: the window variants; SOM: [`RecognizerBody::SomWindows`](crate::RecognizerBody::SomWindows)): each
+//!   window of a rubbing capture that also has accelerometer columns gets Nakano's five features
+//!   followed by the 125 cells of the spectrotemporal histogram of the same window's samples.
+
+pub mod nakano;
+mod scaling;
+pub mod spectral;
+mod windowing;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{LabelledCapture, RecognizerError};
+use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLUMN};
+use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan};
+
+pub use scaling::WindowScaling;
+pub use windowing::{DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S};
+pub(crate) use windowing::{window_vectors, windows};
+
+/// Which features a recognizer computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeatureSet {
+    /// Nakano's five rubbing features over sliding windows (the SOM's default).
+    Nakano,
+    /// Sinapov's spectrotemporal histogram of a whole scratch (k-NN's and SVM's default).
+    Spectral,
+    /// Per window of a rubbing capture with accelerometer columns: the five Nakano features
+    /// followed by the histogram of the window's acceleration (130 features).
+    Both,
+}
+
+impl FeatureSet {
+    /// `nakano`, `spectral` or `both`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Nakano => "nakano",
+            Self::Spectral => "spectral",
+            Self::Both => "both",
+        }
+    }
+
+    /// Length of the feature vector.
+    pub fn dim(self) -> usize {
+        match self {
+            Self::Nakano => nakano::FEATURES,
+            Self::Spectral => FEATURE_LEN,
+            Self::Both => nakano::FEATURES + FEATURE_LEN,
+        }
+    }
+
+    /// Names of the features, in vector order.
+    pub fn feature_names(self) -> Vec<String> {
+        let nakano = nakano::FEATURE_NAMES.iter().map(|s| (*s).to_owned());
+        match self {
+            Self::Nakano => nakano.collect(),
+            Self::Spectral => histogram_names(),
+            Self::Both => nakano.chain(histogram_names()).collect(),
+        }
+    }
+
+    /// The columns of `capture` these features need but it lacks (empty when it has them all).
+    /// Nakano's friction comes from `friction_force_n` or, without it, from the reaction-force
+    /// observer over `tangential_command_force_n`.
+    pub fn missing_columns(self, capture: &LabelledCapture) -> Vec<String> {
+        let has = |name: &str| capture.capture.columns().iter().any(|c| c == name);
+        let mut missing = Vec::new();
+        if matches!(self, Self::Nakano | Self::Both) {
+            for name in [POSITION_COLUMN, HEIGHT_COLUMN] {
+                if !has(name) {
+                    missing.push(name.to_owned());
+                }
+            }
+            if !has(FRICTION_COLUMN) && !has(COMMAND_FORCE_COLUMN) {
+                missing.push(format!("{FRICTION_COLUMN} (or {COMMAND_FORCE_COLUMN})"));
+            }
+        }
+        if matches!(self, Self::Spectral | Self::Both) {
+            missing.extend(ACCEL_COLUMNS.iter().filter(|c| !has(c)).map(|c| (*c).to_owned()));
+        }
+        missing
+    }
+
+    /// A typed error for the first capture that lacks a column these features need.
+    pub fn check_columns(self, captures: &[LabelledCapture]) -> Result<(), RecognizerError> {
+        for c in captures {
+            let missing = self.missing_columns(c);
+            if !missing.is_empty() {
+                return Err(RecognizerError::MissingColumns {
+                    path: c.reference.path.clone(),
+                    features: self.name(),
+                    missing,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+impl std::fmt::Display for FeatureSet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Names of the spectrotemporal histogram's cells, time-major.
+pub(crate) fn histogram_names() -> Vec<String> {
+    (0..FEATURE_LEN)
+        .map(|i| {
+            format!(
+                "histogram_t{}_f{}",
+                i / spectral::FREQUENCY_BINS,
+                i % spectral::FREQUENCY_BINS
+            )
+        })
+        .collect()
+}
+
+/// Sinapov's histogram of a whole capture.
+pub(crate) fn capture_histogram(
+    plan: &SpectrogramPlan,
+    c: &LabelledCapture,
+    scale: CellScale,
+) -> Result<[f64; FEATURE_LEN], RecognizerError> {
+    plan.capture_features(&c.capture, scale)
+        .map_err(|source| RecognizerError::Spectral {
+            path: c.reference.path.clone(),
+            source,
+        })
+}

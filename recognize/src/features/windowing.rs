@@ -1,0 +1,259 @@
+//! How a rubbing capture is cut into windows: the [`NakanoWindowing`] a SOM (or a classifier over
+//! windows) trains and decides on, the windows it picks, and each window's feature vector.
+
+use serde::{Deserialize, Serialize};
+
+use super::FeatureSet;
+use super::nakano::{FEATURES, NakanoConfig, NakanoSignals};
+use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan};
+use crate::{LabelledCapture, RecognizerError};
+
+/// Default decision window of a SOM recognizer, s (15 mm of travel at 5 mm/s).
+pub const DECISION_WINDOW_S: f64 = 3.0;
+/// Default training window of a SOM recognizer, s (5 mm of travel at 5 mm/s).
+pub const TRAINING_WINDOW_S: f64 = 1.0;
+/// Default time between a SOM recognizer's decisions, s.
+pub const HOP_S: f64 = 0.1;
+
+/// How a rubbing stream is cut into the windows the map decides on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NakanoWindowing {
+    /// The two zero-phase moving averages.
+    pub filters: NakanoConfig,
+    /// Samples per decision window.
+    pub window_samples: usize,
+    /// Samples per window the map was trained on, when not [`NakanoWindowing::window_samples`]
+    /// (see [`NakanoWindowing::with_training_window_s`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub training_window_samples: Option<usize>,
+    /// Samples between decisions.
+    pub hop_samples: usize,
+    /// No decision on a window that starts before this travel from the first sample, m.
+    pub start_travel_m: f64,
+    /// Sample rate the windows are counted at, Hz.
+    pub rate_hz: f64,
+}
+
+impl NakanoWindowing {
+    /// The protocol's windowing: `window_s` and `hop_s` at `rate_hz`, the filters at that rate
+    /// ([`NakanoConfig::at_rate`]: the same travel whatever the rate), and decisions from 5 mm
+    /// of travel on (thesis Sec. 4.3).
+    pub fn new(window_s: f64, hop_s: f64, rate_hz: f64) -> Result<Self, RecognizerError> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
+            return Err(RecognizerError::Setting {
+                name: "rate_hz",
+                value: rate_hz,
+                reason: "positive and at most 10^6 Hz",
+            });
+        }
+        let windowing = Self {
+            filters: NakanoConfig::at_rate(rate_hz).map_err(|_| RecognizerError::Setting {
+                name: "rate_hz",
+                value: rate_hz,
+                reason: "a rate at which Nakano's filters span whole samples",
+            })?,
+            window_samples: samples("window_s", window_s, rate_hz)?,
+            training_window_samples: None,
+            hop_samples: samples("hop_s", hop_s, rate_hz)?,
+            start_travel_m: 0.005,
+            rate_hz,
+        };
+        windowing.check().map_err(setting_error)?;
+        Ok(windowing)
+    }
+
+    /// The defaults at `rate_hz`: [`TRAINING_WINDOW_S`] windows to train on,
+    /// [`DECISION_WINDOW_S`] windows to decide on, every [`HOP_S`].
+    pub fn protocol(rate_hz: f64) -> Result<Self, RecognizerError> {
+        Self::new(DECISION_WINDOW_S, HOP_S, rate_hz)?.with_training_window_s(TRAINING_WINDOW_S)
+    }
+
+    /// The same windowing with a decision window of `window_s` instead.
+    pub fn with_window_s(self, window_s: f64) -> Result<Self, RecognizerError> {
+        let windowing = Self {
+            window_samples: samples("window_s", window_s, self.rate_hz)?,
+            ..self
+        };
+        windowing.check().map_err(setting_error)?;
+        Ok(windowing)
+    }
+
+    /// The same windowing, trained on windows of `training_window_s`.
+    ///
+    /// Trained on one run per surface, a map learns each surface's spread from that run's
+    /// windows only. Short training windows give it many, varied windows (the spread a surface
+    /// shows from place to place), while long decision windows average more roughness waves
+    /// into each decision: a 1 s training window with a 3 s decision window recognizes every
+    /// Nakano surface at ≥ 95 % (`tests/recognition_nakano.rs`) where 1 s / 1 s does not.
+    pub fn with_training_window_s(self, training_window_s: f64) -> Result<Self, RecognizerError> {
+        let windowing = Self {
+            training_window_samples: Some(samples("training_window_s", training_window_s, self.rate_hz)?),
+            ..self
+        };
+        windowing.check().map_err(setting_error)?;
+        Ok(windowing)
+    }
+
+    /// The windowing the map was trained with.
+    pub fn training(&self) -> Self {
+        Self {
+            window_samples: self.training_window_samples.unwrap_or(self.window_samples),
+            training_window_samples: None,
+            ..*self
+        }
+    }
+
+    /// Length of the training windows, s.
+    pub fn training_window_s(&self) -> f64 {
+        self.training().window_s()
+    }
+
+    /// The first setting out of range: its name, its value and what it must be. The bounds
+    /// keep a hand-edited recognizer file from sizing buffers past memory or overflowing the
+    /// filters' sample arithmetic.
+    pub(crate) fn check(&self) -> Result<(), (&'static str, f64, &'static str)> {
+        const MAX_HALF_WIDTH: usize = 1_000_000;
+        const MAX_WINDOW: usize = 10_000_000;
+        let windows = [
+            ("window_samples", Some(self.window_samples)),
+            ("training_window_samples", self.training_window_samples),
+        ];
+        for (name, n) in windows {
+            if let Some(n) = n
+                && !(2..=MAX_WINDOW).contains(&n)
+            {
+                return Err((name, n as f64, "from 2 to 10^7 samples"));
+            }
+        }
+        if !(1..=MAX_WINDOW).contains(&self.hop_samples) {
+            return Err(("hop_samples", self.hop_samples as f64, "from 1 to 10^7 samples"));
+        }
+        let filters = [
+            ("filters.highpass_half_width", self.filters.highpass_half_width, 1),
+            (
+                "filters.smoothing_half_width",
+                self.filters.smoothing_half_width,
+                0,
+            ),
+        ];
+        for (name, n, least) in filters {
+            if !(least..=MAX_HALF_WIDTH).contains(&n) {
+                let reason = if least == 1 {
+                    "from 1 to 10^6 samples (the rate is too low for the roughness filter)"
+                } else {
+                    "at most 10^6 samples"
+                };
+                return Err((name, n as f64, reason));
+            }
+        }
+        if !(self.start_travel_m.is_finite() && self.start_travel_m >= 0.0) {
+            return Err(("start_travel_m", self.start_travel_m, "finite and not negative"));
+        }
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= 1e6) {
+            return Err(("rate_hz", self.rate_hz, "positive and at most 10^6 Hz"));
+        }
+        Ok(())
+    }
+
+    /// Window length, s.
+    pub fn window_s(&self) -> f64 {
+        self.window_samples as f64 / self.rate_hz
+    }
+
+    /// From a window's first sample to the sample that completes it (the window plus the
+    /// filters' lookahead), s: how old the oldest sample of a decision is.
+    pub fn decision_latency_s(&self) -> f64 {
+        (self.window_samples + self.filters.lookahead_samples()) as f64 / self.rate_hz
+    }
+
+    /// Whether a window starting at sample `start`, `travel_m` from the first sample, is
+    /// decided on.
+    pub fn is_decision_window(&self, start: u64, travel_m: f64) -> bool {
+        let margin = self.filters.lookahead_samples() as u64;
+        start >= margin
+            && (start - margin).is_multiple_of(self.hop_samples as u64)
+            && travel_m >= self.start_travel_m
+    }
+
+    /// The sample at which the window starting at `start` is complete.
+    pub fn decided_at(&self, start: usize) -> usize {
+        start + self.window_samples - 1 + self.filters.lookahead_samples()
+    }
+}
+
+fn setting_error((name, value, reason): (&'static str, f64, &'static str)) -> RecognizerError {
+    RecognizerError::Setting { name, value, reason }
+}
+
+fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, RecognizerError> {
+    let n = (seconds * rate_hz).round();
+    if !(seconds.is_finite() && seconds > 0.0 && (1.0..=1e7).contains(&n)) {
+        return Err(RecognizerError::Setting {
+            name,
+            value: seconds,
+            reason: "positive, at least one sample and at most 10^7 samples",
+        });
+    }
+    Ok(n as usize)
+}
+
+/// Start and features of every decision window of a capture.
+pub(crate) fn windows(
+    c: &LabelledCapture,
+    windowing: &NakanoWindowing,
+) -> Result<Vec<(usize, [f64; FEATURES])>, RecognizerError> {
+    let nakano = |source| RecognizerError::Nakano {
+        path: c.reference.path.clone(),
+        source,
+    };
+    let signals = NakanoSignals::from_capture(&c.capture).map_err(nakano)?;
+    let x = signals.position_m();
+    let Some(&x0) = x.first() else {
+        return Ok(Vec::new());
+    };
+    let margin = windowing.filters.lookahead_samples();
+    let len = windowing.window_samples;
+    (margin..)
+        .step_by(windowing.hop_samples)
+        .take_while(|s| s + len + margin <= signals.len())
+        .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
+        .map(|s| Ok((s, signals.features(s, len, &windowing.filters).map_err(nakano)?)))
+        .collect()
+}
+
+/// The feature vectors of the windows of `c` that `windowing` picks: Nakano's five features,
+/// followed for [`FeatureSet::Both`] by the spectrotemporal histogram of the window's own
+/// accelerometer samples (`start .. start + window_samples`, all before the decision).
+pub(crate) fn window_vectors(
+    c: &LabelledCapture,
+    windowing: &NakanoWindowing,
+    features: FeatureSet,
+    cell_scale: CellScale,
+    plan: &SpectrogramPlan,
+) -> Result<Vec<(usize, Vec<f64>)>, RecognizerError> {
+    let nakano = windows(c, windowing)?;
+    if features != FeatureSet::Both {
+        return Ok(nakano.into_iter().map(|(s, f)| (s, f.to_vec())).collect());
+    }
+    let spectral = |source| RecognizerError::Spectral {
+        path: c.reference.path.clone(),
+        source,
+    };
+    let [x, y, z] = ACCEL_COLUMNS.map(|name| c.capture.column(name));
+    let (x, y, z) = (
+        x.map_err(|e| spectral(e.into()))?,
+        y.map_err(|e| spectral(e.into()))?,
+        z.map_err(|e| spectral(e.into()))?,
+    );
+    let len = windowing.window_samples;
+    nakano
+        .into_iter()
+        .map(|(s, f)| {
+            let range = s..(s + len).min(x.len());
+            let h = plan
+                .features(&x[range.clone()], &y[range.clone()], &z[range], cell_scale)
+                .map_err(spectral)?;
+            Ok((s, f.iter().copied().chain(h).collect()))
+        })
+        .collect()
+}

@@ -1,0 +1,91 @@
+//! A capture with its class and behaviour, as the recognizer sees it, and the classes of a set
+//! of them.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use crate::RecognizerError;
+use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
+
+/// Metadata key of a capture's class.
+pub const LABEL_KEY: &str = "surface";
+/// Metadata key of a scratch's exploratory behaviour.
+pub const BEHAVIOUR_KEY: &str = "behaviour";
+
+/// A capture with its class, behaviour and hash, as the recognizer sees it.
+#[derive(Debug, Clone)]
+pub struct LabelledCapture {
+    /// The capture.
+    pub capture: Capture,
+    /// Its class (metadata `surface`).
+    pub label: String,
+    /// Its exploratory behaviour (metadata `behaviour`), if any.
+    pub behaviour: Option<String>,
+    /// Where it was read from, and the SHA-256 of its bytes.
+    pub reference: CaptureRef,
+}
+
+impl LabelledCapture {
+    /// Reads a `rubbing` capture and its label; a capture without a `surface` in its metadata
+    /// is an error naming the file.
+    pub fn read(path: &Path) -> Result<Self, RecognizerError> {
+        let bytes = std::fs::read(path).map_err(|source| RecognizerError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let capture = Capture::read_from(bytes.as_slice(), path, Some(CaptureKind::Rubbing))?;
+        Self::new(capture, path, sha256_hex(&bytes))
+    }
+
+    /// Labels a capture already in memory; `path` and `sha256` identify it in the model.
+    pub fn new(capture: Capture, path: &Path, sha256: String) -> Result<Self, RecognizerError> {
+        let meta = capture.metadata();
+        let label = meta
+            .get(LABEL_KEY)
+            .filter(|l| !l.is_empty())
+            .ok_or_else(|| RecognizerError::UnusableCapture {
+                path: path.to_owned(),
+                reason: format!("metadata has no `{LABEL_KEY}`: the class of a capture comes from it"),
+            })?
+            .to_owned();
+        let behaviour = meta.get(BEHAVIOUR_KEY).map(str::to_owned);
+        Ok(Self {
+            capture,
+            label,
+            behaviour,
+            reference: CaptureRef {
+                path: path.to_owned(),
+                sha256,
+            },
+        })
+    }
+}
+
+/// The sorted distinct labels of `captures`.
+pub(crate) fn class_list(captures: &[LabelledCapture]) -> Vec<String> {
+    let set: BTreeSet<&str> = captures.iter().map(|c| c.label.as_str()).collect();
+    set.into_iter().map(str::to_owned).collect()
+}
+
+/// Index of the capture's class among `classes`.
+pub(crate) fn class_index(classes: &[String], c: &LabelledCapture) -> Result<usize, RecognizerError> {
+    classes
+        .iter()
+        .position(|l| *l == c.label)
+        .ok_or_else(|| RecognizerError::UnusableCapture {
+            path: c.reference.path.clone(),
+            reason: format!("surface `{}` is not one the recognizer was trained on", c.label),
+        })
+}
+
+/// A capture must be sampled at the rate the windows are counted at.
+pub(crate) fn check_rate(c: &LabelledCapture, rate_hz: f64) -> Result<(), RecognizerError> {
+    let found = c.capture.metadata().rate_hz();
+    if (found - rate_hz).abs() > 1e-9 * rate_hz {
+        return Err(RecognizerError::UnusableCapture {
+            path: c.reference.path.clone(),
+            reason: format!("sampled at {found} Hz; the recognizer's windows are counted at {rate_hz} Hz"),
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,40 @@
+//! Surface recognizers on disk: self-describing JSON, validated on load, and the offline
+//! pipeline that trains and evaluates them on labelled captures.
+//!
+//! A recognizer file names its method (Nakano's SOM over sliding windows, or Sinapov's k-NN
+//! over one scratch per capture), the classes in label order, how features are computed (filters,
+//! window, hop, sample rate; or the histogram's cell scaling), the trained map or training set
+//! with its feature scaling, and a SHA-256 of each training capture and of all of them together.
+//! Loading checks the format, the version and every shape, so a truncated or hand-edited file is
+//! a typed error naming the file and the field — never a wrong label on the haptic thread.
+//!
+//! **Labels** come from each capture's metadata: `surface` is the class, and `behaviour` (for
+//! scratches) picks which k-NN answers. **Windows** of the SOM start at
+//! `lookahead + k · hop` samples (the first sample whose zero-phase filters are complete, then
+//! every hop) and only once the tip has travelled
+//! [`NakanoWindowing::start_travel_m`](crate::NakanoWindowing::start_travel_m) from the capture's
+//! first sample, as the thesis starts recognising after 5 mm; a live recognizer fed the same
+//! samples makes its decisions on exactly these windows.
+
+mod decide;
+mod evaluate;
+mod file;
+mod grouping;
+pub(crate) mod labelled;
+mod train;
+
+pub use decide::{BehaviourReliability, Decision};
+pub use evaluate::{BehaviourScore, Evaluation, FusedEvaluation, SomQuality};
+pub use file::{
+    BehaviourKnn, BehaviourSom, BehaviourSvc, RECOGNIZER_FORMAT, RECOGNIZER_VERSION, RecognizerBody,
+    RecognizerFile,
+};
+pub use grouping::{TRIAL_KEY, recording_groups, trial_groups};
+pub use labelled::{BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture};
+pub use train::{
+    CV_FOLDS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainSettings,
+    Trainer, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_svc_params,
+};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,334 @@
+use std::path::Path;
+
+use super::*;
+use crate::RecognizerError;
+use crate::features::histogram_names;
+use crate::features::spectral::CellScale;
+use crate::features::{FeatureSet, NakanoWindowing};
+use crate::knn::KnnParams;
+use crate::som::SomParams;
+use crate::svc::{CSearch, Svc, SvcParams};
+use capture::{Capture, CaptureKind, Metadata};
+
+/// A rubbing capture of a sine roughness of `amplitude_m` and `wavelength_m` with friction
+/// `friction_n`, 5 mm/s at 1 kHz for `seconds`.
+fn rubbing(
+    surface: &str,
+    amplitude_m: f64,
+    wavelength_m: f64,
+    friction_n: f64,
+    seconds: f64,
+) -> LabelledCapture {
+    let n = (seconds * 1000.0) as usize;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+    let x: Vec<f64> = t.iter().map(|t| 5e-3 * t).collect();
+    let z: Vec<f64> = x
+        .iter()
+        .map(|x| amplitude_m * (x * std::f64::consts::TAU / wavelength_m).sin())
+        .collect();
+    let f: Vec<f64> = (0..n)
+        .map(|k| friction_n * (1.0 + 0.05 * ((k * 7919) % 13) as f64 / 13.0))
+        .collect();
+    let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0).with(LABEL_KEY, surface);
+    let columns = [
+        "time_s",
+        "tangential_position_m",
+        "normal_position_m",
+        "normal_force_n",
+        "friction_force_n",
+    ]
+    .map(String::from)
+    .to_vec();
+    let capture = Capture::new(meta, columns, vec![t, x, z, vec![0.3; n], f]).expect("valid capture");
+    LabelledCapture::new(capture, Path::new(surface), "00".into()).expect("labelled")
+}
+
+fn three_surfaces(seconds: f64) -> Vec<LabelledCapture> {
+    vec![
+        rubbing("fine", 5e-6, 0.3e-3, 0.10, seconds),
+        rubbing("coarse", 30e-6, 1.5e-3, 0.20, seconds),
+        rubbing("smooth", 1e-6, 0.8e-3, 0.05, seconds),
+    ]
+}
+
+#[test]
+fn a_som_recognizer_round_trips_and_recognizes_distinct_surfaces() {
+    let train = three_surfaces(4.0);
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    assert_eq!(model.classes, ["coarse", "fine", "smooth"]);
+    let text = serde_json::to_string(&model).expect("serialize");
+    let back = RecognizerFile::from_json(&text, Path::new("m.json")).expect("valid");
+    assert_eq!(back, model);
+    let eval = back.evaluate(&three_surfaces(3.0), None).expect("evaluate");
+    assert_eq!(eval.confusion.accuracy(), Some(1.0));
+    assert_eq!((eval.never_correct, eval.not_stable), (0, 0));
+    // The first decision window starts at 270 + 8 × 100 samples, the first hop after 5 mm
+    // (1 s) of travel, and is decided 500 + 270 − 1 samples later.
+    assert!((eval.decision_latency_s - 0.77).abs() < 1e-12);
+    let first = eval.time_to_first_correct_s.expect("correct decisions");
+    assert!((first - 1.839).abs() < 1e-9, "{first}");
+    assert_eq!(eval.flips_per_s, 0.0);
+}
+
+/// A k-NN and an SVM recognizer over two behaviours of three classes, built without
+/// captures: `poke` has a reliability weight, `rub` (as in a file written before weights
+/// were stored, or with too few trials) has none.
+fn sinapov_recognizers() -> [RecognizerFile; 2] {
+    use crate::svc::CvPoint;
+    let x: Vec<Vec<f64>> = (0..6)
+        .map(|i| {
+            (0..crate::features::spectral::FEATURE_LEN)
+                .map(|j| (i / 2) as f64 + 0.01 * ((i * 31 + j * 7) % 11) as f64)
+                .collect()
+        })
+        .collect();
+    let y = [0, 0, 1, 1, 2, 2];
+    let knn = KnnParams::default().fit(&x, &y, 3).expect("k-NN");
+    let params = SvcParams {
+        c: 10.0,
+        probability: false,
+        ..SvcParams::default()
+    };
+    let svc = Svc::fit(params, &x, &y, 3).expect("SVC");
+    let classes: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
+    let knn_body = RecognizerBody::Knn {
+        cell_scale: CellScale::Mean,
+        behaviours: ["poke", "rub"]
+            .iter()
+            .map(|b| BehaviourKnn {
+                behaviour: Some((*b).to_owned()),
+                knn: knn.clone(),
+                reliability: (*b == "poke").then_some(0.8),
+                reliability_folds: (*b == "poke").then_some(5),
+            })
+            .collect(),
+    };
+    let search = CSearch {
+        folds: 5,
+        grid: vec![
+            CvPoint {
+                c: 1.0,
+                accuracy: 0.5,
+            },
+            CvPoint {
+                c: 10.0,
+                accuracy: 0.8,
+            },
+        ],
+        chosen_c: 10.0,
+    };
+    let svm_body = RecognizerBody::Svm {
+        cell_scale: CellScale::Mean,
+        behaviours: ["poke", "rub"]
+            .iter()
+            .map(|b| BehaviourSvc {
+                behaviour: Some((*b).to_owned()),
+                svc: svc.clone(),
+                reliability: (*b == "poke").then_some(0.8),
+                c_search: (*b == "poke").then(|| search.clone()),
+            })
+            .collect(),
+    };
+    [knn_body, svm_body]
+        .map(|body| RecognizerFile::assemble(classes.clone(), histogram_names(), body, &[], 6))
+}
+
+#[test]
+fn reliability_weights_round_trip_and_older_files_without_them_still_load() {
+    for model in sinapov_recognizers() {
+        let method = model.method();
+        let json = serde_json::to_value(&model).expect("serialize");
+        assert_eq!(json["body"]["behaviours"][0]["reliability"], 0.8, "{method}");
+        assert!(
+            json["body"]["behaviours"][1].get("reliability").is_none(),
+            "{method}"
+        );
+        let back = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("valid");
+        assert_eq!(back, model);
+        // `rub` has no weight of its own: it gets the mean of the others' (here `poke`'s).
+        assert_eq!(back.fusion_weights(), [0.8, 0.8], "{method}");
+        assert_eq!(back.behaviour_names(), [Some("poke"), Some("rub")]);
+
+        // A file from before weights were stored: no `reliability`, `reliability_folds`,
+        // `c_search` anywhere. It loads, and every behaviour weighs the same.
+        let mut old = json.clone();
+        for b in old["body"]["behaviours"].as_array_mut().expect("behaviours") {
+            let b = b.as_object_mut().expect("behaviour");
+            for key in ["reliability", "reliability_folds", "c_search"] {
+                b.remove(key);
+            }
+        }
+        let old = RecognizerFile::from_json(&old.to_string(), Path::new("old.json")).expect("old file");
+        assert!(
+            old.reliabilities()
+                .iter()
+                .all(|r| r.reliability.is_none() && r.c_search.is_none())
+        );
+        assert_eq!(old.fusion_weights(), [1.0, 1.0], "{method}");
+
+        // Weights are accuracies.
+        for bad in [serde_json::json!(1.5), serde_json::json!(-0.1)] {
+            let mut edited = json.clone();
+            edited["body"]["behaviours"][0]["reliability"] = bad;
+            let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("range");
+            assert!(
+                err.to_string()
+                    .contains("r.json: field `body.behaviours[0].reliability`"),
+                "{err}"
+            );
+        }
+    }
+    // The SVM's search must name the classifier's C, from its grid.
+    let json = serde_json::to_value(&sinapov_recognizers()[1]).expect("serialize");
+    let mut edited = json.clone();
+    edited["body"]["behaviours"][0]["c_search"]["chosen_c"] = 1.0.into();
+    let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("C");
+    assert!(
+        err.to_string()
+            .contains("field `body.behaviours[0].c_search.chosen_c`: 1 is not the classifier's C 10"),
+        "{err}"
+    );
+    let mut edited = json;
+    edited["body"]["behaviours"][0]["c_search"]["chosen_c"] = 100.0.into();
+    let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("grid");
+    assert!(
+        err.to_string()
+            .contains("c_search.chosen_c`: 100 is not in the grid"),
+        "{err}"
+    );
+}
+
+#[test]
+fn trials_group_captures_in_numeric_order_and_trial_less_captures_stand_alone() {
+    let with_trial = |trial: Option<&str>| {
+        let mut c = rubbing("fine", 5e-6, 0.3e-3, 0.1, 0.1);
+        let mut meta = c.capture.metadata().clone();
+        if let Some(t) = trial {
+            meta = meta.with(TRIAL_KEY, t);
+        }
+        c.capture =
+            Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec()).expect("capture");
+        c
+    };
+    let captures: Vec<LabelledCapture> = [Some("10"), Some("2"), None, Some("2"), Some("0"), None]
+        .into_iter()
+        .map(with_trial)
+        .collect();
+    let refs: Vec<&LabelledCapture> = captures.iter().collect();
+    assert_eq!(trial_groups(&refs), [2, 1, 3, 1, 0, 4]);
+}
+
+#[test]
+fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
+    let train = three_surfaces(4.0);
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let knn = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 3, CellScale::Mean)
+        .expect("k-NN");
+    let svm = RecognizerFile::train_svm_windows(
+        &train,
+        windowing,
+        FeatureSet::Nakano,
+        &SvmC::auto(),
+        CellScale::Mean,
+    )
+    .expect("SVM");
+    for model in [knn, svm] {
+        assert_eq!(model.feature_set(), FeatureSet::Nakano);
+        assert_eq!(model.windowing(), Some(&windowing));
+        let json = serde_json::to_value(&model).expect("serialize");
+        assert_eq!(json["features"], "nakano");
+        let back = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("valid");
+        assert_eq!(back, model);
+        let eval = back.evaluate(&three_surfaces(3.0), None).expect("evaluate");
+        assert_eq!(eval.confusion.accuracy(), Some(1.0), "{}", model.method());
+        // The SOM's windows: the same latency.
+        assert!((eval.decision_latency_s - 0.77).abs() < 1e-12);
+        assert!(
+            back.evaluate_fused(&three_surfaces(3.0))
+                .expect("fused")
+                .is_none()
+        );
+        // Shapes are checked on load.
+        let mut edited = json.clone();
+        edited["body"]["scaling"]["scale"][0] = (-1.0).into();
+        let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("scale");
+        assert!(err.to_string().contains("field `body.scaling`"), "{err}");
+        let mut edited = json;
+        edited["features"] = "both".into();
+        let err = RecognizerFile::from_json(&edited.to_string(), Path::new("r.json")).expect_err("features");
+        assert!(err.to_string().contains("field `features`"), "{err}");
+    }
+    // No accelerometer in these captures: `both` names the capture and the columns.
+    let err = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Both, 3, CellScale::Mean)
+        .expect_err("no accelerometer");
+    assert!(
+        matches!(&err, RecognizerError::MissingColumns { missing, .. } if missing.len() == 3),
+        "{err}"
+    );
+    assert!(
+        err.to_string()
+            .starts_with("fine: `--features both` needs the columns accel_x_mps2"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_bad_file_names_the_field() {
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let model =
+        RecognizerFile::train_som(&three_surfaces(3.0), windowing, SomParams::default()).expect("train");
+    let mut json = serde_json::to_value(&model).expect("serialize");
+    json["version"] = 7.into();
+    let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err("version");
+    assert!(err.to_string().contains("r.json: field `version`"), "{err}");
+    let mut json = serde_json::to_value(&model).expect("serialize");
+    json["body"]["som"]["labels"][3] = 9.into();
+    let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err("label");
+    assert!(err.to_string().contains("field `body.som.labels`"), "{err}");
+    let mut json = serde_json::to_value(&model).expect("serialize");
+    json["body"]["som"]["reference"][0] = serde_json::json!([1.0, 0.0]);
+    let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err("shape");
+    assert!(err.to_string().contains("field `body.som.reference`"), "{err}");
+    // Sizes past memory or past the filters' sample arithmetic are refused on load, with
+    // the value, not allocated or overflowed.
+    for (field, value, message) in [
+        (
+            "highpass_half_width",
+            1e18,
+            "body.windowing.filters.highpass_half_width`: 1000000000000000000 is not from 1 to 10^6",
+        ),
+        (
+            "smoothing_half_width",
+            2e6,
+            "body.windowing.filters.smoothing_half_width`: 2000000 is not at most 10^6",
+        ),
+    ] {
+        let mut json = serde_json::to_value(&model).expect("serialize");
+        json["body"]["windowing"]["filters"][field] = (value as u64).into();
+        let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err(field);
+        assert!(err.to_string().contains(message), "{err}");
+    }
+    let mut json = serde_json::to_value(&model).expect("serialize");
+    json["body"]["windowing"]["window_samples"] = 100_000_000.into();
+    let err = RecognizerFile::from_json(&json.to_string(), Path::new("r.json")).expect_err("window");
+    assert!(
+        err.to_string()
+            .contains("`body.windowing.window_samples`: 100000000 is not from 2 to 10^7"),
+        "{err}"
+    );
+    let err = NakanoWindowing::new(0.5, 0.1, 1000.0)
+        .and_then(|w| w.with_training_window_s(0.001))
+        .expect_err("one sample");
+    assert!(
+        err.to_string()
+            .contains("training_window_samples = 1: from 2 to 10^7"),
+        "{err}"
+    );
+    let err = RecognizerFile::from_json("{\"format\": 1", Path::new("r.json")).expect_err("parse");
+    assert!(matches!(err, RecognizerError::Parse { line: 1, .. }), "{err}");
+    // A capture of a surface the map does not know.
+    let unknown = rubbing("glass", 1e-6, 1e-3, 0.1, 3.0);
+    let err = model.evaluate(&[unknown], None).expect_err("unknown surface");
+    assert!(err.to_string().contains("surface `glass`"), "{err}");
+}

@@ -1,0 +1,130 @@
+//! The k-NN's trainer: one classifier per behaviour over whole-scratch histograms (Sinapov), or
+//! one over rubbing windows.
+
+use super::{
+    CV_FOLDS, Method, TrainSettings, Trainer, histograms_by_behaviour, training_windows, window_check,
+};
+use crate::RecognizerError;
+use crate::features::spectral::CellScale;
+use crate::features::{FeatureSet, NakanoWindowing, WindowScaling, histogram_names};
+use crate::knn::{FeatureScaling, KnnParams, cross_validated_accuracy, group_folds};
+use crate::recognizer::labelled::class_list;
+#[cfg(doc)]
+use crate::recognizer::trial_groups;
+use crate::recognizer::{BehaviourKnn, LabelledCapture, RecognizerBody, RecognizerFile};
+
+/// Trains k-NN recognizers with `settings.k` neighbours: one classifier per behaviour over
+/// whole-scratch histograms ([`RecognizerFile::train_knn`]), or one over rubbing windows
+/// ([`RecognizerFile::train_knn_windows`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct KnnTrainer;
+
+impl Trainer for KnnTrainer {
+    fn method(&self) -> Method {
+        Method::Knn
+    }
+
+    fn train(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+    ) -> Result<RecognizerFile, RecognizerError> {
+        match settings.features {
+            FeatureSet::Spectral => {
+                RecognizerFile::train_knn(captures, KnnParams::default().k(settings.k), settings.cell_scale)
+            }
+            windowed => RecognizerFile::train_knn_windows(
+                captures,
+                settings.windowing(captures)?,
+                windowed,
+                settings.k,
+                settings.cell_scale,
+            ),
+        }
+    }
+}
+
+impl RecognizerFile {
+    /// Trains Sinapov's k-NN on one histogram per capture, one classifier per behaviour.
+    pub fn train_knn(
+        captures: &[LabelledCapture],
+        params: KnnParams,
+        cell_scale: CellScale,
+    ) -> Result<Self, RecognizerError> {
+        let classes = class_list(captures);
+        let mut behaviours = Vec::new();
+        for (name, x, y, groups) in histograms_by_behaviour(captures, &classes, cell_scale)? {
+            let knn = params
+                .fit(&x, &y, classes.len())
+                .map_err(|source| RecognizerError::Knn {
+                    behaviour: name.unwrap_or("").to_owned(),
+                    source,
+                })?;
+            // The fit above has checked the data, so a failing cross-validation only means
+            // too few trials (or too few scratches outside a fold): no weight, see
+            // `fusion_weights`.
+            let cv = group_folds(&groups, CV_FOLDS).ok().and_then(|(_, folds)| {
+                cross_validated_accuracy(params, &x, &y, &groups, classes.len(), CV_FOLDS)
+                    .ok()
+                    .map(|accuracy| (accuracy, folds))
+            });
+            behaviours.push(BehaviourKnn {
+                behaviour: name.map(str::to_owned),
+                knn,
+                reliability: cv.map(|(a, _)| a),
+                reliability_folds: cv.map(|(_, f)| f),
+            });
+        }
+        if behaviours.is_empty() {
+            return Err(RecognizerError::NoTrainingData);
+        }
+        Ok(Self::assemble(
+            classes,
+            histogram_names(),
+            RecognizerBody::Knn {
+                cell_scale,
+                behaviours,
+            },
+            captures,
+            captures.len(),
+        ))
+    }
+
+    /// k-NN over rubbing windows (`features` [`FeatureSet::Nakano`] or [`FeatureSet::Both`]):
+    /// windowed like the SOM, one classifier over every training window, scaled by
+    /// [`WindowScaling`].
+    pub fn train_knn_windows(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        k: usize,
+        cell_scale: CellScale,
+    ) -> Result<Self, RecognizerError> {
+        window_check(features)?;
+        let classes = class_list(captures);
+        let (x, y, _) = training_windows(captures, &classes, &windowing, features, cell_scale)?;
+        let scaling = WindowScaling::fit(&x, &y);
+        let scaled: Vec<Vec<f64>> = x.iter().map(|v| scaling.apply(v)).collect();
+        let knn = KnnParams::default()
+            .k(k)
+            .scaling(FeatureScaling::None)
+            .fit(&scaled, &y, classes.len())
+            .map_err(|source| RecognizerError::Knn {
+                behaviour: String::new(),
+                source,
+            })?;
+        Ok(Self::assemble(
+            classes,
+            features.feature_names(),
+            RecognizerBody::KnnWindows {
+                features,
+                windowing,
+                cell_scale,
+                scaling,
+                knn,
+            },
+            captures,
+            x.len(),
+        ))
+    }
+}

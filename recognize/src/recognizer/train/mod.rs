@@ -1,0 +1,254 @@
+//! Training: one trainer per method ([`SomTrainer`], [`KnnTrainer`], [`SvmTrainer`]) behind
+//! one trait ([`Trainer`]), and [`train`], which picks the trainer that [`TrainSettings`] names.
+//!
+//! Each method has its own features by default (the SOM Nakano's rubbing windows, k-NN and SVM
+//! Sinapov's histogram of a whole scratch) and takes any [`FeatureSet`]; see
+//! [`crate::features`] for how methods and features cross.
+
+mod knn;
+mod som;
+mod svm;
+
+use std::collections::{BTreeMap, BTreeSet};
+
+pub use knn::KnnTrainer;
+pub use som::{SCRATCH_SOM_NORMALIZATION, SomTrainer, som_nodes, som_params};
+pub use svm::{SvmTrainer, WINDOW_SVM_FALLBACK_C, window_svc_params};
+
+use super::labelled::{check_rate, class_index};
+use super::{LabelledCapture, RecognizerFile, recording_groups, trial_groups};
+use crate::RecognizerError;
+use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
+use crate::features::{
+    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, capture_histogram,
+    window_vectors,
+};
+use crate::knn::PAPER_K;
+use crate::som::Normalization;
+#[cfg(doc)]
+use crate::svc::SvcParams;
+
+/// Which classifier a recognizer trains.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// Nakano's 1-D self-organizing map.
+    Som,
+    /// k nearest neighbours (Sinapov).
+    Knn,
+    /// One-vs-one C-SVC with a degree-2 polynomial kernel (Sinapov).
+    Svm,
+}
+
+impl Method {
+    /// `som`, `knn` or `svm`, as recognizer files and `--method` spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Som => "som",
+            Self::Knn => "knn",
+            Self::Svm => "svm",
+        }
+    }
+
+    /// The method's own features: Nakano's rubbing windows for the SOM, Sinapov's histogram of
+    /// a whole scratch for k-NN and SVM.
+    pub fn default_features(self) -> FeatureSet {
+        match self {
+            Self::Som => FeatureSet::Nakano,
+            Self::Knn | Self::Svm => FeatureSet::Spectral,
+        }
+    }
+
+    /// The method's trainer.
+    pub fn trainer(self) -> &'static dyn Trainer {
+        match self {
+            Self::Som => &SomTrainer,
+            Self::Knn => &KnnTrainer,
+            Self::Svm => &SvmTrainer,
+        }
+    }
+}
+
+/// Everything that decides how a recognizer is trained, besides the captures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainSettings {
+    /// The classifier.
+    pub method: Method,
+    /// Its features (by default the method's own, [`Method::default_features`]).
+    pub features: FeatureSet,
+    /// Windowed features (nakano, both): decision window, s.
+    pub window_s: f64,
+    /// Windowed features: window of the training vectors, s.
+    pub train_window_s: f64,
+    /// Windowed features: time between decisions (and between training windows), s.
+    pub hop_s: f64,
+    /// SOM: seed of the map's initial vectors and presentation order.
+    pub seed: u64,
+    /// SOM over windows: how features are scaled before the map (a SOM over whole-scratch
+    /// histograms uses [`SCRATCH_SOM_NORMALIZATION`]).
+    pub normalization: Normalization,
+    /// k-NN: neighbours.
+    pub k: usize,
+    /// SVM: how C is set.
+    pub c: SvmC,
+    /// The histogram's cell scaling.
+    pub cell_scale: CellScale,
+}
+
+impl TrainSettings {
+    /// The defaults of `method`: its own features, [`DECISION_WINDOW_S`] decision windows on
+    /// [`TRAINING_WINDOW_S`] training windows every [`HOP_S`], seed 0,
+    /// [`Normalization::LogWithinClass`], k = 3, C chosen by cross-validation
+    /// ([`SvmC::auto`]), mean cells.
+    pub fn new(method: Method) -> Self {
+        Self {
+            method,
+            features: method.default_features(),
+            window_s: DECISION_WINDOW_S,
+            train_window_s: TRAINING_WINDOW_S,
+            hop_s: HOP_S,
+            seed: 0,
+            normalization: Normalization::LogWithinClass,
+            k: PAPER_K,
+            c: SvmC::auto(),
+            cell_scale: CellScale::Mean,
+        }
+    }
+
+    /// The windowing of windowed features, at the rate of the first capture.
+    pub fn windowing(&self, captures: &[LabelledCapture]) -> Result<NakanoWindowing, RecognizerError> {
+        let rate_hz = captures
+            .first()
+            .map(|c| c.capture.metadata().rate_hz())
+            .ok_or(RecognizerError::NoTrainingData)?;
+        NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?.with_training_window_s(self.train_window_s)
+    }
+}
+
+/// A method's trainer: trains a recognizer of that method on labelled captures, over the
+/// features `settings` names.
+pub trait Trainer: Sync {
+    /// The method it trains.
+    fn method(&self) -> Method;
+
+    /// Trains on `captures` (whose columns have been checked against `settings.features`).
+    fn train(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+    ) -> Result<RecognizerFile, RecognizerError>;
+}
+
+/// Trains the recognizer `settings` describe on `captures`: checks that the captures carry the
+/// columns its features need, then hands them to the method's [`Trainer`].
+pub fn train(
+    captures: &[LabelledCapture],
+    settings: &TrainSettings,
+) -> Result<RecognizerFile, RecognizerError> {
+    settings.features.check_columns(captures)?;
+    settings.method.trainer().train(captures, settings)
+}
+
+/// Most folds of the cross-validations run on the training captures of a k-NN or SVM
+/// recognizer (reliability weights, the SVM's C); fewer when there are fewer trials.
+pub const CV_FOLDS: usize = 5;
+
+/// How an SVM recognizer's C is set.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SvmC {
+    /// Per behaviour, the candidate with the best accuracy under cross-validation by trial on
+    /// that behaviour's training captures; ties go to the smaller C.
+    Auto(Vec<f64>),
+    /// This C for every behaviour.
+    Fixed(f64),
+}
+
+impl SvmC {
+    /// C of a behaviour whose training captures cannot be cross-validated (fewer than two
+    /// trials) under [`SvmC::Auto`]: large enough for the hard-margin machine that separable
+    /// histograms get (see [`SvcParams::default`]).
+    pub const FALLBACK: f64 = 1e4;
+
+    /// [`SvmC::Auto`] over [`crate::svc::C_GRID`].
+    pub fn auto() -> Self {
+        Self::Auto(crate::svc::C_GRID.to_vec())
+    }
+}
+
+/// One behaviour's training data: its name, a histogram per capture, their class indices and
+/// cross-validation groups ([`trial_groups`]).
+pub(crate) type BehaviourHistograms<'a> = (Option<&'a str>, Vec<[f64; FEATURE_LEN]>, Vec<usize>, Vec<u64>);
+
+/// Sinapov's histogram of each capture with its class index and cross-validation group,
+/// grouped by behaviour (k-NN and SVM recognizers keep one classifier per behaviour).
+pub(crate) fn histograms_by_behaviour<'a>(
+    captures: &'a [LabelledCapture],
+    classes: &[String],
+    cell_scale: CellScale,
+) -> Result<Vec<BehaviourHistograms<'a>>, RecognizerError> {
+    let plan = SpectrogramPlan::new();
+    let names: BTreeSet<Option<&str>> = captures.iter().map(|c| c.behaviour.as_deref()).collect();
+    let mut out = Vec::new();
+    for name in names {
+        let (mut x, mut y, mut members) = (Vec::new(), Vec::new(), Vec::new());
+        for c in captures.iter().filter(|c| c.behaviour.as_deref() == name) {
+            x.push(capture_histogram(&plan, c, cell_scale)?);
+            y.push(class_index(classes, c)?);
+            members.push(c);
+        }
+        out.push((name, x, y, trial_groups(&members)));
+    }
+    Ok(out)
+}
+
+/// Training windows of every capture: vectors, class indices, and the cross-validation group
+/// of each window (its capture's, see [`recording_groups`]).
+pub(crate) type WindowData = (Vec<Vec<f64>>, Vec<usize>, Vec<u64>);
+
+pub(crate) fn training_windows(
+    captures: &[LabelledCapture],
+    classes: &[String],
+    windowing: &NakanoWindowing,
+    features: FeatureSet,
+    cell_scale: CellScale,
+) -> Result<WindowData, RecognizerError> {
+    features.check_columns(captures)?;
+    let plan = SpectrogramPlan::new();
+    let groups = recording_groups(captures);
+    let training = windowing.training();
+    let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
+    for (c, &group) in captures.iter().zip(&groups) {
+        check_rate(c, windowing.rate_hz)?;
+        let label = class_index(classes, c)?;
+        for (_, v) in window_vectors(c, &training, features, cell_scale, &plan)? {
+            x.push(v);
+            y.push(label);
+            g.push(group);
+        }
+    }
+    if x.is_empty() {
+        return Err(RecognizerError::NoTrainingData);
+    }
+    Ok((x, y, g))
+}
+
+/// Whether every class has windows in at least two groups, so that no fold of a
+/// cross-validation by group holds out a whole class.
+pub(crate) fn every_class_in_two_groups(labels: &[usize], groups: &[u64]) -> bool {
+    let mut by_class: BTreeMap<usize, BTreeSet<u64>> = BTreeMap::new();
+    for (&l, &g) in labels.iter().zip(groups) {
+        by_class.entry(l).or_default().insert(g);
+    }
+    by_class.values().all(|g| g.len() >= 2)
+}
+
+/// Windows carry `nakano` or `both` features, not `spectral`.
+pub(crate) fn window_check(features: FeatureSet) -> Result<(), RecognizerError> {
+    if features == FeatureSet::Spectral {
+        return Err(RecognizerError::Setting {
+            name: "features",
+            value: f64::NAN,
+            reason: "windows carry `nakano` or `both` features; `spectral` is one histogram per scratch",
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,201 @@
+//! The SOM's trainer: Nakano's map over rubbing windows, a map over windows of both feature
+//! sets, and one map per behaviour over whole-scratch histograms.
+
+use rayon::prelude::*;
+
+use super::{
+    BehaviourHistograms, CV_FOLDS, Method, TrainSettings, Trainer, every_class_in_two_groups,
+    histograms_by_behaviour, training_windows,
+};
+use crate::RecognizerError;
+use crate::features::nakano::FEATURE_NAMES;
+use crate::features::spectral::CellScale;
+use crate::features::{FeatureSet, NakanoWindowing, histogram_names, windows};
+use crate::knn::group_folds;
+use crate::recognizer::labelled::{check_rate, class_index, class_list};
+use crate::recognizer::{BehaviourSom, LabelledCapture, RecognizerBody, RecognizerFile};
+use crate::som::{Normalization, Som, SomParams};
+
+/// Trains SOM recognizers: over Nakano's windows ([`RecognizerFile::train_som`]), over windows
+/// of both feature sets ([`RecognizerFile::train_som_windows`]), or one map per behaviour over
+/// whole-scratch histograms ([`RecognizerFile::train_som_scratches`], scaled by
+/// [`SCRATCH_SOM_NORMALIZATION`], [`som_nodes`] nodes).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SomTrainer;
+
+impl Trainer for SomTrainer {
+    fn method(&self) -> Method {
+        Method::Som
+    }
+
+    fn train(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+    ) -> Result<RecognizerFile, RecognizerError> {
+        let params = SomParams {
+            seed: settings.seed,
+            normalization: settings.normalization,
+            ..SomParams::default()
+        };
+        match settings.features {
+            FeatureSet::Nakano => RecognizerFile::train_som(captures, settings.windowing(captures)?, params),
+            FeatureSet::Both => RecognizerFile::train_som_windows(
+                captures,
+                settings.windowing(captures)?,
+                params,
+                settings.cell_scale,
+            ),
+            FeatureSet::Spectral => {
+                let classes = class_list(captures).len();
+                let params = SomParams {
+                    normalization: SCRATCH_SOM_NORMALIZATION,
+                    ..som_params(classes, settings.seed)
+                };
+                RecognizerFile::train_som_scratches(captures, params, settings.cell_scale)
+            }
+        }
+    }
+}
+
+/// Nodes of a SOM over `classes` classes: the thesis's 12, or three per class when there are
+/// more than four classes (a node answers one class, and Sinapov's 21 surfaces need room for a
+/// class's spread and for the boundaries between classes along the line).
+pub fn som_nodes(classes: usize) -> usize {
+    12.max(3 * classes)
+}
+
+/// The default SOM parameters for `classes` classes with `seed`: Table 3.3's, with
+/// [`som_nodes`] nodes.
+pub fn som_params(classes: usize, seed: u64) -> SomParams {
+    SomParams {
+        nodes: som_nodes(classes),
+        seed,
+        ..SomParams::default()
+    }
+}
+
+/// The scaling of the CLI's SOMs over whole-scratch histograms: the rubbing map's
+/// [`Normalization::LogWithinClass`] (cells are mean magnitudes, positive: log scale, centred,
+/// divided by the pooled within-surface spread, then unit length). Chosen over
+/// [`Normalization::Standardize`] by the maps' cross-validation by trial on the training
+/// captures of `palpus gen --only sinapov` (trials 0–6): 0.84–0.96 per behaviour against
+/// 0.74–0.93.
+pub const SCRATCH_SOM_NORMALIZATION: Normalization = Normalization::LogWithinClass;
+
+impl RecognizerFile {
+    /// Trains Nakano's SOM on the training windows of `captures` (see
+    /// [`NakanoWindowing::with_training_window_s`]); it decides on the decision windows.
+    pub fn train_som(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        params: SomParams,
+    ) -> Result<Self, RecognizerError> {
+        let classes = class_list(captures);
+        let (mut data, mut labels) = (Vec::new(), Vec::new());
+        let training = windowing.training();
+        for c in captures {
+            check_rate(c, windowing.rate_hz)?;
+            let label = class_index(&classes, c)?;
+            for (_, features) in windows(c, &training)? {
+                data.push(features.to_vec());
+                labels.push(label);
+            }
+        }
+        if data.is_empty() {
+            return Err(RecognizerError::NoTrainingData);
+        }
+        let som = Som::train(params, &data, &labels)?;
+        Ok(Self::assemble(
+            classes,
+            FEATURE_NAMES.iter().map(|s| (*s).to_owned()).collect(),
+            RecognizerBody::Som { windowing, som },
+            captures,
+            data.len(),
+        ))
+    }
+
+    /// A SOM over windows of Nakano's features and the window's histogram together
+    /// ([`FeatureSet::Both`]), trained and deciding like Nakano's SOM, its scaling
+    /// `params.normalization` (default: [`Normalization::LogWithinClass`]).
+    pub fn train_som_windows(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        params: SomParams,
+        cell_scale: CellScale,
+    ) -> Result<Self, RecognizerError> {
+        let classes = class_list(captures);
+        let (x, y, _) = training_windows(captures, &classes, &windowing, FeatureSet::Both, cell_scale)?;
+        let som = Som::train(params, &x, &y)?;
+        Ok(Self::assemble(
+            classes,
+            FeatureSet::Both.feature_names(),
+            RecognizerBody::SomWindows {
+                windowing,
+                cell_scale,
+                som,
+            },
+            captures,
+            x.len(),
+        ))
+    }
+
+    /// One SOM per behaviour over the spectrotemporal histograms of whole scratches (one vector
+    /// each), each with its reliability weight from cross-validation by trial (as k-NN's); the
+    /// maps' own scaling is `params.normalization` (the CLI's is [`SCRATCH_SOM_NORMALIZATION`]).
+    pub fn train_som_scratches(
+        captures: &[LabelledCapture],
+        params: SomParams,
+        cell_scale: CellScale,
+    ) -> Result<Self, RecognizerError> {
+        FeatureSet::Spectral.check_columns(captures)?;
+        let classes = class_list(captures);
+        let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
+        let fit_one =
+            |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSom, RecognizerError> {
+                let x: Vec<Vec<f64>> = x.iter().map(|v| v.to_vec()).collect();
+                let som = Som::train(params, &x, y)?;
+                let cv = match group_folds(groups, CV_FOLDS) {
+                    Ok((fold, folds)) if every_class_in_two_groups(y, groups) => {
+                        let mut correct = 0usize;
+                        for f in 0..folds {
+                            let (tx, ty): (Vec<Vec<f64>>, Vec<usize>) = x
+                                .iter()
+                                .zip(y)
+                                .zip(&fold)
+                                .filter(|&(_, &g)| g != f)
+                                .map(|((v, &l), _)| (v.clone(), l))
+                                .unzip();
+                            let map = Som::train(params, &tx, &ty)?;
+                            for ((v, &l), _) in x.iter().zip(y).zip(&fold).filter(|&(_, &g)| g == f) {
+                                correct += usize::from(*map.classify(v)? == l);
+                            }
+                        }
+                        Some((correct as f64 / x.len() as f64, folds))
+                    }
+                    _ => None,
+                };
+                Ok(BehaviourSom {
+                    behaviour: name.map(str::to_owned),
+                    som,
+                    reliability: cv.map(|(a, _)| a),
+                    reliability_folds: cv.map(|(_, f)| f),
+                })
+            };
+        // One behaviour per task; collected in the behaviours' order.
+        let behaviours: Vec<BehaviourSom> = data.par_iter().map(fit_one).collect::<Result<_, _>>()?;
+        if behaviours.is_empty() {
+            return Err(RecognizerError::NoTrainingData);
+        }
+        Ok(Self::assemble(
+            classes,
+            histogram_names(),
+            RecognizerBody::SomScratches {
+                cell_scale,
+                behaviours,
+            },
+            captures,
+            captures.len(),
+        ))
+    }
+}

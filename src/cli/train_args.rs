@@ -1,0 +1,131 @@
+//! How to train a recognizer, as `recognize train`, `recognize cv` and `recognize categorize`
+//! take it on the command line; [`TrainOptions::settings`] turns it into the library's
+//! [`recognize::TrainSettings`].
+
+use clap::{Args, ValueEnum};
+use recognize::{
+    DECISION_WINDOW_S, FeatureSet, HOP_S, Normalization, SvmC, TRAINING_WINDOW_S, TrainSettings,
+};
+
+/// How to train, besides the method: features and settings (`train`, `cv` and `categorize`
+/// alike).
+#[derive(Debug, Args)]
+pub(crate) struct TrainOptions {
+    /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
+    /// (rubbing windows with accelerometer columns). Default: som nakano, knn and svm spectral.
+    #[arg(long, value_enum, value_name = "nakano|spectral|both")]
+    features: Option<Features>,
+    /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
+    /// filters' 0.27 s lookahead).
+    #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
+    window_s: f64,
+    /// Windowed features (nakano, both): window of the training vectors, s.
+    #[arg(long, default_value_t = TRAINING_WINDOW_S, value_name = "S")]
+    train_window_s: f64,
+    /// Windowed features (nakano, both): time between decisions (and between training
+    /// windows), s.
+    #[arg(long, default_value_t = HOP_S, value_name = "S")]
+    hop_s: f64,
+    /// som: seed of the map's initial vectors and presentation order.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// som over nakano features: how features are scaled before the map. log-within-class:
+    /// scales on a log scale, each divided by its pooled within-surface spread, unit length
+    /// (default); standardize: z-scores, unit length; thesis: Eq. 2.26, each feature divided
+    /// by its column's norm.
+    #[arg(long, value_enum, default_value = "log-within-class")]
+    scaling: ScalingArg,
+
+    /// knn: neighbours.
+    #[arg(long, default_value_t = 3)]
+    k: usize,
+    /// svm: the box constraint C, or `auto`: per behaviour, the most accurate of 1, 10, …, 10⁵
+    /// under cross-validation by trial on the training captures (ties to the smaller C; a
+    /// behaviour with fewer than two trials gets 10⁴). With --features nakano|both: one C, by
+    /// cross-validation by run, or 10 when a surface has a single run.
+    #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
+    c: CArg,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum CArg {
+    Auto,
+    Fixed(f64),
+}
+
+fn parse_c(text: &str) -> Result<CArg, String> {
+    if text == "auto" {
+        return Ok(CArg::Auto);
+    }
+    match text.parse::<f64>() {
+        Ok(c) if c.is_finite() && c > 0.0 => Ok(CArg::Fixed(c)),
+        _ => Err(format!("`{text}` is neither `auto` nor a positive number")),
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ScalingArg {
+    LogWithinClass,
+    Standardize,
+    Thesis,
+}
+
+/// `--method`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub(crate) enum Method {
+    Som,
+    Knn,
+    Svm,
+}
+
+impl From<Method> for recognize::Method {
+    fn from(m: Method) -> Self {
+        match m {
+            Method::Som => Self::Som,
+            Method::Knn => Self::Knn,
+            Method::Svm => Self::Svm,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Features {
+    Nakano,
+    Spectral,
+    Both,
+}
+
+impl From<Features> for FeatureSet {
+    fn from(f: Features) -> Self {
+        match f {
+            Features::Nakano => Self::Nakano,
+            Features::Spectral => Self::Spectral,
+            Features::Both => Self::Both,
+        }
+    }
+}
+
+impl TrainOptions {
+    /// The settings of a `method` recognizer: the features asked for, else the method's own.
+    pub(crate) fn settings(&self, method: Method) -> TrainSettings {
+        let method = recognize::Method::from(method);
+        TrainSettings {
+            features: self.features.map_or(method.default_features(), FeatureSet::from),
+            window_s: self.window_s,
+            train_window_s: self.train_window_s,
+            hop_s: self.hop_s,
+            seed: self.seed,
+            normalization: match self.scaling {
+                ScalingArg::LogWithinClass => Normalization::LogWithinClass,
+                ScalingArg::Standardize => Normalization::Standardize,
+                ScalingArg::Thesis => Normalization::ThesisColumnNorm,
+            },
+            k: self.k,
+            c: match self.c {
+                CArg::Auto => SvmC::auto(),
+                CArg::Fixed(c) => SvmC::Fixed(c),
+            },
+            ..TrainSettings::new(method)
+        }
+    }
+}
