@@ -15,8 +15,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use capture::{Capture, CaptureKind};
-use identify::identification::{IdentifyOptions, identify};
-use identify::model_file::{ModelFile, ModelKind};
+use identify::{IdentifyOptions, ModelFile, ModelKind, identify};
 use sha2::{Digest, Sha256};
 
 use crate::scene::{ModelRole, ModelSource, Scene};
@@ -51,7 +50,7 @@ pub enum ModelError {
         /// The scene's name for the model.
         model: String,
         /// Why.
-        source: identify::model_file::ModelFileError,
+        source: identify::ModelFileError,
     },
     /// The model file models something else.
     #[error("model `{model}`: {} holds a {found} model, the scene says {expected}", path.display())]
@@ -73,7 +72,7 @@ pub enum ModelError {
         /// The capture.
         path: PathBuf,
         /// Why (boxed: identification errors are large and rare).
-        source: Box<identify::identification::IdentifyError>,
+        source: Box<identify::IdentifyError>,
     },
     /// The cache could not be written.
     #[error("model `{model}`: writing the cache: {source}")]
@@ -81,7 +80,7 @@ pub enum ModelError {
         /// The scene's name for the model.
         model: String,
         /// Why.
-        source: identify::model_file::ModelFileError,
+        source: identify::ModelFileError,
     },
 }
 

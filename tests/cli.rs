@@ -132,7 +132,7 @@ fn identify_prints_the_json_report_and_writes_models() {
     }
     assert!(report["metrics"]["rbf_network"]["aise"].is_number());
     assert!(report["metrics"]["coulomb_viscous"].is_null());
-    assert!(identify::model_file::ModelFile::load(&model).is_ok());
+    assert!(identify::ModelFile::load(&model).is_ok());
     assert!(
         std::fs::read_to_string(&libsvm)
             .unwrap()

@@ -7,7 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::text;
-use identify::model_file::ModelFile;
+use identify::ModelFile;
 use serde_json::Value;
 
 /// The tests here run real-time haptic loops and renderers: one at a time, so that the 1 %

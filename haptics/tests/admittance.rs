@@ -236,8 +236,8 @@ fn rendered_needle_force_follows_the_truth_along_the_same_path() {
 #[test]
 fn identified_needle_model_rendered_follows_the_truth() {
     use capture::{Capture, CaptureKind};
-    use identify::identification::{IdentifyOptions, identify};
-    use identify::model_file::ModelKind;
+    use identify::{IdentifyOptions, identify};
+    use identify::ModelKind;
     let captures = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/captures/li_bi");
     let train = Capture::read_file(format!("{captures}/needle_train.csv"), CaptureKind::Insertion).unwrap();
     let identified = identify(&train, None, &IdentifyOptions::new(ModelKind::NeedlePuncture)).unwrap();

@@ -16,6 +16,7 @@
 //! equations, which square the condition number: pressures of ~10 N next to velocities of
 //! ~0.01 m/s already give a condition number of ~10³ before squaring).
 
+use capture::kind;
 use capture::rng::SplitMix64;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -128,9 +129,9 @@ impl CoulombViscous {
         if n == 0 {
             return Err(BaselineError::Empty);
         }
-        check_series("normal_force_n", normal_force_n, n)?;
-        check_series("velocity_mps", velocity_mps, n)?;
-        check_series("friction_force_n", friction_force_n, n)?;
+        check_series(kind::NORMAL_FORCE_N, normal_force_n, n)?;
+        check_series(kind::VELOCITY_MPS, velocity_mps, n)?;
+        check_series(kind::FRICTION_FORCE_N, friction_force_n, n)?;
         let columns = if intercept { 3 } else { 2 };
         let a = DMatrix::from_fn(n, columns, |i, j| {
             let s = sign(velocity_mps[i]);
@@ -161,7 +162,7 @@ impl CoulombViscous {
         normal_force_n: &[f64],
         velocity_mps: &[f64],
     ) -> Result<Vec<f64>, BaselineError> {
-        check_series("velocity_mps", velocity_mps, normal_force_n.len())?;
+        check_series(kind::VELOCITY_MPS, velocity_mps, normal_force_n.len())?;
         Ok(normal_force_n
             .iter()
             .zip(velocity_mps)

@@ -17,8 +17,9 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::baselines::{CoulombViscous, RbfNetwork, RbfNetworkParams};
-use crate::metrics::Metrics;
+use crate::baselines::{BaselineError, CoulombViscous, RbfNetwork, RbfNetworkParams};
+use crate::metrics::{Metrics, MetricsError};
+use capture::kind;
 use capture::{Capture, CaptureKind};
 use capture::{CaptureRef, sha256_hex};
 
@@ -137,16 +138,17 @@ pub enum IdentifyError {
         source: svm::SvrError,
     },
     /// A baseline failed.
-    #[error("baseline {what}: {reason}")]
+    #[error("baseline {what}: {source}")]
     Baseline {
         /// Which.
         what: &'static str,
         /// Why.
-        reason: String,
+        #[source]
+        source: BaselineError,
     },
     /// Metrics could not be computed.
     #[error("metrics: {0}")]
-    Metrics(String),
+    Metrics(#[from] MetricsError),
 }
 
 /// The samples a friction model needs.
@@ -179,12 +181,12 @@ pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> 
     }
     Ok(FrictionData {
         time_s: c.time().to_vec(),
-        normal_force_n: c.column("normal_force_n")?.to_vec(),
-        velocity_mps: velocity(c, "tangential_velocity_mps", "tangential_position_m")?,
-        friction_force_n: c.column("friction_force_n")?.to_vec(),
+        normal_force_n: c.column(kind::NORMAL_FORCE_N)?.to_vec(),
+        velocity_mps: velocity(c, kind::TANGENTIAL_VELOCITY_MPS, kind::TANGENTIAL_POSITION_M)?,
+        friction_force_n: c.column(kind::FRICTION_FORCE_N)?.to_vec(),
         commanded_mps: c
-            .has_column("commanded_velocity_mps")
-            .then(|| c.column("commanded_velocity_mps").map(<[f64]>::to_vec))
+            .has_column(kind::COMMANDED_VELOCITY_MPS)
+            .then(|| c.column(kind::COMMANDED_VELOCITY_MPS).map(<[f64]>::to_vec))
             .transpose()?,
     })
 }
@@ -214,7 +216,7 @@ pub(crate) fn svr(
 }
 
 fn metrics(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Metrics, IdentifyError> {
-    Metrics::compute(time_s, measured, predicted).map_err(|e| IdentifyError::Metrics(e.to_string()))
+    Ok(Metrics::compute(time_s, measured, predicted)?)
 }
 
 fn capture_ref(path: &Path) -> CaptureRef {
@@ -264,9 +266,9 @@ fn rbf_network(
     y_train: &[f64],
     x_eval: &[f64],
 ) -> Result<Vec<f64>, IdentifyError> {
-    let baseline = |e: crate::baselines::BaselineError| IdentifyError::Baseline {
+    let baseline = |source: BaselineError| IdentifyError::Baseline {
         what: "RBF network",
-        reason: e.to_string(),
+        source,
     };
     RbfNetwork::fit(
         x_train,
@@ -291,7 +293,7 @@ fn friction_baselines(
         CoulombViscous::fit(&tr.normal_force_n, &tr.velocity_mps, &tr.friction_force_n).map_err(|e| {
             IdentifyError::Baseline {
                 what: "Coulomb+viscous",
-                reason: e.to_string(),
+                source: e,
             }
         })?;
     let cv_pred: Vec<f64> = (0..eval.time_s.len())
@@ -352,10 +354,10 @@ fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         train,
         test,
         vec![Quantity {
-            name: "normal_force_n".into(),
+            name: kind::NORMAL_FORCE_N.into(),
         }],
         Quantity {
-            name: "friction_force_n".into(),
+            name: kind::FRICTION_FORCE_N.into(),
         },
         ModelBody::Single(model),
         hyper,
@@ -521,14 +523,14 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         test,
         vec![
             Quantity {
-                name: "tangential_velocity_mps".into(),
+                name: kind::TANGENTIAL_VELOCITY_MPS.into(),
             },
             Quantity {
-                name: "normal_force_n".into(),
+                name: kind::NORMAL_FORCE_N.into(),
             },
         ],
         Quantity {
-            name: "friction_force_n".into(),
+            name: kind::FRICTION_FORCE_N.into(),
         },
         body,
         hyper,
@@ -553,9 +555,9 @@ pub(crate) fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
             reason: "the needle model needs an insertion capture".into(),
         });
     }
-    let depth = c.column("depth_m")?;
-    let force = c.column("axial_force_n")?;
-    let vel = velocity(c, "velocity_mps", "depth_m")?;
+    let depth = c.column(kind::DEPTH_M)?;
+    let force = c.column(kind::AXIAL_FORCE_N)?;
+    let vel = velocity(c, kind::VELOCITY_MPS, kind::DEPTH_M)?;
     let idx: Vec<usize> = (0..c.len()).filter(|&i| depth[i] > 0.0).collect();
     if idx.len() < 10 {
         return Err(IdentifyError::Data {
@@ -623,14 +625,14 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
         test,
         vec![
             Quantity {
-                name: "depth_m".into(),
+                name: kind::DEPTH_M.into(),
             },
             Quantity {
-                name: "velocity_mps".into(),
+                name: kind::VELOCITY_MPS.into(),
             },
         ],
         Quantity {
-            name: "axial_force_n".into(),
+            name: kind::AXIAL_FORCE_N.into(),
         },
         ModelBody::Single(model),
         hyper,

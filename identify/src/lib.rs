@@ -2,12 +2,25 @@
 //!
 //! This crate is pure computation on data: it knows nothing of threads, devices or rendering.
 //! It may import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
-//! Top-down: [`baselines`] and [`metrics`] (what a model is compared with, and how),
-//! [`identification`] (Li & Bi's three models), [`search`] (cross-validated hyperparameters)
-//! and [`model_file`] (models on disk).
+//! Top-down: `baselines` and `metrics` (what a model is compared with, and how),
+//! `identification` (Li & Bi's three models), `search` (cross-validated hyperparameters)
+//! and `model_file` (models on disk). This file is the crate's door: everything public is
+//! re-exported here, so callers write `identify::ModelFile`, `identify::identify`.
 
-pub mod baselines;
-pub mod identification;
-pub mod metrics;
-pub mod model_file;
-pub mod search;
+mod baselines;
+mod identification;
+mod metrics;
+mod model_file;
+mod search;
+
+pub use baselines::{BaselineError, CentrePlacement, CoulombViscous, RbfNetwork, RbfNetworkParams};
+pub use identification::{ComparedMetrics, Identified, IdentifyError, IdentifyOptions, Report, identify};
+pub use metrics::{
+    Metrics, MetricsError, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound,
+    errors, rmse,
+};
+pub use model_file::{
+    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelFileError, ModelKind, Quantity,
+    ScaledSvr, SvrHyper,
+};
+pub use search::{SearchGrid, SearchPoint, best, search};

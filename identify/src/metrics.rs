@@ -26,6 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use capture::kind;
 pub use capture::signal::PAUSE_FACTOR;
 use capture::signal::median_interval_s;
 
@@ -247,7 +248,7 @@ pub fn rmse(error: &[f64]) -> Result<f64, MetricsError> {
 }
 
 fn check_time(time_s: &[f64]) -> Result<(), MetricsError> {
-    check_nonempty_finite("time_s", time_s)?;
+    check_nonempty_finite(kind::TIME_S, time_s)?;
     for k in 1..time_s.len() {
         if time_s[k] <= time_s[k - 1] {
             return Err(MetricsError::TimeNotIncreasing {

@@ -260,9 +260,7 @@ impl Data {
                         let predict_ns = started.elapsed().as_secs_f64() * 1e9 / va.len().max(1) as f64;
                         let t: Vec<f64> = va.iter().map(|&i| time[i]).collect();
                         let m: Vec<f64> = va.iter().map(|&i| y[i]).collect();
-                        let aise = Metrics::compute(&t, &m, &predicted)
-                            .map_err(|e| IdentifyError::Metrics(e.to_string()))?
-                            .aise;
+                        let aise = Metrics::compute(&t, &m, &predicted)?.aise;
                         Ok(Fold {
                             aise,
                             n_sv: f.model.n_sv() as f64,
@@ -320,9 +318,7 @@ impl Data {
                     let predict_ns = started.elapsed().as_secs_f64() * 1e9 / seg.len().max(1) as f64;
                     let t: Vec<f64> = seg.iter().map(|&i| raw.time_s[i]).collect();
                     let meas: Vec<f64> = seg.iter().map(|&i| raw.friction_force_n[i]).collect();
-                    let aise = Metrics::compute(&t, &meas, &predicted)
-                        .map_err(|e| IdentifyError::Metrics(e.to_string()))?
-                        .aise;
+                    let aise = Metrics::compute(&t, &meas, &predicted)?.aise;
                     Ok(Fold {
                         aise,
                         n_sv: (w.model.n_sv() + m.model.n_sv()) as f64,

@@ -3,8 +3,7 @@
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
 use capture::{Capture, CaptureKind};
-use identify::identification::{IdentifyOptions, identify};
-use identify::model_file::{ModelFile, ModelFileError, ModelKind};
+use identify::{IdentifyOptions, ModelFile, ModelFileError, ModelKind, identify};
 
 fn capture(name: &str, kind: CaptureKind) -> Capture {
     Capture::read_file(

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use capture::{Capture, CaptureKind};
 use clap::{Args, ValueEnum};
-use identify::identification::{IdentifyOptions, Report, identify};
-use identify::metrics::Metrics;
-use identify::model_file::{ModelBody, ModelKind, ScaledSvr};
-use identify::search::{SearchGrid, SearchPoint, best, search};
+use identify::{
+    IdentifyOptions, Metrics, ModelBody, ModelKind, Report, ScaledSvr, SearchGrid, SearchPoint, best,
+    identify, search,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use svm::write_libsvm_model;
 

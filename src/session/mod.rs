@@ -36,7 +36,7 @@ use haptics::rt::{
 };
 use haptics::sim::hand::{HandImpedance, HandScript, LiveHand};
 use haptics::{DeviceSpecs, HapticSample};
-use identify::model_file::{ModelFile, ModelKind};
+use identify::{ModelFile, ModelKind};
 
 use crate::models::ResolvedModel;
 use crate::scene::{ModelRole, Scene, Task};

@@ -1,7 +1,7 @@
 //! Identified models as force-law inputs: a model file's SVR through the allocation-free fast
 //! path, with the box it was trained on.
 
-use identify::model_file::{ModelBody, ModelFile, ModelKind, ScaledSvr};
+use identify::{ModelBody, ModelFile, ModelKind, ScaledSvr};
 use svm::{FastSvr, FastSvrError};
 
 use super::model::{BadInputBox, InputBox, ScalarModel};
