@@ -12,9 +12,11 @@
 //! - [`live_recognizer`]: the live surface recognizer (Nakano's SOM on the rubbing stream);
 //! - [`recorder`]: samples to capture files through a lock-free ring;
 //! - [`acquire`]: the protocols `palpus capture` runs through a device;
+//! - [`bench`]: the loop benchmark (`palpus bench loop`), the full haptic path wired together;
 //! - [`sim`]: the ground-truth world, the papers' protocols, the simulated hand.
 
 pub mod acquire;
+pub mod bench;
 pub mod control;
 pub mod device;
 pub mod law;
@@ -24,6 +26,9 @@ pub mod rt;
 pub mod safety;
 pub mod sim;
 
-pub use device::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
+pub use device::{
+    DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice,
+    InternalForces,
+};
 pub use rt::{Controller, HapticSample, LoopConfig, LoopError, LoopHandle, RateStats, TickInput, TickOutput};
-pub use safety::{ForceGate, ForceOverride, SafetyFilter};
+pub use safety::SafetyFilter;

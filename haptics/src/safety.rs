@@ -1,7 +1,5 @@
-//! The last stage before a force reaches the operator: limits, a NaN guard, and the gate the
-//! watchdog closes when the haptic thread stalls.
-
-use std::sync::atomic::{AtomicU64, Ordering};
+//! The last stage before a force reaches the operator: limits and a NaN guard. (The gate the
+//! watchdog closes when the haptic thread stalls is the device's: [`crate::device::ForceGate`].)
 
 use glam::DVec3;
 
@@ -105,96 +103,6 @@ impl SafetyFilter {
     }
 }
 
-/// Scales a device's applied force from any thread. The watchdog holds one to ramp force to
-/// zero while the haptic thread is stalled and cannot send commands itself.
-pub trait ForceOverride: Send + Sync + std::fmt::Debug {
-    /// Sets the factor applied to the last commanded force (1: as commanded, 0: none) and
-    /// applies it now. Values outside [0, 1] are clamped; NaN means 0.
-    fn set_force_scale(&self, scale: f64);
-
-    /// The current factor.
-    fn force_scale(&self) -> f64;
-}
-
-/// The shared state behind a device's [`ForceOverride`]: the last command the haptic thread
-/// sent and the factor the watchdog set, in atomics so that neither side ever waits.
-///
-/// A command and the scale are independent atomics; a reader may pair a new command with the
-/// old scale for one tick, which is harmless because the scale only goes down during a run
-/// (the watchdog's ramp); it is set back to 1 only when a new run starts.
-#[derive(Debug)]
-pub struct ForceGate {
-    last: [AtomicU64; 4],
-    scale: AtomicU64,
-}
-
-impl Default for ForceGate {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl ForceGate {
-    /// An open gate (scale 1) with no command yet.
-    pub fn new() -> Self {
-        Self {
-            last: [
-                AtomicU64::new(0),
-                AtomicU64::new(0),
-                AtomicU64::new(0),
-                AtomicU64::new(0),
-            ],
-            scale: AtomicU64::new(1f64.to_bits()),
-        }
-    }
-
-    /// Remembers the command the haptic thread is sending and returns it scaled by the gate.
-    pub fn pass(&self, command: &ForceCommand) -> ForceCommand {
-        let values = [
-            command.force_n.x,
-            command.force_n.y,
-            command.force_n.z,
-            command.gripper_force_n,
-        ];
-        for (slot, v) in self.last.iter().zip(values) {
-            slot.store(v.to_bits(), Ordering::Relaxed);
-        }
-        self.scaled(command)
-    }
-
-    /// The last command passed, scaled by the gate: what the actuators apply now.
-    pub fn applied(&self) -> ForceCommand {
-        let v = |i: usize| f64::from_bits(self.last[i].load(Ordering::Relaxed));
-        self.scaled(&ForceCommand {
-            force_n: DVec3::new(v(0), v(1), v(2)),
-            gripper_force_n: v(3),
-        })
-    }
-
-    fn scaled(&self, command: &ForceCommand) -> ForceCommand {
-        let s = self.force_scale();
-        ForceCommand {
-            force_n: command.force_n * s,
-            gripper_force_n: command.gripper_force_n * s,
-        }
-    }
-}
-
-impl ForceOverride for ForceGate {
-    fn set_force_scale(&self, scale: f64) {
-        let s = if scale.is_nan() {
-            0.0
-        } else {
-            scale.clamp(0.0, 1.0)
-        };
-        self.scale.store(s.to_bits(), Ordering::Relaxed);
-    }
-
-    fn force_scale(&self) -> f64 {
-        f64::from_bits(self.scale.load(Ordering::Relaxed))
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -253,22 +161,5 @@ mod tests {
         assert_eq!(flags, flag::FORCE_CLAMPED);
         assert!((out.force_n.length() - 12.0).abs() < 1e-9);
         assert!((out.force_n.normalize() - DVec3::new(0.6, 0.0, -0.8)).length() < 1e-12);
-    }
-
-    #[test]
-    fn gate_scales_the_last_command_from_another_thread() {
-        let gate = std::sync::Arc::new(ForceGate::new());
-        let cmd = ForceCommand {
-            force_n: DVec3::new(1.0, 2.0, 3.0),
-            gripper_force_n: 1.0,
-        };
-        assert_eq!(gate.pass(&cmd), cmd);
-        let g = gate.clone();
-        std::thread::spawn(move || g.set_force_scale(0.5)).join().unwrap();
-        assert_eq!(gate.applied().force_n, DVec3::new(0.5, 1.0, 1.5));
-        gate.set_force_scale(f64::NAN);
-        assert_eq!(gate.applied(), ForceCommand::ZERO);
-        gate.set_force_scale(7.0);
-        assert_eq!(gate.force_scale(), 1.0);
     }
 }

@@ -17,7 +17,7 @@ use haptics::rt::{
     self, Controller, LoopConfig, LoopError, LoopIo, LoopShared, Pacing, Priority, RtRequest, StopReason,
     TickInput, TickOutput, WatchdogConfig, ZeroForce,
 };
-use haptics::safety::ForceOverride;
+use haptics::device::ForceOverride;
 use proptest::prelude::*;
 
 fn device() -> SimOmega7 {

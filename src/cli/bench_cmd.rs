@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use clap::{Args, Subcommand};
-use haptics::rt::bench::{BenchConfig, loop_bench};
+use haptics::bench::{BenchConfig, loop_bench};
 use haptics::rt::{LoopConfig, RtRequest};
 
 /// Measure performance.

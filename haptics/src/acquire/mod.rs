@@ -17,6 +17,10 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 
+use capture::kind::{
+    AXIAL_FORCE_N, COMMANDED_VELOCITY_MPS, DEPTH_M, FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M,
+    TANGENTIAL_POSITION_M, TANGENTIAL_VELOCITY_MPS, TIME_S, VELOCITY_MPS,
+};
 use capture::{CaptureKind, Metadata};
 
 use crate::control::{MotionGains, RubbingController, RubbingPlan};
@@ -71,20 +75,20 @@ impl Protocol {
     pub fn columns(self) -> &'static [&'static str] {
         match self {
             Self::Needle => &[
-                "time_s",
-                "depth_m",
-                "velocity_mps",
-                "commanded_velocity_mps",
-                "axial_force_n",
+                TIME_S,
+                DEPTH_M,
+                VELOCITY_MPS,
+                COMMANDED_VELOCITY_MPS,
+                AXIAL_FORCE_N,
             ],
             _ => &[
-                "time_s",
-                "tangential_position_m",
-                "tangential_velocity_mps",
-                "commanded_velocity_mps",
-                "normal_position_m",
-                "normal_force_n",
-                "friction_force_n",
+                TIME_S,
+                TANGENTIAL_POSITION_M,
+                TANGENTIAL_VELOCITY_MPS,
+                COMMANDED_VELOCITY_MPS,
+                NORMAL_POSITION_M,
+                NORMAL_FORCE_N,
+                FRICTION_FORCE_N,
             ],
         }
     }

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use crate::control::{AccelerationControl, MotionGains, OMEGA7_INTERNAL};
+use crate::control::{AccelerationControl, MotionGains};
 use crate::rt::{Controller, TickInput, TickOutput};
 
 /// The insertion plan.
@@ -137,7 +137,7 @@ impl Controller for InsertionController {
         }
         let mut control = self
             .control
-            .unwrap_or_else(|| AccelerationControl::new(MotionGains::NAKANO, OMEGA7_INTERNAL, t));
+            .unwrap_or_else(|| AccelerationControl::new(MotionGains::NAKANO, input.specs.internal, t));
         let observed = control.observe(input.applied.force_n, s.velocity_mps);
         self.phase_s += t;
         let p = self.plan;

@@ -39,7 +39,7 @@
 
 use glam::DVec3;
 
-use super::motion::{AccelerationControl, MotionGains, OMEGA7_INTERNAL};
+use super::motion::{AccelerationControl, MotionGains};
 use super::observer::InternalForces;
 use crate::law::Environment;
 use crate::rt::{Controller, TickInput, TickOutput};
@@ -53,8 +53,9 @@ pub struct AdmittanceConfig {
     pub virtual_damping_nspm: f64,
     /// Inner PD + DOB loop and observers.
     pub gains: MotionGains,
-    /// The device's own forces, removed by the RFOB.
-    pub internal: InternalForces,
+    /// The device's own forces, removed by the RFOB; `None`: those of the device being driven
+    /// ([`crate::device::DeviceSpecs::internal`], read at the first tick).
+    pub internal: Option<InternalForces>,
 }
 
 impl Default for AdmittanceConfig {
@@ -70,7 +71,7 @@ impl Default for AdmittanceConfig {
                 g_reac_radps: 150.0,
                 mass_n_kg: MotionGains::NAKANO.mass_n_kg,
             },
-            internal: OMEGA7_INTERNAL,
+            internal: None,
         }
     }
 }
@@ -139,8 +140,11 @@ impl<E: Environment> Controller for Admittance<E> {
             None => {
                 self.position_m = state.position_m;
                 self.velocity_mps = DVec3::ZERO;
-                self.control
-                    .insert(AccelerationControl::new(c.gains, c.internal, t))
+                self.control.insert(AccelerationControl::new(
+                    c.gains,
+                    c.internal.unwrap_or(input.specs.internal),
+                    t,
+                ))
             }
         };
         let observed = control.observe(input.applied.force_n, state.velocity_mps);

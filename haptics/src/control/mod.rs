@@ -7,6 +7,6 @@ pub mod observer;
 pub mod rubbing;
 
 pub use admittance::{Admittance, AdmittanceConfig};
-pub use motion::{AccelerationControl, MotionGains, OMEGA7_INTERNAL};
+pub use motion::{AccelerationControl, MotionGains};
 pub use observer::{DisturbanceObserver, InternalForces, Observed, Observers3, ReactionForceObserver};
 pub use rubbing::{RubbingController, RubbingPhase, RubbingPlan};

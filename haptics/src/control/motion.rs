@@ -36,14 +36,6 @@ impl MotionGains {
     };
 }
 
-/// The friction of a simulated or real Omega.7's own mechanism, as the RFOB models it.
-pub const OMEGA7_INTERNAL: InternalForces = InternalForces {
-    viscous_nspm: 0.2,
-    coulomb_n: 0.02,
-    coulomb_band_mps: 1e-3,
-    gravity_n: 0.0,
-};
-
 /// PD + DOB on three axes, with an RFOB for the external force.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AccelerationControl {
@@ -53,7 +45,8 @@ pub struct AccelerationControl {
 }
 
 impl AccelerationControl {
-    /// A controller with `gains`, internal forces `internal`, sampled every `period_s`.
+    /// A controller with `gains`, internal forces `internal` (the device's:
+    /// [`crate::device::DeviceSpecs::internal`]), sampled every `period_s`.
     pub fn new(gains: MotionGains, internal: InternalForces, period_s: f64) -> Self {
         Self {
             gains,

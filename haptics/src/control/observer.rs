@@ -21,6 +21,8 @@
 
 use glam::DVec3;
 
+pub use crate::device::InternalForces;
+
 /// First-order low-pass `g/(s + g)` by backward Euler.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Lpf {
@@ -70,36 +72,6 @@ impl DisturbanceObserver {
     pub fn update(&mut self, motor_force_n: f64, velocity_mps: f64) -> f64 {
         let gmv = self.cutoff_radps * self.mass_kg * velocity_mps;
         self.lpf.update(motor_force_n + gmv, gmv) - gmv
-    }
-}
-
-/// The device's own forces the RFOB must not report as external (Eq. 2.16): gravity not
-/// compensated by the device, and its friction `b·v + C·tanh(v/v_s)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InternalForces {
-    /// Viscous friction, N·s/m.
-    pub viscous_nspm: f64,
-    /// Coulomb friction, N.
-    pub coulomb_n: f64,
-    /// Speed over which Coulomb friction is smoothed, m/s.
-    pub coulomb_band_mps: f64,
-    /// Constant load (uncompensated gravity) along the axis, N, opposing +axis when positive.
-    pub gravity_n: f64,
-}
-
-impl InternalForces {
-    /// No internal forces.
-    pub const NONE: InternalForces = InternalForces {
-        viscous_nspm: 0.0,
-        coulomb_n: 0.0,
-        coulomb_band_mps: 1e-3,
-        gravity_n: 0.0,
-    };
-
-    /// The load they put on the motor at velocity `v`, N (Nakano's `f_g + f_fric`).
-    pub fn load_n(&self, v: f64) -> f64 {
-        let band = self.coulomb_band_mps.max(1e-9);
-        self.gravity_n + self.viscous_nspm * v + self.coulomb_n * (v / band).tanh()
     }
 }
 

@@ -14,7 +14,7 @@
 
 use glam::DVec3;
 
-use super::motion::{AccelerationControl, MotionGains, OMEGA7_INTERNAL};
+use super::motion::{AccelerationControl, MotionGains};
 use crate::rt::{Controller, TickInput, TickOutput};
 
 /// What to rub.
@@ -171,7 +171,7 @@ impl Controller for RubbingController {
         }
         let mut control = self
             .control
-            .unwrap_or_else(|| AccelerationControl::new(gains, OMEGA7_INTERNAL, t));
+            .unwrap_or_else(|| AccelerationControl::new(gains, input.specs.internal, t));
         let observed = control.observe(input.applied.force_n, s.velocity_mps);
         let normal_n = observed.external_n.z;
         self.phase_s += t;

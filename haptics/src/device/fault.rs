@@ -3,8 +3,7 @@
 
 use std::sync::Arc;
 
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
-use crate::safety::ForceOverride;
+use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice};
 
 /// Which call fails.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -18,12 +18,12 @@ pub mod replay;
 pub mod sim_omega7;
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
-use crate::safety::ForceOverride;
-
-/// What a device can do: the limits every command is checked against.
+/// What a device can do: the limits every command is checked against, and the forces of its
+/// own mechanism that an observer must not mistake for the operator's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DeviceSpecs {
     /// Model name, for reports and capture metadata.
@@ -40,20 +40,39 @@ pub struct DeviceSpecs {
     pub max_stiffness_npm: f64,
     /// Largest damping the device renders stably, N·s/m.
     pub max_damping_nspm: f64,
+    /// The mechanism's own friction and uncompensated load, as a reaction-force observer
+    /// models it (the Omega.7's: [`omega7::OMEGA7_INTERNAL`]).
+    pub internal: InternalForces,
 }
 
-impl DeviceSpecs {
-    /// Force Dimension Omega.7, from the data sheet and CHAI3D's device table: 12 N, active
-    /// gripper 8 N, a workspace of Ø 160 mm, 5000 N/m, 30 N·s/m.
-    pub const OMEGA7: DeviceSpecs = DeviceSpecs {
-        model: "omega.7",
-        max_force_n: 12.0,
-        max_gripper_force_n: 8.0,
-        workspace_radius_m: 0.08,
-        max_gripper_gap_m: 0.03,
-        max_stiffness_npm: 5000.0,
-        max_damping_nspm: 30.0,
+/// The device's own forces a reaction-force observer must not report as external (Nakano
+/// Eq. 2.16): gravity not compensated by the device, and its friction `b·v + C·tanh(v/v_s)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InternalForces {
+    /// Viscous friction, N·s/m.
+    pub viscous_nspm: f64,
+    /// Coulomb friction, N.
+    pub coulomb_n: f64,
+    /// Speed over which Coulomb friction is smoothed, m/s.
+    pub coulomb_band_mps: f64,
+    /// Constant load (uncompensated gravity) along the axis, N, opposing +axis when positive.
+    pub gravity_n: f64,
+}
+
+impl InternalForces {
+    /// No internal forces.
+    pub const NONE: InternalForces = InternalForces {
+        viscous_nspm: 0.0,
+        coulomb_n: 0.0,
+        coulomb_band_mps: 1e-3,
+        gravity_n: 0.0,
     };
+
+    /// The load they put on the motor at velocity `v`, N (Nakano's `f_g + f_fric`).
+    pub fn load_n(&self, v: f64) -> f64 {
+        let band = self.coulomb_band_mps.max(1e-9);
+        self.gravity_n + self.viscous_nspm * v + self.coulomb_n * (v / band).tanh()
+    }
 }
 
 /// One reading of the device.
@@ -150,6 +169,96 @@ impl DeviceError {
     }
 }
 
+/// Scales a device's applied force from any thread. The watchdog holds one to ramp force to
+/// zero while the haptic thread is stalled and cannot send commands itself.
+pub trait ForceOverride: Send + Sync + std::fmt::Debug {
+    /// Sets the factor applied to the last commanded force (1: as commanded, 0: none) and
+    /// applies it now. Values outside [0, 1] are clamped; NaN means 0.
+    fn set_force_scale(&self, scale: f64);
+
+    /// The current factor.
+    fn force_scale(&self) -> f64;
+}
+
+/// The shared state behind a device's [`ForceOverride`]: the last command the haptic thread
+/// sent and the factor the watchdog set, in atomics so that neither side ever waits.
+///
+/// A command and the scale are independent atomics; a reader may pair a new command with the
+/// old scale for one tick, which is harmless because the scale only goes down during a run
+/// (the watchdog's ramp); it is set back to 1 only when a new run starts.
+#[derive(Debug)]
+pub struct ForceGate {
+    last: [AtomicU64; 4],
+    scale: AtomicU64,
+}
+
+impl Default for ForceGate {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ForceGate {
+    /// An open gate (scale 1) with no command yet.
+    pub fn new() -> Self {
+        Self {
+            last: [
+                AtomicU64::new(0),
+                AtomicU64::new(0),
+                AtomicU64::new(0),
+                AtomicU64::new(0),
+            ],
+            scale: AtomicU64::new(1f64.to_bits()),
+        }
+    }
+
+    /// Remembers the command the haptic thread is sending and returns it scaled by the gate.
+    pub fn pass(&self, command: &ForceCommand) -> ForceCommand {
+        let values = [
+            command.force_n.x,
+            command.force_n.y,
+            command.force_n.z,
+            command.gripper_force_n,
+        ];
+        for (slot, v) in self.last.iter().zip(values) {
+            slot.store(v.to_bits(), Ordering::Relaxed);
+        }
+        self.scaled(command)
+    }
+
+    /// The last command passed, scaled by the gate: what the actuators apply now.
+    pub fn applied(&self) -> ForceCommand {
+        let v = |i: usize| f64::from_bits(self.last[i].load(Ordering::Relaxed));
+        self.scaled(&ForceCommand {
+            force_n: DVec3::new(v(0), v(1), v(2)),
+            gripper_force_n: v(3),
+        })
+    }
+
+    fn scaled(&self, command: &ForceCommand) -> ForceCommand {
+        let s = self.force_scale();
+        ForceCommand {
+            force_n: command.force_n * s,
+            gripper_force_n: command.gripper_force_n * s,
+        }
+    }
+}
+
+impl ForceOverride for ForceGate {
+    fn set_force_scale(&self, scale: f64) {
+        let s = if scale.is_nan() {
+            0.0
+        } else {
+            scale.clamp(0.0, 1.0)
+        };
+        self.scale.store(s.to_bits(), Ordering::Relaxed);
+    }
+
+    fn force_scale(&self) -> f64 {
+        f64::from_bits(self.scale.load(Ordering::Relaxed))
+    }
+}
+
 /// A haptic device. Called from the haptic thread once per tick: `read_state`, then `command`.
 /// Implementations must not allocate, lock, log or do file I/O in those two calls.
 pub trait HapticDevice: Send {
@@ -200,5 +309,27 @@ impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
     }
     fn close(&mut self) -> Result<(), DeviceError> {
         (**self).close()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gate_scales_the_last_command_from_another_thread() {
+        let gate = Arc::new(ForceGate::new());
+        let cmd = ForceCommand {
+            force_n: DVec3::new(1.0, 2.0, 3.0),
+            gripper_force_n: 1.0,
+        };
+        assert_eq!(gate.pass(&cmd), cmd);
+        let g = gate.clone();
+        std::thread::spawn(move || g.set_force_scale(0.5)).join().unwrap();
+        assert_eq!(gate.applied().force_n, DVec3::new(0.5, 1.0, 1.5));
+        gate.set_force_scale(f64::NAN);
+        assert_eq!(gate.applied(), ForceCommand::ZERO);
+        gate.set_force_scale(7.0);
+        assert_eq!(gate.force_scale(), 1.0);
     }
 }

@@ -16,8 +16,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
-use crate::safety::ForceOverride;
+use super::{
+    DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice, InternalForces,
+};
 
 /// Environment variable naming the library file to load instead of the default search.
 pub const LIBRARY_ENV: &str = "PALPUS_DHD_LIBRARY";
@@ -27,6 +28,30 @@ pub const LIBRARY_NAMES: [&str; 2] = ["libdhd.so", "libdhd.so.3"];
 
 /// Force Dimension's USB vendor id.
 pub const FORCE_DIMENSION_VENDOR_ID: u16 = 0x1451;
+
+/// The friction of a simulated or real Omega.7's own mechanism, as the RFOB models it.
+pub const OMEGA7_INTERNAL: InternalForces = InternalForces {
+    viscous_nspm: 0.2,
+    coulomb_n: 0.02,
+    coulomb_band_mps: 1e-3,
+    gravity_n: 0.0,
+};
+
+impl DeviceSpecs {
+    /// Force Dimension Omega.7, from the data sheet and CHAI3D's device table: 12 N, active
+    /// gripper 8 N, a workspace of Ø 160 mm, 5000 N/m, 30 N·s/m; its mechanism's friction
+    /// [`OMEGA7_INTERNAL`].
+    pub const OMEGA7: DeviceSpecs = DeviceSpecs {
+        model: "omega.7",
+        max_force_n: 12.0,
+        max_gripper_force_n: 8.0,
+        workspace_radius_m: 0.08,
+        max_gripper_gap_m: 0.03,
+        max_stiffness_npm: 5000.0,
+        max_damping_nspm: 30.0,
+        internal: OMEGA7_INTERNAL,
+    };
+}
 
 type GetDeviceCount = unsafe extern "C" fn() -> c_int;
 type Open = unsafe extern "C" fn() -> c_int;
@@ -267,7 +292,7 @@ pub struct Omega7 {
 #[derive(Debug)]
 pub struct DhdOverride {
     lib: Arc<DhdLibrary>,
-    gate: crate::safety::ForceGate,
+    gate: super::ForceGate,
     id: AtomicU64,
 }
 
@@ -337,7 +362,7 @@ impl Omega7 {
             .unwrap_or_else(|| "omega.7".into());
         let override_ = Arc::new(DhdOverride {
             lib: lib.clone(),
-            gate: crate::safety::ForceGate::new(),
+            gate: super::ForceGate::new(),
             id: AtomicU64::new(id as u64),
         });
         let mut device = Self {

@@ -9,11 +9,13 @@
 
 use std::sync::Arc;
 
+use capture::kind::{
+    DEPTH_M, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TANGENTIAL_VELOCITY_MPS, VELOCITY_MPS,
+};
 use capture::{Capture, CaptureKind};
 use glam::DVec3;
 
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
-use crate::safety::{ForceGate, ForceOverride};
+use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
 
 /// A capture played back.
 #[derive(Debug)]
@@ -45,16 +47,16 @@ impl ReplayDevice {
         type Axes<'a> = (&'a [f64], &'a [f64], Option<&'a [f64]>, Option<&'a [f64]>);
         let (x, z, vx, vz): Axes<'_> = match capture.metadata().kind() {
             CaptureKind::Insertion => {
-                let depth = column("depth_m").ok_or_else(|| bad("no depth_m column"))?;
-                (&zeros, depth, None, column("velocity_mps"))
+                let depth = column(DEPTH_M).ok_or_else(|| bad("no depth_m column"))?;
+                (&zeros, depth, None, column(VELOCITY_MPS))
             }
             CaptureKind::Rubbing => {
                 let x =
-                    column("tangential_position_m").ok_or_else(|| bad("no tangential_position_m column"))?;
+                    column(TANGENTIAL_POSITION_M).ok_or_else(|| bad("no tangential_position_m column"))?;
                 (
                     x,
-                    column("normal_position_m").unwrap_or(&zeros),
-                    column("tangential_velocity_mps"),
+                    column(NORMAL_POSITION_M).unwrap_or(&zeros),
+                    column(TANGENTIAL_VELOCITY_MPS),
                     None,
                 )
             }

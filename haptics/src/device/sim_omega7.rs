@@ -16,8 +16,8 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
-use crate::safety::{ForceGate, ForceOverride};
+use super::omega7::OMEGA7_INTERNAL;
+use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
 use crate::sim::hand::{HandImpedance, HandScript};
 use crate::sim::world::friction::{HardContact, SoftContact};
 use crate::sim::world::needle::{NeedleSite, NeedleTissue};
@@ -53,8 +53,8 @@ impl Default for SimOmega7Config {
             period_s: 1e-3,
             substeps: 10,
             mass_kg: 0.3,
-            viscous_nspm: crate::control::motion::OMEGA7_INTERNAL.viscous_nspm,
-            coulomb_n: crate::control::motion::OMEGA7_INTERNAL.coulomb_n,
+            viscous_nspm: OMEGA7_INTERNAL.viscous_nspm,
+            coulomb_n: OMEGA7_INTERNAL.coulomb_n,
             encoder_quantum_m: Encoder::OMEGA7_QUANTUM_M,
             velocity_tau_s: 0.005,
             start_m: DVec3::ZERO,

@@ -16,7 +16,7 @@ use super::monitor::{RateMonitor, RateStats};
 use super::pacer::{Pacer, Pacing};
 use super::sched::{self, RtRequest, RtStatus};
 use super::watchdog::{Heartbeat, Watchdog, WatchdogConfig};
-use crate::device::{DeviceError, DeviceState, ForceCommand, HapticDevice};
+use crate::device::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
 use crate::safety::SafetyFilter;
 
 /// Controller-defined values carried with each sample (estimated forces, model outputs, …):
@@ -54,6 +54,8 @@ pub struct TickInput<'a> {
     pub state: &'a DeviceState,
     /// The command actually sent last tick (after safety), e.g. for a disturbance observer.
     pub applied: &'a ForceCommand,
+    /// The device's limits and its mechanism's own forces (what an observer removes).
+    pub specs: &'a DeviceSpecs,
 }
 
 /// What a controller returns each tick.
@@ -264,7 +266,8 @@ where
     let status = sched::apply_to_current_thread(&config.rt);
     // Set once per shared state; a second run on the same state keeps the first report.
     let _ = shared.rt_status.set(status);
-    let safety = SafetyFilter::new(device.specs());
+    let specs = *device.specs();
+    let safety = SafetyFilter::new(&specs);
     let monitor = &shared.monitor;
     let heartbeat = &*shared.heartbeat;
 
@@ -320,6 +323,7 @@ where
             period_s,
             state: &state,
             applied: &applied,
+            specs: &specs,
         };
         out.flags = 0;
         controller.tick(&input, &mut out);

@@ -1,6 +1,5 @@
 //! The real-time side: pacing, scheduling, the rate monitor, the watchdog and the loop.
 
-pub mod bench;
 pub mod haptic_loop;
 pub mod monitor;
 pub mod pacer;

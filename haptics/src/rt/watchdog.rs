@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use crate::safety::ForceOverride;
+use crate::device::ForceOverride;
 
 /// Watchdog timing. `stall + ramp + poll` is the worst case from the last tick to zero force.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

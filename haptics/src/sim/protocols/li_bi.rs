@@ -11,6 +11,10 @@
 
 use std::f64::consts::PI;
 
+use capture::kind::{
+    AXIAL_FORCE_N, COMMANDED_VELOCITY_MPS, DEPTH_M, FRICTION_FORCE_N, NORMAL_FORCE_N, TANGENTIAL_POSITION_M,
+    TANGENTIAL_VELOCITY_MPS, TIME_S, VELOCITY_MPS,
+};
 use capture::{Capture, CaptureError, CaptureKind, Metadata};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -82,11 +86,11 @@ pub fn hard_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
     let log_every = 200;
     let samples = 31;
     let mut cols = Columns::new(&[
-        "time_s",
-        "tangential_position_m",
-        "tangential_velocity_mps",
-        "normal_force_n",
-        "friction_force_n",
+        TIME_S,
+        TANGENTIAL_POSITION_M,
+        TANGENTIAL_VELOCITY_MPS,
+        NORMAL_FORCE_N,
+        FRICTION_FORCE_N,
     ]);
     for k in 0..=(samples - 1) * log_every {
         let t = k as f64 * DT_S;
@@ -152,12 +156,12 @@ pub fn soft_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
     let log_every = 50;
     let settle = 500;
     let mut cols = Columns::new(&[
-        "time_s",
-        "tangential_position_m",
-        "tangential_velocity_mps",
-        "commanded_velocity_mps",
-        "normal_force_n",
-        "friction_force_n",
+        TIME_S,
+        TANGENTIAL_POSITION_M,
+        TANGENTIAL_VELOCITY_MPS,
+        COMMANDED_VELOCITY_MPS,
+        NORMAL_FORCE_N,
+        FRICTION_FORCE_N,
     ]);
     let mut clock = 0usize;
     let speeds = soft_contact_speeds_mmps(split);
@@ -233,11 +237,11 @@ pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError
     let log_every = 10;
     let (start_m, target_m, withdraw_mps, ramp_s, hold_s, rest_s) = (-0.002, 0.030, 0.010, 0.05, 1.0, 0.3);
     let mut cols = Columns::new(&[
-        "time_s",
-        "depth_m",
-        "velocity_mps",
-        "commanded_velocity_mps",
-        "axial_force_n",
+        TIME_S,
+        DEPTH_M,
+        VELOCITY_MPS,
+        COMMANDED_VELOCITY_MPS,
+        AXIAL_FORCE_N,
     ]);
     let mut per_insertion: Vec<(String, String)> = Vec::new();
     let mut clock = 0usize;

@@ -7,6 +7,7 @@
 //!
 //! Logged at 1 kHz (the thesis samples at 0.3 ms; 1 kHz is the Omega.7's usual servo rate).
 
+use capture::kind;
 use capture::{Capture, CaptureError, CaptureKind, Metadata};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -63,13 +64,13 @@ pub fn rubbing_run(patch: &SurfacePatch, run: u32, seed: u64) -> Result<Capture,
     let start_m = (f64::from(run) / f64::from(RUNS) + rng.random_range(0.0..0.1)) * track;
     let tilt = rng.random_range(-2e-3..2e-3);
     let mut cols = Columns::new(&[
-        "time_s",
-        "tangential_position_m",
-        "tangential_velocity_mps",
-        "commanded_velocity_mps",
-        "normal_position_m",
-        "normal_force_n",
-        "friction_force_n",
+        kind::TIME_S,
+        kind::TANGENTIAL_POSITION_M,
+        kind::TANGENTIAL_VELOCITY_MPS,
+        kind::COMMANDED_VELOCITY_MPS,
+        kind::NORMAL_POSITION_M,
+        kind::NORMAL_FORCE_N,
+        kind::FRICTION_FORCE_N,
     ]);
     // The linear ramp covers half the distance a full-speed start would.
     let steps = ((STROKE_M / SPEED_MPS + RAMP_S / 2.0) * RATE_HZ).round() as usize;

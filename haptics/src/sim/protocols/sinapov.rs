@@ -3,6 +3,9 @@
 //! trials each; the accelerometer is read at 400 Hz. The physics lives in
 //! [`crate::sim::world::scratch`]; this module turns a trial into a capture.
 
+use capture::kind::{
+    ACCEL_X_MPS2, ACCEL_Y_MPS2, ACCEL_Z_MPS2, NORMAL_FORCE_N, TANGENTIAL_POSITION_M, TIME_S,
+};
 use capture::{Capture, CaptureError, CaptureKind, Metadata};
 
 use crate::sim::world::scratch::{ACCEL_RATE_HZ, Behaviour, ScratchSurface, scratch_trial};
@@ -35,12 +38,12 @@ pub fn scratch_capture(
     Capture::new(
         meta,
         [
-            "time_s",
-            "tangential_position_m",
-            "normal_force_n",
-            "accel_x_mps2",
-            "accel_y_mps2",
-            "accel_z_mps2",
+            TIME_S,
+            TANGENTIAL_POSITION_M,
+            NORMAL_FORCE_N,
+            ACCEL_X_MPS2,
+            ACCEL_Y_MPS2,
+            ACCEL_Z_MPS2,
         ]
         .map(String::from)
         .to_vec(),

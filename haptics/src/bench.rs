@@ -8,14 +8,15 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use capture::kind::{AXIAL_FORCE_N, DEPTH_M, TIME_S};
 use capture::{CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
 
-use super::{LoopConfig, LoopError, LoopIo, RateStats, RtStatus, StopReason, spawn};
 use crate::control::{Admittance, AdmittanceConfig};
 use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use crate::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
 use crate::recorder::{Recorder, RecorderConfig};
+use crate::rt::{HapticSample, LoopConfig, LoopError, LoopIo, RateStats, RtStatus, StopReason, sched, spawn};
 use crate::sim::hand::{HandImpedance, Waypoints};
 use crate::sim::world::needle::NeedleTissue;
 
@@ -90,11 +91,11 @@ pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, LoopError> {
     );
     let meta = Metadata::new(CaptureKind::Insertion, "sim-omega7", config.loop_config.rate_hz)
         .with("protocol", "palpus_bench_loop");
-    let writer = CaptureWriter::new(std::io::sink(), &meta, &["time_s", "depth_m", "axial_force_n"])
+    let writer = CaptureWriter::new(std::io::sink(), &meta, &[TIME_S, DEPTH_M, AXIAL_FORCE_N])
         .map_err(|e| LoopError::Spawn(std::io::Error::other(e.to_string())))?;
     let (producer, recorder) = Recorder::spawn(
         writer,
-        move |s: &super::HapticSample, row: &mut Vec<f64>| {
+        move |s: &HapticSample, row: &mut Vec<f64>| {
             row.extend([s.time_s, surface_z_m - s.state.position_m.z, s.channels[1]]);
             true
         },
@@ -103,11 +104,7 @@ pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, LoopError> {
     .map_err(|e| LoopError::Spawn(std::io::Error::other(e.to_string())))?;
 
     let stop_load = Arc::new(AtomicBool::new(false));
-    let load_threads = if config.load {
-        super::sched::core_count()
-    } else {
-        0
-    };
+    let load_threads = if config.load { sched::core_count() } else { 0 };
     let loads: Vec<_> = (0..load_threads)
         .map(|_| {
             let stop = stop_load.clone();
