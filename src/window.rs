@@ -7,12 +7,15 @@
 //! switches scenes and sets the view's parameters.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
 use glam::DVec3;
+use haptics::live::{self, LiveView, RecentSamples};
 use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
+use haptics::sim::hand::LiveHand;
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
 
@@ -32,6 +35,11 @@ const DRAG_M_PER_PX: f64 = 1e-4;
 const SCROLL_M_PER_LINE: f64 = 1e-3;
 /// Hand speed with a key held, m/s.
 const KEY_SPEED_MPS: f64 = 0.02;
+/// How much of the running segment the overlay plots, s.
+const OVERLAY_S: f64 = 10.0;
+/// Seconds of samples the live ring holds between two frames: far more than a frame, so a
+/// window that stalls for a while still sees every sample.
+const RING_S: f64 = 4.0;
 
 /// What the window session produced.
 #[derive(Debug, Default)]
@@ -51,11 +59,17 @@ struct Session {
     current: usize,
     options: SessionOptions,
     cache_dir: PathBuf,
-    link: LiveLink,
+    /// The hand target the UI moves.
+    hand: Arc<LiveHand>,
+    /// Set to end the running segment.
+    stop: Arc<AtomicBool>,
+    /// The running segment's live view.
+    live: LiveView,
+    /// The last [`OVERLAY_S`] seconds of it, for the plots and the recognizer's decisions.
+    recent: RecentSamples,
     worker: Option<JoinHandle<Result<SegmentRun, SessionError>>>,
     hand_m: DVec3,
     recognizer: Option<LiveRecognizer>,
-    consumed: usize,
     recognized: Option<(String, f32)>,
     /// The recognizer channel's decision count at the last sample read.
     decisions_seen: f64,
@@ -63,8 +77,15 @@ struct Session {
     scenes: Vec<PathBuf>,
     error: Option<anyhow::Error>,
     last_wall: Instant,
-    last_ticks: usize,
+    last_ticks: u64,
     rate_hz: f32,
+}
+
+/// The live view of a segment at `rate_hz`, and the window's buffer for its plots.
+fn live_view(rate_hz: f64) -> (live::LiveFeed, LiveView, RecentSamples) {
+    let samples = |s: f64| (s * rate_hz.max(1.0)).ceil() as usize;
+    let (feed, view) = live::channel(samples(RING_S));
+    (feed, view, RecentSamples::new(samples(OVERLAY_S) + 1))
 }
 
 impl Session {
@@ -82,6 +103,7 @@ impl Session {
         scenes.retain(|p| p.extension().is_some_and(|e| e == "toml"));
         scenes.sort();
         let start = start_position_m(&scene);
+        let (_, live, recent) = live_view(scene.device.rate_hz);
         let mut s = Self {
             scene,
             view,
@@ -89,11 +111,13 @@ impl Session {
             current: 0,
             options,
             cache_dir,
-            link: LiveLink::new(start),
+            hand: LiveHand::new(),
+            stop: Arc::new(AtomicBool::new(false)),
+            live,
+            recent,
             worker: None,
             hand_m: start,
             recognizer,
-            consumed: 0,
             recognized: None,
             decisions_seen: 0.0,
             outcome: WindowOutcome::default(),
@@ -112,24 +136,28 @@ impl Session {
             return;
         };
         self.hand_m = start_position_m(&self.scene);
-        self.link = LiveLink::new(self.hand_m);
-        self.consumed = 0;
+        let (feed, live, recent) = live_view(self.scene.device.rate_hz);
+        let link = LiveLink::new(self.hand_m, feed);
+        self.hand = link.hand.clone();
+        self.stop = link.stop.clone();
+        self.live = live;
+        self.recent = recent;
+        self.last_ticks = 0;
         self.recognized = None;
         self.decisions_seen = 0.0;
-        let (scene, options, link, n, recognizer) = (
+        let (scene, options, n, recognizer) = (
             self.scene.clone(),
             self.options.clone(),
-            self.link.clone(),
             self.segments.len(),
             self.recognizer.clone(),
         );
         self.worker = Some(std::thread::spawn(move || {
-            session::run_segment(&scene, &segment, n, &options, Some(&link), recognizer)
+            session::run_segment(&scene, &segment, n, &options, Some(link), recognizer)
         }));
     }
 
     fn stop(&mut self) {
-        self.link.stop.store(true, Ordering::Relaxed);
+        self.stop.store(true, Ordering::Relaxed);
         if let Some(w) = self.worker.take() {
             match w.join() {
                 Ok(Ok(run)) => self.outcome.runs.push(run),
@@ -176,7 +204,7 @@ impl Session {
         } else {
             p
         };
-        self.link.hand.set(self.hand_m, 0.01);
+        self.hand.set(self.hand_m, 0.01);
     }
 }
 
@@ -197,39 +225,45 @@ impl WindowApp for Session {
         let segment = self.segments.get(self.current);
         let kind = segment.map(|s| &s.kind);
         let object = segment.map(|s| s.object.as_str());
-        let (last, mut overlay, ticks) = {
-            let samples = self.link.samples.lock().unwrap_or_else(|e| e.into_inner());
-            // The haptic thread decides inside its tick; each sample where its decision count
-            // steps carries a new decision.
-            if let (Some(r), Some(SegmentKind::Surface { surface })) = (&self.recognizer, kind) {
-                for s in &samples[self.consumed.min(samples.len())..] {
-                    let count = s.channels[channel::DECISIONS];
-                    if count == self.decisions_seen {
-                        continue;
-                    }
-                    self.decisions_seen = count;
-                    if count > 0.0
-                        && let Some((label, confidence)) = decision_in(&s.channels)
-                        && let Some(name) = r.classes().get(label)
-                    {
-                        self.recognized = Some((name.clone(), confidence as f32));
-                        self.outcome.recognition.push(Decision {
-                            object: object.unwrap_or_default().to_owned(),
-                            truth: surface.clone(),
-                            time_s: s.time_s,
-                            label: name.clone(),
-                            confidence,
-                        });
-                    }
-                }
-            }
-            self.consumed = samples.len();
-            (
-                samples.last().copied(),
-                overlay_plots(&samples, kind, 10.0, 600),
-                samples.len(),
-            )
+        // The haptic thread decides inside its tick; each sample where its decision count steps
+        // carries a new decision.
+        let surface = match (&self.recognizer, kind) {
+            (Some(r), Some(SegmentKind::Surface { surface })) => Some((r, surface)),
+            _ => None,
         };
+        let (recent, recognized, decisions_seen, recognition) = (
+            &mut self.recent,
+            &mut self.recognized,
+            &mut self.decisions_seen,
+            &mut self.outcome.recognition,
+        );
+        self.live.drain(|s| {
+            recent.push(s);
+            let Some((r, truth)) = surface else {
+                return;
+            };
+            let count = s.channels[channel::DECISIONS];
+            if count == *decisions_seen {
+                return;
+            }
+            *decisions_seen = count;
+            if count > 0.0
+                && let Some((label, confidence)) = decision_in(&s.channels)
+                && let Some(name) = r.classes().get(label)
+            {
+                *recognized = Some((name.clone(), confidence as f32));
+                recognition.push(Decision {
+                    object: object.unwrap_or_default().to_owned(),
+                    truth: truth.clone(),
+                    time_s: s.time_s,
+                    label: name.clone(),
+                    confidence,
+                });
+            }
+        });
+        let last = self.live.newest();
+        let mut overlay = overlay_plots(self.recent.as_slice(), kind, OVERLAY_S, 600);
+        let ticks = last.map_or(0, |s| s.tick + 1);
         let wall = self.last_wall.elapsed().as_secs_f32();
         if wall >= 0.5 {
             self.rate_hz = ticks.saturating_sub(self.last_ticks) as f32 / wall;
@@ -243,12 +277,7 @@ impl WindowApp for Session {
         };
         let mut frame = self.view.frame(&state);
         overlay.haptic_rate_hz = Some(self.rate_hz);
-        overlay.period_error_s = self
-            .link
-            .stats
-            .lock()
-            .ok()
-            .and_then(|s| s.map(|s| s.period_error.p99.as_secs_f32()));
+        overlay.period_error_s = self.live.stats().map(|s| s.period_error.p99.as_secs_f32());
         let running = self.worker.as_ref().is_some_and(|w| !w.is_finished());
         overlay.device_status = format!(
             "{} · {} · {}{}",

@@ -20,6 +20,7 @@ pub mod bench;
 pub mod control;
 pub mod device;
 pub mod law;
+pub mod live;
 pub mod live_recognizer;
 pub mod recorder;
 pub mod rt;

@@ -32,6 +32,9 @@ pub struct RecorderConfig {
     pub capacity: usize,
     /// Longest time between flushes to the file (at most 100 ms).
     pub flush_interval: Duration,
+    /// Also keep every sample drained, in order, for [`Recorder::finish_with_samples`] (a
+    /// session's report reads them); the recorder thread holds them, never the haptic thread.
+    pub keep_samples: bool,
 }
 
 impl Default for RecorderConfig {
@@ -39,6 +42,7 @@ impl Default for RecorderConfig {
         Self {
             capacity: 4096,
             flush_interval: Duration::from_millis(50),
+            keep_samples: false,
         }
     }
 }
@@ -113,12 +117,15 @@ pub enum RecorderError {
     Panicked,
 }
 
+/// What the recorder thread hands back: the writer and summary, and the samples it kept.
+type Finished<W> = (Result<(W, RecorderSummary), RecorderError>, Vec<HapticSample>);
+
 /// A running recorder thread.
 #[derive(Debug)]
 pub struct Recorder<W: Write + Send + 'static> {
     stats: Arc<RecorderStats>,
     stop: Arc<AtomicBool>,
-    thread: JoinHandle<Result<(W, RecorderSummary), RecorderError>>,
+    thread: JoinHandle<Finished<W>>,
 }
 
 /// Creates `path` (replacing it) and starts recording into it; returns the ring's producer for
@@ -155,54 +162,62 @@ impl<W: Write + Send + 'static> Recorder<W> {
         let thread = std::thread::Builder::new()
             .name("recorder".into())
             .spawn(move || {
-                let mut row = Vec::with_capacity(writer.columns().len());
-                let mut summary = RecorderSummary {
-                    rows: 0,
-                    rejected: 0,
-                    first_rejection: None,
-                };
-                let mut last_flush = Instant::now();
-                loop {
-                    let mut drained = 0;
-                    while let Ok(sample) = consumer.pop() {
-                        drained += 1;
-                        row.clear();
-                        if !map(&sample, &mut row) {
-                            continue;
-                        }
-                        match writer.write_row(&row) {
-                            Ok(()) => {
-                                summary.rows += 1;
-                                thread_stats.written.store(summary.rows, Ordering::Release);
+                let mut kept = Vec::new();
+                let result = (|| {
+                    let mut row = Vec::with_capacity(writer.columns().len());
+                    let mut summary = RecorderSummary {
+                        rows: 0,
+                        rejected: 0,
+                        first_rejection: None,
+                    };
+                    let keep = config.keep_samples;
+                    let mut last_flush = Instant::now();
+                    loop {
+                        let mut drained = 0;
+                        while let Ok(sample) = consumer.pop() {
+                            drained += 1;
+                            if keep {
+                                kept.push(sample);
                             }
-                            Err(e) if matches!(e.kind, CaptureErrorKind::Io(_)) => return Err(e.into()),
-                            Err(e) => {
-                                summary.rejected += 1;
-                                thread_stats.rejected.store(summary.rejected, Ordering::Release);
-                                summary.first_rejection.get_or_insert(e);
+                            row.clear();
+                            if !map(&sample, &mut row) {
+                                continue;
+                            }
+                            match writer.write_row(&row) {
+                                Ok(()) => {
+                                    summary.rows += 1;
+                                    thread_stats.written.store(summary.rows, Ordering::Release);
+                                }
+                                Err(e) if matches!(e.kind, CaptureErrorKind::Io(_)) => return Err(e.into()),
+                                Err(e) => {
+                                    summary.rejected += 1;
+                                    thread_stats.rejected.store(summary.rejected, Ordering::Release);
+                                    summary.first_rejection.get_or_insert(e);
+                                }
+                            }
+                            if drained % 256 == 0 && last_flush.elapsed() >= interval {
+                                break;
                             }
                         }
-                        if drained % 256 == 0 && last_flush.elapsed() >= interval {
+                        let finished = consumer.is_empty()
+                            && (thread_stop.load(Ordering::Acquire) || consumer.is_abandoned());
+                        if last_flush.elapsed() >= interval || finished {
+                            writer.flush()?;
+                            last_flush = Instant::now();
+                            thread_stats.flushed.store(summary.rows, Ordering::Release);
+                            thread_stats.flushes.fetch_add(1, Ordering::AcqRel);
+                        }
+                        if finished {
                             break;
                         }
+                        if drained == 0 {
+                            std::thread::sleep(Duration::from_millis(2).min(interval));
+                        }
                     }
-                    let finished = consumer.is_empty()
-                        && (thread_stop.load(Ordering::Acquire) || consumer.is_abandoned());
-                    if last_flush.elapsed() >= interval || finished {
-                        writer.flush()?;
-                        last_flush = Instant::now();
-                        thread_stats.flushed.store(summary.rows, Ordering::Release);
-                        thread_stats.flushes.fetch_add(1, Ordering::AcqRel);
-                    }
-                    if finished {
-                        break;
-                    }
-                    if drained == 0 {
-                        std::thread::sleep(Duration::from_millis(2).min(interval));
-                    }
-                }
-                let inner = writer.finish()?;
-                Ok((inner, summary))
+                    let inner = writer.finish()?;
+                    Ok((inner, summary))
+                })();
+                (result, kept)
             })
             .map_err(RecorderError::Spawn)?;
         Ok((producer, Self { stats, stop, thread }))
@@ -217,8 +232,17 @@ impl<W: Write + Send + 'static> Recorder<W> {
     /// Call after the haptic loop has stopped (or drop its producer). Fails with
     /// [`CaptureErrorKind::NoSamples`] when nothing was recorded.
     pub fn finish(self) -> Result<(W, RecorderSummary), RecorderError> {
+        self.finish_with_samples().0
+    }
+
+    /// As [`Recorder::finish`], and every sample drained, in order, when
+    /// [`RecorderConfig::keep_samples`] was set (else none) — whether or not the file could be
+    /// finished (a run that never reached its recording phase has samples but no rows).
+    pub fn finish_with_samples(self) -> Finished<W> {
         self.stop.store(true, Ordering::Release);
-        self.thread.join().map_err(|_| RecorderError::Panicked)?
+        self.thread
+            .join()
+            .unwrap_or_else(|_| (Err(RecorderError::Panicked), Vec::new()))
     }
 }
 
@@ -272,12 +296,13 @@ fn read_recording_from<R: BufRead>(inner: R, path: &Path) -> Result<Recording, C
 mod tests {
     use super::*;
     use capture::CaptureKind;
+    use capture::kind::{AXIAL_FORCE_N, DEPTH_M, TIME_S};
 
     fn meta() -> Metadata {
         Metadata::new(CaptureKind::Insertion, "sim-omega7", 1000.0)
     }
 
-    const COLUMNS: &[&str] = &["time_s", "depth_m", "axial_force_n"];
+    const COLUMNS: &[&str] = &[TIME_S, DEPTH_M, AXIAL_FORCE_N];
 
     fn map(s: &HapticSample, row: &mut Vec<f64>) -> bool {
         row.extend([s.time_s, s.state.position_m.z, s.channels[0]]);
@@ -311,6 +336,32 @@ mod tests {
         ));
         let text = String::from_utf8(bytes).unwrap();
         assert_eq!(text.lines().count(), 2 + 499);
+    }
+
+    #[test]
+    fn kept_samples_are_every_sample_drained_in_order() {
+        let writer = CaptureWriter::new(Vec::new(), &meta(), COLUMNS).unwrap();
+        let config = RecorderConfig {
+            keep_samples: true,
+            ..RecorderConfig::default()
+        };
+        let (mut producer, recorder) = Recorder::spawn(writer, map, config).unwrap();
+        for tick in 0..100u64 {
+            let s = HapticSample {
+                tick,
+                time_s: tick as f64 * 1e-3,
+                ..HapticSample::default()
+            };
+            while producer.push(s).is_err() {
+                std::thread::yield_now();
+            }
+        }
+        drop(producer);
+        let (result, samples) = recorder.finish_with_samples();
+        // The map keeps every other row; the kept samples are all of them.
+        assert_eq!(result.unwrap().1.rows, 50);
+        let ticks: Vec<u64> = samples.iter().map(|s| s.tick).collect();
+        assert_eq!(ticks, (0..100).collect::<Vec<_>>());
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The haptic thread never allocates: a counting global allocator watches 10 000+ ticks of the
 //! full path (simulated Omega.7 with a hand and tissue, observers, needle law, admittance,
-//! safety, recorder ring, live triple buffer, rate monitor, pacing).
+//! safety, recorder ring, live triple buffer, rate monitor, pacing), and the live view's
+//! writers.
 
 #![allow(clippy::unwrap_used)]
 
@@ -12,7 +13,9 @@ use glam::DVec3;
 use haptics::control::{Admittance, AdmittanceConfig};
 use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use haptics::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
-use haptics::rt::{self, HapticSample, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest, StopReason};
+use haptics::rt::{
+    self, HapticSample, LoopConfig, LoopIo, LoopShared, Pacing, RateStats, RtRequest, StopReason,
+};
 use haptics::sim::hand::{HandImpedance, Waypoints};
 use haptics::sim::world::needle::{NeedleSite, NeedleTissue};
 
@@ -121,6 +124,70 @@ fn ten_thousand_ticks_allocate_nothing() {
         "{deepest_state}"
     );
     assert!(device.world().needle_site(0.0).unwrap().punctured() >= 1);
+}
+
+#[test]
+fn the_live_view_writers_allocate_nothing_and_the_reader_gets_the_newest() {
+    const CAPACITY: usize = 64;
+    let (feed, mut view) = haptics::live::channel(CAPACITY);
+    let sample = |tick: u64| HapticSample {
+        tick,
+        time_s: tick as f64 * 1e-3,
+        ..HapticSample::default()
+    };
+    // Each writer on a thread of its own, as in a session: the newest sample on the haptic
+    // thread, the recent samples on the recorder's, the statistics on the supervisor's. More
+    // samples than the ring holds, so that the full-ring path runs too.
+    let haptics::live::LiveFeed {
+        mut newest,
+        mut recent,
+        mut stats,
+    } = feed;
+    let watched = |f: &mut dyn FnMut()| {
+        WATCHED.with(|w| w.set(true));
+        f();
+        WATCHED.with(|w| w.set(false));
+    };
+    let newest_thread = std::thread::spawn(move || {
+        watched(&mut || {
+            for tick in 0..1000 {
+                newest.write(sample(tick));
+            }
+        });
+    });
+    let recent_thread = std::thread::spawn(move || {
+        let mut pushed = 0;
+        watched(&mut || {
+            for tick in 0..1000 {
+                pushed += usize::from(recent.push(&sample(tick)));
+            }
+        });
+        (pushed, recent.dropped())
+    });
+    let stats_thread = std::thread::spawn(move || {
+        watched(&mut || {
+            for ticks in 1..=100 {
+                stats.publish(RateStats {
+                    ticks,
+                    ..RateStats::default()
+                });
+            }
+        });
+    });
+    newest_thread.join().unwrap();
+    let (pushed, dropped) = recent_thread.join().unwrap();
+    stats_thread.join().unwrap();
+    assert_eq!(
+        ALLOCATIONS.load(Ordering::Relaxed),
+        0,
+        "a live view writer allocated"
+    );
+    assert_eq!(view.newest().map(|s| s.tick), Some(999));
+    assert_eq!(view.stats().map(|s| s.ticks), Some(100));
+    assert_eq!((pushed, dropped), (CAPACITY, 1000 - CAPACITY as u64));
+    let mut ticks = Vec::new();
+    view.drain(|s| ticks.push(s.tick));
+    assert_eq!(ticks, (0..CAPACITY as u64).collect::<Vec<_>>());
 }
 
 /// Down 43 mm at 80 mm/s, back up: a puncture within the 1.2 s the test runs.

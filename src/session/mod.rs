@@ -13,10 +13,14 @@ pub mod script;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use capture::kind::{
+    AXIAL_FORCE_N, DEPTH_M, FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M,
+    TANGENTIAL_VELOCITY_MPS, TIME_S, VELOCITY_MPS,
+};
 use capture::{Capture, CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
 use haptics::acquire::{self, CaptureOptions, Protocol};
@@ -29,6 +33,7 @@ use haptics::law::{
     Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig, SoftFriction,
     hard_friction_model, needle_model, soft_friction_models,
 };
+use haptics::live::LiveFeed;
 use haptics::live_recognizer::{LiveRecognizer, Recognizing};
 use haptics::recorder::{Recorder, RecorderConfig};
 use haptics::rt::{
@@ -250,29 +255,28 @@ pub struct SegmentRun {
     pub elapsed: Duration,
 }
 
-/// The live connection between a running segment and a window.
-#[derive(Debug, Clone)]
+/// The live connection between a running segment and a window: the window keeps the
+/// [`haptics::live::LiveView`] that goes with `feed` and clones of `hand` and `stop`.
+#[derive(Debug)]
 pub struct LiveLink {
     /// The hand target the UI moves (simulator only).
     pub hand: Arc<LiveHand>,
-    /// Every sample so far (the window plots from it).
-    pub samples: Arc<Mutex<Vec<HapticSample>>>,
     /// Set by the UI to end the segment.
     pub stop: Arc<AtomicBool>,
-    /// The loop's statistics, refreshed about 50 times a second.
-    pub stats: Arc<Mutex<Option<RateStats>>>,
+    /// The live view's writing ends: the newest sample from the haptic thread, the recent
+    /// samples from the recorder thread, the loop's statistics about 50 times a second.
+    pub feed: LiveFeed,
 }
 
 impl LiveLink {
-    /// A link with the hand at `start_m` (device coordinates).
-    pub fn new(start_m: DVec3) -> Self {
+    /// A link with the hand at `start_m` (device coordinates), writing into `feed`.
+    pub fn new(start_m: DVec3, feed: LiveFeed) -> Self {
         let hand = LiveHand::new();
         hand.set(start_m, 0.01);
         Self {
             hand,
-            samples: Arc::new(Mutex::new(Vec::new())),
             stop: Arc::new(AtomicBool::new(false)),
-            stats: Arc::new(Mutex::new(None)),
+            feed,
         }
     }
 }
@@ -422,17 +426,17 @@ fn recording(segment: &Segment) -> (CaptureKind, &'static [&'static str]) {
     match segment.kind {
         SegmentKind::Needle { .. } => (
             CaptureKind::Insertion,
-            &["time_s", "depth_m", "velocity_mps", "axial_force_n"],
+            &[TIME_S, DEPTH_M, VELOCITY_MPS, AXIAL_FORCE_N],
         ),
         SegmentKind::Friction { .. } => (
             CaptureKind::Rubbing,
             &[
-                "time_s",
-                "tangential_position_m",
-                "tangential_velocity_mps",
-                "normal_position_m",
-                "normal_force_n",
-                "friction_force_n",
+                TIME_S,
+                TANGENTIAL_POSITION_M,
+                TANGENTIAL_VELOCITY_MPS,
+                NORMAL_POSITION_M,
+                NORMAL_FORCE_N,
+                FRICTION_FORCE_N,
             ],
         ),
         SegmentKind::Surface { .. } => (CaptureKind::Rubbing, Protocol::Rubbing.columns()),
@@ -499,12 +503,15 @@ pub fn record_path(record: &Path, object: &str, segments: usize) -> PathBuf {
 /// segment given a `recognizer` runs it inside the haptic tick
 /// ([`haptics::live_recognizer::Recognizing`]): its decisions ride in every sample's
 /// [`haptics::live_recognizer::channel`]s.
+///
+/// The segment's samples are kept by the recorder thread, off the haptic thread; a window
+/// reads the running segment through `live`, whose writers never wait.
 pub fn run_segment(
     scene: &Scene,
     segment: &Segment,
     segments: usize,
     options: &SessionOptions,
-    live: Option<&LiveLink>,
+    live: Option<LiveLink>,
     recognizer: Option<LiveRecognizer>,
 ) -> Result<SegmentRun, SessionError> {
     let started = Instant::now();
@@ -526,7 +533,7 @@ pub fn run_segment(
                 stiffness_npm: scene.haptics.grip_stiffness_npm,
                 ..HandImpedance::default()
             };
-            let hand: Box<dyn HandScript> = match live {
+            let hand: Box<dyn HandScript> = match &live {
                 Some(link) if !options.autopilot => Box::new(link.hand.clone()),
                 _ => {
                     let w = script::trainee(&scene.task, SURFACE_Z_M, impedance.stiffness_npm);
@@ -573,11 +580,19 @@ pub fn run_segment(
         _ => controller,
     };
 
-    let samples = live.map_or_else(|| Arc::new(Mutex::new(Vec::new())), |l| l.samples.clone());
-    if let Ok(mut s) = samples.lock() {
-        s.clear();
-    }
-    let sink = samples.clone();
+    let (stop, newest, mut recent, mut live_stats) = match live {
+        Some(LiveLink {
+            stop,
+            feed:
+                LiveFeed {
+                    newest,
+                    recent,
+                    stats,
+                },
+            ..
+        }) => (Some(stop), Some(newest), Some(recent), Some(stats)),
+        None => (None, None, None, None),
+    };
     let kind = segment.kind.clone();
     let (capture_kind, columns) = recording(segment);
     let record = options
@@ -597,14 +612,18 @@ pub fn run_segment(
     };
     meta.insert("scene", &scene.name);
     meta.insert("object", &segment.object);
+    // The recorder thread sees every sample: it hands them on to the window's ring (never
+    // waiting: a window that falls behind misses samples for its plots, not the report) and
+    // keeps them for the report.
     let map = move |s: &HapticSample, r: &mut Vec<f64>| {
-        if let Ok(mut all) = sink.lock() {
-            all.push(*s);
+        if let Some(recent) = recent.as_mut() {
+            recent.push(s);
         }
         row(&kind, surface_z_m, s, r)
     };
     let ring = RecorderConfig {
         capacity: 1 << 16,
+        keep_samples: true,
         ..RecorderConfig::default()
     };
     enum AnyRecorder {
@@ -649,17 +668,15 @@ pub fn run_segment(
     config.max_ticks = until_s.map(|s| (s * rate_hz).round().max(1.0) as u64);
     let io = LoopIo {
         samples: Some(producer),
-        live: None,
+        live: newest,
     };
     let handle = rt::spawn(device, controller, io, config)?;
     while !handle.is_finished() {
-        if let Some(l) = live {
-            if l.stop.load(Ordering::Relaxed) {
-                handle.stop();
-            }
-            if let Ok(mut s) = l.stats.lock() {
-                *s = Some(handle.stats());
-            }
+        if stop.as_ref().is_some_and(|s| s.load(Ordering::Relaxed)) {
+            handle.stop();
+        }
+        if let Some(out) = live_stats.as_mut() {
+            out.publish(handle.stats());
         }
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -673,18 +690,21 @@ pub fn run_segment(
         .result
         .map(|r| format!("{:?}", r.reason))
         .map_err(|e| e.to_string());
-    let recorded = match recorder {
+    let (recorded, samples) = match recorder {
         AnyRecorder::File(r) => {
-            let (_, summary) = r.finish()?;
-            record.map(|p| (p, summary.rows))
+            let (result, samples) = r.finish_with_samples();
+            let (_, summary) = result?;
+            (record.map(|p| (p, summary.rows)), samples)
         }
         AnyRecorder::Sink(r) => {
             // An empty sink (a segment that never touched) is not an error without a file.
-            let _ = r.finish();
-            None
+            let (_, samples) = r.finish_with_samples();
+            (None, samples)
         }
     };
-    let samples = std::mem::take(&mut *samples.lock().unwrap_or_else(|e| e.into_inner()));
+    if let Some(out) = live_stats.as_mut() {
+        out.publish(stats);
+    }
     Ok(SegmentRun {
         segment: segment.clone(),
         samples,
