@@ -332,3 +332,30 @@ fn a_bad_file_names_the_field() {
     let err = model.evaluate(&[unknown], None).expect_err("unknown surface");
     assert!(err.to_string().contains("surface `glass`"), "{err}");
 }
+
+#[test]
+fn train_picks_the_trainer_of_the_method_and_features() {
+    let captures = three_surfaces(4.0);
+    for (method, body) in [
+        (Method::Som, "som"),
+        (Method::Knn, "knn_windows"),
+        (Method::Svm, "svm_windows"),
+    ] {
+        assert_eq!(method.trainer().method(), method);
+        let settings = TrainSettings {
+            window_s: 0.5,
+            train_window_s: 0.5,
+            features: FeatureSet::Nakano,
+            ..TrainSettings::new(method)
+        };
+        let model = train(&captures, &settings).expect("train");
+        assert_eq!(model.method(), method.name());
+        assert_eq!(model.feature_set(), FeatureSet::Nakano);
+        let json = serde_json::to_value(&model).expect("serialize");
+        assert_eq!(json["body"]["method"], body);
+    }
+    // The method's own features by default; columns are checked before any trainer runs.
+    assert_eq!(TrainSettings::new(Method::Knn).features, FeatureSet::Spectral);
+    let err = train(&captures, &TrainSettings::new(Method::Svm)).expect_err("no accelerometer");
+    assert!(matches!(err, RecognizerError::MissingColumns { .. }), "{err}");
+}
