@@ -1,0 +1,362 @@
+use super::*;
+
+fn map(spec: &str) -> ColumnMap {
+    ColumnMap::parse(spec).unwrap()
+}
+
+fn map_err(spec: &str) -> (String, String) {
+    match ColumnMap::parse(spec) {
+        Err(ImportError::BadMap { entry, reason }) => (entry, reason),
+        other => panic!("expected BadMap for `{spec}`, got {other:?}"),
+    }
+}
+
+#[test]
+fn parses_units_factors_and_spaces() {
+    let m = map(
+        " time_s = t[ms] , tangential_position_m=x[mm],normal_force_n=Fz*-0.001, friction_force_n=Fx[mN]*2 ",
+    );
+    assert_eq!(
+        m.spec(),
+        "time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz*-0.001,friction_force_n=Fx[mN]*2"
+    );
+    let e = m.entries();
+    assert_eq!(e.len(), 4);
+    assert_eq!((e[0].target.as_str(), e[0].source.as_str()), ("time_s", "t"));
+    assert_eq!(e[0].unit.as_deref(), Some("ms"));
+    assert_eq!(e[0].scale.apply(1500.0), 1.5);
+    assert_eq!(e[1].scale.apply(1.0), 0.001);
+    assert_eq!(e[2].source, "Fz");
+    assert_eq!(e[2].unit, None);
+    assert_eq!(e[2].scale.apply(300.0), -0.3);
+    assert_eq!(e[3].scale.apply(150.0), 0.3);
+    assert_eq!(
+        m.get("friction_force_n").map(|e| e.text.as_str()),
+        Some("friction_force_n=Fx[mN]*2")
+    );
+    // Source names may contain spaces and odd characters; plain names have no scale.
+    let m = map("depth_m=Tip depth (m),axial_force_n=F.axial,time_s=\"t\"");
+    assert_eq!(m.entries()[0].source, "Tip depth (m)");
+    assert_eq!(m.entries()[0].scale, Scale::IDENTITY);
+    assert_eq!(m.entries()[2].source, "\"t\"");
+    assert_eq!(map("accel_z_mps2=az[g]").entries()[0].scale.factor(), 9.806_65);
+}
+
+#[test]
+fn decimal_units_divide_exactly() {
+    // 0.1 mm is the correctly rounded 1e-4 m (0.1 * 0.001 would not be).
+    assert_eq!(map("depth_m=d[mm]").entries()[0].scale.apply(0.1), 1e-4);
+    assert_eq!(map("depth_m=d[um]").entries()[0].scale.apply(3.0), 3e-6);
+    assert_eq!(map("depth_m=d[µm]").entries()[0].scale.apply(3.0), 3e-6);
+    assert_eq!(map("time_s=t[us]").entries()[0].scale.apply(7.0), 7e-6);
+}
+
+#[test]
+fn unit_table() {
+    let cases = [
+        ("m", Quantity::Length, 1.0),
+        ("cm", Quantity::Length, 1e-2),
+        ("mm", Quantity::Length, 1e-3),
+        ("um", Quantity::Length, 1e-6),
+        ("µm", Quantity::Length, 1e-6),
+        ("s", Quantity::Time, 1.0),
+        ("ms", Quantity::Time, 1e-3),
+        ("us", Quantity::Time, 1e-6),
+        ("N", Quantity::Force, 1.0),
+        ("mN", Quantity::Force, 1e-3),
+        ("kN", Quantity::Force, 1e3),
+        ("m/s", Quantity::Velocity, 1.0),
+        ("mm/s", Quantity::Velocity, 1e-3),
+        ("m/s2", Quantity::Acceleration, 1.0),
+        ("g", Quantity::Acceleration, 9.806_65),
+    ];
+    for (unit, quantity, factor) in cases {
+        let (q, f) = unit_to_si(unit).unwrap();
+        assert_eq!(q, quantity, "{unit}");
+        assert!((f - factor).abs() <= 1e-15 * factor, "{unit}: {f} vs {factor}");
+    }
+    for unknown in ["MN", "inch", "", "G", "mm/s3"] {
+        assert_eq!(unit_to_si(unknown), None, "{unknown}");
+    }
+    assert_eq!(
+        Quantity::of_column("tangential_velocity_mps"),
+        Some(Quantity::Velocity)
+    );
+    assert_eq!(Quantity::of_column("accel_x_mps2"), Some(Quantity::Acceleration));
+    assert_eq!(Quantity::of_column("time_s"), Some(Quantity::Time));
+    assert_eq!(Quantity::of_column("depth_m"), Some(Quantity::Length));
+    assert_eq!(Quantity::of_column("axial_force_n"), Some(Quantity::Force));
+}
+
+#[test]
+fn map_errors_name_the_entry_and_reason() {
+    let (entry, reason) = map_err("time_s=t,depth_m=d[ft]");
+    assert_eq!(entry, "depth_m=d[ft]");
+    assert!(
+        reason.contains("unknown unit `ft`") && reason.contains("mm"),
+        "{reason}"
+    );
+    let (entry, reason) = map_err("friction_force_n=x[mm]");
+    assert_eq!(entry, "friction_force_n=x[mm]");
+    assert!(
+        reason.contains("length unit") && reason.contains("force"),
+        "{reason}"
+    );
+    let (_, reason) = map_err("time_s=t,time_s=u");
+    assert!(reason.contains("`time_s` is mapped more than once"), "{reason}");
+    let (entry, reason) = map_err("pressure_pa=p");
+    assert_eq!(entry, "pressure_pa=p");
+    assert!(
+        reason.contains("not a capture column") && reason.contains("depth_m"),
+        "{reason}"
+    );
+    assert!(map_err("time_s").1.contains("expected `target=source`"));
+    assert!(map_err("=t").1.contains("no target"));
+    assert!(map_err("time_s=").1.contains("no source"));
+    assert!(map_err("time_s=[ms]").1.contains("no source"));
+    assert!(map_err("time_s=t,,depth_m=d").1.contains("empty entry"));
+    assert!(map_err("time_s=t,").1.contains("empty entry"));
+    assert!(map_err("").1.contains("empty"));
+    assert!(
+        map_err("time_s=t*x")
+            .1
+            .contains("scale factor `x` is not a number")
+    );
+    assert!(map_err("time_s=t*0").1.contains("non-zero"));
+    assert!(map_err("time_s=t*inf").1.contains("finite"));
+    assert!(map_err("time_s=t[ms").1.contains("brackets"));
+    assert!(map_err("time_s=t]").1.contains("`]` without `[`"));
+    let display = ColumnMap::parse("time_s=t[h]").unwrap_err().to_string();
+    assert!(
+        display.starts_with("--map entry `time_s=t[h]`: unknown unit `h`"),
+        "{display}"
+    );
+}
+
+#[test]
+fn delimiter_detection() {
+    assert_eq!(
+        detect_delimiter(b"# comment; with, stuff\n\na;b;c\n1;2;3\n"),
+        b';'
+    );
+    assert_eq!(detect_delimiter(b"a\tb\tc\n"), b'\t');
+    assert_eq!(detect_delimiter(b"\"x;y\",b,c\n"), b',');
+    assert_eq!(detect_delimiter(b"a,b;c\n"), b';'); // tie: `;` before `,`
+    assert_eq!(detect_delimiter(b"time\n1\n"), b',');
+    assert_eq!(detect_delimiter(b""), b',');
+}
+
+#[test]
+fn interpolation_is_linear_and_exact_at_samples() {
+    let t = [0.0, 1.0, 3.0];
+    let x = [0.0, 2.0, -2.0];
+    assert_eq!(
+        interpolate(&t, &x, &[-1.0, 0.0, 0.5, 1.0, 2.0, 3.0, 4.0]),
+        vec![0.0, 0.0, 1.0, 2.0, 0.0, -2.0, -2.0]
+    );
+}
+
+#[test]
+fn butterworth_has_the_designed_response() {
+    let rate = 10_000.0;
+    let f = LowPass::butterworth4(400.0, rate);
+    assert!((f.gain(0.0, rate) - 1.0).abs() < 1e-12);
+    // −3 dB at the cut-off per pass.
+    assert!((f.gain(400.0, rate) - 0.5_f64.sqrt()).abs() < 1e-9);
+    // Bilinear 4th order: |H| = 1 / sqrt(1 + (tan(πf/fs) / tan(πfc/fs))^8).
+    let ratio = (std::f64::consts::PI * 0.2).tan() / (std::f64::consts::PI * 0.04).tan();
+    let expected = 1.0 / (1.0 + ratio.powi(8)).sqrt();
+    assert!((f.gain(2000.0, rate) / expected - 1.0).abs() < 1e-6);
+    // A constant and a ramp pass unchanged (steady-state start, odd reflection).
+    let ramp: Vec<f64> = (0..500).map(|i| 0.3 + 0.01 * i as f64).collect();
+    for (a, b) in f.filtfilt(&ramp).iter().zip(&ramp) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+    }
+    assert_eq!(f.filtfilt(&[4.0]), vec![4.0]);
+    assert!(f.filtfilt(&[1.0, 2.0]).iter().all(|v| v.is_finite()));
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn rubbing(spec: &str) -> ImportSpec {
+    ImportSpec::new(CaptureKind::Rubbing, map(spec))
+}
+
+const RUB_MAP: &str = "time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz";
+
+#[test]
+fn imports_a_uniform_file_unchanged_with_metadata() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "log 1.csv",
+        "\u{feff}# exported by a logger\n\"t\";\"x\";\"Fz\";\"other\"\n\n\
+         0;1.5;0.3;a\n10;2.5;0.31;b\n20;3.5;0.32;c\r\n",
+    );
+    let mut spec = rubbing(&format!("{RUB_MAP}, friction_force_n=Fz*0.5"));
+    spec.metadata.push(("surface".into(), "sandpaper_400".into()));
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!(imported.resampling, Resampling::PassThrough);
+    assert_eq!(imported.rows_in, 3);
+    assert_eq!(imported.rate_hz, 100.0);
+    let c = imported.capture;
+    assert_eq!(
+        c.columns(),
+        &[
+            "time_s",
+            "tangential_position_m",
+            "normal_force_n",
+            "friction_force_n"
+        ]
+    );
+    assert_eq!(c.time(), &[0.0, 0.01, 0.02]);
+    assert_eq!(
+        c.column("tangential_position_m").unwrap(),
+        &[0.0015, 0.0025, 0.0035]
+    );
+    assert_eq!(c.column("friction_force_n").unwrap(), &[0.15, 0.155, 0.16]);
+    let m = c.metadata();
+    assert_eq!(
+        (m.kind(), m.device(), m.rate_hz()),
+        (CaptureKind::Rubbing, "imported", 100.0)
+    );
+    assert_eq!(m.get("source"), Some("log_1.csv"));
+    assert_eq!(
+        m.get("map"),
+        Some("time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz,friction_force_n=Fz*0.5")
+    );
+    assert_eq!(m.get("source_rate_hz"), Some("100"));
+    assert_eq!(m.get("surface"), Some("sandpaper_400"));
+}
+
+#[test]
+fn time_from_the_input_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "a.tsv", "x\tFz\n1\t0.1\n2\t0.2\n3\t0.3\n4\t0.4\n");
+    let mut spec = rubbing("tangential_position_m=x,normal_force_n=Fz");
+    assert!(
+        matches!(import_csv(&path, &spec), Err(ImportError::BadSpec { reason, .. }) if reason.contains("no time"))
+    );
+    spec.input_rate_hz = Some(4.0);
+    spec.rate_hz = Some(8.0);
+    let c = import_csv(&path, &spec).unwrap();
+    assert_eq!(c.time(), &[0.0, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75]);
+    assert_eq!(
+        c.column("tangential_position_m").unwrap(),
+        &[1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0]
+    );
+    let mut both = rubbing("time_s=x,tangential_position_m=x,normal_force_n=Fz");
+    both.input_rate_hz = Some(4.0);
+    assert!(
+        import_csv(&path, &both)
+            .unwrap_err()
+            .to_string()
+            .contains("time is given twice")
+    );
+}
+
+#[test]
+fn file_errors_name_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = |text: &str, spec: &ImportSpec| {
+        let path = write(dir.path(), "in.csv", text);
+        import_csv(&path, spec).unwrap_err().to_string()
+    };
+    let spec = rubbing(RUB_MAP);
+    let e = err("# c\nt,x,Fz\n0,1,2\n\n1,1x,2\n", &spec);
+    assert!(e.ends_with("in.csv:5: column `x`: `1x` is not a number"), "{e}");
+    let e = err("t;x;Fz\n0;1;2\n1;1,5;2\n", &spec);
+    assert!(
+        e.contains(":3: column `x`: `1,5` is not a number (decimal commas"),
+        "{e}"
+    );
+    let e = err("t,x,Fz\n0,1,\n", &spec);
+    assert!(e.contains(":2: column `Fz`: `` is not a number"), "{e}");
+    let e = err("t,x,Fz\n0,1,2\n1,1,nan\n", &spec);
+    assert!(e.contains(":3: column `Fz`: `nan` is not finite"), "{e}");
+    let e = err("t,x,Fz\n0,1,2\n1,1\n", &spec);
+    assert!(
+        e.contains(":3: expected 3 fields like the header, found 2"),
+        "{e}"
+    );
+    let e = err("t,x,Fz\n0,1,2\n2,1,2\n2,1,2\n", &spec);
+    assert!(
+        e.contains("in.csv:4: column `t`: time 0.002 s is not after the previous row's 0.002 s"),
+        "{e}"
+    );
+    let e = err("t,x,Fz\n0,1,2\n1,1,2\n0.5,1,2\n", &spec);
+    assert!(e.contains(":4:") && e.contains("not after"), "{e}");
+    let e = err("t,x,Force\n0,1,2\n", &spec);
+    assert!(
+        e.contains(
+            "--map entry `normal_force_n=Fz`: the input has no column `Fz` (its columns: t, x, Force)"
+        ),
+        "{e}"
+    );
+    let e = err("t,x,Fz,Fz\n0,1,2,3\n", &spec);
+    assert!(e.contains("2 columns named `Fz`"), "{e}");
+    let e = err("# only a comment\n\n", &spec);
+    assert!(e.contains("no header row"), "{e}");
+    let e = err("t,x,Fz\n0,1,2\n", &spec);
+    assert!(e.contains("found 1 data row(s)"), "{e}");
+    let e = err("t,x,Fz\n0,1,2\n1,\"2,3\n", &spec);
+    assert!(e.contains("in.csv:"), "{e}");
+    let e = err("t,x,Fz\n0,1,2\n1,1,2\n3,1,2\n", &spec);
+    assert!(
+        e.contains("not uniformly sampled") && e.contains("--rate-hz"),
+        "{e}"
+    );
+    let missing = import_csv(Path::new("/nonexistent/in.csv"), &spec)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        missing.starts_with("/nonexistent/in.csv: cannot read"),
+        "{missing}"
+    );
+}
+
+#[test]
+fn spec_errors_are_reported_before_reading() {
+    let path = Path::new("never_read.csv");
+    let e = |spec: &ImportSpec| import_csv(path, spec).unwrap_err().to_string();
+    let missing = e(&rubbing("time_s=t,friction_force_n=f"));
+    assert!(
+        missing
+            .starts_with("never_read.csv: a rubbing capture needs `tangential_position_m`, `normal_force_n`"),
+        "{missing}"
+    );
+    let wrong = e(&rubbing(&format!("{RUB_MAP},depth_m=d")));
+    assert!(
+        wrong.contains("column `depth_m` is not allowed in a rubbing capture"),
+        "{wrong}"
+    );
+    let mut spec = rubbing(RUB_MAP);
+    spec.rate_hz = Some(-1.0);
+    assert!(e(&spec).contains("--rate-hz -1: must be finite and positive"));
+    let mut spec = rubbing(RUB_MAP);
+    spec.device = "my rig".into();
+    assert!(e(&spec).contains("metadata: value of `device`"), "{}", e(&spec));
+    let mut spec = rubbing(RUB_MAP);
+    spec.metadata.push(("surface".into(), "sand paper".into()));
+    assert!(e(&spec).contains("value of `surface`"), "{}", e(&spec));
+    let mut spec = rubbing(RUB_MAP);
+    spec.metadata.push(("source".into(), "x".into()));
+    assert!(e(&spec).contains("`source` is set by the import"), "{}", e(&spec));
+    let mut spec = rubbing(RUB_MAP);
+    spec.metadata.push(("kind".into(), "x".into()));
+    assert!(e(&spec).contains("reserved"), "{}", e(&spec));
+}
+
+#[test]
+fn metadata_safe_values() {
+    assert_eq!(metadata_safe("a b\tc"), "a_b_c");
+    assert_eq!(metadata_safe("x[µm]"), "x[um]");
+    assert_eq!(metadata_safe("é"), "_");
+    assert_eq!(metadata_safe(""), "_");
+    assert_eq!(snap_rate(999.999_999_999_7), 1000.0);
+    assert_eq!(snap_rate(1000.5), 1000.5);
+}
