@@ -8,7 +8,8 @@ use std::str::FromStr;
 
 use capture::{Capture, CaptureError, write_atomically};
 
-use super::{Split, li_bi, nakano, sinapov};
+use super::split::Split;
+use super::{li_bi, nakano, sinapov};
 use crate::sim::world::scratch::{Behaviour, household_surfaces};
 use crate::sim::world::surface::{SurfacePatch, nakano_surfaces};
 

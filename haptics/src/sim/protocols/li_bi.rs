@@ -20,7 +20,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::columns::Columns;
-use super::{Split, derive_seed, tag};
+use super::seed::{derive_seed, tag};
+use super::split::Split;
 use crate::sim::world::friction::{HardContact, STANDARD_GRAVITY_MPS2, SoftContact, kgf_to_n};
 use crate::sim::world::needle::{NeedleSite, NeedleTissue};
 use crate::sim::world::sensor::{Encoder, ForceSensor, PseudoDifferentiator, round_to};

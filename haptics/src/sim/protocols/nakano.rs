@@ -13,7 +13,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::columns::Columns;
-use super::{derive_seed, tag};
+use super::seed::{derive_seed, tag};
 use crate::sim::world::sensor::{Encoder, LowPass, Noise, PseudoDifferentiator, round_to};
 use crate::sim::world::surface::SurfacePatch;
 

@@ -38,7 +38,7 @@
 
 use std::f64::consts::PI;
 
-use super::{Contact, ScratchSurface, Texture};
+use super::contact::{Contact, Texture};
 use crate::sim::world::profile::Band;
 
 /// A band from micrometres of RMS and millimetres of wavelength.
@@ -115,8 +115,9 @@ impl Row {
     }
 }
 
-/// The 20 surfaces and air (21 entries, air last), ids as numbered in Sinapov Fig. 3.
-pub fn household_surfaces() -> Vec<ScratchSurface> {
+/// The 20 surfaces' contact models and air (21 entries, air last) with their ids as numbered in
+/// Sinapov Fig. 3 and their names.
+pub(super) fn household_contacts() -> Vec<(u32, &'static str, Option<Contact>)> {
     #[rustfmt::skip]
     let rows: [(&'static str, Row); 20] = [
         ("thick_floor_mat", Row { roughness: band(11.0, 0.75, 0.9), textures: grid(90.0, 5.5, 0.15, 0.0).to_vec(),
@@ -162,11 +163,11 @@ pub fn household_surfaces() -> Vec<ScratchSurface> {
         ("wood", Row { roughness: band(1.5, 0.3, 0.9), textures: vec![tex(6.0, 1.2, 0.5, 92.0)],
             thickness_mm: 20.0, mode_hz: 220.0, zeta: 0.10, mu: 0.40, d_mu: 0.02, mu_var: 0.05, shear_kn_per_m: 10.0, width_mm: 0.15, lie: 0.03, patches: 0.3 }),
     ];
-    let mut surfaces: Vec<ScratchSurface> = rows
+    let mut contacts: Vec<(u32, &'static str, Option<Contact>)> = rows
         .into_iter()
         .zip(1u32..)
-        .map(|((name, row), id)| ScratchSurface::new(id, name, Some(row.contact())))
+        .map(|((name, row), id)| (id, name, Some(row.contact())))
         .collect();
-    surfaces.push(ScratchSurface::new(21, "air", None));
-    surfaces
+    contacts.push((21, "air", None));
+    contacts
 }
