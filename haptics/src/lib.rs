@@ -1,16 +1,21 @@
 //! The haptic side of palpus: devices, the 1 kHz loop, control, force laws, the recorder, and
 //! the simulated world they are tested against.
 //!
-//! - [`device`]: one small device interface (CHAI3D's), a simulated Omega.7, the real one
-//!   through the vendor SDK, capture replay, HID pedals;
+//! May import `capture` (the data contract), `svm`, `identify` and `recognize`, each through its
+//! door (what its `lib.rs` re-exports), and no other palpus crate; only the binary imports
+//! haptics. Threads with timing duties (haptic loop, watchdog, recorder) start here.
+//!
+//! - [`device`]: one small device interface (CHAI3D's) with its force gate, a simulated
+//!   Omega.7, the real one through the vendor SDK, capture replay, HID pedals;
 //! - [`rt`]: absolute-deadline pacing, real-time scheduling, the rate monitor, the watchdog and
-//!   the loop itself (allocation-free per tick);
+//!   the loop itself (allocation-free per tick); it imports only `device` and `safety`;
 //! - [`control`]: DOB and RFOB (Nakano ch. 2), PD + DOB motion control, admittance rendering
 //!   (Li & Bi Fig. 11), the rubbing controller (Nakano Table 3.1);
 //! - [`law`]: force laws over identified models (needle puncture, hard and soft friction);
-//! - [`safety`]: force limits, the NaN guard, the force gate;
+//! - [`safety`]: force limits, the NaN guard;
 //! - [`live_recognizer`]: the live surface recognizer (Nakano's SOM on the rubbing stream);
 //! - [`recorder`]: samples to capture files through a lock-free ring;
+//! - [`live`]: a window's view of a running loop (triple buffers and a bounded ring);
 //! - [`acquire`]: the protocols `palpus capture` runs through a device;
 //! - [`bench`]: the loop benchmark (`palpus bench loop`), the full haptic path wired together;
 //! - [`sim`]: the ground-truth world, the papers' protocols, the simulated hand.

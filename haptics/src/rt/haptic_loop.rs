@@ -20,8 +20,8 @@ use crate::device::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticD
 use crate::safety::SafetyFilter;
 
 /// Controller-defined values carried with each sample (estimated forces, model outputs, …):
-/// eight for a controller, three more for the live surface recognizer that may wrap it
-/// ([`crate::live_recognizer::channel`]).
+/// eight for a controller, three more for a controller that wraps it (the live surface
+/// recognizer's decisions).
 pub const CHANNELS: usize = 11;
 
 /// One tick, as recorded and shown live.
