@@ -37,13 +37,21 @@ fn floats(v: &Value) -> Vec<f64> {
         .unwrap_or_default()
 }
 
+/// What repeated fits of one problem measured.
+struct TimedFit {
+    /// Median wall-clock seconds of one fit.
+    median_s: f64,
+    /// Dual objective of the last fit.
+    dual_objective: f64,
+}
+
 fn median_fit(
     params: &SvrParams,
     x: &[f64],
     dim: usize,
     y: &[f64],
     repeats: usize,
-) -> anyhow::Result<(f64, f64)> {
+) -> anyhow::Result<TimedFit> {
     let mut times = Vec::new();
     let mut objective = f64::NAN;
     for _ in 0..repeats.max(1) {
@@ -53,7 +61,10 @@ fn median_fit(
         objective = f.dual_objective;
     }
     times.sort_by(f64::total_cmp);
-    Ok((times[times.len() / 2], objective))
+    Ok(TimedFit {
+        median_s: times[times.len() / 2],
+        dual_objective: objective,
+    })
 }
 
 pub(crate) fn run(args: &SvrArgs) -> anyhow::Result<()> {
@@ -98,7 +109,10 @@ pub(crate) fn run(args: &SvrArgs) -> anyhow::Result<()> {
                 .kernel(Kernel::Rbf { gamma })
                 .solver(solver)
                 .build()?;
-            let (ours, objective) = match median_fit(&params, &x, dim, &y, args.repeats) {
+            let TimedFit {
+                median_s: ours,
+                dual_objective: objective,
+            } = match median_fit(&params, &x, dim, &y, args.repeats) {
                 Ok(r) => r,
                 Err(e) => {
                     println!(

@@ -142,10 +142,10 @@ pub(crate) fn polish(
         let mut kbeta = vec![0.0; n];
         super::ipm::mat_vec(k, &beta, &mut kbeta);
         let residuals: Vec<f64> = (0..n).map(|i| y[i] - kbeta[i] - bias).collect();
-        let worst = worst_violation(&sides, &beta, &residuals, c, epsilon, y_scale);
+        let worst = worst_violation(&sides, &beta, &residuals, settings, y_scale);
         let changed = match worst {
-            Some((_, i, to)) => {
-                sides[i] = to;
+            Some(v) => {
+                sides[v.sample] = v.to;
                 true
             }
             None => false,
@@ -165,18 +165,30 @@ pub(crate) fn polish(
     None
 }
 
+/// A violated KKT condition.
+#[derive(Debug, Clone, Copy)]
+struct Violation {
+    /// How far it is violated: a residual's excess over the tube relative to the targets'
+    /// scale, or a coefficient's excursion out of its box relative to C.
+    size: f64,
+    /// The sample.
+    sample: usize,
+    /// The set the sample belongs in.
+    to: Side,
+}
+
 /// The KKT condition violated most, and the set its sample belongs in.
 fn worst_violation(
     sides: &[Side],
     beta: &[f64],
     residuals: &[f64],
-    c: f64,
-    epsilon: f64,
+    settings: &DualSettings,
     y_scale: f64,
-) -> Option<(f64, usize, Side)> {
+) -> Option<Violation> {
+    let (c, epsilon) = (settings.c, settings.epsilon);
     let tol_r = 1e-9 * y_scale;
     let tol_b = 1e-9 * c;
-    let mut worst: Option<(f64, usize, Side)> = None;
+    let mut worst: Option<Violation> = None;
     for (i, (&side, &r)) in sides.iter().zip(residuals).enumerate() {
         // Violations are scaled to be comparable: residuals by the targets, β by C.
         let candidate = match side {
@@ -194,10 +206,10 @@ fn worst_violation(
             Side::LowerFree if r > -epsilon + tol_r => Some(((r + epsilon) / y_scale, Side::Inside)),
             _ => None,
         };
-        if let Some((v, to)) = candidate
-            && worst.is_none_or(|(w, _, _)| v > w)
+        if let Some((size, to)) = candidate
+            && worst.is_none_or(|w| size > w.size)
         {
-            worst = Some((v, i, to));
+            worst = Some(Violation { size, sample: i, to });
         }
     }
     worst
@@ -337,12 +349,12 @@ pub(crate) fn polish_linear(
         let residuals: Vec<f64> = (0..n)
             .map(|i| y[i] - row(i).iter().zip(&w).map(|(a, b)| a * b).sum::<f64>() - b)
             .collect();
-        let wv = worst_violation(&sides, &beta, &residuals, c, epsilon, y_scale);
+        let wv = worst_violation(&sides, &beta, &residuals, settings, y_scale);
         match wv {
-            Some((_, i, to)) if free.len() == d + 1 && matches!(to, Side::UpperFree | Side::LowerFree) => {
-                pivot(&mut sides, &beta, &free, i, to, c, |k| row(k))?;
+            Some(v) if free.len() == d + 1 && matches!(v.to, Side::UpperFree | Side::LowerFree) => {
+                pivot(&mut sides, &beta, &free, v, c, |k| row(k))?;
             }
-            Some((_, i, to)) => sides[i] = to,
+            Some(v) => sides[v.sample] = v.to,
             None => {
                 for v in &mut beta {
                     *v = v.clamp(-c, c);
@@ -367,11 +379,13 @@ fn pivot<'a>(
     sides: &mut [Side],
     beta: &[f64],
     free: &[usize],
-    entering: usize,
-    to: Side,
+    entering: Violation,
     c: f64,
     row: impl Fn(usize) -> &'a [f64],
 ) -> Option<()> {
+    let Violation {
+        sample: entering, to, ..
+    } = entering;
     let m = free.len();
     let d = m - 1;
     let a = Mat::<f64>::from_fn(m, m, |r, col| if r < d { row(free[col])[r] } else { 1.0 });
