@@ -6,7 +6,7 @@ use std::path::Path;
 use plotters::prelude::*;
 use recognize::CategoryTree;
 
-use super::{PlotError, render};
+use super::{FAMILY, Frame, PlotError, axes, render};
 
 /// Scatter of the embedded surfaces, labelled by name, coloured by leaf category.
 pub fn write_scatter(
@@ -35,23 +35,19 @@ pub fn write_scatter(
         (lo - 0.08 * span)..(hi + 0.25 * span)
     };
     render(path, (1100, 900), |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(
-                format!("surfaces by confusion similarity ({embedding})"),
-                ("sans-serif", 24),
-            )
-            .margin(16)
-            .x_label_area_size(36)
-            .y_label_area_size(52)
-            .build_cartesian_2d(range(0), range(1))
-            .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc("dimension 1")
-            .y_desc("dimension 2")
-            .draw()
-            .map_err(|e| e.to_string())?;
-        let font = ("sans-serif", 16).into_font().color(&BLACK);
+        let frame = Frame {
+            title_px: 24,
+            margin_px: 16,
+        };
+        let title = format!("surfaces by confusion similarity ({embedding})");
+        let chart = axes(
+            root,
+            &title,
+            frame,
+            (range(0), "dimension 1"),
+            (range(1), "dimension 2"),
+        )?;
+        let font = (FAMILY, 16).into_font().color(&BLACK);
         let at: Vec<(i32, i32)> = points
             .iter()
             .map(|p| chart.backend_coord(&(p[0], p[1])))

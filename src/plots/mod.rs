@@ -10,7 +10,10 @@ pub mod session;
 
 use std::path::{Path, PathBuf};
 
+use std::ops::Range;
+
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
@@ -23,6 +26,46 @@ pub use session::write_force_plot;
 
 /// A drawing area of the bitmap backend, in pixels.
 pub type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+/// A chart of `f64` against `f64` on the bitmap backend.
+pub type Chart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The font family every figure writes in (see [`font`]).
+pub const FAMILY: &str = "sans-serif";
+
+/// Title size and margin of a chart, px.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame {
+    /// Size of the title.
+    pub title_px: u32,
+    /// Margin around the chart.
+    pub margin_px: u32,
+}
+
+/// A titled chart over `x` and `y` on `area`, its axes labelled `x_desc` and `y_desc`, with
+/// the axis label areas every figure uses.
+pub fn axes<'a, 'b>(
+    area: &'a Area<'b>,
+    title: &str,
+    frame: Frame,
+    (x, x_desc): (Range<f64>, &str),
+    (y, y_desc): (Range<f64>, &str),
+) -> Result<Chart<'a, 'b>, String> {
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, (FAMILY, frame.title_px))
+        .margin(frame.margin_px)
+        .x_label_area_size(36)
+        .y_label_area_size(52)
+        .build_cartesian_2d(x, y)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(chart)
+}
 
 /// Why a figure could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -50,11 +93,7 @@ pub enum PlotError {
 pub fn font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
+        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT);
     });
 }
 

@@ -21,7 +21,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use recognize::{LabelledCapture, NakanoSignals, RecognizerBody, RecognizerFile};
 
-use super::{Area, PlotError, render};
+use super::{Area, FAMILY, PlotError, render};
 
 /// Class colours (Tableau 10), distinguishable on screen and in print; classes beyond ten
 /// reuse them, which the names in the cells disambiguate.
@@ -49,10 +49,7 @@ fn ink_on(bg: RGBColor) -> RGBColor {
 }
 
 fn text_style(size: u32, colour: RGBColor, h: HPos, v: VPos) -> TextStyle<'static> {
-    ("sans-serif", size)
-        .into_font()
-        .color(&colour)
-        .pos(Pos::new(h, v))
+    (FAMILY, size).into_font().color(&colour).pos(Pos::new(h, v))
 }
 
 /// Writes every plot for `model` evaluated on `captures` into `dir` (created if missing) and

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{Area, PlotError, render};
+use super::{Area, Frame, PlotError, axes, render};
 use crate::session::{SegmentKind, SegmentRun, traces};
 
 /// Draws `force.png`: per segment, force against depth (needle) or position (rubbing), and
@@ -48,19 +48,11 @@ fn line_chart(area: &Area<'_>, title: &str, x_label: &str, xs: &[f64], ys: &[f64
             -1.0..1.0
         }
     };
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(52)
-        .build_cartesian_2d(range(xs), range(ys))
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc("force [N]")
-        .draw()
-        .map_err(|e| e.to_string())?;
+    let frame = Frame {
+        title_px: 20,
+        margin_px: 12,
+    };
+    let mut chart = axes(area, title, frame, (range(xs), x_label), (range(ys), "force [N]"))?;
     // A plot needs no more points than pixels across.
     let step = (xs.len() / 4000).max(1);
     chart
