@@ -17,7 +17,7 @@
 //! - [`recorder`]: samples to capture files through a lock-free ring;
 //! - [`live`]: a window's view of a running loop (triple buffers and a bounded ring);
 //! - [`acquire`]: the protocols `palpus capture` runs through a device;
-//! - [`bench`]: the loop benchmark (`palpus bench loop`), the full haptic path wired together;
+//! - [`bench`](mod@bench): the loop benchmark (`palpus bench loop`), the full haptic path wired together;
 //! - [`sim`]: the ground-truth world, the papers' protocols, the simulated hand.
 
 pub mod acquire;
