@@ -8,7 +8,9 @@ use anyhow::Context;
 #[cfg(doc)]
 use haptics::live_recognizer::Recognizing;
 use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
-use recognize::{LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
+#[cfg(doc)]
+use recognize::NakanoWindowing;
+use recognize::{LabelledCapture, Method, RecognizerFile, TrainSettings};
 
 use crate::scene::Scene;
 use crate::session::report::Recognition;
@@ -81,8 +83,8 @@ pub fn decisions(classes: &[String], run: &SegmentRun) -> Vec<Recognition> {
     out
 }
 
-/// Trains Nakano's SOM on every `*.csv` rubbing capture in `dir`, with the protocol's windows
-/// ([`NakanoWindowing::protocol`]).
+/// Trains Nakano's SOM on every `*.csv` rubbing capture in `dir`, with the method's defaults
+/// ([`TrainSettings::new`]: the protocol's windows, [`NakanoWindowing::protocol`]).
 fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading recognizer captures in {}", dir.display()))?
@@ -94,14 +96,8 @@ fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
         .iter()
         .map(|p| LabelledCapture::read(p).with_context(|| format!("reading {}", p.display())))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let rate_hz = captures
-        .first()
-        .map(|c| c.capture.metadata().rate_hz())
-        .with_context(|| format!("no captures in {}", dir.display()))?;
-    let windowing = NakanoWindowing::protocol(rate_hz)?;
-    Ok(RecognizerFile::train_som(
-        &captures,
-        windowing,
-        SomParams::default(),
-    )?)
+    if captures.is_empty() {
+        anyhow::bail!("no captures in {}", dir.display());
+    }
+    Ok(recognize::train(&captures, &TrainSettings::new(Method::Som))?)
 }
