@@ -2,7 +2,7 @@
 //! recognizer's evaluation ([`recognition`]) and the surfaces' categories ([`categories`]).
 //!
 //! The shared primitives live here: the bundled font ([`font`]), drawing into an RGB buffer
-//! and writing it as PNG ([`render`], [`write_png_rgb`]), and [`PlotError`].
+//! and writing it as PNG ([`render()`], [`write_png_rgb`]), and [`PlotError`].
 
 pub mod categories;
 pub mod recognition;
