@@ -6,7 +6,7 @@
 
 use capture::Capture;
 use haptics::acquire::{CaptureOptions, Protocol, controller, run_capture, sim_device};
-use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest};
+use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing};
 use haptics::sim::world::friction::HardContact;
 use haptics::sim::world::needle::NeedleTissue;
 use haptics::sim::world::surface::nakano_surfaces;
@@ -128,11 +128,8 @@ fn rubbing_observers_report_the_forces_the_world_applied() {
     let mut device = sim_device(&options).unwrap().with_trace(10_000);
     let mut c = controller(Protocol::Rubbing);
     let config = LoopConfig {
-        pacing: Pacing::Unpaced,
-        rt: RtRequest::NONE,
-        watchdog: None,
         max_ticks: Some(10_000),
-        ..LoopConfig::default()
+        ..LoopConfig::unpaced()
     };
     let shared = LoopShared::new(config.period().unwrap());
     let (producer, mut consumer) = rtrb::RingBuffer::new(10_000);

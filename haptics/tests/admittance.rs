@@ -9,7 +9,7 @@ use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimTrace, SimWorld
 use haptics::law::{
     Environment, FreeSpace, NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic, ScalarModel,
 };
-use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest};
+use haptics::rt::{self, LoopConfig, LoopIo, LoopShared};
 use haptics::sim::hand::{HandImpedance, Waypoints};
 use haptics::sim::world::needle::{NeedleSite, NeedleTissue};
 
@@ -17,11 +17,8 @@ const SURFACE_Z_M: f64 = -0.02;
 
 fn unpaced(ticks: u64) -> LoopConfig {
     LoopConfig {
-        pacing: Pacing::Unpaced,
-        rt: RtRequest::NONE,
-        watchdog: None,
         max_ticks: Some(ticks),
-        ..LoopConfig::default()
+        ..LoopConfig::unpaced()
     }
 }
 

@@ -14,7 +14,7 @@ use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use haptics::device::{DeviceError, ForceCommand};
 use haptics::law::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
 use haptics::rt::{
-    self, Controller, LoopConfig, LoopError, LoopIo, LoopShared, Pacing, Priority, RtRequest, StopReason,
+    self, Controller, LoopConfig, LoopError, LoopIo, LoopShared, Priority, RtRequest, StopReason,
     TickInput, TickOutput, WatchdogConfig, ZeroForce,
 };
 use haptics::device::ForceOverride;
@@ -149,11 +149,8 @@ fn the_watchdog_ramps_the_force_to_zero_when_ticks_stop() {
 
 fn unpaced(ticks: u64) -> LoopConfig {
     LoopConfig {
-        pacing: Pacing::Unpaced,
-        rt: RtRequest::NONE,
-        watchdog: None,
         max_ticks: Some(ticks),
-        ..LoopConfig::default()
+        ..LoopConfig::unpaced()
     }
 }
 

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use haptics::device::omega7::{DhdLibrary, Omega7};
 use haptics::device::{DeviceError, ForceCommand, HapticDevice};
-use haptics::rt::{self, LoopConfig, LoopIo, Pacing, RtRequest, StopReason, ZeroForce};
+use haptics::rt::{self, LoopConfig, LoopIo, StopReason, ZeroForce};
 
 fn build(dir: &Path, name: &str, defines: &[&str]) -> PathBuf {
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake_dhd/fake_dhd.c");
@@ -80,11 +80,8 @@ fn the_sdk_is_loaded_by_name_and_drives_the_device() {
 
     // Through the loop: forces are enabled for the run and off and zero afterwards.
     let config = LoopConfig {
-        pacing: Pacing::Unpaced,
-        rt: RtRequest::NONE,
-        watchdog: None,
         max_ticks: Some(10),
-        ..LoopConfig::default()
+        ..LoopConfig::unpaced()
     };
     let outcome = rt::spawn(device, ZeroForce, LoopIo::default(), config)
         .unwrap()

@@ -155,7 +155,7 @@ impl HapticDevice for ReplayDevice {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rt::{self, LoopConfig, LoopIo, Pacing, RtRequest, StopReason, ZeroForce};
+    use crate::rt::{self, LoopConfig, LoopIo, StopReason, ZeroForce};
     use capture::Metadata;
 
     #[test]
@@ -183,12 +183,7 @@ mod tests {
         assert!((s.velocity_mps.z + 0.01).abs() < 1e-12);
         // Through the loop, unpaced: it ends by itself after 0.99 s of loop time.
         let device = ReplayDevice::new(&capture, 1e-3).unwrap();
-        let config = LoopConfig {
-            pacing: Pacing::Unpaced,
-            rt: RtRequest::NONE,
-            watchdog: None,
-            ..LoopConfig::default()
-        };
+        let config = LoopConfig::unpaced();
         let outcome = rt::spawn(device, ZeroForce, LoopIo::default(), config)
             .unwrap()
             .join()

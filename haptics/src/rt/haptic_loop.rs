@@ -129,6 +129,17 @@ impl Default for LoopConfig {
 }
 
 impl LoopConfig {
+    /// 1 kHz as fast as the machine goes, no real-time scheduling, no watchdog: a run of a
+    /// simulated or replayed device, whose clock is the tick count.
+    pub fn unpaced() -> Self {
+        Self {
+            pacing: Pacing::Unpaced,
+            rt: RtRequest::NONE,
+            watchdog: None,
+            ..Self::default()
+        }
+    }
+
     /// The period, or an error for a rate that is not a positive finite number up to 100 kHz.
     pub fn period(&self) -> Result<Duration, LoopError> {
         if self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= 100_000.0 {
