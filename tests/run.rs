@@ -35,6 +35,15 @@ fn run(args: &[&str], cache: &Path) -> std::process::Output {
         .unwrap()
 }
 
+/// Runs `palpus run ARGS --headless --unpaced --report OUT` with a private model cache, checks
+/// that it succeeded, and returns its report.
+fn run_unpaced(args: &[&str], out: &Path, cache: &Path) -> Value {
+    let report_args = ["--headless", "--unpaced", "--report", out.to_str().unwrap()];
+    let o = run(&[args, &report_args[..]].concat(), cache);
+    assert!(o.status.success(), "{}", text(&o));
+    report(out)
+}
+
 fn report(dir: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
@@ -118,18 +127,7 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
     let cache = dir.path().join("cache");
     let session = dir.path().join("session.csv");
     let first = dir.path().join("first");
-    let o = run(
-        &[
-            "--headless",
-            "--unpaced",
-            "--record",
-            session.to_str().unwrap(),
-            "--report",
-            first.to_str().unwrap(),
-        ],
-        &cache,
-    );
-    assert!(o.status.success(), "{}", text(&o));
+    let first_report = run_unpaced(&["--record", session.to_str().unwrap()], &first, &cache);
     let reidentified = dir.path().join("re.json");
     let o = common::palpus(&[
         "identify",
@@ -158,21 +156,11 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
     let scene = dir.path().join("re.toml");
     std::fs::write(&scene, scene_text).unwrap();
     let second = dir.path().join("second");
-    let o = run(
-        &[
-            scene.to_str().unwrap(),
-            "--headless",
-            "--unpaced",
-            "--report",
-            second.to_str().unwrap(),
-        ],
-        &cache,
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(report(&second)["models"][0]["origin"], "file");
+    let second_report = run_unpaced(&[scene.to_str().unwrap()], &second, &cache);
+    assert_eq!(second_report["models"][0]["origin"], "file");
 
     // The two models agree along the trajectory the trainee took.
-    let original = ModelFile::load(Path::new(report(&first)["models"][0]["path"].as_str().unwrap())).unwrap();
+    let original = ModelFile::load(Path::new(first_report["models"][0]["path"].as_str().unwrap())).unwrap();
     let re = ModelFile::load(&reidentified).unwrap();
     let capture = capture::Capture::read_file(&session, capture::CaptureKind::Insertion).unwrap();
     let (depth, velocity) = (
@@ -193,8 +181,8 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
 
     // And the trainee feels the same puncture.
     let (a, b) = (
-        &report(&first)["segments"][0]["punctures"][0],
-        &report(&second)["segments"][0]["punctures"][0],
+        &first_report["segments"][0]["punctures"][0],
+        &second_report["segments"][0]["punctures"][0],
     );
     assert!((f(&a["depth_m"]) - f(&b["depth_m"])).abs() < 0.0015, "{a} vs {b}");
     assert!(
@@ -209,18 +197,7 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let out = dir.path().join("friction");
-    let o = run(
-        &[
-            "scenes/friction_hard_soft.toml",
-            "--headless",
-            "--unpaced",
-            "--report",
-            out.to_str().unwrap(),
-        ],
-        &cache,
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let r = report(&out);
+    let r = run_unpaced(&["scenes/friction_hard_soft.toml"], &out, &cache);
     let (plate, sponge) = (&r["segments"][0], &r["segments"][1]);
     assert_eq!(
         (plate["object"].as_str(), sponge["object"].as_str()),
@@ -233,18 +210,7 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
     assert!(f(&sponge["mean_friction_ratio"]) > 2.0 * hard, "{sponge}");
 
     let out = dir.path().join("surfaces");
-    let o = run(
-        &[
-            "scenes/surfaces_nakano.toml",
-            "--headless",
-            "--unpaced",
-            "--report",
-            out.to_str().unwrap(),
-        ],
-        &cache,
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let r = report(&out);
+    let r = run_unpaced(&["scenes/surfaces_nakano.toml"], &out, &cache);
     assert_eq!(r["segments"].as_array().unwrap().len(), 7);
     let accuracy = f(&r["recognition_accuracy"]);
     assert!(accuracy > 0.9, "live recognition {accuracy}");
