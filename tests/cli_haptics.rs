@@ -69,30 +69,18 @@ fn capture_errors_are_clear() {
             && t.contains("install the Force Dimension SDK or use --device sim"),
         "{t}"
     );
-    let o = palpus(&[
-        "capture",
-        "--device",
-        "sim",
-        "--protocol",
-        "stab",
-        "--out",
-        "x.csv",
-    ]);
-    assert!(!o.status.success());
-    assert!(text(&o).contains("unknown protocol `stab`"), "{}", text(&o));
-    let o = palpus(&[
-        "capture",
-        "--device",
-        "sim",
-        "--protocol",
-        "rubbing",
-        "--surface",
-        "glass",
-        "--out",
-        "x.csv",
-    ]);
-    assert!(!o.status.success());
-    assert!(text(&o).contains("unknown surface `glass`"), "{}", text(&o));
+    for (choice, message) in [
+        (&["--protocol", "stab"][..], "unknown protocol `stab`"),
+        (
+            &["--protocol", "rubbing", "--surface", "glass"][..],
+            "unknown surface `glass`",
+        ),
+    ] {
+        let args = [&["capture", "--device", "sim"], choice, &["--out", "x.csv"]].concat();
+        let o = palpus(&args);
+        assert!(!o.status.success());
+        assert!(text(&o).contains(message), "{}", text(&o));
+    }
 }
 
 #[test]
