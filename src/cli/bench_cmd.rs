@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use clap::{Args, Subcommand};
 use haptics::bench::{BenchConfig, loop_bench};
-use haptics::rt::{LoopConfig, RtRequest};
+use haptics::rt::{LoopConfig, Percentiles, RtRequest};
 
 /// Measure performance.
 #[derive(Debug, Args)]
@@ -59,6 +59,17 @@ struct LoopArgs {
 
 fn us(d: Duration) -> String {
     format!("{:.1} µs", d.as_secs_f64() * 1e6)
+}
+
+/// `p50 …  p99 …  p99.9 …  max …`, in µs.
+fn quantiles(p: &Percentiles) -> String {
+    format!(
+        "p50 {}  p99 {}  p99.9 {}  max {}",
+        us(p.p50),
+        us(p.p99),
+        us(p.p999),
+        us(p.max)
+    )
 }
 
 pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
@@ -117,20 +128,11 @@ fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
         yes(s.rate_error() <= 0.001)
     );
     println!(
-        "period error:     p50 {}  p99 {}  p99.9 {}  max {}  {}",
-        us(s.period_error.p50),
-        us(s.period_error.p99),
-        us(s.period_error.p999),
-        us(s.period_error.max),
+        "period error:     {}  {}",
+        quantiles(&s.period_error),
         yes(s.period_error.p999 <= Duration::from_micros(100))
     );
-    println!(
-        "lateness:         p50 {}  p99 {}  p99.9 {}  max {}",
-        us(s.lateness.p50),
-        us(s.lateness.p99),
-        us(s.lateness.p999),
-        us(s.lateness.max)
-    );
+    println!("lateness:         {}", quantiles(&s.lateness));
     println!(
         "overruns:         {} missed slots, {} ticks > 2 ms late  {}",
         s.overruns,
@@ -138,11 +140,8 @@ fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
         yes(s.late_over_2ms == 0)
     );
     println!(
-        "tick compute:     p50 {}  p99 {}  p99.9 {}  max {}  {}",
-        us(s.compute.p50),
-        us(s.compute.p99),
-        us(s.compute.p999),
-        us(s.compute.max),
+        "tick compute:     {}  {}",
+        quantiles(&s.compute),
         yes(s.compute.p99 <= Duration::from_micros(20))
     );
     println!(
