@@ -171,29 +171,33 @@ pub fn generate(
     for set in sets {
         match set {
             CaptureSet::LiBi => {
+                type Simulate = fn(u64, Split) -> Result<Capture, CaptureError>;
+                let experiments: [(&str, Simulate, &'static str, &str); 3] = [
+                    (
+                        "hard_contact",
+                        li_bi::hard_contact,
+                        "li_bi_hard_contact",
+                        "aluminium_plate",
+                    ),
+                    (
+                        "soft_contact",
+                        li_bi::soft_contact,
+                        "li_bi_soft_contact",
+                        "sponge",
+                    ),
+                    ("needle", li_bi::needle_insertion, "li_bi_needle", "bovine_liver"),
+                ];
                 for split in [Split::Train, Split::Test] {
                     let s = split.as_str();
-                    write(
-                        format!("li_bi/hard_contact_{s}.csv").into(),
-                        li_bi::hard_contact(seed, split),
-                        "li_bi_hard_contact",
-                        "aluminium_plate".into(),
-                        s.into(),
-                    )?;
-                    write(
-                        format!("li_bi/soft_contact_{s}.csv").into(),
-                        li_bi::soft_contact(seed, split),
-                        "li_bi_soft_contact",
-                        "sponge".into(),
-                        s.into(),
-                    )?;
-                    write(
-                        format!("li_bi/needle_{s}.csv").into(),
-                        li_bi::needle_insertion(seed, split),
-                        "li_bi_needle",
-                        "bovine_liver".into(),
-                        s.into(),
-                    )?;
+                    for (file, simulate, protocol, object) in experiments {
+                        write(
+                            format!("li_bi/{file}_{s}.csv").into(),
+                            simulate(seed, split),
+                            protocol,
+                            object.into(),
+                            s.into(),
+                        )?;
+                    }
                 }
             }
             CaptureSet::Nakano => {

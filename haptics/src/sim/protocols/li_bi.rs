@@ -48,6 +48,31 @@ fn split_tag(split: Split) -> u64 {
     }
 }
 
+/// The instruments of Li & Bi's rig: the screw's encoder and the force sensor, whose noise is
+/// seeded per experiment and split.
+struct Instruments {
+    encoder: Encoder,
+    sensor: ForceSensor,
+    rng: ChaCha8Rng,
+}
+
+impl Instruments {
+    fn new(seed: u64, experiment: u64, split: Split) -> Self {
+        Self {
+            encoder: Encoder {
+                quantum_m: ENCODER_QUANTUM_M,
+            },
+            sensor: ForceSensor::li_bi(),
+            rng: ChaCha8Rng::seed_from_u64(derive_seed(seed, &[experiment, split_tag(split)])),
+        }
+    }
+
+    /// The force sensor's reading of `force_n`.
+    fn force(&mut self, force_n: f64) -> f64 {
+        self.sensor.read(force_n, &mut self.rng)
+    }
+}
+
 /// Metadata every Li & Bi capture carries.
 fn base_metadata(kind: CaptureKind, rate_hz: f64, protocol: &str, split: Split, seed: u64) -> Metadata {
     let sensor = ForceSensor::li_bi();
@@ -77,11 +102,7 @@ pub fn hard_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
         Split::Test => (0.008, 0.0010, 0.7, 0.9, 0.6, 4.5, 0.0),
     };
     let law = HardContact::li_bi();
-    let sensor = ForceSensor::li_bi();
-    let encoder = Encoder {
-        quantum_m: ENCODER_QUANTUM_M,
-    };
-    let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, &[tag::HARD, split_tag(split)]));
+    let mut rig = Instruments::new(seed, tag::HARD, split);
     let mut diff =
         PseudoDifferentiator::new(DT_S, PSEUDO_DIFF_TAU_S).with_initial_velocity(v0 + amp * 2.0 * PI * freq);
     let log_every = 200;
@@ -96,7 +117,7 @@ pub fn hard_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
     for k in 0..=(samples - 1) * log_every {
         let t = k as f64 * DT_S;
         let x = v0 * t + amp * (2.0 * PI * freq * t).sin();
-        let x_measured = encoder.read(x);
+        let x_measured = rig.encoder.read(x);
         let v_measured = round_to(diff.update(x_measured), VELOCITY_QUANTUM_MPS);
         if k % log_every != 0 {
             continue;
@@ -107,8 +128,8 @@ pub fn hard_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
             k as f64 / CONTROL_RATE_HZ,
             x_measured,
             v_measured,
-            sensor.read(pressure_n, &mut rng),
-            sensor.read(friction_n, &mut rng),
+            rig.force(pressure_n),
+            rig.force(friction_n),
         ]);
     }
     let meta = base_metadata(
@@ -147,11 +168,7 @@ pub fn soft_contact_speeds_mmps(split: Split) -> &'static [f64] {
 /// have settled; `commanded_velocity_mps` names the segment.
 pub fn soft_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
     let law = SoftContact::sponge();
-    let sensor = ForceSensor::li_bi();
-    let encoder = Encoder {
-        quantum_m: ENCODER_QUANTUM_M,
-    };
-    let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, &[tag::SOFT, split_tag(split)]));
+    let mut rig = Instruments::new(seed, tag::SOFT, split);
     let (p_lo, p_hi) = (kgf_to_n(0.1), kgf_to_n(1.0));
     let per_segment = 40;
     let log_every = 50;
@@ -177,7 +194,7 @@ pub fn soft_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
             let t = k as f64 * DT_S;
             let v_true = v * (1.0 + 0.01 * (2.0 * PI * ripple_hz * t).sin());
             x += v_true * DT_S;
-            let x_measured = encoder.read(x);
+            let x_measured = rig.encoder.read(x);
             let v_measured = round_to(diff.update(x_measured), VELOCITY_QUANTUM_MPS);
             if k >= settle && (k - settle) % log_every == 0 {
                 let phase = (k - settle) as f64 / (per_segment * log_every) as f64;
@@ -188,8 +205,8 @@ pub fn soft_contact(seed: u64, split: Split) -> Result<Capture, CaptureError> {
                     x_measured,
                     v_measured,
                     v,
-                    sensor.read(pressure_n, &mut rng),
-                    sensor.read(friction_n, &mut rng),
+                    rig.force(pressure_n),
+                    rig.force(friction_n),
                 ]);
             }
         }
@@ -230,11 +247,7 @@ pub fn needle_speeds_mmps(split: Split) -> &'static [f64] {
 /// withdraws at 10 mm/s to where it started. Logged at 100 Hz.
 pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError> {
     let tissue = NeedleTissue::bovine_liver();
-    let sensor = ForceSensor::li_bi();
-    let encoder = Encoder {
-        quantum_m: ENCODER_QUANTUM_M,
-    };
-    let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, &[tag::NEEDLE, split_tag(split)]));
+    let mut rig = Instruments::new(seed, tag::NEEDLE, split);
     let log_every = 10;
     let (start_m, target_m, withdraw_mps, ramp_s, hold_s, rest_s) = (-0.002, 0.030, 0.010, 0.05, 1.0, 0.3);
     let mut cols = Columns::new(&[
@@ -282,7 +295,7 @@ pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError
             };
             depth += command * DT_S;
             let force = site.step(depth, command, DT_S);
-            let depth_measured = encoder.read(depth);
+            let depth_measured = rig.encoder.read(depth);
             let v_measured = round_to(diff.update(depth_measured), VELOCITY_QUANTUM_MPS);
             if k.is_multiple_of(log_every) {
                 cols.push(&[
@@ -290,7 +303,7 @@ pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError
                     depth_measured,
                     v_measured,
                     command,
-                    sensor.read(force.axial_force_n, &mut rng),
+                    rig.force(force.axial_force_n),
                 ]);
             }
             phase = phase.advance(DT_S);
