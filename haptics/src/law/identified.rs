@@ -61,26 +61,28 @@ impl<const D: usize> ScalarModel<D> for SvrForceModel<D> {
     }
 }
 
-/// The needle-puncture model of a model file, for [`super::needle::NeedleLaw`].
-pub fn needle_model(file: &ModelFile) -> Result<SvrForceModel<2>, IdentifiedModelError> {
-    match (&file.body, file.kind) {
-        (ModelBody::Single(svr), ModelKind::NeedlePuncture) => SvrForceModel::new(svr, &file.input_range),
+/// The one SVR of a model file that must be of `kind`.
+fn single_model<const D: usize>(
+    file: &ModelFile,
+    kind: ModelKind,
+) -> Result<SvrForceModel<D>, IdentifiedModelError> {
+    match &file.body {
+        ModelBody::Single(svr) if file.kind == kind => SvrForceModel::new(svr, &file.input_range),
         _ => Err(IdentifiedModelError::WrongKind {
-            expected: ModelKind::NeedlePuncture,
+            expected: kind,
             found: file.kind,
         }),
     }
 }
 
+/// The needle-puncture model of a model file, for [`super::needle::NeedleLaw`].
+pub fn needle_model(file: &ModelFile) -> Result<SvrForceModel<2>, IdentifiedModelError> {
+    single_model(file, ModelKind::NeedlePuncture)
+}
+
 /// The hard-contact friction model (normal force → friction) of a model file.
 pub fn hard_friction_model(file: &ModelFile) -> Result<SvrForceModel<1>, IdentifiedModelError> {
-    match (&file.body, file.kind) {
-        (ModelBody::Single(svr), ModelKind::HardFriction) => SvrForceModel::new(svr, &file.input_range),
-        _ => Err(IdentifiedModelError::WrongKind {
-            expected: ModelKind::HardFriction,
-            found: file.kind,
-        }),
-    }
+    single_model(file, ModelKind::HardFriction)
 }
 
 /// The soft-contact model's slope w(v) and intercept m(v) (each of sliding speed).
