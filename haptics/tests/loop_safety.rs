@@ -9,15 +9,15 @@ use std::time::{Duration, Instant};
 
 use glam::DVec3;
 use haptics::control::{Admittance, AdmittanceConfig};
+use haptics::device::ForceOverride;
 use haptics::device::fault::{FaultPoint, FaultyDevice};
 use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
-use haptics::device::{DeviceError, ForceCommand};
+use haptics::device::{DeviceError, ForceCommand, HapticDevice};
 use haptics::law::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
 use haptics::rt::{
-    self, Controller, LoopConfig, LoopError, LoopIo, LoopShared, Priority, RtRequest, StopReason,
-    TickInput, TickOutput, WatchdogConfig, ZeroForce,
+    self, Controller, LoopConfig, LoopError, LoopIo, LoopOutcome, LoopShared, Priority, RtRequest,
+    StopReason, TickInput, TickOutput, WatchdogConfig, ZeroForce,
 };
-use haptics::device::ForceOverride;
 use proptest::prelude::*;
 
 fn device() -> SimOmega7 {
@@ -154,6 +154,14 @@ fn unpaced(ticks: u64) -> LoopConfig {
     }
 }
 
+/// Runs `device` pushing with `force_n` for up to 1000 unpaced ticks.
+fn push_unpaced<D: HapticDevice + 'static>(device: D, force_n: DVec3) -> LoopOutcome<D, Push> {
+    rt::spawn(device, push(force_n), LoopIo::default(), unpaced(1000))
+        .unwrap()
+        .join()
+        .unwrap()
+}
+
 #[test]
 fn a_device_failing_mid_run_stops_safely_with_a_typed_error() {
     // The simulated Omega.7 loses its USB link at tick 100 while pushing with 3 N.
@@ -165,15 +173,7 @@ fn a_device_failing_mid_run_stops_safely_with_a_typed_error() {
         SimWorld::Free,
     );
     let gate = sim.gate().clone();
-    let outcome = rt::spawn(
-        sim,
-        push(DVec3::new(3.0, 0.0, 0.0)),
-        LoopIo::default(),
-        unpaced(1000),
-    )
-    .unwrap()
-    .join()
-    .unwrap();
+    let outcome = push_unpaced(sim, DVec3::new(3.0, 0.0, 0.0));
     match outcome.result {
         Err(LoopError::Device {
             tick: 100,
@@ -189,15 +189,7 @@ fn a_device_failing_mid_run_stops_safely_with_a_typed_error() {
     // A device whose force command starts failing: same safe stop.
     let faulty = FaultyDevice::new(device(), 10, FaultPoint::Command);
     let gate = faulty.inner().gate().clone();
-    let outcome = rt::spawn(
-        faulty,
-        push(DVec3::new(0.0, 3.0, 0.0)),
-        LoopIo::default(),
-        unpaced(1000),
-    )
-    .unwrap()
-    .join()
-    .unwrap();
+    let outcome = push_unpaced(faulty, DVec3::new(0.0, 3.0, 0.0));
     let err = outcome.result.unwrap_err();
     assert!(
         matches!(
