@@ -5,14 +5,15 @@
 mod common;
 
 use std::path::{Path, PathBuf};
+use std::process::Output;
 
-use common::{palpus, text};
+use common::{nakano_captures, palpus, text};
 use haptics::sim::protocols::sinapov::scratch_capture;
 use haptics::sim::world::scratch::{Behaviour, household_surfaces};
 use serde_json::Value;
 
 fn nakano_runs(dir: &Path) -> (Vec<PathBuf>, Vec<PathBuf>) {
-    let out = palpus(&[
+    succeeds(&[
         "gen",
         "--out",
         &dir.to_string_lossy(),
@@ -20,15 +21,7 @@ fn nakano_runs(dir: &Path) -> (Vec<PathBuf>, Vec<PathBuf>) {
         "nakano",
         "--quiet",
     ]);
-    assert!(out.status.success(), "{}", text(&out));
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("nakano"))
-        .expect("nakano folder")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .collect();
-    paths.sort();
-    assert_eq!(paths.len(), 21);
-    paths
+    nakano_captures(dir)
         .into_iter()
         .partition(|p| p.to_string_lossy().ends_with("run0.csv"))
 }
@@ -44,22 +37,59 @@ fn strings(paths: &[PathBuf]) -> Vec<String> {
     paths.iter().map(|p| p.to_string_lossy().into_owned()).collect()
 }
 
+/// Runs palpus with `argv`, which must succeed.
+fn succeeds(argv: &[&str]) -> Output {
+    let out = palpus(argv);
+    assert!(out.status.success(), "{}", text(&out));
+    out
+}
+
+/// Runs palpus with `argv`, which must succeed, and reads what it printed as JSON.
+fn json(argv: &[&str]) -> Value {
+    serde_json::from_slice(&succeeds(argv).stdout).expect("json")
+}
+
+/// Runs palpus with `argv`, which must fail; returns what it printed.
+fn fails(argv: &[&str]) -> String {
+    let out = palpus(argv);
+    assert!(!out.status.success(), "{argv:?} succeeded");
+    text(&out)
+}
+
+/// A JSON file: a recognizer or a categories tree.
+fn read_json(path: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(path).expect("file")).expect("json")
+}
+
+/// `recognize train --method METHOD OPTIONS… --out MODEL`, the captures to follow.
+fn train_head<'a>(method: &'a str, options: &[&'a str], model: &'a str) -> Vec<&'a str> {
+    ["recognize", "train", "--method", method]
+        .into_iter()
+        .chain(options.iter().copied())
+        .chain(["--out", model])
+        .collect()
+}
+
+/// Trains a `method` recognizer on `captures` into `model`, which must succeed: what it printed,
+/// and the file it wrote.
+fn train_model(method: &str, options: &[&str], model: &Path, captures: &[String]) -> (String, Value) {
+    let out = succeeds(&args(
+        &train_head(method, options, &model.to_string_lossy()),
+        captures,
+    ));
+    (text(&out), read_json(model))
+}
+
 #[test]
 fn som_train_and_eval_on_generated_rubbing_runs() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (train, test) = nakano_runs(dir.path());
     let model = dir.path().join("som.json");
     let model_s = model.to_string_lossy().into_owned();
-    let train_s = strings(&train);
-    let out = palpus(&args(
-        &["recognize", "train", "--method", "som", "--out", &model_s],
-        &train_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(text(&out).contains("7 classes"), "{}", text(&out));
+    let (summary, file) = train_model("som", &[], &model, &strings(&train));
+    assert!(summary.contains("7 classes"), "{summary}");
 
     // The file describes itself: method, classes, windowing, the map's scaling, hashes.
-    let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
     assert_eq!(file["format"], "palpus-recognizer");
     assert_eq!(file["body"]["method"], "som");
     assert_eq!(file["classes"].as_array().expect("classes").len(), 7);
@@ -75,9 +105,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert_eq!(file["training_sha256"].as_str().expect("hash").len(), 64);
 
     let test_s = strings(&test);
-    let out = palpus(&args(&["recognize", "eval", &model_s, "--json"], &test_s));
-    assert!(out.status.success(), "{}", text(&out));
-    let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+    let report = eval_json(&model_s, &test_s, &[]);
     assert_eq!(report["method"], "som");
     assert_eq!(report["window_s"], 3.0);
     assert!((report["decision_latency_s"].as_f64().expect("latency") - 3.27).abs() < 1e-12);
@@ -107,12 +135,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert!((0.0..0.1).contains(&te), "{report}");
 
     // Accuracy against window length: one row per window, the latency the window plus 0.27 s.
-    let out = palpus(&args(
-        &["recognize", "eval", &model_s, "--window-s", "0.5,1,2,3", "--json"],
-        &test_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    let table: Value = serde_json::from_slice(&out.stdout).expect("json table");
+    let table = eval_json(&model_s, &test_s, &["--window-s", "0.5,1,2,3"]);
     let rows = table["windows"].as_array().expect("rows");
     assert_eq!(rows.len(), 4);
     for (row, window_s) in rows.iter().zip([0.5, 1.0, 2.0, 3.0]) {
@@ -123,12 +146,10 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     let acc = |i: usize| rows[i]["accuracy"].as_f64().expect("accuracy");
     assert_eq!(acc(3), accuracy);
     assert!(acc(3) > acc(0) + 0.05, "{table}");
-    let out = palpus(&args(
+    let shown = text(&succeeds(&args(
         &["recognize", "eval", &model_s, "--window-s", "0.5,3"],
         &test_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    let shown = text(&out);
+    )));
     assert!(shown.contains("accuracy against decision window"), "{shown}");
     assert!(
         shown.contains("   0.50 s    0.77 s") && shown.contains("   3.00 s    3.27 s"),
@@ -138,7 +159,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     // Nakano's protocol over all three runs: each run trains in turn and the other two are
     // held out, three maps per fold, every decision pooled.
     let all_s = strings(&[train.clone(), test.clone()].concat());
-    let out = palpus(&args(
+    let cv = json(&args(
         &[
             "recognize",
             "cv",
@@ -152,8 +173,6 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
         ],
         &all_s,
     ));
-    assert!(out.status.success(), "{}", text(&out));
-    let cv: Value = serde_json::from_slice(&out.stdout).expect("json");
     assert_eq!(cv["split"], "train-on-one");
     assert_eq!(cv["folds"], 3);
     assert_eq!(cv["rounds"], 9);
@@ -172,7 +191,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert!(worst_class(&cv) >= 0.75, "{cv}");
     assert_eq!(cv["fused_by_count"].as_array().map(Vec::len), Some(0));
     // Nakano's own protocol: the first run trains, the other two test, maps pooled.
-    let out = palpus(&args(
+    let thesis = json(&args(
         &[
             "recognize",
             "cv",
@@ -188,8 +207,6 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
         ],
         &all_s,
     ));
-    assert!(out.status.success(), "{}", text(&out));
-    let thesis: Value = serde_json::from_slice(&out.stdout).expect("json");
     assert_eq!(
         (thesis["rounds"].as_u64(), thesis["fold"].as_u64()),
         (Some(3), Some(1))
@@ -224,12 +241,10 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     );
 
     // Text output, and a shorter window on the same map.
-    let out = palpus(&args(
+    let shown = text(&succeeds(&args(
         &["recognize", "eval", &model_s, "--window-s", "0.5"],
         &test_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    let shown = text(&out);
+    )));
     assert!(
         shown.contains("window 0.500 s, decision latency 0.770 s"),
         "{shown}"
@@ -242,11 +257,10 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     // Plots, into a folder that does not exist yet.
     let plots = dir.path().join("plots").join("som");
     let plots_s = plots.to_string_lossy().into_owned();
-    let out = palpus(&args(
+    let out = succeeds(&args(
         &["recognize", "eval", &model_s, "--plots", &plots_s],
         &test_s,
     ));
-    assert!(out.status.success(), "{}", text(&out));
     let (nodes, classes) = (12, 7);
     for (name, size) in [
         ("confusion.png", palpus::plots::confusion_size(classes)),
@@ -306,15 +320,8 @@ fn knn_and_svm_train_and_eval_on_scratch_captures() {
     let test_s = strings(&test);
     for method in ["knn", "svm"] {
         let model = dir.path().join(format!("{method}.json"));
-        let model_s = model.to_string_lossy().into_owned();
-        let out = palpus(&args(
-            &["recognize", "train", "--method", method, "--out", &model_s],
-            &strings(&train),
-        ));
-        assert!(out.status.success(), "{}", text(&out));
-        let out = palpus(&args(&["recognize", "eval", &model_s, "--json"], &test_s));
-        assert!(out.status.success(), "{}", text(&out));
-        let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+        train_model(method, &[], &model, &strings(&train));
+        let report = eval_json(&model.to_string_lossy(), &test_s, &[]);
         assert_eq!(report["method"], method);
         assert_eq!(report["captures"], 12);
         let accuracy = report["accuracy"].as_f64().expect("accuracy");
@@ -338,7 +345,7 @@ fn trial_of(path: &Path) -> u32 {
 
 /// `palpus gen --only sinapov` into `dir`: every scratch capture, sorted.
 fn generated_scratches(dir: &Path) -> Vec<PathBuf> {
-    let out = palpus(&[
+    succeeds(&[
         "gen",
         "--out",
         &dir.to_string_lossy(),
@@ -346,7 +353,6 @@ fn generated_scratches(dir: &Path) -> Vec<PathBuf> {
         "sinapov",
         "--quiet",
     ]);
-    assert!(out.status.success(), "{}", text(&out));
     let mut paths = Vec::new();
     for surface in std::fs::read_dir(dir.join("sinapov")).expect("sinapov folder") {
         for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
@@ -379,19 +385,13 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
     for method in ["knn", "svm"] {
         let model = dir.path().join(format!("{method}.json"));
         let model_s = model.to_string_lossy().into_owned();
-        let out = palpus(&args(
-            &["recognize", "train", "--method", method, "--out", &model_s],
-            &train_s,
-        ));
-        assert!(out.status.success(), "{}", text(&out));
-        let summary = text(&out);
+        let (summary, file) = train_model(method, &[], &model, &train_s);
         assert!(
             summary.contains("reliability weights") && summary.contains("lateral_slow"),
             "{summary}"
         );
 
         // Each behaviour's weight: a 5-fold (7 trials) cross-validated accuracy on training.
-        let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
         let behaviours = file["body"]["behaviours"].as_array().expect("behaviours");
         assert_eq!(behaviours.len(), 5);
         for b in behaviours {
@@ -426,9 +426,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
             assert_eq!(b["svc"]["params"]["c"].as_f64(), Some(chosen));
         }
 
-        let out = palpus(&args(&["recognize", "eval", &model_s, "--json"], &test_s));
-        assert!(out.status.success(), "{}", text(&out));
-        let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+        let report = eval_json(&model_s, &test_s, &[]);
         for key in [
             "method",
             "accuracy",
@@ -491,9 +489,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         );
 
         // Text: the per-scratch matrix, then each behaviour alone and the fused matrix.
-        let out = palpus(&args(&["recognize", "eval", &model_s], &test_s));
-        assert!(out.status.success(), "{}", text(&out));
-        let shown = text(&out);
+        let shown = text(&succeeds(&args(&["recognize", "eval", &model_s], &test_s)));
         let fused_at = shown
             .find("fused over behaviours: 63 trials")
             .expect("a fused section");
@@ -513,12 +509,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         }
         let old_path = dir.path().join(format!("{method}_old.json"));
         std::fs::write(&old_path, old.to_string()).expect("write");
-        let out = palpus(&args(
-            &["recognize", "eval", &old_path.to_string_lossy(), "--json"],
-            &test_s,
-        ));
-        assert!(out.status.success(), "{}", text(&out));
-        let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+        let report = eval_json(&old_path.to_string_lossy(), &test_s, &[]);
         assert!(
             report["fused"]["per_behaviour"]
                 .as_object()
@@ -543,9 +534,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
     // Sinapov's protocol itself: 10-fold cross-validation by trial over all 1050 scratches,
     // each behaviour alone (Table II) and every combination of behaviours fused (Fig. 6).
     let all_s = [train_s.clone(), test_s.clone()].concat();
-    let out = palpus(&args(&["recognize", "cv", "--method", "knn", "--json"], &all_s));
-    assert!(out.status.success(), "{}", text(&out));
-    let cv: Value = serde_json::from_slice(&out.stdout).expect("json");
+    let cv = json(&args(&["recognize", "cv", "--method", "knn", "--json"], &all_s));
     assert_eq!(cv["split"], "k-fold");
     assert_eq!(
         (cv["folds"].as_u64(), cv["rounds"].as_u64()),
@@ -595,7 +584,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
     // 50 scratches is an error naming the known surface it resembles.
     let categories = dir.path().join("categories");
     let categories_s = categories.to_string_lossy().into_owned();
-    let out = palpus(&args(
+    succeeds(&args(
         &[
             "recognize",
             "categorize",
@@ -607,10 +596,7 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
         ],
         &all_s,
     ));
-    assert!(out.status.success(), "{}", text(&out));
-    let tree: Value =
-        serde_json::from_slice(&std::fs::read(categories.join("categories.json")).expect("categories"))
-            .expect("json");
+    let tree = read_json(&categories.join("categories.json"));
     assert_eq!(tree["decisions"], 1050);
     assert_eq!(tree["accuracy"], 0.0, "a left-out surface can never be named");
     assert_eq!(tree["similarity"].as_array().map(Vec::len), Some(21));
@@ -626,58 +612,33 @@ fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
     assert!(together("paper_white", "paper_yellow"), "{leaves:?}");
     assert!(together("cotton_wool", "soft_cloth"), "{leaves:?}");
     assert!(!together("paper_white", "cotton_wool"), "{leaves:?}");
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "categorize",
-            "--method",
-            "knn",
-            "--out",
-            &categories_s,
-        ],
-        &all_s,
-    ));
-    assert!(!out.status.success());
-    assert!(text(&out).contains("--leave-surface-out"), "{}", text(&out));
+    fails_with(
+        &args(
+            &[
+                "recognize",
+                "categorize",
+                "--method",
+                "knn",
+                "--out",
+                &categories_s,
+            ],
+            &all_s,
+        ),
+        &["--leave-surface-out"],
+    );
 
     // A C given on the command line is used as it is, with its cross-validated accuracy.
     let model = dir.path().join("svm_c100.json");
     let model_s = model.to_string_lossy().into_owned();
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "train",
-            "--method",
-            "svm",
-            "--c",
-            "100",
-            "--out",
-            &model_s,
-        ],
-        &train_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(text(&out).contains("C = 1e2 (given)"), "{}", text(&out));
-    let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+    let (summary, file) = train_model("svm", &["--c", "100"], &model, &train_s);
+    assert!(summary.contains("C = 1e2 (given)"), "{summary}");
     for b in file["body"]["behaviours"].as_array().expect("behaviours") {
         assert_eq!(b["c_search"]["chosen_c"], 100.0);
         assert_eq!(b["c_search"]["grid"].as_array().expect("grid").len(), 1);
         assert_eq!(b["reliability"], b["c_search"]["grid"][0]["accuracy"]);
     }
     fails_with(
-        &args(
-            &[
-                "recognize",
-                "train",
-                "--method",
-                "svm",
-                "--c",
-                "0",
-                "--out",
-                &model_s,
-            ],
-            &train_s,
-        ),
+        &args(&train_head("svm", &["--c", "0"], &model_s), &train_s),
         &["`0` is neither `auto` nor a positive number"],
     );
     eprintln!("{:.1} s", start.elapsed().as_secs_f64());
@@ -741,13 +702,7 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
     let model = dir.path().join("som.json");
     let model_s = model.to_string_lossy().into_owned();
     let mapped = ["--map", map, "--rate-hz", "1000", "--meta", "surface={dir}"];
-    let head: Vec<&str> = ["recognize", "train", "--method", "som", "--out", &model_s]
-        .into_iter()
-        .chain(mapped)
-        .collect();
-    let out = palpus(&args(&head, &train_logs));
-    assert!(out.status.success(), "{}", text(&out));
-    let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+    let (_, file) = train_model("som", &mapped, &model, &train_logs);
     assert!(
         file["classes"]
             .as_array()
@@ -757,13 +712,7 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
         "{}",
         file["classes"]
     );
-    let head: Vec<&str> = ["recognize", "eval", &model_s, "--json"]
-        .into_iter()
-        .chain(mapped)
-        .collect();
-    let out = palpus(&args(&head, &test_logs));
-    assert!(out.status.success(), "{}", text(&out));
-    let report: Value = serde_json::from_slice(&out.stdout).expect("json report");
+    let report = eval_json(&model_s, &test_logs, &mapped);
     // Downsampled from 2 kHz through the anti-aliasing filter: the rubbing's roughness
     // (≤ 20 Hz at 5 mm/s) passes unchanged, so the recognizer does as well as on the captures.
     for (surface, rate) in report["per_class"].as_object().expect("per class") {
@@ -771,12 +720,12 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
     }
     assert!(report["accuracy"].as_f64().expect("accuracy") >= 0.95, "{report}");
     // Without the map the same files are not captures: a clear error naming one.
-    let out = palpus(&args(&["recognize", "eval", &model_s], &test_logs[..1]));
-    assert!(!out.status.success());
-    assert!(text(&out).contains(&test_logs[0]), "{}", text(&out));
+    fails_with(
+        &args(&["recognize", "eval", &model_s], &test_logs[..1]),
+        &[&test_logs[0]],
+    );
 }
 
-/// Runs `palpus recognize eval MODEL CAPTURES --json [EXTRA…]` and returns its report.
 /// Decisions in a JSON confusion matrix: the sum of its counts.
 fn decisions(confusion: &[Value]) -> u64 {
     confusion
@@ -788,9 +737,7 @@ fn decisions(confusion: &[Value]) -> u64 {
 
 /// Runs palpus with `argv`, which must fail, printing each of `expected`.
 fn fails_with(argv: &[&str], expected: &[&str]) {
-    let out = palpus(argv);
-    assert!(!out.status.success(), "{argv:?} succeeded");
-    let shown = text(&out);
+    let shown = fails(argv);
     for e in expected {
         assert!(shown.contains(e), "{e}: {shown}");
     }
@@ -829,14 +776,13 @@ fn assert_flips_agree(report: &Value) {
     }
 }
 
+/// Runs `palpus recognize eval MODEL CAPTURES --json [EXTRA…]` and returns its report.
 fn eval_json(model: &str, captures: &[String], extra: &[&str]) -> Value {
     let head: Vec<&str> = ["recognize", "eval", model, "--json"]
         .into_iter()
         .chain(extra.iter().copied())
         .collect();
-    let out = palpus(&args(&head, captures));
-    assert!(out.status.success(), "{}", text(&out));
-    serde_json::from_slice(&out.stdout).expect("json report")
+    json(&args(&head, captures))
 }
 
 fn worst_class(report: &Value) -> f64 {
@@ -863,22 +809,8 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
     for (method, floor, worst_floor) in [("knn", 0.98, 0.95), ("svm", 0.93, 0.7)] {
         let model = dir.path().join(format!("{method}_nakano.json"));
         let model_s = model.to_string_lossy().into_owned();
-        let out = palpus(&args(
-            &[
-                "recognize",
-                "train",
-                "--method",
-                method,
-                "--features",
-                "nakano",
-                "--out",
-                &model_s,
-            ],
-            &train_s,
-        ));
-        assert!(out.status.success(), "{}", text(&out));
-        assert!(text(&out).contains("over nakano features"), "{}", text(&out));
-        let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+        let (summary, file) = train_model(method, &["--features", "nakano"], &model, &train_s);
+        assert!(summary.contains("over nakano features"), "{summary}");
         assert_eq!(file["features"], "nakano");
         assert_eq!(file["body"]["method"], format!("{method}_windows"));
         assert_eq!(file["body"]["features"], "nakano");
@@ -923,12 +855,7 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
     // A file written before `features` existed (the SOM's default) still loads.
     let som = dir.path().join("som.json");
     let som_s = som.to_string_lossy().into_owned();
-    let out = palpus(&args(
-        &["recognize", "train", "--method", "som", "--out", &som_s],
-        &train_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    let mut file: Value = serde_json::from_slice(&std::fs::read(&som).expect("model")).expect("json");
+    let (_, mut file) = train_model("som", &[], &som, &train_s);
     assert_eq!(file["features"], "nakano");
     file.as_object_mut().expect("object").remove("features");
     std::fs::write(&som, serde_json::to_vec(&file).expect("json")).expect("write");
@@ -937,27 +864,18 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
     // A file whose feature set contradicts its body is refused, naming the field.
     file["features"] = "spectral".into();
     std::fs::write(&som, serde_json::to_vec(&file).expect("json")).expect("write");
-    let out = palpus(&args(&["recognize", "eval", &som_s], &test_s[..1]));
-    assert!(!out.status.success());
-    assert!(text(&out).contains("field `features`"), "{}", text(&out));
+    fails_with(
+        &args(&["recognize", "eval", &som_s], &test_s[..1]),
+        &["field `features`"],
+    );
 
     // Rubbing captures have no accelerometer: no spectral features.
+    let x_s = dir.path().join("x.json").to_string_lossy().into_owned();
     for method in ["knn", "som"] {
-        let out = palpus(&args(
-            &[
-                "recognize",
-                "train",
-                "--method",
-                method,
-                "--features",
-                "spectral",
-                "--out",
-                &dir.path().join("x.json").to_string_lossy(),
-            ],
+        let shown = fails(&args(
+            &train_head(method, &["--features", "spectral"], &x_s),
             &train_s,
         ));
-        assert!(!out.status.success());
-        let shown = text(&out);
         assert!(
             shown.contains(&train_s[0])
                 && shown.contains(
@@ -979,22 +897,8 @@ fn som_over_spectral_histograms_of_generated_scratch_trials() {
     let (train_s, test_s) = sinapov_split(generated_scratches(dir.path()));
     let model = dir.path().join("som_spectral.json");
     let model_s = model.to_string_lossy().into_owned();
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "train",
-            "--method",
-            "som",
-            "--features",
-            "spectral",
-            "--out",
-            &model_s,
-        ],
-        &train_s,
-    ));
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(text(&out).contains("reliability weights"), "{}", text(&out));
-    let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+    let (summary, file) = train_model("som", &["--features", "spectral"], &model, &train_s);
+    assert!(summary.contains("reliability weights"), "{summary}");
     assert_eq!(file["features"], "spectral");
     assert_eq!(file["body"]["method"], "som_scratches");
     assert_eq!(file["feature_names"].as_array().expect("names").len(), 125);
@@ -1020,21 +924,11 @@ fn som_over_spectral_histograms_of_generated_scratch_trials() {
     assert!(fused >= 0.93 && fused >= accuracy, "{report}");
 
     // Scratch captures carry no height or friction: no Nakano features.
-    let out = palpus(&args(
-        &[
-            "recognize",
-            "train",
-            "--method",
-            "knn",
-            "--features",
-            "nakano",
-            "--out",
-            &dir.path().join("x.json").to_string_lossy(),
-        ],
+    let x_s = dir.path().join("x.json").to_string_lossy().into_owned();
+    let shown = fails(&args(
+        &train_head("knn", &["--features", "nakano"], &x_s),
         &train_s[..3],
     ));
-    assert!(!out.status.success());
-    let shown = text(&out);
     assert!(
         shown.contains(&train_s[0])
             && shown.contains("`--features nakano` needs the columns normal_position_m, friction_force_n"),
@@ -1123,21 +1017,7 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
     for method in ["knn", "svm", "som"] {
         let model = dir.path().join(format!("{method}_both.json"));
         let model_s = model.to_string_lossy().into_owned();
-        let out = palpus(&args(
-            &[
-                "recognize",
-                "train",
-                "--method",
-                method,
-                "--features",
-                "both",
-                "--out",
-                &model_s,
-            ],
-            &train_s,
-        ));
-        assert!(out.status.success(), "{}", text(&out));
-        let file: Value = serde_json::from_slice(&std::fs::read(&model).expect("model")).expect("json");
+        let (_, file) = train_model(method, &["--features", "both"], &model, &train_s);
         assert_eq!(file["features"], "both");
         assert_eq!(file["body"]["method"], format!("{method}_windows"));
         let names = file["feature_names"].as_array().expect("names");
@@ -1168,30 +1048,20 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
         assert!(accuracy >= 0.9, "{method}: {report}");
 
         // A 0.5 s window is shorter than the histogram's 768 samples.
-        let out = palpus(&args(
+        let shown = fails(&args(
             &["recognize", "eval", &model_s, "--window-s", "0.5"],
             &test_s[..1],
         ));
-        assert!(!out.status.success());
-        let shown = text(&out);
         assert!(
             shown.contains(&test_s[0]) && shown.contains("needs at least 768"),
             "{shown}"
         );
     }
     // The generated captures alone lack the accelerometer.
+    let x_s = dir.path().join("x.json").to_string_lossy().into_owned();
     fails_with(
         &args(
-            &[
-                "recognize",
-                "train",
-                "--method",
-                "svm",
-                "--features",
-                "both",
-                "--out",
-                &dir.path().join("x.json").to_string_lossy(),
-            ],
+            &train_head("svm", &["--features", "both"], &x_s),
             &strings(&train),
         ),
         &["`--features both` needs the columns accel_x_mps2"],

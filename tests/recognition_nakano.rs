@@ -11,9 +11,12 @@
 //! scaling shows what that trade of latency for accuracy buys.
 #![allow(clippy::print_stdout)] // the tables are this test's report
 
+mod common;
+
 use std::sync::OnceLock;
 
 use capture::{Capture, CaptureKind};
+use common::nakano_captures;
 use haptics::sim::protocols::{CaptureSet, generate};
 use recognize::{
     ConfusionMatrix, FEATURES, NakanoConfig, NakanoSignals, NakanoStream, Normalization, Som, SomParams,
@@ -41,14 +44,7 @@ fn runs() -> &'static [Run] {
     RUNS.get_or_init(|| {
         let dir = tempfile::tempdir().expect("tempdir");
         generate(dir.path(), 1, &[CaptureSet::Nakano], &mut |_| {}).expect("generate");
-        let mut paths: Vec<_> = std::fs::read_dir(dir.path().join("nakano"))
-            .expect("nakano folder")
-            .map(|e| e.expect("entry").path())
-            .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-            .collect();
-        paths.sort();
-        assert_eq!(paths.len(), 21);
-        paths
+        nakano_captures(dir.path())
             .iter()
             .map(|p| {
                 let capture = Capture::read_file(p, CaptureKind::Rubbing).expect("capture");
@@ -63,16 +59,22 @@ fn runs() -> &'static [Run] {
     })
 }
 
-/// Feature vectors of `len`-sample windows every [`HOP`] samples from x = 5 mm on.
-fn windows(run: &Run, len: usize, config: &NakanoConfig) -> Vec<Vec<f64>> {
+/// The run's signals, and its first sample after [`START_TRAVEL_M`] of travel.
+fn signals_from_start(run: &Run) -> (NakanoSignals<'_>, usize) {
     let signals = NakanoSignals::from_capture(&run.capture).expect("columns");
     let x = signals.position_m();
-    let margin = config.lookahead_samples();
     let first = x
         .iter()
         .position(|&p| p - x[0] >= START_TRAVEL_M)
-        .expect("5 mm of travel")
-        .max(margin);
+        .expect("5 mm of travel");
+    (signals, first)
+}
+
+/// Feature vectors of `len`-sample windows every [`HOP`] samples from x = 5 mm on.
+fn windows(run: &Run, len: usize, config: &NakanoConfig) -> Vec<Vec<f64>> {
+    let (signals, first) = signals_from_start(run);
+    let margin = config.lookahead_samples();
+    let first = first.max(margin);
     (first..)
         .step_by(HOP)
         .take_while(|s| s + len + margin <= signals.len())
@@ -84,13 +86,8 @@ fn windows(run: &Run, len: usize, config: &NakanoConfig) -> Vec<Vec<f64>> {
 /// of the stroke (after the filter margin) up to the decision point, decisions every [`HOP`]
 /// samples from x = 5 mm on — a growing window instead of a sliding one.
 fn growing_windows(run: &Run, config: &NakanoConfig) -> Vec<Vec<f64>> {
-    let signals = NakanoSignals::from_capture(&run.capture).expect("columns");
-    let x = signals.position_m();
+    let (signals, first) = signals_from_start(run);
     let margin = config.lookahead_samples();
-    let first = x
-        .iter()
-        .position(|&p| p - x[0] >= START_TRAVEL_M)
-        .expect("5 mm of travel");
     (first..)
         .step_by(HOP)
         .take_while(|end| end + margin <= signals.len())

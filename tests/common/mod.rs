@@ -1,5 +1,8 @@
-//! Running the `palpus` binary from chain tests.
+//! Running the `palpus` binary from chain tests, and finding the captures it generates.
+// Each test binary uses some of these, none all of them.
+#![allow(dead_code)]
 
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs `palpus ARGS` without a vendor library configured in the environment.
@@ -18,4 +21,17 @@ pub fn text(o: &Output) -> String {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     )
+}
+
+/// The 21 rubbing captures (7 surfaces × 3 runs) that `palpus gen --only nakano` writes under
+/// `dir`, sorted by name.
+pub fn nakano_captures(dir: &Path) -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("nakano"))
+        .expect("nakano folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    paths.sort();
+    assert_eq!(paths.len(), 21);
+    paths
 }
