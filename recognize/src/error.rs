@@ -121,3 +121,21 @@ pub enum RecognizerError {
     #[error("confusion matrix")]
     Eval(#[from] EvalError),
 }
+
+impl RecognizerError {
+    /// Wraps a k-NN's error, naming the classifier's behaviour (none for one over windows).
+    pub(crate) fn knn(behaviour: Option<&str>) -> impl Fn(KnnError) -> Self + '_ {
+        move |source| Self::Knn {
+            behaviour: behaviour.unwrap_or_default().to_owned(),
+            source,
+        }
+    }
+
+    /// Wraps an SVC's error, naming the classifier's behaviour (none for one over windows).
+    pub(crate) fn svc(behaviour: Option<&str>) -> impl Fn(SvcError) -> Self + '_ {
+        move |source| Self::Svc {
+            behaviour: behaviour.unwrap_or_default().to_owned(),
+            source,
+        }
+    }
+}

@@ -2,15 +2,18 @@
 //! scratch), and the behaviours' reliabilities and fusion weights.
 
 use super::LabelledCapture;
-use super::file::{BehaviourSom, RecognizerBody, RecognizerFile};
+use super::file::{BehaviourKnn, BehaviourSom, BehaviourSvc, RecognizerBody, RecognizerFile};
 use super::labelled::check_rate;
 use crate::RecognizerError;
 use crate::features::nakano::FEATURES;
 use crate::features::spectral::{CellScale, SpectrogramPlan};
-use crate::features::{FeatureSet, NakanoWindowing, capture_histogram, window_vectors, windows};
+use crate::features::{
+    FeatureSet, NakanoWindowing, WindowScaling, capture_histogram, window_vectors, windows,
+};
+use crate::knn::Knn;
 #[cfg(doc)]
 use crate::som::Som;
-use crate::svc::CSearch;
+use crate::svc::{CSearch, Svc};
 
 /// A behaviour's reliability weight (cross-validated accuracy), as the training summary shows
 /// it.
@@ -75,16 +78,7 @@ impl RecognizerFile {
                 knn,
             } => {
                 let windowing = windowing.unwrap_or(own);
-                self.window_decisions(capture, windowing, *features, *cell_scale, |v| {
-                    let v = scaling.apply(v);
-                    let knn_error = |source| RecognizerError::Knn {
-                        behaviour: String::new(),
-                        source,
-                    };
-                    let label = knn.predict(&v).map_err(knn_error)?;
-                    let p = knn.predict_proba(&v).map_err(knn_error)?;
-                    Ok((label, p.get(label).copied().unwrap_or(0.0)))
-                })
+                self.scaled_window_decisions(capture, windowing, *features, *cell_scale, scaling, knn)
             }
             RecognizerBody::SvmWindows {
                 features,
@@ -95,16 +89,7 @@ impl RecognizerFile {
                 ..
             } => {
                 let windowing = windowing.unwrap_or(own);
-                self.window_decisions(capture, windowing, *features, *cell_scale, |v| {
-                    let v = scaling.apply(v);
-                    let svc_error = |source| RecognizerError::Svc {
-                        behaviour: String::new(),
-                        source,
-                    };
-                    let label = svc.predict(&v).map_err(svc_error)?;
-                    let p = svc.predict_proba(&v).map_err(svc_error)?;
-                    Ok((label, p.get(label).copied().unwrap_or(0.0)))
-                })
+                self.scaled_window_decisions(capture, windowing, *features, *cell_scale, scaling, svc)
             }
             RecognizerBody::SomWindows {
                 windowing: own,
@@ -152,6 +137,23 @@ impl RecognizerFile {
             .collect()
     }
 
+    /// Decisions of a k-NN or SVC over rubbing windows scaled by `scaling`, its probability of
+    /// the label as the confidence.
+    fn scaled_window_decisions(
+        &self,
+        capture: &LabelledCapture,
+        windowing: &NakanoWindowing,
+        features: FeatureSet,
+        cell_scale: CellScale,
+        scaling: &WindowScaling,
+        classifier: &impl Classifier,
+    ) -> Result<Vec<Decision>, RecognizerError> {
+        self.window_decisions(capture, windowing, features, cell_scale, |v| {
+            let (label, p) = classifier.classify(&scaling.apply(v), None)?;
+            Ok((label, p.get(label).copied().unwrap_or(0.0)))
+        })
+    }
+
     /// For a k-NN or SVM recognizer: the index of the capture's behaviour among
     /// [`RecognizerFile::behaviour_names`], its classifier's label and class probabilities.
     pub(crate) fn scratch_prediction(
@@ -170,47 +172,31 @@ impl RecognizerFile {
             RecognizerBody::SomScratches {
                 cell_scale,
                 behaviours,
-            } => {
-                let b = behaviour_index(behaviours, |b| &b.behaviour, capture)?;
-                let features = capture_histogram(plan, capture, *cell_scale)?;
-                let label = *behaviours[b].som.classify(&features)?;
-                // A map answers one class: its "probabilities" are that class's indicator, so a
-                // trial's fusion is a vote weighted by the behaviours' reliabilities.
-                let mut p = vec![0.0; self.classes.len()];
-                if let Some(slot) = p.get_mut(label) {
-                    *slot = 1.0;
-                }
-                Ok((b, label, p))
-            }
+            } => self.scratch_prediction_by(behaviours, capture, plan, *cell_scale),
             RecognizerBody::Knn {
                 cell_scale,
                 behaviours,
-            } => {
-                let b = behaviour_index(behaviours, |b| &b.behaviour, capture)?;
-                let features = capture_histogram(plan, capture, *cell_scale)?;
-                let knn_error = |source| RecognizerError::Knn {
-                    behaviour: capture.behaviour.clone().unwrap_or_default(),
-                    source,
-                };
-                let knn = &behaviours[b].knn;
-                let label = knn.predict(&features).map_err(knn_error)?;
-                Ok((b, label, knn.predict_proba(&features).map_err(knn_error)?))
-            }
+            } => self.scratch_prediction_by(behaviours, capture, plan, *cell_scale),
             RecognizerBody::Svm {
                 cell_scale,
                 behaviours,
-            } => {
-                let b = behaviour_index(behaviours, |b| &b.behaviour, capture)?;
-                let features = capture_histogram(plan, capture, *cell_scale)?;
-                let svc_error = |source| RecognizerError::Svc {
-                    behaviour: capture.behaviour.clone().unwrap_or_default(),
-                    source,
-                };
-                let svc = &behaviours[b].svc;
-                let label = svc.predict(&features).map_err(svc_error)?;
-                Ok((b, label, svc.predict_proba(&features).map_err(svc_error)?))
-            }
+            } => self.scratch_prediction_by(behaviours, capture, plan, *cell_scale),
         }
+    }
+
+    /// [`RecognizerFile::scratch_prediction`] by the classifier of the capture's behaviour among
+    /// `behaviours`, over the capture's histogram.
+    fn scratch_prediction_by(
+        &self,
+        behaviours: &[impl BehaviourClassifier],
+        capture: &LabelledCapture,
+        plan: &SpectrogramPlan,
+        cell_scale: CellScale,
+    ) -> Result<(usize, usize, Vec<f64>), RecognizerError> {
+        let b = behaviour_index(behaviours, capture)?;
+        let features = capture_histogram(plan, capture, cell_scale)?;
+        let (label, p) = behaviours[b].classify(&features, self.classes.len())?;
+        Ok((b, label, p))
     }
 
     /// The behaviours of a k-NN or SVM recognizer, in its classifiers' order (empty for a SOM).
@@ -226,27 +212,15 @@ impl RecognizerFile {
             | RecognizerBody::SomWindows { .. }
             | RecognizerBody::KnnWindows { .. }
             | RecognizerBody::SvmWindows { .. } => Vec::new(),
-            RecognizerBody::SomScratches { behaviours, .. } => som_reliabilities(behaviours),
-            RecognizerBody::Knn { behaviours, .. } => behaviours
-                .iter()
-                .map(|b| BehaviourReliability {
-                    behaviour: b.behaviour.as_deref(),
-                    reliability: b.reliability,
-                    folds: b.reliability_folds,
-                    c_search: None,
-                    c: None,
-                })
-                .collect(),
-            RecognizerBody::Svm { behaviours, .. } => behaviours
-                .iter()
-                .map(|b| BehaviourReliability {
-                    behaviour: b.behaviour.as_deref(),
-                    reliability: b.reliability,
-                    folds: b.c_search.as_ref().map(|s| s.folds),
-                    c_search: b.c_search.as_ref(),
-                    c: Some(b.svc.params().c),
-                })
-                .collect(),
+            RecognizerBody::SomScratches { behaviours, .. } => {
+                behaviours.iter().map(BehaviourClassifier::reliability).collect()
+            }
+            RecognizerBody::Knn { behaviours, .. } => {
+                behaviours.iter().map(BehaviourClassifier::reliability).collect()
+            }
+            RecognizerBody::Svm { behaviours, .. } => {
+                behaviours.iter().map(BehaviourClassifier::reliability).collect()
+            }
         }
     }
 
@@ -267,37 +241,133 @@ impl RecognizerFile {
     }
 }
 
-/// Reliabilities of a [`RecognizerBody::SomScratches`], for
-/// [`RecognizerFile::reliabilities`].
-fn som_reliabilities(behaviours: &[BehaviourSom]) -> Vec<BehaviourReliability<'_>> {
-    behaviours
-        .iter()
-        .map(|b| BehaviourReliability {
-            behaviour: b.behaviour.as_deref(),
-            reliability: b.reliability,
-            folds: b.reliability_folds,
-            c_search: None,
-            c: None,
-        })
-        .collect()
+/// A classifier of one feature vector with class probabilities: a k-NN or an SVC.
+trait Classifier {
+    /// The label of `v` and every class's probability; a failure names `behaviour` (none for
+    /// a classifier over windows).
+    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizerError>;
 }
 
-/// Index of the classifier of the capture's behaviour (k-NN and SVM recognizers keep one per
-/// behaviour).
-fn behaviour_index<T>(
-    behaviours: &[T],
-    name: impl Fn(&T) -> &Option<String>,
+impl Classifier for Knn {
+    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizerError> {
+        let error = RecognizerError::knn(behaviour);
+        Ok((
+            self.predict(v).map_err(&error)?,
+            self.predict_proba(v).map_err(error)?,
+        ))
+    }
+}
+
+impl Classifier for Svc {
+    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizerError> {
+        let error = RecognizerError::svc(behaviour);
+        Ok((
+            self.predict(v).map_err(&error)?,
+            self.predict_proba(v).map_err(error)?,
+        ))
+    }
+}
+
+/// One behaviour's classifier of whole-scratch histograms, as a recognizer stores it.
+trait BehaviourClassifier {
+    /// The behaviour it classifies.
+    fn behaviour(&self) -> &Option<String>;
+
+    /// The label of a histogram and the probabilities of the `classes` classes.
+    fn classify(&self, histogram: &[f64], classes: usize) -> Result<(usize, Vec<f64>), RecognizerError>;
+
+    /// Its stored reliability, for [`RecognizerFile::reliabilities`].
+    fn reliability(&self) -> BehaviourReliability<'_>;
+}
+
+impl BehaviourClassifier for BehaviourKnn {
+    fn behaviour(&self) -> &Option<String> {
+        &self.behaviour
+    }
+
+    fn classify(&self, histogram: &[f64], _: usize) -> Result<(usize, Vec<f64>), RecognizerError> {
+        Classifier::classify(&self.knn, histogram, self.behaviour.as_deref())
+    }
+
+    fn reliability(&self) -> BehaviourReliability<'_> {
+        without_c(&self.behaviour, self.reliability, self.reliability_folds)
+    }
+}
+
+impl BehaviourClassifier for BehaviourSvc {
+    fn behaviour(&self) -> &Option<String> {
+        &self.behaviour
+    }
+
+    fn classify(&self, histogram: &[f64], _: usize) -> Result<(usize, Vec<f64>), RecognizerError> {
+        Classifier::classify(&self.svc, histogram, self.behaviour.as_deref())
+    }
+
+    fn reliability(&self) -> BehaviourReliability<'_> {
+        BehaviourReliability {
+            behaviour: self.behaviour.as_deref(),
+            reliability: self.reliability,
+            folds: self.c_search.as_ref().map(|s| s.folds),
+            c_search: self.c_search.as_ref(),
+            c: Some(self.svc.params().c),
+        }
+    }
+}
+
+impl BehaviourClassifier for BehaviourSom {
+    fn behaviour(&self) -> &Option<String> {
+        &self.behaviour
+    }
+
+    /// A map answers one class: its "probabilities" are that class's indicator, so a trial's
+    /// fusion is a vote weighted by the behaviours' reliabilities.
+    fn classify(&self, histogram: &[f64], classes: usize) -> Result<(usize, Vec<f64>), RecognizerError> {
+        let label = *self.som.classify(histogram)?;
+        let mut p = vec![0.0; classes];
+        if let Some(slot) = p.get_mut(label) {
+            *slot = 1.0;
+        }
+        Ok((label, p))
+    }
+
+    fn reliability(&self) -> BehaviourReliability<'_> {
+        without_c(&self.behaviour, self.reliability, self.reliability_folds)
+    }
+}
+
+/// The reliability of a behaviour whose classifier has no C (k-NN, SOM).
+fn without_c(
+    behaviour: &Option<String>,
+    reliability: Option<f64>,
+    folds: Option<usize>,
+) -> BehaviourReliability<'_> {
+    BehaviourReliability {
+        behaviour: behaviour.as_deref(),
+        reliability,
+        folds,
+        c_search: None,
+        c: None,
+    }
+}
+
+/// Index of the classifier of the capture's behaviour (k-NN, SVM and scratch-SOM recognizers
+/// keep one per behaviour).
+fn behaviour_index(
+    behaviours: &[impl BehaviourClassifier],
     capture: &LabelledCapture,
 ) -> Result<usize, RecognizerError> {
     behaviours
         .iter()
-        .position(|b| *name(b) == capture.behaviour)
+        .position(|b| *b.behaviour() == capture.behaviour)
         .ok_or_else(|| RecognizerError::UnusableCapture {
             path: capture.reference.path.clone(),
             reason: format!(
                 "behaviour {:?}: the recognizer was trained on {:?}",
                 capture.behaviour,
-                behaviours.iter().map(&name).collect::<Vec<_>>()
+                behaviours
+                    .iter()
+                    .map(BehaviourClassifier::behaviour)
+                    .collect::<Vec<_>>()
             ),
         })
 }

@@ -2,11 +2,11 @@
 //! one over rubbing windows.
 
 use super::{
-    CV_FOLDS, Method, TrainSettings, Trainer, histograms_by_behaviour, training_windows, window_check,
+    CV_FOLDS, Method, ScaledWindows, TrainSettings, Trainer, histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizerError;
 use crate::features::spectral::CellScale;
-use crate::features::{FeatureSet, NakanoWindowing, WindowScaling, histogram_names};
+use crate::features::{FeatureSet, NakanoWindowing};
 use crate::knn::{FeatureScaling, KnnParams, cross_validated_accuracy, group_folds};
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
@@ -56,10 +56,7 @@ impl RecognizerFile {
         for (name, x, y, groups) in histograms_by_behaviour(captures, &classes, cell_scale)? {
             let knn = params
                 .fit(&x, &y, classes.len())
-                .map_err(|source| RecognizerError::Knn {
-                    behaviour: name.unwrap_or("").to_owned(),
-                    source,
-                })?;
+                .map_err(RecognizerError::knn(name))?;
             // The fit above has checked the data, so a failing cross-validation only means
             // too few trials (or too few scratches outside a fold): no weight, see
             // `fusion_weights`.
@@ -75,19 +72,15 @@ impl RecognizerFile {
                 reliability_folds: cv.map(|(_, f)| f),
             });
         }
-        if behaviours.is_empty() {
-            return Err(RecognizerError::NoTrainingData);
-        }
-        Ok(Self::assemble(
+        Self::assemble_scratches(
             classes,
-            histogram_names(),
+            behaviours.len(),
             RecognizerBody::Knn {
                 cell_scale,
                 behaviours,
             },
             captures,
-            captures.len(),
-        ))
+        )
     }
 
     /// k-NN over rubbing windows (`features` [`FeatureSet::Nakano`] or [`FeatureSet::Both`]):
@@ -100,19 +93,18 @@ impl RecognizerFile {
         k: usize,
         cell_scale: CellScale,
     ) -> Result<Self, RecognizerError> {
-        window_check(features)?;
-        let classes = class_list(captures);
-        let (x, y, _) = training_windows(captures, &classes, &windowing, features, cell_scale)?;
-        let scaling = WindowScaling::fit(&x, &y);
-        let scaled: Vec<Vec<f64>> = x.iter().map(|v| scaling.apply(v)).collect();
+        let ScaledWindows {
+            classes,
+            scaling,
+            x,
+            y,
+            ..
+        } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
         let knn = KnnParams::default()
             .k(k)
             .scaling(FeatureScaling::None)
-            .fit(&scaled, &y, classes.len())
-            .map_err(|source| RecognizerError::Knn {
-                behaviour: String::new(),
-                source,
-            })?;
+            .fit(&x, &y, classes.len())
+            .map_err(RecognizerError::knn(None))?;
         Ok(Self::assemble(
             classes,
             features.feature_names(),

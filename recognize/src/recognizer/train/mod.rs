@@ -15,18 +15,19 @@ pub use knn::KnnTrainer;
 pub use som::{SCRATCH_SOM_NORMALIZATION, SomTrainer, som_nodes, som_params};
 pub use svm::{SvmTrainer, WINDOW_SVM_FALLBACK_C, window_svc_params};
 
-use super::labelled::{check_rate, class_index};
-use super::{LabelledCapture, RecognizerFile, recording_groups, trial_groups};
+use super::labelled::{check_rate, class_index, class_list};
+use super::{LabelledCapture, RecognizerBody, RecognizerFile, recording_groups, trial_groups};
 use crate::RecognizerError;
 use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
 use crate::features::{
-    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, capture_histogram,
-    window_vectors,
+    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling,
+    capture_histogram, histogram_names, window_vectors,
 };
 use crate::knn::PAPER_K;
 use crate::som::Normalization;
 #[cfg(doc)]
 use crate::svc::SvcParams;
+use crate::svc::{CSearch, SvcError};
 
 /// Which classifier a recognizer trains.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,6 +173,39 @@ impl SvmC {
     pub fn auto() -> Self {
         Self::Auto(crate::svc::C_GRID.to_vec())
     }
+
+    /// The C to use: the best of the candidates (the grid, or the C given) under `search`, a
+    /// cross-validation of them (`None` when the training data cannot be cross-validated);
+    /// without one, the C given, or `fallback`.
+    pub(crate) fn choose(
+        &self,
+        fallback: f64,
+        search: impl FnOnce(&[f64]) -> Option<Result<CSearch, SvcError>>,
+    ) -> Result<ChosenC, SvcError> {
+        let grid = match self {
+            Self::Auto(grid) => grid.clone(),
+            Self::Fixed(c) => vec![*c],
+        };
+        let search = match search(&grid) {
+            Some(Ok(search)) => Some(search),
+            Some(Err(SvcError::TooFewGroups { .. })) | None => None,
+            Some(Err(e)) => return Err(e),
+        };
+        let c = match (&search, self) {
+            (Some(s), _) => s.chosen_c,
+            (None, Self::Fixed(c)) => *c,
+            (None, Self::Auto(_)) => fallback,
+        };
+        Ok(ChosenC { c, search })
+    }
+}
+
+/// An SVM's C, and how it was chosen ([`SvmC::choose`]).
+pub(crate) struct ChosenC {
+    /// The C.
+    pub c: f64,
+    /// The cross-validation that chose it; `None` when there was none.
+    pub search: Option<CSearch>,
 }
 
 /// One behaviour's training data: its name, a histogram per capture, their class indices and
@@ -229,6 +263,65 @@ pub(crate) fn training_windows(
         return Err(RecognizerError::NoTrainingData);
     }
     Ok((x, y, g))
+}
+
+/// Training windows for a k-NN or SVM over windows, scaled by the [`WindowScaling`] fitted to
+/// them.
+pub(crate) struct ScaledWindows {
+    /// The classes, in the recognizer's order.
+    pub classes: Vec<String>,
+    /// The scaling, as the recognizer stores it.
+    pub scaling: WindowScaling,
+    /// The scaled vectors.
+    pub x: Vec<Vec<f64>>,
+    /// Their class indices.
+    pub y: Vec<usize>,
+    /// Their cross-validation groups (see [`training_windows`]).
+    pub groups: Vec<u64>,
+}
+
+/// The scaled training windows of `captures` (`features` [`FeatureSet::Nakano`] or
+/// [`FeatureSet::Both`]).
+pub(crate) fn scaled_training_windows(
+    captures: &[LabelledCapture],
+    windowing: &NakanoWindowing,
+    features: FeatureSet,
+    cell_scale: CellScale,
+) -> Result<ScaledWindows, RecognizerError> {
+    window_check(features)?;
+    let classes = class_list(captures);
+    let (x, y, groups) = training_windows(captures, &classes, windowing, features, cell_scale)?;
+    let scaling = WindowScaling::fit(&x, &y);
+    let x = x.iter().map(|v| scaling.apply(v)).collect();
+    Ok(ScaledWindows {
+        classes,
+        scaling,
+        x,
+        y,
+        groups,
+    })
+}
+
+impl RecognizerFile {
+    /// A recognizer of whole scratches, one classifier per behaviour (`behaviours` of them in
+    /// `body`), over Sinapov's histograms; no behaviour means no training data.
+    pub(crate) fn assemble_scratches(
+        classes: Vec<String>,
+        behaviours: usize,
+        body: RecognizerBody,
+        captures: &[LabelledCapture],
+    ) -> Result<Self, RecognizerError> {
+        if behaviours == 0 {
+            return Err(RecognizerError::NoTrainingData);
+        }
+        Ok(Self::assemble(
+            classes,
+            histogram_names(),
+            body,
+            captures,
+            captures.len(),
+        ))
+    }
 }
 
 /// Whether every class has windows in at least two groups, so that no fold of a

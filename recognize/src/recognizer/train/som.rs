@@ -10,7 +10,7 @@ use super::{
 use crate::RecognizerError;
 use crate::features::nakano::FEATURE_NAMES;
 use crate::features::spectral::CellScale;
-use crate::features::{FeatureSet, NakanoWindowing, histogram_names, windows};
+use crate::features::{FeatureSet, NakanoWindowing, windows};
 use crate::knn::group_folds;
 use crate::recognizer::labelled::{check_rate, class_index, class_list};
 use crate::recognizer::{BehaviourSom, LabelledCapture, RecognizerBody, RecognizerFile};
@@ -184,18 +184,14 @@ impl RecognizerFile {
             };
         // One behaviour per task; collected in the behaviours' order.
         let behaviours: Vec<BehaviourSom> = data.par_iter().map(fit_one).collect::<Result<_, _>>()?;
-        if behaviours.is_empty() {
-            return Err(RecognizerError::NoTrainingData);
-        }
-        Ok(Self::assemble(
+        Self::assemble_scratches(
             classes,
-            histogram_names(),
+            behaviours.len(),
             RecognizerBody::SomScratches {
                 cell_scale,
                 behaviours,
             },
             captures,
-            captures.len(),
-        ))
+        )
     }
 }

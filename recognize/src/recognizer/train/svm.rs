@@ -4,18 +4,18 @@
 use rayon::prelude::*;
 
 use super::{
-    BehaviourHistograms, CV_FOLDS, Method, SvmC, TrainSettings, Trainer, every_class_in_two_groups,
-    histograms_by_behaviour, training_windows, window_check,
+    BehaviourHistograms, CV_FOLDS, Method, ScaledWindows, SvmC, TrainSettings, Trainer,
+    every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizerError;
 use crate::features::spectral::CellScale;
-use crate::features::{FeatureSet, NakanoWindowing, WindowScaling, histogram_names};
+use crate::features::{FeatureSet, NakanoWindowing};
 use crate::knn::FeatureScaling;
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
 use crate::recognizer::{BehaviourSvc, LabelledCapture, RecognizerBody, RecognizerFile};
-use crate::svc::{CSearch, Svc, SvcError, SvcParams, select_c};
+use crate::svc::{CSearch, Svc, SvcParams, select_c};
 use svm::Kernel;
 
 /// Trains SVM recognizers with `settings.c`: one SVC per behaviour over whole-scratch
@@ -93,48 +93,40 @@ impl RecognizerFile {
         let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
         let fit_one =
             |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSvc, RecognizerError> {
-                let svc_error = |source| RecognizerError::Svc {
-                    behaviour: name.unwrap_or("").to_owned(),
-                    source,
-                };
-                let grid = match c {
-                    SvmC::Auto(grid) => grid.clone(),
-                    SvmC::Fixed(c) => vec![*c],
-                };
-                let search = match select_c(params, &grid, x, y, groups, classes.len(), CV_FOLDS) {
-                    Ok(search) => Some(search),
-                    Err(SvcError::TooFewGroups { .. }) => None,
-                    Err(e) => return Err(svc_error(e)),
-                };
-                let chosen = match (&search, c) {
-                    (Some(s), _) => s.chosen_c,
-                    (None, SvmC::Fixed(c)) => *c,
-                    (None, SvmC::Auto(_)) => SvmC::FALLBACK,
-                };
-                let svc =
-                    Svc::fit(SvcParams { c: chosen, ..params }, x, y, classes.len()).map_err(svc_error)?;
+                let svc_error = RecognizerError::svc(*name);
+                let chosen = c
+                    .choose(SvmC::FALLBACK, |grid| {
+                        Some(select_c(params, grid, x, y, groups, classes.len(), CV_FOLDS))
+                    })
+                    .map_err(&svc_error)?;
+                let svc = Svc::fit(
+                    SvcParams {
+                        c: chosen.c,
+                        ..params
+                    },
+                    x,
+                    y,
+                    classes.len(),
+                )
+                .map_err(&svc_error)?;
                 Ok(BehaviourSvc {
                     behaviour: name.map(str::to_owned),
                     svc,
-                    reliability: search.as_ref().and_then(CSearch::accuracy),
-                    c_search: search,
+                    reliability: chosen.search.as_ref().and_then(CSearch::accuracy),
+                    c_search: chosen.search,
                 })
             };
         // One behaviour per task; collected in the behaviours' order.
         let behaviours: Vec<BehaviourSvc> = data.par_iter().map(fit_one).collect::<Result<_, _>>()?;
-        if behaviours.is_empty() {
-            return Err(RecognizerError::NoTrainingData);
-        }
-        Ok(Self::assemble(
+        Self::assemble_scratches(
             classes,
-            histogram_names(),
+            behaviours.len(),
             RecognizerBody::Svm {
                 cell_scale,
                 behaviours,
             },
             captures,
-            captures.len(),
-        ))
+        )
     }
 
     /// C-SVC over rubbing windows (see [`RecognizerFile::train_knn_windows`] and
@@ -148,36 +140,31 @@ impl RecognizerFile {
         c: &SvmC,
         cell_scale: CellScale,
     ) -> Result<Self, RecognizerError> {
-        window_check(features)?;
-        let classes = class_list(captures);
-        let (x, y, groups) = training_windows(captures, &classes, &windowing, features, cell_scale)?;
-        let scaling = WindowScaling::fit(&x, &y);
-        let scaled: Vec<Vec<f64>> = x.iter().map(|v| scaling.apply(v)).collect();
+        let ScaledWindows {
+            classes,
+            scaling,
+            x,
+            y,
+            groups,
+        } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
         let params = window_svc_params(features.dim());
-        let svc_error = |source| RecognizerError::Svc {
-            behaviour: String::new(),
-            source,
-        };
-        let grid = match c {
-            SvmC::Auto(grid) => grid.clone(),
-            SvmC::Fixed(c) => vec![*c],
-        };
-        let search = if every_class_in_two_groups(&y, &groups) {
-            match select_c(params, &grid, &scaled, &y, &groups, classes.len(), CV_FOLDS) {
-                Ok(search) => Some(search),
-                Err(SvcError::TooFewGroups { .. }) => None,
-                Err(e) => return Err(svc_error(e)),
-            }
-        } else {
-            None
-        };
-        let chosen = match (&search, c) {
-            (Some(s), _) => s.chosen_c,
-            (None, SvmC::Fixed(c)) => *c,
-            (None, SvmC::Auto(_)) => WINDOW_SVM_FALLBACK_C,
-        };
-        let svc =
-            Svc::fit(SvcParams { c: chosen, ..params }, &scaled, &y, classes.len()).map_err(svc_error)?;
+        let svc_error = RecognizerError::svc(None);
+        let chosen = c
+            .choose(WINDOW_SVM_FALLBACK_C, |grid| {
+                every_class_in_two_groups(&y, &groups)
+                    .then(|| select_c(params, grid, &x, &y, &groups, classes.len(), CV_FOLDS))
+            })
+            .map_err(&svc_error)?;
+        let svc = Svc::fit(
+            SvcParams {
+                c: chosen.c,
+                ..params
+            },
+            &x,
+            &y,
+            classes.len(),
+        )
+        .map_err(&svc_error)?;
         Ok(Self::assemble(
             classes,
             features.feature_names(),
@@ -187,7 +174,7 @@ impl RecognizerFile {
                 cell_scale,
                 scaling,
                 svc,
-                c_search: search,
+                c_search: chosen.search,
             },
             captures,
             x.len(),
