@@ -98,37 +98,24 @@ pub fn similarity_from_confusion(counts: &[Vec<u64>]) -> Result<Vec<Vec<f64>>, C
             }
         }
     }
-    Ok((0..n)
+    Ok(square(n, 1.0, |i, j| 0.5 * (rates[i][j] + rates[j][i])))
+}
+
+/// An `n` × `n` matrix with `diagonal` on its diagonal and `off(i, j)` elsewhere.
+fn square(n: usize, diagonal: f64, off: impl Fn(usize, usize) -> f64) -> Vec<Vec<f64>> {
+    (0..n)
         .map(|i| {
             (0..n)
-                .map(|j| {
-                    if i == j {
-                        1.0
-                    } else {
-                        0.5 * (rates[i][j] + rates[j][i])
-                    }
-                })
+                .map(|j| if i == j { diagonal } else { off(i, j) })
                 .collect()
         })
-        .collect())
+        .collect()
 }
 
 /// Distances for an embedding from a similarity in `[0, 1]`: `1 − S`, 0 on the diagonal.
 pub fn distances_from_similarity(similarity: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, CategoryError> {
     let n = check(similarity)?;
-    Ok((0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| {
-                    if i == j {
-                        0.0
-                    } else {
-                        (1.0 - similarity[i][j]).max(0.0)
-                    }
-                })
-                .collect()
-        })
-        .collect())
+    Ok(square(n, 0.0, |i, j| (1.0 - similarity[i][j]).max(0.0)))
 }
 
 /// One bipartition by [`normalized_cut`].

@@ -832,32 +832,28 @@ mod tests {
         columns.push("tangential_command_force_n".into());
         data.push(command);
         let capture = Capture::new(meta, columns, data).expect("valid");
-        let estimate = Rfob::default().friction_n(&capture).expect("columns");
+        // Within `tolerance` N of the friction from sample `from` on.
+        let assert_tracks = |capture: &Capture, from: usize, tolerance: f64| {
+            let estimate = Rfob::default().friction_n(capture).expect("columns");
+            for k in from..n {
+                assert!(
+                    (estimate[k] - friction[k]).abs() < tolerance,
+                    "{k}: {} vs {}",
+                    estimate[k],
+                    friction[k]
+                );
+            }
+        };
         // After the observer's transient (5 time constants of 20 ms) it lags the slow friction
         // by ~20 ms: 3 rad/s × 0.02 N × 0.02 s ≈ 1.2 mN.
-        for k in 100..n {
-            assert!(
-                (estimate[k] - friction[k]).abs() < 3e-3,
-                "{k}: {} vs {}",
-                estimate[k],
-                friction[k]
-            );
-        }
+        assert_tracks(&capture, 100, 3e-3);
         // Without a velocity column it pseudo-differentiates the position.
         let mut columns = capture.columns().to_vec();
         let mut data = capture.data().to_vec();
         columns.remove(3);
         data.remove(3);
         let capture = Capture::new(capture.metadata().clone(), columns, data).expect("valid");
-        let estimate = Rfob::default().friction_n(&capture).expect("columns");
-        for k in 200..n {
-            assert!(
-                (estimate[k] - friction[k]).abs() < 5e-3,
-                "{k}: {} vs {}",
-                estimate[k],
-                friction[k]
-            );
-        }
+        assert_tracks(&capture, 200, 5e-3);
     }
 
     #[test]
