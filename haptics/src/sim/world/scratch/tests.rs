@@ -1,4 +1,9 @@
+use std::f64::consts::{PI, TAU};
+
+use super::path::Stroke;
+use super::simulate::{ShearContact, rotation};
 use super::*;
+use crate::sim::world::profile::Band;
 use realfft::RealFftPlanner;
 
 /// Sinapov Sec. IV-A: |a| minus its 100-sample moving average (centred, shortened at the ends).
