@@ -148,6 +148,15 @@ impl<'a> Sources<'a> {
         (self.read)(path)
     }
 
+    /// The bytes of `path`, a source of the scene's model `model`.
+    fn read_model_source(&mut self, model: &str, path: &Path) -> Result<Vec<u8>, ModelError> {
+        self.read(path).map_err(|e| ModelError::Read {
+            model: model.into(),
+            path: path.to_owned(),
+            source: e,
+        })
+    }
+
     /// Every path read so far.
     pub fn opened(&self) -> &BTreeSet<PathBuf> {
         &self.opened
@@ -232,11 +241,7 @@ fn resolve_one(
     let kind = kind_of(&source.kind);
     if let Some(file) = &source.file {
         let path = scene.resolve(file);
-        let bytes = sources.read(&path).map_err(|e| ModelError::Read {
-            model: name.into(),
-            path: path.clone(),
-            source: e,
-        })?;
+        let bytes = sources.read_model_source(name, &path)?;
         let model = ModelFile::from_slice(&bytes, &path).map_err(|e| ModelError::File {
             model: name.into(),
             source: e,
@@ -252,11 +257,7 @@ fn resolve_one(
         });
     };
     let path = scene.resolve(capture);
-    let bytes = sources.read(&path).map_err(|e| ModelError::Read {
-        model: name.into(),
-        path: path.clone(),
-        source: e,
-    })?;
+    let bytes = sources.read_model_source(name, &path)?;
     let options = IdentifyOptions {
         kind,
         c: source.c,
