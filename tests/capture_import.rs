@@ -10,7 +10,7 @@ use std::path::Path;
 mod common;
 
 use capture::{Capture, CaptureKind};
-use common::{palpus, text};
+use common::{palpus, succeeds, success, text};
 
 /// Runs `palpus import IN --kind rubbing --out OUT ARGS...` and returns the output.
 fn import(input: &Path, out: &Path, args: &[&str]) -> std::process::Output {
@@ -106,7 +106,7 @@ fn downsample(jitter_ms: f64) -> Downsampled {
     }
     std::fs::write(&input, csv).unwrap();
     let out = dir.path().join("imported.csv");
-    let o = import(
+    let t = text(&success(import(
         &input,
         &out,
         &[
@@ -117,9 +117,7 @@ fn downsample(jitter_ms: f64) -> Downsampled {
             "--meta",
             "surface=sandpaper_400",
         ],
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let t = text(&o);
+    )));
     assert!(
         t.contains("imported 20006 rows") && t.contains("2001 rows at 1000 Hz"),
         "{t}"
@@ -233,7 +231,7 @@ fn upsampling_interpolates_linearly_within_the_computed_bound() {
     }
     std::fs::write(&input, csv).unwrap();
     let out = dir.path().join("fast.csv");
-    let o = import(
+    let t = text(&success(import(
         &input,
         &out,
         &[
@@ -242,9 +240,8 @@ fn upsampling_interpolates_linearly_within_the_computed_bound() {
             "--rate-hz",
             "1000",
         ],
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    assert!(text(&o).contains("linear interpolation"), "{}", text(&o));
+    )));
+    assert!(t.contains("linear interpolation"), "{t}");
     let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
     assert_eq!(c.len(), 3001);
     assert_eq!(
@@ -282,7 +279,7 @@ fn upsampling_interpolates_linearly_within_the_computed_bound() {
 fn a_capture_in_other_units_passes_through_unchanged() {
     let dir = tempfile::tempdir().unwrap();
     let original = dir.path().join("x.csv");
-    let o = palpus(&[
+    succeeds(&[
         "capture",
         "--device",
         "sim",
@@ -295,7 +292,6 @@ fn a_capture_in_other_units_passes_through_unchanged() {
         "--out",
         original.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", text(&o));
     let capture = Capture::read_file(&original, CaptureKind::Rubbing).unwrap();
     // (capture column, log name, log unit, factor from SI to the log's unit)
     let renames: [(&str, &str, &str, f64); 7] = [
@@ -332,9 +328,8 @@ fn a_capture_in_other_units_passes_through_unchanged() {
         if let Some(rate) = rate {
             args.extend(["--rate-hz", rate]);
         }
-        let o = import(&input, &out, &args);
-        assert!(o.status.success(), "{}", text(&o));
-        assert!(text(&o).contains("(passed through)"), "{}", text(&o));
+        let t = text(&success(import(&input, &out, &args)));
+        assert!(t.contains("(passed through)"), "{t}");
         let back = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
         assert_eq!(back.columns(), capture.columns());
         assert_eq!(back.len(), capture.len());

@@ -5,7 +5,7 @@
 use std::path::Path;
 mod common;
 
-use common::{palpus, text};
+use common::{json, palpus, succeeds, text};
 
 use capture::{Capture, CaptureKind};
 
@@ -55,7 +55,7 @@ fn bad_arguments_are_clear_errors() {
 #[test]
 fn gen_reproduces_the_committed_li_bi_set() {
     let dir = tempfile::tempdir().unwrap();
-    let o = palpus(&[
+    let t = text(&succeeds(&[
         "gen",
         "--out",
         dir.path().to_str().unwrap(),
@@ -63,9 +63,7 @@ fn gen_reproduces_the_committed_li_bi_set() {
         "li_bi",
         "--seed",
         "1",
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let t = text(&o);
+    ]));
     assert!(t.contains("li_bi_needle") && t.contains("total"), "{t}");
     let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
     for name in [
@@ -107,7 +105,7 @@ fn identify_prints_the_json_report_and_writes_models() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
     let model = dir.path().join("needle.json");
     let libsvm = dir.path().join("needle.model");
-    let o = palpus(&[
+    let report = json(&[
         "identify",
         root.join("needle_train.csv").to_str().unwrap(),
         "--model",
@@ -120,8 +118,6 @@ fn identify_prints_the_json_report_and_writes_models() {
         libsvm.to_str().unwrap(),
         "--json",
     ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["model"], "needle");
     assert_eq!(report["n_train"], 350);
     for key in ["n_sv", "dual_objective", "fit_seconds"] {
@@ -139,15 +135,13 @@ fn identify_prints_the_json_report_and_writes_models() {
             .starts_with("svm_type epsilon_svr")
     );
 
-    let o = palpus(&[
+    let report = json(&[
         "identify",
         root.join("hard_contact_train.csv").to_str().unwrap(),
         "--model",
         "hard",
         "--json",
     ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!((report["w"].as_f64().unwrap() - 0.1647).abs() < 0.005);
     assert!(report["b"].is_number() && report["metrics"]["coulomb_viscous"]["aise"].is_number());
 
@@ -169,7 +163,7 @@ fn identify_prints_the_json_report_and_writes_models() {
 #[test]
 fn identify_search_reports_the_frontier_and_fits_the_best_point() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
-    let o = palpus(&[
+    let report = json(&[
         "identify",
         root.join("hard_contact_train.csv").to_str().unwrap(),
         "--model",
@@ -177,8 +171,6 @@ fn identify_search_reports_the_frontier_and_fits_the_best_point() {
         "--search",
         "--json",
     ]);
-    assert!(o.status.success(), "{}", text(&o));
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let points = report["search"].as_array().unwrap();
     assert_eq!(points.len(), 9, "3 C × 3 ε for the linear model");
     let best = points

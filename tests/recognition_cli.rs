@@ -5,9 +5,8 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
-use common::{nakano_captures, palpus, text};
+use common::{fails, json, nakano_captures, succeeds, text};
 use haptics::sim::protocols::sinapov::scratch_capture;
 use haptics::sim::world::scratch::{Behaviour, household_surfaces};
 use serde_json::Value;
@@ -35,25 +34,6 @@ fn args<'a>(head: &[&'a str], paths: &'a [String]) -> Vec<&'a str> {
 
 fn strings(paths: &[PathBuf]) -> Vec<String> {
     paths.iter().map(|p| p.to_string_lossy().into_owned()).collect()
-}
-
-/// Runs palpus with `argv`, which must succeed.
-fn succeeds(argv: &[&str]) -> Output {
-    let out = palpus(argv);
-    assert!(out.status.success(), "{}", text(&out));
-    out
-}
-
-/// Runs palpus with `argv`, which must succeed, and reads what it printed as JSON.
-fn json(argv: &[&str]) -> Value {
-    serde_json::from_slice(&succeeds(argv).stdout).expect("json")
-}
-
-/// Runs palpus with `argv`, which must fail; returns what it printed.
-fn fails(argv: &[&str]) -> String {
-    let out = palpus(argv);
-    assert!(!out.status.success(), "{argv:?} succeeded");
-    text(&out)
 }
 
 /// A JSON file: a recognizer or a categories tree.

@@ -14,6 +14,29 @@ pub fn palpus(args: &[&str]) -> Output {
         .expect("the palpus binary runs")
 }
 
+/// `o`, which must be a success (else the test fails, showing what it printed).
+pub fn success(o: Output) -> Output {
+    assert!(o.status.success(), "{}", text(&o));
+    o
+}
+
+/// Runs `palpus ARGS`, which must succeed.
+pub fn succeeds(args: &[&str]) -> Output {
+    success(palpus(args))
+}
+
+/// Runs `palpus ARGS`, which must succeed, and reads what it printed as JSON.
+pub fn json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_slice(&succeeds(args).stdout).expect("json")
+}
+
+/// Runs `palpus ARGS`, which must fail; returns what it printed.
+pub fn fails(args: &[&str]) -> String {
+    let o = palpus(args);
+    assert!(!o.status.success(), "{args:?} succeeded");
+    text(&o)
+}
+
 /// Everything it printed, stdout then stderr.
 pub fn text(o: &Output) -> String {
     format!(
