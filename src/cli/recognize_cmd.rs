@@ -10,7 +10,7 @@ use recognize::{
     WINDOW_SVM_FALLBACK_C,
 };
 
-use super::train_args::{Method, TrainOptions};
+use super::train_args::{Method, Training};
 
 /// Train and evaluate surface recognizers.
 ///
@@ -65,11 +65,8 @@ struct TrainArgs {
     /// Write the recognizer here.
     #[arg(long, value_name = "MODEL.json")]
     out: PathBuf,
-    /// Which recognizer.
-    #[arg(long, value_enum)]
-    method: Method,
     #[command(flatten)]
-    options: TrainOptions,
+    training: Training,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
@@ -137,11 +134,8 @@ struct CvArgs {
     /// Print one JSON object instead of the tables.
     #[arg(long)]
     json: bool,
-    /// Which recognizer.
-    #[arg(long, value_enum)]
-    method: Method,
     #[command(flatten)]
-    options: TrainOptions,
+    training: Training,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
@@ -164,7 +158,7 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures, None)?;
     let start = std::time::Instant::now();
-    let model = recognize::train(&captures, &args.options.settings(args.method))?;
+    let model = recognize::train(&captures, &args.training.settings())?;
     let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)
@@ -381,7 +375,7 @@ fn print_evaluation(e: &Evaluation, what: &str) {
 
 fn cv(args: &CvArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures, None)?;
-    if args.seeds > 1 && !matches!(args.method, Method::Som) {
+    if args.seeds > 1 && !matches!(args.training.method, Method::Som) {
         anyhow::bail!(
             "--seeds {} applies to som only: knn and svm train the same way every time",
             args.seeds
@@ -397,7 +391,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
         },
     };
     let start = std::time::Instant::now();
-    let settings = args.options.settings(args.method);
+    let settings = args.training.settings();
     let result = protocol::run(&captures, split, args.seeds, args.fold, |train, seed| {
         let settings = recognize::TrainSettings {
             seed: settings.seed + seed,

@@ -7,6 +7,23 @@ use recognize::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, Normalization, SvmC, TRAINING_WINDOW_S, TrainSettings,
 };
 
+/// A recognizer to train: its method and how (`train` and `cv`).
+#[derive(Debug, Args)]
+pub(crate) struct Training {
+    /// Which recognizer.
+    #[arg(long, value_enum)]
+    pub(crate) method: Method,
+    #[command(flatten)]
+    options: TrainOptions,
+}
+
+impl Training {
+    /// The library's settings for it.
+    pub(crate) fn settings(&self) -> TrainSettings {
+        self.options.settings(self.method)
+    }
+}
+
 /// How to train, besides the method: features and settings (`train`, `cv` and `categorize`
 /// alike).
 #[derive(Debug, Args)]

@@ -132,6 +132,16 @@ fn text(area: &Area<'_>, s: &str, at: (i32, i32), style: &TextStyle<'_>) -> Resu
         .map_err(|e| e.to_string())
 }
 
+/// A chart's title, centred across a `width`-pixel image with its top at `y`.
+fn title(area: &Area<'_>, s: &str, width: u32, y: i32) -> Result<(), String> {
+    text(
+        area,
+        s,
+        (width as i32 / 2, y),
+        &text_style(22, BLACK, HPos::Center, VPos::Top),
+    )
+}
+
 fn rect(area: &Area<'_>, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Result<(), String> {
     area.draw(&Rectangle::new([a, b], style))
         .map_err(|e| e.to_string())
@@ -157,13 +167,7 @@ pub fn write_confusion(path: &Path, classes: &[String], percent: &[Vec<f64>]) ->
     render(path, size, |root| {
         let (cw, ch) = CM_CELL;
         let n = classes.len() as i32;
-        let title = text_style(22, BLACK, HPos::Center, VPos::Top);
-        text(
-            root,
-            "confusion matrix (% of each true class)",
-            (size.0 as i32 / 2, 12),
-            &title,
-        )?;
+        title(root, "confusion matrix (% of each true class)", size.0, 12)?;
         let axis = text_style(16, BLACK, HPos::Center, VPos::Center);
         text(root, "predicted", (CM_LEFT + n * cw / 2, 52), &axis)?;
         text(root, "true", (CM_LEFT / 2, CM_TOP - 20), &axis)?;
@@ -272,12 +276,11 @@ pub fn write_som_map(
         let n = labels.len() as i32;
         let right = SOM_LEFT + n * cw;
         let x_mid = |q: i32| SOM_LEFT + q * cw + cw / 2;
-        let title = text_style(22, BLACK, HPos::Center, VPos::Top);
-        text(
+        title(
             root,
             &format!("SOM topographic map ({} nodes)", labels.len()),
-            (size.0 as i32 / 2, 10),
-            &title,
+            size.0,
+            10,
         )?;
         let side = text_style(15, BLACK, HPos::Right, VPos::Center);
         let small = text_style(13, BLACK, HPos::Center, VPos::Bottom);
@@ -411,11 +414,11 @@ pub fn write_som_components(
         let cw = SOM_CELL_W;
         let n = labels.len() as i32;
         let x_mid = |q: i32| left + q * cw + cw / 2;
-        text(
+        title(
             root,
             "SOM map for each feature value (reference vector components)",
-            (size.0 as i32 / 2, 10),
-            &text_style(22, BLACK, HPos::Center, VPos::Top),
+            size.0,
+            10,
         )?;
         for (q, &label) in labels.iter().enumerate() {
             let q = q as i32;
@@ -502,13 +505,7 @@ pub fn write_som_density(
         let cw = SOM_CELL_W;
         let n = labels.len() as i32;
         let right = SOM_LEFT + n * cw;
-        let title = text_style(22, BLACK, HPos::Center, VPos::Top);
-        text(
-            root,
-            "evaluation windows per node, by true class",
-            (size.0 as i32 / 2, 10),
-            &title,
-        )?;
+        title(root, "evaluation windows per node, by true class", size.0, 10)?;
         let name_style = text_style(14, BLACK, HPos::Right, VPos::Center);
         let small = text_style(12, BLACK, HPos::Center, VPos::Bottom);
         for (t, row) in density.iter().enumerate() {
