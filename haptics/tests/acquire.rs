@@ -4,9 +4,12 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use capture::Capture;
+use common::run_unpaced;
 use haptics::acquire::{CaptureOptions, Protocol, controller, run_capture, sim_device};
-use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing};
+use haptics::rt::Pacing;
 use haptics::sim::world::friction::HardContact;
 use haptics::sim::world::needle::NeedleTissue;
 use haptics::sim::world::surface::nakano_surfaces;
@@ -127,22 +130,8 @@ fn rubbing_observers_report_the_forces_the_world_applied() {
     options.pacing = Pacing::Unpaced;
     let mut device = sim_device(&options).unwrap().with_trace(10_000);
     let mut c = controller(Protocol::Rubbing);
-    let config = LoopConfig {
-        max_ticks: Some(10_000),
-        ..LoopConfig::unpaced()
-    };
-    let shared = LoopShared::new(config.period().unwrap());
-    let (producer, mut consumer) = rtrb::RingBuffer::new(10_000);
-    let mut io = LoopIo {
-        samples: Some(producer),
-        live: None,
-    };
-    rt::run(&mut device, &mut c, &mut io, &shared, &config).unwrap();
+    let samples = run_unpaced(&mut device, &mut c, 10_000);
     let trace = device.trace();
-    let mut samples = Vec::new();
-    while let Ok(s) = consumer.pop() {
-        samples.push(s);
-    }
     use haptics::control::rubbing::channel;
     let rubbing: Vec<usize> = (0..trace.len().min(samples.len()))
         .filter(|&i| samples[i].channels[channel::PHASE] == haptics::control::RubbingPhase::Rub.code())

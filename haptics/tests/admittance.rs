@@ -3,24 +3,19 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
+use common::run_unpaced;
 use glam::DVec3;
 use haptics::control::{Admittance, AdmittanceConfig};
 use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimTrace, SimWorld};
 use haptics::law::{
     Environment, FreeSpace, NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic, ScalarModel,
 };
-use haptics::rt::{self, LoopConfig, LoopIo, LoopShared};
 use haptics::sim::hand::{HandImpedance, Waypoints};
 use haptics::sim::world::needle::{NeedleSite, NeedleTissue};
 
 const SURFACE_Z_M: f64 = -0.02;
-
-fn unpaced(ticks: u64) -> LoopConfig {
-    LoopConfig {
-        max_ticks: Some(ticks),
-        ..LoopConfig::unpaced()
-    }
-}
 
 /// Runs `environment` through admittance control with a hand following `path`; returns the
 /// physics trace.
@@ -43,16 +38,7 @@ fn render<E: Environment>(
     .with_hand(hand, Box::new(path))
     .with_trace(ticks as usize);
     let mut controller = Admittance::new(environment, config);
-    let config = unpaced(ticks);
-    let shared = LoopShared::new(config.period().unwrap());
-    rt::run(
-        &mut device,
-        &mut controller,
-        &mut LoopIo::default(),
-        &shared,
-        &config,
-    )
-    .unwrap();
+    run_unpaced(&mut device, &mut controller, ticks);
     device.trace().to_vec()
 }
 
@@ -233,8 +219,8 @@ fn rendered_needle_force_follows_the_truth_along_the_same_path() {
 #[test]
 fn identified_needle_model_rendered_follows_the_truth() {
     use capture::{Capture, CaptureKind};
-    use identify::{IdentifyOptions, identify};
     use identify::ModelKind;
+    use identify::{IdentifyOptions, identify};
     let captures = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/captures/li_bi");
     let train = Capture::read_file(format!("{captures}/needle_train.csv"), CaptureKind::Insertion).unwrap();
     let identified = identify(&train, None, &IdentifyOptions::new(ModelKind::NeedlePuncture)).unwrap();

@@ -3,10 +3,13 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use common::{run_unpaced, unpaced};
 use glam::DVec3;
 use haptics::control::{Admittance, AdmittanceConfig};
 use haptics::device::ForceOverride;
@@ -15,8 +18,8 @@ use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use haptics::device::{DeviceError, ForceCommand, HapticDevice};
 use haptics::law::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
 use haptics::rt::{
-    self, Controller, LoopConfig, LoopError, LoopIo, LoopOutcome, LoopShared, Priority, RtRequest,
-    StopReason, TickInput, TickOutput, WatchdogConfig, ZeroForce,
+    self, Controller, LoopConfig, LoopError, LoopIo, LoopOutcome, Priority, RtRequest, StopReason, TickInput,
+    TickOutput, WatchdogConfig, ZeroForce,
 };
 use proptest::prelude::*;
 
@@ -147,13 +150,6 @@ fn the_watchdog_ramps_the_force_to_zero_when_ticks_stop() {
     assert_eq!(gate.force_scale(), 0.0);
 }
 
-fn unpaced(ticks: u64) -> LoopConfig {
-    LoopConfig {
-        max_ticks: Some(ticks),
-        ..LoopConfig::unpaced()
-    }
-}
-
 /// Runs `device` pushing with `force_n` for up to 1000 unpaced ticks.
 fn push_unpaced<D: HapticDevice + 'static>(device: D, force_n: DVec3) -> LoopOutcome<D, Push> {
     rt::spawn(device, push(force_n), LoopIo::default(), unpaced(1000))
@@ -238,12 +234,7 @@ proptest! {
     ) {
         let mut sim = device().with_trace(4);
         let mut controller = Emit(ForceCommand { force_n: DVec3::new(x, y, z), gripper_force_n: g });
-        let config = unpaced(3);
-        let shared = LoopShared::new(config.period().unwrap());
-        let (producer, mut consumer) = rtrb::RingBuffer::new(8);
-        let mut io = LoopIo { samples: Some(producer), live: None };
-        rt::run(&mut sim, &mut controller, &mut io, &shared, &config).unwrap();
-        while let Ok(s) = consumer.pop() {
+        for s in run_unpaced(&mut sim, &mut controller, 3) {
             prop_assert!(s.command.force_n.is_finite() && s.command.force_n.length() <= 12.0);
             prop_assert!(s.command.gripper_force_n.is_finite() && s.command.gripper_force_n.abs() <= 8.0);
         }
@@ -265,12 +256,7 @@ proptest! {
             SimWorld::Free,
         );
         let mut controller = Admittance::new(env, AdmittanceConfig::default());
-        let config = unpaced(20);
-        let shared = LoopShared::new(config.period().unwrap());
-        let (producer, mut consumer) = rtrb::RingBuffer::new(32);
-        let mut io = LoopIo { samples: Some(producer), live: None };
-        rt::run(&mut sim, &mut controller, &mut io, &shared, &config).unwrap();
-        while let Ok(s) = consumer.pop() {
+        for s in run_unpaced(&mut sim, &mut controller, 20) {
             prop_assert!(s.command.force_n.is_finite(), "{:?}", s.command);
             prop_assert!(s.command.force_n.length() <= 12.0);
         }
