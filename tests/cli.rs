@@ -2,12 +2,17 @@
 
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 mod common;
 
 use common::{json, palpus, succeeds, text};
 
 use capture::{Capture, CaptureKind};
+
+/// The committed Li & Bi capture set.
+fn li_bi_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi")
+}
 
 #[test]
 fn help_explains_the_commands() {
@@ -65,7 +70,7 @@ fn gen_reproduces_the_committed_li_bi_set() {
         "1",
     ]));
     assert!(t.contains("li_bi_needle") && t.contains("total"), "{t}");
-    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
+    let committed = li_bi_dir();
     for name in [
         "hard_contact_train",
         "hard_contact_test",
@@ -102,7 +107,7 @@ fn gen_reproduces_the_committed_li_bi_set() {
 #[test]
 fn identify_prints_the_json_report_and_writes_models() {
     let dir = tempfile::tempdir().unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
+    let root = li_bi_dir();
     let model = dir.path().join("needle.json");
     let libsvm = dir.path().join("needle.model");
     let report = json(&[
@@ -135,23 +140,14 @@ fn identify_prints_the_json_report_and_writes_models() {
             .starts_with("svm_type epsilon_svr")
     );
 
-    let report = json(&[
-        "identify",
-        root.join("hard_contact_train.csv").to_str().unwrap(),
-        "--model",
-        "hard",
-        "--json",
-    ]);
+    let hard = root.join("hard_contact_train.csv");
+    let hard = hard.to_str().unwrap();
+    let report = json(&["identify", hard, "--model", "hard", "--json"]);
     assert!((report["w"].as_f64().unwrap() - 0.1647).abs() < 0.005);
     assert!(report["b"].is_number() && report["metrics"]["coulomb_viscous"]["aise"].is_number());
 
     // A rubbing capture given as a needle one: the reader names the file and the kind.
-    let o = palpus(&[
-        "identify",
-        root.join("hard_contact_train.csv").to_str().unwrap(),
-        "--model",
-        "needle",
-    ]);
+    let o = palpus(&["identify", hard, "--model", "needle"]);
     assert!(!o.status.success());
     assert!(
         text(&o).contains("hard_contact_train.csv") && text(&o).contains("insertion"),
@@ -162,10 +158,11 @@ fn identify_prints_the_json_report_and_writes_models() {
 
 #[test]
 fn identify_search_reports_the_frontier_and_fits_the_best_point() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/li_bi");
+    let root = li_bi_dir();
+    let hard = root.join("hard_contact_train.csv");
     let report = json(&[
         "identify",
-        root.join("hard_contact_train.csv").to_str().unwrap(),
+        hard.to_str().unwrap(),
         "--model",
         "hard",
         "--search",

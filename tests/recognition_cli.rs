@@ -139,20 +139,13 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     // Nakano's protocol over all three runs: each run trains in turn and the other two are
     // held out, three maps per fold, every decision pooled.
     let all_s = strings(&[train.clone(), test.clone()].concat());
-    let cv = json(&args(
-        &[
-            "recognize",
-            "cv",
-            "--method",
-            "som",
-            "--split",
-            "train-on-one",
-            "--seeds",
-            "3",
-            "--json",
-        ],
-        &all_s,
-    ));
+    let train_on_one = |options: &[&'static str]| -> Vec<&'static str> {
+        ["recognize", "cv", "--method", "som", "--split", "train-on-one"]
+            .into_iter()
+            .chain(options.iter().copied())
+            .collect()
+    };
+    let cv = json(&args(&train_on_one(&["--seeds", "3", "--json"]), &all_s));
     assert_eq!(cv["split"], "train-on-one");
     assert_eq!(cv["folds"], 3);
     assert_eq!(cv["rounds"], 9);
@@ -172,19 +165,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert_eq!(cv["fused_by_count"].as_array().map(Vec::len), Some(0));
     // Nakano's own protocol: the first run trains, the other two test, maps pooled.
     let thesis = json(&args(
-        &[
-            "recognize",
-            "cv",
-            "--method",
-            "som",
-            "--split",
-            "train-on-one",
-            "--fold",
-            "1",
-            "--seeds",
-            "3",
-            "--json",
-        ],
+        &train_on_one(&["--fold", "1", "--seeds", "3", "--json"]),
         &all_s,
     ));
     assert_eq!(
@@ -195,19 +176,7 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     assert!(thesis["accuracy"].as_f64().expect("accuracy") >= 0.95, "{thesis}");
     assert!(worst_class(&thesis) >= 0.95, "{thesis}");
     fails_with(
-        &args(
-            &[
-                "recognize",
-                "cv",
-                "--method",
-                "som",
-                "--split",
-                "train-on-one",
-                "--fold",
-                "4",
-            ],
-            &all_s,
-        ),
+        &args(&train_on_one(&["--fold", "4"]), &all_s),
         &["fold 4 asked for, but there are 3 folds"],
     );
     // A SOM's seeds matter; a k-NN's do not.

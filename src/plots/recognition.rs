@@ -142,6 +142,12 @@ fn title(area: &Area<'_>, s: &str, width: u32, y: i32) -> Result<(), String> {
     )
 }
 
+/// A straight line from `a` to `b`.
+fn segment(area: &Area<'_>, a: (i32, i32), b: (i32, i32), colour: RGBColor) -> Result<(), String> {
+    area.draw(&PathElement::new(vec![a, b], colour))
+        .map_err(|e| e.to_string())
+}
+
 fn rect(area: &Area<'_>, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Result<(), String> {
     area.draw(&Rectangle::new([a, b], style))
         .map_err(|e| e.to_string())
@@ -202,16 +208,18 @@ pub fn write_confusion(path: &Path, classes: &[String], percent: &[Vec<f64>]) ->
         // Grid and frame, with the diagonal outlined so correct decisions stand out.
         let grey = RGBColor(160, 160, 160);
         for i in 0..=n {
-            root.draw(&PathElement::new(
-                vec![(CM_LEFT + i * cw, CM_TOP), (CM_LEFT + i * cw, CM_TOP + n * ch)],
+            segment(
+                root,
+                (CM_LEFT + i * cw, CM_TOP),
+                (CM_LEFT + i * cw, CM_TOP + n * ch),
                 grey,
-            ))
-            .map_err(|e| e.to_string())?;
-            root.draw(&PathElement::new(
-                vec![(CM_LEFT, CM_TOP + i * ch), (CM_LEFT + n * cw, CM_TOP + i * ch)],
+            )?;
+            segment(
+                root,
+                (CM_LEFT, CM_TOP + i * ch),
+                (CM_LEFT + n * cw, CM_TOP + i * ch),
                 grey,
-            ))
-            .map_err(|e| e.to_string())?;
+            )?;
         }
         for i in 0..n {
             let (x, y) = (CM_LEFT + i * cw, CM_TOP + i * ch);
@@ -358,11 +366,7 @@ pub fn write_som_map(
             (SOM_LEFT - 14, (h_top + h_bottom) / 2),
             &side,
         )?;
-        root.draw(&PathElement::new(
-            vec![(SOM_LEFT, h_bottom), (right, h_bottom)],
-            BLACK,
-        ))
-        .map_err(|e| e.to_string())?;
+        segment(root, (SOM_LEFT, h_bottom), (right, h_bottom), BLACK)?;
         for (q, &h) in hits.iter().enumerate() {
             let q = q as i32;
             let top = h_bottom - ((h as f64 / h_max) * f64::from(h_bottom - h_top - 18)).round() as i32;
@@ -547,11 +551,7 @@ pub fn write_som_density(
                     &small,
                 )?;
             }
-            root.draw(&PathElement::new(
-                vec![(SOM_LEFT, bottom), (right, bottom)],
-                BLACK,
-            ))
-            .map_err(|e| e.to_string())?;
+            segment(root, (SOM_LEFT, bottom), (right, bottom), BLACK)?;
         }
         // Node indices, coloured by the node's label.
         let y = DENSITY_TOP + classes.len() as i32 * DENSITY_ROW + 8;
