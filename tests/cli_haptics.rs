@@ -8,18 +8,28 @@ use common::{palpus, text};
 
 use capture::{Capture, CaptureKind};
 
-#[test]
-fn devices_reports_none_found_and_succeeds() {
-    let o = palpus(&["devices"]);
+/// Runs `palpus ARGS`, checks that it succeeded and printed each of `needles`; returns what it
+/// printed.
+fn succeeds_saying(args: &[&str], needles: &[&str]) -> String {
+    let o = palpus(args);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
-    for needle in [
-        "HID devices:",
-        "Omega.7 SDK (libdhd):",
-        "Force Dimension devices on USB",
-    ] {
+    for needle in needles {
         assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
     }
+    t
+}
+
+#[test]
+fn devices_reports_none_found_and_succeeds() {
+    let t = succeeds_saying(
+        &["devices"],
+        &[
+            "HID devices:",
+            "Omega.7 SDK (libdhd):",
+            "Force Dimension devices on USB",
+        ],
+    );
     // No hardware and no SDK here: each says so plainly.
     assert!(t.contains("none found") || t.contains("connected"), "{t}");
     assert!(t.contains("use --device sim") || t.contains("SDK "), "{t}");
@@ -85,19 +95,17 @@ fn capture_errors_are_clear() {
 
 #[test]
 fn bench_loop_reports_the_figures() {
-    let o = palpus(&["bench", "loop", "--seconds", "0.3"]);
-    let t = text(&o);
-    assert!(o.status.success(), "{t}");
-    for needle in [
-        "mean rate:",
-        "period error:",
-        "p99.9",
-        "overruns:",
-        "tick compute:",
-        "scheduling:",
-    ] {
-        assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
-    }
+    succeeds_saying(
+        &["bench", "loop", "--seconds", "0.3"],
+        &[
+            "mean rate:",
+            "period error:",
+            "p99.9",
+            "overruns:",
+            "tick compute:",
+            "scheduling:",
+        ],
+    );
     let o = palpus(&["bench", "loop", "--seconds", "-1"]);
     assert!(!o.status.success());
 }
