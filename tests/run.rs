@@ -22,13 +22,20 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Runs `palpus run ARGS` with a private model cache.
-fn run(args: &[&str], cache: &Path) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
-        .arg("run")
+/// `palpus SUBCOMMAND ARGS` in the repository root, with a private model cache.
+fn palpus_at_root(subcommand: &str, args: &[&str], cache: &Path) -> std::process::Command {
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_palpus"));
+    command
+        .arg(subcommand)
         .args(args)
         .current_dir(root())
-        .env("PALPUS_CACHE_DIR", cache)
+        .env("PALPUS_CACHE_DIR", cache);
+    command
+}
+
+/// Runs `palpus run ARGS` with a private model cache and no display.
+fn run(args: &[&str], cache: &Path) -> std::process::Output {
+    palpus_at_root("run", args, cache)
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
         .output()
@@ -298,15 +305,7 @@ fn palpus_render_draws_each_default_scene_and_the_dimple() {
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
-    let render_ = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
-            .arg("render")
-            .args(args)
-            .current_dir(root())
-            .env("PALPUS_CACHE_DIR", &cache)
-            .output()
-            .unwrap()
-    };
+    let render_ = |args: &[&str]| palpus_at_root("render", args, &cache).output().unwrap();
     for scene in ["needle_liver", "surfaces_nakano", "friction_hard_soft"] {
         let out = dir.path().join(format!("{scene}.png"));
         let o = render_(&[
