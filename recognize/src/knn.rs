@@ -383,23 +383,43 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
         });
     }
     let (fold, folds) = group_folds(groups, folds)?;
+    let correct = held_out_correct(
+        features,
+        labels,
+        &fold,
+        folds,
+        |x, y| Knn::fit(params, x, y, classes),
+        |model, x| model.predict(x.as_ref()),
+    )?;
+    Ok(correct as f64 / features.len() as f64)
+}
+
+/// Correct decisions on held-out samples under the folds of [`group_folds`] (`fold` of each
+/// sample, `folds` of them): each fold is held out once, and each of its samples is predicted
+/// (`predict`) by a model fitted (`fit`) on the other folds' samples.
+pub(crate) fn held_out_correct<V, M, E>(
+    features: &[V],
+    labels: &[usize],
+    fold: &[usize],
+    folds: usize,
+    mut fit: impl FnMut(&[&V], &[usize]) -> Result<M, E>,
+    predict: impl Fn(&M, &V) -> Result<usize, E>,
+) -> Result<usize, E> {
     let mut correct = 0usize;
     for f in 0..folds {
-        let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
+        let (train_x, train_y): (Vec<&V>, Vec<usize>) = features
             .iter()
             .zip(labels)
-            .zip(&fold)
+            .zip(fold)
             .filter(|&(_, &g)| g != f)
-            .map(|((x, &y), _)| (x.as_ref(), y))
+            .map(|((x, &y), _)| (x, y))
             .unzip();
-        let model = Knn::fit(params, &train_x, &train_y, classes)?;
-        for ((x, &y), _) in features.iter().zip(labels).zip(&fold).filter(|&(_, &g)| g == f) {
-            if model.predict(x.as_ref())? == y {
-                correct += 1;
-            }
+        let model = fit(&train_x, &train_y)?;
+        for ((x, &y), _) in features.iter().zip(labels).zip(fold).filter(|&(_, &g)| g == f) {
+            correct += usize::from(predict(&model, x)? == y);
         }
     }
-    Ok(correct as f64 / features.len() as f64)
+    Ok(correct)
 }
 
 /// Why probabilities could not be fused.

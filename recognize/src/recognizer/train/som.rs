@@ -11,7 +11,7 @@ use crate::RecognizerError;
 use crate::features::nakano::FEATURE_NAMES;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, windows};
-use crate::knn::group_folds;
+use crate::knn::{group_folds, held_out_correct};
 use crate::recognizer::labelled::{check_rate, class_index, class_list};
 use crate::recognizer::{BehaviourSom, LabelledCapture, RecognizerBody, RecognizerFile};
 use crate::som::{Normalization, Som, SomParams};
@@ -157,20 +157,17 @@ impl RecognizerFile {
                 let som = Som::train(params, &x, y)?;
                 let cv = match group_folds(groups, CV_FOLDS) {
                     Ok((fold, folds)) if every_class_in_two_groups(y, groups) => {
-                        let mut correct = 0usize;
-                        for f in 0..folds {
-                            let (tx, ty): (Vec<Vec<f64>>, Vec<usize>) = x
-                                .iter()
-                                .zip(y)
-                                .zip(&fold)
-                                .filter(|&(_, &g)| g != f)
-                                .map(|((v, &l), _)| (v.clone(), l))
-                                .unzip();
-                            let map = Som::train(params, &tx, &ty)?;
-                            for ((v, &l), _) in x.iter().zip(y).zip(&fold).filter(|&(_, &g)| g == f) {
-                                correct += usize::from(*map.classify(v)? == l);
-                            }
-                        }
+                        let correct = held_out_correct(
+                            &x,
+                            y,
+                            &fold,
+                            folds,
+                            |tx, ty| {
+                                let tx: Vec<Vec<f64>> = tx.iter().map(|v| (*v).clone()).collect();
+                                Som::train(params, &tx, ty)
+                            },
+                            |map, v| map.classify(v).copied(),
+                        )?;
                         Some((correct as f64 / x.len() as f64, folds))
                     }
                     _ => None,
