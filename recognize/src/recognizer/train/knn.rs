@@ -5,6 +5,8 @@ use super::{
     CV_FOLDS, Method, ScaledWindows, TrainSettings, Trainer, histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizerError;
+#[cfg(doc)]
+use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::knn::{FeatureScaling, KnnParams, cross_validated_accuracy, group_folds};

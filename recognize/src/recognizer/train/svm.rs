@@ -8,6 +8,8 @@ use super::{
     every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizerError;
+#[cfg(doc)]
+use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::knn::FeatureScaling;
