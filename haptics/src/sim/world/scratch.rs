@@ -58,14 +58,15 @@
 //! texture frequencies that matter, with semi-implicit Euler steps (stable for `ω·dt < 2`;
 //! here `ω·dt < 0.2`).
 //!
-//! Step 1 is `relief.rs`, step 2 `trial.rs` (what a trial draws) and `path.rs` (the stroke and
-//! the relief along it), steps 3 to 5 `simulate.rs`; `contact.rs` and `table.rs` hold the
+//! Step 1 is `relief.rs`, step 2 `trial.rs` (what a trial draws), `stroke.rs` (the arm's
+//! motion) and `path.rs` (the relief along it), steps 3 to 5 `simulate.rs`; `contact.rs` and `table.rs` hold the
 //! surfaces' contact models.
 
 mod contact;
 mod path;
 mod relief;
 mod simulate;
+mod stroke;
 mod table;
 #[cfg(test)]
 mod tests;

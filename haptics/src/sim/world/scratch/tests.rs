@@ -1,7 +1,7 @@
 use std::f64::consts::{PI, TAU};
 
-use super::path::Stroke;
 use super::simulate::{ShearContact, rotation};
+use super::stroke::Stroke;
 use super::*;
 use crate::sim::world::profile::Band;
 use realfft::RealFftPlanner;

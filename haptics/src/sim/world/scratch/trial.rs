@@ -6,7 +6,7 @@ use std::f64::consts::TAU;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use super::path::Stroke;
+use super::stroke::Stroke;
 use super::{
     Adxl345, Behaviour, FORCE_DRIFT_LATERAL, FORCE_DRIFT_MEDIAL, FORCE_SPREAD, HEADING_JITTER_RAD,
     NAIL_JITTER_RAD, NAIL_ORIENTATION_RAD, PITCH_DRIFT_LATERAL_RAD, PITCH_DRIFT_MEDIAL_RAD,
