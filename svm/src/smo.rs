@@ -209,18 +209,48 @@ pub struct SmoSolution {
     pub violation: f64,
 }
 
+/// The labels `yₜ = ±1` of a dual's variables.
+trait Labels {
+    fn label(&self, t: usize) -> f64;
+}
+
+/// Labels given one by one (the C-SVC's classes).
+struct Given<'a>(&'a [f64]);
+
+impl Labels for Given<'_> {
+    #[inline]
+    fn label(&self, t: usize) -> f64 {
+        self.0[t]
+    }
+}
+
+/// The ε-SVR's split dual: +1 for the first n variables (α), −1 for the rest (α*); computed,
+/// so the inner loops read no label array.
+struct Split {
+    n: usize,
+}
+
+impl Labels for Split {
+    #[inline]
+    fn label(&self, t: usize) -> f64 {
+        if t < self.n { 1.0 } else { -1.0 }
+    }
+}
+
 /// Labels and linear term of the dual's variables, and how they map to samples.
-struct Variables<'a> {
-    labels: &'a [f64],
+struct Variables<'a, L> {
+    labels: L,
     linear: &'a [f64],
     /// Samples: variable t is sample t, or t − n for the second half of a split dual.
     n: usize,
 }
 
-impl Variables<'_> {
+impl<L: Labels> Variables<'_, L> {
+    #[inline]
     fn label(&self, t: usize) -> f64 {
-        self.labels[t]
+        self.labels.label(t)
     }
+    #[inline]
     fn sample(&self, t: usize) -> usize {
         if t < self.n { t } else { t - self.n }
     }
@@ -250,12 +280,12 @@ fn extremes(
 
 /// Recomputes the gradient of every variable outside `active` from scratch,
 /// `∇ₜ = pₜ + Σⱼ yₜ yⱼ K(sₜ, sⱼ) αⱼ`, over the non-zero α only.
-fn rebuild_gradient<R: KernelRows>(
+fn rebuild_gradient<R: KernelRows, L: Labels>(
     grad: &mut [f64],
     alpha: &[f64],
     active: &[usize],
     rows: &mut R,
-    vars: &Variables<'_>,
+    vars: &Variables<'_, L>,
 ) {
     let m = grad.len();
     let mut inactive = vec![true; m];
@@ -300,7 +330,33 @@ pub fn solve_smo<R: KernelRows>(
         "SMO: {m} labels and {} linear terms for {n} samples",
         linear.len()
     );
-    let vars = Variables { labels, linear, n };
+    let vars = Variables {
+        labels: Given(labels),
+        linear,
+        n,
+    };
+    solve(rows, &vars, settings)
+}
+
+/// [`solve_smo`] for any labelling, with the selection's curvature rule fixed at compile time.
+fn solve<R: KernelRows, L: Labels>(
+    rows: &mut R,
+    vars: &Variables<'_, L>,
+    settings: &SmoSettings,
+) -> Result<SmoSolution, SvrError> {
+    match settings.selection {
+        SelectionCurvature::Clamped => solve_with::<R, L, false>(rows, vars, settings),
+        SelectionCurvature::NonPositiveToTau => solve_with::<R, L, true>(rows, vars, settings),
+    }
+}
+
+/// The solve; `NON_POSITIVE_TO_TAU` is [`SelectionCurvature::NonPositiveToTau`].
+fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
+    rows: &mut R,
+    vars: &Variables<'_, L>,
+    settings: &SmoSettings,
+) -> Result<SmoSolution, SvrError> {
+    let (n, m, linear) = (vars.n, vars.linear.len(), vars.linear);
     let (c, stop) = (settings.c, settings.stop);
     let max_iterations = settings.iteration_budget(m);
     let label = |t: usize| vars.label(t);
@@ -343,7 +399,7 @@ pub fn solve_smo<R: KernelRows>(
                 if !unshrunk && g_up + g_low <= 10.0 * stop {
                     // Close to the end: bring everything back once, with exact gradients.
                     unshrunk = true;
-                    rebuild_gradient(&mut grad, &alpha, &active, rows, &vars);
+                    rebuild_gradient(&mut grad, &alpha, &active, rows, vars);
                     active = (0..m).collect();
                 }
                 active.retain(|&t| {
@@ -384,15 +440,10 @@ pub fn solve_smo<R: KernelRows>(
                 if b > 0.0 {
                     let st = sample(t);
                     let a = diag[si] + diag[st] - 2.0 * ki[st];
-                    let a = match settings.selection {
-                        SelectionCurvature::Clamped => a.max(TAU),
-                        SelectionCurvature::NonPositiveToTau => {
-                            if a > 0.0 {
-                                a
-                            } else {
-                                TAU
-                            }
-                        }
+                    let a = if NON_POSITIVE_TO_TAU {
+                        if a > 0.0 { a } else { TAU }
+                    } else {
+                        a.max(TAU)
                     };
                     let decrease = -b * b / a;
                     if decrease <= best {
@@ -406,7 +457,7 @@ pub fn solve_smo<R: KernelRows>(
         if i_sel == usize::MAX || violation < stop || j_sel == usize::MAX {
             if active.len() < m {
                 // Converged on the active set: check everything with exact gradients.
-                rebuild_gradient(&mut grad, &alpha, &active, rows, &vars);
+                rebuild_gradient(&mut grad, &alpha, &active, rows, vars);
                 active = (0..m).collect();
                 counter = shrink_every;
                 continue;
@@ -627,12 +678,16 @@ pub(crate) fn solve_svr(
         .selection(SelectionCurvature::Clamped)
         .build()?;
     // Variable t < n is αₜ (label +1, p = ε − y), t ≥ n is α*ₜ₋ₙ (label −1, p = ε + y).
-    let labels: Vec<f64> = (0..2 * n).map(|t| if t < n { 1.0 } else { -1.0 }).collect();
     let linear: Vec<f64> = (0..2 * n)
         .map(|t| if t < n { epsilon - y[t] } else { epsilon + y[t - n] })
         .collect();
+    let vars = Variables {
+        labels: Split { n },
+        linear: &linear,
+        n,
+    };
     let mut cache = RowCache::new(kernel, x, dim, n);
-    let sol = solve_smo(&mut cache, &labels, &linear, &smo)?;
+    let sol = solve(&mut cache, &vars, &smo)?;
     let beta = (0..n).map(|i| sol.alpha[i] - sol.alpha[i + n]).collect();
     Ok(SvrSmoSolution {
         beta,
