@@ -210,11 +210,12 @@ pub struct SmoSolution {
 }
 
 /// The labels `yₜ = ±1` of a dual's variables.
-trait Labels {
+trait Labels: Copy {
     fn label(&self, t: usize) -> f64;
 }
 
 /// Labels given one by one (the C-SVC's classes).
+#[derive(Clone, Copy)]
 struct Given<'a>(&'a [f64]);
 
 impl Labels for Given<'_> {
@@ -226,6 +227,7 @@ impl Labels for Given<'_> {
 
 /// The ε-SVR's split dual: +1 for the first n variables (α), −1 for the rest (α*); computed,
 /// so the inner loops read no label array.
+#[derive(Clone, Copy)]
 struct Split {
     n: usize,
 }
@@ -243,17 +245,6 @@ struct Variables<'a, L> {
     linear: &'a [f64],
     /// Samples: variable t is sample t, or t − n for the second half of a split dual.
     n: usize,
-}
-
-impl<L: Labels> Variables<'_, L> {
-    #[inline]
-    fn label(&self, t: usize) -> f64 {
-        self.labels.label(t)
-    }
-    #[inline]
-    fn sample(&self, t: usize) -> usize {
-        if t < self.n { t } else { t - self.n }
-    }
 }
 
 /// The largest KKT values over the active set: max over I_up of −yₜ∇ₜ and over I_low of yₜ∇ₜ.
@@ -298,14 +289,16 @@ fn rebuild_gradient<R: KernelRows, L: Labels>(
     for t in (0..m).filter(|&t| inactive[t]) {
         grad[t] = vars.linear[t];
     }
+    let (labels, n) = (vars.labels, vars.n);
+    let sample = |t: usize| if t < n { t } else { t - n };
     for (j, &aj) in alpha.iter().enumerate() {
         if aj == 0.0 {
             continue;
         }
-        let (yj, sj) = (vars.label(j), vars.sample(j));
+        let (yj, sj) = (labels.label(j), sample(j));
         let row = rows.row(sj);
         for t in (0..m).filter(|&t| inactive[t]) {
-            let (yt, st) = (vars.label(t), vars.sample(t));
+            let (yt, st) = (labels.label(t), sample(t));
             grad[t] += yt * yj * row[st] * aj;
         }
     }
@@ -359,8 +352,11 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
     let (n, m, linear) = (vars.n, vars.linear.len(), vars.linear);
     let (c, stop) = (settings.c, settings.stop);
     let max_iterations = settings.iteration_budget(m);
-    let label = |t: usize| vars.label(t);
-    let sample = |t: usize| vars.sample(t);
+    // Copies, so the hot loops keep them in registers rather than reloading them through a
+    // reference after every store to the gradient.
+    let labels = vars.labels;
+    let label = |t: usize| labels.label(t);
+    let sample = |t: usize| if t < n { t } else { t - n };
     let mut alpha = vec![0.0; m];
     let mut grad: Vec<f64> = linear.to_vec();
     let diag: Vec<f64> = (0..n).map(|s| rows.diagonal(s)).collect();
