@@ -18,7 +18,7 @@
 //! * [`ExactSvr`] keeps the same folding and layout in `f64` with libm's `exp`: the reference
 //!   the accuracy cost is measured against, and the choice where `f32` is not enough.
 //!
-//! Measured with `cargo bench -p identify --bench predict` (RBF, 100 support vectors, 2-D): the
+//! Measured with `cargo bench -p svm --bench predict` (RBF, 100 support vectors, 2-D): the
 //! `f32` path is several times faster than `SvrModel::predict` (see the benchmark's report).
 //!
 //! # Accuracy of [`FastSvr`]
