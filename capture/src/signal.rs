@@ -20,7 +20,7 @@
 
 /// An interval longer than this many median intervals is a pause in the recording, not a
 /// sampling interval. Sampling jitter is far below this; protocol pauses (0.5 s between 20 Hz
-/// segments is 10 median intervals) are far above. `identify::metrics::aise` uses the same rule.
+/// segments is 10 median intervals) are far above. `identify::aise` uses the same rule.
 pub const PAUSE_FACTOR: f64 = 4.0;
 
 /// The median interval between consecutive samples, s (`None` for fewer than two samples).

@@ -4,6 +4,7 @@ use std::time::Instant;
 
 use faer::Mat;
 
+use super::data::SvrData;
 use super::error::SvrError;
 use super::ipm;
 use super::kernel::Kernel;
@@ -51,50 +52,6 @@ impl SvrFit {
     /// makes the primal minimum equal minus the dual minimum).
     pub fn relative_gap(&self) -> f64 {
         (self.primal_objective + self.dual_objective).abs() / self.primal_objective.abs().max(1.0)
-    }
-}
-
-/// Training data of an ε-SVR, checked once: `x` is `n × dim` row-major, `y` has `n` targets,
-/// every value finite.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct SvrData<'a> {
-    /// Inputs, row-major.
-    pub x: &'a [f64],
-    /// Input dimension.
-    pub dim: usize,
-    /// Targets.
-    pub y: &'a [f64],
-}
-
-impl<'a> SvrData<'a> {
-    /// Checks the shapes and values.
-    pub fn new(x: &'a [f64], dim: usize, y: &'a [f64]) -> Result<Self, SvrError> {
-        let n = y.len();
-        if n == 0 {
-            return Err(SvrError::NoSamples);
-        }
-        if dim == 0 || x.len() != n * dim {
-            return Err(SvrError::Shape {
-                inputs: x.len(),
-                targets: n,
-                dim,
-            });
-        }
-        for (row, chunk) in x.chunks_exact(dim).enumerate() {
-            if let Some(k) = chunk.iter().position(|v| !v.is_finite()) {
-                return Err(SvrError::NonFinite {
-                    row,
-                    what: format!("input {k}"),
-                });
-            }
-        }
-        if let Some(row) = y.iter().position(|v| !v.is_finite()) {
-            return Err(SvrError::NonFinite {
-                row,
-                what: "target".into(),
-            });
-        }
-        Ok(Self { x, dim, y })
     }
 }
 

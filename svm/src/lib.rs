@@ -9,6 +9,7 @@
 //! Imports no other palpus crate: identification (`identify`) and surface recognition
 //! (`recognize`) both build on it.
 
+mod data;
 mod error;
 mod export;
 mod fast;

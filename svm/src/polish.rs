@@ -11,7 +11,7 @@
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
-use super::fit::SvrData;
+use super::data::SvrData;
 use super::params::DualSettings;
 
 /// Where a sample sits at the optimum.

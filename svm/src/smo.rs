@@ -658,7 +658,7 @@ pub(crate) struct SvrSmoSolution {
 /// keeps the duality gap under [`super::ACCEPT_GAP`]).
 pub(crate) fn solve_svr(
     kernel: &Kernel,
-    data: &super::fit::SvrData<'_>,
+    data: &super::data::SvrData<'_>,
     settings: &super::params::DualSettings,
 ) -> Result<SvrSmoSolution, SvrError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
