@@ -136,10 +136,7 @@ impl Gpu {
     /// The largest MSAA sample count (1 or 4) not above `requested` that `format` supports here.
     pub(crate) fn supported_msaa(&self, format: wgpu::TextureFormat, requested: u32) -> u32 {
         let flags = self.adapter.get_texture_format_features(format).flags;
-        let depth = self
-            .adapter
-            .get_texture_format_features(DEPTH_FORMAT)
-            .flags;
+        let depth = self.adapter.get_texture_format_features(DEPTH_FORMAT).flags;
         if requested >= 4 && flags.sample_count_supported(4) && depth.sample_count_supported(4) {
             4
         } else {
