@@ -13,6 +13,8 @@
 
 use thiserror::Error;
 
+use crate::vectors::{self, VectorFault};
+
 /// Neighbours the paper used.
 pub const PAPER_K: usize = 3;
 
@@ -78,6 +80,24 @@ pub enum KnnError {
         /// Folds asked for.
         folds: usize,
     },
+}
+
+impl From<VectorFault> for KnnError {
+    fn from(fault: VectorFault) -> Self {
+        match fault {
+            VectorFault::Dimension { index, expected, got } => Self::Dimension { index, expected, got },
+            VectorFault::NonFinite { index } => Self::NonFinite { index },
+            VectorFault::LabelOutOfRange {
+                index,
+                label,
+                classes,
+            } => Self::LabelOutOfRange {
+                index,
+                label,
+                classes,
+            },
+        }
+    }
 }
 
 /// How features are scaled before distances are taken.
@@ -177,45 +197,9 @@ impl Knn {
         if dim == 0 {
             return Err(KnnError::ZeroDimension);
         }
-        for (index, (f, &label)) in features.iter().zip(labels).enumerate() {
-            let f = f.as_ref();
-            if f.len() != dim {
-                return Err(KnnError::Dimension {
-                    index,
-                    expected: dim,
-                    got: f.len(),
-                });
-            }
-            if f.iter().any(|v| !v.is_finite()) {
-                return Err(KnnError::NonFinite { index });
-            }
-            if label >= classes {
-                return Err(KnnError::LabelOutOfRange {
-                    index,
-                    label,
-                    classes,
-                });
-            }
-        }
-        let scale = match params.scaling {
-            FeatureScaling::None => vec![(0.0, 1.0); dim],
-            FeatureScaling::MinMax => (0..dim)
-                .map(|j| {
-                    let (lo, hi) = features
-                        .iter()
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), f| {
-                            let v = f.as_ref()[j];
-                            (lo.min(v), hi.max(v))
-                        });
-                    let range = hi - lo;
-                    (lo, if range > 0.0 { 1.0 / range } else { 0.0 })
-                })
-                .collect(),
-        };
-        let mut points = Vec::with_capacity(features.len() * dim);
-        for f in features {
-            points.extend(f.as_ref().iter().zip(&scale).map(|(v, (o, s))| (v - o) * s));
-        }
+        vectors::check_labelled(features, labels, dim, classes)?;
+        let scale = params.scaling.fit(features, dim);
+        let points = vectors::scaled_rows(features, &scale);
         Ok(Self {
             k: params.k,
             classes,
@@ -271,21 +255,8 @@ impl Knn {
     /// by training order (the earlier point is nearer), so results never depend on sorting
     /// internals.
     pub fn neighbours(&self, query: &[f64]) -> Result<Vec<usize>, KnnError> {
-        if query.len() != self.dim {
-            return Err(KnnError::Dimension {
-                index: 0,
-                expected: self.dim,
-                got: query.len(),
-            });
-        }
-        if query.iter().any(|v| !v.is_finite()) {
-            return Err(KnnError::NonFinite { index: 0 });
-        }
-        let q: Vec<f64> = query
-            .iter()
-            .zip(&self.scale)
-            .map(|(v, (o, s))| (v - o) * s)
-            .collect();
+        vectors::check_query(query, self.dim)?;
+        let q: Vec<f64> = vectors::scaled(query, &self.scale).collect();
         let mut dist: Vec<(f64, usize)> = self
             .points
             .chunks_exact(self.dim)

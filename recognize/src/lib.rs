@@ -21,6 +21,7 @@ pub mod protocol;
 pub mod recognizer;
 pub mod som;
 pub mod svc;
+mod vectors;
 
 pub use category::{
     CategoryError, CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,

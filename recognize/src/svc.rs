@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::knn::FeatureScaling;
+use crate::vectors::{self, VectorFault};
 use capture::rng::SplitMix64;
 use svm::{GramRows, Kernel, SelectionCurvature, SmoSettings, SmoSolution};
 
@@ -100,6 +101,24 @@ pub enum SvcError {
         /// Second class of the pair.
         second: usize,
     },
+}
+
+impl From<VectorFault> for SvcError {
+    fn from(fault: VectorFault) -> Self {
+        match fault {
+            VectorFault::Dimension { index, expected, got } => Self::Dimension { index, expected, got },
+            VectorFault::NonFinite { index } => Self::NonFinite { index },
+            VectorFault::LabelOutOfRange {
+                index,
+                label,
+                classes,
+            } => Self::LabelOutOfRange {
+                index,
+                label,
+                classes,
+            },
+        }
+    }
 }
 
 /// Hyperparameters, checked when fitting.
@@ -233,47 +252,12 @@ impl Svc {
             });
         }
         let dim = features[0].as_ref().len();
-        for (index, (f, &label)) in features.iter().zip(labels).enumerate() {
-            let f = f.as_ref();
-            if f.len() != dim {
-                return Err(SvcError::Dimension {
-                    index,
-                    expected: dim,
-                    got: f.len(),
-                });
-            }
-            if f.iter().any(|v| !v.is_finite()) {
-                return Err(SvcError::NonFinite { index });
-            }
-            if label >= classes {
-                return Err(SvcError::LabelOutOfRange {
-                    index,
-                    label,
-                    classes,
-                });
-            }
-        }
+        vectors::check_labelled(features, labels, dim, classes)?;
         if let Some(class) = (0..classes).find(|c| !labels.contains(c)) {
             return Err(SvcError::EmptyClass { class });
         }
-        let scale: Vec<(f64, f64)> = match params.scaling {
-            FeatureScaling::None => vec![(0.0, 1.0); dim],
-            FeatureScaling::MinMax => (0..dim)
-                .map(|j| {
-                    let (lo, hi) = features
-                        .iter()
-                        .map(|f| f.as_ref()[j])
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                            (lo.min(v), hi.max(v))
-                        });
-                    (lo, if hi > lo { 1.0 / (hi - lo) } else { 0.0 })
-                })
-                .collect(),
-        };
-        let mut points = Vec::with_capacity(features.len() * dim);
-        for f in features {
-            points.extend(f.as_ref().iter().zip(&scale).map(|(v, (o, s))| (v - o) * s));
-        }
+        let scale = params.scaling.fit(features, dim);
+        let points = vectors::scaled_rows(features, &scale);
         let row = |t: usize| &points[t * dim..(t + 1) * dim];
         let mut rng = SplitMix64::new(params.seed);
         let mut machines = Vec::with_capacity(classes * classes.saturating_sub(1) / 2);
@@ -406,21 +390,8 @@ impl Svc {
     }
 
     fn scaled(&self, query: &[f64]) -> Result<Vec<f64>, SvcError> {
-        if query.len() != self.dim {
-            return Err(SvcError::Dimension {
-                index: 0,
-                expected: self.dim,
-                got: query.len(),
-            });
-        }
-        if query.iter().any(|v| !v.is_finite()) {
-            return Err(SvcError::NonFinite { index: 0 });
-        }
-        Ok(query
-            .iter()
-            .zip(&self.scale)
-            .map(|(v, (o, s))| (v - o) * s)
-            .collect())
+        vectors::check_query(query, self.dim)?;
+        Ok(vectors::scaled(query, &self.scale).collect())
     }
 
     /// Decision values of every pair, in [`Svc::machines`] order (scikit-learn's
