@@ -14,32 +14,15 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::Criterion;
-use svm::{ExactSvr, FastSvr, InputScaling, Kernel, SvrModel};
+use svm::{ExactSvr, FastSvr, InputScaling, SvrModel, needle_like_model};
 
 const GROUP: &str = "svr_predict_rbf_100sv_2d";
 const VARIANTS: [&str; 3] = ["plain_f64", "exact_f64", "fast_f32"];
 
-fn wiggle(i: usize, salt: f64) -> f64 {
-    (i as f64 * 0.618_033_988_749_894_8 + salt).fract() * 2.0 - 1.0
-}
-
 /// 100 support vectors spread over the unit box of the scaled inputs (depth 0–30 mm, velocity
 /// ±10 mm/s), γ = 10, coefficients within ±C = 100: the size and shape of a needle model.
 fn model() -> (SvrModel, InputScaling) {
-    let n = 100;
-    let model = SvrModel {
-        kernel: Kernel::Rbf { gamma: 10.0 },
-        dim: 2,
-        support_vectors: (0..2 * n).map(|i| 0.5 + 0.5 * wiggle(i, 0.3)).collect(),
-        coefficients: (0..n).map(|i| 100.0 * wiggle(i, 0.71)).collect(),
-        bias: 0.4,
-        weights: None,
-    };
-    let scaling = InputScaling {
-        offset: vec![0.0, -0.01],
-        scale: vec![0.03, 0.02],
-    };
-    (model, scaling)
+    needle_like_model(10.0, 100.0)
 }
 
 /// A stream of raw inputs along an insertion, so no call sees a constant.

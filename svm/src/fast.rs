@@ -32,6 +32,8 @@
 //! correspondingly more. The tests measure the actual error on a grid against [`ExactSvr`]
 //! and `SvrModel::predict` and check it stays under the bound.
 
+use std::ops::MulAssign;
+
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
@@ -340,10 +342,11 @@ fn blocks<T: Copy + Default, const D: usize>(
         .collect()
 }
 
-/// `base^degree` by squaring, the same algorithm as [`powi_x8`] (and libsvm's `powi`).
+/// `base^degree` by squaring (libsvm's `powi`): `⌈log₂ degree⌉` rounds whatever the base, so
+/// every lane of a SIMD base takes the same path. `one` is the multiplicative identity.
 #[inline(always)]
-fn powi(mut base: f64, degree: u32) -> f64 {
-    let mut result = 1.0;
+fn powi_by_squaring<T: Copy + MulAssign>(mut base: T, one: T, degree: u32) -> T {
+    let mut result = one;
     let mut e = degree;
     while e > 0 {
         if e & 1 == 1 {
@@ -471,7 +474,7 @@ impl<const D: usize> FastSvr<D> {
             for (&uk, &ck) in u.iter().zip(&block.c) {
                 t += uk * ck;
             }
-            acc += block.beta * powi_x8(t, degree);
+            acc += block.beta * powi_by_squaring(t, f32x8::ONE, degree);
         }
         acc.to_array().iter().map(|&v| f64::from(v)).sum()
     }
@@ -482,23 +485,6 @@ impl<const D: usize> FastSvr<D> {
 struct SimdBlock<const D: usize> {
     c: [f32x8; D],
     beta: f32x8,
-}
-
-/// `base^degree` by squaring (`⌈log₂ degree⌉` rounds, the same for every lane).
-#[inline(always)]
-fn powi_x8(mut base: f32x8, degree: u32) -> f32x8 {
-    let mut result = f32x8::ONE;
-    let mut e = degree;
-    while e > 0 {
-        if e & 1 == 1 {
-            result *= base;
-        }
-        e >>= 1;
-        if e > 0 {
-            base *= base;
-        }
-    }
-    result
 }
 
 /// First-order bound on the error of one `β·K` term of the `f32` RBF path, per unit `|β|`.
@@ -573,7 +559,7 @@ impl<const D: usize> ExactSvr<D> {
                         }
                     }
                     for ((a, &b), &tl) in acc.iter_mut().zip(&block.beta).zip(&t) {
-                        *a += b * powi(tl, degree);
+                        *a += b * powi_by_squaring(tl, 1.0, degree);
                     }
                 }
                 self.bias + acc.iter().sum::<f64>()
@@ -586,31 +572,7 @@ impl<const D: usize> ExactSvr<D> {
 mod tests {
     use super::*;
 
-    /// Deterministic values in [−1, 1) with no lattice structure.
-    fn wiggle(i: usize, salt: f64) -> f64 {
-        (i as f64 * 0.618_033_988_749_894_8 + salt).fract() * 2.0 - 1.0
-    }
-
-    /// A needle-like model: 100 RBF support vectors on [depth, velocity] scaled to the unit box
-    /// (depth 0–30 mm, velocity ±10 mm/s), coefficients up to `c_max`.
-    fn needle_like(gamma: f64, c_max: f64) -> (SvrModel, InputScaling) {
-        let n = 100;
-        let support_vectors = (0..2 * n).map(|i| 0.5 + 0.5 * wiggle(i, 0.3)).collect();
-        let coefficients = (0..n).map(|i| c_max * wiggle(i, 0.71)).collect();
-        let model = SvrModel {
-            kernel: Kernel::Rbf { gamma },
-            dim: 2,
-            support_vectors,
-            coefficients,
-            bias: 0.4,
-            weights: None,
-        };
-        let scaling = InputScaling {
-            offset: vec![0.0, -0.01],
-            scale: vec![0.03, 0.02],
-        };
-        (model, scaling)
-    }
+    use crate::sample::{needle_like_model as needle_like, wiggle};
 
     fn plain(model: &SvrModel, scaling: &InputScaling, x: &[f64]) -> f64 {
         model.predict(&scaling.apply(x))

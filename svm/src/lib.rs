@@ -19,6 +19,7 @@ mod kernel;
 mod model;
 mod params;
 mod polish;
+mod sample;
 mod smo;
 
 pub use error::SvrError;
@@ -31,6 +32,8 @@ pub use fit::{ACCEPT_GAP, SvrFit, fit, slack};
 pub use kernel::Kernel;
 pub use model::{InputScaling, SvrModel};
 pub use params::{Solver, SvrParams, SvrParamsBuilder};
+#[doc(hidden)]
+pub use sample::needle_like_model;
 pub use smo::{
     GramRows, KernelRows, SelectionCurvature, SmoSettings, SmoSettingsBuilder, SmoSolution, solve_smo,
 };
