@@ -74,3 +74,28 @@ pub enum SvrError {
         reason: String,
     },
 }
+
+impl SvrError {
+    /// [`SvrError::InvalidHyperparameter`].
+    pub(crate) fn hyperparameter(name: &'static str, value: f64, reason: &'static str) -> Self {
+        Self::InvalidHyperparameter { name, value, reason }
+    }
+}
+
+/// C, γ and the stopping tolerance must be finite and positive.
+pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<(), SvrError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(SvrError::hyperparameter(name, value, "must be finite and > 0"))
+    }
+}
+
+/// A wall-clock budget of zero could never be met.
+pub(crate) fn check_time_budget(budget: std::time::Duration) -> Result<(), SvrError> {
+    if budget.is_zero() {
+        Err(SvrError::hyperparameter("time_budget", 0.0, "must be > 0"))
+    } else {
+        Ok(())
+    }
+}

@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::error::SvrError;
+use super::error::{SvrError, check_positive, check_time_budget};
 use super::kernel::Kernel;
 
 /// Which optimiser solves the dual.
@@ -104,28 +104,18 @@ impl SvrParamsBuilder {
 
     /// Validates into [`SvrParams`].
     pub fn build(self) -> Result<SvrParams, SvrError> {
-        let bad = |name: &'static str, value: f64, reason: &'static str| SvrError::InvalidHyperparameter {
-            name,
-            value,
-            reason,
-        };
-        if !(self.c.is_finite() && self.c > 0.0) {
-            return Err(bad("C", self.c, "must be finite and > 0"));
-        }
+        let bad = SvrError::hyperparameter;
+        check_positive("C", self.c)?;
         if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
             return Err(bad("epsilon", self.epsilon, "must be finite and >= 0"));
         }
         match self.kernel {
             Kernel::Linear => {}
             Kernel::Rbf { gamma } => {
-                if !(gamma.is_finite() && gamma > 0.0) {
-                    return Err(bad("gamma", gamma, "must be finite and > 0"));
-                }
+                check_positive("gamma", gamma)?;
             }
             Kernel::Polynomial { gamma, coef0, degree } => {
-                if !(gamma.is_finite() && gamma > 0.0) {
-                    return Err(bad("gamma", gamma, "must be finite and > 0"));
-                }
+                check_positive("gamma", gamma)?;
                 if !coef0.is_finite() {
                     return Err(bad("coef0", coef0, "must be finite"));
                 }
@@ -137,9 +127,7 @@ impl SvrParamsBuilder {
         if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
             return Err(bad("tolerance", self.tolerance, "must be in (0, 1)"));
         }
-        if self.time_budget.is_zero() {
-            return Err(bad("time_budget", 0.0, "must be > 0"));
-        }
+        check_time_budget(self.time_budget)?;
         Ok(SvrParams {
             c: self.c,
             epsilon: self.epsilon,

@@ -17,7 +17,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::error::SvrError;
+use super::error::{SvrError, check_positive, check_time_budget};
 use super::kernel::Kernel;
 
 /// The solver's name in errors.
@@ -151,21 +151,10 @@ impl SmoSettingsBuilder {
 
     /// Validates into [`SmoSettings`].
     pub fn build(self) -> Result<SmoSettings, SvrError> {
-        let bad = |name: &'static str, value: f64, reason: &'static str| SvrError::InvalidHyperparameter {
-            name,
-            value,
-            reason,
-        };
-        if !(self.c.is_finite() && self.c > 0.0) {
-            return Err(bad("C", self.c, "must be finite and > 0"));
-        }
-        if !(self.stop.is_finite() && self.stop > 0.0) {
-            return Err(bad("stop", self.stop, "must be finite and > 0"));
-        }
-        if let Some((_, budget)) = self.budget
-            && budget.is_zero()
-        {
-            return Err(bad("time_budget", 0.0, "must be > 0"));
+        check_positive("C", self.c)?;
+        check_positive("stop", self.stop)?;
+        if let Some((_, budget)) = self.budget {
+            check_time_budget(budget)?;
         }
         Ok(SmoSettings {
             c: self.c,
@@ -500,24 +489,8 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
             let delta = (grad[i_sel] - grad[j_sel]) / quad;
             let sum = old_i + old_j;
             let (mut ai, mut aj) = (old_i - delta, old_j + delta);
-            if sum > c {
-                if ai > c {
-                    ai = c;
-                    aj = sum - c;
-                }
-            } else if aj < 0.0 {
-                aj = 0.0;
-                ai = sum;
-            }
-            if sum > c {
-                if aj > c {
-                    aj = c;
-                    ai = sum - c;
-                }
-            } else if ai < 0.0 {
-                ai = 0.0;
-                aj = sum;
-            }
+            clip_equal_labels(&mut ai, &mut aj, sum, c);
+            clip_equal_labels(&mut aj, &mut ai, sum, c);
             alpha[i_sel] = ai;
             alpha[j_sel] = aj;
         }
@@ -570,6 +543,21 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
         iterations,
         violation,
     })
+}
+
+/// libsvm's clipping of a same-label pair to the box `[0, c]²` on the line `a + b = sum`, for
+/// `a` above `c` or `b` below 0; called again with the pair swapped for the other two sides.
+#[inline(always)]
+fn clip_equal_labels(a: &mut f64, b: &mut f64, sum: f64, c: f64) {
+    if sum > c {
+        if *a > c {
+            *a = c;
+            *b = sum - c;
+        }
+    } else if *b < 0.0 {
+        *b = 0.0;
+        *a = sum;
+    }
 }
 
 /// Kernel rows computed on demand and cached (least recently used slots within
