@@ -172,6 +172,20 @@ fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result
     })
 }
 
+/// The training capture's friction data, and the data to evaluate on: the test capture's, or
+/// without one the training capture's again.
+fn train_and_eval_data(
+    train: &Capture,
+    test: Option<&Capture>,
+) -> Result<(FrictionData, FrictionData), IdentifyError> {
+    let tr = friction_data(train)?;
+    let ev = match test {
+        Some(t) => friction_data(t)?,
+        None => friction_data(train)?,
+    };
+    Ok((tr, ev))
+}
+
 pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
     if c.metadata().kind() != CaptureKind::Rubbing {
         return Err(IdentifyError::Data {
@@ -321,11 +335,7 @@ fn friction_baselines(
 
 fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let tr = friction_data(train)?;
-    let ev = match test {
-        Some(t) => friction_data(t)?,
-        None => friction_data(train)?,
-    };
+    let (tr, ev) = train_and_eval_data(train, test)?;
     let (c, epsilon) = (o.c.unwrap_or(1e11 / KGF_N), o.epsilon.unwrap_or(0.003 * KGF_N));
     let f = svr(
         "hard-contact SVR",
@@ -444,11 +454,7 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
 
 fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let tr = friction_data(train)?;
-    let ev = match test {
-        Some(t) => friction_data(t)?,
-        None => friction_data(train)?,
-    };
+    let (tr, ev) = train_and_eval_data(train, test)?;
     let StageOne {
         points: stage1, fits, ..
     } = stage_one(&tr, train.source())?;

@@ -286,24 +286,12 @@ impl Data {
                     let scaling = InputScaling::min_max(&v, 1);
                     let vs = scaling.apply(&v);
                     let started = Instant::now();
-                    let w = svr(
-                        "slope fold",
-                        c,
-                        epsilon,
-                        kernel,
-                        &vs,
-                        1,
-                        &keep.iter().map(|p| p[1]).collect::<Vec<_>>(),
-                    )?;
-                    let m = svr(
-                        "intercept fold",
-                        c,
-                        epsilon,
-                        kernel,
-                        &vs,
-                        1,
-                        &keep.iter().map(|p| p[2]).collect::<Vec<_>>(),
-                    )?;
+                    let fit_column = |name, column: usize| {
+                        let targets: Vec<f64> = keep.iter().map(|p| p[column]).collect();
+                        svr(name, c, epsilon, kernel, &vs, 1, &targets)
+                    };
+                    let w = fit_column("slope fold", 1)?;
+                    let m = fit_column("intercept fold", 2)?;
                     let fit_s = started.elapsed().as_secs_f64();
                     let seg = &segments[k];
                     let started = Instant::now();

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
 use capture::{Capture, CaptureKind};
-use identify::{IdentifyOptions, ModelFile, ModelFileError, ModelKind, identify};
+use identify::{Identified, IdentifyOptions, ModelFile, ModelFileError, ModelKind, identify};
 
 fn capture(name: &str, kind: CaptureKind) -> Capture {
     Capture::read_file(
@@ -16,19 +16,18 @@ fn capture(name: &str, kind: CaptureKind) -> Capture {
     .unwrap()
 }
 
+/// Identifies `model` on the set's training capture and evaluates it on its test capture.
+fn identify_held_out(set: &str, kind: CaptureKind, model: ModelKind) -> Identified {
+    let (train, test) = (
+        capture(&format!("{set}_train"), kind),
+        capture(&format!("{set}_test"), kind),
+    );
+    identify(&train, Some(&test), &IdentifyOptions::new(model)).unwrap()
+}
+
 #[test]
 fn soft_contact_svr_beats_both_baselines_on_held_out_data() {
-    let (train, test) = (
-        capture("soft_contact_train", CaptureKind::Rubbing),
-        capture("soft_contact_test", CaptureKind::Rubbing),
-    );
-    let r = identify(
-        &train,
-        Some(&test),
-        &IdentifyOptions::new(ModelKind::SoftFriction),
-    )
-    .unwrap()
-    .report;
+    let r = identify_held_out("soft_contact", CaptureKind::Rubbing, ModelKind::SoftFriction).report;
     let (svr, cv, net) = (
         r.metrics.svr.aise,
         r.metrics.coulomb_viscous.unwrap().aise,
@@ -45,16 +44,7 @@ fn soft_contact_svr_beats_both_baselines_on_held_out_data() {
 
 #[test]
 fn needle_svr_beats_the_rbf_network_on_held_out_data() {
-    let (train, test) = (
-        capture("needle_train", CaptureKind::Insertion),
-        capture("needle_test", CaptureKind::Insertion),
-    );
-    let identified = identify(
-        &train,
-        Some(&test),
-        &IdentifyOptions::new(ModelKind::NeedlePuncture),
-    )
-    .unwrap();
+    let identified = identify_held_out("needle", CaptureKind::Insertion, ModelKind::NeedlePuncture);
     let r = &identified.report;
     println!(
         "needle AISE: SVR {:.3e}, RBF network {:.3e}; {} SVs / {}",
@@ -80,16 +70,7 @@ fn needle_svr_beats_the_rbf_network_on_held_out_data() {
 
 #[test]
 fn hard_contact_recovers_the_paper_law_and_model_files_round_trip() {
-    let (train, test) = (
-        capture("hard_contact_train", CaptureKind::Rubbing),
-        capture("hard_contact_test", CaptureKind::Rubbing),
-    );
-    let identified = identify(
-        &train,
-        Some(&test),
-        &IdentifyOptions::new(ModelKind::HardFriction),
-    )
-    .unwrap();
+    let identified = identify_held_out("hard_contact", CaptureKind::Rubbing, ModelKind::HardFriction);
     let r = &identified.report;
     let (w, b_kgf) = (r.w.unwrap(), r.b_kgf.unwrap());
     assert!(
