@@ -159,23 +159,15 @@ pub fn cylinder(
 /// (20 mm) with the skin's top at y = 0.
 pub fn tissue_block() -> Vec<MeshData> {
     let h = 0.04;
-    vec![
-        tissue_box("skin", [-h, -0.002, -h], [h, 0.0, h], 96, [0.93, 0.70, 0.60, 1.0]),
-        tissue_box(
-            "fat",
-            [-h, -0.010, -h],
-            [h, -0.002, h],
-            64,
-            [0.95, 0.85, 0.45, 1.0],
-        ),
-        tissue_box(
-            "muscle",
-            [-h, -0.030, -h],
-            [h, -0.010, h],
-            32,
-            [0.55, 0.12, 0.10, 1.0],
-        ),
+    // Name, bottom and top y, cells along the top's edge, colour.
+    [
+        ("skin", -0.002, 0.0, 96, [0.93, 0.70, 0.60, 1.0]),
+        ("fat", -0.010, -0.002, 64, [0.95, 0.85, 0.45, 1.0]),
+        ("muscle", -0.030, -0.010, 32, [0.55, 0.12, 0.10, 1.0]),
     ]
+    .into_iter()
+    .map(|(name, bottom, top, cells, color)| tissue_box(name, [-h, bottom, -h], [h, top, h], cells, color))
+    .collect()
 }
 
 /// A needle 80 mm long, 1.2 mm across, tip at the origin, with a 15 mm hub: `shaft`, `hub`.

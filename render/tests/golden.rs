@@ -44,6 +44,11 @@ fn golden(name: &str, image: &Image) {
     }
 }
 
+/// Pixels of `a` and `b` that differ by more than a small tolerance.
+fn differing_pixels(a: &Image, b: &Image) -> usize {
+    render::golden::compare(a, b, 24).unwrap().differing_pixels
+}
+
 fn luma(p: [u8; 4]) -> f32 {
     0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])
 }
@@ -84,12 +89,8 @@ fn needle_dimpling_surface() {
         HEIGHT,
     );
     // The dimple changes a sizeable area around the entry point, not just the needle.
-    let cmp = render::golden::compare(&pressed, &rest, 24).unwrap();
-    assert!(
-        cmp.differing_pixels > 2000,
-        "dimple changed only {} pixels",
-        cmp.differing_pixels
-    );
+    let changed = differing_pixels(&pressed, &rest);
+    assert!(changed > 2000, "dimple changed only {changed} pixels");
     golden("needle_dimpling_surface", &pressed);
 }
 
@@ -106,12 +107,8 @@ fn needle_inserted() {
     opaque.tissue.punctured = false;
     let hidden = draw(&opaque, WIDTH, HEIGHT);
     // See-through tissue reveals the shaft below the surface: the two pictures differ there.
-    let cmp = render::golden::compare(&inserted, &hidden, 24).unwrap();
-    assert!(
-        cmp.differing_pixels > 1000,
-        "only {} pixels changed",
-        cmp.differing_pixels
-    );
+    let changed = differing_pixels(&inserted, &hidden);
+    assert!(changed > 1000, "only {changed} pixels changed");
     golden("needle_inserted", &inserted);
 }
 
