@@ -390,30 +390,39 @@ mod tests {
                 found: CaptureKind::Rubbing
             })
         ));
-        assert!(bad_msg(parse(&format!("{OK}  seed=1"))).contains("empty token"));
-        assert!(bad_msg(parse(&format!("{OK} seed=1 "))).contains("empty token"));
-        assert!(bad_msg(parse(&format!("{OK} seed"))).contains("token `seed` has no `=`"));
-        assert!(bad_msg(parse(&format!("{OK} seed=1 seed=2"))).contains("duplicate key `seed`"));
-        assert!(bad_msg(parse(&format!("{OK} kind=rubbing"))).contains("duplicate key `kind`"));
-        assert!(bad_msg(parse(&format!("{OK} k=\tv"))).contains("value of `k`"));
-        assert!(bad_msg(parse(&format!("{OK} k!=v"))).contains("key `k!`"));
-        assert!(bad_msg(parse(&format!("{OK} k="))).contains("empty value"));
-        assert!(bad_msg(parse("format=1 kind=rubbing rate_hz=10 units=si")).contains("key `device`"));
-        assert!(
-            bad_msg(parse("format=1 kind=stroking device=d rate_hz=10 units=si"))
-                .contains("unknown capture kind `stroking`")
-        );
-        assert!(
-            bad_msg(parse("format=1 kind=rubbing device=d rate_hz=fast units=si"))
-                .contains("rate_hz `fast` is not a number")
-        );
-        assert!(
-            bad_msg(parse("format=1 kind=rubbing device=d rate_hz=-5 units=si"))
-                .contains("finite and positive")
-        );
-        assert!(
-            bad_msg(parse("format=1 kind=rubbing device=d rate_hz=inf units=si"))
-                .contains("finite and positive")
-        );
+        let bad_lines = [
+            (format!("{OK}  seed=1"), "empty token"),
+            (format!("{OK} seed=1 "), "empty token"),
+            (format!("{OK} seed"), "token `seed` has no `=`"),
+            (format!("{OK} seed=1 seed=2"), "duplicate key `seed`"),
+            (format!("{OK} kind=rubbing"), "duplicate key `kind`"),
+            (format!("{OK} k=\tv"), "value of `k`"),
+            (format!("{OK} k!=v"), "key `k!`"),
+            (format!("{OK} k="), "empty value"),
+            (
+                "format=1 kind=rubbing rate_hz=10 units=si".to_owned(),
+                "key `device`",
+            ),
+            (
+                "format=1 kind=stroking device=d rate_hz=10 units=si".to_owned(),
+                "unknown capture kind `stroking`",
+            ),
+            (
+                "format=1 kind=rubbing device=d rate_hz=fast units=si".to_owned(),
+                "rate_hz `fast` is not a number",
+            ),
+            (
+                "format=1 kind=rubbing device=d rate_hz=-5 units=si".to_owned(),
+                "finite and positive",
+            ),
+            (
+                "format=1 kind=rubbing device=d rate_hz=inf units=si".to_owned(),
+                "finite and positive",
+            ),
+        ];
+        for (line, expected) in &bad_lines {
+            let msg = bad_msg(parse(line));
+            assert!(msg.contains(expected), "{line:?}: {msg}");
+        }
     }
 }

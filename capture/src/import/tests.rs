@@ -269,25 +269,25 @@ fn file_errors_name_file_line_and_column() {
     let spec = rubbing(RUB_MAP);
     let e = err("# c\nt,x,Fz\n0,1,2\n\n1,1x,2\n", &spec);
     assert!(e.ends_with("in.csv:5: column `x`: `1x` is not a number"), "{e}");
-    let e = err("t;x;Fz\n0;1;2\n1;1,5;2\n", &spec);
-    assert!(
-        e.contains(":3: column `x`: `1,5` is not a number (decimal commas"),
-        "{e}"
-    );
-    let e = err("t,x,Fz\n0,1,\n", &spec);
-    assert!(e.contains(":2: column `Fz`: `` is not a number"), "{e}");
-    let e = err("t,x,Fz\n0,1,2\n1,1,nan\n", &spec);
-    assert!(e.contains(":3: column `Fz`: `nan` is not finite"), "{e}");
-    let e = err("t,x,Fz\n0,1,2\n1,1\n", &spec);
-    assert!(
-        e.contains(":3: expected 3 fields like the header, found 2"),
-        "{e}"
-    );
-    let e = err("t,x,Fz\n0,1,2\n2,1,2\n2,1,2\n", &spec);
-    assert!(
-        e.contains("in.csv:4: column `t`: time 0.002 s is not after the previous row's 0.002 s"),
-        "{e}"
-    );
+    for (text, expected) in [
+        (
+            "t;x;Fz\n0;1;2\n1;1,5;2\n",
+            ":3: column `x`: `1,5` is not a number (decimal commas",
+        ),
+        ("t,x,Fz\n0,1,\n", ":2: column `Fz`: `` is not a number"),
+        ("t,x,Fz\n0,1,2\n1,1,nan\n", ":3: column `Fz`: `nan` is not finite"),
+        (
+            "t,x,Fz\n0,1,2\n1,1\n",
+            ":3: expected 3 fields like the header, found 2",
+        ),
+        (
+            "t,x,Fz\n0,1,2\n2,1,2\n2,1,2\n",
+            "in.csv:4: column `t`: time 0.002 s is not after the previous row's 0.002 s",
+        ),
+    ] {
+        let e = err(text, &spec);
+        assert!(e.contains(expected), "{e}");
+    }
     let e = err("t,x,Fz\n0,1,2\n1,1,2\n0.5,1,2\n", &spec);
     assert!(e.contains(":4:") && e.contains("not after"), "{e}");
     let e = err("t,x,Force\n0,1,2\n", &spec);
