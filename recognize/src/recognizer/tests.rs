@@ -71,6 +71,14 @@ fn a_som_recognizer_round_trips_and_recognizes_distinct_surfaces() {
     assert_eq!(eval.flips_per_s, 0.0);
 }
 
+/// One classifier per behaviour, `poke` then `rub`: `make` gets the behaviour and whether it
+/// carries a reliability weight (only `poke` does).
+fn poke_and_rub<T>(make: impl Fn(Option<String>, bool) -> T) -> Vec<T> {
+    ["poke", "rub"]
+        .map(|b| make(Some(b.to_owned()), b == "poke"))
+        .into()
+}
+
 /// A k-NN and an SVM recognizer over two behaviours of three classes, built without
 /// captures: `poke` has a reliability weight, `rub` (as in a file written before weights
 /// were stored, or with too few trials) has none.
@@ -94,15 +102,12 @@ fn sinapov_recognizers() -> [RecognizerFile; 2] {
     let classes: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
     let knn_body = RecognizerBody::Knn {
         cell_scale: CellScale::Mean,
-        behaviours: ["poke", "rub"]
-            .iter()
-            .map(|b| BehaviourKnn {
-                behaviour: Some((*b).to_owned()),
-                knn: knn.clone(),
-                reliability: (*b == "poke").then_some(0.8),
-                reliability_folds: (*b == "poke").then_some(5),
-            })
-            .collect(),
+        behaviours: poke_and_rub(|behaviour, weighted| BehaviourKnn {
+            behaviour,
+            knn: knn.clone(),
+            reliability: weighted.then_some(0.8),
+            reliability_folds: weighted.then_some(5),
+        }),
     };
     let search = CSearch {
         folds: 5,
@@ -120,15 +125,12 @@ fn sinapov_recognizers() -> [RecognizerFile; 2] {
     };
     let svm_body = RecognizerBody::Svm {
         cell_scale: CellScale::Mean,
-        behaviours: ["poke", "rub"]
-            .iter()
-            .map(|b| BehaviourSvc {
-                behaviour: Some((*b).to_owned()),
-                svc: svc.clone(),
-                reliability: (*b == "poke").then_some(0.8),
-                c_search: (*b == "poke").then(|| search.clone()),
-            })
-            .collect(),
+        behaviours: poke_and_rub(|behaviour, weighted| BehaviourSvc {
+            behaviour,
+            svc: svc.clone(),
+            reliability: weighted.then_some(0.8),
+            c_search: weighted.then(|| search.clone()),
+        }),
     };
     [knn_body, svm_body]
         .map(|body| RecognizerFile::assemble(classes.clone(), histogram_names(), body, &[], 6))
