@@ -163,14 +163,7 @@ fn files_round_trip_and_report_their_path() {
 fn write_file_is_atomic() {
     let dir = tempfile::tempdir().unwrap();
     let capture = insertion(vec![vec![0.0], vec![0.0], vec![0.0]]).unwrap();
-    let listing = |p: &Path| -> Vec<_> {
-        let mut names: Vec<_> = std::fs::read_dir(p)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        names.sort();
-        names
-    };
+    let listing = atomic::tests::entries;
 
     // Directory does not exist: clean typed error, nothing created.
     let target = dir.path().join("no/such/dir/a.csv");
