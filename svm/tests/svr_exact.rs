@@ -92,18 +92,9 @@ fn paper_hard_contact_setting_reaches_the_exact_primal_optimum() {
     );
     let capture = Capture::read_file(path, CaptureKind::Rubbing).unwrap();
     let g = 9.80665;
-    let p: Vec<f64> = capture
-        .column("normal_force_n")
-        .unwrap()
-        .iter()
-        .map(|v| v / g)
-        .collect();
-    let f: Vec<f64> = capture
-        .column("friction_force_n")
-        .unwrap()
-        .iter()
-        .map(|v| v / g)
-        .collect();
+    let in_kgf =
+        |column: &str| -> Vec<f64> { capture.column(column).unwrap().iter().map(|v| v / g).collect() };
+    let (p, f) = (in_kgf("normal_force_n"), in_kgf("friction_force_n"));
     let (c, eps) = (1e11, 0.003);
     let fitted = fit(&linear(c, eps), &p, 1, &f).unwrap();
     let w = fitted.model.linear_weights().unwrap()[0];
