@@ -44,6 +44,11 @@ fn golden(name: &str, image: &Image) {
     }
 }
 
+/// The tissue scene with the needle in `state`, drawn at the golden size.
+fn tissue_view(tissue: &[Arc<MeshData>], needle: &[Arc<MeshData>], state: NeedleState) -> Image {
+    draw(&tissue_scene(tissue, needle, state), WIDTH, HEIGHT)
+}
+
 /// Pixels of `a` and `b` that differ by more than a small tolerance.
 fn differing_pixels(a: &Image, b: &Image) -> usize {
     render::golden::compare(a, b, 24).unwrap().differing_pixels
@@ -71,22 +76,14 @@ fn tissue_at_rest() {
 fn needle_dimpling_surface() {
     let tissue = meshes("tissue_block.glb");
     let needle = meshes("needle.glb");
-    let rest = draw(
-        &tissue_scene(&tissue, &needle, NeedleState::Above { height_m: 0.0 }),
-        WIDTH,
-        HEIGHT,
-    );
-    let pressed = draw(
-        &tissue_scene(
-            &tissue,
-            &needle,
-            NeedleState::Pressing {
-                depth_m: 0.010,
-                radius_m: 0.012,
-            },
-        ),
-        WIDTH,
-        HEIGHT,
+    let rest = tissue_view(&tissue, &needle, NeedleState::Above { height_m: 0.0 });
+    let pressed = tissue_view(
+        &tissue,
+        &needle,
+        NeedleState::Pressing {
+            depth_m: 0.010,
+            radius_m: 0.012,
+        },
     );
     // The dimple changes a sizeable area around the entry point, not just the needle.
     let changed = differing_pixels(&pressed, &rest);
@@ -98,11 +95,7 @@ fn needle_dimpling_surface() {
 fn needle_inserted() {
     let tissue = meshes("tissue_block.glb");
     let needle = meshes("needle.glb");
-    let inserted = draw(
-        &tissue_scene(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 }),
-        WIDTH,
-        HEIGHT,
-    );
+    let inserted = tissue_view(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 });
     let mut opaque = tissue_scene(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 });
     opaque.tissue.punctured = false;
     let hidden = draw(&opaque, WIDTH, HEIGHT);
