@@ -13,6 +13,7 @@
 
 use thiserror::Error;
 
+pub use crate::vectors::FeatureScaling;
 use crate::vectors::{self, VectorFault};
 
 /// Neighbours the paper used.
@@ -98,19 +99,6 @@ impl From<VectorFault> for KnnError {
             },
         }
     }
-}
-
-/// How features are scaled before distances are taken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FeatureScaling {
-    /// Raw values.
-    None,
-    /// Each feature mapped to `[0, 1]` by the training set's minimum and maximum (WEKA `IBk`'s
-    /// default, hence the paper's). A feature that is constant in training maps to 0. Without it
-    /// the few loud low-frequency cells would decide every distance.
-    #[default]
-    MinMax,
 }
 
 /// Hyperparameters of [`Knn`]; checked when fitting.

@@ -21,7 +21,7 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::knn::FeatureScaling;
+use crate::vectors::FeatureScaling;
 use crate::vectors::{self, VectorFault};
 use capture::rng::SplitMix64;
 use svm::{GramRows, Kernel, SelectionCurvature, SmoSettings, SmoSolution};

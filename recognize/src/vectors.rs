@@ -2,7 +2,18 @@
 //! [`crate::svc::Svc`]): both take the same vectors, reject the same faults and scale
 //! features the same way, so that a recognizer's k-NN and SVM see identical inputs.
 
-use crate::knn::FeatureScaling;
+/// How features are scaled before distances are taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeatureScaling {
+    /// Raw values.
+    None,
+    /// Each feature mapped to `[0, 1]` by the training set's minimum and maximum (WEKA `IBk`'s
+    /// default, hence the paper's). A feature that is constant in training maps to 0. Without it
+    /// the few loud low-frequency cells would decide every distance.
+    #[default]
+    MinMax,
+}
 
 /// What is wrong with an input vector; each classifier's error type names it in its own words.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
