@@ -16,8 +16,8 @@ use haptics::law::PunctureState;
 use render::{Camera, Dimple, Frame, Material, MeshData, Object, Overlay, TissueState, Tool};
 
 use crate::scene::Scene;
-use crate::session::channel as c;
 use crate::session::{SURFACE_Z_M, SegmentKind, SegmentRun};
+use haptics::control::admittance::channel as c;
 
 /// Why a scene's meshes could not be prepared.
 #[derive(Debug, thiserror::Error)]
@@ -221,7 +221,7 @@ impl SceneView {
             _ => DVec3::new(
                 s.state.position_m.x,
                 s.state.position_m.y,
-                s.channels[c::TOOL_Z_M],
+                s.channels[c::VIRTUAL_Z_M],
             ),
         };
         let tip = self.to_scene_m(tool_device_m, state.object, state.kind);
@@ -229,7 +229,7 @@ impl SceneView {
         let depth_m = surface.y - tip.y;
         match state.kind {
             Some(SegmentKind::Needle { .. }) => {
-                let code = s.channels[c::STATE];
+                let code = s.channels[c::ENV_STATE];
                 if code == PunctureState::CapsuleLoading.code() && depth_m > 0.0 {
                     frame.tissue.dimples.push(Dimple {
                         centre_m: Vec3::new(tip.x, surface.y, tip.z),
@@ -329,12 +329,13 @@ pub fn render_session_frame(
         SegmentKind::Needle { .. } => {
             let loading = PunctureState::CapsuleLoading.code();
             let peak = (0..run.samples.len())
-                .filter(|&i| run.samples[i].channels[c::STATE] == loading)
+                .filter(|&i| run.samples[i].channels[c::ENV_STATE] == loading)
                 .max_by(|&a, &b| {
-                    run.samples[a].channels[c::MODEL_Z_N].total_cmp(&run.samples[b].channels[c::MODEL_Z_N])
+                    run.samples[a].channels[c::MODEL_FORCE_Z_N]
+                        .total_cmp(&run.samples[b].channels[c::MODEL_FORCE_Z_N])
                 });
             let deepest = (0..run.samples.len()).min_by(|&a, &b| {
-                run.samples[a].channels[c::TOOL_Z_M].total_cmp(&run.samples[b].channels[c::TOOL_Z_M])
+                run.samples[a].channels[c::VIRTUAL_Z_M].total_cmp(&run.samples[b].channels[c::VIRTUAL_Z_M])
             });
             let mut m = Vec::new();
             if let Some(i) = peak {

@@ -6,12 +6,13 @@ use anyhow::{Context, bail};
 use clap::Args;
 use glam::DVec3;
 use haptics::HapticSample;
+use haptics::control::admittance::channel;
 use haptics::law::PunctureState;
 use serde::Deserialize;
 
 use crate::models;
 use crate::scene::Scene;
-use crate::session::{self, SegmentKind, channel, start_position_m};
+use crate::session::{self, SegmentKind, start_position_m};
 use crate::view::{SceneView, ViewState, overlay_plots};
 
 /// Draw one frame of a scene headless, to PNG.
@@ -121,8 +122,8 @@ pub(crate) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let segment = segments.iter().find(|s| Some(&s.object) == object.as_ref());
     sample.state.position_m = position;
-    sample.channels[channel::TOOL_Z_M] = position.z;
-    sample.channels[channel::STATE] = code;
+    sample.channels[channel::VIRTUAL_Z_M] = position.z;
+    sample.channels[channel::ENV_STATE] = code;
     let kind: Option<&SegmentKind> = segment.map(|s| &s.kind);
     let state = ViewState {
         object: object.as_deref(),

@@ -7,8 +7,8 @@ use haptics::law::PunctureState;
 use haptics::sim::world::needle::NeedleTissue;
 use serde::Serialize;
 
-use super::channel as c;
 use super::{SURFACE_Z_M, SegmentKind, SegmentRun};
+use haptics::control::admittance::channel as c;
 
 /// One detected capsule or membrane rupture.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -92,9 +92,12 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
             let punctures = punctures(s);
             let depth = s
                 .iter()
-                .map(|x| surface_z_m - x.channels[c::TOOL_Z_M])
+                .map(|x| surface_z_m - x.channels[c::VIRTUAL_Z_M])
                 .fold(f64::NEG_INFINITY, f64::max);
-            let force = s.iter().map(|x| x.channels[c::MODEL_Z_N]).fold(0.0, f64::max);
+            let force = s
+                .iter()
+                .map(|x| x.channels[c::MODEL_FORCE_Z_N])
+                .fold(0.0, f64::max);
             (
                 "needle",
                 punctures,
@@ -106,13 +109,16 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         SegmentKind::Friction { .. } => {
             let (mut sum, mut n) = (0.0, 0usize);
             for x in s {
-                let normal = x.channels[c::MODEL_Z_N];
+                let normal = x.channels[c::MODEL_FORCE_Z_N];
                 if normal > 0.2 && x.state.velocity_mps.x.abs() > 0.003 {
-                    sum += x.channels[c::MODEL_X_N].abs() / normal;
+                    sum += x.channels[c::MODEL_FORCE_X_N].abs() / normal;
                     n += 1;
                 }
             }
-            let force = s.iter().map(|x| x.channels[c::MODEL_Z_N]).fold(0.0, f64::max);
+            let force = s
+                .iter()
+                .map(|x| x.channels[c::MODEL_FORCE_Z_N])
+                .fold(0.0, f64::max);
             (
                 "friction",
                 Vec::new(),
@@ -181,18 +187,19 @@ fn punctures(s: &[HapticSample]) -> Vec<Puncture> {
     let mut peak_speed_mps = 0.0;
     for w in s.windows(2) {
         let (a, b) = (&w[0], &w[1]);
-        if (a.channels[c::STATE] == loading || a.channels[c::STATE] == PunctureState::Insertion.code())
-            && a.channels[c::MODEL_Z_N] > peak
+        if (a.channels[c::ENV_STATE] == loading
+            || a.channels[c::ENV_STATE] == PunctureState::Insertion.code())
+            && a.channels[c::MODEL_FORCE_Z_N] > peak
         {
-            peak = a.channels[c::MODEL_Z_N];
-            peak_speed_mps = -a.channels[c::TOOL_VZ_MPS];
+            peak = a.channels[c::MODEL_FORCE_Z_N];
+            peak_speed_mps = -a.channels[c::VIRTUAL_VZ_MPS];
         }
-        if b.channels[c::STATE] == puncture && a.channels[c::STATE] != puncture {
+        if b.channels[c::ENV_STATE] == puncture && a.channels[c::ENV_STATE] != puncture {
             let speed_mps = peak_speed_mps;
             let index = out.len();
             out.push(Puncture {
                 time_s: b.time_s,
-                depth_m: b.channels[c::INPUT],
+                depth_m: b.channels[c::ENV_INPUT],
                 speed_mps,
                 peak_force_n: peak,
                 truth_depth_m: tissue.puncture_depth_m(index, speed_mps.max(0.0)),

@@ -24,7 +24,8 @@ use capture::kind::{
 use capture::{Capture, CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
 use haptics::acquire::{self, CaptureOptions, Protocol};
-use haptics::control::{Admittance, AdmittanceConfig};
+use haptics::control::admittance::channel;
+use haptics::control::{Admittance, AdmittanceConfig, Direct};
 use haptics::device::HapticDevice;
 use haptics::device::omega7::Omega7;
 use haptics::device::replay::ReplayDevice;
@@ -36,9 +37,7 @@ use haptics::law::{
 use haptics::live::LiveFeed;
 use haptics::live_recognizer::{LiveRecognizer, Recognizing};
 use haptics::recorder::{Recorder, RecorderConfig};
-use haptics::rt::{
-    self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, TickInput, TickOutput, WatchdogConfig,
-};
+use haptics::rt::{self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, WatchdogConfig};
 use haptics::sim::hand::{HandImpedance, HandScript, LiveHand};
 use haptics::{DeviceSpecs, HapticSample};
 use identify::{ModelFile, ModelKind};
@@ -289,53 +288,6 @@ pub fn start_position_m(scene: &Scene) -> DVec3 {
     }
 }
 
-/// Renders an environment at the device's own position (impedance rendering): for devices
-/// that only report motion, such as a replayed capture, where admittance has nothing to move.
-#[derive(Debug)]
-struct Direct<E>(E);
-
-impl<E: Environment> Controller for Direct<E> {
-    fn tick(&mut self, input: &TickInput<'_>, out: &mut TickOutput) {
-        let s = input.state;
-        let env = self.0.force(s.position_m, s.velocity_mps);
-        out.command.force_n = env.force_n;
-        out.flags |= env.flags;
-        // Same channel layout as the admittance renderer: hand, model, tool z, tool vz, state,
-        // law input, hand x, model x.
-        out.channels = [
-            -env.force_n.z,
-            env.force_n.z,
-            s.position_m.z,
-            s.velocity_mps.z,
-            env.state,
-            env.input,
-            -env.force_n.x,
-            env.force_n.x,
-            0.0,
-            0.0,
-            0.0,
-        ];
-    }
-}
-
-/// Channel layout of the renderers' samples (admittance and direct alike).
-pub mod channel {
-    /// Hand force estimated by the RFOB, z, N.
-    pub const HAND_Z_N: usize = 0;
-    /// The model's force on the tool, z, N.
-    pub const MODEL_Z_N: usize = 1;
-    /// Virtual tool height, m.
-    pub const TOOL_Z_M: usize = 2;
-    /// Virtual tool vertical velocity, m/s.
-    pub const TOOL_VZ_MPS: usize = 3;
-    /// Law state code (needle: [`haptics::law::PunctureState::code`]).
-    pub const STATE: usize = 4;
-    /// Law input (needle depth, m; friction: normal force, N).
-    pub const INPUT: usize = 5;
-    /// The model's force on the tool, x, N.
-    pub const MODEL_X_N: usize = 7;
-}
-
 /// A sample's value in SI units.
 pub type Trace = fn(&HapticSample) -> f64;
 
@@ -346,13 +298,13 @@ pub fn traces(kind: Option<&SegmentKind>) -> (Trace, Trace, &'static str) {
     use haptics::control::rubbing::channel as rub;
     match kind {
         Some(SegmentKind::Needle { .. }) | None => (
-            |s| SURFACE_Z_M - s.channels[channel::TOOL_Z_M],
-            |s| s.channels[channel::MODEL_Z_N],
+            |s| SURFACE_Z_M - s.channels[channel::VIRTUAL_Z_M],
+            |s| s.channels[channel::MODEL_FORCE_Z_N],
             "depth",
         ),
         Some(SegmentKind::Friction { .. }) => (
             |s| s.state.position_m.x,
-            |s| -s.channels[channel::MODEL_X_N],
+            |s| -s.channels[channel::MODEL_FORCE_X_N],
             "position",
         ),
         Some(SegmentKind::Surface { .. }) => (
@@ -365,7 +317,7 @@ pub fn traces(kind: Option<&SegmentKind>) -> (Trace, Trace, &'static str) {
 
 fn renderer<E: Environment + 'static>(env: E, scene: &Scene, direct: bool) -> Box<dyn Controller> {
     if direct {
-        Box::new(Direct(env))
+        Box::new(Direct::new(env))
     } else {
         let h = scene.haptics;
         Box::new(Admittance::new(
@@ -449,7 +401,7 @@ fn row(kind: &SegmentKind, surface_z_m: f64, s: &HapticSample, row: &mut Vec<f64
     use channel as c;
     match kind {
         SegmentKind::Needle { .. } => {
-            let depth_m = surface_z_m - s.channels[c::TOOL_Z_M];
+            let depth_m = surface_z_m - s.channels[c::VIRTUAL_Z_M];
             // Only contact is a capture of the tissue; the approach in air is not.
             if depth_m <= 0.0 {
                 return false;
@@ -457,13 +409,13 @@ fn row(kind: &SegmentKind, surface_z_m: f64, s: &HapticSample, row: &mut Vec<f64
             row.extend([
                 s.time_s,
                 depth_m,
-                -s.channels[c::TOOL_VZ_MPS],
-                s.channels[c::MODEL_Z_N],
+                -s.channels[c::VIRTUAL_VZ_MPS],
+                s.channels[c::MODEL_FORCE_Z_N],
             ]);
             true
         }
         SegmentKind::Friction { .. } => {
-            let normal_n = s.channels[c::MODEL_Z_N];
+            let normal_n = s.channels[c::MODEL_FORCE_Z_N];
             if normal_n <= 0.05 {
                 return false;
             }
@@ -474,7 +426,7 @@ fn row(kind: &SegmentKind, surface_z_m: f64, s: &HapticSample, row: &mut Vec<f64
                 s.state.position_m.z - surface_z_m,
                 normal_n,
                 // Positive opposing the motion, as the capture format says.
-                -s.channels[c::MODEL_X_N] * s.state.velocity_mps.x.signum(),
+                -s.channels[c::MODEL_FORCE_X_N] * s.state.velocity_mps.x.signum(),
             ]);
             true
         }

@@ -1,12 +1,14 @@
 //! Control: observers (DOB, RFOB), acceleration-based motion and force control, admittance
-//! rendering, and the rubbing controller.
+//! and direct rendering, and the rubbing controller.
 
 pub mod admittance;
+pub mod direct;
 pub mod motion;
 pub mod observer;
 pub mod rubbing;
 
 pub use admittance::{Admittance, AdmittanceConfig};
+pub use direct::Direct;
 pub use motion::{AccelerationControl, MotionGains};
 pub use observer::{DisturbanceObserver, InternalForces, Observed, Observers3, ReactionForceObserver};
 pub use rubbing::{RubbingController, RubbingPhase, RubbingPlan};
