@@ -1,0 +1,209 @@
+//! Choosing C by cross-validation over a grid, with folds that keep a trial's scratches together.
+
+use super::*;
+
+/// The values of C that [`select_c`] tries by default: 1 to 10⁵ in decades.
+pub const C_GRID: [f64; 6] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
+
+/// One C of a [`CSearch`] and its cross-validated accuracy.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CvPoint {
+    /// The box constraint.
+    pub c: f64,
+    /// Fraction of held-out vectors classified correctly.
+    pub accuracy: f64,
+}
+
+/// How C was chosen: each candidate's accuracy under cross-validation by group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CSearch {
+    /// Folds of the cross-validation (whole groups per fold, see
+    /// [`super::knn::group_folds`]).
+    pub folds: usize,
+    /// Every candidate, in the order tried.
+    pub grid: Vec<CvPoint>,
+    /// The most accurate candidate; ties go to the smaller C (the wider margin).
+    pub chosen_c: f64,
+}
+
+impl CSearch {
+    /// Cross-validated accuracy of the chosen C.
+    pub fn accuracy(&self) -> Option<f64> {
+        self.grid
+            .iter()
+            .find(|p| p.c == self.chosen_c)
+            .map(|p| p.accuracy)
+    }
+
+    /// Checks a search read from a file: `Err((field, reason))`.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        if self.folds < 2 {
+            return Err(("folds", format!("{} folds; cross-validation needs 2", self.folds)));
+        }
+        if self.grid.is_empty() {
+            return Err(("grid", "no candidate".into()));
+        }
+        if let Some(p) = self
+            .grid
+            .iter()
+            .find(|p| !(p.c.is_finite() && p.c > 0.0 && (0.0..=1.0).contains(&p.accuracy)))
+        {
+            return Err((
+                "grid",
+                format!(
+                    "C = {}, accuracy {}: C must be positive, accuracy in [0, 1]",
+                    p.c, p.accuracy
+                ),
+            ));
+        }
+        if self.accuracy().is_none() {
+            return Err(("chosen_c", format!("{} is not in the grid", self.chosen_c)));
+        }
+        Ok(())
+    }
+}
+
+/// Accuracy of an SVC with `params` under cross-validation by group
+/// ([`super::knn::group_folds`]): all vectors of a group (a trial) are held out together.
+///
+/// A training fold that lacks some classes is fitted on the classes it has, and the held-out
+/// vectors of the missing ones count as wrong (the classifier cannot name them); a fold with a
+/// single class predicts it. Probabilities are not fitted (only votes are scored).
+pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
+    params: SvcParams,
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<f64, SvcError> {
+    let (fold, folds) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    let params = SvcParams {
+        probability: false,
+        ..params
+    };
+    let mut correct = 0usize;
+    for f in 0..folds {
+        correct += fold_correct(params, features, labels, &fold, f, classes)?;
+    }
+    Ok(correct as f64 / features.len() as f64)
+}
+
+/// Picks C from `grid` by [`cross_validated_accuracy`] with `params`' other settings: the most
+/// accurate C, ties to the smaller one.
+pub fn select_c<V: AsRef<[f64]>>(
+    params: SvcParams,
+    grid: &[f64],
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<CSearch, SvcError> {
+    let (_, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    let mut order: Vec<f64> = grid.to_vec();
+    order.sort_by(f64::total_cmp);
+    order.dedup();
+    if order.is_empty() {
+        return Err(SvcError::Parameter {
+            name: "c",
+            value: f64::NAN,
+            reason: "an empty grid of C values",
+        });
+    }
+    let mut points = Vec::with_capacity(order.len());
+    for &c in &order {
+        let accuracy = cross_validated_accuracy(
+            SvcParams { c, ..params },
+            features,
+            labels,
+            groups,
+            classes,
+            folds,
+        )?;
+        points.push(CvPoint { c, accuracy });
+    }
+    // Ascending C, so a strict improvement is needed to move to a larger one.
+    let best = points.iter().fold(
+        points[0],
+        |best, p| if p.accuracy > best.accuracy { *p } else { best },
+    );
+    Ok(CSearch {
+        folds: used,
+        grid: points,
+        chosen_c: best.c,
+    })
+}
+
+/// Fold of each vector and the number of folds, after checking the counts.
+pub(super) fn cv_folds(
+    features: usize,
+    labels: usize,
+    groups: &[u64],
+    folds: usize,
+) -> Result<(Vec<usize>, usize), SvcError> {
+    if features == 0 || features != labels || groups.len() != features {
+        return Err(SvcError::Counts {
+            features,
+            labels: if labels == features { groups.len() } else { labels },
+        });
+    }
+    crate::knn::group_folds(groups, folds).map_err(|_| {
+        let mut distinct = groups.to_vec();
+        distinct.sort_unstable();
+        distinct.dedup();
+        SvcError::TooFewGroups {
+            groups: distinct.len(),
+            folds,
+        }
+    })
+}
+
+/// Held-out vectors of fold `f` classified correctly by an SVC fitted on the other folds.
+pub(super) fn fold_correct<V: AsRef<[f64]>>(
+    params: SvcParams,
+    features: &[V],
+    labels: &[usize],
+    fold: &[usize],
+    f: usize,
+    classes: usize,
+) -> Result<usize, SvcError> {
+    let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
+        .iter()
+        .zip(labels)
+        .zip(fold)
+        .filter(|&(_, &g)| g != f)
+        .map(|((x, &y), _)| (x.as_ref(), y))
+        .unzip();
+    // The classes present in training, relabelled 0..m for the fit.
+    let mut present: Vec<usize> = train_y.clone();
+    present.sort_unstable();
+    present.dedup();
+    if let Some(&label) = present.iter().find(|&&l| l >= classes) {
+        return Err(SvcError::LabelOutOfRange {
+            index: labels.iter().position(|&l| l == label).unwrap_or(0),
+            label,
+            classes,
+        });
+    }
+    let held_out = features
+        .iter()
+        .zip(labels)
+        .zip(fold)
+        .filter(|&(_, &g)| g == f)
+        .map(|((x, &y), _)| (x.as_ref(), y));
+    if present.len() < 2 {
+        let only = present.first().copied();
+        return Ok(held_out.filter(|&(_, y)| Some(y) == only).count());
+    }
+    let compact: Vec<usize> = train_y
+        .iter()
+        .map(|y| present.binary_search(y).unwrap_or(0))
+        .collect();
+    let svc = Svc::fit(params, &train_x, &compact, present.len())?;
+    let mut correct = 0;
+    for (x, y) in held_out {
+        correct += usize::from(present[svc.predict(x)?] == y);
+    }
+    Ok(correct)
+}
