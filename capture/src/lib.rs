@@ -35,6 +35,7 @@
 pub mod atomic;
 mod error;
 pub mod import;
+pub mod json_file;
 pub mod kind;
 mod meta;
 mod reader;
@@ -50,6 +51,7 @@ use std::path::{Path, PathBuf};
 
 pub use atomic::write_atomically;
 pub use error::{CaptureError, CaptureErrorKind};
+pub use json_file::JsonFileError;
 pub use kind::{CaptureKind, UnknownKind};
 pub use meta::{METADATA_MARKER, Metadata, RESERVED_KEYS};
 pub use reader::CaptureReader;

@@ -7,12 +7,12 @@
 //! typed error naming the file and the field, never a wrong force on the haptic thread.
 
 use std::fmt;
-use std::io::{self, Read};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use capture::{CaptureRef, sha256_hex, write_atomically};
+use capture::json_file::{self, JsonFileError};
+use capture::{CaptureRef, sha256_hex};
 
 use crate::metrics::Metrics;
 use svm::{InputScaling, Kernel, SvrModel};
@@ -175,42 +175,17 @@ impl ModelFile {
 
     /// Writes the model atomically.
     pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
-        write_atomically(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, self).map_err(io::Error::other)
-        })
-        .map_err(|source| ModelFileError::Io {
-            path: path.to_owned(),
-            source,
-        })
+        json_file::save_pretty(path, self)
     }
 
     /// Reads and validates a model file.
     pub fn load(path: &Path) -> Result<Self, ModelFileError> {
-        let mut text = String::new();
-        std::fs::File::open(path)
-            .and_then(|mut f| f.read_to_string(&mut text))
-            .map_err(|source| ModelFileError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
-        Self::from_slice(text.as_bytes(), path)
+        json_file::load(path, Self::validate)
     }
 
     /// Parses and validates a model file's bytes; `path` names it in errors.
     pub fn from_slice(bytes: &[u8], path: &Path) -> Result<Self, ModelFileError> {
-        let model: Self = serde_json::from_slice(bytes).map_err(|e| ModelFileError::Parse {
-            path: path.to_owned(),
-            line: e.line(),
-            reason: e.to_string(),
-        })?;
-        model
-            .validate()
-            .map_err(|(field, reason)| ModelFileError::Invalid {
-                path: path.to_owned(),
-                field,
-                reason,
-            })?;
-        Ok(model)
+        json_file::parse(bytes, path, Self::validate)
     }
 
     /// Checks version and shapes; `Err((field, reason))`.
@@ -278,36 +253,5 @@ impl ModelFile {
     }
 }
 
-/// Why a model file could not be used.
-#[derive(Debug, thiserror::Error)]
-pub enum ModelFileError {
-    /// Reading or writing failed.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: io::Error,
-    },
-    /// Not valid JSON for a model.
-    #[error("{}:{line}: {reason}", path.display())]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// Line of the error.
-        line: usize,
-        /// What serde said.
-        reason: String,
-    },
-    /// Parsed, but inconsistent.
-    #[error("{}: field `{field}`: {reason}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// The field.
-        field: String,
-        /// Why.
-        reason: String,
-    },
-}
+/// Why a model file could not be used: the shape every JSON file of the project fails in.
+pub type ModelFileError = JsonFileError;

@@ -9,7 +9,7 @@ use crate::features::spectral::SpectralError;
 use crate::knn::KnnError;
 use crate::som::SomError;
 use crate::svc::SvcError;
-use capture::CaptureError;
+use capture::{CaptureError, JsonFileError};
 
 /// Why a recognizer could not be trained, stored, loaded or evaluated.
 #[derive(Debug, thiserror::Error)]
@@ -136,6 +136,17 @@ impl RecognizerError {
         move |source| Self::Svc {
             behaviour: behaviour.unwrap_or_default().to_owned(),
             source,
+        }
+    }
+}
+
+/// A recognizer file's failures keep this crate's own variants, with the same messages.
+impl From<JsonFileError> for RecognizerError {
+    fn from(e: JsonFileError) -> Self {
+        match e {
+            JsonFileError::Io { path, source } => Self::Io { path, source },
+            JsonFileError::Parse { path, line, reason } => Self::Parse { path, line, reason },
+            JsonFileError::Invalid { path, field, reason } => Self::Invalid { path, field, reason },
         }
     }
 }

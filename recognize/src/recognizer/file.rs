@@ -2,7 +2,6 @@
 //! written and read, and the checks that make a truncated or hand-edited file a typed error
 //! naming the file and the field.
 
-use std::io::{self, Read};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -17,7 +16,8 @@ use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
 use crate::knn::Knn;
 use crate::som::Som;
 use crate::svc::{CSearch, Svc};
-use capture::{CaptureRef, sha256_hex, write_atomically};
+use capture::json_file;
+use capture::{CaptureRef, sha256_hex};
 
 /// Format name in every recognizer file.
 pub const RECOGNIZER_FORMAT: &str = "palpus-recognizer";
@@ -259,42 +259,17 @@ impl RecognizerFile {
 
     /// Writes the recognizer atomically as pretty JSON.
     pub fn save(&self, path: &Path) -> Result<(), RecognizerError> {
-        write_atomically(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, self).map_err(io::Error::other)
-        })
-        .map_err(|source| RecognizerError::Io {
-            path: path.to_owned(),
-            source,
-        })
+        Ok(json_file::save_pretty(path, self)?)
     }
 
     /// Reads and validates a recognizer file.
     pub fn load(path: &Path) -> Result<Self, RecognizerError> {
-        let mut text = String::new();
-        std::fs::File::open(path)
-            .and_then(|mut f| f.read_to_string(&mut text))
-            .map_err(|source| RecognizerError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
-        Self::from_json(&text, path)
+        Ok(json_file::load(path, Self::validate)?)
     }
 
     /// Parses and validates a recognizer; `path` names it in errors.
     pub fn from_json(text: &str, path: &Path) -> Result<Self, RecognizerError> {
-        let model: Self = serde_json::from_str(text).map_err(|e| RecognizerError::Parse {
-            path: path.to_owned(),
-            line: e.line(),
-            reason: e.to_string(),
-        })?;
-        model
-            .validate()
-            .map_err(|(field, reason)| RecognizerError::Invalid {
-                path: path.to_owned(),
-                field,
-                reason,
-            })?;
-        Ok(model)
+        Ok(json_file::parse(text.as_bytes(), path, Self::validate)?)
     }
 
     /// Checks format, version and shapes; `Err((field, reason))`.
