@@ -28,7 +28,7 @@ pub enum ViewError {
         /// The object.
         object: String,
         /// Why.
-        source: render::MeshError,
+        source: render::RenderError,
     },
     /// The `#node` named is not in the file.
     #[error("object `{object}`: {} has no node `{node}` (it has: {available})", file.display())]

@@ -11,7 +11,8 @@ use std::f64::consts::TAU;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use crate::gltf_io::{MeshError, write_glb};
+use crate::error::RenderError;
+use crate::gltf_io::write_glb;
 use crate::mesh::MeshData;
 
 /// The needle's entry point on the liver and on the tissue block: the origin, surface normal +y.
@@ -100,9 +101,10 @@ pub fn default_assets() -> Vec<(&'static str, Vec<MeshData>)> {
 }
 
 /// Generates every asset and writes it into `dir` (created if missing); returns the paths written.
-pub fn write_default_assets(dir: &Path) -> Result<Vec<PathBuf>, MeshError> {
-    fs::create_dir_all(dir).map_err(|source| MeshError::Io {
+pub fn write_default_assets(dir: &Path) -> Result<Vec<PathBuf>, RenderError> {
+    fs::create_dir_all(dir).map_err(|source| RenderError::Io {
         path: dir.to_path_buf(),
+        reason: source.to_string(),
         source,
     })?;
     let mut written = Vec::new();

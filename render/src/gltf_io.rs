@@ -8,159 +8,22 @@
 use std::collections::HashSet;
 use std::fs;
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{Mat3, Mat4, Vec3};
 use gltf::buffer::Source;
 use gltf::mesh::Mode;
 use serde_json::{Value, json};
 
+use crate::error::RenderError;
 use crate::mesh::MeshData;
-
-/// Why a mesh file could not be read or written. Every variant names the file.
-#[derive(Debug, thiserror::Error)]
-pub enum MeshError {
-    /// The file does not exist.
-    #[error("{path}: file not found")]
-    NotFound {
-        /// The file.
-        path: PathBuf,
-    },
-    /// Any other I/O failure while reading or writing.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The underlying error.
-        #[source]
-        source: io::Error,
-    },
-    /// The bytes are not a valid glTF document.
-    #[error("{path}: not a valid glTF file: {reason}")]
-    NotGltf {
-        /// The file.
-        path: PathBuf,
-        /// What the parser or validator reported.
-        reason: String,
-    },
-    /// A buffer lives in an external file or data URI; only self-contained `.glb` is supported.
-    #[error("{path}: buffer {buffer} is external ({uri}); only self-contained .glb files are supported")]
-    ExternalBuffer {
-        /// The file.
-        path: PathBuf,
-        /// The buffer's index.
-        buffer: usize,
-        /// The buffer's URI.
-        uri: String,
-    },
-    /// The binary chunk is missing or shorter than the buffer it must hold.
-    #[error("{path}: binary chunk holds {actual} bytes, buffer {buffer} needs {expected}")]
-    TruncatedBuffer {
-        /// The file.
-        path: PathBuf,
-        /// The buffer's index.
-        buffer: usize,
-        /// Bytes the buffer declares.
-        expected: usize,
-        /// Bytes present.
-        actual: usize,
-    },
-    /// A primitive has no POSITION attribute.
-    #[error("{path}: mesh '{mesh}' has a primitive without POSITION")]
-    MissingPositions {
-        /// The file.
-        path: PathBuf,
-        /// The node or mesh name.
-        mesh: String,
-    },
-    /// An attribute's accessor cannot be read as the expected type or lies outside its buffer.
-    #[error("{path}: mesh '{mesh}': attribute {attribute} cannot be read")]
-    BadAccessor {
-        /// The file.
-        path: PathBuf,
-        /// The node or mesh name.
-        mesh: String,
-        /// The attribute (`POSITION`, `NORMAL`, `COLOR_0`, `indices`).
-        attribute: &'static str,
-    },
-    /// An attribute's vertex count differs from POSITION's.
-    #[error("{path}: mesh '{mesh}': {attribute} has {actual} entries, POSITION has {expected}")]
-    AttributeCount {
-        /// The file.
-        path: PathBuf,
-        /// The node or mesh name.
-        mesh: String,
-        /// The attribute.
-        attribute: &'static str,
-        /// POSITION's count.
-        expected: usize,
-        /// The attribute's count.
-        actual: usize,
-    },
-    /// A primitive is not a triangle list.
-    #[error("{path}: mesh '{mesh}' has a {mode} primitive; only triangle lists are supported")]
-    NonTriangle {
-        /// The file.
-        path: PathBuf,
-        /// The node or mesh name.
-        mesh: String,
-        /// The primitive's mode, e.g. `Lines`.
-        mode: String,
-    },
-    /// The index count is not a multiple of three.
-    #[error("{path}: mesh '{mesh}' has {count} indices, not a multiple of 3")]
-    PartialTriangle {
-        /// The file.
-        path: PathBuf,
-        /// The node or mesh name.
-        mesh: String,
-        /// The number of indices.
-        count: usize,
-    },
-    /// An index points past the last vertex.
-    #[error("{path}: mesh '{mesh}': index {index} out of range for {vertex_count} vertices")]
-    IndexOutOfRange {
-        /// The file.
-        path: PathBuf,
-        /// The node or mesh name.
-        mesh: String,
-        /// The offending index.
-        index: u32,
-        /// The number of vertices.
-        vertex_count: usize,
-    },
-    /// A mesh to be written has no vertices or no triangles (glTF accessors need count ≥ 1).
-    #[error("{path}: mesh '{mesh}' is empty")]
-    EmptyMesh {
-        /// The file.
-        path: PathBuf,
-        /// The mesh name.
-        mesh: String,
-    },
-    /// A mesh to be written holds NaN or infinite values.
-    #[error("{path}: mesh '{mesh}': {attribute} holds a non-finite value")]
-    NonFinite {
-        /// The file.
-        path: PathBuf,
-        /// The mesh name.
-        mesh: String,
-        /// The attribute.
-        attribute: &'static str,
-    },
-    /// The meshes do not fit the 32-bit sizes glTF uses.
-    #[error("{path}: meshes too large for a .glb file")]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-    },
-}
 
 /// Loads every node that has a mesh from a `.glb` (or self-contained `.gltf` without external
 /// buffers), in scene order, with the node's world transform applied.
 ///
 /// Missing normals are computed (area-weighted, smooth); a missing COLOR_0 reads as opaque white;
 /// a primitive without indices reads as a plain triangle list.
-pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, MeshError> {
+pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, RenderError> {
     let bytes = fs::read(path).map_err(|e| io_error(path, e))?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| explain_invalid(path, &bytes, e))?;
     let document = &gltf.document;
@@ -171,7 +34,7 @@ pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, MeshError> {
             Source::Bin => {
                 let blob = gltf.blob.as_deref().unwrap_or(&[]);
                 if blob.len() < buffer.length() {
-                    return Err(MeshError::TruncatedBuffer {
+                    return Err(RenderError::TruncatedBuffer {
                         path: path.to_path_buf(),
                         buffer: buffer.index(),
                         expected: buffer.length(),
@@ -181,7 +44,7 @@ pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, MeshError> {
                 buffers.push(blob);
             }
             Source::Uri(uri) => {
-                return Err(MeshError::ExternalBuffer {
+                return Err(RenderError::ExternalBuffer {
                     path: path.to_path_buf(),
                     buffer: buffer.index(),
                     uri: uri.to_string(),
@@ -209,7 +72,7 @@ pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, MeshError> {
 ///
 /// The file is written to a temporary sibling and renamed into place, so readers never see a
 /// half-written file. The same input always yields the same bytes.
-pub fn write_glb(path: &Path, meshes: &[MeshData]) -> Result<(), MeshError> {
+pub fn write_glb(path: &Path, meshes: &[MeshData]) -> Result<(), RenderError> {
     let bytes = encode_glb(path, meshes)?;
     let file_name = path
         .file_name()
@@ -276,14 +139,15 @@ fn cross64(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn io_error(path: &Path, e: io::Error) -> MeshError {
+fn io_error(path: &Path, e: io::Error) -> RenderError {
     if e.kind() == io::ErrorKind::NotFound {
-        MeshError::NotFound {
+        RenderError::NotFound {
             path: path.to_path_buf(),
         }
     } else {
-        MeshError::Io {
+        RenderError::Io {
             path: path.to_path_buf(),
+            reason: e.to_string(),
             source: e,
         }
     }
@@ -291,7 +155,7 @@ fn io_error(path: &Path, e: io::Error) -> MeshError {
 
 /// The validator reports a primitive without POSITION as a generic schema error; re-parse without
 /// validation to name that common case precisely.
-fn explain_invalid(path: &Path, bytes: &[u8], error: gltf::Error) -> MeshError {
+fn explain_invalid(path: &Path, bytes: &[u8], error: gltf::Error) -> RenderError {
     if let gltf::Error::Validation(_) = error
         && let Ok(unchecked) = gltf::Gltf::from_slice_without_validation(bytes)
     {
@@ -304,14 +168,14 @@ fn explain_invalid(path: &Path, bytes: &[u8], error: gltf::Error) -> MeshError {
                 .any(|p| !p.attributes.contains_key(&positions))
             {
                 let name = mesh.name.clone().unwrap_or_else(|| format!("mesh_{index}"));
-                return MeshError::MissingPositions {
+                return RenderError::MissingPositions {
                     path: path.to_path_buf(),
                     mesh: name,
                 };
             }
         }
     }
-    MeshError::NotGltf {
+    RenderError::NotGltf {
         path: path.to_path_buf(),
         reason: error.to_string(),
     }
@@ -358,7 +222,7 @@ fn read_mesh(
     name: &str,
     mesh: &gltf::Mesh<'_>,
     buffers: &[&[u8]],
-) -> Result<MeshData, MeshError> {
+) -> Result<MeshData, RenderError> {
     let mut data = MeshData {
         name: name.to_string(),
         positions: Vec::new(),
@@ -366,12 +230,12 @@ fn read_mesh(
         colors: Vec::new(),
         indices: Vec::new(),
     };
-    let bad = |attribute| MeshError::BadAccessor {
+    let bad = |attribute| RenderError::BadAccessor {
         path: path.to_path_buf(),
         mesh: name.to_string(),
         attribute,
     };
-    let count_mismatch = |attribute, expected, actual| MeshError::AttributeCount {
+    let count_mismatch = |attribute, expected, actual| RenderError::AttributeCount {
         path: path.to_path_buf(),
         mesh: name.to_string(),
         attribute,
@@ -381,14 +245,14 @@ fn read_mesh(
     let mut parts = Vec::new();
     for primitive in mesh.primitives() {
         if primitive.mode() != Mode::Triangles {
-            return Err(MeshError::NonTriangle {
+            return Err(RenderError::NonTriangle {
                 path: path.to_path_buf(),
                 mesh: name.to_string(),
                 mode: format!("{:?}", primitive.mode()),
             });
         }
         if primitive.get(&gltf::Semantic::Positions).is_none() {
-            return Err(MeshError::MissingPositions {
+            return Err(RenderError::MissingPositions {
                 path: path.to_path_buf(),
                 mesh: name.to_string(),
             });
@@ -414,7 +278,7 @@ fn read_mesh(
                 .ok_or_else(|| bad("indices"))?
                 .into_u32()
                 .collect(),
-            None => (0..u32::try_from(n).map_err(|_| MeshError::TooLarge {
+            None => (0..u32::try_from(n).map_err(|_| RenderError::TooLarge {
                 path: path.to_path_buf(),
             })?)
                 .collect(),
@@ -428,14 +292,14 @@ fn read_mesh(
             return Err(count_mismatch("COLOR_0", n, colors.len()));
         }
         if !indices.len().is_multiple_of(3) {
-            return Err(MeshError::PartialTriangle {
+            return Err(RenderError::PartialTriangle {
                 path: path.to_path_buf(),
                 mesh: name.to_string(),
                 count: indices.len(),
             });
         }
         if let Some(&index) = indices.iter().find(|&&i| i as usize >= n) {
-            return Err(MeshError::IndexOutOfRange {
+            return Err(RenderError::IndexOutOfRange {
                 path: path.to_path_buf(),
                 mesh: name.to_string(),
                 index,
@@ -445,7 +309,7 @@ fn read_mesh(
         parts.push((positions, normals, colors, indices));
     }
     for (positions, normals, colors, indices) in parts {
-        let offset = u32::try_from(data.positions.len()).map_err(|_| MeshError::TooLarge {
+        let offset = u32::try_from(data.positions.len()).map_err(|_| RenderError::TooLarge {
             path: path.to_path_buf(),
         })?;
         // Per primitive, so that computed smoothing never blends across primitive borders.
@@ -454,7 +318,7 @@ fn read_mesh(
         data.normals.extend_from_slice(&normals);
         data.colors.extend_from_slice(&colors);
         for i in indices {
-            let shifted = i.checked_add(offset).ok_or_else(|| MeshError::TooLarge {
+            let shifted = i.checked_add(offset).ok_or_else(|| RenderError::TooLarge {
                 path: path.to_path_buf(),
             })?;
             data.indices.push(shifted);
@@ -499,8 +363,8 @@ const MODE_TRIANGLES: u32 = 4;
 /// The JSON is built with `serde_json` rather than `gltf-json`: the writer needs a dozen fields,
 /// `json!` states them in the shape the spec documents, and serde_json's sorted maps make the
 /// output byte-stable without depending on another crate's struct layout and skip rules.
-fn encode_glb(path: &Path, meshes: &[MeshData]) -> Result<Vec<u8>, MeshError> {
-    let too_large = || MeshError::TooLarge {
+fn encode_glb(path: &Path, meshes: &[MeshData]) -> Result<Vec<u8>, RenderError> {
+    let too_large = || RenderError::TooLarge {
         path: path.to_path_buf(),
     };
     let mut bin: Vec<u8> = Vec::new();
@@ -573,8 +437,9 @@ fn encode_glb(path: &Path, meshes: &[MeshData]) -> Result<Vec<u8>, MeshError> {
     {
         obj.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
     }
-    let mut json_bytes = serde_json::to_vec(&root).map_err(|e| MeshError::Io {
+    let mut json_bytes = serde_json::to_vec(&root).map_err(|e| RenderError::Io {
         path: path.to_path_buf(),
+        reason: e.to_string(),
         source: io::Error::other(e),
     })?;
     // Chunks must be 4-byte aligned: JSON pads with spaces, BIN with zeros (glTF 2.0 §4.4.3).
@@ -605,15 +470,15 @@ fn encode_glb(path: &Path, meshes: &[MeshData]) -> Result<Vec<u8>, MeshError> {
     Ok(out)
 }
 
-fn validate_for_write(path: &Path, mesh: &MeshData) -> Result<(), MeshError> {
+fn validate_for_write(path: &Path, mesh: &MeshData) -> Result<(), RenderError> {
     let n = mesh.positions.len();
     if n == 0 || mesh.indices.is_empty() {
-        return Err(MeshError::EmptyMesh {
+        return Err(RenderError::EmptyMesh {
             path: path.to_path_buf(),
             mesh: mesh.name.clone(),
         });
     }
-    let mismatch = |attribute, actual| MeshError::AttributeCount {
+    let mismatch = |attribute, actual| RenderError::AttributeCount {
         path: path.to_path_buf(),
         mesh: mesh.name.clone(),
         attribute,
@@ -627,21 +492,21 @@ fn validate_for_write(path: &Path, mesh: &MeshData) -> Result<(), MeshError> {
         return Err(mismatch("COLOR_0", mesh.colors.len()));
     }
     if !mesh.indices.len().is_multiple_of(3) {
-        return Err(MeshError::PartialTriangle {
+        return Err(RenderError::PartialTriangle {
             path: path.to_path_buf(),
             mesh: mesh.name.clone(),
             count: mesh.indices.len(),
         });
     }
     if let Some(&index) = mesh.indices.iter().find(|&&i| i as usize >= n) {
-        return Err(MeshError::IndexOutOfRange {
+        return Err(RenderError::IndexOutOfRange {
             path: path.to_path_buf(),
             mesh: mesh.name.clone(),
             index,
             vertex_count: n,
         });
     }
-    let non_finite = |attribute| MeshError::NonFinite {
+    let non_finite = |attribute| RenderError::NonFinite {
         path: path.to_path_buf(),
         mesh: mesh.name.clone(),
         attribute,

@@ -2,7 +2,7 @@
 //! CPU SIMD widths, so a test counts the pixels that differ noticeably instead of demanding
 //! identical bytes.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::RenderError;
 use crate::image::Image;
@@ -42,39 +42,6 @@ impl Comparison {
     pub fn fraction(&self) -> f64 {
         self.differing_pixels as f64 / self.total_pixels.max(1) as f64
     }
-}
-
-/// Why a golden check did not pass.
-#[derive(Debug, thiserror::Error)]
-pub enum GoldenError {
-    #[error(
-        "{name}: {differing} of {total} pixels ({percent:.3} %) differ by more than {threshold} \
-         (allowed {allowed:.3} %); actual and diff written to {dir}"
-    )]
-    Mismatch {
-        name: String,
-        differing: usize,
-        total: usize,
-        percent: f64,
-        threshold: u8,
-        allowed: f64,
-        dir: PathBuf,
-    },
-    #[error(
-        "{name}: size {actual_w}×{actual_h} differs from golden {golden_w}×{golden_h}; actual written to {dir}"
-    )]
-    SizeMismatch {
-        name: String,
-        actual_w: u32,
-        actual_h: u32,
-        golden_w: u32,
-        golden_h: u32,
-        dir: PathBuf,
-    },
-    #[error("golden {path} is missing; run with {BLESS_ENV}=1 to create it (actual written to {dir})")]
-    Missing { path: PathBuf, dir: PathBuf },
-    #[error(transparent)]
-    Render(#[from] RenderError),
 }
 
 /// Compares two images pixel by pixel; `None` when their sizes differ.
@@ -121,7 +88,7 @@ pub fn check(
     golden_dir: &Path,
     failure_dir: &Path,
     tolerance: Tolerance,
-) -> Result<Option<Comparison>, GoldenError> {
+) -> Result<Option<Comparison>, RenderError> {
     let golden_path = golden_dir.join(format!("{name}.png"));
     if bless_requested() {
         actual.save_png(&golden_path)?;
@@ -130,7 +97,7 @@ pub fn check(
     let actual_path = failure_dir.join(format!("{name}.actual.png"));
     if !golden_path.exists() {
         actual.save_png(&actual_path)?;
-        return Err(GoldenError::Missing {
+        return Err(RenderError::GoldenMissing {
             path: golden_path,
             dir: failure_dir.to_path_buf(),
         });
@@ -138,7 +105,7 @@ pub fn check(
     let expected = Image::load_png(&golden_path)?;
     let Some(cmp) = compare(actual, &expected, tolerance.channel_threshold) else {
         actual.save_png(&actual_path)?;
-        return Err(GoldenError::SizeMismatch {
+        return Err(RenderError::GoldenSizeMismatch {
             name: name.into(),
             actual_w: actual.width,
             actual_h: actual.height,
@@ -150,7 +117,7 @@ pub fn check(
     if cmp.fraction() > tolerance.max_fraction {
         actual.save_png(&actual_path)?;
         cmp.diff.save_png(&failure_dir.join(format!("{name}.diff.png")))?;
-        return Err(GoldenError::Mismatch {
+        return Err(RenderError::GoldenMismatch {
             name: name.into(),
             differing: cmp.differing_pixels,
             total: cmp.total_pixels,
@@ -202,7 +169,7 @@ mod tests {
         }
         let err = check("x", &solid(8, 8, 255), &golden, &fail, Tolerance::default()).unwrap_err();
         assert!(
-            matches!(err, GoldenError::Mismatch { differing: 64, .. }),
+            matches!(err, RenderError::GoldenMismatch { differing: 64, .. }),
             "{err}"
         );
         assert!(fail.join("x.actual.png").exists() && fail.join("x.diff.png").exists());

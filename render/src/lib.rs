@@ -7,6 +7,8 @@
 //! - Dimples bend objects marked deformable in the vertex shader; after puncture they are drawn
 //!   see-through so the shaft inside shows.
 //! - [`golden`] compares images with a tolerance; [`bench`] measures frames per second.
+//! - Every fallible call returns [`RenderError`]: GPU and window failures, image and mesh files,
+//!   golden mismatches, each naming the file involved.
 
 pub mod assets_gen;
 pub mod bench;
@@ -31,7 +33,7 @@ pub use frame::{
     Camera, Dimple, Frame, MAX_DIMPLES, Material, Object, Overlay, Param, Recognition, TissueState, Tool,
     UiAction,
 };
-pub use gltf_io::{MeshError, compute_normals, load_glb, write_glb};
+pub use gltf_io::{compute_normals, load_glb, write_glb};
 pub use gpu::{Backend, GpuOptions};
 pub use image::Image;
 pub use mesh::MeshData;

@@ -10,7 +10,7 @@ use render::assets_gen::{
     SKIN_THICKNESS_M, VESSEL_RADIUS_M, VESSEL_WALL_DEPTH_M, default_assets, patch_centre_m,
     write_default_assets,
 };
-use render::{MeshData, MeshError, load_glb, write_glb};
+use render::{MeshData, RenderError, load_glb, write_glb};
 
 fn committed_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/meshes")
@@ -497,7 +497,7 @@ fn patches_lie_side_by_side_on_y0_and_rank_by_roughness() {
 fn missing_file_is_not_found() {
     let path = Path::new("/nonexistent/dir/liver.glb");
     match load_glb(path) {
-        Err(MeshError::NotFound { path: p }) => assert_eq!(p, path),
+        Err(RenderError::NotFound { path: p }) => assert_eq!(p, path),
         other => panic!("{other:?}"),
     }
 }
@@ -515,7 +515,7 @@ fn garbage_bytes_are_not_gltf() {
         let path = dir.path().join(format!("bad_{n}.glb"));
         std::fs::write(&path, bytes).unwrap();
         let err = load_glb(&path).unwrap_err();
-        assert!(matches!(err, MeshError::NotGltf { .. }), "{err:?}");
+        assert!(matches!(err, RenderError::NotGltf { .. }), "{err:?}");
         assert!(err.to_string().contains(&format!("bad_{n}.glb")), "{err}");
     }
 }
@@ -565,7 +565,7 @@ fn gltf_without_positions_is_a_typed_error() {
     });
     std::fs::write(&path, glb_from_json(&json, &bin)).unwrap();
     match load_glb(&path) {
-        Err(MeshError::MissingPositions { mesh, .. }) => assert_eq!(mesh, "blob"),
+        Err(RenderError::MissingPositions { mesh, .. }) => assert_eq!(mesh, "blob"),
         other => panic!("{other:?}"),
     }
 }
@@ -620,7 +620,7 @@ fn loader_applies_transforms_fills_defaults_and_rejects_bad_primitives() {
 
     std::fs::write(&path, doc(3, 4)).unwrap();
     match load_glb(&path) {
-        Err(MeshError::IndexOutOfRange {
+        Err(RenderError::IndexOutOfRange {
             index: 3,
             vertex_count: 3,
             ..
@@ -629,7 +629,7 @@ fn loader_applies_transforms_fills_defaults_and_rejects_bad_primitives() {
     }
     std::fs::write(&path, doc(2, 1)).unwrap();
     match load_glb(&path) {
-        Err(MeshError::NonTriangle { mode, .. }) => assert_eq!(mode, "Lines"),
+        Err(RenderError::NonTriangle { mode, .. }) => assert_eq!(mode, "Lines"),
         other => panic!("{other:?}"),
     }
 }
@@ -649,19 +649,19 @@ fn writer_rejects_inconsistent_meshes() {
     out_of_range.indices[2] = 3;
     assert!(matches!(
         write_glb(&path, &[out_of_range]),
-        Err(MeshError::IndexOutOfRange { index: 3, .. })
+        Err(RenderError::IndexOutOfRange { index: 3, .. })
     ));
     let mut short_normals = good.clone();
     short_normals.normals.pop();
     assert!(matches!(
         write_glb(&path, &[short_normals]),
-        Err(MeshError::AttributeCount { .. })
+        Err(RenderError::AttributeCount { .. })
     ));
     let mut nan = good.clone();
     nan.positions[0][1] = f32::NAN;
     assert!(matches!(
         write_glb(&path, &[nan]),
-        Err(MeshError::NonFinite { .. })
+        Err(RenderError::NonFinite { .. })
     ));
     assert!(!path.exists(), "a rejected mesh must leave no file");
     write_glb(&path, &[good]).unwrap();
