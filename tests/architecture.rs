@@ -20,7 +20,7 @@ const LAYERS: [(&str, &str, &[&str]); 7] = [
     ("identify", "identify", &["capture", "svm"]),
     ("recognize", "recognize", &["capture", "svm"]),
     ("haptics", "haptics", &["capture", "svm", "identify", "recognize"]),
-    ("render", "render", &[]),
+    ("render", "render", &["capture"]),
     (
         "palpus",
         ".",

@@ -10,6 +10,7 @@ use std::fs;
 use std::io::{self, Write};
 use std::path::Path;
 
+use capture::atomic::write_atomically;
 use glam::{Mat3, Mat4, Vec3};
 use gltf::buffer::Source;
 use gltf::mesh::Mode;
@@ -70,26 +71,12 @@ pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, RenderError> {
 /// Writes `meshes` as a binary glTF 2.0 file: one node and one single-primitive mesh per entry,
 /// with f32 POSITION (with the min/max the spec requires), NORMAL, COLOR_0 (vec4) and u32 indices.
 ///
-/// The file is written to a temporary sibling and renamed into place, so readers never see a
-/// half-written file. The same input always yields the same bytes.
+/// The file is written through [`capture::atomic::write_atomically`], so readers never see a
+/// half-written file and a failed write keeps the previous one. The same input always yields the
+/// same bytes.
 pub fn write_glb(path: &Path, meshes: &[MeshData]) -> Result<(), RenderError> {
     let bytes = encode_glb(path, meshes)?;
-    let file_name = path
-        .file_name()
-        .map_or_else(|| "mesh.glb".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut file = fs::File::create(&tmp)?;
-        file.write_all(&bytes)?;
-        file.sync_all()?;
-        drop(file);
-        fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        // Best effort: the original error is the one worth reporting.
-        let _ = fs::remove_file(&tmp);
-        io_error(path, e)
-    })
+    write_atomically(path, |out| out.write_all(&bytes)).map_err(|e| io_error(path, e))
 }
 
 /// Area-weighted smooth vertex normals of a triangle list; vertices in no (or only degenerate)

@@ -1,8 +1,10 @@
 //! CPU images: what headless rendering returns and screenshots store.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufReader, Write};
 use std::path::Path;
+
+use capture::atomic::write_atomically;
 
 use crate::error::RenderError;
 
@@ -48,8 +50,8 @@ impl Image {
         Some([p[0], p[1], p[2], p[3]])
     }
 
-    /// Writes a PNG to a temporary file beside `path`, then renames it, so a reader never sees
-    /// a half-written image.
+    /// Writes a PNG (creating its directory) through [`write_atomically`], so a reader never
+    /// sees a half-written image and a failed write keeps the previous one.
     pub fn save_png(&self, path: &Path) -> Result<(), RenderError> {
         let io_err = |reason: &str, source| RenderError::Io {
             path: path.to_path_buf(),
@@ -59,48 +61,25 @@ impl Image {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| io_err("cannot create directory", e))?;
         }
-        let mut tmp_name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-        tmp_name.push(format!(".tmp{}", std::process::id()));
-        let tmp = path.with_file_name(tmp_name);
-        let result = self.write_png(&tmp, path);
-        if result.is_err() {
-            // The temporary may be half-written; the destination is untouched either way.
-            let _ = std::fs::remove_file(&tmp);
-            return result;
-        }
-        std::fs::rename(&tmp, path).map_err(|e| io_err("cannot rename temporary PNG into place", e))
+        // Encoded in memory first so that encoder failures and file failures stay distinct.
+        let bytes = self.encode_png(path)?;
+        write_atomically(path, |out| out.write_all(&bytes)).map_err(|e| io_err("cannot write", e))
     }
 
-    fn write_png(&self, tmp: &Path, path: &Path) -> Result<(), RenderError> {
-        let file = File::create(tmp).map_err(|source| RenderError::Io {
-            path: tmp.to_path_buf(),
-            reason: "cannot create".into(),
-            source,
-        })?;
-        let mut writer = BufWriter::new(file);
-        {
-            let mut encoder = png::Encoder::new(&mut writer, self.width, self.height);
-            encoder.set_color(png::ColorType::Rgba);
-            encoder.set_depth(png::BitDepth::Eight);
-            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let enc_err = |e: png::EncodingError| RenderError::PngEncode {
-                path: path.to_path_buf(),
-                reason: e.to_string(),
-            };
-            let mut png_writer = encoder.write_header().map_err(enc_err)?;
-            png_writer.write_image_data(&self.rgba).map_err(enc_err)?;
-            png_writer.finish().map_err(enc_err)?;
-        }
-        writer.flush().map_err(|source| RenderError::Io {
-            path: tmp.to_path_buf(),
-            reason: "cannot write".into(),
-            source,
-        })?;
-        writer.get_ref().sync_all().map_err(|source| RenderError::Io {
-            path: tmp.to_path_buf(),
-            reason: "cannot sync".into(),
-            source,
-        })
+    fn encode_png(&self, path: &Path) -> Result<Vec<u8>, RenderError> {
+        let mut bytes = Vec::new();
+        let mut encoder = png::Encoder::new(&mut bytes, self.width, self.height);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let enc_err = |e: png::EncodingError| RenderError::PngEncode {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        };
+        let mut png_writer = encoder.write_header().map_err(enc_err)?;
+        png_writer.write_image_data(&self.rgba).map_err(enc_err)?;
+        png_writer.finish().map_err(enc_err)?;
+        Ok(bytes)
     }
 
     /// Reads an 8-bit RGB or RGBA PNG (RGB gets opaque alpha).
