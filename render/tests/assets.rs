@@ -513,10 +513,18 @@ fn garbage_bytes_are_not_gltf() {
     .enumerate()
     {
         let path = dir.path().join(format!("bad_{n}.glb"));
-        std::fs::write(&path, bytes).unwrap();
-        let err = load_glb(&path).unwrap_err();
+        let err = load_error(&path, bytes);
         assert!(matches!(err, RenderError::NotGltf { .. }), "{err:?}");
         assert!(err.to_string().contains(&format!("bad_{n}.glb")), "{err}");
+    }
+}
+
+/// Writes `bytes` to `path` and returns why loading them fails; a successful load fails the test.
+fn load_error(path: &Path, bytes: &[u8]) -> RenderError {
+    std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    match load_glb(path) {
+        Err(e) => e,
+        Ok(meshes) => panic!("{} loaded: {meshes:?}", path.display()),
     }
 }
 
@@ -563,11 +571,11 @@ fn gltf_without_positions_is_a_typed_error() {
         "bufferViews": [{"buffer": 0, "byteLength": 36}],
         "buffers": [{"byteLength": 36}],
     });
-    std::fs::write(&path, glb_from_json(&json, &bin)).unwrap();
-    match load_glb(&path) {
-        Err(RenderError::MissingPositions { mesh, .. }) => assert_eq!(mesh, "blob"),
-        other => panic!("{other:?}"),
-    }
+    let err = load_error(&path, &glb_from_json(&json, &bin));
+    assert!(
+        matches!(&err, RenderError::MissingPositions { mesh, .. } if mesh == "blob"),
+        "{err:?}"
+    );
 }
 
 /// A hand-written file: nested node transforms, no normals, no colours, u16 indices, one index
@@ -618,20 +626,23 @@ fn loader_applies_transforms_fills_defaults_and_rejects_bad_primitives() {
     assert!(m.normals.iter().all(|n| *n == [0.0, 1.0, 0.0]), "{:?}", m.normals);
     assert!(m.colors.iter().all(|c| *c == [1.0; 4]));
 
-    std::fs::write(&path, doc(3, 4)).unwrap();
-    match load_glb(&path) {
-        Err(RenderError::IndexOutOfRange {
-            index: 3,
-            vertex_count: 3,
-            ..
-        }) => {}
-        other => panic!("{other:?}"),
-    }
-    std::fs::write(&path, doc(2, 1)).unwrap();
-    match load_glb(&path) {
-        Err(RenderError::NonTriangle { mode, .. }) => assert_eq!(mode, "Lines"),
-        other => panic!("{other:?}"),
-    }
+    let err = load_error(&path, &doc(3, 4));
+    assert!(
+        matches!(
+            err,
+            RenderError::IndexOutOfRange {
+                index: 3,
+                vertex_count: 3,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    let err = load_error(&path, &doc(2, 1));
+    assert!(
+        matches!(&err, RenderError::NonTriangle { mode, .. } if mode == "Lines"),
+        "{err:?}"
+    );
 }
 
 #[test]

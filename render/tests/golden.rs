@@ -44,6 +44,11 @@ fn golden(name: &str, image: &Image) {
     }
 }
 
+/// The tissue block's and the needle's committed meshes.
+fn tissue_and_needle() -> (Vec<Arc<MeshData>>, Vec<Arc<MeshData>>) {
+    (meshes("tissue_block.glb"), meshes("needle.glb"))
+}
+
 /// The tissue scene with the needle in `state`, drawn at the golden size.
 fn tissue_view(tissue: &[Arc<MeshData>], needle: &[Arc<MeshData>], state: NeedleState) -> Image {
     draw(&tissue_scene(tissue, needle, state), WIDTH, HEIGHT)
@@ -60,12 +65,8 @@ fn luma(p: [u8; 4]) -> f32 {
 
 #[test]
 fn tissue_at_rest() {
-    let frame = tissue_scene(
-        &meshes("tissue_block.glb"),
-        &meshes("needle.glb"),
-        NeedleState::Above { height_m: 0.02 },
-    );
-    let image = draw(&frame, WIDTH, HEIGHT);
+    let (tissue, needle) = tissue_and_needle();
+    let image = tissue_view(&tissue, &needle, NeedleState::Above { height_m: 0.02 });
     // The block fills the middle of the picture: not the background colour.
     let centre = image.pixel(WIDTH / 2, HEIGHT * 3 / 5).unwrap();
     assert!(luma(centre) > 40.0, "{centre:?}");
@@ -74,8 +75,7 @@ fn tissue_at_rest() {
 
 #[test]
 fn needle_dimpling_surface() {
-    let tissue = meshes("tissue_block.glb");
-    let needle = meshes("needle.glb");
+    let (tissue, needle) = tissue_and_needle();
     let rest = tissue_view(&tissue, &needle, NeedleState::Above { height_m: 0.0 });
     let pressed = tissue_view(
         &tissue,
@@ -93,8 +93,7 @@ fn needle_dimpling_surface() {
 
 #[test]
 fn needle_inserted() {
-    let tissue = meshes("tissue_block.glb");
-    let needle = meshes("needle.glb");
+    let (tissue, needle) = tissue_and_needle();
     let inserted = tissue_view(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 });
     let mut opaque = tissue_scene(&tissue, &needle, NeedleState::Inserted { depth_m: 0.025 });
     opaque.tissue.punctured = false;
