@@ -135,7 +135,7 @@ pub enum IdentifyError {
         what: String,
         /// Why.
         #[source]
-        source: svm::SvrError,
+        source: svm::SvmError,
     },
     /// A baseline failed.
     #[error("baseline {what}: {source}")]

@@ -1,6 +1,6 @@
 //! An ε-SVR's training data, checked once before any solver sees it.
 
-use super::error::SvrError;
+use super::error::SvmError;
 
 /// Training data of an ε-SVR, checked once: `x` is `n × dim` row-major, `y` has `n` targets,
 /// every value finite.
@@ -16,28 +16,30 @@ pub(crate) struct SvrData<'a> {
 
 impl<'a> SvrData<'a> {
     /// Checks the shapes and values.
-    pub fn new(x: &'a [f64], dim: usize, y: &'a [f64]) -> Result<Self, SvrError> {
+    pub fn new(x: &'a [f64], dim: usize, y: &'a [f64]) -> Result<Self, SvmError> {
         let n = y.len();
         if n == 0 {
-            return Err(SvrError::NoSamples);
+            return Err(SvmError::NoSamples);
         }
         if dim == 0 || x.len() != n * dim {
-            return Err(SvrError::Shape {
-                inputs: x.len(),
-                targets: n,
+            return Err(SvmError::Shape {
+                array: "input",
+                values: x.len(),
+                rows_of: "targets",
+                rows: n,
                 dim,
             });
         }
         for (row, chunk) in x.chunks_exact(dim).enumerate() {
             if let Some(k) = chunk.iter().position(|v| !v.is_finite()) {
-                return Err(SvrError::NonFinite {
+                return Err(SvmError::NonFinite {
                     row,
                     what: format!("input {k}"),
                 });
             }
         }
         if let Some(row) = y.iter().position(|v| !v.is_finite()) {
-            return Err(SvrError::NonFinite {
+            return Err(SvmError::NonFinite {
                 row,
                 what: "target".into(),
             });

@@ -23,135 +23,18 @@
 //! libsvm's optional Laplace error model, which prediction does not use).
 
 use std::fmt;
-use std::io::{self, BufRead, Write};
+use std::io::{BufRead, Write};
 
+use super::error::SvmError;
 use super::kernel::Kernel;
 use super::model::SvrModel;
-
-/// Why a model could not be written to or read from libsvm's format.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum LibsvmError {
-    /// Reading or writing failed.
-    #[error("I/O error: {0}")]
-    Io(#[from] io::Error),
-    /// The model cannot be expressed in (or is not consistent enough for) libsvm's format.
-    #[error("cannot export the model: {0}")]
-    Export(String),
-    /// A line of a model file is malformed.
-    #[error("line {line}: {kind}")]
-    Parse {
-        /// 1-based line number.
-        line: usize,
-        /// What is wrong with it.
-        kind: LibsvmParseError,
-    },
-    /// The file ended before a required part.
-    #[error("the model file ends without {0}")]
-    Missing(&'static str),
-}
-
-/// What is wrong with one line of a libsvm model file.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum LibsvmParseError {
-    /// A header keyword this reader does not know.
-    #[error("unknown header keyword `{0}`")]
-    UnknownKey(String),
-    /// A header keyword appears twice.
-    #[error("header keyword `{0}` appears twice")]
-    DuplicateKey(String),
-    /// A header keyword without the value(s) it needs.
-    #[error("`{key}` needs {expected} value(s), found {found}")]
-    ValueCount {
-        /// The keyword.
-        key: String,
-        /// Values expected.
-        expected: usize,
-        /// Values found.
-        found: usize,
-    },
-    /// A value that is not a number of the right kind.
-    #[error("{what}: `{text}` is not {expected}")]
-    BadNumber {
-        /// Which value.
-        what: String,
-        /// The text found.
-        text: String,
-        /// What it should be.
-        expected: &'static str,
-    },
-    /// Not a regression model.
-    #[error("svm_type `{0}` is not a regression model (expected epsilon_svr or nu_svr)")]
-    UnsupportedSvmType(String),
-    /// A kernel this crate does not have.
-    #[error("kernel_type `{0}` is not supported (expected linear, polynomial or rbf)")]
-    UnsupportedKernel(String),
-    /// A kernel parameter outside its domain.
-    #[error("{name} = {value}: {reason}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// What it must be.
-        reason: &'static str,
-    },
-    /// A header keyword appears before one it depends on, or a required one is missing.
-    #[error("`{key}` must come after `{after}`")]
-    Order {
-        /// The keyword.
-        key: &'static str,
-        /// The keyword it needs first.
-        after: &'static str,
-    },
-    /// A required header keyword never appeared before `SV`.
-    #[error("the header has no `{0}` line")]
-    MissingKey(&'static str),
-    /// A support-vector line has no coefficient.
-    #[error("a support-vector line needs a coefficient")]
-    EmptySupportVector,
-    /// A support-vector element is not `index:value`.
-    #[error("`{0}` is not an index:value pair")]
-    BadNode(String),
-    /// Indices must be ≥ 1 and strictly increasing along a line.
-    #[error("index {index} after index {previous}: indices must be ≥ 1 and strictly increasing")]
-    IndexOrder {
-        /// The index found.
-        index: usize,
-        /// The index before it (0 at the start of the line).
-        previous: usize,
-    },
-    /// An index beyond the dimension asked for.
-    #[error("index {index} exceeds the input dimension {dim}")]
-    IndexBeyondDim {
-        /// The index found.
-        index: usize,
-        /// The dimension.
-        dim: usize,
-    },
-    /// More support-vector lines than `total_sv` declared.
-    #[error("more support vectors than total_sv = {declared}")]
-    TooManySupportVectors {
-        /// The declared count.
-        declared: usize,
-    },
-    /// Fewer support-vector lines than `total_sv` declared (reported at the last line).
-    #[error("{found} support vectors but total_sv = {declared}")]
-    TooFewSupportVectors {
-        /// The declared count.
-        declared: usize,
-        /// Lines found.
-        found: usize,
-    },
-}
 
 /// Writes `model` in libsvm's model text format.
 ///
 /// A linear model that carries primal weights `w` is written as the single equivalent support
 /// vector `w` with coefficient 1 (`K(w, x) = w·x`): libsvm would otherwise re-sum `Σ βᵢ xᵢ`,
 /// which at large C cancels terms of size ~C and loses the digits the primal `w` keeps.
-pub fn write_libsvm_model<W: Write>(model: &SvrModel, mut w: W) -> Result<(), LibsvmError> {
+pub fn write_libsvm_model<W: Write>(model: &SvrModel, mut w: W) -> Result<(), SvmError> {
     check_exportable(model)?;
     if let (Kernel::Linear, Some(weights)) = (model.kernel, &model.weights) {
         let primal = SvrModel {
@@ -201,21 +84,21 @@ pub fn write_libsvm_model<W: Write>(model: &SvrModel, mut w: W) -> Result<(), Li
 }
 
 /// [`write_libsvm_model`] into a string.
-pub fn to_libsvm_string(model: &SvrModel) -> Result<String, LibsvmError> {
+pub fn to_libsvm_string(model: &SvrModel) -> Result<String, SvmError> {
     let mut out = Vec::new();
     write_libsvm_model(model, &mut out)?;
-    String::from_utf8(out).map_err(|e| LibsvmError::Export(e.to_string()))
+    String::from_utf8(out).map_err(|e| SvmError::LibsvmExport(e.to_string()))
 }
 
 /// Reads a libsvm regression model; the input dimension is the largest index used (0 for a
 /// model without support vectors, whose prediction is its bias for any input).
-pub fn read_libsvm_model<R: BufRead>(r: R) -> Result<SvrModel, LibsvmError> {
+pub fn read_libsvm_model<R: BufRead>(r: R) -> Result<SvrModel, SvmError> {
     read_impl(r, None)
 }
 
 /// Reads a libsvm regression model of input dimension `dim` (needed when the last inputs are 0
 /// in every support vector, which libsvm's sparse vectors do not write).
-pub fn read_libsvm_model_with_dim<R: BufRead>(r: R, dim: usize) -> Result<SvrModel, LibsvmError> {
+pub fn read_libsvm_model_with_dim<R: BufRead>(r: R, dim: usize) -> Result<SvrModel, SvmError> {
     read_impl(r, Some(dim))
 }
 
@@ -230,8 +113,8 @@ impl fmt::Display for Num {
     }
 }
 
-fn check_exportable(model: &SvrModel) -> Result<(), LibsvmError> {
-    let fail = |reason: String| Err(LibsvmError::Export(reason));
+fn check_exportable(model: &SvrModel) -> Result<(), SvmError> {
+    let fail = |reason: String| Err(SvmError::LibsvmExport(reason));
     if model.support_vectors.len() != model.n_sv() * model.dim {
         return fail(format!(
             "{} support-vector values for {} coefficients of dimension {}",
@@ -247,7 +130,7 @@ fn check_exportable(model: &SvrModel) -> Result<(), LibsvmError> {
         if v.is_finite() {
             Ok(())
         } else {
-            Err(LibsvmError::Export(format!("{name} = {v} is not finite")))
+            Err(SvmError::LibsvmExport(format!("{name} = {v} is not finite")))
         }
     };
     finite("bias", model.bias)?;
@@ -308,52 +191,40 @@ struct Header {
     prob_a: bool,
 }
 
-fn parse_f64(what: &str, text: &str, line: usize) -> Result<f64, LibsvmError> {
+fn parse_f64(what: &str, text: &str, line: usize) -> Result<f64, SvmError> {
     match text.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(parse_error(
+        _ => Err(SvmError::LibsvmBadNumber {
             line,
-            LibsvmParseError::BadNumber {
-                what: what.to_owned(),
-                text: text.to_owned(),
-                expected: "a finite number",
-            },
-        )),
+            what: what.to_owned(),
+            text: text.to_owned(),
+            expected: "a finite number",
+        }),
     }
 }
 
-fn parse_usize(what: &str, text: &str, line: usize) -> Result<usize, LibsvmError> {
-    text.parse::<usize>().map_err(|_| {
-        parse_error(
-            line,
-            LibsvmParseError::BadNumber {
-                what: what.to_owned(),
-                text: text.to_owned(),
-                expected: "a non-negative integer",
-            },
-        )
+fn parse_usize(what: &str, text: &str, line: usize) -> Result<usize, SvmError> {
+    text.parse::<usize>().map_err(|_| SvmError::LibsvmBadNumber {
+        line,
+        what: what.to_owned(),
+        text: text.to_owned(),
+        expected: "a non-negative integer",
     })
 }
 
-fn parse_error(line: usize, kind: LibsvmParseError) -> LibsvmError {
-    LibsvmError::Parse { line, kind }
-}
-
-fn one_value<'a>(key: &str, values: &[&'a str], line: usize) -> Result<&'a str, LibsvmError> {
+fn one_value<'a>(key: &str, values: &[&'a str], line: usize) -> Result<&'a str, SvmError> {
     match values {
         [v] => Ok(v),
-        _ => Err(parse_error(
+        _ => Err(SvmError::LibsvmValueCount {
             line,
-            LibsvmParseError::ValueCount {
-                key: key.to_owned(),
-                expected: 1,
-                found: values.len(),
-            },
-        )),
+            key: key.to_owned(),
+            expected: 1,
+            found: values.len(),
+        }),
     }
 }
 
-fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmError> {
+fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, SvmError> {
     let mut lines = r.lines().enumerate().map(|(i, l)| (i + 1, l));
     let mut h = Header::default();
 
@@ -366,7 +237,10 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
         let values: Vec<&str> = tokens.collect();
         let duplicate = |seen: bool| {
             if seen {
-                Err(parse_error(no, LibsvmParseError::DuplicateKey(key.to_owned())))
+                Err(SvmError::LibsvmDuplicateKey {
+                    line: no,
+                    key: key.to_owned(),
+                })
             } else {
                 Ok(())
             }
@@ -376,10 +250,10 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
                 duplicate(h.svm_type)?;
                 let t = one_value(key, &values, no)?;
                 if t != "epsilon_svr" && t != "nu_svr" {
-                    return Err(parse_error(
-                        no,
-                        LibsvmParseError::UnsupportedSvmType(t.to_owned()),
-                    ));
+                    return Err(SvmError::LibsvmSvmType {
+                        line: no,
+                        svm_type: t.to_owned(),
+                    });
                 }
                 h.svm_type = true;
             }
@@ -387,7 +261,10 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
                 duplicate(h.kernel_type.is_some())?;
                 let t = one_value(key, &values, no)?;
                 if !matches!(t, "linear" | "polynomial" | "rbf") {
-                    return Err(parse_error(no, LibsvmParseError::UnsupportedKernel(t.to_owned())));
+                    return Err(SvmError::LibsvmKernel {
+                        line: no,
+                        kernel: t.to_owned(),
+                    });
                 }
                 h.kernel_type = Some(t.to_owned());
                 h.kernel_line = no;
@@ -395,27 +272,21 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
             "degree" => {
                 duplicate(h.degree.is_some())?;
                 let text = one_value(key, &values, no)?;
-                let d = text.parse::<i64>().map_err(|_| {
-                    parse_error(
-                        no,
-                        LibsvmParseError::BadNumber {
-                            what: "degree".to_owned(),
-                            text: text.to_owned(),
-                            expected: "an integer",
-                        },
-                    )
+                let d = text.parse::<i64>().map_err(|_| SvmError::LibsvmBadNumber {
+                    line: no,
+                    what: "degree".to_owned(),
+                    text: text.to_owned(),
+                    expected: "an integer",
                 })?;
                 match u32::try_from(d) {
                     Ok(d) if (1..=i32::MAX as u32).contains(&d) => h.degree = Some(d),
                     _ => {
-                        return Err(parse_error(
-                            no,
-                            LibsvmParseError::InvalidParameter {
-                                name: "degree",
-                                value: d as f64,
-                                reason: "must be an integer between 1 and 2³¹ − 1",
-                            },
-                        ));
+                        return Err(SvmError::LibsvmParameter {
+                            line: no,
+                            name: "degree",
+                            value: d as f64,
+                            reason: "must be an integer between 1 and 2³¹ − 1",
+                        });
                     }
                 }
             }
@@ -431,14 +302,12 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
                 duplicate(h.nr_class)?;
                 let n = parse_usize("nr_class", one_value(key, &values, no)?, no)?;
                 if n != 2 {
-                    return Err(parse_error(
-                        no,
-                        LibsvmParseError::InvalidParameter {
-                            name: "nr_class",
-                            value: n as f64,
-                            reason: "a regression model has nr_class 2",
-                        },
-                    ));
+                    return Err(SvmError::LibsvmParameter {
+                        line: no,
+                        name: "nr_class",
+                        value: n as f64,
+                        reason: "a regression model has nr_class 2",
+                    });
                 }
                 h.nr_class = true;
             }
@@ -449,13 +318,11 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
             "rho" => {
                 duplicate(h.rho.is_some())?;
                 if !h.nr_class {
-                    return Err(parse_error(
-                        no,
-                        LibsvmParseError::Order {
-                            key: "rho",
-                            after: "nr_class",
-                        },
-                    ));
+                    return Err(SvmError::LibsvmOrder {
+                        line: no,
+                        key: "rho",
+                        after: "nr_class",
+                    });
                 }
                 h.rho = Some(parse_f64("rho", one_value(key, &values, no)?, no)?);
             }
@@ -466,23 +333,26 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
             }
             "SV" => {
                 if !values.is_empty() {
-                    return Err(parse_error(
-                        no,
-                        LibsvmParseError::ValueCount {
-                            key: "SV".to_owned(),
-                            expected: 0,
-                            found: values.len(),
-                        },
-                    ));
+                    return Err(SvmError::LibsvmValueCount {
+                        line: no,
+                        key: "SV".to_owned(),
+                        expected: 0,
+                        found: values.len(),
+                    });
                 }
                 sv_line = Some(no);
                 break;
             }
-            other => return Err(parse_error(no, LibsvmParseError::UnknownKey(other.to_owned()))),
+            other => {
+                return Err(SvmError::LibsvmUnknownKey {
+                    line: no,
+                    key: other.to_owned(),
+                });
+            }
         }
     }
-    let sv_line = sv_line.ok_or(LibsvmError::Missing("an `SV` line"))?;
-    let missing = |key| Err(parse_error(sv_line, LibsvmParseError::MissingKey(key)));
+    let sv_line = sv_line.ok_or(SvmError::LibsvmMissing("an `SV` line"))?;
+    let missing = |key| Err(SvmError::LibsvmMissingKey { line: sv_line, key });
     if !h.svm_type {
         return missing("svm_type");
     }
@@ -508,28 +378,34 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
         let mut tokens = text.split_whitespace();
         let Some(first) = tokens.next() else { continue };
         if coefficients.len() == total_sv {
-            return Err(parse_error(
-                no,
-                LibsvmParseError::TooManySupportVectors { declared: total_sv },
-            ));
+            return Err(SvmError::LibsvmTooManySupportVectors {
+                line: no,
+                declared: total_sv,
+            });
         }
         coefficients.push(parse_f64("coefficient", first, no)?);
         let mut row = Vec::new();
         let mut previous = 0;
         for token in tokens {
-            let (index, value) = token
-                .split_once(':')
-                .ok_or_else(|| parse_error(no, LibsvmParseError::BadNode(token.to_owned())))?;
-            let index = index
-                .parse::<usize>()
-                .map_err(|_| parse_error(no, LibsvmParseError::BadNode(token.to_owned())))?;
+            let (index, value) = token.split_once(':').ok_or_else(|| SvmError::LibsvmBadNode {
+                line: no,
+                text: token.to_owned(),
+            })?;
+            let index = index.parse::<usize>().map_err(|_| SvmError::LibsvmBadNode {
+                line: no,
+                text: token.to_owned(),
+            })?;
             if index <= previous {
-                return Err(parse_error(no, LibsvmParseError::IndexOrder { index, previous }));
+                return Err(SvmError::LibsvmIndexOrder {
+                    line: no,
+                    index,
+                    previous,
+                });
             }
             if let Some(dim) = dim
                 && index > dim
             {
-                return Err(parse_error(no, LibsvmParseError::IndexBeyondDim { index, dim }));
+                return Err(SvmError::LibsvmIndexBeyondDim { line: no, index, dim });
             }
             row.push((index, parse_f64(&format!("value of index {index}"), value, no)?));
             previous = index;
@@ -537,13 +413,11 @@ fn read_impl<R: BufRead>(r: R, dim: Option<usize>) -> Result<SvrModel, LibsvmErr
         rows.push(row);
     }
     if coefficients.len() != total_sv {
-        return Err(parse_error(
-            last_line,
-            LibsvmParseError::TooFewSupportVectors {
-                declared: total_sv,
-                found: coefficients.len(),
-            },
-        ));
+        return Err(SvmError::LibsvmTooFewSupportVectors {
+            line: last_line,
+            declared: total_sv,
+            found: coefficients.len(),
+        });
     }
     let dim = dim.unwrap_or_else(|| {
         rows.iter()
@@ -574,18 +448,19 @@ fn kernel_from_header(
     degree: Option<u32>,
     gamma: Option<(f64, usize)>,
     coef0: Option<f64>,
-) -> Result<Kernel, LibsvmError> {
+) -> Result<Kernel, SvmError> {
     let positive_gamma = || match gamma {
         Some((g, _)) if g > 0.0 => Ok(g),
-        Some((g, line)) => Err(parse_error(
+        Some((g, line)) => Err(SvmError::LibsvmParameter {
             line,
-            LibsvmParseError::InvalidParameter {
-                name: "gamma",
-                value: g,
-                reason: "must be positive",
-            },
-        )),
-        None => Err(parse_error(kernel_line, LibsvmParseError::MissingKey("gamma"))),
+            name: "gamma",
+            value: g,
+            reason: "must be positive",
+        }),
+        None => Err(SvmError::LibsvmMissingKey {
+            line: kernel_line,
+            key: "gamma",
+        }),
     };
     Ok(match kernel_type {
         "linear" => Kernel::Linear,
@@ -811,16 +686,17 @@ mod tests {
         );
         assert!(matches!(
             read_libsvm_model_with_dim(text.as_bytes(), 2),
-            Err(LibsvmError::Parse {
+            Err(SvmError::LibsvmIndexBeyondDim {
                 line: 10,
-                kind: LibsvmParseError::IndexBeyondDim { index: 3, dim: 2 }
+                index: 3,
+                dim: 2
             })
         ));
     }
 
-    fn parse_err(text: &str) -> (usize, LibsvmParseError) {
+    fn parse_err(text: &str) -> SvmError {
         match read_libsvm_model(text.as_bytes()) {
-            Err(LibsvmError::Parse { line, kind }) => (line, kind),
+            Err(e) if e.line().is_some() => e,
             other => panic!("expected a parse error, got {other:?}"),
         }
     }
@@ -850,32 +726,38 @@ mod tests {
         ];
         for &(from, to, line) in cases {
             let text = good.replacen(from, to, 1);
-            let (got_line, kind) = parse_err(&text);
-            assert_eq!(got_line, line, "{to}: {kind}");
-            // Every message names what is wrong.
-            assert!(!kind.to_string().is_empty());
+            let err = parse_err(&text);
+            assert_eq!(err.line(), Some(line), "{to}: {err}");
+            // Every message names the line and what is wrong with it.
+            let message = err.to_string();
+            let what = message.strip_prefix(&format!("line {line}: "));
+            assert!(what.is_some_and(|w| !w.is_empty()), "{message}");
         }
         assert_eq!(
             parse_err(&good.replace("gamma 2\n", "")),
-            (2, LibsvmParseError::MissingKey("gamma"))
+            SvmError::LibsvmMissingKey {
+                line: 2,
+                key: "gamma"
+            }
         );
         assert_eq!(
             parse_err(&good.replace("total_sv 1\n", "")),
-            (6, LibsvmParseError::MissingKey("total_sv"))
+            SvmError::LibsvmMissingKey {
+                line: 6,
+                key: "total_sv"
+            }
         );
         assert_eq!(
             parse_err("svm_type epsilon_svr\nkernel_type linear\nrho 1\n"),
-            (
-                3,
-                LibsvmParseError::Order {
-                    key: "rho",
-                    after: "nr_class"
-                }
-            )
+            SvmError::LibsvmOrder {
+                line: 3,
+                key: "rho",
+                after: "nr_class"
+            }
         );
         assert!(matches!(
             read_libsvm_model(good.split("total_sv").next().unwrap().as_bytes()),
-            Err(LibsvmError::Missing(_))
+            Err(SvmError::LibsvmMissing(_))
         ));
     }
 
@@ -904,20 +786,20 @@ mod tests {
             weights: Some(vec![0.5]),
             ..m
         };
-        assert!(matches!(to_libsvm_string(&bad), Err(LibsvmError::Export(_))));
+        assert!(matches!(to_libsvm_string(&bad), Err(SvmError::LibsvmExport(_))));
     }
 
     #[test]
     fn inconsistent_models_are_not_exported() {
         let mut m = fixture_models().remove(0).1;
         m.support_vectors.pop();
-        assert!(matches!(to_libsvm_string(&m), Err(LibsvmError::Export(_))));
+        assert!(matches!(to_libsvm_string(&m), Err(SvmError::LibsvmExport(_))));
         let mut m = fixture_models().remove(0).1;
         m.coefficients[3] = f64::NAN;
         let err = to_libsvm_string(&m).unwrap_err().to_string();
         assert!(err.contains("coefficient 3"), "{err}");
         let mut m = fixture_models().remove(0).1;
         m.kernel = Kernel::Rbf { gamma: f64::INFINITY };
-        assert!(matches!(to_libsvm_string(&m), Err(LibsvmError::Export(_))));
+        assert!(matches!(to_libsvm_string(&m), Err(SvmError::LibsvmExport(_))));
     }
 }

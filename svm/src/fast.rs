@@ -37,6 +37,7 @@ use std::ops::MulAssign;
 use wide::bytemuck::cast;
 use wide::{f32x8, u32x8};
 
+use super::error::SvmError;
 use super::kernel::Kernel;
 use super::model::{InputScaling, SvrModel};
 
@@ -107,42 +108,6 @@ const EXP2_POLY: [f32; 7] = [
     0.000_153_458_18,
 ];
 
-/// Why a fast evaluator could not be built.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum FastSvrError {
-    /// The model or the scaling has another input dimension than the evaluator.
-    #[error("{what} has dimension {found}, the evaluator {expected}")]
-    Dimension {
-        /// `model`, `scaling.offset` or `scaling.scale`.
-        what: &'static str,
-        /// Its dimension.
-        found: usize,
-        /// The evaluator's `D`.
-        expected: usize,
-    },
-    /// The model's arrays disagree in length.
-    #[error("{values} support-vector values for {coefficients} coefficients of dimension {dim}")]
-    Shape {
-        /// Support-vector values.
-        values: usize,
-        /// Coefficients.
-        coefficients: usize,
-        /// Dimension.
-        dim: usize,
-    },
-    /// A value is NaN or infinite, or a scale is 0, or a folded value overflows `f32`.
-    #[error("{what} = {value} is not usable: {reason}")]
-    BadValue {
-        /// Which value (`scaling.scale[1]`, `coefficient 7`, ...).
-        what: String,
-        /// Its value.
-        value: f64,
-        /// Why.
-        reason: &'static str,
-    },
-}
-
 /// One block of [`LANES`] support vectors, structure-of-arrays (the `f64` layout of
 /// [`ExactSvr`], and the staging layout [`FastSvr`]'s SIMD blocks are built from).
 #[derive(Debug, Clone, Copy)]
@@ -177,8 +142,8 @@ struct Folding<const D: usize> {
     bias: f64,
 }
 
-fn bad(what: String, value: f64, reason: &'static str) -> FastSvrError {
-    FastSvrError::BadValue { what, value, reason }
+fn bad(what: String, value: f64, reason: &'static str) -> SvmError {
+    SvmError::BadValue { what, value, reason }
 }
 
 /// Validates `model` and `scaling` for dimension `D` and folds them. `rbf_base_e` is false for
@@ -187,14 +152,14 @@ fn fold<const D: usize>(
     model: &SvrModel,
     scaling: &InputScaling,
     rbf_base_e: bool,
-) -> Result<Folding<D>, FastSvrError> {
+) -> Result<Folding<D>, SvmError> {
     for (what, found) in [
         ("model", model.dim),
         ("scaling.offset", scaling.offset.len()),
         ("scaling.scale", scaling.scale.len()),
     ] {
         if found != D {
-            return Err(FastSvrError::Dimension {
+            return Err(SvmError::Dimension {
                 what,
                 found,
                 expected: D,
@@ -202,9 +167,11 @@ fn fold<const D: usize>(
         }
     }
     if model.support_vectors.len() != model.n_sv() * D {
-        return Err(FastSvrError::Shape {
+        return Err(SvmError::Shape {
+            array: "support-vector",
             values: model.support_vectors.len(),
-            coefficients: model.n_sv(),
+            rows_of: "coefficients",
+            rows: model.n_sv(),
             dim: D,
         });
     }
@@ -246,7 +213,7 @@ fn fold<const D: usize>(
         Kernel::Linear => {
             let w = model.linear_weights().unwrap_or_default();
             if w.len() != D {
-                return Err(FastSvrError::Dimension {
+                return Err(SvmError::Dimension {
                     what: "model weights",
                     found: w.len(),
                     expected: D,
@@ -378,7 +345,7 @@ pub struct FastSvr<const D: usize> {
 impl<const D: usize> FastSvr<D> {
     /// Builds the evaluator of `model` for raw inputs that `scaling` maps into the model's
     /// training space.
-    pub fn new(model: &SvrModel, scaling: &InputScaling) -> Result<Self, FastSvrError> {
+    pub fn new(model: &SvrModel, scaling: &InputScaling) -> Result<Self, SvmError> {
         let folding = fold::<D>(model, scaling, false)?;
         let mut max_c: f64 = 0.0;
         for (i, ci) in folding.c.iter().enumerate() {
@@ -516,7 +483,7 @@ pub struct ExactSvr<const D: usize> {
 impl<const D: usize> ExactSvr<D> {
     /// Builds the evaluator of `model` for raw inputs that `scaling` maps into the model's
     /// training space.
-    pub fn new(model: &SvrModel, scaling: &InputScaling) -> Result<Self, FastSvrError> {
+    pub fn new(model: &SvrModel, scaling: &InputScaling) -> Result<Self, SvmError> {
         let folding = fold::<D>(model, scaling, true)?;
         Ok(Self {
             kind: folding.kind,
@@ -781,7 +748,7 @@ mod tests {
         let (model, scaling) = needle_like(10.0, 1.0);
         assert_eq!(
             FastSvr::<3>::new(&model, &scaling).unwrap_err(),
-            FastSvrError::Dimension {
+            SvmError::Dimension {
                 what: "model",
                 found: 2,
                 expected: 3
@@ -793,7 +760,7 @@ mod tests {
         };
         assert!(matches!(
             ExactSvr::<2>::new(&model, &short),
-            Err(FastSvrError::Dimension {
+            Err(SvmError::Dimension {
                 what: "scaling.offset",
                 ..
             })
@@ -812,13 +779,13 @@ mod tests {
         huge.coefficients[0] = 1e300;
         assert!(matches!(
             FastSvr::<2>::new(&huge, &scaling),
-            Err(FastSvrError::BadValue { .. })
+            Err(SvmError::BadValue { .. })
         ));
         let mut ragged = model;
         ragged.support_vectors.pop();
         assert!(matches!(
             FastSvr::<2>::new(&ragged, &scaling),
-            Err(FastSvrError::Shape { .. })
+            Err(SvmError::Shape { .. })
         ));
     }
 }

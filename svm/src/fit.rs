@@ -5,7 +5,7 @@ use std::time::Instant;
 use faer::Mat;
 
 use super::data::SvrData;
-use super::error::SvrError;
+use super::error::SvmError;
 use super::ipm;
 use super::kernel::Kernel;
 use super::model::SvrModel;
@@ -75,7 +75,7 @@ struct DualSolution {
 }
 
 /// Fits an ε-SVR to `n` samples: `x` is `n × dim` row-major, `y` has `n` targets.
-pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFit, SvrError> {
+pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFit, SvmError> {
     let started = Instant::now();
     let data = SvrData::new(x, dim, y)?;
     let settings = params.dual_settings(started);
@@ -109,9 +109,9 @@ fn solve_dense(
     kernel: &Kernel,
     data: &SvrData<'_>,
     settings: &DualSettings,
-) -> Result<DualSolution, SvrError> {
+) -> Result<DualSolution, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
-    let k = kernel_matrix(kernel, x, dim).ok_or_else(|| SvrError::Numerical {
+    let k = kernel_matrix(kernel, x, dim).ok_or_else(|| SvmError::Numerical {
         solver: "kernel",
         reason: "kernel values overflow; scale the inputs or lower gamma/degree".into(),
     })?;
@@ -160,7 +160,7 @@ fn solve_dense(
             kernel_matrix: Some(k),
             weights: p.weights,
         }),
-        None if !sol.converged => Err(SvrError::NotConverged {
+        None if !sol.converged => Err(SvmError::NotConverged {
             solver: "interior point",
             iterations,
             gap: sol.gap,
@@ -193,7 +193,7 @@ fn certify(
     data: &SvrData<'_>,
     settings: &DualSettings,
     solution: DualSolution,
-) -> Result<SvrFit, SvrError> {
+) -> Result<SvrFit, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
@@ -256,7 +256,7 @@ fn certify(
     let within = gap <= ACCEPT_GAP * primal_objective.abs().max(1.0) + rounding;
     // (NaN fails `within` too.)
     if !within || !primal_objective.is_finite() {
-        return Err(SvrError::NotConverged {
+        return Err(SvmError::NotConverged {
             solver,
             iterations,
             gap: gap / primal_objective.abs().max(1.0),

@@ -18,7 +18,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 
-use super::error::SvrError;
+use super::error::SvmError;
 use super::params::DualSettings;
 
 const NAME: &str = "interior point";
@@ -77,7 +77,7 @@ pub(crate) fn solve(
     y: &[f64],
     settings: &DualSettings,
     accept: &mut dyn FnMut(&IpmSolution) -> bool,
-) -> Result<IpmSolution, SvrError> {
+) -> Result<IpmSolution, SvmError> {
     let n = y.len();
     let (c, epsilon, tolerance) = (settings.c, settings.epsilon, settings.tolerance);
     let max_iterations = if settings.max_iterations == 0 {
@@ -187,7 +187,7 @@ pub(crate) fn solve(
             }
         }
         if settings.over_budget() {
-            return Err(SvrError::Budget {
+            return Err(SvmError::Budget {
                 solver: NAME,
                 budget_s: settings.budget_s(),
                 iterations: iteration,
@@ -201,7 +201,7 @@ pub(crate) fn solve(
                 .map(|i| h[j].s[i] / h[j].z[i] + h[j].t[i] / h[j].w[i])
                 .collect()
         });
-        let llt = factorize(k, &d).ok_or_else(|| SvrError::Numerical {
+        let llt = factorize(k, &d).ok_or_else(|| SvmError::Numerical {
             solver: NAME,
             reason: format!(
                 "reduced Newton matrix not positive definite at iteration {iteration}, even regularised"
@@ -305,7 +305,7 @@ pub(crate) fn solve(
                     .any(|v| !v.is_finite())
             })
         {
-            return Err(SvrError::Numerical {
+            return Err(SvmError::Numerical {
                 solver: NAME,
                 reason: format!("iterate became non-finite at iteration {iteration}"),
             });

@@ -6,6 +6,9 @@
 //!
 //! One SMO core ([`solve_smo`]) serves the ε-SVR here and the C-SVC of `recognize`.
 //!
+//! Every fallible function of the crate (fits, libsvm model files, the fast evaluators) returns
+//! the one error type [`SvmError`].
+//!
 //! Imports no other palpus crate: identification (`identify`) and surface recognition
 //! (`recognize`) both build on it.
 
@@ -22,12 +25,9 @@ mod polish;
 mod sample;
 mod smo;
 
-pub use error::SvrError;
-pub use export::{
-    LibsvmError, LibsvmParseError, read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string,
-    write_libsvm_model,
-};
-pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, FastSvrError, LANES, fast_exp2};
+pub use error::SvmError;
+pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};
+pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, LANES, fast_exp2};
 pub use fit::{ACCEPT_GAP, SvrFit, fit, slack};
 pub use kernel::Kernel;
 pub use model::{InputScaling, SvrModel};

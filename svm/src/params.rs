@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::error::{SvrError, check_positive, check_time_budget};
+use super::error::{SvmError, check_positive, check_time_budget};
 use super::kernel::Kernel;
 
 /// Which optimiser solves the dual.
@@ -96,15 +96,15 @@ impl SvrParamsBuilder {
         self
     }
 
-    /// Wall-clock budget; a fit that exceeds it stops with [`SvrError::Budget`].
+    /// Wall-clock budget; a fit that exceeds it stops with [`SvmError::Budget`].
     pub fn time_budget(mut self, budget: Duration) -> Self {
         self.time_budget = budget;
         self
     }
 
     /// Validates into [`SvrParams`].
-    pub fn build(self) -> Result<SvrParams, SvrError> {
-        let bad = SvrError::hyperparameter;
+    pub fn build(self) -> Result<SvrParams, SvmError> {
+        let bad = SvmError::hyperparameter;
         check_positive("C", self.c)?;
         if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
             return Err(bad("epsilon", self.epsilon, "must be finite and >= 0"));
@@ -248,7 +248,7 @@ mod tests {
         ];
         for b in cases {
             let err = b.build().unwrap_err();
-            assert!(matches!(err, SvrError::InvalidHyperparameter { .. }), "{err}");
+            assert!(matches!(err, SvmError::InvalidHyperparameter { .. }), "{err}");
         }
         let p = SvrParams::builder()
             .c(1e11)

@@ -17,7 +17,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::error::{SvrError, check_positive, check_time_budget};
+use super::error::{SvmError, check_positive, check_time_budget};
 use super::kernel::Kernel;
 
 /// The solver's name in errors.
@@ -137,7 +137,7 @@ impl SmoSettingsBuilder {
         self
     }
 
-    /// Wall-clock budget counted from `started`; exceeding it is [`SvrError::Budget`].
+    /// Wall-clock budget counted from `started`; exceeding it is [`SvmError::Budget`].
     pub fn time_budget(mut self, started: Instant, budget: Duration) -> Self {
         self.budget = Some((started, budget));
         self
@@ -150,7 +150,7 @@ impl SmoSettingsBuilder {
     }
 
     /// Validates into [`SmoSettings`].
-    pub fn build(self) -> Result<SmoSettings, SvrError> {
+    pub fn build(self) -> Result<SmoSettings, SvmError> {
         check_positive("C", self.c)?;
         check_positive("stop", self.stop)?;
         if let Some((_, budget)) = self.budget {
@@ -304,7 +304,7 @@ pub fn solve_smo<R: KernelRows>(
     labels: &[f64],
     linear: &[f64],
     settings: &SmoSettings,
-) -> Result<SmoSolution, SvrError> {
+) -> Result<SmoSolution, SvmError> {
     let n = rows.samples();
     let m = labels.len();
     assert!(
@@ -325,7 +325,7 @@ fn solve<R: KernelRows, L: Labels>(
     rows: &mut R,
     vars: &Variables<'_, L>,
     settings: &SmoSettings,
-) -> Result<SmoSolution, SvrError> {
+) -> Result<SmoSolution, SvmError> {
     match settings.selection {
         SelectionCurvature::Clamped => solve_with::<R, L, false>(rows, vars, settings),
         SelectionCurvature::NonPositiveToTau => solve_with::<R, L, true>(rows, vars, settings),
@@ -337,7 +337,7 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
     rows: &mut R,
     vars: &Variables<'_, L>,
     settings: &SmoSettings,
-) -> Result<SmoSolution, SvrError> {
+) -> Result<SmoSolution, SvmError> {
     let (n, m, linear) = (vars.n, vars.linear.len(), vars.linear);
     let (c, stop) = (settings.c, settings.stop);
     let max_iterations = settings.iteration_budget(m);
@@ -369,7 +369,7 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
             && iterations % 1000 == 0
             && started.elapsed().as_secs_f64() > budget_s
         {
-            return Err(SvrError::Budget {
+            return Err(SvmError::Budget {
                 solver: NAME,
                 budget_s,
                 iterations,
@@ -502,7 +502,7 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
         iterations += 1;
     }
     if violation >= stop && iterations >= max_iterations {
-        return Err(SvrError::NotConverged {
+        return Err(SvmError::NotConverged {
             solver: NAME,
             iterations,
             gap: violation,
@@ -648,7 +648,7 @@ pub(crate) fn solve_svr(
     kernel: &Kernel,
     data: &super::data::SvrData<'_>,
     settings: &super::params::DualSettings,
-) -> Result<SvrSmoSolution, SvrError> {
+) -> Result<SvrSmoSolution, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let n = y.len();
     let epsilon = settings.epsilon;

@@ -8,7 +8,7 @@
 
 use std::time::Duration;
 
-use svm::{Kernel, SvrError, SvrParams, fit, slack};
+use svm::{Kernel, SvmError, SvrParams, fit, slack};
 
 fn lcg(state: &mut u64) -> f64 {
     *state = state
@@ -26,7 +26,7 @@ fn certify(
     eps: f64,
     kernel: Kernel,
     ctx: &str,
-) -> Result<(), SvrError> {
+) -> Result<(), SvmError> {
     let params = SvrParams::builder()
         .c(c)
         .epsilon(eps)
@@ -36,7 +36,7 @@ fn certify(
         .unwrap();
     let f = match fit(&params, x, dim, y) {
         Ok(f) => f,
-        Err(e @ (SvrError::NotConverged { .. } | SvrError::Budget { .. } | SvrError::Numerical { .. })) => {
+        Err(e @ (SvmError::NotConverged { .. } | SvmError::Budget { .. } | SvmError::Numerical { .. })) => {
             return Err(e);
         }
         Err(e) => panic!("{ctx}: unexpected error {e}"),
@@ -202,17 +202,17 @@ fn degenerate_data_duplicates_constants_and_huge_inputs() {
     }
     // Bad input is a typed error, not a panic.
     let p = SvrParams::builder().build().unwrap();
-    assert!(matches!(fit(&p, &[], 1, &[]), Err(SvrError::NoSamples)));
+    assert!(matches!(fit(&p, &[], 1, &[]), Err(SvmError::NoSamples)));
     assert!(matches!(
         fit(&p, &[1.0, 2.0], 1, &[1.0]),
-        Err(SvrError::Shape { .. })
+        Err(SvmError::Shape { .. })
     ));
     assert!(matches!(
         fit(&p, &[f64::NAN], 1, &[1.0]),
-        Err(SvrError::NonFinite { row: 0, .. })
+        Err(SvmError::NonFinite { row: 0, .. })
     ));
     assert!(matches!(
         fit(&p, &[1.0], 1, &[f64::INFINITY]),
-        Err(SvrError::NonFinite { .. })
+        Err(SvmError::NonFinite { .. })
     ));
 }

@@ -2,7 +2,7 @@
 //! path, with the box it was trained on.
 
 use identify::{ModelBody, ModelFile, ModelKind, ScaledSvr};
-use svm::{FastSvr, FastSvrError};
+use svm::{FastSvr, SvmError};
 
 use super::model::{BadInputBox, InputBox, ScalarModel};
 
@@ -27,7 +27,7 @@ pub enum IdentifiedModelError {
     },
     /// The SVR cannot be put on the fast path.
     #[error(transparent)]
-    Fast(#[from] FastSvrError),
+    Fast(#[from] SvmError),
     /// The training range is not a usable box.
     #[error(transparent)]
     Box(#[from] BadInputBox),

@@ -180,7 +180,7 @@ impl SvcParams {
             .selection(SelectionCurvature::NonPositiveToTau)
             .build()
             .map_err(|e| match e {
-                svm::SvrError::InvalidHyperparameter { name, value, reason } => {
+                svm::SvmError::InvalidHyperparameter { name, value, reason } => {
                     SvcError::Parameter { name, value, reason }
                 }
                 _ => SvcError::Parameter {
