@@ -1,4 +1,5 @@
-//! Typed capture errors that always say where the problem is.
+//! The crate's one error type: captures, imported logs, JSON files and signals all fail with a
+//! [`CaptureError`] that says where the problem is.
 
 use std::error::Error;
 use std::fmt;
@@ -7,7 +8,7 @@ use std::path::PathBuf;
 
 use super::kind::CaptureKind;
 
-/// A capture could not be read, written or built.
+/// A capture, imported log, JSON file or signal could not be read, written or built.
 ///
 /// Carries the location (file, 1-based line, column name) separately from
 /// the reason so callers can match on [`CaptureErrorKind`] while users get a
@@ -20,8 +21,15 @@ use super::kind::CaptureKind;
 #[derive(Debug)]
 pub struct CaptureError {
     /// The file (or pseudo-source such as `<memory>`) the error concerns.
-    pub file: PathBuf,
-    /// 1-based file line: metadata = 1, header = 2, first sample = 3.
+    ///
+    /// `None` for errors about values that never were in a file: the slices given to
+    /// [`signal`](super::signal) and a `--map` spec given to
+    /// [`ColumnMap::parse`](super::import::ColumnMap::parse). An option rather than an empty
+    /// path so that "no file" cannot be mistaken for a file name, and so that a caller that
+    /// does know the file can see it is missing and add it (few places read this field).
+    pub file: Option<PathBuf>,
+    /// 1-based file line: metadata = 1, header = 2, first sample = 3 (for
+    /// imported logs and JSON files, the line of the input).
     pub line: Option<usize>,
     /// Column whose field is bad, for per-field errors.
     pub column: Option<String>,
@@ -33,7 +41,17 @@ impl CaptureError {
     /// An error about `file` with no line or column yet.
     pub fn new(file: impl Into<PathBuf>, kind: CaptureErrorKind) -> Self {
         CaptureError {
-            file: file.into(),
+            file: Some(file.into()),
+            line: None,
+            column: None,
+            kind,
+        }
+    }
+
+    /// An error about values that are not from a file (signal slices, a `--map` spec).
+    pub fn without_file(kind: CaptureErrorKind) -> Self {
+        CaptureError {
+            file: None,
             line: None,
             column: None,
             kind,
@@ -55,14 +73,16 @@ impl CaptureError {
 
 impl fmt::Display for CaptureError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
+        match (&self.file, self.line) {
+            (Some(file), Some(line)) => write!(f, "{}:{line}: ", file.display())?,
+            (Some(file), None) => write!(f, "{}: ", file.display())?,
+            (None, Some(line)) => write!(f, "line {line}: ")?,
+            (None, None) => {}
         }
         if let Some(column) = &self.column {
-            write!(f, ": column `{column}`")?;
+            write!(f, "column `{column}`: ")?;
         }
-        write!(f, ": {}", self.kind)
+        write!(f, "{}", self.kind)
     }
 }
 
@@ -75,7 +95,7 @@ impl Error for CaptureError {
     }
 }
 
-/// Why a capture was rejected.
+/// Why a capture, imported log, JSON file or signal was rejected.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CaptureErrorKind {
@@ -105,8 +125,9 @@ pub enum CaptureErrorKind {
     /// `units=` is not `si`.
     #[error("unsupported units `{0}` (only `si` is supported)")]
     UnsupportedUnits(String),
-    /// The file ends after the metadata line, before the header.
-    #[error("no column header line")]
+    /// There is no column header: a capture ends after its metadata line, or an imported log
+    /// has only `#` comments and blank lines.
+    #[error("no header row (the first line that is not a `#` comment must name the columns)")]
     NoHeader,
     /// A required column is absent (or [`Capture::column`](super::Capture::column)
     /// asked for a column the capture does not have).
@@ -140,8 +161,13 @@ pub enum CaptureErrorKind {
         /// Length of this column.
         found: usize,
     },
-    /// A field does not parse as a decimal number (the text is kept).
-    #[error("`{0}` is not a number")]
+    /// A field does not parse as a decimal number (the text is kept). A comma can only be in
+    /// the text of an imported log with another delimiter, where it is a decimal comma.
+    #[error(
+        "`{}` is not a number{}",
+        .0,
+        if .0.contains(',') { " (decimal commas are not supported)" } else { "" }
+    )]
     NotNumeric(String),
     /// A field is NaN or infinite (including overflowing literals like `1e999`).
     #[error("value is not finite")]
@@ -165,6 +191,158 @@ pub enum CaptureErrorKind {
     /// There is a header but no sample rows (or a writer finished without rows).
     #[error("no samples (a capture needs at least one data row)")]
     NoSamples,
+
+    // --- JSON files (`json_file`) ---
+    /// Not valid JSON for this kind of file (what serde said; the line is the error's line).
+    #[error("{0}")]
+    Json(String),
+    /// A JSON file parsed but is inconsistent. The field is a JSON path such as
+    /// `body.scaling`, not a CSV column, so it lives here rather than in
+    /// [`CaptureError::column`].
+    #[error("field `{field}`: {reason}")]
+    Invalid {
+        /// The offending field.
+        field: String,
+        /// Why.
+        reason: String,
+    },
+
+    // --- Importing foreign CSV logs (`import`) ---
+    /// A `--map` entry is malformed (bad syntax, unknown target or unit, duplicate target).
+    #[error("--map entry `{entry}`: {reason}")]
+    BadMap {
+        /// The entry as written.
+        entry: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The map or spec does not fit the capture kind, or the rates or metadata are invalid.
+    #[error("{0}")]
+    BadSpec(String),
+    /// The input log could not be read.
+    #[error("cannot read: {0}")]
+    CannotRead(#[source] io::Error),
+    /// The CSV structure is broken (e.g. an unterminated quote); the CSV parser's message.
+    #[error("malformed CSV: {0}")]
+    Csv(String),
+    /// An imported log has fewer than two data rows.
+    #[error("found {0} data row(s); importing needs at least 2")]
+    TooFewRows(usize),
+    /// A mapped source column is not in the log's header.
+    ///
+    /// This and [`AmbiguousSource`](Self::AmbiguousSource) hold boxed `str`s and slices: they
+    /// are the largest kinds, and `Vec`/`String` would make every `Result<_, CaptureError>`
+    /// of the crate bigger to return (clippy's `result_large_err`).
+    #[error(
+        "--map entry `{entry}`: the input has no column `{column}` (its columns: {})",
+        available.join(", ")
+    )]
+    UnknownSource {
+        /// The map entry.
+        entry: Box<str>,
+        /// The missing source column.
+        column: Box<str>,
+        /// The log's header names.
+        available: Box<[String]>,
+    },
+    /// A mapped source column appears more than once in the log's header.
+    #[error("--map entry `{entry}`: the input has {count} columns named `{column}`")]
+    AmbiguousSource {
+        /// The map entry.
+        entry: Box<str>,
+        /// The duplicated header name.
+        column: Box<str>,
+        /// How many times it appears.
+        count: usize,
+    },
+    /// A row of an imported log has another number of fields than its header.
+    #[error("expected {expected} fields like the header, found {found}")]
+    HeaderFieldCount {
+        /// Fields in the header.
+        expected: usize,
+        /// Fields in this row.
+        found: usize,
+    },
+    /// A mapped cell of an imported log is NaN or infinite, also after unit conversion (the
+    /// cell's text is kept).
+    #[error("`{0}` is not finite")]
+    NotFiniteText(String),
+    /// The time of an imported log did not strictly increase (values converted to seconds).
+    #[error("time {current} s is not after the previous row's {previous} s (time must strictly increase)")]
+    RowTimeNotIncreasing {
+        /// Previous time, s.
+        previous: f64,
+        /// This time, s.
+        current: f64,
+    },
+    /// No target rate was given and the imported log is not uniformly sampled.
+    #[error(
+        "the input is not uniformly sampled (intervals {min_interval_s} to {max_interval_s} s, \
+         mean rate {mean_rate_hz} Hz); give the output rate (--rate-hz) to resample it"
+    )]
+    NotUniform {
+        /// Shortest interval, s.
+        min_interval_s: f64,
+        /// Longest interval, s.
+        max_interval_s: f64,
+        /// Mean rate, Hz.
+        mean_rate_hz: f64,
+    },
+    /// The import's output would be unreasonably large.
+    #[error(
+        "the output would have {rows} rows at {rate_hz} Hz over {span_s} s; check the time \
+         unit and --rate-hz"
+    )]
+    TooManyRows {
+        /// Rows the output grid would have.
+        rows: f64,
+        /// Output rate, Hz.
+        rate_hz: f64,
+        /// Input time span, s.
+        span_s: f64,
+    },
+
+    // --- Signals (`signal`): slices, so these name indices rather than lines ---
+    /// `time_s` and `position_m` differ in length.
+    #[error("time_s has {time} samples but position_m has {position}")]
+    LengthMismatch {
+        /// Samples in `time_s`.
+        time: usize,
+        /// Samples in `position_m`.
+        position: usize,
+    },
+    /// A sample is NaN or infinite.
+    #[error("{column}[{index}] = {value} is not finite")]
+    NonFiniteSample {
+        /// `time_s` or `position_m`.
+        column: &'static str,
+        /// Sample index.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// Time does not strictly increase (a zero interval would divide by zero when τ = 0).
+    #[error("time_s[{index}] = {time_s} s does not exceed time_s[{previous_index}] = {previous_s} s")]
+    SampleTimeNotIncreasing {
+        /// Index of the sample that is not later than its predecessor.
+        index: usize,
+        /// Its time.
+        time_s: f64,
+        /// Index of the predecessor.
+        previous_index: usize,
+        /// The predecessor's time.
+        previous_s: f64,
+    },
+    /// A filter parameter is out of its domain.
+    #[error("{name} = {value}: {reason}")]
+    InvalidParameter {
+        /// `period_s`, `tau_s` or `max_interval_s`.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What it must be.
+        reason: &'static str,
+    },
 }
 
 #[cfg(test)]
@@ -203,5 +381,17 @@ mod tests {
             found: 0,
         };
         assert_eq!(blank.to_string(), "expected 3 fields, found 0 (blank line)");
+    }
+
+    #[test]
+    fn display_without_a_file_is_the_location_that_is_known() {
+        let kind = || CaptureErrorKind::LengthMismatch { time: 2, position: 1 };
+        let e = CaptureError::without_file(kind());
+        assert_eq!(e.to_string(), "time_s has 2 samples but position_m has 1");
+        let e = CaptureError::without_file(kind()).at_line(4).in_column("x");
+        assert_eq!(
+            e.to_string(),
+            "line 4: column `x`: time_s has 2 samples but position_m has 1"
+        );
     }
 }

@@ -2,67 +2,28 @@
 //! atomically, read strictly, and every failure naming the file and the line or field.
 
 use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
-use crate::write_atomically;
-
-/// Why a JSON file could not be written, read or used.
-#[derive(Debug, thiserror::Error)]
-pub enum JsonFileError {
-    /// Reading or writing failed.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: io::Error,
-    },
-    /// Not valid JSON for this kind of file.
-    #[error("{}:{line}: {reason}", path.display())]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// Line of the error.
-        line: usize,
-        /// What serde said.
-        reason: String,
-    },
-    /// Parsed, but inconsistent.
-    #[error("{}: field `{field}`: {reason}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// The field.
-        field: String,
-        /// Why.
-        reason: String,
-    },
-}
+use crate::{CaptureError, CaptureErrorKind, write_atomically};
 
 /// Writes `value` as pretty JSON to `path` atomically: a failure leaves any earlier file whole.
-pub fn save_pretty<T: Serialize>(path: &Path, value: &T) -> Result<(), JsonFileError> {
+pub fn save_pretty<T: Serialize>(path: &Path, value: &T) -> Result<(), CaptureError> {
     write_atomically(path, |w| {
         serde_json::to_writer_pretty(&mut *w, value).map_err(io::Error::other)
     })
-    .map_err(|source| JsonFileError::Io {
-        path: path.to_owned(),
-        source,
-    })
+    .map_err(|source| CaptureError::new(path, CaptureErrorKind::Io(source)))
 }
 
 /// Reads `path` and parses it with [`parse`].
 pub fn load<T: DeserializeOwned>(
     path: &Path,
     validate: impl FnOnce(&T) -> Result<(), (String, String)>,
-) -> Result<T, JsonFileError> {
-    let bytes = std::fs::read(path).map_err(|source| JsonFileError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+) -> Result<T, CaptureError> {
+    let bytes =
+        std::fs::read(path).map_err(|source| CaptureError::new(path, CaptureErrorKind::Io(source)))?;
     parse(&bytes, path, validate)
 }
 
@@ -72,17 +33,11 @@ pub fn parse<T: DeserializeOwned>(
     bytes: &[u8],
     path: &Path,
     validate: impl FnOnce(&T) -> Result<(), (String, String)>,
-) -> Result<T, JsonFileError> {
-    let value: T = serde_json::from_slice(bytes).map_err(|e| JsonFileError::Parse {
-        path: path.to_owned(),
-        line: e.line(),
-        reason: e.to_string(),
-    })?;
-    validate(&value).map_err(|(field, reason)| JsonFileError::Invalid {
-        path: path.to_owned(),
-        field,
-        reason,
-    })?;
+) -> Result<T, CaptureError> {
+    let value: T = serde_json::from_slice(bytes)
+        .map_err(|e| CaptureError::new(path, CaptureErrorKind::Json(e.to_string())).at_line(e.line()))?;
+    validate(&value)
+        .map_err(|(field, reason)| CaptureError::new(path, CaptureErrorKind::Invalid { field, reason }))?;
     Ok(value)
 }
 
@@ -111,7 +66,10 @@ mod tests {
         assert_eq!(load(&path, version_one).expect("load"), Doc { version: 1 });
 
         let e = parse::<Doc>(b"{\n\"version\": x}", &path, version_one).unwrap_err();
-        assert!(matches!(e, JsonFileError::Parse { line: 2, .. }), "{e}");
+        assert!(
+            matches!(e.kind, CaptureErrorKind::Json(_)) && e.line == Some(2),
+            "{e}"
+        );
         assert!(
             e.to_string().starts_with(&format!("{}:2: ", path.display())),
             "{e}"
@@ -124,6 +82,6 @@ mod tests {
         );
 
         let e = load::<Doc>(&dir.path().join("missing.json"), version_one).unwrap_err();
-        assert!(matches!(e, JsonFileError::Io { .. }), "{e}");
+        assert!(matches!(e.kind, CaptureErrorKind::Io(_)), "{e}");
     }
 }

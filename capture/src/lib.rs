@@ -25,12 +25,13 @@
 //! [`CaptureWriter`] and [`CaptureReader`] stream rows; [`Capture`] holds a
 //! whole capture in memory, column-major. All three enforce the same rules
 //! and report problems as a [`CaptureError`] naming file, line and column.
-
 //!
 //! Besides the format itself this crate holds what every consumer of captures shares:
-//! [`import`] of foreign logs, [`signal`] (velocity from position, resampling), [`rng`] (the
-//! one seeded generator) and [`CaptureRef`] (how a trained file names its captures). It
-//! imports no other palpus crate.
+//! [`import`] of foreign logs, [`signal`] (velocity from position), [`json_file`] (the
+//! project's JSON files), [`rng`] (the one seeded generator) and [`CaptureRef`] (how a trained
+//! file names its captures). It imports no other palpus crate. Everything in it that can fail
+//! fails with a [`CaptureError`]; those about no file (signal slices, a `--map` spec) have
+//! no [`CaptureError::file`].
 
 pub mod atomic;
 mod error;
@@ -51,7 +52,6 @@ use std::path::{Path, PathBuf};
 
 pub use atomic::write_atomically;
 pub use error::{CaptureError, CaptureErrorKind};
-pub use json_file::JsonFileError;
 pub use kind::{CaptureKind, UnknownKind};
 pub use meta::{METADATA_MARKER, Metadata, RESERVED_KEYS};
 pub use reader::CaptureReader;

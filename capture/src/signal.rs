@@ -18,10 +18,19 @@
 //! constant-velocity segments restarts the position too: a difference across the pause is not a
 //! velocity).
 
+use crate::{CaptureError, CaptureErrorKind};
+
 /// An interval longer than this many median intervals is a pause in the recording, not a
 /// sampling interval. Sampling jitter is far below this; protocol pauses (0.5 s between 20 Hz
 /// segments is 10 median intervals) are far above. `identify::aise` uses the same rule.
 pub const PAUSE_FACTOR: f64 = 4.0;
+
+/// Failures here are about slices, which have no file: they are [`CaptureError`]s without one
+/// ([`CaptureError::without_file`]), whose kinds name the sample index instead of a line. A
+/// caller that knows the file (a capture's source) can set [`CaptureError::file`].
+fn fail(kind: CaptureErrorKind) -> CaptureError {
+    CaptureError::without_file(kind)
+}
 
 /// The median interval between consecutive samples, s (`None` for fewer than two samples).
 pub fn median_interval_s(time_s: &[f64]) -> Option<f64> {
@@ -32,52 +41,6 @@ pub fn median_interval_s(time_s: &[f64]) -> Option<f64> {
     let mid = dt.len() / 2;
     let (_, median, _) = dt.select_nth_unstable_by(mid, f64::total_cmp);
     Some(*median)
-}
-
-/// Why a signal could not be differentiated.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum SignalError {
-    /// `time_s` and `position_m` differ in length.
-    #[error("time_s has {time} samples but position_m has {position}")]
-    LengthMismatch {
-        /// Samples in `time_s`.
-        time: usize,
-        /// Samples in `position_m`.
-        position: usize,
-    },
-    /// A sample is NaN or infinite.
-    #[error("{column}[{index}] = {value} is not finite")]
-    NonFinite {
-        /// `time_s` or `position_m`.
-        column: &'static str,
-        /// Sample index.
-        index: usize,
-        /// The offending value.
-        value: f64,
-    },
-    /// Time does not strictly increase (a zero interval would divide by zero when τ = 0).
-    #[error("time_s[{index}] = {time_s} s does not exceed time_s[{previous_index}] = {previous_s} s")]
-    TimeNotIncreasing {
-        /// Index of the sample that is not later than its predecessor.
-        index: usize,
-        /// Its time.
-        time_s: f64,
-        /// Index of the predecessor.
-        previous_index: usize,
-        /// The predecessor's time.
-        previous_s: f64,
-    },
-    /// A filter parameter is out of its domain.
-    #[error("{name} = {value}: {reason}")]
-    InvalidParameter {
-        /// `period_s` or `tau_s`.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// What it must be.
-        reason: &'static str,
-    },
 }
 
 /// Streaming pseudo-differentiator (Li & Bi Eq. 13) at a fixed sampling period.
@@ -109,7 +72,7 @@ impl PseudoDifferentiator {
 
     /// [`PseudoDifferentiator::new`] for untrusted values: `period_s` must be finite and
     /// positive, `tau_s` finite and non-negative.
-    pub fn try_new(period_s: f64, tau_s: f64) -> Result<Self, SignalError> {
+    pub fn try_new(period_s: f64, tau_s: f64) -> Result<Self, CaptureError> {
         check_period(period_s)?;
         check_tau(tau_s)?;
         Ok(Self::new(period_s, tau_s))
@@ -167,7 +130,11 @@ fn step(dx_m: f64, dt_s: f64, tau_s: f64, previous_mps: f64) -> f64 {
 ///
 /// The recording is split into segments at pauses (intervals longer than [`PAUSE_FACTOR`] ×
 /// the median interval); see [`pseudo_differentiate_with_pauses`] for the rest.
-pub fn pseudo_differentiate(time_s: &[f64], position_m: &[f64], tau_s: f64) -> Result<Vec<f64>, SignalError> {
+pub fn pseudo_differentiate(
+    time_s: &[f64],
+    position_m: &[f64],
+    tau_s: f64,
+) -> Result<Vec<f64>, CaptureError> {
     check_inputs(time_s, position_m, tau_s)?;
     let max_interval_s = median_interval_s(time_s).map_or(f64::INFINITY, |m| PAUSE_FACTOR * m);
     Ok(differentiate_checked(time_s, position_m, tau_s, max_interval_s))
@@ -189,14 +156,14 @@ pub fn pseudo_differentiate_with_pauses(
     position_m: &[f64],
     tau_s: f64,
     max_interval_s: f64,
-) -> Result<Vec<f64>, SignalError> {
+) -> Result<Vec<f64>, CaptureError> {
     check_inputs(time_s, position_m, tau_s)?;
     if max_interval_s.is_nan() || max_interval_s <= 0.0 {
-        return Err(SignalError::InvalidParameter {
+        return Err(fail(CaptureErrorKind::InvalidParameter {
             name: "max_interval_s",
             value: max_interval_s,
             reason: "must be positive",
-        });
+        }));
     }
     Ok(differentiate_checked(time_s, position_m, tau_s, max_interval_s))
 }
@@ -224,58 +191,58 @@ fn differentiate_checked(time_s: &[f64], position_m: &[f64], tau_s: f64, max_int
     velocity_mps
 }
 
-fn check_inputs(time_s: &[f64], position_m: &[f64], tau_s: f64) -> Result<(), SignalError> {
+fn check_inputs(time_s: &[f64], position_m: &[f64], tau_s: f64) -> Result<(), CaptureError> {
     check_tau(tau_s)?;
     if time_s.len() != position_m.len() {
-        return Err(SignalError::LengthMismatch {
+        return Err(fail(CaptureErrorKind::LengthMismatch {
             time: time_s.len(),
             position: position_m.len(),
-        });
+        }));
     }
     for (index, (&t, &x)) in time_s.iter().zip(position_m).enumerate() {
         check_finite("time_s", index, t)?;
         check_finite("position_m", index, x)?;
         if index > 0 && t <= time_s[index - 1] {
-            return Err(SignalError::TimeNotIncreasing {
+            return Err(fail(CaptureErrorKind::SampleTimeNotIncreasing {
                 index,
                 time_s: t,
                 previous_index: index - 1,
                 previous_s: time_s[index - 1],
-            });
+            }));
         }
     }
     Ok(())
 }
 
-fn check_finite(column: &'static str, index: usize, value: f64) -> Result<(), SignalError> {
+fn check_finite(column: &'static str, index: usize, value: f64) -> Result<(), CaptureError> {
     if value.is_finite() {
         Ok(())
     } else {
-        Err(SignalError::NonFinite { column, index, value })
+        Err(fail(CaptureErrorKind::NonFiniteSample { column, index, value }))
     }
 }
 
-fn check_period(period_s: f64) -> Result<(), SignalError> {
+fn check_period(period_s: f64) -> Result<(), CaptureError> {
     if period_s.is_finite() && period_s > 0.0 {
         Ok(())
     } else {
-        Err(SignalError::InvalidParameter {
+        Err(fail(CaptureErrorKind::InvalidParameter {
             name: "period_s",
             value: period_s,
             reason: "must be finite and positive",
-        })
+        }))
     }
 }
 
-fn check_tau(tau_s: f64) -> Result<(), SignalError> {
+fn check_tau(tau_s: f64) -> Result<(), CaptureError> {
     if tau_s.is_finite() && tau_s >= 0.0 {
         Ok(())
     } else {
-        Err(SignalError::InvalidParameter {
+        Err(fail(CaptureErrorKind::InvalidParameter {
             name: "tau_s",
             value: tau_s,
             reason: "must be finite and non-negative",
-        })
+        }))
     }
 }
 
@@ -441,40 +408,51 @@ mod tests {
 
     #[test]
     fn bad_input_is_a_typed_error() {
-        assert_eq!(
-            pseudo_differentiate(&[0.0, 1.0], &[0.0], 0.0),
-            Err(SignalError::LengthMismatch { time: 2, position: 1 })
-        );
+        /// The kind of the error, which has no file: these are slices.
+        fn kind<T: std::fmt::Debug>(result: Result<T, CaptureError>) -> CaptureErrorKind {
+            let e = result.unwrap_err();
+            assert!(e.file.is_none(), "{e}");
+            e.kind
+        }
         assert!(matches!(
-            pseudo_differentiate(&[0.0, 1.0, 1.0], &[0.0, 1.0, 2.0], 0.0),
-            Err(SignalError::TimeNotIncreasing {
+            kind(pseudo_differentiate(&[0.0, 1.0], &[0.0], 0.0)),
+            CaptureErrorKind::LengthMismatch { time: 2, position: 1 }
+        ));
+        assert!(matches!(
+            kind(pseudo_differentiate(&[0.0, 1.0, 1.0], &[0.0, 1.0, 2.0], 0.0)),
+            CaptureErrorKind::SampleTimeNotIncreasing {
                 index: 2,
                 previous_index: 1,
                 ..
-            })
+            }
         ));
         assert!(matches!(
-            pseudo_differentiate(&[0.0, 1.0], &[0.0, f64::NAN], 0.0),
-            Err(SignalError::NonFinite {
+            kind(pseudo_differentiate(&[0.0, 1.0], &[0.0, f64::NAN], 0.0)),
+            CaptureErrorKind::NonFiniteSample {
                 column: "position_m",
                 index: 1,
                 ..
-            })
+            }
         ));
         assert!(matches!(
-            pseudo_differentiate(&[0.0, 1.0], &[0.0, 1.0], -1e-3),
-            Err(SignalError::InvalidParameter { name: "tau_s", .. })
+            kind(pseudo_differentiate(&[0.0, 1.0], &[0.0, 1.0], -1e-3)),
+            CaptureErrorKind::InvalidParameter { name: "tau_s", .. }
         ));
         assert!(matches!(
-            pseudo_differentiate_with_pauses(&[0.0, 1.0], &[0.0, 1.0], 0.0, 0.0),
-            Err(SignalError::InvalidParameter {
+            kind(pseudo_differentiate_with_pauses(
+                &[0.0, 1.0],
+                &[0.0, 1.0],
+                0.0,
+                0.0
+            )),
+            CaptureErrorKind::InvalidParameter {
                 name: "max_interval_s",
                 ..
-            })
+            }
         ));
         assert!(matches!(
-            PseudoDifferentiator::try_new(0.0, 0.01),
-            Err(SignalError::InvalidParameter { name: "period_s", .. })
+            kind(PseudoDifferentiator::try_new(0.0, 0.01)),
+            CaptureErrorKind::InvalidParameter { name: "period_s", .. }
         ));
         let d = PseudoDifferentiator::try_new(1e-3, 0.0).unwrap();
         assert_eq!((d.period_s(), d.tau_s(), d.velocity_mps()), (1e-3, 0.0, 0.0));

@@ -31,21 +31,21 @@ impl ColumnMap {
     /// columns (of any kind; [`import_csv`] checks them against the kind), each at most once;
     /// a unit must be in the [unit table](unit_to_si) and measure the target's quantity; a
     /// factor must be a finite non-zero number.
-    pub fn parse(spec: &str) -> Result<ColumnMap, ImportError> {
+    pub fn parse(spec: &str) -> Result<ColumnMap, CaptureError> {
         if spec.trim().is_empty() {
-            return Err(ImportError::BadMap {
+            return Err(CaptureError::without_file(CaptureErrorKind::BadMap {
                 entry: String::new(),
                 reason: "the column map is empty (expected `target=source,...`)".into(),
-            });
+            }));
         }
         let mut entries: Vec<MapEntry> = Vec::new();
         for raw in spec.split(',') {
             let entry = parse_entry(raw.trim())?;
             if entries.iter().any(|e| e.target == entry.target) {
-                return Err(ImportError::BadMap {
+                return Err(CaptureError::without_file(CaptureErrorKind::BadMap {
                     reason: format!("target `{}` is mapped more than once", entry.target),
                     entry: entry.text,
-                });
+                }));
             }
             entries.push(entry);
         }
@@ -87,10 +87,12 @@ pub(super) fn all_capture_columns() -> String {
     names.join(", ")
 }
 
-pub(super) fn parse_entry(entry: &str) -> Result<MapEntry, ImportError> {
-    let bad = |reason: String| ImportError::BadMap {
-        entry: entry.to_owned(),
-        reason,
+pub(super) fn parse_entry(entry: &str) -> Result<MapEntry, CaptureError> {
+    let bad = |reason: String| {
+        CaptureError::without_file(CaptureErrorKind::BadMap {
+            entry: entry.to_owned(),
+            reason,
+        })
     };
     if entry.is_empty() {
         return Err(bad(

@@ -71,8 +71,7 @@
 //! rejected with a clear error instead.
 
 use std::fmt;
-use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::CaptureErrorKind;
 use crate::kind::{CaptureKind, TIME_S};
@@ -184,208 +183,20 @@ pub struct Imported {
     pub resampling: Resampling,
 }
 
-/// Why a CSV file could not be imported. Every variant about an input names the file, and
-/// the line, column or `--map` entry where one applies.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ImportError {
-    /// A `--map` entry is malformed (bad syntax, unknown target or unit, duplicate target).
-    #[error("--map entry `{entry}`: {reason}")]
-    BadMap {
-        /// The entry as written.
-        entry: String,
-        /// What is wrong with it.
-        reason: String,
-    },
-    /// The map or spec does not fit the capture kind, or the rates or metadata are invalid.
-    #[error("{}: {reason}", file.display())]
-    BadSpec {
-        /// The input file.
-        file: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
-    /// The input could not be read.
-    #[error("{}: cannot read: {source}", file.display())]
-    Io {
-        /// The input file.
-        file: PathBuf,
-        /// The I/O error.
-        #[source]
-        source: io::Error,
-    },
-    /// The CSV structure is broken (e.g. an unterminated quote).
-    #[error("{}:{line}: malformed CSV: {reason}", file.display())]
-    Csv {
-        /// The input file.
-        file: PathBuf,
-        /// 1-based line.
-        line: u64,
-        /// The CSV parser's message.
-        reason: String,
-    },
-    /// There is no header row.
-    #[error(
-        "{}: no header row (the first line that is not a `#` comment must name the columns)",
-        file.display()
-    )]
-    NoHeader {
-        /// The input file.
-        file: PathBuf,
-    },
-    /// Fewer than two data rows.
-    #[error("{}: found {found} data row(s); importing needs at least 2", file.display())]
-    TooFewRows {
-        /// The input file.
-        file: PathBuf,
-        /// Data rows found.
-        found: usize,
-    },
-    /// A mapped source column is not in the header.
-    #[error(
-        "{}: --map entry `{entry}`: the input has no column `{column}` (its columns: {})",
-        file.display(),
-        available.join(", ")
-    )]
-    UnknownSource {
-        /// The input file.
-        file: PathBuf,
-        /// The map entry.
-        entry: String,
-        /// The missing source column.
-        column: String,
-        /// The input's header names.
-        available: Vec<String>,
-    },
-    /// A mapped source column appears twice in the header.
-    #[error("{}: --map entry `{entry}`: the input has {count} columns named `{column}`", file.display())]
-    AmbiguousSource {
-        /// The input file.
-        file: PathBuf,
-        /// The map entry.
-        entry: String,
-        /// The duplicated header name.
-        column: String,
-        /// How many times it appears.
-        count: usize,
-    },
-    /// A data row has another number of fields than the header.
-    #[error("{}:{line}: expected {expected} fields like the header, found {found}", file.display())]
-    FieldCount {
-        /// The input file.
-        file: PathBuf,
-        /// 1-based line.
-        line: u64,
-        /// Fields in the header.
-        expected: usize,
-        /// Fields in this row.
-        found: usize,
-    },
-    /// A mapped cell is not a number.
-    #[error(
-        "{}:{line}: column `{column}`: `{text}` is not a number{}",
-        file.display(),
-        if text.contains(',') { " (decimal commas are not supported)" } else { "" }
-    )]
-    NotNumeric {
-        /// The input file.
-        file: PathBuf,
-        /// 1-based line.
-        line: u64,
-        /// The input column.
-        column: String,
-        /// The cell.
-        text: String,
-    },
-    /// A mapped cell is NaN or infinite (also after unit conversion).
-    #[error("{}:{line}: column `{column}`: `{text}` is not finite", file.display())]
-    NotFinite {
-        /// The input file.
-        file: PathBuf,
-        /// 1-based line.
-        line: u64,
-        /// The input column.
-        column: String,
-        /// The cell.
-        text: String,
-    },
-    /// Time did not strictly increase.
-    #[error(
-        "{}:{line}: column `{column}`: time {current} s is not after the previous row's {previous} s \
-         (time must strictly increase)",
-        file.display()
-    )]
-    TimeNotIncreasing {
-        /// The input file.
-        file: PathBuf,
-        /// 1-based line.
-        line: u64,
-        /// The input's time column.
-        column: String,
-        /// Previous time, s (converted).
-        previous: f64,
-        /// This time, s (converted).
-        current: f64,
-    },
-    /// No target rate was given and the input is not uniformly sampled.
-    #[error(
-        "{}: the input is not uniformly sampled (intervals {min_interval_s} to {max_interval_s} s, \
-         mean rate {mean_rate_hz} Hz); give the output rate (--rate-hz) to resample it",
-        file.display()
-    )]
-    NotUniform {
-        /// The input file.
-        file: PathBuf,
-        /// Shortest interval, s.
-        min_interval_s: f64,
-        /// Longest interval, s.
-        max_interval_s: f64,
-        /// Mean rate, Hz.
-        mean_rate_hz: f64,
-    },
-    /// The output would be unreasonably large.
-    #[error(
-        "{}: the output would have {rows} rows at {rate_hz} Hz over {span_s} s; check the time \
-         unit and --rate-hz",
-        file.display()
-    )]
-    TooManyRows {
-        /// The input file.
-        file: PathBuf,
-        /// Rows the output grid would have.
-        rows: f64,
-        /// Output rate, Hz.
-        rate_hz: f64,
-        /// Input time span, s.
-        span_s: f64,
-    },
-    /// The imported data did not make a valid capture (should not happen: everything is
-    /// checked before).
-    #[error("{}: building the capture: {source}", file.display())]
-    Capture {
-        /// The input file.
-        file: PathBuf,
-        /// The capture error.
-        #[source]
-        source: CaptureError,
-    },
-}
-
 // --- Import ------------------------------------------------------------------------------
 
 /// Imports the CSV file at `path` as a capture, as described in the
 /// [module documentation](self). Nothing is written; see [`Capture::write_file`].
-pub fn import_csv(path: &Path, spec: &ImportSpec) -> Result<Capture, ImportError> {
+///
+/// Every error names the file, and the line, column or `--map` entry where one applies.
+pub fn import_csv(path: &Path, spec: &ImportSpec) -> Result<Capture, CaptureError> {
     import_csv_report(path, spec).map(|imported| imported.capture)
 }
 
 /// [`import_csv`], also returning the row count, rates and the resampling applied.
-pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, ImportError> {
-    let file = path.to_path_buf();
-    let bad_spec = |reason: String| ImportError::BadSpec {
-        file: file.clone(),
-        reason,
-    };
+pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, CaptureError> {
+    let fail = |kind| CaptureError::new(path, kind);
+    let bad_spec = |reason: String| fail(CaptureErrorKind::BadSpec(reason));
     let time_entry = spec.map.get(TIME_S);
     match (time_entry, spec.input_rate_hz) {
         (None, None) => {
@@ -428,13 +239,13 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Imp
     let table = read_table(path, &spec.map)?;
     let rows_in = table.lines.len();
     if rows_in < 2 {
-        return Err(ImportError::TooFewRows { file, found: rows_in });
+        return Err(fail(CaptureErrorKind::TooFewRows(rows_in)));
     }
     let time: Vec<f64> = match (time_entry, spec.input_rate_hz) {
         (Some(entry), _) => {
             let index = spec.map.entries.iter().position(|e| e.target == entry.target);
             let time = index.map(|i| table.columns[i].clone()).unwrap_or_default();
-            check_increasing(&file, &entry.source, &time, &table.lines)?;
+            check_increasing(path, &entry.source, &time, &table.lines)?;
             time
         }
         (None, Some(rate)) => (0..rows_in).map(|i| i as f64 / rate).collect(),
@@ -449,24 +260,22 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Imp
             let rate = snap_rate(source_rate_hz);
             if !is_uniform(&time, rate) {
                 let (min, max) = interval_range(&time);
-                return Err(ImportError::NotUniform {
-                    file,
+                return Err(fail(CaptureErrorKind::NotUniform {
                     min_interval_s: min,
                     max_interval_s: max,
                     mean_rate_hz: source_rate_hz,
-                });
+                }));
             }
             rate
         }
     };
     let rows_out = (span * rate_hz + UNIFORM_TOLERANCE).floor() + 1.0;
     if rows_out.is_nan() || rows_out > MAX_ROWS as f64 {
-        return Err(ImportError::TooManyRows {
-            file,
+        return Err(fail(CaptureErrorKind::TooManyRows {
             rows: rows_out,
             rate_hz,
             span_s: span,
-        });
+        }));
     }
     let rows_out = rows_out as usize;
 
@@ -541,8 +350,13 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Imp
     for (key, value) in &spec.metadata {
         meta = meta.with(key, value);
     }
-    let capture =
-        Capture::new(meta, columns, data).map_err(|source| ImportError::Capture { file, source })?;
+    // Should not happen: everything was checked above. If it does, name the input file; the
+    // line dropped is a line of the output, which the user never sees.
+    let capture = Capture::new(meta, columns, data).map_err(|e| CaptureError {
+        file: Some(path.to_path_buf()),
+        line: None,
+        ..e
+    })?;
     Ok(Imported {
         capture,
         rows_in,
@@ -598,17 +412,17 @@ fn check_map_against_kind(spec: &ImportSpec) -> Result<(), String> {
     Ok(())
 }
 
-fn check_increasing(file: &Path, column: &str, time: &[f64], lines: &[u64]) -> Result<(), ImportError> {
+fn check_increasing(file: &Path, column: &str, time: &[f64], lines: &[usize]) -> Result<(), CaptureError> {
     for (i, pair) in time.windows(2).enumerate() {
         // Values are finite (checked while reading), so `<=` is the whole negation of `>`.
         if pair[1] <= pair[0] {
-            return Err(ImportError::TimeNotIncreasing {
-                file: file.to_path_buf(),
-                line: lines[i + 1],
-                column: column.to_owned(),
+            let kind = CaptureErrorKind::RowTimeNotIncreasing {
                 previous: pair[0],
                 current: pair[1],
-            });
+            };
+            return Err(CaptureError::new(file, kind)
+                .at_line(lines[i + 1])
+                .in_column(column));
         }
     }
     Ok(())

@@ -7,15 +7,12 @@ use super::*;
 pub(super) struct Table {
     pub(super) columns: Vec<Vec<f64>>,
     /// 1-based file line of each data row.
-    pub(super) lines: Vec<u64>,
+    pub(super) lines: Vec<usize>,
 }
 
-pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, ImportError> {
-    let file = path.to_path_buf();
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
-        file: file.clone(),
-        source,
-    })?;
+pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, CaptureError> {
+    let fail = |kind| CaptureError::new(path, kind);
+    let bytes = std::fs::read(path).map_err(|source| fail(CaptureErrorKind::CannotRead(source)))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
     let mut reader = csv::ReaderBuilder::new()
         .delimiter(detect_delimiter(bytes))
@@ -26,17 +23,16 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, ImportEr
         .from_reader(bytes);
     // The csv crate's line numbers skip comment and blank lines; count them from byte offsets.
     let mut lines = LineCounter::new(bytes);
-    let csv_error = |e: csv::Error, lines: &mut LineCounter<'_>, fallback_line: u64| ImportError::Csv {
-        file: file.clone(),
-        line: e.position().map_or(fallback_line, |p| lines.line_at(p.byte())),
-        reason: e.to_string(),
+    let csv_error = |e: csv::Error, lines: &mut LineCounter<'_>, fallback_line: usize| {
+        let line = e.position().map_or(fallback_line, |p| lines.line_at(p.byte()));
+        fail(CaptureErrorKind::Csv(e.to_string())).at_line(line)
     };
     let is_blank = |record: &csv::ByteRecord| record.iter().all(<[u8]>::is_empty);
 
     let mut record = csv::ByteRecord::new();
     let header: Vec<String> = loop {
         match reader.read_byte_record(&mut record) {
-            Ok(false) => return Err(ImportError::NoHeader { file }),
+            Ok(false) => return Err(fail(CaptureErrorKind::NoHeader)),
             Ok(true) if is_blank(&record) => continue,
             Ok(true) => {
                 break record
@@ -52,21 +48,19 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, ImportEr
         let matches: Vec<usize> = (0..header.len()).filter(|&i| header[i] == entry.source).collect();
         match matches.as_slice() {
             [] => {
-                return Err(ImportError::UnknownSource {
-                    file,
-                    entry: entry.text.clone(),
-                    column: entry.source.clone(),
-                    available: header,
-                });
+                return Err(fail(CaptureErrorKind::UnknownSource {
+                    entry: entry.text.as_str().into(),
+                    column: entry.source.as_str().into(),
+                    available: header.into(),
+                }));
             }
             [i] => indices.push(*i),
             _ => {
-                return Err(ImportError::AmbiguousSource {
-                    file,
-                    entry: entry.text.clone(),
-                    column: entry.source.clone(),
+                return Err(fail(CaptureErrorKind::AmbiguousSource {
+                    entry: entry.text.as_str().into(),
+                    column: entry.source.as_str().into(),
                     count: matches.len(),
-                });
+                }));
             }
         }
     }
@@ -89,12 +83,11 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, ImportEr
         };
         last_line = line;
         if record.len() != header.len() {
-            return Err(ImportError::FieldCount {
-                file,
-                line,
+            let kind = CaptureErrorKind::HeaderFieldCount {
                 expected: header.len(),
                 found: record.len(),
-            });
+            };
+            return Err(fail(kind).at_line(line));
         }
         for ((entry, &i), column) in map.entries.iter().zip(&indices).zip(&mut table.columns) {
             let cell = &record[i];
@@ -102,20 +95,15 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, ImportEr
             let value: f64 = std::str::from_utf8(cell)
                 .ok()
                 .and_then(|s| s.parse().ok())
-                .ok_or_else(|| ImportError::NotNumeric {
-                    file: file.clone(),
-                    line,
-                    column: entry.source.clone(),
-                    text: text(),
+                .ok_or_else(|| {
+                    fail(CaptureErrorKind::NotNumeric(text()))
+                        .at_line(line)
+                        .in_column(&entry.source)
                 })?;
             let value = entry.scale.apply(value);
             if !value.is_finite() {
-                return Err(ImportError::NotFinite {
-                    file,
-                    line,
-                    column: entry.source.clone(),
-                    text: text(),
-                });
+                let kind = CaptureErrorKind::NotFiniteText(text());
+                return Err(fail(kind).at_line(line).in_column(&entry.source));
             }
             column.push(value);
         }
@@ -128,7 +116,7 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, ImportEr
 pub(super) struct LineCounter<'a> {
     pub(super) bytes: &'a [u8],
     pub(super) offset: usize,
-    pub(super) line: u64,
+    pub(super) line: usize,
 }
 
 impl<'a> LineCounter<'a> {
@@ -143,7 +131,7 @@ impl<'a> LineCounter<'a> {
     /// The line of the record the csv reader reports at byte `offset`; offsets must not
     /// decrease between calls. The reader's offset is where it started looking, so empty and
     /// `#` lines it skipped before the record are skipped here too.
-    pub(super) fn line_at(&mut self, offset: u64) -> u64 {
+    pub(super) fn line_at(&mut self, offset: u64) -> usize {
         let mut end = usize::try_from(offset)
             .unwrap_or(usize::MAX)
             .min(self.bytes.len());
@@ -165,7 +153,7 @@ impl<'a> LineCounter<'a> {
                 .iter()
                 .filter(|&&b| b == b'\n')
                 .count();
-            self.line += newlines as u64;
+            self.line += newlines;
             self.offset = end;
         }
         self.line

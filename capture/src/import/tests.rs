@@ -1,3 +1,5 @@
+use std::path::PathBuf;
+
 use super::*;
 
 fn map(spec: &str) -> ColumnMap {
@@ -6,7 +8,11 @@ fn map(spec: &str) -> ColumnMap {
 
 fn map_err(spec: &str) -> (String, String) {
     match ColumnMap::parse(spec) {
-        Err(ImportError::BadMap { entry, reason }) => (entry, reason),
+        Err(CaptureError {
+            file: None,
+            kind: CaptureErrorKind::BadMap { entry, reason },
+            ..
+        }) => (entry, reason),
         other => panic!("expected BadMap for `{spec}`, got {other:?}"),
     }
 }
@@ -239,7 +245,7 @@ fn time_from_the_input_rate() {
     let path = write(dir.path(), "a.tsv", "x\tFz\n1\t0.1\n2\t0.2\n3\t0.3\n4\t0.4\n");
     let mut spec = rubbing("tangential_position_m=x,normal_force_n=Fz");
     assert!(
-        matches!(import_csv(&path, &spec), Err(ImportError::BadSpec { reason, .. }) if reason.contains("no time"))
+        matches!(import_csv(&path, &spec), Err(CaptureError { kind: CaptureErrorKind::BadSpec(reason), .. }) if reason.contains("no time"))
     );
     spec.input_rate_hz = Some(4.0);
     spec.rate_hz = Some(8.0);
