@@ -50,7 +50,7 @@ pub enum ModelError {
         /// The scene's name for the model.
         model: String,
         /// Why.
-        source: identify::ModelFileError,
+        source: identify::IdentifyError,
     },
     /// The model file models something else.
     #[error("model `{model}`: {} holds a {found} model, the scene says {expected}", path.display())]
@@ -80,7 +80,7 @@ pub enum ModelError {
         /// The scene's name for the model.
         model: String,
         /// Why.
-        source: identify::ModelFileError,
+        source: identify::IdentifyError,
     },
 }
 

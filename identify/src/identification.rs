@@ -17,8 +17,9 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::baselines::{BaselineError, CoulombViscous, RbfNetwork, RbfNetworkParams};
-use crate::metrics::{Metrics, MetricsError};
+use crate::baselines::{CoulombViscous, RbfNetwork, RbfNetworkParams};
+use crate::error::IdentifyError;
+use crate::metrics::Metrics;
 use capture::kind;
 use capture::{Capture, CaptureKind};
 use capture::{CaptureRef, sha256_hex};
@@ -114,43 +115,6 @@ pub struct Identified {
     pub report: Report,
 }
 
-/// Why an identification failed.
-#[derive(Debug, thiserror::Error)]
-pub enum IdentifyError {
-    /// A capture lacks what this model needs.
-    #[error(transparent)]
-    Capture(#[from] capture::CaptureError),
-    /// The data cannot make this model.
-    #[error("{}: {reason}", path.display())]
-    Data {
-        /// Capture.
-        path: std::path::PathBuf,
-        /// Why.
-        reason: String,
-    },
-    /// A fit failed.
-    #[error("fitting {what}: {source}")]
-    Svr {
-        /// Which SVR.
-        what: String,
-        /// Why.
-        #[source]
-        source: svm::SvmError,
-    },
-    /// A baseline failed.
-    #[error("baseline {what}: {source}")]
-    Baseline {
-        /// Which.
-        what: &'static str,
-        /// Why.
-        #[source]
-        source: BaselineError,
-    },
-    /// Metrics could not be computed.
-    #[error("metrics: {0}")]
-    Metrics(#[from] MetricsError),
-}
-
 /// The samples a friction model needs.
 pub(crate) struct FrictionData {
     pub(crate) time_s: Vec<f64>,
@@ -229,8 +193,11 @@ pub(crate) fn svr(
     })
 }
 
-fn metrics(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Metrics, IdentifyError> {
-    Ok(Metrics::compute(time_s, measured, predicted)?)
+/// [`Metrics::compute`], a failure wrapped so that the message says the metrics failed.
+pub(crate) fn metrics(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Metrics, IdentifyError> {
+    Metrics::compute(time_s, measured, predicted).map_err(|source| IdentifyError::Metrics {
+        source: Box::new(source),
+    })
 }
 
 fn capture_ref(path: &Path) -> CaptureRef {
@@ -280,9 +247,9 @@ fn rbf_network(
     y_train: &[f64],
     x_eval: &[f64],
 ) -> Result<Vec<f64>, IdentifyError> {
-    let baseline = |source: BaselineError| IdentifyError::Baseline {
+    let baseline = |source| IdentifyError::Baseline {
         what: "RBF network",
-        source,
+        source: Box::new(source),
     };
     RbfNetwork::fit(
         x_train,
@@ -307,7 +274,7 @@ fn friction_baselines(
         CoulombViscous::fit(&tr.normal_force_n, &tr.velocity_mps, &tr.friction_force_n).map_err(|e| {
             IdentifyError::Baseline {
                 what: "Coulomb+viscous",
-                source: e,
+                source: Box::new(e),
             }
         })?;
     let cv_pred: Vec<f64> = (0..eval.time_s.len())

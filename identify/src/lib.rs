@@ -4,23 +4,26 @@
 //! It may import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
 //! Top-down: `baselines` and `metrics` (what a model is compared with, and how),
 //! `identification` (Li & Bi's three models), `search` (cross-validated hyperparameters)
-//! and `model_file` (models on disk). This file is the crate's door: everything public is
-//! re-exported here, so callers write `identify::ModelFile`, `identify::identify`.
+//! and `model_file` (models on disk). Every failure of any of them is one [`IdentifyError`]
+//! (`error`), which wraps `capture`'s and `svm`'s errors. This file is the crate's door:
+//! everything public is re-exported here, so callers write `identify::ModelFile`,
+//! `identify::identify`.
 
 mod baselines;
+mod error;
 mod identification;
 mod metrics;
 mod model_file;
 mod search;
 
-pub use baselines::{BaselineError, CentrePlacement, CoulombViscous, RbfNetwork, RbfNetworkParams};
-pub use identification::{ComparedMetrics, Identified, IdentifyError, IdentifyOptions, Report, identify};
+pub use baselines::{CentrePlacement, CoulombViscous, RbfNetwork, RbfNetworkParams};
+pub use error::IdentifyError;
+pub use identification::{ComparedMetrics, Identified, IdentifyOptions, Report, identify};
 pub use metrics::{
-    Metrics, MetricsError, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound,
-    errors, rmse,
+    Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
 };
 pub use model_file::{
-    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelFileError, ModelKind, Quantity,
-    ScaledSvr, SvrHyper,
+    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity, ScaledSvr,
+    SvrHyper,
 };
 pub use search::{SearchGrid, SearchPoint, best, search};

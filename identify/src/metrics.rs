@@ -30,73 +30,12 @@ use capture::kind;
 pub use capture::signal::PAUSE_FACTOR;
 use capture::signal::median_interval_s;
 
+use crate::error::{self, IdentifyError, check_finite};
+
 /// The paper's observation duration T for AISE, s.
 pub const PAPER_DURATION_S: f64 = 10.0;
 /// The paper's sampling step for AISE, s.
 pub const PAPER_STEP_S: f64 = 0.2;
-
-/// Why a metric could not be computed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum MetricsError {
-    /// No samples at all.
-    #[error("no samples")]
-    Empty,
-    /// AISE needs an observed duration, so at least two samples.
-    #[error("{found} sample(s): AISE needs at least 2 (a duration to average over)")]
-    TooFewSamples {
-        /// Samples given.
-        found: usize,
-    },
-    /// Two of the series differ in length.
-    #[error("{name} has {found} samples, expected {expected} (the length of time_s)")]
-    LengthMismatch {
-        /// The series that does not match.
-        name: &'static str,
-        /// Its length.
-        found: usize,
-        /// The length it should have.
-        expected: usize,
-    },
-    /// A sample is NaN or infinite.
-    #[error("{name}[{index}] = {value} is not finite")]
-    NonFinite {
-        /// The series.
-        name: &'static str,
-        /// Sample index.
-        index: usize,
-        /// The value.
-        value: f64,
-    },
-    /// Time does not strictly increase.
-    #[error("time_s[{index}] = {time_s} s does not exceed the previous sample's {previous_s} s")]
-    TimeNotIncreasing {
-        /// Index of the offending sample.
-        index: usize,
-        /// Its time.
-        time_s: f64,
-        /// The previous sample's time.
-        previous_s: f64,
-    },
-    /// A parameter of the evaluation is out of its domain.
-    #[error("{name} = {value}: {reason}")]
-    InvalidParameter {
-        /// Its name.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// What it must be.
-        reason: &'static str,
-    },
-    /// The capture is shorter than the requested observation window.
-    #[error("the samples cover {covered_s} s but the observation window needs {needed_s} s")]
-    TooShort {
-        /// Time covered by the samples.
-        covered_s: f64,
-        /// Time needed.
-        needed_s: f64,
-    },
-}
 
 /// Accuracy of a model on one capture, in the target's unit (N for forces).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -113,7 +52,7 @@ pub struct Metrics {
 
 impl Metrics {
     /// Metrics of `predicted` against `measured`, sampled at `time_s` (strictly increasing).
-    pub fn compute(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Self, MetricsError> {
+    pub fn compute(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Self, IdentifyError> {
         let error = errors(time_s, measured, predicted)?;
         Ok(Self {
             aise: aise(time_s, &error)?,
@@ -125,7 +64,7 @@ impl Metrics {
 }
 
 /// `measured − predicted`, after checking lengths, finiteness and time order.
-pub fn errors(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Vec<f64>, MetricsError> {
+pub fn errors(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Vec<f64>, IdentifyError> {
     check_time(time_s)?;
     check_series("measured", measured, time_s.len())?;
     check_series("predicted", predicted, time_s.len())?;
@@ -135,21 +74,21 @@ pub fn errors(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Vec
 /// AISE by the trapezoid rule over the samples' own times, pauses excluded (see the module
 /// documentation): `Σ_{k ∉ gaps} ½ (e_k² + e_{k+1}²) Δt_k / Σ_{k ∉ gaps} Δt_k`, with a gap being an
 /// interval longer than [`PAUSE_FACTOR`] × the median interval.
-pub fn aise(time_s: &[f64], error: &[f64]) -> Result<f64, MetricsError> {
+pub fn aise(time_s: &[f64], error: &[f64]) -> Result<f64, IdentifyError> {
     check_time(time_s)?;
     check_series("error", error, time_s.len())?;
-    let median_s = median_interval_s(time_s).ok_or(MetricsError::TooFewSamples { found: time_s.len() })?;
+    let median_s = median_interval_s(time_s).ok_or(IdentifyError::TooFewSamples { found: time_s.len() })?;
     let max_interval_s = PAUSE_FACTOR * median_s;
     aise_trapezoid_checked(time_s, error, max_interval_s)
 }
 
 /// AISE by the trapezoid rule with an explicit pause threshold: intervals longer than
 /// `max_interval_s` are not observation time. `f64::INFINITY` integrates over every interval.
-pub fn aise_trapezoid(time_s: &[f64], error: &[f64], max_interval_s: f64) -> Result<f64, MetricsError> {
+pub fn aise_trapezoid(time_s: &[f64], error: &[f64], max_interval_s: f64) -> Result<f64, IdentifyError> {
     check_time(time_s)?;
     check_series("error", error, time_s.len())?;
     if max_interval_s.is_nan() || max_interval_s <= 0.0 {
-        return Err(MetricsError::InvalidParameter {
+        return Err(IdentifyError::InvalidParameter {
             name: "max_interval_s",
             value: max_interval_s,
             reason: "must be positive",
@@ -158,9 +97,9 @@ pub fn aise_trapezoid(time_s: &[f64], error: &[f64], max_interval_s: f64) -> Res
     aise_trapezoid_checked(time_s, error, max_interval_s)
 }
 
-fn aise_trapezoid_checked(time_s: &[f64], error: &[f64], max_interval_s: f64) -> Result<f64, MetricsError> {
+fn aise_trapezoid_checked(time_s: &[f64], error: &[f64], max_interval_s: f64) -> Result<f64, IdentifyError> {
     if time_s.len() < 2 {
-        return Err(MetricsError::TooFewSamples { found: time_s.len() });
+        return Err(IdentifyError::TooFewSamples { found: time_s.len() });
     }
     let mut integral = 0.0;
     let mut duration_s = 0.0;
@@ -174,7 +113,7 @@ fn aise_trapezoid_checked(time_s: &[f64], error: &[f64], max_interval_s: f64) ->
     if duration_s > 0.0 {
         Ok(integral / duration_s)
     } else {
-        Err(MetricsError::InvalidParameter {
+        Err(IdentifyError::InvalidParameter {
             name: "max_interval_s",
             value: max_interval_s,
             reason: "every interval is longer, so nothing is left to average over",
@@ -185,12 +124,12 @@ fn aise_trapezoid_checked(time_s: &[f64], error: &[f64], max_interval_s: f64) ->
 /// The paper's discretisation of AISE: the error linearly interpolated at `t₀ + kΔ` for
 /// `k = 0 … N−1` with `N = round(duration_s / step_s)`, and `(Δ/T) Σ e_k²` with `T = NΔ`.
 /// The samples must cover `[t₀, t₀ + (N−1)Δ]`.
-pub fn aise_paper(time_s: &[f64], error: &[f64], step_s: f64, duration_s: f64) -> Result<f64, MetricsError> {
+pub fn aise_paper(time_s: &[f64], error: &[f64], step_s: f64, duration_s: f64) -> Result<f64, IdentifyError> {
     check_time(time_s)?;
     check_series("error", error, time_s.len())?;
     for (name, value) in [("step_s", step_s), ("duration_s", duration_s)] {
         if !(value.is_finite() && value > 0.0) {
-            return Err(MetricsError::InvalidParameter {
+            return Err(IdentifyError::InvalidParameter {
                 name,
                 value,
                 reason: "must be finite and positive",
@@ -199,7 +138,7 @@ pub fn aise_paper(time_s: &[f64], error: &[f64], step_s: f64, duration_s: f64) -
     }
     let steps = (duration_s / step_s).round();
     if !(1.0..=1e9).contains(&steps) {
-        return Err(MetricsError::InvalidParameter {
+        return Err(IdentifyError::InvalidParameter {
             name: "duration_s",
             value: duration_s,
             reason: "must hold between 1 and 1e9 steps",
@@ -211,7 +150,7 @@ pub fn aise_paper(time_s: &[f64], error: &[f64], step_s: f64, duration_s: f64) -
     let end_s = time_s[time_s.len() - 1];
     // Grid points are computed as t₀ + kΔ; allow the last one to overshoot by rounding.
     if last_s > end_s + 1e-9 * step_s.max(end_s.abs()) {
-        return Err(MetricsError::TooShort {
+        return Err(IdentifyError::TooShort {
             covered_s: end_s - t0,
             needed_s: last_s - t0,
         });
@@ -236,22 +175,22 @@ pub fn aise_paper(time_s: &[f64], error: &[f64], step_s: f64, duration_s: f64) -
 }
 
 /// The paper's error bound `max |e|`.
-pub fn error_bound(error: &[f64]) -> Result<f64, MetricsError> {
+pub fn error_bound(error: &[f64]) -> Result<f64, IdentifyError> {
     check_nonempty_finite("error", error)?;
     Ok(error.iter().fold(0.0, |m, e| m.max(e.abs())))
 }
 
 /// `sqrt(mean(e²))`, every sample weighing the same.
-pub fn rmse(error: &[f64]) -> Result<f64, MetricsError> {
+pub fn rmse(error: &[f64]) -> Result<f64, IdentifyError> {
     check_nonempty_finite("error", error)?;
     Ok((error.iter().map(|e| e * e).sum::<f64>() / error.len() as f64).sqrt())
 }
 
-fn check_time(time_s: &[f64]) -> Result<(), MetricsError> {
+fn check_time(time_s: &[f64]) -> Result<(), IdentifyError> {
     check_nonempty_finite(kind::TIME_S, time_s)?;
     for k in 1..time_s.len() {
         if time_s[k] <= time_s[k - 1] {
-            return Err(MetricsError::TimeNotIncreasing {
+            return Err(IdentifyError::TimeNotIncreasing {
                 index: k,
                 time_s: time_s[k],
                 previous_s: time_s[k - 1],
@@ -261,29 +200,16 @@ fn check_time(time_s: &[f64]) -> Result<(), MetricsError> {
     Ok(())
 }
 
-fn check_series(name: &'static str, values: &[f64], expected: usize) -> Result<(), MetricsError> {
-    if values.len() != expected {
-        return Err(MetricsError::LengthMismatch {
-            name,
-            found: values.len(),
-            expected,
-        });
-    }
+fn check_series(name: &'static str, values: &[f64], expected: usize) -> Result<(), IdentifyError> {
+    error::check_series(name, values, expected)?;
     check_nonempty_finite(name, values)
 }
 
-fn check_nonempty_finite(name: &'static str, values: &[f64]) -> Result<(), MetricsError> {
+fn check_nonempty_finite(name: &'static str, values: &[f64]) -> Result<(), IdentifyError> {
     if values.is_empty() {
-        return Err(MetricsError::Empty);
+        return Err(IdentifyError::Empty);
     }
-    match values.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(MetricsError::NonFinite {
-            name,
-            index,
-            value: values[index],
-        }),
-        None => Ok(()),
-    }
+    check_finite(name, values)
 }
 
 #[cfg(test)]
@@ -387,17 +313,17 @@ mod tests {
     #[test]
     fn bad_input_is_a_typed_error() {
         let t = [0.0, 0.1, 0.2];
-        assert_eq!(
+        assert!(matches!(
             Metrics::compute(&t, &[1.0, 2.0], &[1.0, 2.0, 3.0]),
-            Err(MetricsError::LengthMismatch {
+            Err(IdentifyError::LengthMismatch {
                 name: "measured",
                 found: 2,
                 expected: 3
             })
-        );
+        ));
         assert!(matches!(
             Metrics::compute(&t, &[1.0, f64::INFINITY, 2.0], &[0.0; 3]),
-            Err(MetricsError::NonFinite {
+            Err(IdentifyError::NonFinite {
                 name: "measured",
                 index: 1,
                 ..
@@ -405,24 +331,27 @@ mod tests {
         ));
         assert!(matches!(
             Metrics::compute(&[0.0, 0.2, 0.1], &[0.0; 3], &[0.0; 3]),
-            Err(MetricsError::TimeNotIncreasing { index: 2, .. })
+            Err(IdentifyError::TimeNotIncreasing { index: 2, .. })
         ));
-        assert_eq!(Metrics::compute(&[], &[], &[]), Err(MetricsError::Empty));
-        assert_eq!(
+        assert!(matches!(
+            Metrics::compute(&[], &[], &[]),
+            Err(IdentifyError::Empty)
+        ));
+        assert!(matches!(
             Metrics::compute(&[0.0], &[1.0], &[0.0]),
-            Err(MetricsError::TooFewSamples { found: 1 })
-        );
+            Err(IdentifyError::TooFewSamples { found: 1 })
+        ));
         assert!(matches!(
             aise_paper(&t, &[0.0; 3], PAPER_STEP_S, PAPER_DURATION_S),
-            Err(MetricsError::TooShort { .. })
+            Err(IdentifyError::TooShort { .. })
         ));
         assert!(matches!(
             aise_paper(&t, &[0.0; 3], 0.0, 1.0),
-            Err(MetricsError::InvalidParameter { name: "step_s", .. })
+            Err(IdentifyError::InvalidParameter { name: "step_s", .. })
         ));
         assert!(matches!(
             aise_trapezoid(&t, &[0.0; 3], f64::NAN),
-            Err(MetricsError::InvalidParameter {
+            Err(IdentifyError::InvalidParameter {
                 name: "max_interval_s",
                 ..
             })

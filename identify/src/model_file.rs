@@ -11,9 +11,10 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use capture::json_file::{self, JsonFileError};
+use capture::json_file;
 use capture::{CaptureRef, sha256_hex};
 
+use crate::error::IdentifyError;
 use crate::metrics::Metrics;
 use svm::{InputScaling, Kernel, SvrModel};
 
@@ -174,18 +175,18 @@ impl ModelFile {
     }
 
     /// Writes the model atomically.
-    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
-        json_file::save_pretty(path, self)
+    pub fn save(&self, path: &Path) -> Result<(), IdentifyError> {
+        Ok(json_file::save_pretty(path, self)?)
     }
 
     /// Reads and validates a model file.
-    pub fn load(path: &Path) -> Result<Self, ModelFileError> {
-        json_file::load(path, Self::validate)
+    pub fn load(path: &Path) -> Result<Self, IdentifyError> {
+        Ok(json_file::load(path, Self::validate)?)
     }
 
     /// Parses and validates a model file's bytes; `path` names it in errors.
-    pub fn from_slice(bytes: &[u8], path: &Path) -> Result<Self, ModelFileError> {
-        json_file::parse(bytes, path, Self::validate)
+    pub fn from_slice(bytes: &[u8], path: &Path) -> Result<Self, IdentifyError> {
+        Ok(json_file::parse(bytes, path, Self::validate)?)
     }
 
     /// Checks version and shapes; `Err((field, reason))`.
@@ -252,6 +253,3 @@ impl ModelFile {
         }
     }
 }
-
-/// Why a model file could not be used: the shape every JSON file of the project fails in.
-pub type ModelFileError = JsonFileError;

@@ -10,10 +10,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::error::IdentifyError;
 use crate::identification::{
-    FrictionData, IdentifyError, KGF_N, friction_data, needle_data, spread, stage_one, svr,
+    FrictionData, KGF_N, friction_data, metrics, needle_data, spread, stage_one, svr,
 };
-use crate::metrics::Metrics;
 use crate::model_file::ModelKind;
 use capture::Capture;
 use svm::{InputScaling, Kernel};
@@ -260,7 +260,7 @@ impl Data {
                         let predict_ns = started.elapsed().as_secs_f64() * 1e9 / va.len().max(1) as f64;
                         let t: Vec<f64> = va.iter().map(|&i| time[i]).collect();
                         let m: Vec<f64> = va.iter().map(|&i| y[i]).collect();
-                        let aise = Metrics::compute(&t, &m, &predicted)?.aise;
+                        let aise = metrics(&t, &m, &predicted)?.aise;
                         Ok(Fold {
                             aise,
                             n_sv: f.model.n_sv() as f64,
@@ -306,7 +306,7 @@ impl Data {
                     let predict_ns = started.elapsed().as_secs_f64() * 1e9 / seg.len().max(1) as f64;
                     let t: Vec<f64> = seg.iter().map(|&i| raw.time_s[i]).collect();
                     let meas: Vec<f64> = seg.iter().map(|&i| raw.friction_force_n[i]).collect();
-                    let aise = Metrics::compute(&t, &meas, &predicted)?.aise;
+                    let aise = metrics(&t, &meas, &predicted)?.aise;
                     Ok(Fold {
                         aise,
                         n_sv: (w.model.n_sv() + m.model.n_sv()) as f64,

@@ -2,8 +2,8 @@
 
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
-use capture::{Capture, CaptureKind};
-use identify::{Identified, IdentifyOptions, ModelFile, ModelFileError, ModelKind, identify};
+use capture::{Capture, CaptureErrorKind, CaptureKind};
+use identify::{Identified, IdentifyError, IdentifyOptions, ModelFile, ModelKind, identify};
 
 fn capture(name: &str, kind: CaptureKind) -> Capture {
     Capture::read_file(
@@ -90,13 +90,16 @@ fn hard_contact_recovers_the_paper_law_and_model_files_round_trip() {
     let text = std::fs::read_to_string(&path).unwrap();
     std::fs::write(&path, text.replace("\"version\": 1", "\"version\": 9")).unwrap();
     match ModelFile::load(&path) {
-        Err(ModelFileError::Invalid { field, .. }) => assert_eq!(field, "version"),
+        Err(IdentifyError::Capture(e)) => match e.kind {
+            CaptureErrorKind::Invalid { field, .. } => assert_eq!(field, "version"),
+            other => panic!("{other:?}"),
+        },
         other => panic!("{other:?}"),
     }
     std::fs::write(&path, &text[..text.len() / 2]).unwrap();
     assert!(matches!(
         ModelFile::load(&path),
-        Err(ModelFileError::Parse { .. })
+        Err(IdentifyError::Capture(e)) if matches!(e.kind, CaptureErrorKind::Json(_))
     ));
     let mut broken = identified.model.clone();
     broken.inputs.push(broken.inputs[0].clone());
