@@ -2,7 +2,9 @@
 
 use std::path::PathBuf;
 
-use crate::golden::BLESS_ENV;
+/// Environment variable that, set to `1`, makes [`crate::golden::check`] rewrite the golden
+/// instead of comparing. Defined here because the missing-golden message names it.
+pub const BLESS_ENV: &str = "PALPUS_BLESS";
 
 /// Why a picture or a mesh could not be made, read or stored, or why a golden check failed.
 /// Every variant that involves a file names it.

@@ -4,11 +4,9 @@
 
 use std::path::Path;
 
+pub use crate::error::BLESS_ENV;
 use crate::error::RenderError;
 use crate::image::Image;
-
-/// Environment variable that, set to `1`, makes [`check`] rewrite the golden instead of comparing.
-pub const BLESS_ENV: &str = "PALPUS_BLESS";
 
 /// How different two images may be.
 #[derive(Debug, Clone, Copy, PartialEq)]
