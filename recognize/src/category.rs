@@ -10,52 +10,24 @@
 use nalgebra::{DMatrix, SymmetricEigen};
 use serde::Serialize;
 
-/// Why a categorization or embedding could not be computed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum CategoryError {
-    /// No rows (or no indices to cut).
-    #[error("empty matrix or index set")]
-    Empty,
-    /// Row `row` has `len` entries instead of `n`.
-    #[error("matrix is not square: row {row} has {len} entries, expected {n}")]
-    NotSquare { row: usize, len: usize, n: usize },
-    /// An entry is NaN or infinite.
-    #[error("entry ({row}, {col}) is not finite")]
-    NonFinite { row: usize, col: usize },
-    /// A similarity or distance is negative.
-    #[error("entry ({row}, {col}) is negative: {value}")]
-    Negative { row: usize, col: usize, value: f64 },
-    /// `m[i][j]` and `m[j][i]` differ.
-    #[error("matrix is not symmetric at ({row}, {col})")]
-    Asymmetric { row: usize, col: usize },
-    /// An index to cut is out of range or repeated.
-    #[error("index {index} is out of range or repeated (matrix has {n} rows)")]
-    BadIndex { index: usize, n: usize },
-    /// A parameter is out of range.
-    #[error("{0}")]
-    BadParameter(&'static str),
-    /// The k-nearest-neighbour graph has more than one component, so some geodesic distances
-    /// do not exist.
-    #[error("the {k}-nearest-neighbour graph is disconnected (point {from} cannot reach point {to})")]
-    Disconnected { k: usize, from: usize, to: usize },
-}
+use crate::RecognizeError;
 
 /// Checks that `m` is a non-empty, square, finite, non-negative, symmetric matrix; returns `n`.
-fn check(m: &[Vec<f64>]) -> Result<usize, CategoryError> {
+fn check(m: &[Vec<f64>]) -> Result<usize, RecognizeError> {
     let n = m.len();
     if n == 0 {
-        return Err(CategoryError::Empty);
+        return Err(RecognizeError::EmptyMatrix);
     }
     for (row, r) in m.iter().enumerate() {
         if r.len() != n {
-            return Err(CategoryError::NotSquare { row, len: r.len(), n });
+            return Err(RecognizeError::NotSquare { row, len: r.len(), n });
         }
         for (col, &value) in r.iter().enumerate() {
             if !value.is_finite() {
-                return Err(CategoryError::NonFinite { row, col });
+                return Err(RecognizeError::NonFiniteEntry { row, col });
             }
             if value < 0.0 {
-                return Err(CategoryError::Negative { row, col, value });
+                return Err(RecognizeError::Negative { row, col, value });
             }
         }
     }
@@ -65,7 +37,7 @@ fn check(m: &[Vec<f64>]) -> Result<usize, CategoryError> {
             // in the last bits.
             let b = m[j][i];
             if (a - b).abs() > 1e-9 * (1.0 + a.abs().max(b.abs())) {
-                return Err(CategoryError::Asymmetric { row: i, col: j });
+                return Err(RecognizeError::Asymmetric { row: i, col: j });
             }
         }
     }
@@ -81,15 +53,15 @@ fn check(m: &[Vec<f64>]) -> Result<usize, CategoryError> {
 /// diagonal is 1 as in the paper: it is not a confusion, and it keeps every degree positive so
 /// that the normalized Laplacian exists. A class with no test decisions contributes only
 /// through the other classes' confusions with it.
-pub fn similarity_from_confusion(counts: &[Vec<u64>]) -> Result<Vec<Vec<f64>>, CategoryError> {
+pub fn similarity_from_confusion(counts: &[Vec<u64>]) -> Result<Vec<Vec<f64>>, RecognizeError> {
     let n = counts.len();
     if n == 0 {
-        return Err(CategoryError::Empty);
+        return Err(RecognizeError::EmptyMatrix);
     }
     let mut rates = vec![vec![0.0; n]; n];
     for (row, r) in counts.iter().enumerate() {
         if r.len() != n {
-            return Err(CategoryError::NotSquare { row, len: r.len(), n });
+            return Err(RecognizeError::NotSquare { row, len: r.len(), n });
         }
         let total: u64 = r.iter().sum();
         if total > 0 {
@@ -113,7 +85,7 @@ fn square(n: usize, diagonal: f64, off: impl Fn(usize, usize) -> f64) -> Vec<Vec
 }
 
 /// Distances for an embedding from a similarity in `[0, 1]`: `1 − S`, 0 on the diagonal.
-pub fn distances_from_similarity(similarity: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, CategoryError> {
+pub fn distances_from_similarity(similarity: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, RecognizeError> {
     let n = check(similarity)?;
     Ok(square(n, 0.0, |i, j| (1.0 - similarity[i][j]).max(0.0)))
 }
@@ -156,18 +128,20 @@ fn ncut_value(w: &[Vec<f64>], indices: &[usize], in_left: &[bool]) -> f64 {
 /// along that order with the smallest Ncut value splits them.
 ///
 /// A class with no similarity to the others (degree 0) is cut off alone with Ncut 0.
-pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut, CategoryError> {
+pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut, RecognizeError> {
     let n = check(similarity)?;
     let mut seen = vec![false; n];
     for &index in indices {
         if index >= n || seen[index] {
-            return Err(CategoryError::BadIndex { index, n });
+            return Err(RecognizeError::BadIndex { index, n });
         }
         seen[index] = true;
     }
     let m = indices.len();
     if m < 2 {
-        return Err(CategoryError::BadParameter("a cut needs at least two classes"));
+        return Err(RecognizeError::category_config(
+            "a cut needs at least two classes",
+        ));
     }
     let degree: Vec<f64> = indices
         .iter()
@@ -198,7 +172,7 @@ pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut,
     let eig = SymmetricEigen::new(laplacian);
     let smallest = (0..m)
         .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
-        .ok_or(CategoryError::Empty)?;
+        .ok_or(RecognizeError::EmptyMatrix)?;
     let y: Vec<f64> = (0..m)
         .map(|a| eig.eigenvectors[(a, smallest)] * inv_sqrt[a])
         .collect();
@@ -213,7 +187,7 @@ pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut,
             best = Some((value, split));
         }
     }
-    let (ncut, split) = best.ok_or(CategoryError::Empty)?;
+    let (ncut, split) = best.ok_or(RecognizeError::EmptyMatrix)?;
     let mut left: Vec<usize> = order[..split].iter().map(|&a| indices[a]).collect();
     let mut right: Vec<usize> = order[split..].iter().map(|&a| indices[a]).collect();
     left.sort_unstable();
@@ -294,20 +268,20 @@ impl CategoryTree {
 
 /// Recursively bipartitions all classes of `similarity` by [`normalized_cut`] until `stop`
 /// keeps a set whole or it has a single member.
-pub fn recursive_ncut(similarity: &[Vec<f64>], stop: StopRule) -> Result<CategoryTree, CategoryError> {
+pub fn recursive_ncut(similarity: &[Vec<f64>], stop: StopRule) -> Result<CategoryTree, RecognizeError> {
     let n = check(similarity)?;
     if stop.max_ncut.is_nan() || stop.max_ncut < 0.0 {
-        return Err(CategoryError::BadParameter(
+        return Err(RecognizeError::category_config(
             "max_ncut must be a non-negative number",
         ));
     }
     if stop.min_size < 2 {
-        return Err(CategoryError::BadParameter("min_size must be at least 2"));
+        return Err(RecognizeError::category_config("min_size must be at least 2"));
     }
     split((0..n).collect(), similarity, stop)
 }
 
-fn split(members: Vec<usize>, w: &[Vec<f64>], stop: StopRule) -> Result<CategoryTree, CategoryError> {
+fn split(members: Vec<usize>, w: &[Vec<f64>], stop: StopRule) -> Result<CategoryTree, RecognizeError> {
     if members.len() < stop.min_size {
         return Ok(CategoryTree {
             members,
@@ -335,10 +309,12 @@ fn split(members: Vec<usize>, w: &[Vec<f64>], stop: StopRule) -> Result<Category
 /// match `distances`, from the top eigenvectors of the double-centred squared distances.
 /// Each axis's sign is fixed so that its largest-magnitude coordinate is positive, so the same
 /// input always gives the same picture.
-pub fn classical_mds<const D: usize>(distances: &[Vec<f64>]) -> Result<Vec<[f64; D]>, CategoryError> {
+pub fn classical_mds<const D: usize>(distances: &[Vec<f64>]) -> Result<Vec<[f64; D]>, RecognizeError> {
     let n = check(distances)?;
     if D == 0 {
-        return Err(CategoryError::BadParameter("MDS needs at least one dimension"));
+        return Err(RecognizeError::category_config(
+            "MDS needs at least one dimension",
+        ));
     }
     let sq = DMatrix::from_fn(n, n, |i, j| distances[i][j] * distances[i][j]);
     let row_mean: Vec<f64> = (0..n).map(|i| sq.row(i).mean()).collect();
@@ -370,16 +346,16 @@ pub fn classical_mds<const D: usize>(distances: &[Vec<f64>]) -> Result<Vec<[f64;
 /// ISOMAP (Tenenbaum et al.): geodesic distances along the graph joining each point to its
 /// `k` nearest neighbours (an edge when either end chose it), by Floyd–Warshall, embedded by
 /// [`classical_mds`].
-pub fn isomap<const D: usize>(distances: &[Vec<f64>], k: usize) -> Result<Vec<[f64; D]>, CategoryError> {
+pub fn isomap<const D: usize>(distances: &[Vec<f64>], k: usize) -> Result<Vec<[f64; D]>, RecognizeError> {
     let geodesic = geodesic_distances(distances, k)?;
     classical_mds::<D>(&geodesic)
 }
 
 /// Shortest-path distances along the symmetrised `k`-nearest-neighbour graph of `distances`.
-pub fn geodesic_distances(distances: &[Vec<f64>], k: usize) -> Result<Vec<Vec<f64>>, CategoryError> {
+pub fn geodesic_distances(distances: &[Vec<f64>], k: usize) -> Result<Vec<Vec<f64>>, RecognizeError> {
     let n = check(distances)?;
     if k == 0 {
-        return Err(CategoryError::BadParameter("ISOMAP needs k ≥ 1 neighbours"));
+        return Err(RecognizeError::category_config("ISOMAP needs k ≥ 1 neighbours"));
     }
     let mut g = vec![vec![f64::INFINITY; n]; n];
     for (i, row) in g.iter_mut().enumerate() {
@@ -411,7 +387,7 @@ pub fn geodesic_distances(distances: &[Vec<f64>], k: usize) -> Result<Vec<Vec<f6
     }
     for (from, row) in g.iter().enumerate() {
         if let Some(to) = row.iter().position(|d| d.is_infinite()) {
-            return Err(CategoryError::Disconnected { k, from, to });
+            return Err(RecognizeError::Disconnected { k, from, to });
         }
     }
     Ok(g)
@@ -515,10 +491,13 @@ mod tests {
         assert!((s[0][2] - 0.5 * (0.0 + 0.25)).abs() < 1e-12);
         assert!((s[1][2] - 0.5 * (0.0 + 0.25)).abs() < 1e-12);
         check(&s).unwrap();
-        assert_eq!(similarity_from_confusion(&[]), Err(CategoryError::Empty));
+        assert!(matches!(
+            similarity_from_confusion(&[]),
+            Err(RecognizeError::EmptyMatrix)
+        ));
         assert!(matches!(
             similarity_from_confusion(&[vec![1, 2], vec![3]]),
-            Err(CategoryError::NotSquare { row: 1, .. })
+            Err(RecognizeError::NotSquare { row: 1, .. })
         ));
     }
 
@@ -591,51 +570,60 @@ mod tests {
         let points = [[0.0, 0.0], [0.1, 0.0], [10.0, 0.0], [10.1, 0.0]];
         assert!(matches!(
             isomap::<2>(&euclid(&points), 1),
-            Err(CategoryError::Disconnected { k: 1, .. })
+            Err(RecognizeError::Disconnected { k: 1, .. })
         ));
         assert!(isomap::<2>(&euclid(&points), 2).is_ok());
         assert!(matches!(
             isomap::<2>(&euclid(&points), 0),
-            Err(CategoryError::BadParameter(_))
+            Err(RecognizeError::Config {
+                of: "category parameter",
+                ..
+            })
         ));
     }
 
     #[test]
     fn bad_input_is_a_typed_error() {
         let empty: Vec<Vec<f64>> = Vec::new();
-        assert_eq!(classical_mds::<2>(&empty), Err(CategoryError::Empty));
-        assert_eq!(
+        assert!(matches!(
+            classical_mds::<2>(&empty),
+            Err(RecognizeError::EmptyMatrix)
+        ));
+        assert!(matches!(
             recursive_ncut(&empty, StopRule::default()),
-            Err(CategoryError::Empty)
-        );
+            Err(RecognizeError::EmptyMatrix)
+        ));
         assert!(matches!(
             classical_mds::<2>(&[vec![0.0, 1.0], vec![1.0]]),
-            Err(CategoryError::NotSquare { row: 1, len: 1, n: 2 })
+            Err(RecognizeError::NotSquare { row: 1, len: 1, n: 2 })
         ));
         assert!(matches!(
             isomap::<2>(&[vec![0.0, f64::NAN], vec![f64::NAN, 0.0]], 1),
-            Err(CategoryError::NonFinite { row: 0, col: 1 })
+            Err(RecognizeError::NonFiniteEntry { row: 0, col: 1 })
         ));
         assert!(matches!(
             normalized_cut(&[vec![1.0, -0.5], vec![-0.5, 1.0]], &[0, 1]),
-            Err(CategoryError::Negative { row: 0, col: 1, .. })
+            Err(RecognizeError::Negative { row: 0, col: 1, .. })
         ));
         assert!(matches!(
             recursive_ncut(&[vec![1.0, 0.2], vec![0.3, 1.0]], StopRule::default()),
-            Err(CategoryError::Asymmetric { row: 0, col: 1 })
+            Err(RecognizeError::Asymmetric { row: 0, col: 1 })
         ));
         let w = vec![vec![1.0, 0.2], vec![0.2, 1.0]];
         assert!(matches!(
             normalized_cut(&w, &[0, 2]),
-            Err(CategoryError::BadIndex { index: 2, n: 2 })
+            Err(RecognizeError::BadIndex { index: 2, n: 2 })
         ));
         assert!(matches!(
             normalized_cut(&w, &[0, 0]),
-            Err(CategoryError::BadIndex { index: 0, .. })
+            Err(RecognizeError::BadIndex { index: 0, .. })
         ));
         assert!(matches!(
             normalized_cut(&w, &[1]),
-            Err(CategoryError::BadParameter(_))
+            Err(RecognizeError::Config {
+                of: "category parameter",
+                ..
+            })
         ));
         assert!(matches!(
             recursive_ncut(
@@ -645,7 +633,10 @@ mod tests {
                     min_size: 2
                 }
             ),
-            Err(CategoryError::BadParameter(_))
+            Err(RecognizeError::Config {
+                of: "category parameter",
+                ..
+            })
         ));
         assert!(matches!(
             recursive_ncut(
@@ -655,7 +646,10 @@ mod tests {
                     min_size: 1
                 }
             ),
-            Err(CategoryError::BadParameter(_))
+            Err(RecognizeError::Config {
+                of: "category parameter",
+                ..
+            })
         ));
     }
 

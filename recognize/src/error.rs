@@ -1,20 +1,22 @@
 //! The crate's one error type.
+//!
+//! Every part of the crate (features, classifiers, confusion matrices, protocols, categories,
+//! recognizer files) fails with [`RecognizeError`]. Failures that one part passes up from
+//! another keep the outer part's context in a wrapping variant whose source is the inner
+//! failure, boxed: one enum cannot hold itself by value, and a box keeps the common variants
+//! small while the chain of `source()`s still reads outer to inner.
 
 use std::io;
 use std::path::PathBuf;
 
-use crate::eval::EvalError;
-use crate::features::nakano::NakanoError;
-use crate::features::spectral::SpectralError;
-use crate::knn::KnnError;
-use crate::som::SomError;
-use crate::svc::SvcError;
-use capture::{CaptureError, JsonFileError};
+use capture::{CaptureError, CaptureErrorKind};
 
-/// Why a recognizer could not be trained, stored, loaded or evaluated.
+/// Why surface recognition failed: features, a classifier, a confusion matrix, a protocol, a
+/// category tree, or a recognizer being trained, stored, loaded or evaluated.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum RecognizerError {
+pub enum RecognizeError {
+    // --- Files and captures ---
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -47,6 +49,9 @@ pub enum RecognizerError {
     /// A capture could not be read.
     #[error("reading capture")]
     Capture(#[from] CaptureError),
+    /// The SVM solvers rejected a problem or a setting.
+    #[error("SVM solver")]
+    Svm(#[from] svm::SvmError),
     /// A capture cannot be used as it is.
     #[error("{}: {reason}", path.display())]
     UnusableCapture {
@@ -54,55 +59,6 @@ pub enum RecognizerError {
         path: PathBuf,
         /// Why.
         reason: String,
-    },
-    /// Nakano's features failed on a capture.
-    #[error("{}: Nakano features", path.display())]
-    Nakano {
-        /// The capture.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: NakanoError,
-    },
-    /// Sinapov's features failed on a capture.
-    #[error("{}: spectrotemporal features", path.display())]
-    Spectral {
-        /// The capture.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: SpectralError,
-    },
-    /// The map could not be trained or queried.
-    #[error("self-organizing map")]
-    Som(#[from] SomError),
-    /// An SVC could not be fitted or queried.
-    #[error("SVC of behaviour `{behaviour}`")]
-    Svc {
-        /// The behaviour whose classifier failed.
-        behaviour: String,
-        /// Why.
-        #[source]
-        source: SvcError,
-    },
-    /// A k-NN could not be fitted or queried.
-    #[error("k-NN of behaviour `{behaviour}`")]
-    Knn {
-        /// The behaviour whose classifier failed.
-        behaviour: String,
-        /// Why.
-        #[source]
-        source: KnnError,
-    },
-    /// A setting is out of range.
-    #[error("invalid setting {name} = {value}: {reason}")]
-    Setting {
-        /// The setting.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// What it must be.
-        reason: &'static str,
     },
     /// The captures lack columns the chosen features need.
     #[error("{}: `--features {features}` needs the columns {}, which this capture lacks", path.display(), missing.join(", "))]
@@ -117,36 +73,442 @@ pub enum RecognizerError {
     /// No capture gave a training vector.
     #[error("no training windows: every capture is shorter than one window after the start travel")]
     NoTrainingData,
-    /// A label could not be recorded.
-    #[error("confusion matrix")]
-    Eval(#[from] EvalError),
+
+    // --- Context around an inner failure ---
+    /// A feature set failed on a capture.
+    #[error("{}: {features} features", path.display())]
+    Features {
+        /// The capture.
+        path: PathBuf,
+        /// The feature set (`Nakano`, `spectrotemporal`).
+        features: &'static str,
+        /// Why.
+        #[source]
+        source: Box<RecognizeError>,
+    },
+    /// The self-organizing map could not be trained or queried.
+    #[error("self-organizing map")]
+    Som(#[source] Box<RecognizeError>),
+    /// A behaviour's classifier could not be fitted or queried.
+    #[error("{classifier} of behaviour `{behaviour}`")]
+    Classifier {
+        /// The classifier (`SVC`, `k-NN`).
+        classifier: &'static str,
+        /// The behaviour whose classifier failed (empty for one over windows).
+        behaviour: String,
+        /// Why.
+        #[source]
+        source: Box<RecognizeError>,
+    },
+    /// Fitting or querying one fused behaviour's k-NN failed.
+    #[error("behaviour {behaviour}")]
+    FusedBehaviour {
+        /// Index of the behaviour.
+        behaviour: usize,
+        /// What went wrong.
+        #[source]
+        source: Box<RecognizeError>,
+    },
+    /// A fold's recognizer could not be trained or evaluated.
+    #[error("fold {fold} of {folds} (seed {seed})")]
+    Fold {
+        /// The fold held out (or trained on, for train-on-one).
+        fold: usize,
+        /// Folds in all.
+        folds: usize,
+        /// The seed of this round.
+        seed: u64,
+        /// Why.
+        #[source]
+        source: Box<RecognizeError>,
+    },
+
+    // --- Settings ---
+    /// A setting or hyperparameter is out of range.
+    #[error("invalid {of} {name} = {value}: {reason}")]
+    Parameter {
+        /// Whose setting (`setting`, `SVC parameter`, `SOM parameter`).
+        of: &'static str,
+        /// The setting.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        reason: &'static str,
+    },
+    /// A configuration is not usable, for a reason that names no single value.
+    #[error("invalid {of}: {reason}")]
+    Config {
+        /// Whose configuration (`Nakano configuration`, `category parameter`).
+        of: &'static str,
+        /// Why.
+        reason: &'static str,
+    },
+
+    // --- Training data and queries (k-NN, SVC, SOM) ---
+    /// `k` must be at least one.
+    #[error("k must be at least 1")]
+    ZeroK,
+    /// No training points.
+    #[error("no training points")]
+    Empty,
+    /// Fewer training points than neighbours.
+    #[error("k = {k} neighbours asked for, only {points} training points")]
+    TooFewPoints {
+        /// Neighbours asked for.
+        k: usize,
+        /// Training points available.
+        points: usize,
+    },
+    /// Feature vectors have no values.
+    #[error("feature vectors are empty")]
+    ZeroDimension,
+    /// Features and labels (or groups) differ in count, or there are none.
+    #[error("{features} feature vectors and {labels} labels: need equal, non-zero counts")]
+    Counts {
+        /// Feature vectors given.
+        features: usize,
+        /// Labels (or groups) given.
+        labels: usize,
+    },
+    /// A vector has the wrong dimension.
+    #[error("vector {index} has {got} values, expected {expected}")]
+    Dimension {
+        /// Index of the vector (0 for a query).
+        index: usize,
+        /// Dimension of the training data (or the map).
+        expected: usize,
+        /// Dimension found.
+        got: usize,
+    },
+    /// A feature is NaN or infinite.
+    #[error("vector {index} has a value that is not finite")]
+    NonFinite {
+        /// Index of the vector (0 for a query).
+        index: usize,
+    },
+    /// A label is not below the class count.
+    #[error("label {label} of point {index} is not below the class count {classes}")]
+    LabelOutOfRange {
+        /// Index of the point.
+        index: usize,
+        /// The label.
+        label: usize,
+        /// Number of classes.
+        classes: usize,
+    },
+    /// Cross-validation needs at least two groups (recordings, trials) and two folds.
+    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
+    TooFewGroups {
+        /// Distinct groups.
+        groups: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
+    /// A class has no training vector.
+    #[error("class {class} has no training vector")]
+    EmptyClass {
+        /// The class.
+        class: usize,
+    },
+    /// Probabilities were asked of a classifier fitted without them.
+    #[error("the classifier was fitted without probability estimates")]
+    NoProbability,
+    /// The solver did not converge within its iteration limit.
+    #[error("SMO did not converge in {iterations} iterations (classes {first}, {second})")]
+    NotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// First class of the pair.
+        first: usize,
+        /// Second class of the pair.
+        second: usize,
+    },
+
+    // --- Fusing classifiers ---
+    /// Nothing to fuse.
+    #[error("no classifiers to fuse")]
+    NothingToFuse,
+    /// Probability vectors and weights differ in count.
+    #[error("{probabilities} probability vectors but {weights} weights")]
+    WeightCount {
+        /// Probability vectors.
+        probabilities: usize,
+        /// Weights.
+        weights: usize,
+    },
+    /// Probability vectors differ in length.
+    #[error("classifier {index} gives {got} class probabilities, expected {expected}")]
+    FusionClasses {
+        /// Index of the classifier.
+        index: usize,
+        /// Classes of the first classifier.
+        expected: usize,
+        /// Classes of this one.
+        got: usize,
+    },
+    /// A weight is negative or not finite.
+    #[error("weight {index} is {weight}; weights must be finite and non-negative")]
+    BadWeight {
+        /// Index of the classifier.
+        index: usize,
+        /// The weight.
+        weight: f64,
+    },
+    /// All weights are zero: no classifier is reliable, so there is nothing to trust.
+    #[error("all weights are zero")]
+    ZeroTotalWeight,
+    /// A query gives a feature vector per behaviour; this one has the wrong count.
+    #[error("{queries} queries for {behaviours} behaviours")]
+    QueryCount {
+        /// Queries given.
+        queries: usize,
+        /// Behaviours fitted.
+        behaviours: usize,
+    },
+
+    // --- Nakano's features ---
+    /// The capture lacks a column Nakano's features need.
+    #[error("capture lacks a column Nakano's features need")]
+    NakanoColumn(#[source] CaptureError),
+    /// The signals passed in differ in length.
+    #[error("signals differ in length: position {position}, height {height}, friction {friction}")]
+    SignalLengths {
+        /// Samples of position.
+        position: usize,
+        /// Samples of height.
+        height: usize,
+        /// Samples of friction.
+        friction: usize,
+    },
+    /// A window (with the filter's margin each side) does not fit in the signal.
+    #[error(
+        "window of {len} samples at {start} needs samples {start}-{margin}..{start}+{len}+{margin} \
+         (filter margin {margin}), but the signal has {samples}"
+    )]
+    WindowOutOfRange {
+        /// First sample of the window.
+        start: usize,
+        /// Samples in the window.
+        len: usize,
+        /// Filter margin needed on each side.
+        margin: usize,
+        /// Samples available.
+        samples: usize,
+    },
+    /// A window needs at least two samples (a variance and a travel).
+    #[error("window of {len} samples: at least 2 needed")]
+    WindowTooShort {
+        /// Samples asked for.
+        len: usize,
+    },
+    /// The velocity for the reaction-force observer could not be derived from position.
+    #[error("cannot derive velocity for the reaction-force observer")]
+    Velocity(#[source] CaptureError),
+
+    // --- Spectrotemporal features ---
+    /// The capture lacks an accelerometer column.
+    #[error("capture has no accelerometer data")]
+    NoAccelerometer(#[source] CaptureError),
+    /// The three axes do not have the same number of samples.
+    #[error("accelerometer axes differ in length: x {x}, y {y}, z {z} samples")]
+    AxisLengths {
+        /// Samples on x.
+        x: usize,
+        /// Samples on y.
+        y: usize,
+        /// Samples on z.
+        z: usize,
+    },
+    /// Too few samples for one frame per time bin.
+    #[error("recording has {samples} samples; the spectrotemporal histogram needs at least {needed}")]
+    TooShort {
+        /// Samples given.
+        samples: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// A sample is NaN or infinite.
+    #[error("sample {index} is not finite")]
+    NonFiniteSample {
+        /// Index of the first bad sample.
+        index: usize,
+    },
+    /// The FFT library rejected a buffer (a bug here, not bad input).
+    #[error("FFT failed")]
+    Fft(#[from] realfft::FftError),
+
+    // --- Confusion matrices ---
+    /// A label is not one of the confusion matrix's classes.
+    #[error("confusion matrix: label {0} is not one of the classes")]
+    UnknownLabel(String),
+    /// Two confusion matrices over different classes cannot be merged.
+    #[error("confusion matrices over different classes")]
+    MatrixClasses,
+    /// The same class was given twice to a confusion matrix.
+    #[error("confusion matrix: class {0} given twice")]
+    DuplicateClass(String),
+
+    // --- Protocols ---
+    /// Fewer recordings than folds, or fewer than two folds.
+    #[error(
+        "{recordings} recordings (distinct `trial` or `run` in the metadata, else captures) cannot \
+         be split into {folds} folds: at least 2 folds, and at least one recording per fold"
+    )]
+    Folds {
+        /// Recordings found.
+        recordings: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
+    /// The fold asked for alone does not exist.
+    #[error("fold {fold} asked for, but there are {folds} folds (numbered from 1)")]
+    NoSuchFold {
+        /// The fold asked for (from 1).
+        fold: usize,
+        /// Folds in all.
+        folds: usize,
+    },
+    /// Leaving one surface out needs at least three (two to train on).
+    #[error("{surfaces} surfaces: leaving one out needs at least 3")]
+    Surfaces {
+        /// Surfaces found.
+        surfaces: usize,
+    },
+    /// At least one seed is needed.
+    #[error("at least one seed is needed")]
+    NoSeeds,
+    /// The folds' recognizers know different classes (a surface missing from some training
+    /// folds), so their decisions cannot be pooled.
+    #[error(
+        "fold {fold}'s recognizer knows the classes [{}] but fold 1's knows [{}]: every surface \
+         must have recordings in every training fold",
+        got.join(", "),
+        expected.join(", ")
+    )]
+    FoldClasses {
+        /// The fold whose classes differ.
+        fold: usize,
+        /// Its classes.
+        got: Vec<String>,
+        /// The first fold's classes.
+        expected: Vec<String>,
+    },
+
+    // --- Categories ---
+    /// A matrix has no rows, or there are no indices to cut.
+    #[error("empty matrix or index set")]
+    EmptyMatrix,
+    /// Row `row` has `len` entries instead of `n`.
+    #[error("matrix is not square: row {row} has {len} entries, expected {n}")]
+    NotSquare {
+        /// The row.
+        row: usize,
+        /// Its entries.
+        len: usize,
+        /// Rows of the matrix.
+        n: usize,
+    },
+    /// A matrix entry is NaN or infinite.
+    #[error("entry ({row}, {col}) is not finite")]
+    NonFiniteEntry {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// A similarity or distance is negative.
+    #[error("entry ({row}, {col}) is negative: {value}")]
+    Negative {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+        /// The entry.
+        value: f64,
+    },
+    /// `m[i][j]` and `m[j][i]` differ.
+    #[error("matrix is not symmetric at ({row}, {col})")]
+    Asymmetric {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// An index to cut is out of range or repeated.
+    #[error("index {index} is out of range or repeated (matrix has {n} rows)")]
+    BadIndex {
+        /// The index.
+        index: usize,
+        /// Rows of the matrix.
+        n: usize,
+    },
+    /// The k-nearest-neighbour graph has more than one component, so some geodesic distances
+    /// do not exist.
+    #[error("the {k}-nearest-neighbour graph is disconnected (point {from} cannot reach point {to})")]
+    Disconnected {
+        /// Neighbours per point.
+        k: usize,
+        /// A point.
+        from: usize,
+        /// A point it cannot reach.
+        to: usize,
+    },
 }
 
-impl RecognizerError {
+impl RecognizeError {
     /// Wraps a k-NN's error, naming the classifier's behaviour (none for one over windows).
-    pub(crate) fn knn(behaviour: Option<&str>) -> impl Fn(KnnError) -> Self + '_ {
-        move |source| Self::Knn {
-            behaviour: behaviour.unwrap_or_default().to_owned(),
-            source,
-        }
+    pub(crate) fn knn(behaviour: Option<&str>) -> impl Fn(Self) -> Self + '_ {
+        Self::classifier("k-NN", behaviour)
     }
 
     /// Wraps an SVC's error, naming the classifier's behaviour (none for one over windows).
-    pub(crate) fn svc(behaviour: Option<&str>) -> impl Fn(SvcError) -> Self + '_ {
-        move |source| Self::Svc {
+    pub(crate) fn svc(behaviour: Option<&str>) -> impl Fn(Self) -> Self + '_ {
+        Self::classifier("SVC", behaviour)
+    }
+
+    fn classifier<'a>(classifier: &'static str, behaviour: Option<&'a str>) -> impl Fn(Self) -> Self + 'a {
+        move |source| Self::Classifier {
+            classifier,
             behaviour: behaviour.unwrap_or_default().to_owned(),
-            source,
+            source: Box::new(source),
         }
     }
-}
 
-/// A recognizer file's failures keep this crate's own variants, with the same messages.
-impl From<JsonFileError> for RecognizerError {
-    fn from(e: JsonFileError) -> Self {
-        match e {
-            JsonFileError::Io { path, source } => Self::Io { path, source },
-            JsonFileError::Parse { path, line, reason } => Self::Parse { path, line, reason },
-            JsonFileError::Invalid { path, field, reason } => Self::Invalid { path, field, reason },
+    /// A Nakano configuration that cannot be used.
+    pub(crate) fn nakano_config(reason: &'static str) -> Self {
+        Self::Config {
+            of: "Nakano configuration",
+            reason,
+        }
+    }
+
+    /// A category computation's parameter that cannot be used.
+    pub(crate) fn category_config(reason: &'static str) -> Self {
+        Self::Config {
+            of: "category parameter",
+            reason,
+        }
+    }
+
+    /// Wraps the self-organizing map's error.
+    pub(crate) fn som(source: Self) -> Self {
+        Self::Som(Box::new(source))
+    }
+
+    /// A recognizer file's failures keep this crate's own variants, with the same messages;
+    /// anything else the JSON reader reports stays a capture-crate error.
+    pub(crate) fn from_json_file(e: CaptureError) -> Self {
+        let path = e.file.clone().unwrap_or_default();
+        match e.kind {
+            CaptureErrorKind::Io(source) => Self::Io { path, source },
+            CaptureErrorKind::Json(reason) => Self::Parse {
+                path,
+                line: e.line.unwrap_or_default(),
+                reason,
+            },
+            CaptureErrorKind::Invalid { field, reason } => Self::Invalid { path, field, reason },
+            kind => Self::Capture(CaptureError { kind, ..e }),
         }
     }
 }

@@ -11,95 +11,13 @@
 //! own cross-validated accuracy on its training data, and the prediction maximises
 //! `Σ_b w_b · Pr_b(s | X_b)`, so that an unreliable behaviour cannot outvote reliable ones.
 
-use thiserror::Error;
+use crate::RecognizeError;
 
+use crate::vectors;
 pub use crate::vectors::FeatureScaling;
-use crate::vectors::{self, VectorFault};
 
 /// Neighbours the paper used.
 pub const PAPER_K: usize = 3;
-
-/// Why a classifier could not be fitted or queried.
-#[derive(Debug, Error, PartialEq)]
-pub enum KnnError {
-    /// `k` must be at least one.
-    #[error("k must be at least 1")]
-    ZeroK,
-    /// No training points.
-    #[error("no training points")]
-    Empty,
-    /// Fewer training points than neighbours.
-    #[error("k = {k} neighbours asked for, only {points} training points")]
-    TooFewPoints {
-        /// Neighbours asked for.
-        k: usize,
-        /// Training points available.
-        points: usize,
-    },
-    /// Feature vectors have no values.
-    #[error("feature vectors are empty")]
-    ZeroDimension,
-    /// Features and labels (or groups) differ in count.
-    #[error("{features} feature vectors but {labels} labels")]
-    LengthMismatch {
-        /// Feature vectors given.
-        features: usize,
-        /// Labels (or groups) given.
-        labels: usize,
-    },
-    /// A vector has the wrong dimension.
-    #[error("vector {index} has {got} values, expected {expected}")]
-    Dimension {
-        /// Index of the vector (0 for a query).
-        index: usize,
-        /// Dimension of the training data.
-        expected: usize,
-        /// Dimension found.
-        got: usize,
-    },
-    /// A feature is NaN or infinite.
-    #[error("vector {index} has a value that is not finite")]
-    NonFinite {
-        /// Index of the vector (0 for a query).
-        index: usize,
-    },
-    /// A label is not below the class count.
-    #[error("label {label} of point {index} is not below the class count {classes}")]
-    LabelOutOfRange {
-        /// Index of the point.
-        index: usize,
-        /// The label.
-        label: usize,
-        /// Number of classes.
-        classes: usize,
-    },
-    /// Cross-validation needs at least two groups (recordings) and two folds.
-    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
-    TooFewGroups {
-        /// Distinct groups.
-        groups: usize,
-        /// Folds asked for.
-        folds: usize,
-    },
-}
-
-impl From<VectorFault> for KnnError {
-    fn from(fault: VectorFault) -> Self {
-        match fault {
-            VectorFault::Dimension { index, expected, got } => Self::Dimension { index, expected, got },
-            VectorFault::NonFinite { index } => Self::NonFinite { index },
-            VectorFault::LabelOutOfRange {
-                index,
-                label,
-                classes,
-            } => Self::LabelOutOfRange {
-                index,
-                label,
-                classes,
-            },
-        }
-    }
-}
 
 /// Hyperparameters of [`Knn`]; checked when fitting.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -137,7 +55,7 @@ impl KnnParams {
         features: &[V],
         labels: &[usize],
         classes: usize,
-    ) -> Result<Knn, KnnError> {
+    ) -> Result<Knn, RecognizeError> {
         Knn::fit(*self, features, labels, classes)
     }
 }
@@ -162,28 +80,28 @@ impl Knn {
         features: &[V],
         labels: &[usize],
         classes: usize,
-    ) -> Result<Self, KnnError> {
+    ) -> Result<Self, RecognizeError> {
         if params.k == 0 {
-            return Err(KnnError::ZeroK);
+            return Err(RecognizeError::ZeroK);
         }
         if features.is_empty() {
-            return Err(KnnError::Empty);
+            return Err(RecognizeError::Empty);
         }
         if features.len() != labels.len() {
-            return Err(KnnError::LengthMismatch {
+            return Err(RecognizeError::Counts {
                 features: features.len(),
                 labels: labels.len(),
             });
         }
         if features.len() < params.k {
-            return Err(KnnError::TooFewPoints {
+            return Err(RecognizeError::TooFewPoints {
                 k: params.k,
                 points: features.len(),
             });
         }
         let dim = features[0].as_ref().len();
         if dim == 0 {
-            return Err(KnnError::ZeroDimension);
+            return Err(RecognizeError::ZeroDimension);
         }
         vectors::check_labelled(features, labels, dim, classes)?;
         let scale = params.scaling.fit(features, dim);
@@ -242,7 +160,7 @@ impl Knn {
     /// Indices of the `k` nearest training points, nearest first. Equal distances are broken
     /// by training order (the earlier point is nearer), so results never depend on sorting
     /// internals.
-    pub fn neighbours(&self, query: &[f64]) -> Result<Vec<usize>, KnnError> {
+    pub fn neighbours(&self, query: &[f64]) -> Result<Vec<usize>, RecognizeError> {
         vectors::check_query(query, self.dim)?;
         let q: Vec<f64> = vectors::scaled(query, &self.scale).collect();
         let mut dist: Vec<(f64, usize)> = self
@@ -257,7 +175,7 @@ impl Knn {
 
     /// Class probabilities: the fraction of the `k` neighbours with each label (the paper's and
     /// WEKA's, unweighted by distance).
-    pub fn predict_proba(&self, query: &[f64]) -> Result<Vec<f64>, KnnError> {
+    pub fn predict_proba(&self, query: &[f64]) -> Result<Vec<f64>, RecognizeError> {
         let mut p = vec![0.0; self.classes];
         for i in self.neighbours(query)? {
             p[self.labels[i]] += 1.0 / self.k as f64;
@@ -268,7 +186,7 @@ impl Knn {
     /// Most likely class. When several classes share the most votes (e.g. three different
     /// labels with `k = 3`), the one of the nearest neighbour among them wins — the 1-NN answer
     /// restricted to the tie, rather than an arbitrary class index.
-    pub fn predict(&self, query: &[f64]) -> Result<usize, KnnError> {
+    pub fn predict(&self, query: &[f64]) -> Result<usize, RecognizeError> {
         let neighbours = self.neighbours(query)?;
         let mut votes = vec![0usize; self.classes];
         for &i in &neighbours {
@@ -301,12 +219,12 @@ pub fn argmax(p: &[f64]) -> Option<usize> {
 /// the distinct group ids, sorted, go round-robin to folds `0, 1, …`. All samples of a group
 /// share a fold, so a recording is never on both sides of a split. With fewer groups than folds
 /// each group is its own fold (leave-one-group-out).
-pub fn group_folds(groups: &[u64], folds: usize) -> Result<(Vec<usize>, usize), KnnError> {
+pub fn group_folds(groups: &[u64], folds: usize) -> Result<(Vec<usize>, usize), RecognizeError> {
     let mut distinct: Vec<u64> = groups.to_vec();
     distinct.sort_unstable();
     distinct.dedup();
     if distinct.len() < 2 || folds < 2 {
-        return Err(KnnError::TooFewGroups {
+        return Err(RecognizeError::TooFewGroups {
             groups: distinct.len(),
             folds,
         });
@@ -328,15 +246,15 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     groups: &[u64],
     classes: usize,
     folds: usize,
-) -> Result<f64, KnnError> {
+) -> Result<f64, RecognizeError> {
     if groups.len() != features.len() {
-        return Err(KnnError::LengthMismatch {
+        return Err(RecognizeError::Counts {
             features: features.len(),
             labels: groups.len(),
         });
     }
     if labels.len() != features.len() {
-        return Err(KnnError::LengthMismatch {
+        return Err(RecognizeError::Counts {
             features: features.len(),
             labels: labels.len(),
         });
@@ -381,60 +299,6 @@ pub(crate) fn held_out_correct<V, M, E>(
     Ok(correct)
 }
 
-/// Why probabilities could not be fused.
-#[derive(Debug, Error, PartialEq)]
-pub enum FusionError {
-    /// Nothing to fuse.
-    #[error("no classifiers to fuse")]
-    Empty,
-    /// Probability vectors and weights differ in count.
-    #[error("{probabilities} probability vectors but {weights} weights")]
-    CountMismatch {
-        /// Probability vectors.
-        probabilities: usize,
-        /// Weights.
-        weights: usize,
-    },
-    /// Probability vectors differ in length.
-    #[error("classifier {index} gives {got} class probabilities, expected {expected}")]
-    ClassMismatch {
-        /// Index of the classifier.
-        index: usize,
-        /// Classes of the first classifier.
-        expected: usize,
-        /// Classes of this one.
-        got: usize,
-    },
-    /// A weight is negative or not finite.
-    #[error("weight {index} is {weight}; weights must be finite and non-negative")]
-    BadWeight {
-        /// Index of the classifier.
-        index: usize,
-        /// The weight.
-        weight: f64,
-    },
-    /// All weights are zero: no classifier is reliable, so there is nothing to trust.
-    #[error("all weights are zero")]
-    ZeroTotalWeight,
-    /// A query gives a feature vector per behaviour; this one has the wrong count.
-    #[error("{queries} queries for {behaviours} behaviours")]
-    QueryCount {
-        /// Queries given.
-        queries: usize,
-        /// Behaviours fitted.
-        behaviours: usize,
-    },
-    /// Fitting or querying one behaviour's classifier failed.
-    #[error("behaviour {behaviour}")]
-    Knn {
-        /// Index of the behaviour.
-        behaviour: usize,
-        /// What went wrong.
-        #[source]
-        source: KnnError,
-    },
-}
-
 /// One behaviour's training data: a feature vector, label and group (recording or trial, for
 /// the reliability cross-validation) per interaction.
 #[derive(Debug, Clone, Copy)]
@@ -463,14 +327,17 @@ impl ReliabilityFusion {
         behaviours: &[BehaviourData<'_, V>],
         classes: usize,
         folds: usize,
-    ) -> Result<Self, FusionError> {
+    ) -> Result<Self, RecognizeError> {
         if behaviours.is_empty() {
-            return Err(FusionError::Empty);
+            return Err(RecognizeError::NothingToFuse);
         }
         let mut models = Vec::with_capacity(behaviours.len());
         let mut weights = Vec::with_capacity(behaviours.len());
         for (behaviour, d) in behaviours.iter().enumerate() {
-            let wrap = |source| FusionError::Knn { behaviour, source };
+            let wrap = |source| RecognizeError::FusedBehaviour {
+                behaviour,
+                source: Box::new(source),
+            };
             models.push(Knn::fit(params, d.features, d.labels, classes).map_err(wrap)?);
             weights.push(
                 cross_validated_accuracy(params, d.features, d.labels, d.groups, classes, folds)
@@ -492,11 +359,11 @@ impl ReliabilityFusion {
 
     /// Fused class probabilities of one surface: `queries[b]` is the feature vector from
     /// behaviour `b`, or `None` where that behaviour was not performed. Fails with
-    /// [`FusionError::Empty`] when no behaviour was, and [`FusionError::ZeroTotalWeight`] when
+    /// [`RecognizeError::NothingToFuse`] when no behaviour was, and [`RecognizeError::ZeroTotalWeight`] when
     /// only behaviours that never classified correctly were.
-    pub fn predict_proba(&self, queries: &[Option<&[f64]>]) -> Result<Vec<f64>, FusionError> {
+    pub fn predict_proba(&self, queries: &[Option<&[f64]>]) -> Result<Vec<f64>, RecognizeError> {
         if queries.len() != self.models.len() {
-            return Err(FusionError::QueryCount {
+            return Err(RecognizeError::QueryCount {
                 queries: queries.len(),
                 behaviours: self.models.len(),
             });
@@ -509,11 +376,12 @@ impl ReliabilityFusion {
             .enumerate()
         {
             if let Some(q) = q {
-                probabilities.push(
-                    model
-                        .predict_proba(q)
-                        .map_err(|source| FusionError::Knn { behaviour, source })?,
-                );
+                probabilities.push(model.predict_proba(q).map_err(|source| {
+                    RecognizeError::FusedBehaviour {
+                        behaviour,
+                        source: Box::new(source),
+                    }
+                })?);
                 weights.push(w);
             }
         }
@@ -521,9 +389,9 @@ impl ReliabilityFusion {
     }
 
     /// The most likely class ([`argmax`] of [`ReliabilityFusion::predict_proba`]).
-    pub fn predict(&self, queries: &[Option<&[f64]>]) -> Result<usize, FusionError> {
+    pub fn predict(&self, queries: &[Option<&[f64]>]) -> Result<usize, RecognizeError> {
         let p = self.predict_proba(queries)?;
-        argmax(&p).ok_or(FusionError::Empty)
+        argmax(&p).ok_or(RecognizeError::NothingToFuse)
     }
 }
 
@@ -531,12 +399,12 @@ impl ReliabilityFusion {
 /// inputs are. Weights are the behaviours' cross-validated accuracies
 /// ([`cross_validated_accuracy`]); dividing by their sum keeps the result comparable across
 /// different numbers of behaviours without changing its argmax.
-pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec<f64>, FusionError> {
+pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec<f64>, RecognizeError> {
     if probabilities.is_empty() {
-        return Err(FusionError::Empty);
+        return Err(RecognizeError::NothingToFuse);
     }
     if probabilities.len() != weights.len() {
-        return Err(FusionError::CountMismatch {
+        return Err(RecognizeError::WeightCount {
             probabilities: probabilities.len(),
             weights: weights.len(),
         });
@@ -547,14 +415,14 @@ pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec
     for (index, (p, &w)) in probabilities.iter().zip(weights).enumerate() {
         let p = p.as_ref();
         if p.len() != classes {
-            return Err(FusionError::ClassMismatch {
+            return Err(RecognizeError::FusionClasses {
                 index,
                 expected: classes,
                 got: p.len(),
             });
         }
         if !(w.is_finite() && w >= 0.0) {
-            return Err(FusionError::BadWeight { index, weight: w });
+            return Err(RecognizeError::BadWeight { index, weight: w });
         }
         total += w;
         for (o, v) in out.iter_mut().zip(p) {
@@ -562,7 +430,7 @@ pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec
         }
     }
     if total <= 0.0 {
-        return Err(FusionError::ZeroTotalWeight);
+        return Err(RecognizeError::ZeroTotalWeight);
     }
     out.iter_mut().for_each(|v| *v /= total);
     Ok(out)
@@ -641,51 +509,57 @@ mod tests {
     fn bad_input_is_a_typed_error() {
         let (x, y) = line();
         let p = KnnParams::default();
-        assert_eq!(p.k(0).fit(&x, &y, 3), Err(KnnError::ZeroK));
-        assert_eq!(p.fit::<[f64; 1]>(&[], &[], 3), Err(KnnError::Empty));
-        assert_eq!(
+        assert!(matches!(p.k(0).fit(&x, &y, 3), Err(RecognizeError::ZeroK)));
+        assert!(matches!(
+            p.fit::<[f64; 1]>(&[], &[], 3),
+            Err(RecognizeError::Empty)
+        ));
+        assert!(matches!(
             p.fit(&x, &y[..5], 3),
-            Err(KnnError::LengthMismatch {
+            Err(RecognizeError::Counts {
                 features: 6,
                 labels: 5
             })
-        );
-        assert_eq!(
+        ));
+        assert!(matches!(
             p.k(7).fit(&x, &y, 3),
-            Err(KnnError::TooFewPoints { k: 7, points: 6 })
-        );
-        assert_eq!(
+            Err(RecognizeError::TooFewPoints { k: 7, points: 6 })
+        ));
+        assert!(matches!(
             p.fit(&x, &y, 2),
-            Err(KnnError::LabelOutOfRange {
+            Err(RecognizeError::LabelOutOfRange {
                 index: 5,
                 label: 2,
                 classes: 2
             })
-        );
+        ));
         let ragged: Vec<Vec<f64>> = vec![vec![0.0], vec![1.0, 2.0], vec![3.0]];
-        assert_eq!(
+        assert!(matches!(
             p.fit(&ragged, &[0, 0, 0], 1),
-            Err(KnnError::Dimension {
+            Err(RecognizeError::Dimension {
                 index: 1,
                 expected: 1,
                 got: 2
             })
-        );
-        assert_eq!(
+        ));
+        assert!(matches!(
             p.fit(&[[0.0], [f64::NAN], [1.0]], &[0, 0, 0], 1),
-            Err(KnnError::NonFinite { index: 1 })
-        );
+            Err(RecognizeError::NonFinite { index: 1 })
+        ));
         let empty: [[f64; 0]; 3] = [[], [], []];
-        assert_eq!(p.fit(&empty, &[0, 0, 0], 1), Err(KnnError::ZeroDimension));
+        assert!(matches!(
+            p.fit(&empty, &[0, 0, 0], 1),
+            Err(RecognizeError::ZeroDimension)
+        ));
         let knn = p.fit(&x, &y, 3).expect("valid");
         assert!(matches!(
             knn.predict(&[1.0, 2.0]),
-            Err(KnnError::Dimension { .. })
+            Err(RecognizeError::Dimension { .. })
         ));
-        assert_eq!(
+        assert!(matches!(
             knn.predict_proba(&[f64::INFINITY]),
-            Err(KnnError::NonFinite { index: 0 })
-        );
+            Err(RecognizeError::NonFinite { index: 0 })
+        ));
     }
 
     #[test]
@@ -697,10 +571,10 @@ mod tests {
         assert_eq!(fold, vec![2, 2, 1, 1, 0, 0, 0]);
         let (_, n) = group_folds(&groups, 10).expect("enough groups");
         assert_eq!(n, 4, "leave-one-group-out when groups < folds");
-        assert_eq!(
+        assert!(matches!(
             group_folds(&[5, 5], 10),
-            Err(KnnError::TooFewGroups { groups: 1, folds: 10 })
-        );
+            Err(RecognizeError::TooFewGroups { groups: 1, folds: 10 })
+        ));
     }
 
     #[test]
@@ -764,24 +638,25 @@ mod tests {
         assert_eq!(fusion.predict(&[Some(&[4.9]), Some(&[0.12])]).expect("valid"), 1);
         // Only behaviour 1 performed: its answer alone.
         assert_eq!(fusion.predict(&[None, Some(&[0.12])]).expect("valid"), 0);
-        assert_eq!(fusion.predict(&[None, None]), Err(FusionError::Empty));
-        assert_eq!(
+        assert!(matches!(
+            fusion.predict(&[None, None]),
+            Err(RecognizeError::NothingToFuse)
+        ));
+        assert!(matches!(
             fusion.predict(&[None]),
-            Err(FusionError::QueryCount {
+            Err(RecognizeError::QueryCount {
                 queries: 1,
                 behaviours: 2
             })
-        );
-        assert_eq!(
-            fusion.predict(&[Some(&[1.0, 2.0]), None]),
-            Err(FusionError::Knn {
-                behaviour: 0,
-                source: KnnError::Dimension {
-                    index: 0,
-                    expected: 1,
-                    got: 2
-                }
-            })
+        ));
+        assert!(
+            matches!(fusion.predict(&[Some(&[1.0, 2.0]), None]), Err(RecognizeError::FusedBehaviour {
+            behaviour: 0,
+            source }) if matches!(*source, RecognizeError::Dimension {
+                index: 0,
+                expected: 1,
+                got: 2
+            }))
         );
         let one_group = [0, 0, 0, 0, 0, 0];
         let bad = BehaviourData {
@@ -789,42 +664,46 @@ mod tests {
             labels: &labels,
             groups: &one_group,
         };
-        assert_eq!(
-            ReliabilityFusion::fit(params, &[data(good), bad], 2, 3),
-            Err(FusionError::Knn {
+        assert!(
+            matches!(ReliabilityFusion::fit(params, &[data(good), bad], 2, 3), Err(RecognizeError::FusedBehaviour {
                 behaviour: 1,
-                source: KnnError::TooFewGroups { groups: 1, folds: 3 }
-            })
+                source }) if matches!(*source, RecognizeError::TooFewGroups { groups: 1, folds: 3 }))
         );
     }
 
     #[test]
     fn fusion_rejects_bad_input() {
         let a = [0.5, 0.5];
-        assert_eq!(fuse::<[f64; 2]>(&[], &[]), Err(FusionError::Empty));
-        assert_eq!(
+        assert!(matches!(
+            fuse::<[f64; 2]>(&[], &[]),
+            Err(RecognizeError::NothingToFuse)
+        ));
+        assert!(matches!(
             fuse(&[a], &[1.0, 1.0]),
-            Err(FusionError::CountMismatch {
+            Err(RecognizeError::WeightCount {
                 probabilities: 1,
                 weights: 2
             })
-        );
-        assert_eq!(
+        ));
+        assert!(matches!(
             fuse(&[&a[..], &[1.0][..]], &[1.0, 1.0]),
-            Err(FusionError::ClassMismatch {
+            Err(RecognizeError::FusionClasses {
                 index: 1,
                 expected: 2,
                 got: 1
             })
-        );
-        assert_eq!(
+        ));
+        assert!(matches!(
             fuse(&[a], &[-0.1]),
-            Err(FusionError::BadWeight {
+            Err(RecognizeError::BadWeight {
                 index: 0,
                 weight: -0.1
             })
-        );
-        assert_eq!(fuse(&[a, a], &[0.0, 0.0]), Err(FusionError::ZeroTotalWeight));
+        ));
+        assert!(matches!(
+            fuse(&[a, a], &[0.0, 0.0]),
+            Err(RecognizeError::ZeroTotalWeight)
+        ));
         assert_eq!(argmax(&[]), None);
         assert_eq!(argmax(&[0.2, 0.4, 0.4]), Some(1));
     }

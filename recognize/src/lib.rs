@@ -24,18 +24,16 @@ pub mod svc;
 mod vectors;
 
 pub use category::{
-    CategoryError, CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,
+    CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,
     similarity_from_confusion,
 };
-pub use error::RecognizerError;
-pub use eval::{ConfusionMatrix, EvalError};
-pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoError, NakanoSignals, NakanoStream};
-pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectralError, SpectrogramPlan};
+pub use error::RecognizeError;
+pub use eval::ConfusionMatrix;
+pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
+pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
 pub use features::{DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling};
-pub use knn::{
-    BehaviourData, FeatureScaling, FusionError, Knn, KnnError, KnnParams, ReliabilityFusion, argmax, fuse,
-};
-pub use protocol::{ProtocolError, ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
+pub use knn::{BehaviourData, FeatureScaling, Knn, KnnParams, ReliabilityFusion, argmax, fuse};
+pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{
     BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,
     Decision, Evaluation, FusedEvaluation, KnnTrainer, LABEL_KEY, LabelledCapture, Method, RECOGNIZER_FORMAT,
@@ -43,5 +41,5 @@ pub use recognizer::{
     SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, WINDOW_SVM_FALLBACK_C, recording_groups, som_nodes,
     som_params, train, trial_groups, window_svc_params,
 };
-pub use som::{Normalization, Som, SomError, SomParams};
-pub use svc::{CSearch, Svc, SvcError, SvcParams};
+pub use som::{Normalization, Som, SomParams};
+pub use svc::{CSearch, Svc, SvcParams};

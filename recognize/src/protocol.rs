@@ -18,8 +18,8 @@
 use std::borrow::Borrow;
 use std::collections::BTreeSet;
 
-use super::eval::{ConfusionMatrix, EvalError};
-use crate::RecognizerError;
+use super::eval::ConfusionMatrix;
+use crate::RecognizeError;
 use crate::recognizer::{Evaluation, LabelledCapture, RecognizerFile, recording_groups};
 
 /// Folds of Sinapov's cross-validation.
@@ -32,69 +32,6 @@ pub fn recordings(captures: &[LabelledCapture]) -> usize {
 
 /// Most behaviours whose every combination is fused (2¹⁰ − 1 = 1023 combinations).
 pub const MAX_COMBINED_BEHAVIOURS: usize = 10;
-
-/// Why a protocol could not run.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ProtocolError {
-    /// Fewer recordings than folds, or fewer than two folds.
-    #[error(
-        "{recordings} recordings (distinct `trial` or `run` in the metadata, else captures) cannot \
-         be split into {folds} folds: at least 2 folds, and at least one recording per fold"
-    )]
-    Folds {
-        /// Recordings found.
-        recordings: usize,
-        /// Folds asked for.
-        folds: usize,
-    },
-    /// The fold asked for alone does not exist.
-    #[error("fold {fold} asked for, but there are {folds} folds (numbered from 1)")]
-    NoSuchFold {
-        /// The fold asked for (from 1).
-        fold: usize,
-        /// Folds in all.
-        folds: usize,
-    },
-    /// Leaving one surface out needs at least three (two to train on).
-    #[error("{surfaces} surfaces: leaving one out needs at least 3")]
-    Surfaces {
-        /// Surfaces found.
-        surfaces: usize,
-    },
-    /// At least one seed is needed.
-    #[error("at least one seed is needed")]
-    NoSeeds,
-    /// A fold's recognizer could not be trained or evaluated.
-    #[error("fold {fold} of {folds} (seed {seed})")]
-    Fold {
-        /// The fold held out (or trained on, for train-on-one).
-        fold: usize,
-        /// Folds in all.
-        folds: usize,
-        /// The seed of this round.
-        seed: u64,
-        /// Why.
-        #[source]
-        source: Box<RecognizerError>,
-    },
-    /// The folds' recognizers know different classes (a surface missing from some training
-    /// folds), so their decisions cannot be pooled.
-    #[error(
-        "fold {fold}'s recognizer knows the classes [{}] but fold 1's knows [{}]: every surface \
-         must have recordings in every training fold",
-        got.join(", "),
-        expected.join(", ")
-    )]
-    Classes {
-        /// The fold whose classes differ.
-        fold: usize,
-        /// Its classes.
-        got: Vec<String>,
-        /// The first fold's classes.
-        expected: Vec<String>,
-    },
-}
 
 /// How the recordings are split.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -130,11 +67,11 @@ impl Split {
 
 /// Fold (0-based) of each capture: its recording's rank among the distinct recordings, modulo
 /// `folds`.
-pub fn fold_of_each(captures: &[LabelledCapture], folds: usize) -> Result<Vec<usize>, ProtocolError> {
+pub fn fold_of_each(captures: &[LabelledCapture], folds: usize) -> Result<Vec<usize>, RecognizeError> {
     let groups = recording_groups(captures);
     let recordings = recordings(captures);
     if folds < 2 || recordings < folds {
-        return Err(ProtocolError::Folds { recordings, folds });
+        return Err(RecognizeError::Folds { recordings, folds });
     }
     // Groups are numbered densely from 0 in the recordings' order.
     Ok(groups.iter().map(|&g| g as usize % folds).collect())
@@ -239,19 +176,19 @@ pub fn run<F>(
     seeds: u64,
     only: Option<usize>,
     mut train: F,
-) -> Result<ProtocolResult, ProtocolError>
+) -> Result<ProtocolResult, RecognizeError>
 where
-    F: FnMut(&[LabelledCapture], u64) -> Result<RecognizerFile, Box<RecognizerError>>,
+    F: FnMut(&[LabelledCapture], u64) -> Result<RecognizerFile, Box<RecognizeError>>,
 {
     if seeds == 0 {
-        return Err(ProtocolError::NoSeeds);
+        return Err(RecognizeError::NoSeeds);
     }
     let folds = split.folds();
     let fold_of = fold_of_each(captures, folds)?;
     if let Some(fold) = only
         && !(1..=folds).contains(&fold)
     {
-        return Err(ProtocolError::NoSuchFold { fold, folds });
+        return Err(RecognizeError::NoSuchFold { fold, folds });
     }
     let mut evaluations = Vec::new();
     let mut per_behaviour: Vec<(Option<String>, ConfusionMatrix<String>)> = Vec::new();
@@ -271,13 +208,13 @@ where
             .map(|i| &captures[i])
             .collect();
         for seed in 0..seeds {
-            let at = |source: RecognizerError| ProtocolError::Fold {
+            let at = |source: RecognizeError| RecognizeError::Fold {
                 fold: fold + 1,
                 folds,
                 seed,
                 source: Box::new(source),
             };
-            let model = train(&training, seed).map_err(|source| ProtocolError::Fold {
+            let model = train(&training, seed).map_err(|source| RecognizeError::Fold {
                 fold: fold + 1,
                 folds,
                 seed,
@@ -286,7 +223,7 @@ where
             match &classes {
                 None => classes = Some(model.classes.clone()),
                 Some(expected) if *expected != model.classes => {
-                    return Err(ProtocolError::Classes {
+                    return Err(RecognizeError::FoldClasses {
                         fold: fold + 1,
                         got: model.classes.clone(),
                         expected: expected.clone(),
@@ -303,13 +240,13 @@ where
         seeds: seeds as usize,
         rounds: evaluations.len(),
         evaluation: pool(&evaluations)
-            .map_err(|e| ProtocolError::Fold {
+            .map_err(|e| RecognizeError::Fold {
                 fold: 1,
                 folds,
                 seed: 0,
-                source: Box::new(e.into()),
+                source: Box::new(e),
             })?
-            .ok_or(ProtocolError::NoSeeds)?,
+            .ok_or(RecognizeError::NoSeeds)?,
         per_behaviour,
         combinations,
     })
@@ -323,9 +260,9 @@ where
 pub fn surface_confusion<F>(
     captures: &[LabelledCapture],
     mut train: F,
-) -> Result<ConfusionMatrix<String>, ProtocolError>
+) -> Result<ConfusionMatrix<String>, RecognizeError>
 where
-    F: FnMut(&[LabelledCapture], u64) -> Result<RecognizerFile, Box<RecognizerError>>,
+    F: FnMut(&[LabelledCapture], u64) -> Result<RecognizerFile, Box<RecognizeError>>,
 {
     let surfaces: Vec<String> = captures
         .iter()
@@ -334,19 +271,19 @@ where
         .into_iter()
         .collect();
     if surfaces.len() < 3 {
-        return Err(ProtocolError::Surfaces {
+        return Err(RecognizeError::Surfaces {
             surfaces: surfaces.len(),
         });
     }
     let folds = surfaces.len();
-    let mut confusion = ConfusionMatrix::new(surfaces.clone()).map_err(|e| ProtocolError::Fold {
+    let mut confusion = ConfusionMatrix::new(surfaces.clone()).map_err(|e| RecognizeError::Fold {
         fold: 1,
         folds,
         seed: 0,
-        source: Box::new(e.into()),
+        source: Box::new(e),
     })?;
     for (fold, surface) in surfaces.iter().enumerate() {
-        let at = |source: Box<RecognizerError>| ProtocolError::Fold {
+        let at = |source: Box<RecognizeError>| RecognizeError::Fold {
             fold: fold + 1,
             folds,
             seed: 0,
@@ -358,14 +295,14 @@ where
         for c in captures.iter().filter(|c| c.label == *surface) {
             for d in model.decisions(c, None).map_err(|e| at(Box::new(e)))? {
                 let predicted = model.classes.get(d.label).ok_or_else(|| {
-                    at(Box::new(RecognizerError::UnusableCapture {
+                    at(Box::new(RecognizeError::UnusableCapture {
                         path: c.reference.path.clone(),
                         reason: format!("decision names class {} of {}", d.label, model.classes.len()),
                     }))
                 })?;
                 confusion
                     .add(surface, predicted)
-                    .map_err(|e| at(Box::new(e.into())))?;
+                    .map_err(|e| at(Box::new(e)))?;
             }
         }
     }
@@ -379,7 +316,7 @@ fn score_behaviours(
     held_out: &[&LabelledCapture],
     per_behaviour: &mut Vec<(Option<String>, ConfusionMatrix<String>)>,
     combinations: &mut Vec<Combination>,
-) -> Result<(), RecognizerError> {
+) -> Result<(), RecognizeError> {
     let Some(all) = model.evaluate_fused(held_out)? else {
         return Ok(());
     };
@@ -425,7 +362,7 @@ fn merge_into(
     totals: &mut Vec<(Option<String>, ConfusionMatrix<String>)>,
     behaviour: &Option<String>,
     confusion: &ConfusionMatrix<String>,
-) -> Result<(), RecognizerError> {
+) -> Result<(), RecognizeError> {
     match totals.iter_mut().find(|(b, _)| b == behaviour) {
         Some((_, m)) => m.merge(confusion)?,
         None => totals.push((behaviour.clone(), confusion.clone())),
@@ -437,7 +374,7 @@ fn merge_into(
 /// and to a stable decision averaged over the captures that had one, flips per second and the
 /// window averaged over rounds weighted by their captures.
 /// `None` for no evaluations.
-pub fn pool<E: Borrow<Evaluation>>(evaluations: &[E]) -> Result<Option<Evaluation>, EvalError> {
+pub fn pool<E: Borrow<Evaluation>>(evaluations: &[E]) -> Result<Option<Evaluation>, RecognizeError> {
     let mut it = evaluations.iter().map(Borrow::borrow);
     let Some(first) = it.next() else {
         return Ok(None);
@@ -549,14 +486,14 @@ mod tests {
         assert_eq!(fold_of_each(&runs, 3).expect("3 recordings"), [0, 1, 1, 2]);
         assert!(matches!(
             fold_of_each(&runs, 4),
-            Err(ProtocolError::Folds {
+            Err(RecognizeError::Folds {
                 recordings: 3,
                 folds: 4
             })
         ));
         assert!(matches!(
             fold_of_each(&runs, 1),
-            Err(ProtocolError::Folds { folds: 1, .. })
+            Err(RecognizeError::Folds { folds: 1, .. })
         ));
     }
 
@@ -566,16 +503,16 @@ mod tests {
         let mut trained = 0;
         let result = surface_confusion(&two, |_, _| {
             trained += 1;
-            Err(Box::new(RecognizerError::NoTrainingData))
+            Err(Box::new(RecognizeError::NoTrainingData))
         });
-        assert!(matches!(result, Err(ProtocolError::Surfaces { surfaces: 2 })));
+        assert!(matches!(result, Err(RecognizeError::Surfaces { surfaces: 2 })));
         assert_eq!(trained, 0);
         // With three, a training failure names its fold.
         let three = [capture("a", None), capture("b", None), capture("c", None)];
-        let result = surface_confusion(&three, |_, _| Err(Box::new(RecognizerError::NoTrainingData)));
+        let result = surface_confusion(&three, |_, _| Err(Box::new(RecognizeError::NoTrainingData)));
         assert!(matches!(
             result,
-            Err(ProtocolError::Fold {
+            Err(RecognizeError::Fold {
                 fold: 1,
                 folds: 3,
                 ..

@@ -40,48 +40,7 @@ use std::collections::BTreeMap;
 use capture::rng::SplitMix64;
 use serde::{Deserialize, Serialize};
 
-/// Why a map could not be trained or used.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum SomError {
-    /// A hyperparameter is out of range.
-    #[error("invalid SOM parameter {name} = {value}: {reason}")]
-    Parameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// What it must be.
-        reason: &'static str,
-    },
-    /// No training vectors.
-    #[error("no training vectors")]
-    NoData,
-    /// Training vectors and labels differ in number.
-    #[error("{vectors} training vectors but {labels} labels")]
-    LabelCount {
-        /// Vectors given.
-        vectors: usize,
-        /// Labels given.
-        labels: usize,
-    },
-    /// A vector's dimension differs from the map's.
-    #[error("vector {index} has {found} features, expected {expected}")]
-    Dimension {
-        /// Which vector (0 for a single query).
-        index: usize,
-        /// Its length.
-        found: usize,
-        /// The map's dimension.
-        expected: usize,
-    },
-    /// A feature is NaN or infinite.
-    #[error("vector {index} has a non-finite feature")]
-    NonFinite {
-        /// Which vector.
-        index: usize,
-    },
-}
+use crate::RecognizeError;
 
 /// How features are scaled before the map sees them (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -130,8 +89,15 @@ impl Default for SomParams {
 
 impl SomParams {
     /// Checks every parameter's range.
-    pub fn check(&self) -> Result<(), SomError> {
-        let bad = |name, value, reason| Err(SomError::Parameter { name, value, reason });
+    pub fn check(&self) -> Result<(), RecognizeError> {
+        let bad = |name, value, reason| {
+            Err(RecognizeError::Parameter {
+                of: "SOM parameter",
+                name,
+                value,
+                reason,
+            })
+        };
         if self.nodes == 0 {
             return bad("nodes", 0.0, "at least 1");
         }
@@ -295,28 +261,28 @@ pub struct Som<L> {
 
 impl<L: Clone + Ord> Som<L> {
     /// Trains a map on `data` (one feature vector per row) and labels its nodes with `labels`.
-    pub fn train(params: SomParams, data: &[Vec<f64>], labels: &[L]) -> Result<Self, SomError> {
+    pub fn train(params: SomParams, data: &[Vec<f64>], labels: &[L]) -> Result<Self, RecognizeError> {
         params.check()?;
         if data.is_empty() {
-            return Err(SomError::NoData);
+            return Err(RecognizeError::Empty);
         }
         if data.len() != labels.len() {
-            return Err(SomError::LabelCount {
-                vectors: data.len(),
+            return Err(RecognizeError::Counts {
+                features: data.len(),
                 labels: labels.len(),
             });
         }
         let dim = data[0].len();
         for (index, v) in data.iter().enumerate() {
             if v.len() != dim {
-                return Err(SomError::Dimension {
+                return Err(RecognizeError::Dimension {
                     index,
-                    found: v.len(),
+                    got: v.len(),
                     expected: dim,
                 });
             }
             if v.iter().any(|x| !x.is_finite()) {
-                return Err(SomError::NonFinite { index });
+                return Err(RecognizeError::NonFinite { index });
             }
         }
         let scaling = Scaling::fit(params.normalization, data, labels);
@@ -397,17 +363,17 @@ impl<L: Clone + Ord> Som<L> {
         best.0
     }
 
-    fn check_query(&self, features: &[f64]) -> Result<Vec<f64>, SomError> {
+    fn check_query(&self, features: &[f64]) -> Result<Vec<f64>, RecognizeError> {
         let expected = self.scaling.offset.len();
         if features.len() != expected {
-            return Err(SomError::Dimension {
+            return Err(RecognizeError::Dimension {
                 index: 0,
-                found: features.len(),
+                got: features.len(),
                 expected,
             });
         }
         if features.iter().any(|x| !x.is_finite()) {
-            return Err(SomError::NonFinite { index: 0 });
+            return Err(RecognizeError::NonFinite { index: 0 });
         }
         Ok(self.scaling.apply(features))
     }
@@ -421,19 +387,19 @@ impl<L: Clone + Ord> Som<L> {
     /// product of a node with another label: all vectors have unit length, so it lies in
     /// `[0, 1]`; 0 means a node of another surface matches as well, and it is 1 when every node
     /// has the winner's label.
-    pub fn decide_into(&self, features: &[f64], scratch: &mut [f64]) -> Result<SomDecision, SomError> {
+    pub fn decide_into(&self, features: &[f64], scratch: &mut [f64]) -> Result<SomDecision, RecognizeError> {
         let expected = self.scaling.dim();
         for found in [features.len(), scratch.len()] {
             if found != expected {
-                return Err(SomError::Dimension {
+                return Err(RecognizeError::Dimension {
                     index: 0,
-                    found,
+                    got: found,
                     expected,
                 });
             }
         }
         if features.iter().any(|x| !x.is_finite()) {
-            return Err(SomError::NonFinite { index: 0 });
+            return Err(RecognizeError::NonFinite { index: 0 });
         }
         self.scaling.apply_into(features, scratch);
         let node = self.winner_scaled(scratch);
@@ -526,12 +492,12 @@ impl<L: Clone + Ord> Som<L> {
     }
 
     /// The winning node for raw `features` (Eq. 2.27).
-    pub fn winner(&self, features: &[f64]) -> Result<usize, SomError> {
+    pub fn winner(&self, features: &[f64]) -> Result<usize, RecognizeError> {
         Ok(self.winner_scaled(&self.check_query(features)?))
     }
 
     /// The label of the winning node for raw `features`.
-    pub fn classify(&self, features: &[f64]) -> Result<&L, SomError> {
+    pub fn classify(&self, features: &[f64]) -> Result<&L, RecognizeError> {
         let c = self.winner(features)?;
         Ok(&self.labels[c])
     }
@@ -559,9 +525,9 @@ impl<L: Clone + Ord> Som<L> {
 
     /// Quantization error: mean Euclidean distance from each scaled vector to its winner's
     /// reference vector.
-    pub fn quantization_error(&self, data: &[Vec<f64>]) -> Result<f64, SomError> {
+    pub fn quantization_error(&self, data: &[Vec<f64>]) -> Result<f64, RecognizeError> {
         if data.is_empty() {
-            return Err(SomError::NoData);
+            return Err(RecognizeError::Empty);
         }
         let mut total = 0.0;
         for (index, v) in data.iter().enumerate() {
@@ -574,9 +540,9 @@ impl<L: Clone + Ord> Som<L> {
 
     /// Topographic error: fraction of vectors whose best and second-best nodes are not
     /// neighbours on the line.
-    pub fn topographic_error(&self, data: &[Vec<f64>]) -> Result<f64, SomError> {
+    pub fn topographic_error(&self, data: &[Vec<f64>]) -> Result<f64, RecognizeError> {
         if data.is_empty() {
-            return Err(SomError::NoData);
+            return Err(RecognizeError::Empty);
         }
         if self.reference.len() < 2 {
             return Ok(0.0);
@@ -597,14 +563,10 @@ impl<L: Clone + Ord> Som<L> {
     }
 }
 
-fn reindex(e: SomError, index: usize) -> SomError {
+fn reindex(e: RecognizeError, index: usize) -> RecognizeError {
     match e {
-        SomError::Dimension { found, expected, .. } => SomError::Dimension {
-            index,
-            found,
-            expected,
-        },
-        SomError::NonFinite { .. } => SomError::NonFinite { index },
+        RecognizeError::Dimension { got, expected, .. } => RecognizeError::Dimension { index, got, expected },
+        RecognizeError::NonFinite { .. } => RecognizeError::NonFinite { index },
         other => other,
     }
 }
@@ -743,46 +705,52 @@ mod tests {
                 nodes: 0,
                 ..SomParams::default()
             }),
-            Some(SomError::Parameter { .. })
+            Some(RecognizeError::Parameter {
+                of: "SOM parameter",
+                ..
+            })
         ));
         assert!(matches!(
             bad(SomParams {
                 sigma: f64::NAN,
                 ..SomParams::default()
             }),
-            Some(SomError::Parameter { .. })
+            Some(RecognizeError::Parameter {
+                of: "SOM parameter",
+                ..
+            })
         ));
-        assert_eq!(
+        assert!(matches!(
             Som::<u8>::train(SomParams::default(), &[], &[]).err(),
-            Some(SomError::NoData)
-        );
+            Some(RecognizeError::Empty)
+        ));
         assert!(matches!(
             Som::train(SomParams::default(), &ok, &[0, 1]).err(),
-            Some(SomError::LabelCount {
-                vectors: 1,
+            Some(RecognizeError::Counts {
+                features: 1,
                 labels: 2
             })
         ));
         assert!(matches!(
             Som::train(SomParams::default(), &[vec![1.0], vec![1.0, 2.0]], &[0, 1]).err(),
-            Some(SomError::Dimension { index: 1, .. })
+            Some(RecognizeError::Dimension { index: 1, .. })
         ));
         assert!(matches!(
             Som::train(SomParams::default(), &[vec![f64::INFINITY]], &[0]).err(),
-            Some(SomError::NonFinite { index: 0 })
+            Some(RecognizeError::NonFinite { index: 0 })
         ));
         let som = Som::train(SomParams::default(), &ok, &[0]).expect("valid");
         assert!(matches!(
             som.classify(&[1.0]),
-            Err(SomError::Dimension {
-                found: 1,
+            Err(RecognizeError::Dimension {
+                got: 1,
                 expected: 2,
                 ..
             })
         ));
         assert!(matches!(
             som.quantization_error(&[vec![1.0, 2.0], vec![f64::NAN, 0.0]]),
-            Err(SomError::NonFinite { index: 1 })
+            Err(RecognizeError::NonFinite { index: 1 })
         ));
     }
 }

@@ -2,6 +2,8 @@
 //! [`crate::svc::Svc`]): both take the same vectors, reject the same faults and scale
 //! features the same way, so that a recognizer's k-NN and SVM see identical inputs.
 
+use crate::RecognizeError;
+
 /// How features are scaled before distances are taken.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -15,25 +17,6 @@ pub enum FeatureScaling {
     MinMax,
 }
 
-/// What is wrong with an input vector; each classifier's error type names it in its own words.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum VectorFault {
-    /// Vector `index` has `got` values, not `expected`.
-    Dimension {
-        index: usize,
-        expected: usize,
-        got: usize,
-    },
-    /// Vector `index` has a NaN or infinite value.
-    NonFinite { index: usize },
-    /// The label of vector `index` is not below the class count.
-    LabelOutOfRange {
-        index: usize,
-        label: usize,
-        classes: usize,
-    },
-}
-
 /// The first fault of the training vectors in order: each must have `dim` finite values and a
 /// label below `classes`.
 pub(crate) fn check_labelled<V: AsRef<[f64]>>(
@@ -41,11 +24,11 @@ pub(crate) fn check_labelled<V: AsRef<[f64]>>(
     labels: &[usize],
     dim: usize,
     classes: usize,
-) -> Result<(), VectorFault> {
+) -> Result<(), RecognizeError> {
     for (index, (f, &label)) in features.iter().zip(labels).enumerate() {
         check_vector(index, f.as_ref(), dim)?;
         if label >= classes {
-            return Err(VectorFault::LabelOutOfRange {
+            return Err(RecognizeError::LabelOutOfRange {
                 index,
                 label,
                 classes,
@@ -56,20 +39,20 @@ pub(crate) fn check_labelled<V: AsRef<[f64]>>(
 }
 
 /// A query must have `dim` finite values; it is reported as vector 0.
-pub(crate) fn check_query(query: &[f64], dim: usize) -> Result<(), VectorFault> {
+pub(crate) fn check_query(query: &[f64], dim: usize) -> Result<(), RecognizeError> {
     check_vector(0, query, dim)
 }
 
-fn check_vector(index: usize, f: &[f64], dim: usize) -> Result<(), VectorFault> {
+fn check_vector(index: usize, f: &[f64], dim: usize) -> Result<(), RecognizeError> {
     if f.len() != dim {
-        return Err(VectorFault::Dimension {
+        return Err(RecognizeError::Dimension {
             index,
             expected: dim,
             got: f.len(),
         });
     }
     if f.iter().any(|v| !v.is_finite()) {
-        return Err(VectorFault::NonFinite { index });
+        return Err(RecognizeError::NonFinite { index });
     }
     Ok(())
 }

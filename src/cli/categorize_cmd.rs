@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use recognize::{
-    CategoryError, CategoryTree, LabelledCapture, RecognizerFile, StopRule, classical_mds,
+    CategoryTree, LabelledCapture, RecognizeError, RecognizerFile, StopRule, classical_mds,
     distances_from_similarity, isomap, recursive_ncut, similarity_from_confusion, surface_confusion,
 };
 
@@ -102,7 +102,7 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
         0 => ("mds".to_owned(), classical_mds::<2>(&distances)?),
         k => match isomap::<2>(&distances, k) {
             Ok(p) => (format!("isomap k={k}"), p),
-            Err(CategoryError::Disconnected { .. }) => ("mds".to_owned(), classical_mds::<2>(&distances)?),
+            Err(RecognizeError::Disconnected { .. }) => ("mds".to_owned(), classical_mds::<2>(&distances)?),
             Err(other) => return Err(other.into()),
         },
     };

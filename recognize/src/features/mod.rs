@@ -26,7 +26,7 @@ mod windowing;
 
 use serde::{Deserialize, Serialize};
 
-use crate::{LabelledCapture, RecognizerError};
+use crate::{LabelledCapture, RecognizeError};
 use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLUMN};
 use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan};
 
@@ -99,11 +99,11 @@ impl FeatureSet {
     }
 
     /// A typed error for the first capture that lacks a column these features need.
-    pub fn check_columns(self, captures: &[LabelledCapture]) -> Result<(), RecognizerError> {
+    pub fn check_columns(self, captures: &[LabelledCapture]) -> Result<(), RecognizeError> {
         for c in captures {
             let missing = self.missing_columns(c);
             if !missing.is_empty() {
-                return Err(RecognizerError::MissingColumns {
+                return Err(RecognizeError::MissingColumns {
                     path: c.reference.path.clone(),
                     features: self.name(),
                     missing,
@@ -138,10 +138,11 @@ pub(crate) fn capture_histogram(
     plan: &SpectrogramPlan,
     c: &LabelledCapture,
     scale: CellScale,
-) -> Result<[f64; FEATURE_LEN], RecognizerError> {
+) -> Result<[f64; FEATURE_LEN], RecognizeError> {
     plan.capture_features(&c.capture, scale)
-        .map_err(|source| RecognizerError::Spectral {
+        .map_err(|source| RecognizeError::Features {
             path: c.reference.path.clone(),
-            source,
+            features: "spectrotemporal",
+            source: Box::new(source),
         })
 }

@@ -44,8 +44,10 @@
 
 use std::borrow::Cow;
 
-use capture::signal::{SignalError, pseudo_differentiate};
-use capture::{Capture, CaptureError};
+use capture::Capture;
+use capture::signal::pseudo_differentiate;
+
+use crate::RecognizeError;
 
 /// Number of features in a Nakano feature vector (thesis Eq. 2.23: r = 5).
 pub const FEATURES: usize = 5;
@@ -72,52 +74,6 @@ pub const FRICTION_COLUMN: &str = capture::kind::FRICTION_FORCE_N;
 pub const COMMAND_FORCE_COLUMN: &str = capture::kind::TANGENTIAL_COMMAND_FORCE_N;
 /// Column of the measured velocity along x (pseudo-differentiated from position when absent).
 pub const VELOCITY_COLUMN: &str = capture::kind::TANGENTIAL_VELOCITY_MPS;
-
-/// Why features could not be computed.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum NakanoError {
-    /// The capture lacks a column the features need.
-    #[error("capture lacks a column Nakano's features need")]
-    Column(#[from] CaptureError),
-    /// The signals passed in differ in length.
-    #[error("signals differ in length: position {position}, height {height}, friction {friction}")]
-    LengthMismatch {
-        /// Samples of position.
-        position: usize,
-        /// Samples of height.
-        height: usize,
-        /// Samples of friction.
-        friction: usize,
-    },
-    /// A window (with the filter's margin each side) does not fit in the signal.
-    #[error(
-        "window of {len} samples at {start} needs samples {start}-{margin}..{start}+{len}+{margin} \
-         (filter margin {margin}), but the signal has {samples}"
-    )]
-    WindowOutOfRange {
-        /// First sample of the window.
-        start: usize,
-        /// Samples in the window.
-        len: usize,
-        /// Filter margin needed on each side.
-        margin: usize,
-        /// Samples available.
-        samples: usize,
-    },
-    /// A window needs at least two samples (a variance and a travel).
-    #[error("window of {len} samples: at least 2 needed")]
-    WindowTooShort {
-        /// Samples asked for.
-        len: usize,
-    },
-    /// A filter or speed setting is not usable.
-    #[error("invalid Nakano configuration: {0}")]
-    Config(&'static str),
-    /// The velocity for the reaction-force observer could not be derived from position.
-    #[error("cannot derive velocity for the reaction-force observer")]
-    Velocity(#[from] SignalError),
-}
 
 /// The reaction-force observer (RFOB, thesis Sec. 2.1) that estimates friction for captures
 /// without a `friction_force_n` column, from the commanded force and the velocity along x.
@@ -151,24 +107,31 @@ impl Default for Rfob {
 impl Rfob {
     /// Friction estimated from `capture`'s `tangential_command_force_n` and velocity
     /// (`tangential_velocity_mps`, or position pseudo-differentiated when that is absent).
-    pub fn friction_n(&self, capture: &Capture) -> Result<Vec<f64>, NakanoError> {
+    pub fn friction_n(&self, capture: &Capture) -> Result<Vec<f64>, RecognizeError> {
         let usable = [self.nominal_mass_kg, self.cutoff_radps, self.velocity_tau_s]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0);
         if !usable {
-            return Err(NakanoError::Config(
+            return Err(RecognizeError::nakano_config(
                 "RFOB mass, cut-off and time constant must be positive",
             ));
         }
-        let command = capture.column(COMMAND_FORCE_COLUMN)?;
+        let command = capture
+            .column(COMMAND_FORCE_COLUMN)
+            .map_err(RecognizeError::NakanoColumn)?;
         let time = capture.time();
         let velocity: Cow<'_, [f64]> = match capture.column(VELOCITY_COLUMN) {
             Ok(v) => Cow::Borrowed(v),
-            Err(_) => Cow::Owned(pseudo_differentiate(
-                time,
-                capture.column(POSITION_COLUMN)?,
-                self.velocity_tau_s,
-            )?),
+            Err(_) => Cow::Owned(
+                pseudo_differentiate(
+                    time,
+                    capture
+                        .column(POSITION_COLUMN)
+                        .map_err(RecognizeError::NakanoColumn)?,
+                    self.velocity_tau_s,
+                )
+                .map_err(RecognizeError::Velocity)?,
+            ),
         };
         let mg = self.nominal_mass_kg * self.cutoff_radps;
         let mut state = command[0] + mg * velocity[0];
@@ -217,7 +180,7 @@ impl NakanoConfig {
     /// The default filters ([`ROUGHNESS_CUTOFF_M`], [`WAVE_SMOOTHING_M`] at
     /// [`PROTOCOL_SPEED_MPS`]) for samples at `rate_hz`: the same travel at any rate, so a log at
     /// 100 Hz or 10 kHz is filtered as the 1 kHz captures are (`H` = 250, `S` = 20 there).
-    pub fn at_rate(rate_hz: f64) -> Result<Self, NakanoError> {
+    pub fn at_rate(rate_hz: f64) -> Result<Self, RecognizeError> {
         Self::from_wavelengths(ROUGHNESS_CUTOFF_M, WAVE_SMOOTHING_M, PROTOCOL_SPEED_MPS, rate_hz)
     }
 
@@ -228,12 +191,12 @@ impl NakanoConfig {
         smoothing_m: f64,
         speed_mps: f64,
         rate_hz: f64,
-    ) -> Result<Self, NakanoError> {
+    ) -> Result<Self, RecognizeError> {
         let all_positive = [cutoff_m, smoothing_m, speed_mps, rate_hz]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0);
         if !all_positive {
-            return Err(NakanoError::Config(
+            return Err(RecognizeError::nakano_config(
                 "wavelengths, speed and rate must be positive and finite",
             ));
         }
@@ -241,7 +204,9 @@ impl NakanoConfig {
         let half = |span_m: f64| (span_m / step_m / 2.0).round();
         let (h, s) = (half(cutoff_m), half(smoothing_m));
         if h > 1e7 || s > 1e7 {
-            return Err(NakanoError::Config("filter spans more than 10^7 samples"));
+            return Err(RecognizeError::nakano_config(
+                "filter spans more than 10^7 samples",
+            ));
         }
         Ok(Self {
             highpass_half_width: h as usize,
@@ -267,14 +232,18 @@ impl<'a> NakanoSignals<'a> {
     /// The columns `tangential_position_m`, `normal_position_m` and `friction_force_n`; without
     /// a friction column, friction is estimated by the default [`Rfob`] from
     /// `tangential_command_force_n` (an error names that column if it is missing too).
-    pub fn from_capture(capture: &'a Capture) -> Result<Self, NakanoError> {
+    pub fn from_capture(capture: &'a Capture) -> Result<Self, RecognizeError> {
         let friction_n = match capture.column(FRICTION_COLUMN) {
             Ok(f) => Cow::Borrowed(f),
             Err(_) => Cow::Owned(Rfob::default().friction_n(capture)?),
         };
         Ok(Self {
-            position_m: capture.column(POSITION_COLUMN)?,
-            height_m: capture.column(HEIGHT_COLUMN)?,
+            position_m: capture
+                .column(POSITION_COLUMN)
+                .map_err(RecognizeError::NakanoColumn)?,
+            height_m: capture
+                .column(HEIGHT_COLUMN)
+                .map_err(RecognizeError::NakanoColumn)?,
             friction_n,
         })
     }
@@ -284,9 +253,9 @@ impl<'a> NakanoSignals<'a> {
         position_m: &'a [f64],
         height_m: &'a [f64],
         friction_n: &'a [f64],
-    ) -> Result<Self, NakanoError> {
+    ) -> Result<Self, RecognizeError> {
         if position_m.len() != height_m.len() || position_m.len() != friction_n.len() {
-            return Err(NakanoError::LengthMismatch {
+            return Err(RecognizeError::SignalLengths {
                 position: position_m.len(),
                 height: height_m.len(),
                 friction: friction_n.len(),
@@ -321,12 +290,12 @@ impl<'a> NakanoSignals<'a> {
         start: usize,
         len: usize,
         config: &NakanoConfig,
-    ) -> Result<[f64; FEATURES], NakanoError> {
+    ) -> Result<[f64; FEATURES], RecognizeError> {
         if len < 2 {
-            return Err(NakanoError::WindowTooShort { len });
+            return Err(RecognizeError::WindowTooShort { len });
         }
         let margin = config.lookahead_samples();
-        let out_of_range = NakanoError::WindowOutOfRange {
+        let out_of_range = RecognizeError::WindowOutOfRange {
             start,
             len,
             margin,
@@ -386,7 +355,7 @@ pub fn capture_features(
     start: usize,
     len: usize,
     config: &NakanoConfig,
-) -> Result<[f64; FEATURES], NakanoError> {
+) -> Result<[f64; FEATURES], RecognizeError> {
     NakanoSignals::from_capture(capture)?.features(start, len, config)
 }
 
@@ -534,9 +503,9 @@ impl SlidingMoments {
 
 impl NakanoStream {
     /// A stream over windows of `window_len` samples.
-    pub fn new(config: NakanoConfig, window_len: usize) -> Result<Self, NakanoError> {
+    pub fn new(config: NakanoConfig, window_len: usize) -> Result<Self, RecognizeError> {
         if window_len < 2 {
-            return Err(NakanoError::WindowTooShort { len: window_len });
+            return Err(RecognizeError::WindowTooShort { len: window_len });
         }
         let (h, s) = (config.highpass_half_width, config.smoothing_half_width);
         Ok(Self {
@@ -764,24 +733,24 @@ mod tests {
         let config = NakanoConfig::default();
         assert!(matches!(
             sig.features(100, 200, &config),
-            Err(NakanoError::WindowOutOfRange { margin: 270, .. })
+            Err(RecognizeError::WindowOutOfRange { margin: 270, .. })
         ));
         assert!(matches!(
             sig.features(600, 200, &config),
-            Err(NakanoError::WindowOutOfRange { .. })
+            Err(RecognizeError::WindowOutOfRange { .. })
         ));
         assert!(sig.features(270, 460, &config).is_ok());
         assert!(matches!(
             sig.features(300, 1, &config),
-            Err(NakanoError::WindowTooShort { len: 1 })
+            Err(RecognizeError::WindowTooShort { len: 1 })
         ));
         assert!(matches!(
             sig.features(usize::MAX, 2, &config),
-            Err(NakanoError::WindowOutOfRange { .. })
+            Err(RecognizeError::WindowOutOfRange { .. })
         ));
         assert!(matches!(
             NakanoSignals::new(&x, &z[1..], &f),
-            Err(NakanoError::LengthMismatch { height: 999, .. })
+            Err(RecognizeError::SignalLengths { height: 999, .. })
         ));
         assert!(NakanoStream::new(config, 1).is_err());
         assert!(NakanoConfig::from_wavelengths(0.0, 1e-4, 5e-3, 1e3).is_err());
@@ -826,7 +795,7 @@ mod tests {
         let no_command = Capture::new(meta.clone(), columns.clone(), data.clone()).expect("valid");
         assert!(matches!(
             NakanoSignals::from_capture(&no_command),
-            Err(NakanoError::Column(_))
+            Err(RecognizeError::NakanoColumn(_))
         ));
         let mut columns = columns;
         columns.push("tangential_command_force_n".into());

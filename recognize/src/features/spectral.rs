@@ -14,10 +14,10 @@
 
 use std::sync::Arc;
 
+use crate::RecognizeError;
 use realfft::{RealFftPlanner, RealToComplex};
-use thiserror::Error;
 
-use capture::{Capture, CaptureError};
+use capture::Capture;
 
 /// Length of the moving average the magnitude is compared with (Sinapov: 100 samples, 0.25 s).
 pub const MOVING_AVERAGE_LEN: usize = 100;
@@ -47,41 +47,6 @@ pub const ACCEL_COLUMNS: [&str; 3] = [
     capture::kind::ACCEL_Z_MPS2,
 ];
 
-/// Why features could not be computed.
-#[derive(Debug, Error)]
-pub enum SpectralError {
-    /// The capture lacks a column (normally one of [`ACCEL_COLUMNS`]).
-    #[error("capture has no accelerometer data")]
-    Capture(#[from] CaptureError),
-    /// The three axes do not have the same number of samples.
-    #[error("accelerometer axes differ in length: x {x}, y {y}, z {z} samples")]
-    AxisLengths {
-        /// Samples on x.
-        x: usize,
-        /// Samples on y.
-        y: usize,
-        /// Samples on z.
-        z: usize,
-    },
-    /// Too few samples for one frame per time bin.
-    #[error("recording has {samples} samples; the spectrotemporal histogram needs at least {needed}")]
-    TooShort {
-        /// Samples given.
-        samples: usize,
-        /// Samples needed ([`MIN_SAMPLES`]).
-        needed: usize,
-    },
-    /// A sample is NaN or infinite.
-    #[error("sample {index} is not finite")]
-    NonFinite {
-        /// Index of the first bad sample.
-        index: usize,
-    },
-    /// The FFT library rejected a buffer (a bug here, not bad input).
-    #[error("FFT failed")]
-    Fft(#[from] realfft::FftError),
-}
-
 /// How a histogram cell is scaled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -100,9 +65,9 @@ pub enum CellScale {
 }
 
 /// Euclidean norm per sample.
-pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, SpectralError> {
+pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, RecognizeError> {
     if x.len() != y.len() || x.len() != z.len() {
-        return Err(SpectralError::AxisLengths {
+        return Err(RecognizeError::AxisLengths {
             x: x.len(),
             y: y.len(),
             z: z.len(),
@@ -117,7 +82,7 @@ pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, SpectralEr
             if m.is_finite() {
                 Ok(m)
             } else {
-                Err(SpectralError::NonFinite { index })
+                Err(RecognizeError::NonFiniteSample { index })
             }
         })
         .collect()
@@ -210,15 +175,15 @@ impl SpectrogramPlan {
     /// [`HOP_LEN`] samples, as many as fit entirely (the tail shorter than a hop is dropped).
     /// Magnitudes are `|X_k|` scaled by `2 / Σ window`, so a tone of amplitude `A` peaks at
     /// about `A` whatever the frame length.
-    pub fn spectrogram(&self, signal: &[f64]) -> Result<Spectrogram, SpectralError> {
+    pub fn spectrogram(&self, signal: &[f64]) -> Result<Spectrogram, RecognizeError> {
         if signal.len() < MIN_SAMPLES {
-            return Err(SpectralError::TooShort {
+            return Err(RecognizeError::TooShort {
                 samples: signal.len(),
                 needed: MIN_SAMPLES,
             });
         }
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
-            return Err(SpectralError::NonFinite { index });
+            return Err(RecognizeError::NonFiniteSample { index });
         }
         let frames = (signal.len() - FRAME_LEN) / HOP_LEN + 1;
         let scale = 2.0 / self.window.iter().sum::<f64>();
@@ -248,10 +213,10 @@ impl SpectrogramPlan {
         y: &[f64],
         z: &[f64],
         scale: CellScale,
-    ) -> Result<[f64; FEATURE_LEN], SpectralError> {
+    ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
         let m = magnitude(x, y, z)?;
         if m.len() < MIN_SAMPLES {
-            return Err(SpectralError::TooShort {
+            return Err(RecognizeError::TooShort {
                 samples: m.len(),
                 needed: MIN_SAMPLES,
             });
@@ -265,9 +230,10 @@ impl SpectrogramPlan {
         &self,
         capture: &Capture,
         scale: CellScale,
-    ) -> Result<[f64; FEATURE_LEN], SpectralError> {
+    ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
         let [x, y, z] = ACCEL_COLUMNS;
-        self.features(capture.column(x)?, capture.column(y)?, capture.column(z)?, scale)
+        let column = |name| capture.column(name).map_err(RecognizeError::NoAccelerometer);
+        self.features(column(x)?, column(y)?, column(z)?, scale)
     }
 }
 
@@ -432,7 +398,7 @@ mod tests {
         let short = vec![0.0; MIN_SAMPLES - 1];
         assert!(matches!(
             plan.features(&short, &short, &short, CellScale::Mean),
-            Err(SpectralError::TooShort {
+            Err(RecognizeError::TooShort {
                 samples: 767,
                 needed: 768
             })
@@ -440,7 +406,7 @@ mod tests {
         let ok = vec![0.0; MIN_SAMPLES];
         assert!(matches!(
             plan.features(&ok, &short, &ok, CellScale::Mean),
-            Err(SpectralError::AxisLengths {
+            Err(RecognizeError::AxisLengths {
                 x: 768,
                 y: 767,
                 z: 768
@@ -450,7 +416,7 @@ mod tests {
         nan[5] = f64::NAN;
         assert!(matches!(
             plan.features(&ok, &nan, &ok, CellScale::Mean),
-            Err(SpectralError::NonFinite { index: 5 })
+            Err(RecognizeError::NonFiniteSample { index: 5 })
         ));
         // A still sensor gives an all-zero feature, not a division by zero.
         let still = plan
@@ -484,6 +450,6 @@ mod tests {
         let err = SpectrogramPlan::new()
             .capture_features(&capture, CellScale::Mean)
             .expect_err("no y axis");
-        assert!(matches!(err, SpectralError::Capture(_)), "{err:?}");
+        assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
     }
 }

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::FeatureSet;
 use super::nakano::{FEATURES, NakanoConfig, NakanoSignals};
 use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan};
-use crate::{LabelledCapture, RecognizerError};
+use crate::{LabelledCapture, RecognizeError};
 
 /// Default decision window of a SOM recognizer, s (15 mm of travel at 5 mm/s).
 pub const DECISION_WINDOW_S: f64 = 3.0;
@@ -38,16 +38,18 @@ impl NakanoWindowing {
     /// The protocol's windowing: `window_s` and `hop_s` at `rate_hz`, the filters at that rate
     /// ([`NakanoConfig::at_rate`]: the same travel whatever the rate), and decisions from 5 mm
     /// of travel on (thesis Sec. 4.3).
-    pub fn new(window_s: f64, hop_s: f64, rate_hz: f64) -> Result<Self, RecognizerError> {
+    pub fn new(window_s: f64, hop_s: f64, rate_hz: f64) -> Result<Self, RecognizeError> {
         if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
-            return Err(RecognizerError::Setting {
+            return Err(RecognizeError::Parameter {
+                of: "setting",
                 name: "rate_hz",
                 value: rate_hz,
                 reason: "positive and at most 10^6 Hz",
             });
         }
         let windowing = Self {
-            filters: NakanoConfig::at_rate(rate_hz).map_err(|_| RecognizerError::Setting {
+            filters: NakanoConfig::at_rate(rate_hz).map_err(|_| RecognizeError::Parameter {
+                of: "setting",
                 name: "rate_hz",
                 value: rate_hz,
                 reason: "a rate at which Nakano's filters span whole samples",
@@ -64,12 +66,12 @@ impl NakanoWindowing {
 
     /// The defaults at `rate_hz`: [`TRAINING_WINDOW_S`] windows to train on,
     /// [`DECISION_WINDOW_S`] windows to decide on, every [`HOP_S`].
-    pub fn protocol(rate_hz: f64) -> Result<Self, RecognizerError> {
+    pub fn protocol(rate_hz: f64) -> Result<Self, RecognizeError> {
         Self::new(DECISION_WINDOW_S, HOP_S, rate_hz)?.with_training_window_s(TRAINING_WINDOW_S)
     }
 
     /// The same windowing with a decision window of `window_s` instead.
-    pub fn with_window_s(self, window_s: f64) -> Result<Self, RecognizerError> {
+    pub fn with_window_s(self, window_s: f64) -> Result<Self, RecognizeError> {
         let windowing = Self {
             window_samples: samples("window_s", window_s, self.rate_hz)?,
             ..self
@@ -85,7 +87,7 @@ impl NakanoWindowing {
     /// shows from place to place), while long decision windows average more roughness waves
     /// into each decision: a 1 s training window with a 3 s decision window recognizes every
     /// Nakano surface at ≥ 95 % (`tests/recognition_nakano.rs`) where 1 s / 1 s does not.
-    pub fn with_training_window_s(self, training_window_s: f64) -> Result<Self, RecognizerError> {
+    pub fn with_training_window_s(self, training_window_s: f64) -> Result<Self, RecognizeError> {
         let windowing = Self {
             training_window_samples: Some(samples("training_window_s", training_window_s, self.rate_hz)?),
             ..self
@@ -181,14 +183,20 @@ impl NakanoWindowing {
     }
 }
 
-fn setting_error((name, value, reason): (&'static str, f64, &'static str)) -> RecognizerError {
-    RecognizerError::Setting { name, value, reason }
+fn setting_error((name, value, reason): (&'static str, f64, &'static str)) -> RecognizeError {
+    RecognizeError::Parameter {
+        of: "setting",
+        name,
+        value,
+        reason,
+    }
 }
 
-fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, RecognizerError> {
+fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, RecognizeError> {
     let n = (seconds * rate_hz).round();
     if !(seconds.is_finite() && seconds > 0.0 && (1.0..=1e7).contains(&n)) {
-        return Err(RecognizerError::Setting {
+        return Err(RecognizeError::Parameter {
+            of: "setting",
             name,
             value: seconds,
             reason: "positive, at least one sample and at most 10^7 samples",
@@ -201,10 +209,11 @@ fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, Reco
 pub(crate) fn windows(
     c: &LabelledCapture,
     windowing: &NakanoWindowing,
-) -> Result<Vec<(usize, [f64; FEATURES])>, RecognizerError> {
-    let nakano = |source| RecognizerError::Nakano {
+) -> Result<Vec<(usize, [f64; FEATURES])>, RecognizeError> {
+    let nakano = |source| RecognizeError::Features {
         path: c.reference.path.clone(),
-        source,
+        features: "Nakano",
+        source: Box::new(source),
     };
     let signals = NakanoSignals::from_capture(&c.capture).map_err(nakano)?;
     let x = signals.position_m();
@@ -230,20 +239,21 @@ pub(crate) fn window_vectors(
     features: FeatureSet,
     cell_scale: CellScale,
     plan: &SpectrogramPlan,
-) -> Result<Vec<(usize, Vec<f64>)>, RecognizerError> {
+) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
     let nakano = windows(c, windowing)?;
     if features != FeatureSet::Both {
         return Ok(nakano.into_iter().map(|(s, f)| (s, f.to_vec())).collect());
     }
-    let spectral = |source| RecognizerError::Spectral {
+    let spectral = |source| RecognizeError::Features {
         path: c.reference.path.clone(),
-        source,
+        features: "spectrotemporal",
+        source: Box::new(source),
     };
     let [x, y, z] = ACCEL_COLUMNS.map(|name| c.capture.column(name));
     let (x, y, z) = (
-        x.map_err(|e| spectral(e.into()))?,
-        y.map_err(|e| spectral(e.into()))?,
-        z.map_err(|e| spectral(e.into()))?,
+        x.map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))?,
+        y.map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))?,
+        z.map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))?,
     );
     let len = windowing.window_samples;
     nakano

@@ -4,7 +4,7 @@
 use super::LabelledCapture;
 use super::file::{BehaviourKnn, BehaviourSom, BehaviourSvc, RecognizerBody, RecognizerFile};
 use super::labelled::check_rate;
-use crate::RecognizerError;
+use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
 use crate::features::spectral::{CellScale, SpectrogramPlan};
 use crate::features::{
@@ -51,7 +51,7 @@ impl RecognizerFile {
         &self,
         capture: &LabelledCapture,
         windowing: Option<&NakanoWindowing>,
-    ) -> Result<Vec<Decision>, RecognizerError> {
+    ) -> Result<Vec<Decision>, RecognizeError> {
         match &self.body {
             RecognizerBody::Som { windowing: own, som } => {
                 let windowing = windowing.unwrap_or(own);
@@ -60,7 +60,9 @@ impl RecognizerFile {
                 windows(capture, windowing)?
                     .into_iter()
                     .map(|(start, features)| {
-                        let d = som.decide_into(&features, &mut scratch)?;
+                        let d = som
+                            .decide_into(&features, &mut scratch)
+                            .map_err(RecognizeError::som)?;
                         Ok(Decision {
                             window_start: start,
                             decided_at: windowing.decided_at(start),
@@ -99,7 +101,7 @@ impl RecognizerFile {
                 let windowing = windowing.unwrap_or(own);
                 let mut scratch = vec![0.0; som.dim()];
                 self.window_decisions(capture, windowing, FeatureSet::Both, *cell_scale, |v| {
-                    let d = som.decide_into(v, &mut scratch)?;
+                    let d = som.decide_into(v, &mut scratch).map_err(RecognizeError::som)?;
                     Ok((som.node_labels().get(d.node).copied().unwrap_or(0), d.confidence))
                 })
             }
@@ -118,8 +120,8 @@ impl RecognizerFile {
         windowing: &NakanoWindowing,
         features: FeatureSet,
         cell_scale: CellScale,
-        mut classify: impl FnMut(&[f64]) -> Result<(usize, f64), RecognizerError>,
-    ) -> Result<Vec<Decision>, RecognizerError> {
+        mut classify: impl FnMut(&[f64]) -> Result<(usize, f64), RecognizeError>,
+    ) -> Result<Vec<Decision>, RecognizeError> {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         let plan = SpectrogramPlan::new();
@@ -147,7 +149,7 @@ impl RecognizerFile {
         cell_scale: CellScale,
         scaling: &WindowScaling,
         classifier: &impl Classifier,
-    ) -> Result<Vec<Decision>, RecognizerError> {
+    ) -> Result<Vec<Decision>, RecognizeError> {
         self.window_decisions(capture, windowing, features, cell_scale, |v| {
             let (label, p) = classifier.classify(&scaling.apply(v), None)?;
             Ok((label, p.get(label).copied().unwrap_or(0.0)))
@@ -160,12 +162,12 @@ impl RecognizerFile {
         &self,
         capture: &LabelledCapture,
         plan: &SpectrogramPlan,
-    ) -> Result<(usize, usize, Vec<f64>), RecognizerError> {
+    ) -> Result<(usize, usize, Vec<f64>), RecognizeError> {
         match &self.body {
             RecognizerBody::Som { .. }
             | RecognizerBody::SomWindows { .. }
             | RecognizerBody::KnnWindows { .. }
-            | RecognizerBody::SvmWindows { .. } => Err(RecognizerError::UnusableCapture {
+            | RecognizerBody::SvmWindows { .. } => Err(RecognizeError::UnusableCapture {
                 path: capture.reference.path.clone(),
                 reason: "a recognizer over rubbing windows does not classify whole scratches".into(),
             }),
@@ -192,7 +194,7 @@ impl RecognizerFile {
         capture: &LabelledCapture,
         plan: &SpectrogramPlan,
         cell_scale: CellScale,
-    ) -> Result<(usize, usize, Vec<f64>), RecognizerError> {
+    ) -> Result<(usize, usize, Vec<f64>), RecognizeError> {
         let b = behaviour_index(behaviours, capture)?;
         let features = capture_histogram(plan, capture, cell_scale)?;
         let (label, p) = behaviours[b].classify(&features, self.classes.len())?;
@@ -245,12 +247,12 @@ impl RecognizerFile {
 trait Classifier {
     /// The label of `v` and every class's probability; a failure names `behaviour` (none for
     /// a classifier over windows).
-    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizerError>;
+    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizeError>;
 }
 
 impl Classifier for Knn {
-    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizerError> {
-        let error = RecognizerError::knn(behaviour);
+    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizeError> {
+        let error = RecognizeError::knn(behaviour);
         Ok((
             self.predict(v).map_err(&error)?,
             self.predict_proba(v).map_err(error)?,
@@ -259,8 +261,8 @@ impl Classifier for Knn {
 }
 
 impl Classifier for Svc {
-    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizerError> {
-        let error = RecognizerError::svc(behaviour);
+    fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizeError> {
+        let error = RecognizeError::svc(behaviour);
         Ok((
             self.predict(v).map_err(&error)?,
             self.predict_proba(v).map_err(error)?,
@@ -274,7 +276,7 @@ trait BehaviourClassifier {
     fn behaviour(&self) -> &Option<String>;
 
     /// The label of a histogram and the probabilities of the `classes` classes.
-    fn classify(&self, histogram: &[f64], classes: usize) -> Result<(usize, Vec<f64>), RecognizerError>;
+    fn classify(&self, histogram: &[f64], classes: usize) -> Result<(usize, Vec<f64>), RecognizeError>;
 
     /// Its stored reliability, for [`RecognizerFile::reliabilities`].
     fn reliability(&self) -> BehaviourReliability<'_>;
@@ -285,7 +287,7 @@ impl BehaviourClassifier for BehaviourKnn {
         &self.behaviour
     }
 
-    fn classify(&self, histogram: &[f64], _: usize) -> Result<(usize, Vec<f64>), RecognizerError> {
+    fn classify(&self, histogram: &[f64], _: usize) -> Result<(usize, Vec<f64>), RecognizeError> {
         Classifier::classify(&self.knn, histogram, self.behaviour.as_deref())
     }
 
@@ -299,7 +301,7 @@ impl BehaviourClassifier for BehaviourSvc {
         &self.behaviour
     }
 
-    fn classify(&self, histogram: &[f64], _: usize) -> Result<(usize, Vec<f64>), RecognizerError> {
+    fn classify(&self, histogram: &[f64], _: usize) -> Result<(usize, Vec<f64>), RecognizeError> {
         Classifier::classify(&self.svc, histogram, self.behaviour.as_deref())
     }
 
@@ -321,8 +323,8 @@ impl BehaviourClassifier for BehaviourSom {
 
     /// A map answers one class: its "probabilities" are that class's indicator, so a trial's
     /// fusion is a vote weighted by the behaviours' reliabilities.
-    fn classify(&self, histogram: &[f64], classes: usize) -> Result<(usize, Vec<f64>), RecognizerError> {
-        let label = *self.som.classify(histogram)?;
+    fn classify(&self, histogram: &[f64], classes: usize) -> Result<(usize, Vec<f64>), RecognizeError> {
+        let label = *self.som.classify(histogram).map_err(RecognizeError::som)?;
         let mut p = vec![0.0; classes];
         if let Some(slot) = p.get_mut(label) {
             *slot = 1.0;
@@ -355,11 +357,11 @@ fn without_c(
 fn behaviour_index(
     behaviours: &[impl BehaviourClassifier],
     capture: &LabelledCapture,
-) -> Result<usize, RecognizerError> {
+) -> Result<usize, RecognizeError> {
     behaviours
         .iter()
         .position(|b| *b.behaviour() == capture.behaviour)
-        .ok_or_else(|| RecognizerError::UnusableCapture {
+        .ok_or_else(|| RecognizeError::UnusableCapture {
             path: capture.reference.path.clone(),
             reason: format!(
                 "behaviour {:?}: the recognizer was trained on {:?}",

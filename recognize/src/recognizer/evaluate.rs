@@ -10,11 +10,11 @@ use super::file::{RecognizerBody, RecognizerFile};
 use super::grouping::trial_of;
 use super::labelled::{check_rate, class_index};
 use super::{Decision, LabelledCapture};
-use crate::RecognizerError;
+use crate::RecognizeError;
 use crate::eval::ConfusionMatrix;
 use crate::features::spectral::SpectrogramPlan;
 use crate::features::windows;
-use crate::knn::{FusionError, argmax, fuse};
+use crate::knn::{argmax, fuse};
 
 /// One behaviour's scratches classified alone, in a [`FusedEvaluation`].
 #[derive(Debug, Clone)]
@@ -105,7 +105,7 @@ impl RecognizerFile {
     pub fn evaluate_fused<C: Borrow<LabelledCapture>>(
         &self,
         captures: &[C],
-    ) -> Result<Option<FusedEvaluation>, RecognizerError> {
+    ) -> Result<Option<FusedEvaluation>, RecognizeError> {
         if !self.body.is_scratch() {
             return Ok(None);
         }
@@ -143,10 +143,10 @@ impl RecognizerFile {
             let p: Vec<&[f64]> = members.iter().map(|(_, p)| p.as_slice()).collect();
             let w: Vec<f64> = members.iter().map(|(b, _)| weights[*b]).collect();
             let fused = match fuse(&p, &w) {
-                Err(FusionError::ZeroTotalWeight) => fuse(&p, &vec![1.0; p.len()]),
+                Err(RecognizeError::ZeroTotalWeight) => fuse(&p, &vec![1.0; p.len()]),
                 other => other,
             }
-            .map_err(|e| RecognizerError::UnusableCapture {
+            .map_err(|e| RecognizeError::UnusableCapture {
                 path: PathBuf::from(&self.classes[*truth]),
                 reason: format!("fusing a trial's behaviours: {e}"),
             })?;
@@ -177,7 +177,7 @@ impl RecognizerFile {
         &self,
         captures: &[C],
         window_s: Option<f64>,
-    ) -> Result<Evaluation, RecognizerError> {
+    ) -> Result<Evaluation, RecognizeError> {
         let windowing = match (self.windowing(), window_s) {
             (Some(w), Some(s)) => Some(w.with_window_s(s)?),
             (w, _) => w.copied(),
@@ -239,7 +239,7 @@ impl RecognizerFile {
         captures: &[C],
         training: bool,
         window_s: Option<f64>,
-    ) -> Result<Option<SomQuality>, RecognizerError> {
+    ) -> Result<Option<SomQuality>, RecognizeError> {
         let RecognizerBody::Som { windowing, som } = &self.body else {
             return Ok(None);
         };
@@ -258,8 +258,8 @@ impl RecognizerFile {
             return Ok(None);
         }
         Ok(Some(SomQuality {
-            quantization_error: som.quantization_error(&data)?,
-            topographic_error: som.topographic_error(&data)?,
+            quantization_error: som.quantization_error(&data).map_err(RecognizeError::som)?,
+            topographic_error: som.topographic_error(&data).map_err(RecognizeError::som)?,
             windows: data.len(),
         }))
     }

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::LabelledCapture;
 #[cfg(doc)]
 use super::{SvmC, trial_groups};
-use crate::RecognizerError;
+use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
 use crate::features::spectral::{CellScale, FEATURE_LEN};
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
@@ -258,18 +258,18 @@ impl RecognizerFile {
     }
 
     /// Writes the recognizer atomically as pretty JSON.
-    pub fn save(&self, path: &Path) -> Result<(), RecognizerError> {
-        Ok(json_file::save_pretty(path, self)?)
+    pub fn save(&self, path: &Path) -> Result<(), RecognizeError> {
+        json_file::save_pretty(path, self).map_err(RecognizeError::from_json_file)
     }
 
     /// Reads and validates a recognizer file.
-    pub fn load(path: &Path) -> Result<Self, RecognizerError> {
-        Ok(json_file::load(path, Self::validate)?)
+    pub fn load(path: &Path) -> Result<Self, RecognizeError> {
+        json_file::load(path, Self::validate).map_err(RecognizeError::from_json_file)
     }
 
     /// Parses and validates a recognizer; `path` names it in errors.
-    pub fn from_json(text: &str, path: &Path) -> Result<Self, RecognizerError> {
-        Ok(json_file::parse(text.as_bytes(), path, Self::validate)?)
+    pub fn from_json(text: &str, path: &Path) -> Result<Self, RecognizeError> {
+        json_file::parse(text.as_bytes(), path, Self::validate).map_err(RecognizeError::from_json_file)
     }
 
     /// Checks format, version and shapes; `Err((field, reason))`.

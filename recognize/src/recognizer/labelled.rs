@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-use crate::RecognizerError;
+use crate::RecognizeError;
 use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
 
 /// Metadata key of a capture's class.
@@ -28,8 +28,8 @@ pub struct LabelledCapture {
 impl LabelledCapture {
     /// Reads a `rubbing` capture and its label; a capture without a `surface` in its metadata
     /// is an error naming the file.
-    pub fn read(path: &Path) -> Result<Self, RecognizerError> {
-        let bytes = std::fs::read(path).map_err(|source| RecognizerError::Io {
+    pub fn read(path: &Path) -> Result<Self, RecognizeError> {
+        let bytes = std::fs::read(path).map_err(|source| RecognizeError::Io {
             path: path.to_owned(),
             source,
         })?;
@@ -38,12 +38,12 @@ impl LabelledCapture {
     }
 
     /// Labels a capture already in memory; `path` and `sha256` identify it in the model.
-    pub fn new(capture: Capture, path: &Path, sha256: String) -> Result<Self, RecognizerError> {
+    pub fn new(capture: Capture, path: &Path, sha256: String) -> Result<Self, RecognizeError> {
         let meta = capture.metadata();
         let label = meta
             .get(LABEL_KEY)
             .filter(|l| !l.is_empty())
-            .ok_or_else(|| RecognizerError::UnusableCapture {
+            .ok_or_else(|| RecognizeError::UnusableCapture {
                 path: path.to_owned(),
                 reason: format!("metadata has no `{LABEL_KEY}`: the class of a capture comes from it"),
             })?
@@ -68,21 +68,21 @@ pub(crate) fn class_list(captures: &[LabelledCapture]) -> Vec<String> {
 }
 
 /// Index of the capture's class among `classes`.
-pub(crate) fn class_index(classes: &[String], c: &LabelledCapture) -> Result<usize, RecognizerError> {
+pub(crate) fn class_index(classes: &[String], c: &LabelledCapture) -> Result<usize, RecognizeError> {
     classes
         .iter()
         .position(|l| *l == c.label)
-        .ok_or_else(|| RecognizerError::UnusableCapture {
+        .ok_or_else(|| RecognizeError::UnusableCapture {
             path: c.reference.path.clone(),
             reason: format!("surface `{}` is not one the recognizer was trained on", c.label),
         })
 }
 
 /// A capture must be sampled at the rate the windows are counted at.
-pub(crate) fn check_rate(c: &LabelledCapture, rate_hz: f64) -> Result<(), RecognizerError> {
+pub(crate) fn check_rate(c: &LabelledCapture, rate_hz: f64) -> Result<(), RecognizeError> {
     let found = c.capture.metadata().rate_hz();
     if (found - rate_hz).abs() > 1e-9 * rate_hz {
-        return Err(RecognizerError::UnusableCapture {
+        return Err(RecognizeError::UnusableCapture {
             path: c.reference.path.clone(),
             reason: format!("sampled at {found} Hz; the recognizer's windows are counted at {rate_hz} Hz"),
         });

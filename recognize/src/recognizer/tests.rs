@@ -1,7 +1,7 @@
 use std::path::Path;
 
 use super::*;
-use crate::RecognizerError;
+use crate::RecognizeError;
 use crate::features::histogram_names;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
@@ -265,7 +265,7 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
     let err = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Both, 3, CellScale::Mean)
         .expect_err("no accelerometer");
     assert!(
-        matches!(&err, RecognizerError::MissingColumns { missing, .. } if missing.len() == 3),
+        matches!(&err, RecognizeError::MissingColumns { missing, .. } if missing.len() == 3),
         "{err}"
     );
     assert!(
@@ -328,7 +328,7 @@ fn a_bad_file_names_the_field() {
         "{err}"
     );
     let err = RecognizerFile::from_json("{\"format\": 1", Path::new("r.json")).expect_err("parse");
-    assert!(matches!(err, RecognizerError::Parse { line: 1, .. }), "{err}");
+    assert!(matches!(err, RecognizeError::Parse { line: 1, .. }), "{err}");
     // A capture of a surface the map does not know.
     let unknown = rubbing("glass", 1e-6, 1e-3, 0.1, 3.0);
     let err = model.evaluate(&[unknown], None).expect_err("unknown surface");
@@ -359,5 +359,5 @@ fn train_picks_the_trainer_of_the_method_and_features() {
     // The method's own features by default; columns are checked before any trainer runs.
     assert_eq!(TrainSettings::new(Method::Knn).features, FeatureSet::Spectral);
     let err = train(&captures, &TrainSettings::new(Method::Svm)).expect_err("no accelerometer");
-    assert!(matches!(err, RecognizerError::MissingColumns { .. }), "{err}");
+    assert!(matches!(err, RecognizeError::MissingColumns { .. }), "{err}");
 }

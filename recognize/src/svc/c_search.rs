@@ -76,7 +76,7 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     groups: &[u64],
     classes: usize,
     folds: usize,
-) -> Result<f64, SvcError> {
+) -> Result<f64, RecognizeError> {
     let (fold, folds) = cv_folds(features.len(), labels.len(), groups, folds)?;
     let params = SvcParams {
         probability: false,
@@ -99,13 +99,14 @@ pub fn select_c<V: AsRef<[f64]>>(
     groups: &[u64],
     classes: usize,
     folds: usize,
-) -> Result<CSearch, SvcError> {
+) -> Result<CSearch, RecognizeError> {
     let (_, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
     let mut order: Vec<f64> = grid.to_vec();
     order.sort_by(f64::total_cmp);
     order.dedup();
     if order.is_empty() {
-        return Err(SvcError::Parameter {
+        return Err(RecognizeError::Parameter {
+            of: "SVC parameter",
             name: "c",
             value: f64::NAN,
             reason: "an empty grid of C values",
@@ -141,9 +142,9 @@ pub(super) fn cv_folds(
     labels: usize,
     groups: &[u64],
     folds: usize,
-) -> Result<(Vec<usize>, usize), SvcError> {
+) -> Result<(Vec<usize>, usize), RecognizeError> {
     if features == 0 || features != labels || groups.len() != features {
-        return Err(SvcError::Counts {
+        return Err(RecognizeError::Counts {
             features,
             labels: if labels == features { groups.len() } else { labels },
         });
@@ -152,7 +153,7 @@ pub(super) fn cv_folds(
         let mut distinct = groups.to_vec();
         distinct.sort_unstable();
         distinct.dedup();
-        SvcError::TooFewGroups {
+        RecognizeError::TooFewGroups {
             groups: distinct.len(),
             folds,
         }
@@ -167,7 +168,7 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     fold: &[usize],
     f: usize,
     classes: usize,
-) -> Result<usize, SvcError> {
+) -> Result<usize, RecognizeError> {
     let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
         .iter()
         .zip(labels)
@@ -180,7 +181,7 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     present.sort_unstable();
     present.dedup();
     if let Some(&label) = present.iter().find(|&&l| l >= classes) {
-        return Err(SvcError::LabelOutOfRange {
+        return Err(RecognizeError::LabelOutOfRange {
             index: labels.iter().position(|&l| l == label).unwrap_or(0),
             label,
             classes,

@@ -4,7 +4,7 @@
 use super::{
     CV_FOLDS, Method, ScaledWindows, TrainSettings, Trainer, histograms_by_behaviour, scaled_training_windows,
 };
-use crate::RecognizerError;
+use crate::RecognizeError;
 #[cfg(doc)]
 use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
@@ -30,7 +30,7 @@ impl Trainer for KnnTrainer {
         &self,
         captures: &[LabelledCapture],
         settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizerError> {
+    ) -> Result<RecognizerFile, RecognizeError> {
         match settings.features {
             FeatureSet::Spectral => {
                 RecognizerFile::train_knn(captures, KnnParams::default().k(settings.k), settings.cell_scale)
@@ -52,13 +52,13 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         params: KnnParams,
         cell_scale: CellScale,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let mut behaviours = Vec::new();
         for (name, x, y, groups) in histograms_by_behaviour(captures, &classes, cell_scale)? {
             let knn = params
                 .fit(&x, &y, classes.len())
-                .map_err(RecognizerError::knn(name))?;
+                .map_err(RecognizeError::knn(name))?;
             // The fit above has checked the data, so a failing cross-validation only means
             // too few trials (or too few scratches outside a fold): no weight, see
             // `fusion_weights`.
@@ -94,7 +94,7 @@ impl RecognizerFile {
         features: FeatureSet,
         k: usize,
         cell_scale: CellScale,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         let ScaledWindows {
             classes,
             scaling,
@@ -106,7 +106,7 @@ impl RecognizerFile {
             .k(k)
             .scaling(FeatureScaling::None)
             .fit(&x, &y, classes.len())
-            .map_err(RecognizerError::knn(None))?;
+            .map_err(RecognizeError::knn(None))?;
         Ok(Self::assemble(
             classes,
             features.feature_names(),

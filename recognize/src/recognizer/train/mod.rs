@@ -17,7 +17,7 @@ pub use svm::{SvmTrainer, WINDOW_SVM_FALLBACK_C, window_svc_params};
 
 use super::labelled::{check_rate, class_index, class_list};
 use super::{LabelledCapture, RecognizerBody, RecognizerFile, recording_groups, trial_groups};
-use crate::RecognizerError;
+use crate::RecognizeError;
 use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
 use crate::features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling,
@@ -25,9 +25,9 @@ use crate::features::{
 };
 use crate::knn::PAPER_K;
 use crate::som::Normalization;
+use crate::svc::CSearch;
 #[cfg(doc)]
 use crate::svc::SvcParams;
-use crate::svc::{CSearch, SvcError};
 
 /// Which classifier a recognizer trains.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -116,11 +116,11 @@ impl TrainSettings {
     }
 
     /// The windowing of windowed features, at the rate of the first capture.
-    pub fn windowing(&self, captures: &[LabelledCapture]) -> Result<NakanoWindowing, RecognizerError> {
+    pub fn windowing(&self, captures: &[LabelledCapture]) -> Result<NakanoWindowing, RecognizeError> {
         let rate_hz = captures
             .first()
             .map(|c| c.capture.metadata().rate_hz())
-            .ok_or(RecognizerError::NoTrainingData)?;
+            .ok_or(RecognizeError::NoTrainingData)?;
         NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?.with_training_window_s(self.train_window_s)
     }
 }
@@ -136,7 +136,7 @@ pub trait Trainer: Sync {
         &self,
         captures: &[LabelledCapture],
         settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizerError>;
+    ) -> Result<RecognizerFile, RecognizeError>;
 }
 
 /// Trains the recognizer `settings` describe on `captures`: checks that the captures carry the
@@ -144,7 +144,7 @@ pub trait Trainer: Sync {
 pub fn train(
     captures: &[LabelledCapture],
     settings: &TrainSettings,
-) -> Result<RecognizerFile, RecognizerError> {
+) -> Result<RecognizerFile, RecognizeError> {
     settings.features.check_columns(captures)?;
     settings.method.trainer().train(captures, settings)
 }
@@ -180,15 +180,15 @@ impl SvmC {
     pub(crate) fn choose(
         &self,
         fallback: f64,
-        search: impl FnOnce(&[f64]) -> Option<Result<CSearch, SvcError>>,
-    ) -> Result<ChosenC, SvcError> {
+        search: impl FnOnce(&[f64]) -> Option<Result<CSearch, RecognizeError>>,
+    ) -> Result<ChosenC, RecognizeError> {
         let grid = match self {
             Self::Auto(grid) => grid.clone(),
             Self::Fixed(c) => vec![*c],
         };
         let search = match search(&grid) {
             Some(Ok(search)) => Some(search),
-            Some(Err(SvcError::TooFewGroups { .. })) | None => None,
+            Some(Err(RecognizeError::TooFewGroups { .. })) | None => None,
             Some(Err(e)) => return Err(e),
         };
         let c = match (&search, self) {
@@ -218,7 +218,7 @@ pub(crate) fn histograms_by_behaviour<'a>(
     captures: &'a [LabelledCapture],
     classes: &[String],
     cell_scale: CellScale,
-) -> Result<Vec<BehaviourHistograms<'a>>, RecognizerError> {
+) -> Result<Vec<BehaviourHistograms<'a>>, RecognizeError> {
     let plan = SpectrogramPlan::new();
     let names: BTreeSet<Option<&str>> = captures.iter().map(|c| c.behaviour.as_deref()).collect();
     let mut out = Vec::new();
@@ -244,7 +244,7 @@ pub(crate) fn training_windows(
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-) -> Result<WindowData, RecognizerError> {
+) -> Result<WindowData, RecognizeError> {
     features.check_columns(captures)?;
     let plan = SpectrogramPlan::new();
     let groups = recording_groups(captures);
@@ -260,7 +260,7 @@ pub(crate) fn training_windows(
         }
     }
     if x.is_empty() {
-        return Err(RecognizerError::NoTrainingData);
+        return Err(RecognizeError::NoTrainingData);
     }
     Ok((x, y, g))
 }
@@ -287,7 +287,7 @@ pub(crate) fn scaled_training_windows(
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-) -> Result<ScaledWindows, RecognizerError> {
+) -> Result<ScaledWindows, RecognizeError> {
     window_check(features)?;
     let classes = class_list(captures);
     let (x, y, groups) = training_windows(captures, &classes, windowing, features, cell_scale)?;
@@ -310,9 +310,9 @@ impl RecognizerFile {
         behaviours: usize,
         body: RecognizerBody,
         captures: &[LabelledCapture],
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         if behaviours == 0 {
-            return Err(RecognizerError::NoTrainingData);
+            return Err(RecognizeError::NoTrainingData);
         }
         Ok(Self::assemble(
             classes,
@@ -335,9 +335,10 @@ pub(crate) fn every_class_in_two_groups(labels: &[usize], groups: &[u64]) -> boo
 }
 
 /// Windows carry `nakano` or `both` features, not `spectral`.
-pub(crate) fn window_check(features: FeatureSet) -> Result<(), RecognizerError> {
+pub(crate) fn window_check(features: FeatureSet) -> Result<(), RecognizeError> {
     if features == FeatureSet::Spectral {
-        return Err(RecognizerError::Setting {
+        return Err(RecognizeError::Parameter {
+            of: "setting",
             name: "features",
             value: f64::NAN,
             reason: "windows carry `nakano` or `both` features; `spectral` is one histogram per scratch",

@@ -7,7 +7,7 @@ use super::{
     BehaviourHistograms, CV_FOLDS, Method, TrainSettings, Trainer, every_class_in_two_groups,
     histograms_by_behaviour, training_windows,
 };
-use crate::RecognizerError;
+use crate::RecognizeError;
 use crate::features::nakano::FEATURE_NAMES;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, windows};
@@ -32,7 +32,7 @@ impl Trainer for SomTrainer {
         &self,
         captures: &[LabelledCapture],
         settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizerError> {
+    ) -> Result<RecognizerFile, RecognizeError> {
         let params = SomParams {
             seed: settings.seed,
             normalization: settings.normalization,
@@ -90,7 +90,7 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         params: SomParams,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let (mut data, mut labels) = (Vec::new(), Vec::new());
         let training = windowing.training();
@@ -103,9 +103,9 @@ impl RecognizerFile {
             }
         }
         if data.is_empty() {
-            return Err(RecognizerError::NoTrainingData);
+            return Err(RecognizeError::NoTrainingData);
         }
-        let som = Som::train(params, &data, &labels)?;
+        let som = Som::train(params, &data, &labels).map_err(RecognizeError::som)?;
         Ok(Self::assemble(
             classes,
             FEATURE_NAMES.iter().map(|s| (*s).to_owned()).collect(),
@@ -123,7 +123,7 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         params: SomParams,
         cell_scale: CellScale,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let (x, y, _) = training_windows(captures, &classes, &windowing, FeatureSet::Both, cell_scale)?;
         let som = Som::train(params, &x, &y)?;
@@ -147,12 +147,12 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         params: SomParams,
         cell_scale: CellScale,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         FeatureSet::Spectral.check_columns(captures)?;
         let classes = class_list(captures);
         let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
         let fit_one =
-            |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSom, RecognizerError> {
+            |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSom, RecognizeError> {
                 let x: Vec<Vec<f64>> = x.iter().map(|v| v.to_vec()).collect();
                 let som = Som::train(params, &x, y)?;
                 let cv = match group_folds(groups, CV_FOLDS) {

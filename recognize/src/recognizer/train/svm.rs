@@ -7,7 +7,7 @@ use super::{
     BehaviourHistograms, CV_FOLDS, Method, ScaledWindows, SvmC, TrainSettings, Trainer,
     every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows,
 };
-use crate::RecognizerError;
+use crate::RecognizeError;
 #[cfg(doc)]
 use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
@@ -35,7 +35,7 @@ impl Trainer for SvmTrainer {
         &self,
         captures: &[LabelledCapture],
         settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizerError> {
+    ) -> Result<RecognizerFile, RecognizeError> {
         match settings.features {
             FeatureSet::Spectral => {
                 RecognizerFile::train_svm(captures, SvcParams::default(), &settings.c, settings.cell_scale)
@@ -90,12 +90,12 @@ impl RecognizerFile {
         params: SvcParams,
         c: &SvmC,
         cell_scale: CellScale,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
         let fit_one =
-            |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSvc, RecognizerError> {
-                let svc_error = RecognizerError::svc(*name);
+            |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSvc, RecognizeError> {
+                let svc_error = RecognizeError::svc(*name);
                 let chosen = c
                     .choose(SvmC::FALLBACK, |grid| {
                         Some(select_c(params, grid, x, y, groups, classes.len(), CV_FOLDS))
@@ -141,7 +141,7 @@ impl RecognizerFile {
         features: FeatureSet,
         c: &SvmC,
         cell_scale: CellScale,
-    ) -> Result<Self, RecognizerError> {
+    ) -> Result<Self, RecognizeError> {
         let ScaledWindows {
             classes,
             scaling,
@@ -150,7 +150,7 @@ impl RecognizerFile {
             groups,
         } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
         let params = window_svc_params(features.dim());
-        let svc_error = RecognizerError::svc(None);
+        let svc_error = RecognizeError::svc(None);
         let chosen = c
             .choose(WINDOW_SVM_FALLBACK_C, |grid| {
                 every_class_in_two_groups(&y, &groups)
