@@ -6,7 +6,8 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use haptics::live_recognizer::{LiveRecognizer, LiveRecognizerError};
+use haptics::HapticsError;
+use haptics::live_recognizer::LiveRecognizer;
 use haptics::sim::protocols::nakano::{RUNS, rubbing_run};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
 use recognize::{CellScale, KnnParams, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
@@ -140,7 +141,7 @@ fn only_a_som_at_its_own_rate_runs_live() {
     let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
     assert!(matches!(
         LiveRecognizer::new(&model, 500.0),
-        Err(LiveRecognizerError::Rate { .. })
+        Err(HapticsError::LiveRate { .. })
     ));
     let mut live = LiveRecognizer::new(&model, 1000.0).expect("som");
     let c = &runs[0][1].capture;
@@ -159,7 +160,7 @@ fn only_a_som_at_its_own_rate_runs_live() {
     assert!(before.is_some());
     assert!(matches!(
         live.push(x[0], f64::NAN, f[0]),
-        Err(LiveRecognizerError::NotFinite { .. })
+        Err(HapticsError::NotFiniteSample { .. })
     ));
     assert_eq!(live.current(), before);
     let mut fresh = LiveRecognizer::new(&model, 1000.0).expect("som");
@@ -198,7 +199,7 @@ fn only_a_som_at_its_own_rate_runs_live() {
     let knn = RecognizerFile::train_knn(&scratches, KnnParams::default(), CellScale::Mean).expect("knn");
     assert!(matches!(
         LiveRecognizer::new(&knn, 1000.0),
-        Err(LiveRecognizerError::Method {
+        Err(HapticsError::LiveMethod {
             method: "knn",
             features: "spectral"
         })

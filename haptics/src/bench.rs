@@ -14,9 +14,10 @@ use glam::DVec3;
 
 use crate::control::{Admittance, AdmittanceConfig};
 use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
+use crate::error::HapticsError;
 use crate::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
 use crate::recorder::{Recorder, RecorderConfig};
-use crate::rt::{HapticSample, LoopConfig, LoopError, LoopIo, RateStats, RtStatus, StopReason, sched, spawn};
+use crate::rt::{HapticSample, LoopConfig, LoopIo, RateStats, RtStatus, StopReason, sched, spawn};
 use crate::sim::hand::{HandImpedance, Waypoints};
 use crate::sim::world::needle::NeedleTissue;
 
@@ -66,7 +67,7 @@ pub fn insertion_hand(surface_z_m: f64, seconds: f64) -> Waypoints {
 }
 
 /// Runs the benchmark.
-pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, LoopError> {
+pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, HapticsError> {
     let surface_z_m = -0.02;
     let period_s = 1.0 / config.loop_config.rate_hz;
     let device = SimOmega7::new(
@@ -91,8 +92,7 @@ pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, LoopError> {
     );
     let meta = Metadata::new(CaptureKind::Insertion, "sim-omega7", config.loop_config.rate_hz)
         .with("protocol", "palpus_bench_loop");
-    let writer = CaptureWriter::new(std::io::sink(), &meta, &[TIME_S, DEPTH_M, AXIAL_FORCE_N])
-        .map_err(|e| LoopError::Spawn(std::io::Error::other(e.to_string())))?;
+    let writer = CaptureWriter::new(std::io::sink(), &meta, &[TIME_S, DEPTH_M, AXIAL_FORCE_N])?;
     let (producer, recorder) = Recorder::spawn(
         writer,
         move |s: &HapticSample, row: &mut Vec<f64>| {
@@ -100,8 +100,7 @@ pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, LoopError> {
             true
         },
         RecorderConfig::default(),
-    )
-    .map_err(|e| LoopError::Spawn(std::io::Error::other(e.to_string())))?;
+    )?;
 
     let stop_load = Arc::new(AtomicBool::new(false));
     let load_threads = if config.load { sched::core_count() } else { 0 };

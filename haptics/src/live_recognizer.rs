@@ -9,51 +9,9 @@
 //! and agree with them to ~1e-9 relative.
 
 use crate::acquire;
+use crate::error::HapticsError;
 use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
-use recognize::{
-    FEATURES, NakanoError, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile, Som, SomError,
-};
-
-/// Why a live recognizer could not be built or fed.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum LiveRecognizerError {
-    /// Only a SOM over Nakano's rubbing features runs live.
-    #[error(
-        "a {method} recognizer over {features} features cannot run live: only a som over nakano \
-         features decides from the rubbing stream"
-    )]
-    Method {
-        /// The recognizer's method.
-        method: &'static str,
-        /// Its features (`nakano`, `spectral`, `both`).
-        features: &'static str,
-    },
-    /// The loop's rate is not the rate the recognizer's windows are counted at.
-    #[error("the loop runs at {loop_hz} Hz but the recognizer's windows are counted at {model_hz} Hz")]
-    Rate {
-        /// The loop's rate, Hz.
-        loop_hz: f64,
-        /// The recognizer's rate, Hz.
-        model_hz: f64,
-    },
-    /// The stream could not be built.
-    #[error("feature stream")]
-    Stream(#[from] NakanoError),
-    /// A sample was NaN or infinite; the stroke starts afresh from the next one.
-    #[error("non-finite sample (position {position_m} m, height {height_m} m, friction {friction_n} N)")]
-    NotFinite {
-        /// Position along the rubbing direction, m.
-        position_m: f64,
-        /// Height, m.
-        height_m: f64,
-        /// Friction, N.
-        friction_n: f64,
-    },
-    /// The map refused a feature vector.
-    #[error("map")]
-    Som(#[from] SomError),
-}
+use recognize::{FEATURES, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile, Som};
 
 /// One live decision.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,9 +41,9 @@ pub struct LiveRecognizer {
 
 impl LiveRecognizer {
     /// A recognizer for a loop running at `loop_hz`, from a loaded SOM recognizer file.
-    pub fn new(model: &RecognizerFile, loop_hz: f64) -> Result<Self, LiveRecognizerError> {
+    pub fn new(model: &RecognizerFile, loop_hz: f64) -> Result<Self, HapticsError> {
         let RecognizerBody::Som { windowing, som } = &model.body else {
-            return Err(LiveRecognizerError::Method {
+            return Err(HapticsError::LiveMethod {
                 method: model.method(),
                 features: model.body.feature_set().name(),
             });
@@ -93,7 +51,7 @@ impl LiveRecognizer {
         // Written so that a NaN rate is refused too.
         let same_rate = (loop_hz - windowing.rate_hz).abs() <= 1e-9 * windowing.rate_hz;
         if !same_rate {
-            return Err(LiveRecognizerError::Rate {
+            return Err(HapticsError::LiveRate {
                 loop_hz,
                 model_hz: windowing.rate_hz,
             });
@@ -122,11 +80,11 @@ impl LiveRecognizer {
         position_m: f64,
         height_m: f64,
         friction_n: f64,
-    ) -> Result<Option<LiveDecision>, LiveRecognizerError> {
+    ) -> Result<Option<LiveDecision>, HapticsError> {
         if !(position_m.is_finite() && height_m.is_finite() && friction_n.is_finite()) {
             self.stream.reset();
             self.first_position_m = None;
-            return Err(LiveRecognizerError::NotFinite {
+            return Err(HapticsError::NotFiniteSample {
                 position_m,
                 height_m,
                 friction_n,

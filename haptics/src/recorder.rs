@@ -15,7 +15,7 @@
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
@@ -23,6 +23,7 @@ use std::time::{Duration, Instant};
 
 use capture::{CaptureError, CaptureErrorKind, CaptureReader, CaptureWriter, Metadata};
 
+use crate::error::HapticsError;
 use crate::rt::HapticSample;
 
 /// Recorder settings.
@@ -94,31 +95,8 @@ pub struct RecorderSummary {
     pub first_rejection: Option<CaptureError>,
 }
 
-/// Why recording failed.
-#[derive(Debug, thiserror::Error)]
-pub enum RecorderError {
-    /// The file could not be created.
-    #[error("cannot create {}", path.display())]
-    Create {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
-    /// Writing failed (I/O), or no sample was recorded.
-    #[error(transparent)]
-    Capture(#[from] CaptureError),
-    /// The recorder thread could not be started.
-    #[error("cannot start the recorder thread")]
-    Spawn(#[source] std::io::Error),
-    /// The recorder thread panicked.
-    #[error("the recorder thread panicked")]
-    Panicked,
-}
-
 /// What the recorder thread hands back: the writer and summary, and the samples it kept.
-type Finished<W> = (Result<(W, RecorderSummary), RecorderError>, Vec<HapticSample>);
+type Finished<W> = (Result<(W, RecorderSummary), HapticsError>, Vec<HapticSample>);
 
 /// A running recorder thread.
 #[derive(Debug)]
@@ -136,8 +114,9 @@ pub fn record_to_file(
     columns: &[&str],
     map: impl RowMap,
     config: RecorderConfig,
-) -> Result<(rtrb::Producer<HapticSample>, Recorder<File>), RecorderError> {
-    let file = File::create(path).map_err(|source| RecorderError::Create {
+) -> Result<(rtrb::Producer<HapticSample>, Recorder<File>), HapticsError> {
+    let file = File::create(path).map_err(|source| HapticsError::Io {
+        action: "create",
         path: path.to_owned(),
         source,
     })?;
@@ -151,7 +130,7 @@ impl<W: Write + Send + 'static> Recorder<W> {
         mut writer: CaptureWriter<W>,
         mut map: impl RowMap,
         config: RecorderConfig,
-    ) -> Result<(rtrb::Producer<HapticSample>, Self), RecorderError> {
+    ) -> Result<(rtrb::Producer<HapticSample>, Self), HapticsError> {
         let (producer, mut consumer) = rtrb::RingBuffer::new(config.capacity.max(1));
         let stats = Arc::new(RecorderStats::default());
         let stop = Arc::new(AtomicBool::new(false));
@@ -219,7 +198,10 @@ impl<W: Write + Send + 'static> Recorder<W> {
                 })();
                 (result, kept)
             })
-            .map_err(RecorderError::Spawn)?;
+            .map_err(|source| HapticsError::Spawn {
+                thread: "recorder",
+                source,
+            })?;
         Ok((producer, Self { stats, stop, thread }))
     }
 
@@ -231,7 +213,7 @@ impl<W: Write + Send + 'static> Recorder<W> {
     /// Drains what is left in the ring, finishes the file and returns the underlying writer.
     /// Call after the haptic loop has stopped (or drop its producer). Fails with
     /// [`CaptureErrorKind::NoSamples`] when nothing was recorded.
-    pub fn finish(self) -> Result<(W, RecorderSummary), RecorderError> {
+    pub fn finish(self) -> Result<(W, RecorderSummary), HapticsError> {
         self.finish_with_samples().0
     }
 
@@ -242,7 +224,7 @@ impl<W: Write + Send + 'static> Recorder<W> {
         self.stop.store(true, Ordering::Release);
         self.thread
             .join()
-            .unwrap_or_else(|_| (Err(RecorderError::Panicked), Vec::new()))
+            .unwrap_or_else(|_| (Err(HapticsError::Panicked { thread: "recorder" }), Vec::new()))
     }
 }
 

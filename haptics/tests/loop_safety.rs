@@ -11,14 +11,15 @@ use std::time::{Duration, Instant};
 
 use common::{run_unpaced, unpaced};
 use glam::DVec3;
+use haptics::HapticsError;
 use haptics::control::{Admittance, AdmittanceConfig};
 use haptics::device::ForceOverride;
 use haptics::device::fault::{FaultPoint, FaultyDevice};
 use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
-use haptics::device::{DeviceError, ForceCommand, HapticDevice};
+use haptics::device::{ForceCommand, HapticDevice};
 use haptics::law::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
 use haptics::rt::{
-    self, Controller, LoopConfig, LoopError, LoopIo, LoopOutcome, Priority, RtRequest, StopReason, TickInput,
+    self, Controller, LoopConfig, LoopIo, LoopOutcome, Priority, RtRequest, StopReason, TickInput,
     TickOutput, WatchdogConfig, ZeroForce,
 };
 use proptest::prelude::*;
@@ -140,7 +141,10 @@ fn the_watchdog_ramps_the_force_to_zero_when_ticks_stop() {
     assert!(zero_after < Duration::from_millis(100));
     assert!(monotone, "the force went up during the ramp");
     assert!(
-        matches!(outcome.result, Err(LoopError::WatchdogTripped { tick: 51, .. })),
+        matches!(
+            outcome.result,
+            Err(HapticsError::WatchdogTripped { tick: 51, .. })
+        ),
         "{:?}",
         outcome.result
     );
@@ -171,9 +175,9 @@ fn a_device_failing_mid_run_stops_safely_with_a_typed_error() {
     let gate = sim.gate().clone();
     let outcome = push_unpaced(sim, DVec3::new(3.0, 0.0, 0.0));
     match outcome.result {
-        Err(LoopError::Device {
-            tick: 100,
-            source: DeviceError::Fault(what),
+        Err(HapticsError::DeviceFault {
+            what,
+            tick: Some(100),
         }) => assert!(what.contains("disconnect")),
         other => panic!("{other:?}"),
     }
@@ -188,13 +192,7 @@ fn a_device_failing_mid_run_stops_safely_with_a_typed_error() {
     let outcome = push_unpaced(faulty, DVec3::new(0.0, 3.0, 0.0));
     let err = outcome.result.unwrap_err();
     assert!(
-        matches!(
-            err,
-            LoopError::Device {
-                tick: 10,
-                source: DeviceError::Call { .. }
-            }
-        ),
+        matches!(err, HapticsError::DeviceCall { tick: Some(10), .. }),
         "{err:?}"
     );
     assert!(err.to_string().contains("force set to zero"), "{err}");

@@ -9,8 +9,9 @@ use std::process::Command;
 use std::sync::Arc;
 
 use glam::DVec3;
+use haptics::HapticsError;
 use haptics::device::omega7::{DhdLibrary, Omega7};
-use haptics::device::{DeviceError, ForceCommand, HapticDevice};
+use haptics::device::{ForceCommand, HapticDevice};
 use haptics::rt::{self, LoopConfig, LoopIo, StopReason, ZeroForce};
 
 fn build(dir: &Path, name: &str, defines: &[&str]) -> PathBuf {
@@ -104,9 +105,10 @@ fn the_sdk_is_loaded_by_name_and_drives_the_device() {
     assert!(
         matches!(
             e,
-            DeviceError::Call {
+            HapticsError::DeviceCall {
                 call: "dhdGetPosition",
-                code: -1
+                code: -1,
+                tick: None
             }
         ),
         "{e:?}"
@@ -121,7 +123,7 @@ fn the_sdk_is_loaded_by_name_and_drives_the_device() {
     // SAFETY: plain int arguments.
     unsafe { set_count(0) };
     let e = Omega7::open_with(dhd.clone()).unwrap_err();
-    assert!(matches!(e, DeviceError::NoDevice { .. }));
+    assert!(matches!(e, HapticsError::NoDevice { .. }));
     assert!(e.to_string().contains("use --device sim"), "{e}");
     // SAFETY: plain int arguments.
     unsafe {
@@ -138,7 +140,7 @@ fn a_library_without_a_required_function_is_refused_by_name() {
     let path = build(dir.path(), "libdhd_novelocity.so", &["-DOMIT_VELOCITY"]);
     let e = DhdLibrary::load(Some(&path)).unwrap_err();
     match &e {
-        DeviceError::SymbolMissing { symbol, library } => {
+        HapticsError::SymbolMissing { symbol, library } => {
             assert_eq!(*symbol, "dhdGetLinearVelocity");
             assert!(library.ends_with("libdhd_novelocity.so"));
         }
@@ -150,6 +152,6 @@ fn a_library_without_a_required_function_is_refused_by_name() {
     std::fs::write(&junk, b"not an ELF file").unwrap();
     assert!(matches!(
         DhdLibrary::load(Some(&junk)),
-        Err(DeviceError::SdkMissing { .. })
+        Err(HapticsError::SdkMissing { .. })
     ));
 }

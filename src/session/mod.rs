@@ -156,23 +156,15 @@ pub enum SessionError {
         /// The scene's name for it.
         model: String,
         /// Why.
-        source: haptics::law::IdentifiedModelError,
+        source: haptics::HapticsError,
     },
-    /// The device could not be opened.
-    #[error("opening the device: {0}")]
-    Device(#[from] haptics::DeviceError),
     /// The replay capture is unreadable.
     #[error(transparent)]
     Replay(#[from] capture::CaptureError),
-    /// The loop could not run.
+    /// The device could not be opened, the loop could not run, recording failed, or a
+    /// simulated surface is unknown.
     #[error(transparent)]
-    Loop(#[from] haptics::LoopError),
-    /// Recording failed.
-    #[error(transparent)]
-    Recorder(#[from] haptics::recorder::RecorderError),
-    /// A simulated surface is unknown.
-    #[error(transparent)]
-    Acquire(#[from] acquire::AcquireError),
+    Haptics(#[from] haptics::HapticsError),
     /// The device cannot run this task.
     #[error("{0}")]
     Unsupported(String),
@@ -589,7 +581,7 @@ pub fn run_segment(
         }
         None => {
             let writer = CaptureWriter::new(std::io::sink(), &meta, columns)
-                .map_err(haptics::recorder::RecorderError::from)?;
+                .map_err(haptics::HapticsError::from)?;
             let (p, r) = Recorder::spawn(writer, map, ring)?;
             (p, AnyRecorder::Sink(r))
         }

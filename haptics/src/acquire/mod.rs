@@ -26,10 +26,10 @@ use capture::{CaptureKind, Metadata};
 use crate::control::{MotionGains, RubbingController, RubbingPlan};
 use crate::device::HapticDevice;
 use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld, Texture};
-use crate::recorder::{RecorderConfig, RecorderError, RecorderSummary, record_to_file};
+use crate::error::HapticsError;
+use crate::recorder::{RecorderConfig, RecorderSummary, record_to_file};
 use crate::rt::{
-    self, CHANNELS, Controller, HapticSample, LoopConfig, LoopError, LoopIo, LoopOutcome, Pacing, RateStats,
-    RtStatus,
+    self, CHANNELS, Controller, HapticSample, LoopConfig, LoopIo, LoopOutcome, Pacing, RateStats, RtStatus,
 };
 use crate::sim::world::friction::{HardContact, SoftContact};
 use crate::sim::world::needle::NeedleTissue;
@@ -161,27 +161,13 @@ impl CaptureOptions {
     }
 }
 
-/// Why a capture failed.
-#[derive(Debug, thiserror::Error)]
-pub enum AcquireError {
-    /// No such surface.
-    #[error("unknown surface `{0}` (expected one of: {list})", list = surface_names().join(", "))]
-    UnknownSurface(String),
-    /// The loop failed (device error, watchdog).
-    #[error(transparent)]
-    Loop(#[from] LoopError),
-    /// Recording failed.
-    #[error(transparent)]
-    Recorder(#[from] RecorderError),
-}
-
 /// Names of Nakano's surfaces.
 pub fn surface_names() -> Vec<&'static str> {
     nakano_surfaces().iter().map(|s| s.name).collect()
 }
 
 /// The simulated Omega.7 set up for `options`: the world the protocol needs, the tip above it.
-pub fn sim_device(options: &CaptureOptions) -> Result<SimOmega7, AcquireError> {
+pub fn sim_device(options: &CaptureOptions) -> Result<SimOmega7, HapticsError> {
     let start_m = glam::DVec3::new(0.0, 0.0, SURFACE_Z_M + 0.003);
     let world = match options.protocol {
         Protocol::Needle => SimWorld::needle_block(
@@ -207,7 +193,10 @@ pub fn sim_device(options: &CaptureOptions) -> Result<SimOmega7, AcquireError> {
             let surface = nakano_surfaces()
                 .into_iter()
                 .find(|s| s.name == options.surface)
-                .ok_or_else(|| AcquireError::UnknownSurface(options.surface.clone()))?;
+                .ok_or_else(|| HapticsError::UnknownSurface {
+                    name: options.surface.clone(),
+                    expected: surface_names().join(", "),
+                })?;
             SimWorld::surface(
                 Texture::Patch {
                     patch: Box::new(SurfacePatch::new(&surface)),
@@ -395,7 +384,7 @@ pub fn run_capture(
     out: &Path,
     options: &CaptureOptions,
     progress: &mut dyn FnMut(&RateStats),
-) -> Result<CaptureReport, AcquireError> {
+) -> Result<CaptureReport, HapticsError> {
     let started = Instant::now();
     let mut config = options.loop_config;
     config.pacing = options.pacing;

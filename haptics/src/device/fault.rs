@@ -3,7 +3,8 @@
 
 use std::sync::Arc;
 
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice};
+use super::{DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice};
+use crate::error::HapticsError;
 
 /// Which call fails.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,22 +50,26 @@ impl<D: HapticDevice> HapticDevice for FaultyDevice<D> {
         self.inner.name()
     }
 
-    fn enable_forces(&mut self, enabled: bool) -> Result<(), DeviceError> {
+    fn enable_forces(&mut self, enabled: bool) -> Result<(), HapticsError> {
         self.inner.enable_forces(enabled)
     }
 
-    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+    fn read_state(&mut self) -> Result<DeviceState, HapticsError> {
         if self.point == FaultPoint::Read && self.ticks >= self.after {
-            return Err(DeviceError::Fault("device stopped answering (injected)"));
+            return Err(HapticsError::DeviceFault {
+                what: "device stopped answering (injected)",
+                tick: None,
+            });
         }
         self.inner.read_state()
     }
 
-    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+    fn command(&mut self, command: &ForceCommand) -> Result<(), HapticsError> {
         if self.point == FaultPoint::Command && self.ticks >= self.after && *command != ForceCommand::ZERO {
-            return Err(DeviceError::Call {
+            return Err(HapticsError::DeviceCall {
                 call: "set force (injected)",
                 code: -1,
+                tick: None,
             });
         }
         self.ticks += 1;
@@ -75,7 +80,7 @@ impl<D: HapticDevice> HapticDevice for FaultyDevice<D> {
         self.inner.force_override()
     }
 
-    fn close(&mut self) -> Result<(), DeviceError> {
+    fn close(&mut self) -> Result<(), HapticsError> {
         self.inner.close()
     }
 }

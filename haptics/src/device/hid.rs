@@ -10,6 +10,8 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use crate::error::HapticsError;
+
 /// One HID device.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct HidInfo {
@@ -29,19 +31,8 @@ pub struct HidInfo {
     pub path: String,
 }
 
-/// Why HID failed.
-#[derive(Debug, thiserror::Error)]
-pub enum HidError {
-    /// HID enumeration or opening failed.
-    #[error("HID: {0}")]
-    Hid(#[from] hidapi::HidError),
-    /// The pedal's reader thread could not be started.
-    #[error("cannot start the pedal thread")]
-    Spawn(#[source] std::io::Error),
-}
-
 /// Every HID device the system shows (empty when there are none).
-pub fn list_hid_devices() -> Result<Vec<HidInfo>, HidError> {
+pub fn list_hid_devices() -> Result<Vec<HidInfo>, HapticsError> {
     let api = hidapi::HidApi::new()?;
     let mut list: Vec<HidInfo> = api
         .device_list()
@@ -112,7 +103,7 @@ pub struct Pedal {
 
 impl Pedal {
     /// Opens the first HID device with `vendor_id:product_id` and starts reading it.
-    pub fn open(vendor_id: u16, product_id: u16, mapping: PedalMapping) -> Result<Self, HidError> {
+    pub fn open(vendor_id: u16, product_id: u16, mapping: PedalMapping) -> Result<Self, HapticsError> {
         let api = hidapi::HidApi::new()?;
         let device = api.open(vendor_id, product_id)?;
         let state = Arc::new(PedalState::default());
@@ -134,7 +125,10 @@ impl Pedal {
                     }
                 }
             })
-            .map_err(HidError::Spawn)?;
+            .map_err(|source| HapticsError::Spawn {
+                thread: "pedal",
+                source,
+            })?;
         Ok(Self {
             state,
             stop,

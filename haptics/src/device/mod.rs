@@ -22,6 +22,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
+use crate::error::HapticsError;
+
 /// What a device can do: the limits every command is checked against, and the forces of its
 /// own mechanism that an observer must not mistake for the operator's.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,68 +107,6 @@ impl ForceCommand {
         force_n: DVec3::ZERO,
         gripper_force_n: 0.0,
     };
-}
-
-/// Why a device call failed. Errors the haptic thread can meet carry only static text, so
-/// reporting one does not allocate.
-#[derive(Debug, thiserror::Error)]
-pub enum DeviceError {
-    /// The vendor library could not be loaded.
-    #[error(
-        "the Force Dimension SDK (libdhd) was not found ({tried}): install the Force Dimension SDK or use --device sim"
-    )]
-    SdkMissing {
-        /// What was tried and why each failed.
-        tried: String,
-    },
-    /// The vendor library lacks a function the device needs.
-    #[error(
-        "libdhd at {library} has no `{symbol}`: install a Force Dimension SDK of version 3 or newer, or use --device sim"
-    )]
-    SymbolMissing {
-        /// The library file.
-        library: String,
-        /// The missing function.
-        symbol: &'static str,
-    },
-    /// The SDK loaded but found no device.
-    #[error("no Omega.7 is connected ({detail}): connect and power it on, or use --device sim")]
-    NoDevice {
-        /// What the SDK said.
-        detail: String,
-    },
-    /// A device call returned an error code.
-    #[error("{call} failed (code {code})")]
-    Call {
-        /// The function that failed.
-        call: &'static str,
-        /// Its return code.
-        code: i32,
-    },
-    /// The device stopped answering or reported a fault.
-    #[error("device fault: {0}")]
-    Fault(&'static str),
-    /// The device was used after `close`.
-    #[error("device is closed")]
-    Closed,
-    /// A replayed capture has no more samples: the normal end of a replay.
-    #[error("the replayed capture has ended")]
-    EndOfReplay,
-    /// A capture could not be used for replay.
-    #[error("cannot replay {source_name}: {reason}")]
-    BadReplay {
-        /// The capture's file.
-        source_name: String,
-        /// Why.
-        reason: String,
-    },
-}
-
-impl DeviceError {
-    /// Whether this is the orderly end of a finite device (a replay), not a failure.
-    pub fn is_end_of_stream(&self) -> bool {
-        matches!(self, DeviceError::EndOfReplay)
-    }
 }
 
 /// Scales a device's applied force from any thread. The watchdog holds one to ramp force to
@@ -270,22 +210,22 @@ pub trait HapticDevice: Send {
 
     /// Switches force output on or off. Devices start with forces off: a force reaches the
     /// operator only after an explicit `enable_forces(true)`.
-    fn enable_forces(&mut self, enabled: bool) -> Result<(), DeviceError>;
+    fn enable_forces(&mut self, enabled: bool) -> Result<(), HapticsError>;
 
     /// Reads position, velocity, gripper and buttons.
-    fn read_state(&mut self) -> Result<DeviceState, DeviceError>;
+    fn read_state(&mut self) -> Result<DeviceState, HapticsError>;
 
     /// Applies a force until the next command. The command must already be within
     /// [`HapticDevice::specs`]; the haptic loop's safety filter sees to that.
-    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError>;
+    fn command(&mut self, command: &ForceCommand) -> Result<(), HapticsError>;
 
     /// A handle that scales the applied force from another thread (the watchdog's), even
     /// while the haptic thread is stalled.
     fn force_override(&self) -> Arc<dyn ForceOverride>;
 
     /// Zeroes the force, disables forces and releases the device. Further calls fail with
-    /// [`DeviceError::Closed`]. Closing twice is not an error.
-    fn close(&mut self) -> Result<(), DeviceError>;
+    /// [`HapticsError::DeviceClosed`]. Closing twice is not an error.
+    fn close(&mut self) -> Result<(), HapticsError>;
 }
 
 impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
@@ -295,19 +235,19 @@ impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
     fn name(&self) -> &str {
         (**self).name()
     }
-    fn enable_forces(&mut self, enabled: bool) -> Result<(), DeviceError> {
+    fn enable_forces(&mut self, enabled: bool) -> Result<(), HapticsError> {
         (**self).enable_forces(enabled)
     }
-    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+    fn read_state(&mut self) -> Result<DeviceState, HapticsError> {
         (**self).read_state()
     }
-    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+    fn command(&mut self, command: &ForceCommand) -> Result<(), HapticsError> {
         (**self).command(command)
     }
     fn force_override(&self) -> Arc<dyn ForceOverride> {
         (**self).force_override()
     }
-    fn close(&mut self) -> Result<(), DeviceError> {
+    fn close(&mut self) -> Result<(), HapticsError> {
         (**self).close()
     }
 }

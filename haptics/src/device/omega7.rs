@@ -16,9 +16,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
-use super::{
-    DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice, InternalForces,
-};
+use super::{DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice, InternalForces};
+use crate::error::HapticsError;
 
 /// Environment variable naming the library file to load instead of the default search.
 pub const LIBRARY_ENV: &str = "PALPUS_DHD_LIBRARY";
@@ -154,7 +153,7 @@ unsafe fn lookup<T: Copy>(library: &libloading::Library, name: &str) -> Option<T
 impl DhdLibrary {
     /// Loads the SDK: `explicit` if given, else the file named by `PALPUS_DHD_LIBRARY`, else
     /// `libdhd.so` and `libdhd.so.3` through the loader's search path.
-    pub fn load(explicit: Option<&Path>) -> Result<Self, DeviceError> {
+    pub fn load(explicit: Option<&Path>) -> Result<Self, HapticsError> {
         let env = std::env::var_os(LIBRARY_ENV).map(PathBuf::from);
         let candidates: Vec<PathBuf> = match explicit.map(Path::to_path_buf).or(env) {
             Some(path) => vec![path],
@@ -169,12 +168,12 @@ impl DhdLibrary {
                 Err(e) => tried.push(format!("{}: {e}", candidate.display())),
             }
         }
-        Err(DeviceError::SdkMissing {
+        Err(HapticsError::SdkMissing {
             tried: tried.join("; "),
         })
     }
 
-    fn from_library(library: libloading::Library, path: PathBuf) -> Result<Self, DeviceError> {
+    fn from_library(library: libloading::Library, path: PathBuf) -> Result<Self, HapticsError> {
         // SAFETY (every lookup below): each type alias is the C prototype of that function
         // in Force Dimension's dhdc.h (SDK 3.x), with `char ID` as c_char and `uchar` as
         // c_uchar.
@@ -202,7 +201,7 @@ impl DhdLibrary {
         };
         for (name, required) in SYMBOLS {
             if required && !lib.has(name) {
-                return Err(DeviceError::SymbolMissing {
+                return Err(HapticsError::SymbolMissing {
                     library: lib.path.display().to_string(),
                     symbol: name,
                 });
@@ -325,25 +324,25 @@ impl ForceOverride for DhdOverride {
 
 impl Omega7 {
     /// Loads the SDK (see [`DhdLibrary::load`]) and opens the first device.
-    pub fn open(library: Option<&Path>) -> Result<Self, DeviceError> {
+    pub fn open(library: Option<&Path>) -> Result<Self, HapticsError> {
         Self::open_with(Arc::new(DhdLibrary::load(library)?))
     }
 
     /// Opens the first device through an already loaded SDK.
-    pub fn open_with(lib: Arc<DhdLibrary>) -> Result<Self, DeviceError> {
+    pub fn open_with(lib: Arc<DhdLibrary>) -> Result<Self, HapticsError> {
         if lib.device_count() == Some(0) {
-            return Err(DeviceError::NoDevice {
+            return Err(HapticsError::NoDevice {
                 detail: "the SDK sees no Force Dimension device".into(),
             });
         }
-        let open = lib.functions.open.ok_or(DeviceError::SymbolMissing {
+        let open = lib.functions.open.ok_or(HapticsError::SymbolMissing {
             library: lib.path.display().to_string(),
             symbol: "dhdOpen",
         })?;
         // SAFETY: no arguments; returns a device id ≥ 0 or −1.
         let id = unsafe { open() };
         if id < 0 {
-            return Err(DeviceError::NoDevice {
+            return Err(HapticsError::NoDevice {
                 detail: lib
                     .last_error()
                     .unwrap_or_else(|| format!("dhdOpen returned {id}")),
@@ -389,9 +388,13 @@ impl Omega7 {
         &self.lib
     }
 
-    fn check(&self, call: &'static str, code: c_int) -> Result<(), DeviceError> {
+    fn check(&self, call: &'static str, code: c_int) -> Result<(), HapticsError> {
         if code < 0 {
-            Err(DeviceError::Call { call, code })
+            Err(HapticsError::DeviceCall {
+                call,
+                code,
+                tick: None,
+            })
         } else {
             Ok(())
         }
@@ -411,27 +414,33 @@ impl HapticDevice for Omega7 {
         "omega7"
     }
 
-    fn enable_forces(&mut self, enabled: bool) -> Result<(), DeviceError> {
+    fn enable_forces(&mut self, enabled: bool) -> Result<(), HapticsError> {
         if !self.open {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         let Some(f) = self.lib.functions.enable_force else {
-            return Err(DeviceError::Fault("dhdEnableForce missing"));
+            return Err(HapticsError::DeviceFault {
+                what: "dhdEnableForce missing",
+                tick: None,
+            });
         };
         // SAFETY: a flag and the device id, per dhdc.h.
         let code = unsafe { f(c_uchar::from(enabled), self.id()) };
         self.check("dhdEnableForce", code)
     }
 
-    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+    fn read_state(&mut self) -> Result<DeviceState, HapticsError> {
         if !self.open {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         let f = &self.lib.functions;
         let (mut px, mut py, mut pz) = (0.0, 0.0, 0.0);
         let (mut vx, mut vy, mut vz) = (0.0, 0.0, 0.0);
         let (Some(position), Some(velocity)) = (f.get_position, f.get_linear_velocity) else {
-            return Err(DeviceError::Fault("position functions missing"));
+            return Err(HapticsError::DeviceFault {
+                what: "position functions missing",
+                tick: None,
+            });
         };
         // SAFETY: three writable doubles each, and the device id, per dhdc.h.
         let code = unsafe { position(&mut px, &mut py, &mut pz, self.id()) };
@@ -467,13 +476,16 @@ impl HapticDevice for Omega7 {
         })
     }
 
-    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+    fn command(&mut self, command: &ForceCommand) -> Result<(), HapticsError> {
         if !self.open {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         let c = self.override_.gate.pass(command);
         let Some(f) = self.lib.functions.set_force_torque_gripper else {
-            return Err(DeviceError::Fault("dhdSetForceAndTorqueAndGripperForce missing"));
+            return Err(HapticsError::DeviceFault {
+                what: "dhdSetForceAndTorqueAndGripperForce missing",
+                tick: None,
+            });
         };
         // SAFETY: plain doubles and the device id, per dhdc.h.
         let code = unsafe {
@@ -495,7 +507,7 @@ impl HapticDevice for Omega7 {
         self.override_.clone()
     }
 
-    fn close(&mut self) -> Result<(), DeviceError> {
+    fn close(&mut self) -> Result<(), HapticsError> {
         if !self.open {
             return Ok(());
         }
@@ -568,7 +580,7 @@ mod tests {
     fn a_missing_library_says_what_to_do() {
         let e = DhdLibrary::load(Some(Path::new("/nonexistent/libdhd.so"))).unwrap_err();
         let text = e.to_string();
-        assert!(matches!(e, DeviceError::SdkMissing { .. }));
+        assert!(matches!(e, HapticsError::SdkMissing { .. }));
         assert!(
             text.contains("install the Force Dimension SDK or use --device sim"),
             "{text}"

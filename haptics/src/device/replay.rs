@@ -15,7 +15,8 @@ use capture::kind::{
 use capture::{Capture, CaptureKind};
 use glam::DVec3;
 
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
+use super::{DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
+use crate::error::HapticsError;
 
 /// A capture played back.
 #[derive(Debug)]
@@ -33,8 +34,8 @@ pub struct ReplayDevice {
 
 impl ReplayDevice {
     /// Plays `capture`, read every `period_s` seconds of loop time.
-    pub fn new(capture: &Capture, period_s: f64) -> Result<Self, DeviceError> {
-        let bad = |reason: &str| DeviceError::BadReplay {
+    pub fn new(capture: &Capture, period_s: f64) -> Result<Self, HapticsError> {
+        let bad = |reason: &str| HapticsError::BadReplay {
             source_name: capture.source().display().to_string(),
             reason: reason.to_owned(),
         };
@@ -98,18 +99,18 @@ impl HapticDevice for ReplayDevice {
         "replay"
     }
 
-    fn enable_forces(&mut self, _enabled: bool) -> Result<(), DeviceError> {
+    fn enable_forces(&mut self, _enabled: bool) -> Result<(), HapticsError> {
         Ok(())
     }
 
-    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+    fn read_state(&mut self) -> Result<DeviceState, HapticsError> {
         if self.closed {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         let t = self.tick as f64 * self.period_s;
         let n = self.time_s.len();
         if n == 0 || t > self.time_s[n - 1] {
-            return Err(DeviceError::EndOfReplay);
+            return Err(HapticsError::EndOfReplay);
         }
         while self.cursor + 1 < n && self.time_s[self.cursor + 1] <= t {
             self.cursor += 1;
@@ -133,9 +134,9 @@ impl HapticDevice for ReplayDevice {
         })
     }
 
-    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+    fn command(&mut self, command: &ForceCommand) -> Result<(), HapticsError> {
         if self.closed {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         self.gate.pass(command);
         self.tick += 1;
@@ -146,7 +147,7 @@ impl HapticDevice for ReplayDevice {
         self.gate.clone()
     }
 
-    fn close(&mut self) -> Result<(), DeviceError> {
+    fn close(&mut self) -> Result<(), HapticsError> {
         self.closed = true;
         Ok(())
     }

@@ -17,7 +17,8 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::omega7::OMEGA7_INTERNAL;
-use super::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
+use super::{DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
+use crate::error::HapticsError;
 use crate::sim::hand::{HandImpedance, HandScript};
 use crate::sim::world::friction::{HardContact, SoftContact};
 use crate::sim::world::needle::{NeedleSite, NeedleTissue};
@@ -478,27 +479,30 @@ impl HapticDevice for SimOmega7 {
         "sim-omega7"
     }
 
-    fn enable_forces(&mut self, enabled: bool) -> Result<(), DeviceError> {
+    fn enable_forces(&mut self, enabled: bool) -> Result<(), HapticsError> {
         if self.closed {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         self.forces_enabled = enabled;
         Ok(())
     }
 
-    fn read_state(&mut self) -> Result<DeviceState, DeviceError> {
+    fn read_state(&mut self) -> Result<DeviceState, HapticsError> {
         if self.closed {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         if self.config.fail_after_ticks.is_some_and(|n| self.tick >= n) {
-            return Err(DeviceError::Fault("simulated USB disconnect"));
+            return Err(HapticsError::DeviceFault {
+                what: "simulated USB disconnect",
+                tick: None,
+            });
         }
         Ok(self.measured)
     }
 
-    fn command(&mut self, command: &ForceCommand) -> Result<(), DeviceError> {
+    fn command(&mut self, command: &ForceCommand) -> Result<(), HapticsError> {
         if self.closed {
-            return Err(DeviceError::Closed);
+            return Err(HapticsError::DeviceClosed { tick: None });
         }
         self.step(command);
         self.tick += 1;
@@ -509,7 +513,7 @@ impl HapticDevice for SimOmega7 {
         self.gate.clone()
     }
 
-    fn close(&mut self) -> Result<(), DeviceError> {
+    fn close(&mut self) -> Result<(), HapticsError> {
         self.forces_enabled = false;
         self.gate.pass(&ForceCommand::ZERO);
         self.closed = true;
@@ -579,7 +583,10 @@ mod tests {
         d.command(&push).unwrap();
         assert_eq!(d.true_state().1, DVec3::ZERO);
         d.close().unwrap();
-        assert!(matches!(d.read_state(), Err(DeviceError::Closed)));
+        assert!(matches!(
+            d.read_state(),
+            Err(HapticsError::DeviceClosed { tick: None })
+        ));
     }
 
     #[test]

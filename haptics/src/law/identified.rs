@@ -2,9 +2,10 @@
 //! path, with the box it was trained on.
 
 use identify::{ModelBody, ModelFile, ModelKind, ScaledSvr};
-use svm::{FastSvr, SvmError};
+use svm::FastSvr;
 
-use super::model::{BadInputBox, InputBox, ScalarModel};
+use super::model::{InputBox, ScalarModel};
+use crate::error::HapticsError;
 
 /// One SVR of a model file, evaluated by [`FastSvr`] (f32, SIMD, no allocation).
 #[derive(Debug, Clone)]
@@ -14,28 +15,9 @@ pub struct SvrForceModel<const D: usize> {
     input_box: InputBox<D>,
 }
 
-/// Why a model file cannot drive a force law.
-#[derive(Debug, thiserror::Error)]
-pub enum IdentifiedModelError {
-    /// The file models something else.
-    #[error("a {found} model cannot drive this law (it needs a {expected} model)")]
-    WrongKind {
-        /// What the law needs.
-        expected: ModelKind,
-        /// What the file holds.
-        found: ModelKind,
-    },
-    /// The SVR cannot be put on the fast path.
-    #[error(transparent)]
-    Fast(#[from] SvmError),
-    /// The training range is not a usable box.
-    #[error(transparent)]
-    Box(#[from] BadInputBox),
-}
-
 impl<const D: usize> SvrForceModel<D> {
     /// From one scaled SVR and the training range of its inputs.
-    pub fn new(svr: &ScaledSvr, range: &[[f64; 2]]) -> Result<Self, IdentifiedModelError> {
+    pub fn new(svr: &ScaledSvr, range: &[[f64; 2]]) -> Result<Self, HapticsError> {
         let mut lo = [0.0; D];
         let mut hi = [0.0; D];
         for k in 0..D {
@@ -62,13 +44,10 @@ impl<const D: usize> ScalarModel<D> for SvrForceModel<D> {
 }
 
 /// The one SVR of a model file that must be of `kind`.
-fn single_model<const D: usize>(
-    file: &ModelFile,
-    kind: ModelKind,
-) -> Result<SvrForceModel<D>, IdentifiedModelError> {
+fn single_model<const D: usize>(file: &ModelFile, kind: ModelKind) -> Result<SvrForceModel<D>, HapticsError> {
     match &file.body {
         ModelBody::Single(svr) if file.kind == kind => SvrForceModel::new(svr, &file.input_range),
-        _ => Err(IdentifiedModelError::WrongKind {
+        _ => Err(HapticsError::WrongModelKind {
             expected: kind,
             found: file.kind,
         }),
@@ -76,19 +55,17 @@ fn single_model<const D: usize>(
 }
 
 /// The needle-puncture model of a model file, for [`super::needle::NeedleLaw`].
-pub fn needle_model(file: &ModelFile) -> Result<SvrForceModel<2>, IdentifiedModelError> {
+pub fn needle_model(file: &ModelFile) -> Result<SvrForceModel<2>, HapticsError> {
     single_model(file, ModelKind::NeedlePuncture)
 }
 
 /// The hard-contact friction model (normal force → friction) of a model file.
-pub fn hard_friction_model(file: &ModelFile) -> Result<SvrForceModel<1>, IdentifiedModelError> {
+pub fn hard_friction_model(file: &ModelFile) -> Result<SvrForceModel<1>, HapticsError> {
     single_model(file, ModelKind::HardFriction)
 }
 
 /// The soft-contact model's slope w(v) and intercept m(v) (each of sliding speed).
-pub fn soft_friction_models(
-    file: &ModelFile,
-) -> Result<(SvrForceModel<1>, SvrForceModel<1>), IdentifiedModelError> {
+pub fn soft_friction_models(file: &ModelFile) -> Result<(SvrForceModel<1>, SvrForceModel<1>), HapticsError> {
     match (&file.body, file.kind) {
         (ModelBody::TwoStage { slope, intercept }, ModelKind::SoftFriction) => {
             let speed = &file.input_range[..1];
@@ -97,7 +74,7 @@ pub fn soft_friction_models(
                 SvrForceModel::new(intercept, speed)?,
             ))
         }
-        _ => Err(IdentifiedModelError::WrongKind {
+        _ => Err(HapticsError::WrongModelKind {
             expected: ModelKind::SoftFriction,
             found: file.kind,
         }),

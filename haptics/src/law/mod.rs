@@ -14,9 +14,7 @@ pub mod reference;
 
 pub use environment::{Environment, EnvironmentForce, FreeSpace, FrictionSurface, NeedleEnvironment};
 pub use friction::{FrictionLaw, Frictionless, HardFriction, SoftFriction};
-pub use identified::{
-    IdentifiedModelError, SvrForceModel, hard_friction_model, needle_model, soft_friction_models,
-};
-pub use model::{BadInputBox, Evaluation, FnModel, InputBox, ScalarModel, eval_clamped};
+pub use identified::{SvrForceModel, hard_friction_model, needle_model, soft_friction_models};
+pub use model::{Evaluation, FnModel, InputBox, ScalarModel, eval_clamped};
 pub use needle::{NeedleLaw, NeedleLawConfig, NeedleOutput, PunctureState};
 pub use reference::{NeedleQuasiStatic, hard_contact_model, soft_contact_models};

@@ -5,6 +5,8 @@
 //! without allocating, and the box of inputs the model was trained on, so that it clamps
 //! instead of extrapolating.
 
+use crate::error::HapticsError;
+
 /// The box of inputs a model was identified on: `lo[i] ≤ x[i] ≤ hi[i]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InputBox<const N: usize> {
@@ -14,25 +16,13 @@ pub struct InputBox<const N: usize> {
     pub hi: [f64; N],
 }
 
-/// A box whose corners are not finite or not ordered.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("input box dimension {dimension}: [{lo}, {hi}] is not a finite, ordered range")]
-pub struct BadInputBox {
-    /// Which input.
-    pub dimension: usize,
-    /// Its lower bound.
-    pub lo: f64,
-    /// Its upper bound.
-    pub hi: f64,
-}
-
 impl<const N: usize> InputBox<N> {
     /// A box, checked: every bound finite, `lo ≤ hi`.
-    pub fn new(lo: [f64; N], hi: [f64; N]) -> Result<Self, BadInputBox> {
+    pub fn new(lo: [f64; N], hi: [f64; N]) -> Result<Self, HapticsError> {
         for dimension in 0..N {
             let (l, h) = (lo[dimension], hi[dimension]);
             if !(l.is_finite() && h.is_finite() && l <= h) {
-                return Err(BadInputBox {
+                return Err(HapticsError::BadInputBox {
                     dimension,
                     lo: l,
                     hi: h,

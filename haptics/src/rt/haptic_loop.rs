@@ -16,7 +16,8 @@ use super::monitor::{RateMonitor, RateStats};
 use super::pacer::{Pacer, Pacing};
 use super::sched::{self, RtRequest, RtStatus};
 use super::watchdog::{Heartbeat, Watchdog, WatchdogConfig};
-use crate::device::{DeviceError, DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
+use crate::device::{DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
+use crate::error::HapticsError;
 use crate::safety::SafetyFilter;
 
 /// Controller-defined values carried with each sample (estimated forces, model outputs, …):
@@ -141,11 +142,11 @@ impl LoopConfig {
     }
 
     /// The period, or an error for a rate that is not a positive finite number up to 100 kHz.
-    pub fn period(&self) -> Result<Duration, LoopError> {
+    pub fn period(&self) -> Result<Duration, HapticsError> {
         if self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= 100_000.0 {
             Ok(Duration::from_secs_f64(1.0 / self.rate_hz))
         } else {
-            Err(LoopError::BadRate(self.rate_hz))
+            Err(HapticsError::BadRate(self.rate_hz))
         }
     }
 }
@@ -223,39 +224,6 @@ pub struct RunSummary {
     pub reason: StopReason,
 }
 
-/// Why the loop stopped on an error. In every case the device was sent zero force first.
-#[derive(Debug, thiserror::Error)]
-pub enum LoopError {
-    /// The device failed.
-    #[error("haptic device failed at tick {tick}; force set to zero")]
-    Device {
-        /// Tick at which it failed.
-        tick: u64,
-        /// The device's error.
-        #[source]
-        source: DeviceError,
-    },
-    /// The haptic thread stalled and the watchdog ramped the force to zero.
-    #[error(
-        "the haptic thread stalled for {stall:?} before tick {tick}; the watchdog ramped the force to zero"
-    )]
-    WatchdogTripped {
-        /// The first tick after the stall.
-        tick: u64,
-        /// How long the loop was silent.
-        stall: Duration,
-    },
-    /// The configured rate is unusable.
-    #[error("loop rate {0} Hz is not in (0, 100000]")]
-    BadRate(f64),
-    /// A thread could not be started.
-    #[error("cannot start the haptic or watchdog thread")]
-    Spawn(#[source] std::io::Error),
-    /// The haptic thread panicked (a bug); the device was dropped with it.
-    #[error("the haptic thread panicked")]
-    Panicked,
-}
-
 /// Runs the loop on the calling thread until stopped, finished or failed.
 ///
 /// Opens the device's force gate and enables its forces at the start, and sends zero force
@@ -267,7 +235,7 @@ pub fn run<D, C>(
     io: &mut LoopIo,
     shared: &LoopShared,
     config: &LoopConfig,
-) -> Result<RunSummary, LoopError>
+) -> Result<RunSummary, HapticsError>
 where
     D: HapticDevice + ?Sized,
     C: Controller + ?Sized,
@@ -284,9 +252,9 @@ where
 
     // A new run starts with the gate open, even after a previous run's watchdog closed it.
     device.force_override().set_force_scale(1.0);
-    if let Err(source) = device.enable_forces(true) {
+    if let Err(e) = device.enable_forces(true) {
         safe_stop(device);
-        return Err(LoopError::Device { tick: 0, source });
+        return Err(e.in_loop_at(0));
     }
     let mut pacer = Pacer::new(period, config.pacing, Instant::now());
     let mut applied = ForceCommand::ZERO;
@@ -306,7 +274,7 @@ where
         let wake = pacer.wait();
         if heartbeat.tripped() {
             safe_stop(device);
-            return Err(LoopError::WatchdogTripped {
+            return Err(HapticsError::WatchdogTripped {
                 tick,
                 stall: heartbeat.stall(),
             });
@@ -322,9 +290,9 @@ where
         let state = match device.read_state() {
             Ok(s) => s,
             Err(e) if e.is_end_of_stream() => break StopReason::EndOfStream,
-            Err(source) => {
+            Err(e) => {
                 safe_stop(device);
-                return Err(LoopError::Device { tick, source });
+                return Err(e.in_loop_at(tick));
             }
         };
         let time_s = tick as f64 * period_s;
@@ -339,9 +307,9 @@ where
         out.flags = 0;
         controller.tick(&input, &mut out);
         let (command, safety_flags) = safety.apply(&out.command);
-        if let Err(source) = device.command(&command) {
+        if let Err(e) = device.command(&command) {
             safe_stop(device);
-            return Err(LoopError::Device { tick, source });
+            return Err(e.in_loop_at(tick));
         }
         applied = command;
         let sample = HapticSample {
@@ -392,7 +360,7 @@ pub struct LoopOutcome<D, C> {
     /// recorder the run is over).
     pub io: LoopIo,
     /// How the run ended.
-    pub result: Result<RunSummary, LoopError>,
+    pub result: Result<RunSummary, HapticsError>,
 }
 
 /// A loop running on its own thread.
@@ -409,7 +377,7 @@ pub fn spawn<D, C>(
     controller: C,
     io: LoopIo,
     config: LoopConfig,
-) -> Result<LoopHandle<D, C>, LoopError>
+) -> Result<LoopHandle<D, C>, HapticsError>
 where
     D: HapticDevice + 'static,
     C: Controller + 'static,
@@ -417,8 +385,12 @@ where
     let shared = Arc::new(LoopShared::new(config.period()?));
     let watchdog = match config.watchdog {
         Some(w) => Some(
-            Watchdog::spawn(w, shared.heartbeat.clone(), device.force_override())
-                .map_err(LoopError::Spawn)?,
+            Watchdog::spawn(w, shared.heartbeat.clone(), device.force_override()).map_err(|source| {
+                HapticsError::Spawn {
+                    thread: "watchdog",
+                    source,
+                }
+            })?,
         ),
         None => None,
     };
@@ -435,7 +407,10 @@ where
                 result,
             }
         })
-        .map_err(LoopError::Spawn)?;
+        .map_err(|source| HapticsError::Spawn {
+            thread: "haptic",
+            source,
+        })?;
     Ok(LoopHandle {
         shared,
         thread,
@@ -465,8 +440,11 @@ impl<D, C> LoopHandle<D, C> {
     }
 
     /// Waits for the loop to end, then stops the watchdog.
-    pub fn join(mut self) -> Result<LoopOutcome<D, C>, LoopError> {
-        let outcome = self.thread.join().map_err(|_| LoopError::Panicked);
+    pub fn join(mut self) -> Result<LoopOutcome<D, C>, HapticsError> {
+        let outcome = self
+            .thread
+            .join()
+            .map_err(|_| HapticsError::Panicked { thread: "haptic" });
         if let Some(w) = self.watchdog.take() {
             w.stop();
         }

@@ -7,8 +7,8 @@ pub mod sched;
 pub mod watchdog;
 
 pub use haptic_loop::{
-    CHANNELS, Controller, HapticSample, LoopConfig, LoopError, LoopHandle, LoopIo, LoopOutcome, LoopShared,
-    RunSummary, StopReason, TickInput, TickOutput, ZeroForce, run, spawn,
+    CHANNELS, Controller, HapticSample, LoopConfig, LoopHandle, LoopIo, LoopOutcome, LoopShared, RunSummary,
+    StopReason, TickInput, TickOutput, ZeroForce, run, spawn,
 };
 pub use monitor::{Percentiles, RateMonitor, RateStats};
 pub use pacer::{Pacer, Pacing};

@@ -10,6 +10,7 @@ use capture::{Capture, CaptureError, write_atomically};
 
 use super::split::Split;
 use super::{li_bi, nakano, sinapov};
+use crate::error::HapticsError;
 use crate::sim::world::scratch::{Behaviour, household_surfaces};
 use crate::sim::world::surface::{SurfacePatch, nakano_surfaces};
 
@@ -91,29 +92,6 @@ impl GenSummary {
     }
 }
 
-/// Why generation failed.
-#[derive(Debug, thiserror::Error)]
-pub enum GenError {
-    /// A capture could not be built or written.
-    #[error("capture {}", path.display())]
-    Capture {
-        /// The capture's path, relative to the output folder.
-        path: PathBuf,
-        /// What was wrong.
-        #[source]
-        source: CaptureError,
-    },
-    /// A folder or the manifest could not be written.
-    #[error("cannot write {}: {source}", path.display())]
-    Io {
-        /// The path that failed.
-        path: PathBuf,
-        /// The underlying error.
-        #[source]
-        source: std::io::Error,
-    },
-}
-
 /// File name of the manifest written next to the captures.
 pub const MANIFEST: &str = "MANIFEST.csv";
 
@@ -125,30 +103,34 @@ pub fn generate(
     seed: u64,
     sets: &[CaptureSet],
     progress: &mut dyn FnMut(&Generated),
-) -> Result<GenSummary, GenError> {
+) -> Result<GenSummary, HapticsError> {
     let mut summary = GenSummary::default();
     let mut write = |relative: PathBuf,
                      capture: Result<Capture, CaptureError>,
                      protocol: &'static str,
                      label: String,
                      role: String| {
-        let capture = capture.map_err(|source| GenError::Capture {
+        let capture = capture.map_err(|source| HapticsError::GeneratedCapture {
             path: relative.clone(),
-            source,
+            source: Box::new(source),
         })?;
         let path = out.join(&relative);
         if let Some(parent) = path.parent() {
-            fs::create_dir_all(parent).map_err(|source| GenError::Io {
+            fs::create_dir_all(parent).map_err(|source| HapticsError::Io {
+                action: "write",
                 path: parent.to_owned(),
                 source,
             })?;
         }
-        capture.write_file(&path).map_err(|source| GenError::Capture {
-            path: relative.clone(),
-            source,
-        })?;
+        capture
+            .write_file(&path)
+            .map_err(|source| HapticsError::GeneratedCapture {
+                path: relative.clone(),
+                source: Box::new(source),
+            })?;
         let bytes = fs::metadata(&path)
-            .map_err(|source| GenError::Io {
+            .map_err(|source| HapticsError::Io {
+                action: "write",
                 path: path.clone(),
                 source,
             })?
@@ -163,7 +145,7 @@ pub fn generate(
         };
         progress(&generated);
         summary.files.push(generated);
-        Ok::<(), GenError>(())
+        Ok::<(), HapticsError>(())
     };
     let mut sets = sets.to_vec();
     sets.sort();
@@ -237,7 +219,7 @@ pub fn generate(
     Ok(summary)
 }
 
-fn write_manifest(out: &Path, summary: &GenSummary) -> Result<(), GenError> {
+fn write_manifest(out: &Path, summary: &GenSummary) -> Result<(), HapticsError> {
     let path = out.join(MANIFEST);
     write_atomically(&path, |w| {
         writeln!(w, "path,protocol,label,role,rows")?;
@@ -254,5 +236,9 @@ fn write_manifest(out: &Path, summary: &GenSummary) -> Result<(), GenError> {
         }
         Ok(())
     })
-    .map_err(|source: std::io::Error| GenError::Io { path, source })
+    .map_err(|source: std::io::Error| HapticsError::Io {
+        action: "write",
+        path,
+        source,
+    })
 }

@@ -14,6 +14,6 @@ mod seed;
 pub mod sinapov;
 mod split;
 
-pub use generate::{CaptureSet, GenError, GenSummary, Generated, generate};
+pub use generate::{CaptureSet, GenSummary, Generated, generate};
 pub use seed::derive_seed;
 pub use split::Split;

@@ -1,0 +1,233 @@
+//! Every failure of the haptic side, as one type.
+//!
+//! The haptic thread can meet some of these mid-run; those variants carry only static text and
+//! numbers, so building and reporting one does not allocate. This file sits at the crate root
+//! and imports only the lower crates and the standard library, so that `rt` may use it without
+//! reaching up into control, laws, the simulated world or the recorder.
+
+use std::fmt;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use capture::CaptureError;
+use identify::{IdentifyError, ModelKind};
+use recognize::RecognizeError;
+use svm::SvmError;
+
+/// Why a haptics operation failed: a device, the loop, a recording, a capture protocol, the
+/// live recognizer, or an identified model.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum HapticsError {
+    /// The vendor library could not be loaded.
+    #[error(
+        "the Force Dimension SDK (libdhd) was not found ({tried}): install the Force Dimension SDK or use --device sim"
+    )]
+    SdkMissing {
+        /// What was tried and why each failed.
+        tried: String,
+    },
+    /// The vendor library lacks a function the device needs.
+    #[error(
+        "libdhd at {library} has no `{symbol}`: install a Force Dimension SDK of version 3 or newer, or use --device sim"
+    )]
+    SymbolMissing {
+        /// The library file.
+        library: String,
+        /// The missing function.
+        symbol: &'static str,
+    },
+    /// The SDK loaded but found no device.
+    #[error("no Omega.7 is connected ({detail}): connect and power it on, or use --device sim")]
+    NoDevice {
+        /// What the SDK said.
+        detail: String,
+    },
+    /// A device call returned an error code. Inside the loop, the loop then sent zero force and
+    /// stopped, and `tick` says when.
+    #[error("{call} failed (code {code}){}", InLoop(*tick))]
+    DeviceCall {
+        /// The function that failed.
+        call: &'static str,
+        /// Its return code.
+        code: i32,
+        /// The loop's tick when it failed (0: as the loop enabled forces); `None` outside the
+        /// loop.
+        tick: Option<u64>,
+    },
+    /// The device stopped answering or reported a fault.
+    #[error("device fault: {what}{}", InLoop(*tick))]
+    DeviceFault {
+        /// What went wrong.
+        what: &'static str,
+        /// The loop's tick when it failed; `None` outside the loop.
+        tick: Option<u64>,
+    },
+    /// The device was used after `close`.
+    #[error("device is closed{}", InLoop(*tick))]
+    DeviceClosed {
+        /// The loop's tick when it was used; `None` outside the loop.
+        tick: Option<u64>,
+    },
+    /// A replayed capture has no more samples: the normal end of a replay.
+    #[error("the replayed capture has ended")]
+    EndOfReplay,
+    /// A capture could not be used for replay.
+    #[error("cannot replay {source_name}: {reason}")]
+    BadReplay {
+        /// The capture's file.
+        source_name: String,
+        /// Why.
+        reason: String,
+    },
+    /// HID enumeration or opening failed.
+    #[error("HID: {0}")]
+    Hid(#[from] hidapi::HidError),
+    /// The haptic thread stalled and the watchdog ramped the force to zero.
+    #[error(
+        "the haptic thread stalled for {stall:?} before tick {tick}; the watchdog ramped the force to zero"
+    )]
+    WatchdogTripped {
+        /// The first tick after the stall.
+        tick: u64,
+        /// How long the loop was silent.
+        stall: Duration,
+    },
+    /// The configured loop rate is unusable.
+    #[error("loop rate {0} Hz is not in (0, 100000]")]
+    BadRate(f64),
+    /// A thread could not be started.
+    #[error("cannot start the {thread} thread")]
+    Spawn {
+        /// Which (`haptic`, `watchdog`, `recorder`, `pedal`).
+        thread: &'static str,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A thread panicked (a bug); what it owned was dropped with it.
+    #[error("the {thread} thread panicked")]
+    Panicked {
+        /// Which (`haptic`, `recorder`).
+        thread: &'static str,
+    },
+    /// A file or folder could not be created or written.
+    #[error("cannot {action} {}", path.display())]
+    Io {
+        /// What was being done (`create`, `write`).
+        action: &'static str,
+        /// The path that failed.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A generated capture could not be built or written.
+    #[error("capture {}", path.display())]
+    GeneratedCapture {
+        /// The capture's path, relative to the output folder.
+        path: PathBuf,
+        /// What was wrong (boxed: the path beside it would make every haptics error large).
+        #[source]
+        source: Box<CaptureError>,
+    },
+    /// No simulated surface has this name.
+    #[error("unknown surface `{name}` (expected one of: {expected})")]
+    UnknownSurface {
+        /// The name asked for.
+        name: String,
+        /// The known names, comma-separated.
+        expected: String,
+    },
+    /// Only a SOM over Nakano's rubbing features runs live.
+    #[error(
+        "a {method} recognizer over {features} features cannot run live: only a som over nakano \
+         features decides from the rubbing stream"
+    )]
+    LiveMethod {
+        /// The recognizer's method.
+        method: &'static str,
+        /// Its features (`nakano`, `spectral`, `both`).
+        features: &'static str,
+    },
+    /// The loop's rate is not the rate the recognizer's windows are counted at.
+    #[error("the loop runs at {loop_hz} Hz but the recognizer's windows are counted at {model_hz} Hz")]
+    LiveRate {
+        /// The loop's rate, Hz.
+        loop_hz: f64,
+        /// The recognizer's rate, Hz.
+        model_hz: f64,
+    },
+    /// A live sample was NaN or infinite; the stroke starts afresh from the next one.
+    #[error("non-finite sample (position {position_m} m, height {height_m} m, friction {friction_n} N)")]
+    NotFiniteSample {
+        /// Position along the rubbing direction, m.
+        position_m: f64,
+        /// Height, m.
+        height_m: f64,
+        /// Friction, N.
+        friction_n: f64,
+    },
+    /// A model file models something other than what the force law needs.
+    #[error("a {found} model cannot drive this law (it needs a {expected} model)")]
+    WrongModelKind {
+        /// What the law needs.
+        expected: ModelKind,
+        /// What the file holds.
+        found: ModelKind,
+    },
+    /// A model's input box has corners that are not finite or not ordered.
+    #[error("input box dimension {dimension}: [{lo}, {hi}] is not a finite, ordered range")]
+    BadInputBox {
+        /// Which input.
+        dimension: usize,
+        /// Its lower bound.
+        lo: f64,
+        /// Its upper bound.
+        hi: f64,
+    },
+    /// A capture could not be read, validated or written.
+    #[error(transparent)]
+    Capture(#[from] CaptureError),
+    /// An SVR could not be put on the fast path.
+    #[error(transparent)]
+    Svm(#[from] SvmError),
+    /// A model file could not be used.
+    #[error(transparent)]
+    Identify(#[from] IdentifyError),
+    /// The recognizer (its feature stream or its map) refused.
+    #[error(transparent)]
+    Recognize(#[from] RecognizeError),
+}
+
+impl HapticsError {
+    /// Whether this is the orderly end of a finite device (a replay), not a failure.
+    pub fn is_end_of_stream(&self) -> bool {
+        matches!(self, HapticsError::EndOfReplay)
+    }
+
+    /// The same failure, marked as met by the loop at tick `at` (after which the loop sent zero
+    /// force). Moves data only, so the haptic thread can call it without allocating; failures
+    /// that carry no tick are returned unchanged.
+    pub fn in_loop_at(mut self, at: u64) -> Self {
+        if let HapticsError::DeviceCall { tick, .. }
+        | HapticsError::DeviceFault { tick, .. }
+        | HapticsError::DeviceClosed { tick } = &mut self
+        {
+            *tick = Some(at);
+        }
+        self
+    }
+}
+
+/// The tail of a device failure's message: where the loop met it, without allocating.
+struct InLoop(Option<u64>);
+
+impl fmt::Display for InLoop {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(tick) => write!(f, " at loop tick {tick}; force set to zero"),
+            None => Ok(()),
+        }
+    }
+}
