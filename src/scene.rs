@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use haptics::DeviceSpecs;
 use serde::Deserialize;
 
 /// The scene `palpus run` starts when none is given.
@@ -308,6 +309,39 @@ impl fmt::Display for ModelRole {
     }
 }
 
+/// The device every scene's bounds come from (the simulator is a faithful Omega.7).
+const DEVICE: DeviceSpecs = DeviceSpecs::OMEGA7;
+/// Heaviest virtual tool, kg: far heavier than any instrument held in one hand, which the
+/// trainee could no longer move against the device's 12 N.
+const MAX_VIRTUAL_MASS_KG: f64 = 10.0;
+/// Fastest scripted hand motion, m/s: deliberate surgical motions stay below ~0.1 m/s; 0.5 m/s
+/// crosses the Omega.7's whole workspace in a third of a second.
+const MAX_HAND_SPEED_MPS: f64 = 0.5;
+/// Longest scripted task (holds, all strokes), s: an hour.
+const MAX_TASK_S: f64 = 3600.0;
+/// Longest scene name; the name becomes a folder of the default output path.
+const MAX_NAME_LEN: usize = 64;
+
+/// A scene's name names its report folder, so it must be one plain path component: letters,
+/// digits, `_`, `-` and `.`, not starting with `.` (no `..`, no hidden folder, no separator).
+fn check_name(name: &str) -> Result<(), String> {
+    if name.is_empty() || name.len() > MAX_NAME_LEN {
+        return Err(format!("`{name}`: must be 1–{MAX_NAME_LEN} characters"));
+    }
+    if name.starts_with('.') {
+        return Err(format!("`{name}`: must not start with `.`"));
+    }
+    if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')))
+    {
+        return Err(format!(
+            "`{name}`: `{c}` is not allowed (letters, digits, `_`, `-`, `.`)"
+        ));
+    }
+    Ok(())
+}
+
 /// Why a scene cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -410,8 +444,8 @@ impl Scene {
     }
 
     fn validate(&self) -> Result<(), SceneError> {
-        if self.name.trim().is_empty() {
-            return Err(self.invalid("name", "must not be empty"));
+        if let Err(reason) = check_name(&self.name) {
+            return Err(self.invalid("name", reason));
         }
         if !matches!(self.device.kind.as_str(), "sim" | "omega7") {
             return Err(self.invalid(
@@ -424,15 +458,33 @@ impl Scene {
             return Err(self.invalid("device.rate_hz", format!("{rate}: expected 100–10000 Hz")));
         }
         let h = self.haptics;
-        for (key, value) in [
-            ("haptics.virtual_mass_kg", h.virtual_mass_kg),
-            ("haptics.virtual_damping_nspm", h.virtual_damping_nspm),
-            ("haptics.grip_stiffness_npm", h.grip_stiffness_npm),
-            ("haptics.rupture_min_peak_n", h.rupture_min_peak_n),
+        for (key, value, max, why) in [
+            (
+                "haptics.virtual_mass_kg",
+                h.virtual_mass_kg,
+                MAX_VIRTUAL_MASS_KG,
+                "a tool held in one hand",
+            ),
+            (
+                "haptics.virtual_damping_nspm",
+                h.virtual_damping_nspm,
+                DEVICE.max_damping_nspm,
+                "the Omega.7's largest stable damping",
+            ),
+            (
+                "haptics.grip_stiffness_npm",
+                h.grip_stiffness_npm,
+                DEVICE.max_stiffness_npm,
+                "the Omega.7's stiffest stable spring",
+            ),
+            (
+                "haptics.rupture_min_peak_n",
+                h.rupture_min_peak_n,
+                DEVICE.max_force_n,
+                "the Omega.7's largest force",
+            ),
         ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(self.invalid(key, format!("{value}: must be a positive number")));
-            }
+            self.in_range(key, value, max, why)?;
         }
         let c = self.camera;
         if c.eye_m.iter().chain(&c.target_m).any(|v| !v.is_finite()) || c.eye_m == c.target_m {
@@ -482,8 +534,29 @@ impl Scene {
             if !(m.roughness.is_finite() && (0.0..=1.0).contains(&m.roughness)) {
                 return Err(self.invalid(key("roughness"), "must lie in 0–1"));
             }
-            if !(m.contact_stiffness_npm.is_finite() && m.contact_stiffness_npm > 0.0) {
-                return Err(self.invalid(key("contact_stiffness_npm"), "must be positive"));
+            self.in_range(
+                &key("contact_stiffness_npm"),
+                m.contact_stiffness_npm,
+                DEVICE.max_stiffness_npm,
+                "the Omega.7's stiffest stable spring",
+            )?;
+            // The virtual tool is integrated semi-implicitly (haptics::control::admittance): a
+            // spring K on mass M is stable only for T < 2·√(M/K). Asking for T ≤ √(M/K), half
+            // that, keeps every contact resolved by at least 2π ticks per period.
+            let stiffness_npm = m.contact_stiffness_npm + h.grip_stiffness_npm;
+            let period_s = 1.0 / rate;
+            if period_s > (h.virtual_mass_kg / stiffness_npm).sqrt() {
+                return Err(self.invalid(
+                    key("contact_stiffness_npm"),
+                    format!(
+                        "{} N/m with the grip's {} N/m on a {} kg virtual tool oscillates faster than \
+                         {rate} Hz can follow (needs virtual_mass_kg ≥ {:.4} kg, or a softer contact)",
+                        m.contact_stiffness_npm,
+                        h.grip_stiffness_npm,
+                        h.virtual_mass_kg,
+                        stiffness_npm * period_s * period_s
+                    ),
+                ));
             }
             for (field, model, kinds) in [
                 ("puncture", &m.puncture, &["needle"][..]),
@@ -560,14 +633,27 @@ impl Scene {
         self.validate_task()
     }
 
+    /// `value` must be a number in (0, `max`]; `why` says where the bound comes from.
+    fn in_range(&self, key: &str, value: f64, max: f64, why: &str) -> Result<(), SceneError> {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(self.invalid(key, format!("{value}: must be a positive number")));
+        }
+        if value > max {
+            return Err(self.invalid(key, format!("{value}: above {max} ({why})")));
+        }
+        Ok(())
+    }
+
     fn validate_task(&self) -> Result<(), SceneError> {
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(self.invalid(format!("task.{key}"), format!("{v}: must be a positive number")))
-            }
+        let speed = |key: &str, v: f64| {
+            self.in_range(
+                &format!("task.{key}"),
+                v,
+                MAX_HAND_SPEED_MPS,
+                "a deliberate hand motion",
+            )
         };
+        let positive = |key: &str, v: f64| self.in_range(&format!("task.{key}"), v, f64::MAX, "");
         match self.task {
             Task::Insertion {
                 start_above_m,
@@ -578,10 +664,10 @@ impl Scene {
             } => {
                 positive("start_above_m", start_above_m)?;
                 positive("depth_m", depth_m)?;
-                positive("speed_mps", speed_mps)?;
-                positive("withdraw_speed_mps", withdraw_speed_mps)?;
-                if !(hold_s.is_finite() && hold_s >= 0.0) {
-                    return Err(self.invalid("task.hold_s", "must be zero or more"));
+                speed("speed_mps", speed_mps)?;
+                speed("withdraw_speed_mps", withdraw_speed_mps)?;
+                if !(hold_s.is_finite() && (0.0..=MAX_TASK_S).contains(&hold_s)) {
+                    return Err(self.invalid("task.hold_s", format!("{hold_s}: expected 0–{MAX_TASK_S} s")));
                 }
                 if depth_m + start_above_m > 0.07 {
                     return Err(self.invalid(
@@ -603,10 +689,24 @@ impl Scene {
                 strokes,
             } => {
                 positive("normal_force_n", normal_force_n)?;
-                positive("stroke_m", stroke_m)?;
-                positive("speed_mps", speed_mps)?;
+                self.in_range(
+                    "task.stroke_m",
+                    stroke_m,
+                    2.0 * DEVICE.workspace_radius_m,
+                    "the Omega.7's workspace diameter",
+                )?;
+                speed("speed_mps", speed_mps)?;
                 if strokes == 0 {
                     return Err(self.invalid("task.strokes", "at least one"));
+                }
+                // The stroke plan is built before the run starts, so its length bounds memory.
+                let planned_s =
+                    f64::from(strokes) * stroke_m / speed_mps * self.rubbed_objects().len().max(1) as f64;
+                if planned_s > MAX_TASK_S {
+                    return Err(self.invalid(
+                        "task.strokes",
+                        format!("{strokes} strokes take {planned_s:.3e} s; at most {MAX_TASK_S} s in all"),
+                    ));
                 }
                 if normal_force_n > 10.0 {
                     return Err(self.invalid("task.normal_force_n", "above the Omega.7's 12 N less margin"));
@@ -717,6 +817,84 @@ mod tests {
             "tool = true\n[[objects]]\nname = \"n2\"\nmesh = \"n.glb\"\nmaterial = \"steel\"\ntool = true",
         ));
         assert!(e.contains("at most one object"), "{e}");
+    }
+
+    /// Values that parse but would pin the device at its force limit, or grow memory without
+    /// bound, are refused at load with the key that carries them.
+    #[test]
+    fn implausible_values_are_refused_with_their_key() {
+        let needle = default_text();
+        let rub = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/friction_hard_soft.toml"),
+        )
+        .unwrap();
+        assert!(needle.contains("virtual_mass_kg = 0.8") && needle.contains("speed_mps = 0.010"));
+        assert!(rub.contains("stroke_m = 0.03") && rub.contains("strokes = 4"));
+        assert!(rub.contains("contact_stiffness_npm = 300.0"));
+        for (text, key) in [
+            (
+                needle.replace("virtual_mass_kg = 0.8", "virtual_mass_kg = 1e-30"),
+                "contact_stiffness_npm`",
+            ),
+            (
+                needle.replace("virtual_mass_kg = 0.8", "virtual_mass_kg = 1e3"),
+                "haptics.virtual_mass_kg`",
+            ),
+            (
+                needle.replace("grip_stiffness_npm = 300.0", "grip_stiffness_npm = 1e12"),
+                "haptics.grip_stiffness_npm`",
+            ),
+            (
+                needle.replace("virtual_damping_nspm = 4.0", "virtual_damping_nspm = 1e9"),
+                "haptics.virtual_damping_nspm`",
+            ),
+            (
+                needle.replacen("speed_mps = 0.010", "speed_mps = 1e6", 1),
+                "task.speed_mps`",
+            ),
+            (needle.replace("hold_s = ", "hold_s = 1e9 #"), "task.hold_s`"),
+            (rub.replace("stroke_m = 0.03", "stroke_m = 1e3"), "task.stroke_m`"),
+            (
+                rub.replace("strokes = 4", "strokes = 4294967295"),
+                "task.strokes`",
+            ),
+            (
+                rub.replace("contact_stiffness_npm = 300.0", "contact_stiffness_npm = 1e30"),
+                "contact_stiffness_npm`",
+            ),
+        ] {
+            let e = error(&text);
+            assert!(e.starts_with("scenes/x.toml: `") && e.contains(key), "{key}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_scene_name_is_one_plain_path_component() {
+        let text = default_text();
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("name = "))
+            .unwrap()
+            .to_owned();
+        for bad in [
+            "../../../somewhere",
+            "a/b",
+            "a\\b",
+            ".hidden",
+            "",
+            "x y",
+            &"n".repeat(65),
+        ] {
+            let e = error(&text.replacen(&line, &format!("name = \"{bad}\""), 1));
+            assert!(e.contains("`name`"), "{bad}: {e}");
+        }
+        for good in ["liver_2", "needle-liver.v2"] {
+            let scene = Scene::parse(
+                &text.replacen(&line, &format!("name = \"{good}\""), 1),
+                Path::new("x.toml"),
+            );
+            assert_eq!(scene.unwrap().name, good);
+        }
     }
 
     #[test]

@@ -158,11 +158,13 @@ pub enum SessionError {
         /// Why.
         source: haptics::HapticsError,
     },
+    /// The device could not be opened.
+    #[error("opening the device: {0}")]
+    Device(#[source] haptics::HapticsError),
     /// The replay capture is unreadable.
     #[error(transparent)]
     Replay(#[from] capture::CaptureError),
-    /// The device could not be opened, the loop could not run, recording failed, or a
-    /// simulated surface is unknown.
+    /// The loop could not run, recording failed, or a simulated surface is unknown.
     #[error(transparent)]
     Haptics(#[from] haptics::HapticsError),
     /// The device cannot run this task.
@@ -501,7 +503,9 @@ pub fn run_segment(
                 "the surfaces of a recognition scene are simulated; run it with --device sim".into(),
             ));
         }
-        (DeviceChoice::Omega7, _) => Box::new(Omega7::open(options.dhd_library.as_deref())?),
+        (DeviceChoice::Omega7, _) => {
+            Box::new(Omega7::open(options.dhd_library.as_deref()).map_err(SessionError::Device)?)
+        }
         (DeviceChoice::Replay(path), kind) => {
             let expected = match kind {
                 SegmentKind::Needle { .. } => CaptureKind::Insertion,
@@ -580,8 +584,8 @@ pub fn run_segment(
             (p, AnyRecorder::File(r))
         }
         None => {
-            let writer = CaptureWriter::new(std::io::sink(), &meta, columns)
-                .map_err(haptics::HapticsError::from)?;
+            let writer =
+                CaptureWriter::new(std::io::sink(), &meta, columns).map_err(haptics::HapticsError::from)?;
             let (p, r) = Recorder::spawn(writer, map, ring)?;
             (p, AnyRecorder::Sink(r))
         }
