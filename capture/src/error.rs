@@ -172,6 +172,19 @@ pub enum CaptureErrorKind {
     /// A field is NaN or infinite (including overflowing literals like `1e999`).
     #[error("value is not finite")]
     NotFinite,
+    /// A field is finite but beyond the column's plausible magnitude
+    /// ([`magnitude_limit`](super::kind::magnitude_limit)): a wrong unit or a logger's
+    /// sentinel, which downstream filters and fits would spread over every sample.
+    #[error(
+        "{value:e} is outside ±{limit:e}, the largest magnitude a capture accepts in this \
+         column (SI units; a wrong unit or a sentinel value?)"
+    )]
+    Implausible {
+        /// The value.
+        value: f64,
+        /// The column's limit.
+        limit: f64,
+    },
     /// `time_s` did not strictly increase from the previous sample.
     #[error("time {current} s is not after the previous sample's time {previous} s")]
     TimeNotIncreasing {
@@ -267,6 +280,24 @@ pub enum CaptureErrorKind {
     /// cell's text is kept).
     #[error("`{0}` is not finite")]
     NotFiniteText(String),
+    /// A mapped cell of an imported log is beyond the target column's plausible magnitude
+    /// after unit conversion (the cell's text is kept; see
+    /// [`magnitude_limit`](super::kind::magnitude_limit)).
+    #[error(
+        "`{text}` is {value:e} in SI units, outside ±{limit:e}, the largest magnitude a capture \
+         accepts in `{target}` (check the unit in --map, or skip such rows with \
+         --drop-implausible)"
+    )]
+    ImplausibleText {
+        /// The cell as written.
+        text: Box<str>,
+        /// The value in SI units.
+        value: f64,
+        /// The target column's limit.
+        limit: f64,
+        /// The capture column the cell maps to.
+        target: Box<str>,
+    },
     /// The time of an imported log did not strictly increase (values converted to seconds).
     #[error("time {current} s is not after the previous row's {previous} s (time must strictly increase)")]
     RowTimeNotIncreasing {
@@ -288,19 +319,11 @@ pub enum CaptureErrorKind {
         /// Mean rate, Hz.
         mean_rate_hz: f64,
     },
-    /// The import's output would be unreasonably large.
-    #[error(
-        "the output would have {rows} rows at {rate_hz} Hz over {span_s} s; check the time \
-         unit and --rate-hz"
-    )]
-    TooManyRows {
-        /// Rows the output grid would have.
-        rows: f64,
-        /// Output rate, Hz.
-        rate_hz: f64,
-        /// Input time span, s.
-        span_s: f64,
-    },
+    /// The import's output would be larger than its budget; checked before anything is
+    /// allocated. Boxed, like [`UnknownSource`](Self::UnknownSource)'s slices, to keep every
+    /// `Result<_, CaptureError>` small.
+    #[error("{0}")]
+    TooManyRows(Box<OutputBudget>),
 
     // --- Signals (`signal`): slices, so these name indices rather than lines ---
     /// `time_s` and `position_m` differ in length.
@@ -343,6 +366,44 @@ pub enum CaptureErrorKind {
         /// What it must be.
         reason: &'static str,
     },
+}
+
+/// An import's output size against its budget (see
+/// [`import::MAX_OUTPUT_ROWS`](super::import::MAX_OUTPUT_ROWS) and
+/// [`ImportSpec::max_upsample`](super::import::ImportSpec::max_upsample)), for
+/// [`CaptureErrorKind::TooManyRows`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputBudget {
+    /// Rows the output grid would have.
+    pub rows: f64,
+    /// Output rate, Hz.
+    pub rate_hz: f64,
+    /// Input time span, s.
+    pub span_s: f64,
+    /// Data rows read from the input.
+    pub rows_in: usize,
+    /// The budget the output exceeds, rows.
+    pub limit: f64,
+    /// Which budget, and the option that changes it, if any.
+    pub reason: &'static str,
+}
+
+impl fmt::Display for OutputBudget {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let OutputBudget {
+            rows,
+            rate_hz,
+            span_s,
+            rows_in,
+            limit,
+            reason,
+        } = self;
+        write!(
+            f,
+            "the output would have {rows} rows ({rate_hz} Hz over {span_s} s) from {rows_in} \
+             input rows, more than {limit} ({reason}); check the time unit and --rate-hz"
+        )
+    }
 }
 
 #[cfg(test)]

@@ -68,6 +68,40 @@ pub const AXIAL_FORCE_N: &str = "axial_force_n";
 /// (the time derivative of `depth_m`).
 pub const VELOCITY_MPS: &str = "velocity_mps";
 
+// --- Plausible magnitudes --------------------------------------------------
+
+/// Largest magnitude a capture accepts in any physical column (positions in m, forces in N,
+/// velocities in m/s, accelerations in m/s²), in SI units.
+///
+/// Finite is not enough: one `1e308` from a logger's overflow sentinel survives parsing,
+/// then turns every sample a low-pass or an interpolation touches into garbage (and squares
+/// to infinity in any fit). 10⁶ SI is far beyond every rig this format is for (a tool
+/// travels millimetres to a metre, loads are below a kilonewton, hand-held tools move at a
+/// few m/s, and even shock accelerometers saturate near 10⁵ g ≈ 9.8·10⁵ m/s²), so anything
+/// larger is a wrong unit or a sentinel. It also keeps arithmetic safe: a square is at most
+/// 10¹², and a sum of squares over 10⁷ samples at most 10¹⁹, nowhere near `f64`'s 10³⁰⁸.
+pub const MAX_PHYSICAL_MAGNITUDE: f64 = 1e6;
+
+/// Largest magnitude of `time_s`, in seconds (about 317 years).
+///
+/// Captures count time from the start of the recording, but imported logs keep their
+/// first timestamp, and Unix-epoch seconds (1.7·10⁹ in 2024) are a common clock; epoch
+/// milliseconds or nanoseconds read as seconds (10¹² and more) are a unit mistake and are
+/// caught.
+pub const MAX_TIME_MAGNITUDE_S: f64 = 1e10;
+
+/// The largest magnitude a capture accepts in `column` (SI units): [`MAX_TIME_MAGNITUDE_S`]
+/// for `time_s`, [`MAX_PHYSICAL_MAGNITUDE`] for every other column. This is the one place
+/// the limits are chosen; the reader, the writer, [`Capture::new`](crate::Capture::new) and
+/// the import all ask it.
+pub fn magnitude_limit(column: &str) -> f64 {
+    if column == TIME_S {
+        MAX_TIME_MAGNITUDE_S
+    } else {
+        MAX_PHYSICAL_MAGNITUDE
+    }
+}
+
 const RUBBING_REQUIRED: &[&str] = &[TIME_S, TANGENTIAL_POSITION_M, NORMAL_FORCE_N];
 const RUBBING_OPTIONAL: &[&str] = &[
     TANGENTIAL_VELOCITY_MPS,
@@ -191,5 +225,22 @@ mod tests {
         );
         assert!(!CaptureKind::Insertion.allows_column("friction_force_n"));
         assert!(!CaptureKind::Rubbing.allows_column("depth_m"));
+    }
+
+    #[test]
+    fn magnitude_limits() {
+        assert_eq!(magnitude_limit(TIME_S), MAX_TIME_MAGNITUDE_S);
+        for kind in CaptureKind::ALL {
+            for name in kind
+                .required_columns()
+                .iter()
+                .chain(kind.optional_columns())
+                .skip(1)
+            {
+                assert_eq!(magnitude_limit(name), MAX_PHYSICAL_MAGNITUDE, "{name}");
+            }
+        }
+        // Unix-epoch seconds are times; epoch milliseconds are not.
+        const { assert!(1.8e9 <= MAX_TIME_MAGNITUDE_S && 1.7e12 > MAX_TIME_MAGNITUDE_S) };
     }
 }

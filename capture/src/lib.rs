@@ -21,10 +21,17 @@
 //! * Lines 3… are samples, one `f64` per column, written in shortest
 //!   round-trip form: writing then reading gives bit-identical values, and
 //!   identical input gives identical bytes. Every line ends with `\n`.
+//!   Values are finite; readers also require them within their column's
+//!   plausible magnitude ([`kind::magnitude_limit`]: ±10⁶ SI, ±10¹⁰ s for
+//!   `time_s`).
 //!
 //! [`CaptureWriter`] and [`CaptureReader`] stream rows; [`Capture`] holds a
 //! whole capture in memory, column-major. All three enforce the same rules
-//! and report problems as a [`CaptureError`] naming file, line and column.
+//! and report problems as a [`CaptureError`] naming file, line and column,
+//! except one: [`CaptureReader`] (and so [`Capture::read_file`]) and [`import`] also refuse
+//! values beyond [`kind::magnitude_limit`], while the writer and [`Capture::new`] store any
+//! finite value, so that a recorder never loses a run to one glitching sample and the
+//! bad value is reported, with its line and column, by whoever reads the file.
 //!
 //! Besides the format itself this crate holds what every consumer of captures shares:
 //! [`import`] of foreign logs, [`signal`] (velocity from position), [`json_file`] (the
@@ -51,7 +58,7 @@ use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 pub use atomic::write_atomically;
-pub use error::{CaptureError, CaptureErrorKind};
+pub use error::{CaptureError, CaptureErrorKind, OutputBudget};
 pub use kind::{CaptureKind, UnknownKind};
 pub use meta::{METADATA_MARKER, Metadata, RESERVED_KEYS};
 pub use reader::CaptureReader;

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use super::error::{CaptureError, CaptureErrorKind};
 use super::kind::{CaptureKind, TIME_S};
 use super::meta::{METADATA_MARKER, Metadata};
-use super::validate::{check_columns, check_finite, check_time};
+use super::validate::{check_columns, check_time, check_value};
 
 /// Reads a capture row by row, validating as strictly as the writer does.
 ///
@@ -25,7 +25,9 @@ use super::validate::{check_columns, check_finite, check_time};
 ///   `FieldCount { found: 0 }`);
 /// * fields are whatever Rust's `f64` parser accepts, and must then be
 ///   finite (`nan`, `inf` and overflowing literals like `1e999` are
-///   [`CaptureErrorKind::NotFinite`]);
+///   [`CaptureErrorKind::NotFinite`]) and within the column's plausible
+///   magnitude ([`magnitude_limit`](super::kind::magnitude_limit), else
+///   [`CaptureErrorKind::Implausible`]);
 /// * `time_s` strictly increases;
 /// * there is at least one data row ([`CaptureErrorKind::NoSamples`]).
 ///
@@ -143,7 +145,7 @@ impl<R: BufRead> CaptureReader<R> {
         }
         row.clear();
         for (field, name) in content.split(|&b| b == b',').zip(&self.columns) {
-            let value = parse_field(field).map_err(|kind| {
+            let value = parse_field(field, name).map_err(|kind| {
                 CaptureError::new(&self.source, kind)
                     .at_line(self.line)
                     .in_column(name)
@@ -189,11 +191,11 @@ impl<R: BufRead> CaptureReader<R> {
     }
 }
 
-fn parse_field(field: &[u8]) -> Result<f64, CaptureErrorKind> {
+fn parse_field(field: &[u8], column: &str) -> Result<f64, CaptureErrorKind> {
     let not_numeric = || CaptureErrorKind::NotNumeric(String::from_utf8_lossy(field).into_owned());
     let text = std::str::from_utf8(field).map_err(|_| not_numeric())?;
     let value: f64 = text.parse().map_err(|_| not_numeric())?;
-    check_finite(value)?;
+    check_value(column, value)?;
     Ok(value)
 }
 
@@ -497,6 +499,39 @@ mod tests {
         let rows = read_all(&format!("{META}{HEADER}0,1e-999,4.9e-324\n"), None).unwrap();
         assert_eq!(rows[0][1], 0.0);
         assert_eq!(rows[0][2].to_bits(), 1);
+    }
+
+    #[test]
+    fn implausible_magnitudes_name_line_and_column() {
+        let cases = [
+            ("0,0,1e308\n", 3, "normal_force_n", 1e308, 1e6),
+            (
+                "0,0,0\n1,-1000000.5,0\n",
+                4,
+                "tangential_position_m",
+                -1_000_000.5,
+                1e6,
+            ),
+            ("0,0,0\n1.7e12,0,0\n", 4, "time_s", 1.7e12, 1e10),
+        ];
+        for (body, line, column, value, limit) in cases {
+            let e = body_error(body);
+            assert!(
+                matches!(e.kind, CaptureErrorKind::Implausible { value: v, limit: l }
+                    if v == value && l == limit),
+                "{body:?}: {e}"
+            );
+            assert_at(&e, Some(line), Some(column));
+        }
+        assert_eq!(
+            body_error("0,0,1e308\n").to_string(),
+            "captures/a.csv:3: column `normal_force_n`: 1e308 is outside ±1e6, the largest \
+             magnitude a capture accepts in this column (SI units; a wrong unit or a sentinel \
+             value?)"
+        );
+        // The limits themselves are plausible, and Unix-epoch seconds are valid times.
+        let rows = read_all(&format!("{META}{HEADER}1.7e9,-1e6,1e6\n"), None).unwrap();
+        assert_eq!(rows[0], [1.7e9, -1e6, 1e6]);
     }
 
     #[test]

@@ -230,12 +230,39 @@ fn streaming_writer_and_capture_agree() {
     assert_eq!(w.finish().unwrap(), bytes_of(&capture));
 }
 
+#[test]
+fn readers_refuse_what_the_writer_stores_beyond_the_plausible_magnitude() {
+    let capture = insertion(vec![vec![0.0, 0.001], vec![0.0, 0.01], vec![0.5, 2e6]]).unwrap();
+    let bytes = bytes_of(&capture);
+    let e = Capture::read_from(&bytes[..], "big.csv", None).unwrap_err();
+    assert_eq!(
+        (e.line, e.column.as_deref()),
+        (Some(4), Some("axial_force_n")),
+        "{e}"
+    );
+    assert!(
+        matches!(e.kind, CaptureErrorKind::Implausible { value, limit } if value == 2e6 && limit == 1e6),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .starts_with("big.csv:4: column `axial_force_n`: 2e6 is outside ±1e6"),
+        "{e}"
+    );
+}
+
 // --- Property tests ----------------------------------------------------------
 
 /// Any finite f64: all magnitudes, both zeros, subnormals.
 fn finite() -> impl Strategy<Value = f64> {
     use proptest::num::f64::{NEGATIVE, NORMAL, POSITIVE, SUBNORMAL, ZERO};
     POSITIVE | NEGATIVE | NORMAL | SUBNORMAL | ZERO
+}
+
+/// Any finite f64 a reader accepts in a column with magnitude `limit`: larger magnitudes are
+/// folded in by `%`, which keeps every bit pattern of the mantissa in play.
+fn plausible(limit: f64) -> impl Strategy<Value = f64> {
+    finite().prop_map(move |v| if v.abs() <= limit { v } else { v % limit })
 }
 
 fn arb_kind() -> impl Strategy<Value = CaptureKind> {
@@ -278,7 +305,7 @@ fn arb_columns(kind: CaptureKind) -> impl Strategy<Value = Vec<String>> {
 
 /// Strictly increasing finite times (sorted, de-duplicated).
 fn arb_times() -> impl Strategy<Value = Vec<f64>> {
-    prop::collection::vec(finite(), 1..25).prop_map(|mut times| {
+    prop::collection::vec(plausible(kind::MAX_TIME_MAGNITUDE_S), 1..25).prop_map(|mut times| {
         times.sort_by(f64::total_cmp);
         times.dedup_by(|a, b| a == b); // also merges -0.0 and 0.0
         times
@@ -289,8 +316,10 @@ fn arb_capture() -> impl Strategy<Value = Capture> {
     arb_kind()
         .prop_flat_map(|kind| (arb_metadata(kind), arb_columns(kind), arb_times()))
         .prop_flat_map(|(meta, columns, times)| {
-            let others =
-                prop::collection::vec(prop::collection::vec(finite(), times.len()), columns.len() - 1);
+            let others = prop::collection::vec(
+                prop::collection::vec(plausible(kind::MAX_PHYSICAL_MAGNITUDE), times.len()),
+                columns.len() - 1,
+            );
             (Just(meta), Just(columns), Just(times), others)
         })
         .prop_map(|(meta, columns, times, others)| {

@@ -1,8 +1,9 @@
 //! Checks shared by the writer, the reader and [`Capture::new`](super::Capture::new),
-//! so all three accept exactly the same captures.
+//! so all three accept the same captures, but for the magnitude check ([`check_value`])
+//! that only readers make (see the crate documentation for why).
 
 use super::error::CaptureErrorKind;
-use super::kind::{CaptureKind, TIME_S};
+use super::kind::{CaptureKind, TIME_S, magnitude_limit};
 
 /// Checks a header against `kind`: every name known for the kind, no
 /// duplicates, `time_s` first, all required columns present. Problems are
@@ -37,6 +38,19 @@ pub(crate) fn check_finite(value: f64) -> Result<(), CaptureErrorKind> {
         Ok(())
     } else {
         Err(CaptureErrorKind::NotFinite)
+    }
+}
+
+/// [`check_finite`], then the column's plausible magnitude
+/// ([`magnitude_limit`]): a finite `1e308` is as useless downstream as an infinity, and
+/// worse, since filters and fits would spread it over every sample.
+pub(crate) fn check_value(column: &str, value: f64) -> Result<(), CaptureErrorKind> {
+    check_finite(value)?;
+    let limit = magnitude_limit(column);
+    if value.abs() <= limit {
+        Ok(())
+    } else {
+        Err(CaptureErrorKind::Implausible { value, limit })
     }
 }
 
@@ -102,6 +116,20 @@ mod tests {
         for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             assert!(matches!(check_finite(v), Err(CaptureErrorKind::NotFinite)));
         }
+        check_value("normal_force_n", -1e6).unwrap();
+        check_value("time_s", 1.7e9).unwrap();
+        assert!(matches!(
+            check_value("normal_force_n", 1e308),
+            Err(CaptureErrorKind::Implausible { value, limit }) if value == 1e308 && limit == 1e6
+        ));
+        assert!(matches!(
+            check_value("time_s", -1.7e12),
+            Err(CaptureErrorKind::Implausible { limit, .. }) if limit == 1e10
+        ));
+        assert!(matches!(
+            check_value("depth_m", f64::NAN),
+            Err(CaptureErrorKind::NotFinite)
+        ));
         check_time(None, -5.0).unwrap();
         check_time(Some(1.0), 1.0 + f64::EPSILON).unwrap();
         assert!(matches!(

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use capture::CaptureKind;
-use capture::import::{ColumnMap, ImportSpec, import_csv, import_csv_report};
+use capture::import::{ColumnMap, DEFAULT_MAX_UPSAMPLE, ImportSpec, import_csv, import_csv_report};
 use capture::sha256_hex;
 use clap::Args;
 use recognize::LabelledCapture;
@@ -31,6 +31,13 @@ use recognize::LabelledCapture;
 /// rate cannot represent with a zero-phase low-pass (4th-order Butterworth forwards and
 /// backwards, cut-off 0.4 × the output rate), so fast vibrations do not alias into slow
 /// forces. The metadata records the source file, the map and the source rate.
+///
+/// Limits, checked before anything is allocated or written: rates from 1 Hz to 100 kHz; the
+/// output at most --max-upsample times the input's rows (default 1000), and never more than
+/// 10^7 rows when it is bigger than the input. Every mapped value, in SI units, must be
+/// within ±1e6 (±1e10 s for time): larger is a wrong unit or a logger's sentinel, and one
+/// such value would spread over every resampled row. --drop-implausible skips such rows
+/// (and non-finite ones) instead and says how many.
 #[derive(Debug, Args)]
 pub(crate) struct ImportArgs {
     /// The CSV file to import.
@@ -42,12 +49,22 @@ pub(crate) struct ImportArgs {
     /// Column mapping, e.g. `time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz*0.001`.
     #[arg(long, value_name = "SPEC")]
     map: String,
-    /// Output rate, Hz (default: the input's rate, which must then be uniform).
+    /// Output rate, Hz, from 1 to 100000 (default: the input's rate, which must then be
+    /// uniform).
     #[arg(long, value_name = "HZ")]
     rate_hz: Option<f64>,
-    /// The input's rate, Hz, when it has no time column (row i is at i / rate).
+    /// The input's rate, Hz, from 1 to 100000, when it has no time column (row i is at
+    /// i / rate).
     #[arg(long, value_name = "HZ")]
     input_rate_hz: Option<f64>,
+    /// The output may have at most this many times the input's rows (at least 1); an output
+    /// bigger than the input is capped at 10^7 rows whatever this says.
+    #[arg(long, value_name = "FACTOR", default_value_t = DEFAULT_MAX_UPSAMPLE)]
+    max_upsample: f64,
+    /// Skip rows with a mapped value that is not finite or beyond ±1e6 in SI units (±1e10 s
+    /// for time) instead of failing; the number skipped is printed.
+    #[arg(long)]
+    drop_implausible: bool,
     /// The `device` recorded in the metadata.
     #[arg(long, default_value = "imported", value_name = "NAME")]
     device: String,
@@ -83,6 +100,8 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
         input_rate_hz: args.input_rate_hz,
         device: args.device.clone(),
         metadata: args.meta.clone(),
+        max_upsample: args.max_upsample,
+        drop_implausible: args.drop_implausible,
     };
     // Import errors name the input file (and line, column or map entry) themselves.
     let imported = import_csv_report(&args.input, &spec)?;
@@ -106,6 +125,12 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
             args.out.display(),
             imported.resampling
         );
+        if imported.rows_dropped > 0 {
+            println!(
+                "dropped {} row(s) with a non-finite or implausible value (--drop-implausible)",
+                imported.rows_dropped
+            );
+        }
     }
     Ok(())
 }
@@ -164,6 +189,7 @@ impl MappedCaptures {
                         .iter()
                         .map(|(k, v)| (k.clone(), v.replace("{dir}", &dir).replace("{stem}", &stem)))
                         .collect(),
+                    ..ImportSpec::new(CaptureKind::Rubbing, map.clone())
                 };
                 let capture = import_csv(p, &spec)?;
                 let bytes = std::fs::read(p).with_context(|| format!("reading {}", p.display()))?;

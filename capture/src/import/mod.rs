@@ -7,7 +7,12 @@
 //! `;` and tab (the most frequent one outside quotes wins; a single column means `,`). Lines
 //! starting with `#` and blank lines are skipped, header names may be quoted, and fields are
 //! trimmed. Columns the [`ColumnMap`] does not mention are ignored; every mapped cell must be
-//! a finite decimal number (a decimal comma is an error, not a guess).
+//! a finite decimal number (a decimal comma is an error, not a guess) whose value in SI units
+//! is within its target column's [`magnitude_limit`] (±10⁶ SI, ±10¹⁰ s for time): a logger's
+//! `1e308` sentinel would otherwise pass as finite and the low-pass would spread it over
+//! every output sample. With [`ImportSpec::drop_implausible`] (`--drop-implausible`), rows
+//! with a non-finite or out-of-range mapped value are skipped and counted instead; the
+//! resampling then bridges them like any gap.
 //!
 //! # Column map
 //!
@@ -53,6 +58,15 @@
 //!   [`crate::signal`], which only has the pseudo-differentiator, and the workspace avoids
 //!   a DSP dependency for two biquads.
 //!
+//! # Size budget
+//!
+//! The output's size is checked before anything of that size is allocated: rates
+//! (`--rate-hz`, `--input-rate-hz`) must be from [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`], the
+//! output may have at most [`ImportSpec::max_upsample`] times the input's rows (default
+//! [`DEFAULT_MAX_UPSAMPLE`], `--max-upsample`), and an output larger than its input at most
+//! [`MAX_OUTPUT_ROWS`] rows. So a few bytes of input with a wrong time unit are an error
+//! naming the numbers, not gigabytes of capture.
+//!
 //! Timestamps are trusted as the true sampling instants. Interpolating a component near the
 //! input's Nyquist frequency between jittered samples turns part of it into broadband noise
 //! that no filter can separate: ±2 µs of jitter on a 10 kHz log leaves about 0.45 %
@@ -74,8 +88,8 @@ use std::fmt;
 use std::path::Path;
 
 use crate::error::CaptureErrorKind;
-use crate::kind::{CaptureKind, TIME_S};
-use crate::{Capture, CaptureError, Metadata};
+use crate::kind::{CaptureKind, TIME_S, magnitude_limit};
+use crate::{Capture, CaptureError, Metadata, OutputBudget};
 
 mod column_map;
 mod resample;
@@ -100,9 +114,28 @@ pub const CUTOFF_FRACTION: f64 = 0.4;
 /// filter's impulse response has decayed to ~1e-4 after about five).
 const PAD_CUTOFF_PERIODS: f64 = 8.0;
 
-/// Refuse to build captures larger than this many rows (a wrong time unit would otherwise
-/// ask for billions of samples).
-const MAX_ROWS: usize = 200_000_000;
+/// Slowest output or input rate accepted, Hz. Below 1 Hz nothing a haptic model uses is left,
+/// and a rate given in kHz by mistake (`--rate-hz 1` for 1 kHz) still passes, but a rate
+/// of 0.001 cannot be meant.
+pub const MIN_RATE_HZ: f64 = 1.0;
+
+/// Fastest output or input rate accepted, Hz. Haptic loops run at 1 kHz and texture
+/// accelerometers are sampled at up to a few tens of kHz, so 100 kHz covers every rig while
+/// a time unit mistaken by 10³ or more (`--rate-hz 3e7`) is refused before it allocates.
+pub const MAX_RATE_HZ: f64 = 1e5;
+
+/// Default of [`ImportSpec::max_upsample`]: an output may have at most this many times the
+/// input's rows (1 Hz to 1 kHz, or 100 Hz to 100 kHz). More is not resampling but inventing
+/// samples, usually from a wrong time unit (a 2-row log spanning 10⁵ s at 1 kHz would be
+/// 10⁸ rows, 3.8 GB).
+pub const DEFAULT_MAX_UPSAMPLE: f64 = 1000.0;
+
+/// Largest output of an import that is bigger than its input, in rows, whatever
+/// [`ImportSpec::max_upsample`] says: 10⁷ rows is 2.8 h at 1 kHz or 100 s at 100 kHz, and
+/// about 80 MB per column in memory (the output is built in memory before it is written). An
+/// output no larger than its input (pass-through, downsampling) is not limited: the input was
+/// already read into memory.
+pub const MAX_OUTPUT_ROWS: usize = 10_000_000;
 
 /// What to import and how: see [`import_csv`].
 #[derive(Debug, Clone, PartialEq)]
@@ -119,6 +152,13 @@ pub struct ImportSpec {
     pub device: String,
     /// Extra metadata keys, in order (e.g. `surface=sandpaper_400`).
     pub metadata: Vec<(String, String)>,
+    /// The output may have at most this many times the input's rows (default
+    /// [`DEFAULT_MAX_UPSAMPLE`]); never more than [`MAX_OUTPUT_ROWS`] when it grows. Must be
+    /// finite and at least 1.
+    pub max_upsample: f64,
+    /// Skip rows with a mapped value that is not finite or beyond its target's
+    /// [`magnitude_limit`] (counted in [`Imported::rows_dropped`]) instead of failing on them.
+    pub drop_implausible: bool,
 }
 
 impl ImportSpec {
@@ -131,6 +171,8 @@ impl ImportSpec {
             input_rate_hz: None,
             device: "imported".into(),
             metadata: Vec::new(),
+            max_upsample: DEFAULT_MAX_UPSAMPLE,
+            drop_implausible: false,
         }
     }
 }
@@ -173,8 +215,11 @@ impl fmt::Display for Resampling {
 pub struct Imported {
     /// The capture (not yet written).
     pub capture: Capture,
-    /// Data rows read from the input.
+    /// Data rows read from the input and used (without the dropped ones).
     pub rows_in: usize,
+    /// Rows skipped for a non-finite or implausible value (with
+    /// [`ImportSpec::drop_implausible`]; else 0).
+    pub rows_dropped: usize,
     /// The input's mean rate, Hz: `(rows − 1) / (last time − first time)`.
     pub source_rate_hz: f64,
     /// The output rate, Hz.
@@ -218,11 +263,22 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         ("--rate-hz", spec.rate_hz),
         ("--input-rate-hz", spec.input_rate_hz),
     ] {
-        if let Some(rate) = rate
-            && !(rate.is_finite() && rate > 0.0)
-        {
-            return Err(bad_spec(format!("{what} {rate}: must be finite and positive")));
+        if let Some(rate) = rate {
+            if !(rate.is_finite() && rate > 0.0) {
+                return Err(bad_spec(format!("{what} {rate}: must be finite and positive")));
+            }
+            if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate) {
+                return Err(bad_spec(format!(
+                    "{what} {rate}: must be from {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz (check the unit)"
+                )));
+            }
         }
+    }
+    if !(spec.max_upsample.is_finite() && spec.max_upsample >= 1.0) {
+        return Err(bad_spec(format!(
+            "--max-upsample {}: must be finite and at least 1",
+            spec.max_upsample
+        )));
     }
     // Check the caller's metadata before reading a possibly large file.
     let mut meta = Metadata::new(spec.kind, spec.device.clone(), spec.rate_hz.unwrap_or(1.0));
@@ -236,7 +292,7 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     }
     meta.validate().map_err(|kind| bad_spec(metadata_reason(kind)))?;
 
-    let table = read_table(path, &spec.map)?;
+    let table = read_table(path, &spec.map, spec.drop_implausible)?;
     let rows_in = table.lines.len();
     if rows_in < 2 {
         return Err(fail(CaptureErrorKind::TooFewRows(rows_in)));
@@ -269,13 +325,27 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
             rate
         }
     };
+    // The budget is checked in floating point before anything of the output's size exists.
     let rows_out = (span * rate_hz + UNIFORM_TOLERANCE).floor() + 1.0;
-    if rows_out.is_nan() || rows_out > MAX_ROWS as f64 {
-        return Err(fail(CaptureErrorKind::TooManyRows {
+    let too_many = |limit: f64, reason| {
+        fail(CaptureErrorKind::TooManyRows(Box::new(OutputBudget {
             rows: rows_out,
             rate_hz,
             span_s: span,
-        }));
+            rows_in,
+            limit,
+            reason,
+        })))
+    };
+    let upsample_limit = spec.max_upsample * rows_in as f64;
+    if rows_out.is_nan() || rows_out > upsample_limit {
+        return Err(too_many(upsample_limit, "the input's rows times --max-upsample"));
+    }
+    if rows_out > MAX_OUTPUT_ROWS as f64 && rows_out > rows_in as f64 {
+        return Err(too_many(
+            MAX_OUTPUT_ROWS as f64,
+            "the most an import may add, whatever --max-upsample says",
+        ));
     }
     let rows_out = rows_out as usize;
 
@@ -360,6 +430,7 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     Ok(Imported {
         capture,
         rows_in,
+        rows_dropped: table.dropped,
         source_rate_hz,
         rate_hz,
         resampling,

@@ -8,9 +8,18 @@ pub(super) struct Table {
     pub(super) columns: Vec<Vec<f64>>,
     /// 1-based file line of each data row.
     pub(super) lines: Vec<usize>,
+    /// Rows skipped for a non-finite or implausible value (only with `drop_implausible`).
+    pub(super) dropped: usize,
 }
 
-pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, CaptureError> {
+/// Reads the mapped columns of `path`. A mapped value that is not finite or beyond its target's
+/// [`magnitude_limit`] after conversion is an error naming line and column, or, with
+/// `drop_implausible`, drops its row.
+pub(super) fn read_table(
+    path: &Path,
+    map: &ColumnMap,
+    drop_implausible: bool,
+) -> Result<Table, CaptureError> {
     let fail = |kind| CaptureError::new(path, kind);
     let bytes = std::fs::read(path).map_err(|source| fail(CaptureErrorKind::CannotRead(source)))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
@@ -68,7 +77,10 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, CaptureE
     let mut table = Table {
         columns: vec![Vec::new(); map.entries.len()],
         lines: Vec::new(),
+        dropped: 0,
     };
+    let limits: Vec<f64> = map.entries.iter().map(|e| magnitude_limit(&e.target)).collect();
+    let mut row = Vec::with_capacity(map.entries.len());
     let mut last_line = 1;
     loop {
         match reader.read_byte_record(&mut record) {
@@ -89,7 +101,9 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, CaptureE
             };
             return Err(fail(kind).at_line(line));
         }
-        for ((entry, &i), column) in map.entries.iter().zip(&indices).zip(&mut table.columns) {
+        row.clear();
+        let mut implausible = false;
+        for ((entry, &i), &limit) in map.entries.iter().zip(&indices).zip(&limits) {
             let cell = &record[i];
             let text = || String::from_utf8_lossy(cell).into_owned();
             let value: f64 = std::str::from_utf8(cell)
@@ -101,10 +115,32 @@ pub(super) fn read_table(path: &Path, map: &ColumnMap) -> Result<Table, CaptureE
                         .in_column(&entry.source)
                 })?;
             let value = entry.scale.apply(value);
+            // Checked after conversion: the limit is in SI units, and a scale can overflow.
+            let plausible = value.abs() <= limit; // false for NaN
+            if drop_implausible && !plausible {
+                implausible = true;
+                break;
+            }
             if !value.is_finite() {
                 let kind = CaptureErrorKind::NotFiniteText(text());
                 return Err(fail(kind).at_line(line).in_column(&entry.source));
             }
+            if !plausible {
+                let kind = CaptureErrorKind::ImplausibleText {
+                    text: text().into(),
+                    value,
+                    limit,
+                    target: entry.target.as_str().into(),
+                };
+                return Err(fail(kind).at_line(line).in_column(&entry.source));
+            }
+            row.push(value);
+        }
+        if implausible {
+            table.dropped += 1;
+            continue;
+        }
+        for (column, &value) in table.columns.iter_mut().zip(&row) {
             column.push(value);
         }
         table.lines.push(line);

@@ -366,3 +366,131 @@ fn metadata_safe_values() {
     assert_eq!(snap_rate(999.999_999_999_7), 1000.0);
     assert_eq!(snap_rate(1000.5), 1000.5);
 }
+
+#[test]
+fn output_budget_is_checked_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2 rows, 49 bytes, spanning 10⁵ s: at 1 kHz this would be 10⁸ rows (3.8 GB).
+    let path = write(dir.path(), "span.csv", "t,x,Fz\n0,0.001,0.3\n100000,0.002,0.3\n");
+    let mut spec = rubbing("time_s=t,tangential_position_m=x,normal_force_n=Fz");
+    spec.rate_hz = Some(1000.0);
+    let e = import_csv(&path, &spec).unwrap_err();
+    let shown = e.to_string();
+    assert_eq!(e.file.as_deref(), Some(path.as_path()), "{shown}");
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::TooManyRows(b)
+            if b.rows == 100_000_001.0 && b.rows_in == 2 && b.limit == 2.0 * DEFAULT_MAX_UPSAMPLE),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("--max-upsample") && shown.contains("--rate-hz"),
+        "{shown}"
+    );
+    // Raising the factor does not lift the absolute cap.
+    spec.max_upsample = 1e9;
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::TooManyRows(b) if b.limit == MAX_OUTPUT_ROWS as f64),
+        "{e}"
+    );
+    // Within both, upsampling works as before.
+    let path = write(dir.path(), "short.csv", "t,x,Fz\n0,0.001,0.3\n1,0.002,0.3\n");
+    spec.max_upsample = DEFAULT_MAX_UPSAMPLE;
+    assert_eq!(import_csv(&path, &spec).unwrap().len(), 1001);
+    spec.max_upsample = 100.0;
+    assert!(matches!(
+        import_csv(&path, &spec).unwrap_err().kind,
+        CaptureErrorKind::TooManyRows(b) if b.rows_in == 2
+    ));
+    spec.max_upsample = 0.5;
+    assert!(
+        import_csv(&path, &spec)
+            .unwrap_err()
+            .to_string()
+            .contains("--max-upsample 0.5")
+    );
+}
+
+#[test]
+fn rates_must_be_in_the_documented_range() {
+    let path = Path::new("never_read.csv");
+    for (rate, input_rate, expected) in [
+        (Some(3e7), None, "--rate-hz 30000000: must be from 1 to 100000 Hz"),
+        (Some(0.5), None, "--rate-hz 0.5: must be from 1 to 100000 Hz"),
+        (
+            None,
+            Some(1e6),
+            "--input-rate-hz 1000000: must be from 1 to 100000 Hz",
+        ),
+    ] {
+        let mut spec = rubbing("tangential_position_m=x,normal_force_n=Fz");
+        spec.rate_hz = rate;
+        spec.input_rate_hz = input_rate.or(Some(1000.0));
+        let e = import_csv(path, &spec).unwrap_err();
+        assert!(matches!(e.kind, CaptureErrorKind::BadSpec(_)), "{e}");
+        assert!(e.to_string().starts_with("never_read.csv: "), "{e}");
+        assert!(e.to_string().contains(expected), "{e}");
+    }
+}
+
+#[test]
+fn implausible_values_are_errors_or_dropped_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "t,x,Fx,Fz\n0,1,0.1,0.3\n1,2,1e308,0.3\n2,3,0.1,0.3\n3,4,0.1,nan\n4,5,0.1,0.3\n";
+    let path = write(dir.path(), "in.csv", text);
+    let map_text = "time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz,friction_force_n=Fx";
+    let mut spec = rubbing(map_text);
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert_eq!((e.line, e.column.as_deref()), (Some(3), Some("Fx")), "{e}");
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::ImplausibleText { text, value, limit, target }
+            if &**text == "1e308" && *value == 1e308 && *limit == 1e6
+                && &**target == "friction_force_n"),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("in.csv:3: column `Fx`: `1e308` is 1e308 in SI units"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("--drop-implausible"), "{e}");
+    // The limit is on the SI value: 2e9 mm is 2e6 m, 2e8 mm is not.
+    let mm = write(dir.path(), "mm.csv", "t,x,Fx,Fz\n0,2e8,0,0\n1,2e9,0,0\n");
+    let e = import_csv(&mm, &spec).unwrap_err();
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::ImplausibleText { value, .. } if *value == 2e6)
+            && e.line == Some(3),
+        "{e}"
+    );
+    // Time has its own, larger limit: epoch seconds pass, epoch milliseconds as seconds do not.
+    let epoch = write(dir.path(), "epoch.csv", "t,x,Fz\n1.7e12,0,0\n1.7e12,0,0\n");
+    let e = import_csv(
+        &epoch,
+        &rubbing("time_s=t,tangential_position_m=x,normal_force_n=Fz"),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::ImplausibleText { limit, .. } if *limit == 1e10),
+        "{e}"
+    );
+
+    spec.drop_implausible = true;
+    spec.rate_hz = Some(1000.0);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!((imported.rows_in, imported.rows_dropped), (3, 2));
+    let c = imported.capture;
+    assert_eq!(c.time(), &[0.0, 0.001, 0.002, 0.003, 0.004]);
+    // The dropped rows are bridged by interpolation between the kept ones.
+    assert_eq!(c.column("friction_force_n").unwrap(), &[0.1; 5]);
+    assert!(c.data().iter().flatten().all(|v| v.abs() <= 1e6));
+    // Dropping everything but one row leaves too few.
+    let bad = write(
+        dir.path(),
+        "bad.csv",
+        "t,x,Fx,Fz\n0,1,inf,0\n1,1,1e7,0\n2,1,0,0\n",
+    );
+    assert!(matches!(
+        import_csv(&bad, &spec).unwrap_err().kind,
+        CaptureErrorKind::TooFewRows(1)
+    ));
+}
