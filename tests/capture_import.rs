@@ -414,7 +414,117 @@ fn errors_name_the_problem_and_leave_no_file() {
         "--meta",
         "low-pass",
         "mm/s",
+        "--max-upsample",
+        "--drop-implausible",
+        "100 kHz",
     ] {
         assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
     }
+}
+
+/// A few bytes of input cannot ask for gigabytes: the output's size is checked against a
+/// budget before anything is allocated, and the error says which numbers and which option.
+#[test]
+fn small_inputs_cannot_ask_for_huge_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("log.csv");
+    let out = dir.path().join("out.csv");
+    let map = "time_s=t,tangential_position_m=x,normal_force_n=Fz";
+    let fails_with = |content: &str, args: &[&str], needles: &[&str]| {
+        std::fs::write(&input, content).unwrap();
+        let mut all = vec!["--map", map];
+        all.extend_from_slice(args);
+        let o = import(&input, &out, &all);
+        let t = text(&o);
+        assert!(!o.status.success(), "{t}");
+        for needle in needles {
+            assert!(t.contains(needle), "`{needle}` missing from:\n{t}");
+        }
+        assert!(!out.exists(), "output left behind: {t}");
+    };
+    // 2 rows spanning 10⁵ s at 1 kHz would be 10⁸ rows.
+    fails_with(
+        "t,x,Fz\n0,0.001,0.3\n100000,0.002,0.3\n",
+        &["--rate-hz", "1000"],
+        &[
+            "log.csv: the output would have 100000001 rows",
+            "from 2 input rows, more than 2000",
+            "--max-upsample",
+        ],
+    );
+    // However large the factor, an output bigger than its input stops at 10⁷ rows.
+    fails_with(
+        "t,x,Fz\n0,0.001,0.3\n100000,0.002,0.3\n",
+        &["--rate-hz", "1000", "--max-upsample", "1e12"],
+        &["more than 10000000"],
+    );
+    // A rate far beyond any rig (a time unit off by 10⁴ or more).
+    let six_seconds: String = std::iter::once("t,x,Fz\n".to_owned())
+        .chain((0..=6).map(|i| format!("{i},0.001,0.3\n")))
+        .collect();
+    fails_with(
+        &six_seconds,
+        &["--rate-hz", "3e7"],
+        &["log.csv: --rate-hz 30000000: must be from 1 to 100000 Hz"],
+    );
+}
+
+/// One garbage value must not become a garbage capture: it is an error naming where it is,
+/// or, with --drop-implausible, a dropped row that leaves the rest as it would be.
+#[test]
+fn implausible_values_are_refused_or_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("log.csv");
+    let out = dir.path().join("out.csv");
+    let mut csv = String::from("t,x,Fz,Fx\n");
+    for i in 0..600 {
+        let t = i as f64 * 1e-3;
+        let fx = if i == 300 {
+            "1e308".to_owned()
+        } else {
+            format!("{}", 0.1 + 0.01 * (7.0 * t).sin())
+        };
+        writeln!(csv, "{t},{},{},{fx}", position_lf(t), force_lf(t)).unwrap();
+    }
+    std::fs::write(&input, csv).unwrap();
+    let map = "time_s=t,tangential_position_m=x,normal_force_n=Fz,friction_force_n=Fx";
+    let o = import(&input, &out, &["--map", map, "--rate-hz", "100"]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("log.csv:302: column `Fx`: `1e308` is 1e308 in SI units, outside ±1e6"),
+        "{t}"
+    );
+    assert!(t.contains("--drop-implausible"), "{t}");
+    assert!(!out.exists());
+
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--rate-hz", "100", "--drop-implausible"],
+    )));
+    assert!(
+        t.contains("imported 599 rows") && t.contains("dropped 1 row(s)"),
+        "{t}"
+    );
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    let friction = c.column("friction_force_n").unwrap();
+    assert!(friction.iter().all(|f| (0.08..0.12).contains(f)), "{friction:?}");
+
+    // A capture file holding such a value is refused where it is, too.
+    let capture_text = std::fs::read_to_string(&out).unwrap();
+    let mut lines: Vec<String> = capture_text.lines().map(str::to_owned).collect();
+    let fields: Vec<&str> = lines[4].split(',').collect();
+    let last = fields.len() - 1;
+    let mut fields: Vec<String> = fields.iter().map(|f| (*f).to_owned()).collect();
+    fields[last] = "-1e300".into();
+    lines[4] = fields.join(",");
+    std::fs::write(&out, lines.join("\n") + "\n").unwrap();
+    let e = Capture::read_file(&out, CaptureKind::Rubbing).unwrap_err();
+    assert_eq!(
+        (e.line, e.column.as_deref()),
+        (Some(5), Some("friction_force_n")),
+        "{e}"
+    );
+    assert!(e.to_string().contains("-1e300 is outside ±1e6"), "{e}");
 }
