@@ -1017,3 +1017,79 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
     );
     eprintln!("took {:.1} s", start.elapsed().as_secs_f64());
 }
+
+/// Writes a rubbing capture of `surface` to `dir/name`: a sine roughness of `amplitude_m` under
+/// a tip sliding at 5 mm/s, 1 kHz, for `seconds`. Returns its path.
+fn write_rubbing(dir: &Path, name: &str, surface: &str, amplitude_m: f64, seconds: f64) -> String {
+    use capture::{Capture, CaptureKind, Metadata};
+    let n = (seconds * 1000.0) as usize;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+    let x: Vec<f64> = t.iter().map(|t| 5e-3 * t).collect();
+    let z: Vec<f64> = x
+        .iter()
+        .map(|x| amplitude_m * (x * std::f64::consts::TAU / 1e-3).sin())
+        .collect();
+    let f: Vec<f64> = (0..n)
+        .map(|k| 1e4 * amplitude_m * (1.0 + 0.05 * ((k * 7919) % 13) as f64 / 13.0))
+        .collect();
+    let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0).with("surface", surface);
+    let columns = [
+        "time_s",
+        "tangential_position_m",
+        "normal_position_m",
+        "normal_force_n",
+        "friction_force_n",
+    ]
+    .map(String::from)
+    .to_vec();
+    let path = dir.join(name);
+    Capture::new(meta, columns, vec![t, x, z, vec![0.3; n], f])
+        .expect("capture")
+        .write_file(&path)
+        .expect("write");
+    path.to_string_lossy().into_owned()
+}
+
+/// Captures too short for one window: training refuses their class, naming it and them, and
+/// evaluating only such captures is an error, not "0 decisions"; one among others is a warning.
+#[test]
+fn captures_without_a_window_are_named_in_train_and_eval() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let long: Vec<String> = [("fine", 5e-6), ("coarse", 30e-6)]
+        .iter()
+        .map(|(s, a)| write_rubbing(d, &format!("{s}.csv"), s, *a, 4.0))
+        .collect();
+    let cork = write_rubbing(d, "cork.csv", "cork", 10e-6, 0.4);
+    let model = d.join("m.json").to_string_lossy().into_owned();
+    let windows = ["--window-s", "0.5", "--train-window-s", "0.5"];
+    let with_cork: Vec<String> = long.iter().cloned().chain([cork.clone()]).collect();
+    fails_with(
+        &args(&train_head("som", &windows, &model), &with_cork),
+        &[
+            "class `cork` has no training vector",
+            "cork.csv is 0.400 s long; a training window needs 0.5 s",
+        ],
+    );
+    succeeds(&args(&train_head("som", &windows, &model), &long));
+
+    let short = vec![
+        write_rubbing(d, "fine-short.csv", "fine", 5e-6, 0.4),
+        write_rubbing(d, "coarse-short.csv", "coarse", 30e-6, 0.3),
+    ];
+    let eval = ["recognize", "eval", &model];
+    fails_with(
+        &args(&eval, &short),
+        &[
+            "no decisions to evaluate",
+            "fine-short.csv is 0.400 s long; a decision window needs 0.5 s",
+            "coarse-short.csv is 0.300 s long",
+        ],
+    );
+    let mixed: Vec<String> = long.iter().cloned().chain([short[0].clone()]).collect();
+    let shown = text(&succeeds(&args(&eval, &mixed)));
+    assert!(
+        shown.contains("warning: capture") && shown.contains("fine-short.csv is 0.400 s long"),
+        "{shown}"
+    );
+}

@@ -11,6 +11,8 @@ use std::path::PathBuf;
 
 use capture::{CaptureError, CaptureErrorKind};
 
+use crate::features::WindowlessCapture;
+
 /// Why surface recognition failed: features, a classifier, a confusion matrix, a protocol, a
 /// category tree, or a recognizer being trained, stored, loaded or evaluated.
 #[derive(Debug, thiserror::Error)]
@@ -73,6 +75,20 @@ pub enum RecognizeError {
     /// No capture gave a training vector.
     #[error("no training windows: every capture is shorter than one window after the start travel")]
     NoTrainingData,
+    /// A class's captures gave no training window, so the recognizer could never answer it.
+    #[error("class `{class}` has no training vector: {}", windowless_list(captures))]
+    ClassWithoutWindows {
+        /// The class.
+        class: String,
+        /// Each of its captures, and why it gave no window.
+        captures: Vec<WindowlessCapture>,
+    },
+    /// No evaluated capture gave a decision, so there is nothing to score.
+    #[error("no decisions to evaluate: {}", if captures.is_empty() { "no captures given".to_owned() } else { windowless_list(captures) })]
+    NoDecisions {
+        /// Each capture evaluated, and why it gave no window.
+        captures: Vec<WindowlessCapture>,
+    },
 
     // --- Context around an inner failure ---
     /// A feature set failed on a capture.
@@ -454,6 +470,15 @@ pub enum RecognizeError {
         /// A point it cannot reach.
         to: usize,
     },
+}
+
+/// The captures and their reasons, one after the other.
+fn windowless_list(captures: &[WindowlessCapture]) -> String {
+    captures
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 impl RecognizeError {

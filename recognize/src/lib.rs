@@ -31,7 +31,10 @@ pub use error::RecognizeError;
 pub use eval::ConfusionMatrix;
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
-pub use features::{DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling};
+pub use features::{
+    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling,
+    WindowlessCapture,
+};
 pub use knn::{BehaviourData, FeatureScaling, Knn, KnnParams, ReliabilityFusion, argmax, fuse};
 pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{

@@ -300,9 +300,7 @@ where
                         reason: format!("decision names class {} of {}", d.label, model.classes.len()),
                     }))
                 })?;
-                confusion
-                    .add(surface, predicted)
-                    .map_err(|e| at(Box::new(e)))?;
+                confusion.add(surface, predicted).map_err(|e| at(Box::new(e)))?;
             }
         }
     }
@@ -372,8 +370,9 @@ fn merge_into(
 
 /// Pools evaluations of one recognizer kind: confusions summed; the time to the first correct
 /// and to a stable decision averaged over the captures that had one, flips per second and the
-/// window averaged over rounds weighted by their captures.
-/// `None` for no evaluations.
+/// window averaged over rounds weighted by their captures; captures without a decision listed
+/// as each round found them (a capture held out in several rounds, once per round, as it is
+/// counted in `captures`). `None` for no evaluations.
 pub fn pool<E: Borrow<Evaluation>>(evaluations: &[E]) -> Result<Option<Evaluation>, RecognizeError> {
     let mut it = evaluations.iter().map(Borrow::borrow);
     let Some(first) = it.next() else {
@@ -414,6 +413,7 @@ pub fn pool<E: Borrow<Evaluation>>(evaluations: &[E]) -> Result<Option<Evaluatio
         out.captures += e.captures;
         out.never_correct += e.never_correct;
         out.not_stable += e.not_stable;
+        out.windowless.extend(e.windowless.iter().cloned());
     }
     let mean = |acc: Option<(f64, usize)>| acc.and_then(|(s, n)| (n > 0).then(|| s / n as f64));
     let n = out.captures.max(1) as f64;
@@ -542,6 +542,7 @@ mod tests {
                 captures,
                 never_correct: never,
                 not_stable: never,
+                windowless: Vec::new(),
             }
         };
         let pooled = pool(&[

@@ -265,6 +265,7 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     }
     let window_s = args.window_s.first().copied();
     let e = model.evaluate(&captures, window_s)?;
+    warn_windowless(&e);
     let fused = model.evaluate_fused(&captures)?;
     let quality = model.som_quality(&captures, false, window_s)?;
     let plots = match &args.plots {
@@ -313,7 +314,9 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
 fn eval_windows(args: &EvalArgs, model: &RecognizerFile, captures: &[LabelledCapture]) -> anyhow::Result<()> {
     let mut evaluations = Vec::with_capacity(args.window_s.len());
     for &w in &args.window_s {
-        evaluations.push(model.evaluate(captures, Some(w))?);
+        let e = model.evaluate(captures, Some(w))?;
+        warn_windowless(&e);
+        evaluations.push(e);
     }
     if args.json {
         let rows: Vec<serde_json::Value> = evaluations.iter().map(to_json).collect();
@@ -351,6 +354,19 @@ fn eval_windows(args: &EvalArgs, model: &RecognizerFile, captures: &[LabelledCap
         );
     }
     Ok(())
+}
+
+/// Warns on stderr about each capture that gave no decision window (once per capture, however
+/// many rounds held it out): the evaluation scores it as never correct rather than failing, so
+/// that the other captures are still scored; with no decision at all, evaluating is an error.
+fn warn_windowless(e: &Evaluation) {
+    let mut seen = std::collections::BTreeSet::new();
+    for w in e.windowless.iter().filter(|w| seen.insert(&w.path)) {
+        eprintln!(
+            "warning: {w}; it gives no decision at a {:.3} s window and counts as never correct",
+            e.window_s
+        );
+    }
 }
 
 /// An evaluation's summary line, confusion matrix and timing.
@@ -401,6 +417,7 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     })?;
     let elapsed_s = start.elapsed().as_secs_f64();
     let e = &result.evaluation;
+    warn_windowless(e);
     let by_count = result.fused_by_count();
     if args.json {
         let mut json = to_json(e);

@@ -31,7 +31,7 @@ use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLU
 use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan};
 
 pub use scaling::WindowScaling;
-pub use windowing::{DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S};
+pub use windowing::{DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowlessCapture};
 pub(crate) use windowing::{window_vectors, windows};
 
 /// Which features a recognizer computes.

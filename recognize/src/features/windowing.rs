@@ -205,6 +205,68 @@ fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, Reco
     Ok(n as usize)
 }
 
+/// A capture that gave no window, and why: too short for one window, or its tip never travels
+/// far enough (no sliding contact) for a window to start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowlessCapture {
+    /// The capture.
+    pub path: std::path::PathBuf,
+    /// Why it gave no window, a clause that follows the capture's name (`is 0.400 s long; …`).
+    pub reason: String,
+}
+
+impl std::fmt::Display for WindowlessCapture {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "capture {} {}", self.path.display(), self.reason)
+    }
+}
+
+impl WindowlessCapture {
+    /// Why `c` gives no window of `windowing`, whose windows are `kind` (`decision`,
+    /// `training`) windows. Only meaningful for a capture that [`windows`] found none in.
+    pub(crate) fn of(c: &LabelledCapture, windowing: &NakanoWindowing, kind: &str) -> Self {
+        let rate = windowing.rate_hz;
+        let margin = windowing.filters.lookahead_samples();
+        let len = windowing.window_samples;
+        let samples = c.capture.len();
+        let secs = |n: usize| n as f64 / rate;
+        let position: &[f64] = NakanoSignals::from_capture(&c.capture).map_or(&[], |s| s.position_m());
+        let travel_mm = |at: f64| 1e3 * at;
+        let start = windowing.start_travel_m;
+        let reason = if samples < len + 2 * margin {
+            format!(
+                "is {:.3} s long; a {kind} window needs {} s, {:.3} s with the filters' margins",
+                secs(samples),
+                secs(len),
+                secs(len + 2 * margin)
+            )
+        } else {
+            let x0 = position.first().copied().unwrap_or_default();
+            match position.iter().position(|x| (x - x0).abs() >= start) {
+                None => {
+                    let most = position.iter().map(|x| (x - x0).abs()).fold(0.0, f64::max);
+                    format!(
+                        "moves its tip only {:.3} mm (no sliding contact?); a {kind} window starts after {} mm of travel",
+                        travel_mm(most),
+                        travel_mm(start)
+                    )
+                }
+                Some(at) => format!(
+                    "reaches {} mm of travel at {:.3} s of its {:.3} s; no {} s {kind} window fits after that",
+                    travel_mm(start),
+                    secs(at),
+                    secs(samples),
+                    secs(len)
+                ),
+            }
+        };
+        Self {
+            path: c.reference.path.clone(),
+            reason,
+        }
+    }
+}
+
 /// Start and features of every decision window of a capture.
 pub(crate) fn windows(
     c: &LabelledCapture,

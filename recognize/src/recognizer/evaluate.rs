@@ -13,7 +13,7 @@ use super::{Decision, LabelledCapture};
 use crate::RecognizeError;
 use crate::eval::ConfusionMatrix;
 use crate::features::spectral::SpectrogramPlan;
-use crate::features::windows;
+use crate::features::{WindowlessCapture, windows};
 use crate::knn::{argmax, fuse};
 
 /// One behaviour's scratches classified alone, in a [`FusedEvaluation`].
@@ -91,6 +91,10 @@ pub struct Evaluation {
     pub never_correct: usize,
     /// Captures whose last decision is wrong.
     pub not_stable: usize,
+    /// Captures that gave no decision (shorter than one decision window, or a tip that never
+    /// travels far enough), and why. They still count in `captures`, `never_correct` and
+    /// `not_stable`: a capture the recognizer cannot answer is one it never recognizes.
+    pub windowless: Vec<WindowlessCapture>,
 }
 
 /// The scratches of one trial: each one's behaviour index and class probabilities.
@@ -173,6 +177,12 @@ impl RecognizerFile {
     }
 
     /// Evaluates on `captures`; `window_s` overrides a SOM's window length.
+    ///
+    /// A capture that gives no decision window does not fail the evaluation: it is listed in
+    /// [`Evaluation::windowless`] (the CLI warns about each), since the other captures are
+    /// still scored. When no capture gives a decision there is nothing to score, and the
+    /// evaluation is refused with [`RecognizeError::NoDecisions`] naming every capture and why,
+    /// rather than reporting an accuracy over zero decisions.
     pub fn evaluate<C: Borrow<LabelledCapture>>(
         &self,
         captures: &[C],
@@ -185,12 +195,22 @@ impl RecognizerFile {
         let mut confusion = ConfusionMatrix::new(self.classes.clone())?;
         let (mut first, mut stable) = (Vec::new(), Vec::new());
         let (mut flips, mut span_s, mut duration_s) = (0usize, 0.0, 0.0);
+        let mut windowless = Vec::new();
         for c in captures {
             let c = c.borrow();
             let truth = class_index(&self.classes, c)?;
             let rate_hz = c.capture.metadata().rate_hz();
             duration_s += c.capture.len() as f64 / rate_hz;
             let decisions = self.decisions(c, windowing.as_ref())?;
+            if decisions.is_empty() {
+                windowless.push(match &windowing {
+                    Some(w) => WindowlessCapture::of(c, w, "decision"),
+                    None => WindowlessCapture {
+                        path: c.reference.path.clone(),
+                        reason: "gave no decision".to_owned(),
+                    },
+                });
+            }
             for d in &decisions {
                 confusion.add(&self.classes[truth], &self.classes[d.label])?;
             }
@@ -206,6 +226,9 @@ impl RecognizerFile {
             if let (Some(a), Some(b)) = (decisions.first(), decisions.last()) {
                 span_s += at_s(b) - at_s(a);
             }
+        }
+        if confusion.total() == 0 {
+            return Err(RecognizeError::NoDecisions { captures: windowless });
         }
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         let (window_s, decision_latency_s) = match &windowing {
@@ -226,6 +249,7 @@ impl RecognizerFile {
             captures: captures.len(),
             never_correct: captures.len() - first.len(),
             not_stable: captures.len() - stable.len(),
+            windowless,
         })
     }
 

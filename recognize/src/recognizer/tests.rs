@@ -19,9 +19,21 @@ fn rubbing(
     friction_n: f64,
     seconds: f64,
 ) -> LabelledCapture {
+    rubbing_at(surface, amplitude_m, wavelength_m, friction_n, seconds, 5e-3)
+}
+
+/// [`rubbing`] at `speed_m_s` (0: a tip that never slides).
+fn rubbing_at(
+    surface: &str,
+    amplitude_m: f64,
+    wavelength_m: f64,
+    friction_n: f64,
+    seconds: f64,
+    speed_m_s: f64,
+) -> LabelledCapture {
     let n = (seconds * 1000.0) as usize;
     let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
-    let x: Vec<f64> = t.iter().map(|t| 5e-3 * t).collect();
+    let x: Vec<f64> = t.iter().map(|t| speed_m_s * t).collect();
     let z: Vec<f64> = x
         .iter()
         .map(|x| amplitude_m * (x * std::f64::consts::TAU / wavelength_m).sin())
@@ -360,4 +372,85 @@ fn train_picks_the_trainer_of_the_method_and_features() {
     assert_eq!(TrainSettings::new(Method::Knn).features, FeatureSet::Spectral);
     let err = train(&captures, &TrainSettings::new(Method::Svm)).expect_err("no accelerometer");
     assert!(matches!(err, RecognizeError::MissingColumns { .. }), "{err}");
+}
+
+/// `c`, read from `path` instead.
+fn from(mut c: LabelledCapture, path: &str) -> LabelledCapture {
+    c.reference.path = path.into();
+    c
+}
+
+#[test]
+fn training_refuses_a_class_whose_captures_give_no_window() {
+    // 0.4 s is shorter than one 0.5 s window with the filters' 0.27 s margin each side.
+    let mut captures = three_surfaces(4.0);
+    captures.push(from(rubbing("cork", 10e-6, 1e-3, 0.15, 0.4), "cork-a.csv"));
+    captures.push(from(rubbing("cork", 10e-6, 1e-3, 0.15, 0.4), "cork-b.csv"));
+    for method in [Method::Som, Method::Knn] {
+        let settings = TrainSettings {
+            window_s: 0.5,
+            train_window_s: 0.5,
+            features: FeatureSet::Nakano,
+            ..TrainSettings::new(method)
+        };
+        let err = train(&captures, &settings).expect_err("cork has no window");
+        let RecognizeError::ClassWithoutWindows { class, captures: why } = &err else {
+            panic!("{method:?}: {err}");
+        };
+        assert_eq!(class, "cork");
+        let paths: Vec<&Path> = why.iter().map(|w| w.path.as_path()).collect();
+        assert_eq!(paths, [Path::new("cork-a.csv"), Path::new("cork-b.csv")]);
+        let text = err.to_string();
+        assert!(text.contains("class `cork` has no training vector"), "{text}");
+        assert!(
+            text.contains("capture cork-a.csv is 0.400 s long; a training window needs 0.5 s"),
+            "{text}"
+        );
+    }
+    // Long enough, but a tip that never slides gives no window either.
+    let mut captures = three_surfaces(4.0);
+    captures.push(from(rubbing_at("cork", 10e-6, 1e-3, 0.15, 4.0, 0.0), "still.csv"));
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let err = RecognizerFile::train_som(&captures, windowing, SomParams::default()).expect_err("no travel");
+    assert!(
+        err.to_string()
+            .contains("capture still.csv moves its tip only 0.000 mm"),
+        "{err}"
+    );
+}
+
+#[test]
+fn evaluation_refuses_no_decisions_and_lists_captures_without_one() {
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let model =
+        RecognizerFile::train_som(&three_surfaces(4.0), windowing, SomParams::default()).expect("train");
+    let short = [
+        from(rubbing("fine", 5e-6, 0.3e-3, 0.10, 0.4), "fine-short.csv"),
+        from(rubbing("coarse", 30e-6, 1.5e-3, 0.20, 0.3), "coarse-short.csv"),
+    ];
+    let err = model.evaluate(&short, None).expect_err("no decisions");
+    let RecognizeError::NoDecisions { captures } = &err else {
+        panic!("{err}");
+    };
+    let paths: Vec<&Path> = captures.iter().map(|w| w.path.as_path()).collect();
+    assert_eq!(
+        paths,
+        [Path::new("fine-short.csv"), Path::new("coarse-short.csv")]
+    );
+    let text = err.to_string();
+    assert!(
+        text.contains("capture fine-short.csv is 0.400 s long; a decision window needs 0.5 s"),
+        "{text}"
+    );
+    assert!(
+        text.contains("capture coarse-short.csv is 0.300 s long"),
+        "{text}"
+    );
+    // One short capture among others is scored as never correct and listed, not refused.
+    let mut mixed = three_surfaces(3.0);
+    mixed.push(short[0].clone());
+    let eval = model.evaluate(&mixed, None).expect("other captures decide");
+    assert_eq!(eval.windowless.len(), 1);
+    assert_eq!(eval.windowless[0].path, Path::new("fine-short.csv"));
+    assert_eq!((eval.captures, eval.never_correct), (4, 1));
 }

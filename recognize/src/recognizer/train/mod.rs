@@ -21,7 +21,7 @@ use crate::RecognizeError;
 use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
 use crate::features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling,
-    capture_histogram, histogram_names, window_vectors,
+    WindowlessCapture, capture_histogram, histogram_names, window_vectors,
 };
 use crate::knn::PAPER_K;
 use crate::som::Normalization;
@@ -259,10 +259,39 @@ pub(crate) fn training_windows(
             g.push(group);
         }
     }
+    every_class_has_windows(captures, classes, &y, &training)?;
     if x.is_empty() {
         return Err(RecognizeError::NoTrainingData);
     }
     Ok((x, y, g))
+}
+
+/// Refuses training when a class of `classes` has no vector among `labels` (the class index of
+/// each training window of `captures`, cut by the training windowing `training`): a recognizer
+/// would list that class but could never answer it. The error names the class and why each of
+/// its captures gave no window.
+pub(crate) fn every_class_has_windows(
+    captures: &[LabelledCapture],
+    classes: &[String],
+    labels: &[usize],
+    training: &NakanoWindowing,
+) -> Result<(), RecognizeError> {
+    let mut counts = vec![0usize; classes.len()];
+    for &l in labels {
+        if let Some(n) = counts.get_mut(l) {
+            *n += 1;
+        }
+    }
+    let Some(empty) = counts.iter().position(|&n| n == 0) else {
+        return Ok(());
+    };
+    let class = classes[empty].clone();
+    let captures = captures
+        .iter()
+        .filter(|c| c.label == class)
+        .map(|c| WindowlessCapture::of(c, training, "training"))
+        .collect();
+    Err(RecognizeError::ClassWithoutWindows { class, captures })
 }
 
 /// Training windows for a k-NN or SVM over windows, scaled by the [`WindowScaling`] fitted to

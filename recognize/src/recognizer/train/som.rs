@@ -4,8 +4,8 @@
 use rayon::prelude::*;
 
 use super::{
-    BehaviourHistograms, CV_FOLDS, Method, TrainSettings, Trainer, every_class_in_two_groups,
-    histograms_by_behaviour, training_windows,
+    BehaviourHistograms, CV_FOLDS, Method, TrainSettings, Trainer, every_class_has_windows,
+    every_class_in_two_groups, histograms_by_behaviour, training_windows,
 };
 use crate::RecognizeError;
 use crate::features::nakano::FEATURE_NAMES;
@@ -102,6 +102,7 @@ impl RecognizerFile {
                 labels.push(label);
             }
         }
+        every_class_has_windows(captures, &classes, &labels, &training)?;
         if data.is_empty() {
             return Err(RecognizeError::NoTrainingData);
         }
