@@ -404,6 +404,16 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         }
     };
 
+    // Inputs are within their limits, but the low-pass can overshoot a step by a few percent,
+    // so a value just inside a limit may come out just beyond it; refuse rather than write a
+    // capture that no reader would accept.
+    for (&name, column) in order.iter().zip::<&Vec<Vec<f64>>>(&out_data) {
+        let limit = magnitude_limit(name);
+        let beyond = |v: &f64| v.is_nan() || v.abs() > limit;
+        if let Some(&value) = column.iter().find(|v| beyond(v)) {
+            return Err(fail(CaptureErrorKind::Implausible { value, limit }).in_column(name));
+        }
+    }
     let mut columns = vec![TIME_S.to_owned()];
     columns.extend(order.iter().map(|&name| name.to_owned()));
     let mut data = vec![out_time];

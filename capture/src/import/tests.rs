@@ -494,3 +494,29 @@ fn implausible_values_are_errors_or_dropped_rows() {
         CaptureErrorKind::TooFewRows(1)
     ));
 }
+
+#[test]
+fn resampled_output_stays_within_the_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    // A step from -1e6 to 1e6 N at 1 kHz, downsampled: the low-pass overshoots the step.
+    let step = |name: &str, size: f64| {
+        let mut text = String::from("t,x,Fz\n");
+        for i in 0..400 {
+            let force = if i < 200 { -size } else { size };
+            text += &format!("{},0,{force}\n", i as f64 / 1000.0);
+        }
+        write(dir.path(), name, &text)
+    };
+    let path = step("step.csv", 1e6);
+    let mut spec = rubbing("time_s=t,tangential_position_m=x,normal_force_n=Fz");
+    spec.rate_hz = Some(100.0);
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("normal_force_n"), "{e}");
+    assert!(
+        matches!(e.kind, CaptureErrorKind::Implausible { value, limit } if value.abs() > limit),
+        "{e}"
+    );
+    // The same step at half the size comes through.
+    let path = step("half.csv", 5e5);
+    assert_eq!(import_csv(&path, &spec).unwrap().len(), 40);
+}
