@@ -44,6 +44,20 @@ pub enum IdentifyError {
         #[source]
         source: Box<IdentifyError>,
     },
+    /// A metric came out infinite or NaN (values so large their squares overflow), so the
+    /// model file could not hold it.
+    #[error(
+        "{}: the {what} is {value}: the capture holds values too large to evaluate a fit on",
+        path.display()
+    )]
+    NonFiniteMetric {
+        /// The capture the metric was computed on.
+        path: PathBuf,
+        /// Which metric of which model on which data.
+        what: String,
+        /// Its value.
+        value: f64,
+    },
     /// No samples at all.
     #[error("no samples")]
     Empty,

@@ -9,6 +9,14 @@
 //! - **Needle puncture**: an RBF ε-SVR of [depth, velocity] (C = 100, γ = 30, ε = 0.02 N),
 //!   inputs scaled to [0, 1], on up to 350 samples spread over the capture's in-tissue samples (the paper trains on 350).
 //!
+//! Every SVR trains on at most [`IdentifyOptions::max_fit_samples`] rows (default
+//! [`DEFAULT_MAX_FIT_SAMPLES`]): a longer capture is thinned to evenly spaced rows (the first
+//! and the last always kept), deterministically, and [`Report::n_rows`] next to
+//! [`Report::n_train`] says how many of how many were used. The solvers grow faster than
+//! linearly in the samples, so without a budget a 10⁶-row capture never finishes; metrics and
+//! input ranges still use every row (they are linear). The soft contact's first stage also
+//! caps each segment at [`MAX_SEGMENT_SAMPLES`].
+//!
 //! Velocity comes from the capture's velocity column, or from its position by the paper's
 //! pseudo-differentiation (Eq. 13) when it has none.
 
@@ -35,6 +43,14 @@ use svm::{InputScaling, Kernel, SvrFit, SvrParams, fit};
 pub(crate) const KGF_N: f64 = 9.806_65;
 /// Pseudo-differentiation time constant when a capture has no velocity column, s.
 const PSEUDO_DIFF_TAU_S: f64 = 0.01;
+/// Default budget of training rows per identification (see the module documentation): far
+/// above the paper's captures (31, 360 and 350 samples), low enough that every model fits a
+/// 10⁶-row capture in seconds.
+pub const DEFAULT_MAX_FIT_SAMPLES: usize = 20_000;
+/// Soft contact: most rows each constant-speed segment's first-stage fit trains on (evenly
+/// spaced over the segment). Those fits run the dense interior point, O(n³) per iteration,
+/// which takes seconds from a few hundred samples on; the paper's segments hold 40.
+pub const MAX_SEGMENT_SAMPLES: usize = 200;
 
 /// What to identify and with which hyperparameters (None: the defaults of that model).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,6 +65,9 @@ pub struct IdentifyOptions {
     pub gamma: Option<f64>,
     /// Needle: at most this many training samples.
     pub max_samples: usize,
+    /// Every model: at most this many training rows, evenly spaced over the capture (the
+    /// needle model takes the smaller of this and `max_samples`).
+    pub max_fit_samples: usize,
 }
 
 impl IdentifyOptions {
@@ -60,6 +79,7 @@ impl IdentifyOptions {
             epsilon: None,
             gamma: None,
             max_samples: 350,
+            max_fit_samples: DEFAULT_MAX_FIT_SAMPLES,
         }
     }
 }
@@ -82,6 +102,12 @@ pub struct Report {
     pub model: String,
     /// Training samples of the final stage.
     pub n_train: usize,
+    /// Rows of the training capture the fit could use (needle: in tissue); the fit trained
+    /// on an evenly spaced `max_fit_samples` of them when there were more.
+    pub n_rows: usize,
+    /// Rows the SVR(s) trained on, at most `max_fit_samples` (soft contact: the first stage's,
+    /// all segments together; for the others equal to `n_train`).
+    pub n_fit_rows: usize,
     /// Support vectors (all SVRs of the model).
     pub n_sv: usize,
     /// Linear model slope (hard contact).
@@ -136,18 +162,44 @@ fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result
     })
 }
 
-/// The training capture's friction data, and the data to evaluate on: the test capture's, or
-/// without one the training capture's again.
-fn train_and_eval_data(
+/// The training capture's friction data, and the test capture's when there is one.
+fn train_and_test_data(
     train: &Capture,
     test: Option<&Capture>,
-) -> Result<(FrictionData, FrictionData), IdentifyError> {
-    let tr = friction_data(train)?;
-    let ev = match test {
-        Some(t) => friction_data(t)?,
-        None => friction_data(train)?,
-    };
-    Ok((tr, ev))
+) -> Result<(FrictionData, Option<FrictionData>), IdentifyError> {
+    Ok((friction_data(train)?, test.map(friction_data).transpose()?))
+}
+
+/// `n` indices spread evenly over `0..n_all` (all of them when `n ≥ n_all`), first and last
+/// included.
+pub(crate) fn even_indices(n_all: usize, n: usize) -> Vec<usize> {
+    if n >= n_all {
+        return (0..n_all).collect();
+    }
+    let n = n.max(2);
+    (0..n)
+        .map(|k| ((k as f64) * n_all.saturating_sub(1) as f64 / (n - 1) as f64).round() as usize)
+        .collect()
+}
+
+impl FrictionData {
+    /// Rows.
+    pub(crate) fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    /// At most `max_rows` rows, evenly spaced (see [`even_indices`]).
+    pub(crate) fn thinned(&self, max_rows: usize) -> Self {
+        let pick = even_indices(self.len(), max_rows);
+        let take = |v: &[f64]| -> Vec<f64> { pick.iter().map(|&i| v[i]).collect() };
+        Self {
+            time_s: take(&self.time_s),
+            normal_force_n: take(&self.normal_force_n),
+            velocity_mps: take(&self.velocity_mps),
+            friction_force_n: take(&self.friction_force_n),
+            commanded_mps: self.commanded_mps.as_deref().map(take),
+        }
+    }
 }
 
 pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
@@ -302,7 +354,9 @@ fn friction_baselines(
 
 fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let (tr, ev) = train_and_eval_data(train, test)?;
+    let (all, held_out) = train_and_test_data(train, test)?;
+    let tr = all.thinned(o.max_fit_samples);
+    let ev = held_out.as_ref().unwrap_or(&all);
     let (c, epsilon) = (o.c.unwrap_or(1e11 / KGF_N), o.epsilon.unwrap_or(0.003 * KGF_N));
     let f = svr(
         "hard-contact SVR",
@@ -316,10 +370,16 @@ fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
     let w = f.model.linear_weights().map(|w| w[0]);
     let b = f.model.bias;
     let model = scaled(f.model.clone(), InputScaling::identity(1));
-    let predicted: Vec<f64> = ev.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
-    let svr_metrics = metrics(&ev.time_s, &ev.friction_force_n, &predicted)?;
-    let train_pred: Vec<f64> = tr.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
-    let (cv, net) = friction_baselines(&tr, &ev, false)?;
+    let predict = |d: &FrictionData| -> Result<Metrics, IdentifyError> {
+        let predicted: Vec<f64> = d.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
+        metrics(&d.time_s, &d.friction_force_n, &predicted)
+    };
+    let train_metrics = predict(&all)?;
+    let svr_metrics = match &held_out {
+        Some(t) => predict(t)?,
+        None => train_metrics,
+    };
+    let (cv, net) = friction_baselines(&tr, ev, false)?;
     let hyper = vec![SvrHyper {
         label: "svr".into(),
         c,
@@ -338,15 +398,12 @@ fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         },
         ModelBody::Single(model),
         hyper,
-        tr.time_s.len(),
-        (
-            metrics(&tr.time_s, &tr.friction_force_n, &train_pred)?,
-            svr_metrics,
-        ),
+        (tr.len(), all.len(), tr.len()),
+        (train_metrics, svr_metrics),
         (Some(cv), net),
         &[&f],
         started,
-        range(&tr.normal_force_n, 1),
+        range(&all.normal_force_n, 1),
         (w, Some(b)),
         Vec::new(),
     )
@@ -360,6 +417,8 @@ pub(crate) struct StageOne {
     pub(crate) fits: Vec<SvrFit>,
     /// Sample indices of each segment.
     pub(crate) segments: Vec<Vec<usize>>,
+    /// Rows the fits trained on, all segments together (at most [`MAX_SEGMENT_SAMPLES`] each).
+    pub(crate) fit_rows: usize,
 }
 
 /// Stage 1 of the soft contact: friction against normal force per constant-speed segment,
@@ -384,14 +443,19 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
         points: Vec::new(),
         fits: Vec::new(),
         segments: Vec::new(),
+        fit_rows: 0,
     };
     for &v in &speeds {
         let idx: Vec<usize> = (0..commanded.len()).filter(|&i| commanded[i] == v).collect();
         if idx.len() < 3 {
             continue;
         }
-        let p: Vec<f64> = idx.iter().map(|&i| tr.normal_force_n[i]).collect();
-        let f: Vec<f64> = idx.iter().map(|&i| tr.friction_force_n[i]).collect();
+        let fit_idx: Vec<usize> = even_indices(idx.len(), MAX_SEGMENT_SAMPLES)
+            .into_iter()
+            .map(|k| idx[k])
+            .collect();
+        let p: Vec<f64> = fit_idx.iter().map(|&i| tr.normal_force_n[i]).collect();
+        let f: Vec<f64> = fit_idx.iter().map(|&i| tr.friction_force_n[i]).collect();
         let speed = idx.iter().map(|&i| tr.velocity_mps[i]).sum::<f64>() / idx.len() as f64;
         let fitted = svr(
             &format!("stage-1 SVR at {v} m/s"),
@@ -405,6 +469,7 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
         let w = fitted.model.linear_weights().map_or(0.0, |w| w[0]);
         out.points.push([speed, w, fitted.model.bias]);
         out.fits.push(fitted);
+        out.fit_rows += fit_idx.len();
         out.segments.push(idx);
     }
     if out.points.len() < 3 {
@@ -421,9 +486,14 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
 
 fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let (tr, ev) = train_and_eval_data(train, test)?;
+    let (all, held_out) = train_and_test_data(train, test)?;
+    let tr = all.thinned(o.max_fit_samples);
+    let ev = held_out.as_ref().unwrap_or(&all);
     let StageOne {
-        points: stage1, fits, ..
+        points: stage1,
+        fits,
+        fit_rows,
+        ..
     } = stage_one(&tr, train.source())?;
     // Stage 2: RBF ε-SVRs of speed for w and m, on speeds scaled to [0, 1].
     let v: Vec<f64> = stage1.iter().map(|s| s[0]).collect();
@@ -462,9 +532,12 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
             .map(|i| mf(&[d.velocity_mps[i], d.normal_force_n[i]]))
             .collect()
     };
-    let svr_metrics = metrics(&ev.time_s, &ev.friction_force_n, &model_eval(&ev))?;
-    let train_metrics = metrics(&tr.time_s, &tr.friction_force_n, &model_eval(&tr))?;
-    let (cv, net) = friction_baselines(&tr, &ev, true)?;
+    let train_metrics = metrics(&all.time_s, &all.friction_force_n, &model_eval(&all))?;
+    let svr_metrics = match &held_out {
+        Some(t) => metrics(&t.time_s, &t.friction_force_n, &model_eval(t))?,
+        None => train_metrics,
+    };
+    let (cv, net) = friction_baselines(&tr, ev, true)?;
     let hyper = vec![
         SvrHyper {
             label: "stage1".into(),
@@ -485,10 +558,10 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
             kernel: Kernel::Rbf { gamma },
         },
     ];
-    let mut all = vec![&fw, &fm];
-    all.extend(fits.iter());
-    let x_range: Vec<f64> = (0..tr.time_s.len())
-        .flat_map(|i| [tr.velocity_mps[i], tr.normal_force_n[i]])
+    let mut all_fits = vec![&fw, &fm];
+    all_fits.extend(fits.iter());
+    let x_range: Vec<f64> = (0..all.len())
+        .flat_map(|i| [all.velocity_mps[i], all.normal_force_n[i]])
         .collect();
     finish(
         ModelKind::SoftFriction,
@@ -507,10 +580,10 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         },
         body,
         hyper,
-        stage1.len(),
+        (stage1.len(), all.len(), fit_rows),
         (train_metrics, svr_metrics),
         (Some(cv), net),
-        &all,
+        &all_fits,
         started,
         range(&x_range, 2),
         (None, None),
@@ -563,7 +636,7 @@ pub(crate) fn spread((t, x, y): &NeedleSamples, max_samples: usize) -> NeedleSam
 fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
     let all = needle_data(train)?;
-    let (_, x, y) = spread(&all, o.max_samples);
+    let (_, x, y) = spread(&all, o.max_samples.min(o.max_fit_samples));
     let (t_all, x_all, y_all) = all;
     let scaling = InputScaling::min_max(&x, 2);
     let xs = scaling.apply(&x);
@@ -582,8 +655,11 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
         None => (t_all.clone(), x_all.clone(), y_all.clone()),
     };
     let predict = |xx: &[f64]| -> Vec<f64> { xx.chunks_exact(2).map(|r| model.predict(r)).collect() };
-    let svr_metrics = metrics(&t_ev, &y_ev, &predict(&x_ev))?;
     let train_metrics = metrics(&t_all, &y_all, &predict(&x_all))?;
+    let svr_metrics = match test {
+        Some(_) => metrics(&t_ev, &y_ev, &predict(&x_ev))?,
+        None => train_metrics,
+    };
     let net_pred = rbf_network(&x, 2, &y, &x_ev)?;
     let net_metrics = metrics(&t_ev, &y_ev, &net_pred)?;
     let hyper = vec![SvrHyper {
@@ -609,7 +685,7 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
         },
         ModelBody::Single(model),
         hyper,
-        y.len(),
+        (y.len(), y_all.len(), y.len()),
         (train_metrics, svr_metrics),
         (None, net_metrics),
         &[&f],
@@ -629,7 +705,7 @@ fn finish(
     output: Quantity,
     body: ModelBody,
     hyper: Vec<SvrHyper>,
-    n_train: usize,
+    (n_train, n_rows, n_fit_rows): (usize, usize, usize),
     (train_metrics, svr_metrics): (Metrics, Metrics),
     (coulomb_viscous, rbf_network): (Option<Metrics>, Metrics),
     fits: &[&SvrFit],
@@ -650,6 +726,8 @@ fn finish(
     let report = Report {
         model: kind.short_name().into(),
         n_train,
+        n_rows,
+        n_fit_rows,
         n_sv,
         w,
         b,
@@ -682,5 +760,55 @@ fn finish(
         test_metrics: test.map(|_| svr_metrics),
         input_range,
     };
+    check_written(&report, &model, train, test)?;
     Ok(Identified { model, report })
+}
+
+/// Refuses a fit that would write a non-finite metric (JSON has no infinity, so the file
+/// could not be read back) or a model that [`ModelFile::validate`] would refuse on load,
+/// naming the capture whose data made it so.
+fn check_written(
+    report: &Report,
+    model: &ModelFile,
+    train: &Capture,
+    test: Option<&Capture>,
+) -> Result<(), IdentifyError> {
+    let eval = test.unwrap_or(train);
+    let m = &report.metrics;
+    let mut all = vec![
+        ("training", "ε-SVR", train, model.train_metrics),
+        (report.evaluated_on.as_str(), "ε-SVR", eval, Some(m.svr)),
+        (
+            report.evaluated_on.as_str(),
+            "RBF network",
+            eval,
+            Some(m.rbf_network),
+        ),
+    ];
+    all.push((
+        report.evaluated_on.as_str(),
+        "Coulomb+viscous",
+        eval,
+        m.coulomb_viscous,
+    ));
+    for (data, model_name, capture, metrics) in all {
+        let Some(metrics) = metrics else { continue };
+        for (name, value) in [
+            ("AISE", metrics.aise),
+            ("error bound", metrics.error_bound),
+            ("RMSE", metrics.rmse),
+        ] {
+            if !value.is_finite() {
+                return Err(IdentifyError::NonFiniteMetric {
+                    path: capture.source().to_owned(),
+                    what: format!("{name} of the {model_name} on the {data} data"),
+                    value,
+                });
+            }
+        }
+    }
+    model.validate().map_err(|(field, reason)| IdentifyError::Data {
+        path: train.source().to_owned(),
+        reason: format!("the fitted model would not load again: {field}: {reason}"),
+    })
 }

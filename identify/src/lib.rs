@@ -18,12 +18,15 @@ mod search;
 
 pub use baselines::{CentrePlacement, CoulombViscous, RbfNetwork, RbfNetworkParams};
 pub use error::IdentifyError;
-pub use identification::{ComparedMetrics, Identified, IdentifyOptions, Report, identify};
+pub use identification::{
+    ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, Identified, IdentifyOptions, MAX_SEGMENT_SAMPLES, Report,
+    identify,
+};
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
 };
 pub use model_file::{
-    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity, ScaledSvr,
-    SvrHyper,
+    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
+    ScaledSvr, SvrHyper,
 };
 pub use search::{SearchGrid, SearchPoint, best, search};

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::error::IdentifyError;
 use crate::identification::{
-    FrictionData, KGF_N, friction_data, metrics, needle_data, spread, stage_one, svr,
+    DEFAULT_MAX_FIT_SAMPLES, FrictionData, KGF_N, friction_data, metrics, needle_data, spread, stage_one, svr,
 };
 use crate::model_file::ModelKind;
 use capture::Capture;
@@ -175,7 +175,8 @@ impl Data {
     fn load(kind: ModelKind, train: &Capture, max_samples: usize) -> Result<Self, IdentifyError> {
         Ok(match kind {
             ModelKind::HardFriction => {
-                let d = friction_data(train)?;
+                // The same evenly spaced rows identification trains on by default.
+                let d = friction_data(train)?.thinned(DEFAULT_MAX_FIT_SAMPLES);
                 Self::Regression {
                     x: d.normal_force_n,
                     dim: 1,
@@ -195,7 +196,7 @@ impl Data {
                 }
             }
             ModelKind::SoftFriction => {
-                let raw = friction_data(train)?;
+                let raw = friction_data(train)?.thinned(DEFAULT_MAX_FIT_SAMPLES);
                 let one = stage_one(&raw, train.source())?;
                 Self::Soft {
                     raw,
