@@ -122,6 +122,18 @@ pub enum HapticsError {
         #[source]
         source: std::io::Error,
     },
+    /// A finished recording could not be renamed over its target; it is kept whole under its
+    /// partial name and the target is as it was.
+    #[error("the recording is in {} but could not replace {}", partial.display(), target.display())]
+    RecordingNotPlaced {
+        /// The finished recording.
+        partial: PathBuf,
+        /// The file it was to replace.
+        target: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
     /// A generated capture could not be built or written.
     #[error("capture {}", path.display())]
     GeneratedCapture {

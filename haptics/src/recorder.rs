@@ -12,10 +12,17 @@
 //! the file — the writer's buffer can spill to the file on its own when it fills — so the
 //! last line of a killed recording may be cut. [`read_recording`] reads such a file: every
 //! whole row, and a cut last line reported, not treated as an error.
+//!
+//! A recording into a file ([`record_to_file`]) never harms what the target held before: it
+//! is written to `TARGET.partial` ([`partial_path`]) and only [`Recorder::finish`] syncs it
+//! and renames it over the target. A recording that is killed, or that its caller abandons
+//! without finishing, leaves the old target untouched and the rows it got in
+//! `TARGET.partial`, a capture like any other under a name no `*.csv` scan picks up.
 
+use std::ffi::OsString;
 use std::fs::File;
-use std::io::{BufRead, BufReader, Write};
-use std::path::Path;
+use std::io::{self, BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
@@ -104,10 +111,62 @@ pub struct Recorder<W: Write + Send + 'static> {
     stats: Arc<RecorderStats>,
     stop: Arc<AtomicBool>,
     thread: JoinHandle<Finished<W>>,
+    /// Where a file recording goes once it has finished; `None` for a plain writer.
+    placement: Option<Placement<W>>,
 }
 
-/// Creates `path` (replacing it) and starts recording into it; returns the ring's producer for
-/// the haptic loop and the recorder.
+/// A file recording written under a temporary name, to be put in place when it finishes.
+struct Placement<W> {
+    partial: PathBuf,
+    target: PathBuf,
+    /// Makes the written bytes durable before the rename publishes them.
+    sync: fn(&W) -> io::Result<()>,
+}
+
+impl<W> std::fmt::Debug for Placement<W> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Placement")
+            .field("partial", &self.partial)
+            .field("target", &self.target)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<W> Placement<W> {
+    /// Syncs the finished file and renames it over the target, so that the target holds
+    /// either its old content or the whole new recording, never a mix.
+    fn place(&self, file: &W) -> Result<(), HapticsError> {
+        (self.sync)(file).map_err(|source| HapticsError::Io {
+            action: "sync",
+            path: self.partial.clone(),
+            source,
+        })?;
+        std::fs::rename(&self.partial, &self.target).map_err(|source| HapticsError::RecordingNotPlaced {
+            partial: self.partial.clone(),
+            target: self.target.clone(),
+            source,
+        })
+    }
+}
+
+/// The file a recording into `target` is written to until it finishes: `target` with
+/// `.partial` appended (`run.csv` → `run.csv.partial`). After a crash it holds the rows the
+/// recording got, readable with [`read_recording`] or as any capture; its name keeps it out
+/// of folder scans for `*.csv` captures, so a cut recording is never taken for a whole one.
+pub fn partial_path(target: &Path) -> PathBuf {
+    let mut name = OsString::from(target.as_os_str());
+    name.push(".partial");
+    PathBuf::from(name)
+}
+
+/// Starts recording into `path`; returns the ring's producer for the haptic loop and the
+/// recorder.
+///
+/// The rows go to [`partial_path`]`(path)` (created afresh, replacing a leftover one), and
+/// [`Recorder::finish`] syncs that file and renames it over `path`: an existing `path` is
+/// replaced only by a recording that finished. A recording that is killed or abandoned leaves
+/// `path` as it was and the partial file beside it; one that recorded no row leaves no
+/// partial file.
 pub fn record_to_file(
     path: &Path,
     meta: &Metadata,
@@ -115,13 +174,29 @@ pub fn record_to_file(
     map: impl RowMap,
     config: RecorderConfig,
 ) -> Result<(rtrb::Producer<HapticSample>, Recorder<File>), HapticsError> {
-    let file = File::create(path).map_err(|source| HapticsError::Io {
+    // Refused now rather than by the rename after the whole recording.
+    if path.is_dir() {
+        return Err(HapticsError::Io {
+            action: "create",
+            path: path.to_owned(),
+            source: io::Error::new(io::ErrorKind::IsADirectory, "it is a directory"),
+        });
+    }
+    let partial = partial_path(path);
+    let file = File::create(&partial).map_err(|source| HapticsError::Io {
         action: "create",
-        path: path.to_owned(),
+        path: partial.clone(),
         source,
     })?;
-    let writer = CaptureWriter::with_source(file, path, meta, columns)?;
-    Recorder::spawn(writer, map, config)
+    // Errors name the file the rows are in.
+    let writer = CaptureWriter::with_source(file, &partial, meta, columns)?;
+    let (producer, mut recorder) = Recorder::spawn(writer, map, config)?;
+    recorder.placement = Some(Placement {
+        partial,
+        target: path.to_owned(),
+        sync: File::sync_all,
+    });
+    Ok((producer, recorder))
 }
 
 impl<W: Write + Send + 'static> Recorder<W> {
@@ -202,7 +277,15 @@ impl<W: Write + Send + 'static> Recorder<W> {
                 thread: "recorder",
                 source,
             })?;
-        Ok((producer, Self { stats, stop, thread }))
+        Ok((
+            producer,
+            Self {
+                stats,
+                stop,
+                thread,
+                placement: None,
+            },
+        ))
     }
 
     /// Live counters.
@@ -210,9 +293,13 @@ impl<W: Write + Send + 'static> Recorder<W> {
         &self.stats
     }
 
-    /// Drains what is left in the ring, finishes the file and returns the underlying writer.
-    /// Call after the haptic loop has stopped (or drop its producer). Fails with
+    /// Drains what is left in the ring, finishes the file and returns the underlying writer;
+    /// a recording from [`record_to_file`] is then synced and renamed over its target. Call
+    /// after the haptic loop has stopped (or drop its producer). Fails with
     /// [`CaptureErrorKind::NoSamples`] when nothing was recorded.
+    ///
+    /// A recorder dropped without this call stops when its producer is dropped and leaves a
+    /// file recording under its partial name.
     pub fn finish(self) -> Result<(W, RecorderSummary), HapticsError> {
         self.finish_with_samples().0
     }
@@ -222,9 +309,25 @@ impl<W: Write + Send + 'static> Recorder<W> {
     /// finished (a run that never reached its recording phase has samples but no rows).
     pub fn finish_with_samples(self) -> Finished<W> {
         self.stop.store(true, Ordering::Release);
-        self.thread
+        let (result, kept) = self
+            .thread
             .join()
-            .unwrap_or_else(|_| (Err(HapticsError::Panicked { thread: "recorder" }), Vec::new()))
+            .unwrap_or_else(|_| (Err(HapticsError::Panicked { thread: "recorder" }), Vec::new()));
+        let Some(placement) = self.placement else {
+            return (result, kept);
+        };
+        let result = match result {
+            Ok((file, summary)) => placement.place(&file).map(|()| (file, summary)),
+            Err(e) => {
+                // A header and no row is no recording worth keeping; anything else that
+                // failed keeps what it got under the partial name.
+                if matches!(&e, HapticsError::Capture(c) if matches!(c.kind, CaptureErrorKind::NoSamples)) {
+                    let _ = std::fs::remove_file(&placement.partial);
+                }
+                Err(e)
+            }
+        };
+        (result, kept)
     }
 }
 
