@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use haptics::acquire::{CaptureOptions, Protocol, run_capture, sim_device};
 use haptics::device::HapticDevice;
 use haptics::device::omega7::Omega7;
+use haptics::recorder::partial_path;
 use haptics::rt::Pacing;
 
 /// Record a capture through a haptic device.
@@ -27,7 +28,10 @@ pub(crate) struct CaptureArgs {
     /// What to capture: needle, hard, soft or rubbing.
     #[arg(long, value_parser = parse_protocol)]
     protocol: Protocol,
-    /// The capture file to write.
+    /// The capture file to write. Rows go to FILE.partial while the capture runs, and it is
+    /// renamed to FILE when the capture completes: an existing FILE is replaced, as every
+    /// palpus output is (no --force), but only by a finished capture. A capture that fails or
+    /// is killed leaves FILE as it was and what it recorded in FILE.partial.
     #[arg(long, value_name = "FILE")]
     out: PathBuf,
     /// For `rubbing` on the simulator: which of Nakano's seven surfaces.
@@ -94,8 +98,15 @@ pub(crate) fn run(args: &CaptureArgs) -> anyhow::Result<()> {
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let report = run_capture(device, &args.out, &options, &mut |_| {})
-        .with_context(|| format!("capturing `{}` into {}", args.protocol, args.out.display()))?;
+    let report = run_capture(device, &args.out, &options, &mut |_| {}).with_context(|| {
+        let partial = partial_path(&args.out);
+        let kept = if partial.exists() {
+            format!(" (what was recorded is in {})", partial.display())
+        } else {
+            String::new()
+        };
+        format!("capturing `{}` into {}{kept}", args.protocol, args.out.display())
+    })?;
     if args.quiet {
         return Ok(());
     }

@@ -33,7 +33,11 @@ pub(crate) struct RunArgs {
     /// Stop each part of the task after this many seconds.
     #[arg(long, value_name = "S")]
     duration: Option<f64>,
-    /// Record the session as a capture (rubbing scenes: one file per surface).
+    /// Record the session as a capture (rubbing scenes: one file per surface). Each file is
+    /// written as FILE.partial and renamed to FILE when its part of the session ends: an
+    /// existing FILE is replaced, as every palpus output is (no --force), but only by a
+    /// finished recording. A session that fails or is killed leaves FILE as it was and what
+    /// it recorded in FILE.partial.
     #[arg(long, value_name = "FILE")]
     record: Option<PathBuf>,
     /// Where the report goes (default: out/run/SCENE).
