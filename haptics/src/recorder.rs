@@ -308,12 +308,23 @@ impl<W: Write + Send + 'static> Recorder<W> {
     /// [`RecorderConfig::keep_samples`] was set (else none) — whether or not the file could be
     /// finished (a run that never reached its recording phase has samples but no rows).
     pub fn finish_with_samples(self) -> Finished<W> {
+        self.finish_placing(true)
+    }
+
+    /// As [`Recorder::finish_with_samples`] for a run that failed: every row is flushed, but a
+    /// recording from [`record_to_file`] stays under its partial name, so a failed run never
+    /// replaces a good file at the target.
+    pub fn abandon(self) -> Finished<W> {
+        self.finish_placing(false)
+    }
+
+    fn finish_placing(self, place: bool) -> Finished<W> {
         self.stop.store(true, Ordering::Release);
         let (result, kept) = self
             .thread
             .join()
             .unwrap_or_else(|_| (Err(HapticsError::Panicked { thread: "recorder" }), Vec::new()));
-        let Some(placement) = self.placement else {
+        let Some(placement) = self.placement.filter(|_| place) else {
             return (result, kept);
         };
         let result = match result {

@@ -160,3 +160,25 @@ fn a_directory_target_is_refused_before_recording() {
     assert!(e.to_string().contains("cannot create"), "{e}");
     assert!(entries(dir.path()).is_empty());
 }
+
+#[test]
+fn an_abandoned_recording_keeps_the_old_file_and_all_its_rows_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.csv");
+    let old = good_recording(&path, 300);
+
+    let (mut producer, recorder) =
+        record_to_file(&path, &meta("failed"), COLUMNS, row, RecorderConfig::default()).unwrap();
+    for tick in 0..200 {
+        while producer.push(sample(tick)).is_err() {
+            std::thread::yield_now();
+        }
+    }
+    drop(producer);
+    let (result, _) = recorder.abandon();
+    assert_eq!(result.unwrap().1.rows, 200);
+    assert_eq!(std::fs::read(&path).unwrap(), old);
+    assert_eq!(entries(dir.path()), ["run.csv", "run.csv.partial"]);
+    let partial = Capture::read_file(&partial_path(&path), CaptureKind::Insertion).unwrap();
+    assert_eq!(partial.len(), 200);
+}

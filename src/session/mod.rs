@@ -639,6 +639,9 @@ pub fn run_segment(
         .map(|r| format!("{:?}", r.reason))
         .map_err(|e| e.to_string());
     let (recorded, samples) = match recorder {
+        // A run that failed keeps its rows beside the target, under the partial name, and
+        // leaves a file already there untouched.
+        AnyRecorder::File(r) if result.is_err() => (None, r.abandon().1),
         AnyRecorder::File(r) => {
             let (result, samples) = r.finish_with_samples();
             let (_, summary) = result?;

@@ -428,9 +428,12 @@ pub fn run_capture(
     } = outcome;
     drop(io);
     let _ = device.close();
-    let recorded = recorder.finish();
-    result?;
-    let (_, summary) = recorded?;
+    // A failed run keeps its rows under the partial name and leaves the target as it was.
+    if let Err(e) = result {
+        let _ = recorder.abandon();
+        return Err(e.into());
+    }
+    let (_, summary) = recorder.finish()?;
     Ok(CaptureReport {
         path: out.to_owned(),
         recorder: summary,
