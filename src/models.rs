@@ -1,6 +1,11 @@
 //! Model resolution: the models a scene's drawn objects need, loaded from model files or
 //! identified from captures on demand and cached.
 //!
+//! Every model, from a file, the cache or a fit, must be one the device can render: its
+//! output over its own input range (the box the force laws clamp inputs to) stays within the
+//! device's force limit, and the force law builds from it. Both are checked here, at load,
+//! with the file named, so a corrupted or absurd model never reaches the haptic thread.
+//!
 //! The cache key is a SHA-256 of the model kind, the training capture's bytes and the
 //! hyperparameters, so changing either re-identifies and nothing stale is ever served. Every
 //! file goes through one reader (`Sources`), which is how the tests prove that a model no
@@ -23,6 +28,11 @@ use crate::scene::{ModelRole, ModelSource, Scene};
 /// Bumped when identification changes in a way that makes cached models stale.
 const CACHE_VERSION: &str = "palpus-model-cache 1";
 
+/// Grid points per input on which a model's output is checked against the device limit: 33
+/// points put one within 1/32 of the range of any input, and cost 33² evaluations for a
+/// two-input model.
+pub const PEAK_GRID_POINTS: usize = 33;
+
 /// Why a model could not be resolved.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
@@ -41,16 +51,16 @@ pub enum ModelError {
     Capture {
         /// The scene's name for the model.
         model: String,
-        /// Why.
-        source: capture::CaptureError,
+        /// Why (boxed, as every large error here: errors are rare and results many).
+        source: Box<capture::CaptureError>,
     },
     /// The model file is not valid.
     #[error("model `{model}`: {source}")]
     File {
         /// The scene's name for the model.
         model: String,
-        /// Why.
-        source: identify::IdentifyError,
+        /// Why (boxed).
+        source: Box<identify::IdentifyError>,
     },
     /// The model file models something else.
     #[error("model `{model}`: {} holds a {found} model, the scene says {expected}", path.display())]
@@ -74,13 +84,41 @@ pub enum ModelError {
         /// Why (boxed: identification errors are large and rare).
         source: Box<identify::IdentifyError>,
     },
+    /// The model's output over its own input range exceeds what the device can render.
+    #[error(
+        "model `{model}`: {}: the model's output reaches {peak_n} N at inputs {at:?} within its \
+         input range, beyond the device's {limit_n} N limit",
+        path.display()
+    )]
+    TooStrong {
+        /// The scene's name for the model.
+        model: String,
+        /// The model file (or the capture it was identified from).
+        path: PathBuf,
+        /// The largest |output| found, N (NaN when the model evaluates to NaN).
+        peak_n: f64,
+        /// Where.
+        at: Vec<f64>,
+        /// The device's force limit, N.
+        limit_n: f64,
+    },
+    /// A force law cannot be built from the model.
+    #[error("model `{model}`: {}: {source}", path.display())]
+    Law {
+        /// The scene's name for the model.
+        model: String,
+        /// The model file (or the capture it was identified from).
+        path: PathBuf,
+        /// Why (boxed: the haptics error is large and this one rare).
+        source: Box<haptics::HapticsError>,
+    },
     /// The cache could not be written.
     #[error("model `{model}`: writing the cache: {source}")]
     Cache {
         /// The scene's name for the model.
         model: String,
-        /// Why.
-        source: identify::IdentifyError,
+        /// Why (boxed).
+        source: Box<identify::IdentifyError>,
     },
 }
 
@@ -244,9 +282,10 @@ fn resolve_one(
         let bytes = sources.read_model_source(name, &path)?;
         let model = ModelFile::from_slice(&bytes, &path).map_err(|e| ModelError::File {
             model: name.into(),
-            source: e,
+            source: Box::new(e),
         })?;
         check_kind(name, &path, kind, &model)?;
+        check_renderable(name, &path, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
         return Ok((model, Origin::File(path)));
     }
     let Some(capture) = &source.capture else {
@@ -264,6 +303,7 @@ fn resolve_one(
         epsilon: source.epsilon,
         gamma: source.gamma,
         max_samples: source.max_samples,
+        max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
     };
     let cached = cache_dir.join(format!(
         "{}-{}.json",
@@ -274,6 +314,7 @@ fn resolve_one(
         && let Ok(model) = ModelFile::load(&cached)
         && model.kind == kind
     {
+        check_renderable(name, &cached, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
         return Ok((model, Origin::Cached(cached)));
     }
     let capture_kind = if kind == ModelKind::NeedlePuncture {
@@ -285,7 +326,7 @@ fn resolve_one(
         Capture::read_from(BufReader::new(bytes.as_slice()), &path, Some(capture_kind)).map_err(|e| {
             ModelError::Capture {
                 model: name.into(),
-                source: e,
+                source: Box::new(e),
             }
         })?;
     fitting(FitEvent::Started {
@@ -300,6 +341,12 @@ fn resolve_one(
     })?;
     let elapsed = started.elapsed();
     fitting(FitEvent::Finished { model: name, elapsed });
+    check_renderable(
+        name,
+        &path,
+        &identified.model,
+        haptics::DeviceSpecs::OMEGA7.max_force_n,
+    )?;
     std::fs::create_dir_all(cache_dir).map_err(|e| ModelError::Read {
         model: name.into(),
         path: cache_dir.to_owned(),
@@ -307,7 +354,7 @@ fn resolve_one(
     })?;
     identified.model.save(&cached).map_err(|e| ModelError::Cache {
         model: name.into(),
-        source: e,
+        source: Box::new(e),
     })?;
     Ok((
         identified.model,
@@ -331,6 +378,38 @@ fn check_kind(name: &str, path: &Path, expected: ModelKind, model: &ModelFile) -
     }
 }
 
+/// Refuses a model that a device with force limit `limit_n` cannot render: one whose output
+/// on a [`PEAK_GRID_POINTS`]-point grid over its input range exceeds the limit (or is not a
+/// number), or one no force law builds from. `path` is the file (or capture) named in errors.
+pub fn check_renderable(name: &str, path: &Path, model: &ModelFile, limit_n: f64) -> Result<(), ModelError> {
+    let (peak_n, at) = model.peak_output(PEAK_GRID_POINTS);
+    // NaN compares as not below the limit, so a model evaluating to NaN is refused too.
+    if peak_n.partial_cmp(&limit_n) != Some(std::cmp::Ordering::Less)
+        && peak_n.partial_cmp(&limit_n) != Some(std::cmp::Ordering::Equal)
+    {
+        return Err(ModelError::TooStrong {
+            model: name.into(),
+            path: path.to_owned(),
+            peak_n,
+            at,
+            limit_n,
+        });
+    }
+    // Build the fast path the force law will use, so that what it refuses is refused here,
+    // with the file named, rather than when the session starts.
+    let law = |source| ModelError::Law {
+        model: name.into(),
+        path: path.to_owned(),
+        source: Box::new(source),
+    };
+    match model.kind {
+        ModelKind::NeedlePuncture => haptics::law::needle_model(model).map(drop),
+        ModelKind::HardFriction => haptics::law::hard_friction_model(model).map(drop),
+        ModelKind::SoftFriction => haptics::law::soft_friction_models(model).map(drop),
+    }
+    .map_err(law)
+}
+
 /// SHA-256 (first 16 hex digits) of what determines an identified model.
 pub fn cache_key(capture_bytes: &[u8], options: &IdentifyOptions) -> String {
     let mut h = Sha256::new();
@@ -340,8 +419,8 @@ pub fn cache_key(capture_bytes: &[u8], options: &IdentifyOptions) -> String {
     h.update(capture_bytes);
     // `{:?}` of an f64 round-trips, so two different values never share a key.
     let hyper = format!(
-        "c={:?};epsilon={:?};gamma={:?};max_samples={}",
-        options.c, options.epsilon, options.gamma, options.max_samples
+        "c={:?};epsilon={:?};gamma={:?};max_samples={};max_fit_samples={}",
+        options.c, options.epsilon, options.gamma, options.max_samples, options.max_fit_samples
     );
     h.update(hyper.as_bytes());
     h.finalize().iter().take(8).map(|b| format!("{b:02x}")).collect()
