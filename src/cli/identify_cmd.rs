@@ -20,6 +20,10 @@ use svm::write_libsvm_model;
 /// --epsilon and --gamma set the second stage. needle: RBF SVR of [depth, velocity] on inputs
 /// scaled to [0, 1], at most --max-samples samples (default 350, as the paper).
 ///
+/// Every model trains on at most --max-fit-samples rows: a longer capture is thinned to
+/// evenly spaced rows (first and last kept, the same rows every run), and a line on stderr
+/// says how many of how many were used. Metrics use every row.
+///
 /// The report compares the SVR with Coulomb+viscous least squares (friction models) and an
 /// RBF network by AISE, error bound max|F − F̂| and RMSE, on --test if given, else on the
 /// training capture.
@@ -57,6 +61,9 @@ pub(crate) struct IdentifyArgs {
     /// Needle: at most this many training samples.
     #[arg(long, default_value_t = 350)]
     max_samples: usize,
+    /// Every model: at most this many training rows, evenly spaced over the capture.
+    #[arg(long, value_name = "N", default_value_t = identify::DEFAULT_MAX_FIT_SAMPLES)]
+    max_fit_samples: usize,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -92,6 +99,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         epsilon: args.epsilon,
         gamma: args.gamma,
         max_samples: args.max_samples,
+        max_fit_samples: args.max_fit_samples,
     };
     let explored = if args.search {
         let grid = SearchGrid::default_for(kind);
@@ -115,6 +123,24 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let identified =
         identify(&train, test.as_ref(), &options).with_context(|| format!("identifying a {kind} model"))?;
+    let r = &identified.report;
+    if r.n_fit_rows < r.n_rows {
+        let limit = match kind {
+            ModelKind::NeedlePuncture if args.max_samples <= args.max_fit_samples => "--max-samples",
+            _ => "--max-fit-samples",
+        };
+        eprintln!(
+            "fitted on {} of {} {}rows of {} (evenly spaced, {limit})",
+            r.n_fit_rows,
+            r.n_rows,
+            if kind == ModelKind::NeedlePuncture {
+                "in-tissue "
+            } else {
+                ""
+            },
+            args.capture.display(),
+        );
+    }
     if let Some(out) = &args.out {
         identified.model.save(out)?;
     }
