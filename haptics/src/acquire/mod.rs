@@ -431,7 +431,7 @@ pub fn run_capture(
     // A failed run keeps its rows under the partial name and leaves the target as it was.
     if let Err(e) = result {
         let _ = recorder.abandon();
-        return Err(e.into());
+        return Err(e);
     }
     let (_, summary) = recorder.finish()?;
     Ok(CaptureReport {
