@@ -156,20 +156,28 @@ pub enum SessionError {
         /// The scene's name for it.
         model: String,
         /// Why.
-        source: haptics::HapticsError,
+        source: Box<haptics::HapticsError>,
     },
     /// The device could not be opened.
     #[error("opening the device: {0}")]
-    Device(#[source] haptics::HapticsError),
+    Device(#[source] Box<haptics::HapticsError>),
     /// The replay capture is unreadable.
     #[error(transparent)]
     Replay(#[from] capture::CaptureError),
     /// The loop could not run, recording failed, or a simulated surface is unknown.
     #[error(transparent)]
-    Haptics(#[from] haptics::HapticsError),
+    Haptics(Box<haptics::HapticsError>),
     /// The device cannot run this task.
     #[error("{0}")]
     Unsupported(String),
+}
+
+// Boxed: the haptics error carries the lower crates' errors and would make every session
+// `Result` as large as the largest of them.
+impl From<haptics::HapticsError> for SessionError {
+    fn from(e: haptics::HapticsError) -> Self {
+        Self::Haptics(Box::new(e))
+    }
 }
 
 /// The segments of `scene` with the models resolved for it.
@@ -333,7 +341,7 @@ fn controller(
 ) -> Result<Box<dyn Controller>, SessionError> {
     let law_error = |source| SessionError::Model {
         model: segment.object.clone(),
-        source,
+        source: Box::new(source),
     };
     Ok(match &segment.kind {
         SegmentKind::Needle { model } => {
@@ -503,9 +511,9 @@ pub fn run_segment(
                 "the surfaces of a recognition scene are simulated; run it with --device sim".into(),
             ));
         }
-        (DeviceChoice::Omega7, _) => {
-            Box::new(Omega7::open(options.dhd_library.as_deref()).map_err(SessionError::Device)?)
-        }
+        (DeviceChoice::Omega7, _) => Box::new(
+            Omega7::open(options.dhd_library.as_deref()).map_err(|e| SessionError::Device(Box::new(e)))?,
+        ),
         (DeviceChoice::Replay(path), kind) => {
             let expected = match kind {
                 SegmentKind::Needle { .. } => CaptureKind::Insertion,
