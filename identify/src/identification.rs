@@ -285,11 +285,19 @@ pub fn identify(
     test: Option<&Capture>,
     options: &IdentifyOptions,
 ) -> Result<Identified, IdentifyError> {
-    match options.kind {
+    let identified = match options.kind {
         ModelKind::HardFriction => hard(train, test, options),
         ModelKind::SoftFriction => soft(train, test, options),
         ModelKind::NeedlePuncture => needle(train, test, options),
-    }
+    };
+    // Every SVR trains on the training capture: a failed fit names it.
+    identified.map_err(|e| match e {
+        IdentifyError::Svr { what, source } => IdentifyError::Svr {
+            what: format!("{what} on {}", train.source().display()),
+            source,
+        },
+        other => other,
+    })
 }
 
 /// The RBF-network baseline fitted on (`x_train`, `y_train`) and evaluated at `x_eval`.

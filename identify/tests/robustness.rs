@@ -51,27 +51,30 @@ fn hard_with_huge_force(dir: &Path) -> PathBuf {
 fn a_force_too_large_to_square_is_refused_naming_the_capture() {
     let dir = tempfile::tempdir().unwrap();
     let huge = hard_with_huge_force(dir.path());
-    // The reader may refuse the value itself; either way the error names the file.
-    let train = match Capture::read_file(&huge, CaptureKind::Rubbing) {
-        Ok(c) => c,
-        Err(e) => {
-            assert!(e.to_string().contains("hard_huge.csv"), "{e}");
-            return;
-        }
-    };
-    let e = identify(&train, None, &IdentifyOptions::new(ModelKind::HardFriction)).unwrap_err();
-    assert!(e.to_string().contains("hard_huge.csv"), "{e}");
-
-    // A sane training capture evaluated on the absurd one: the metric names the test capture.
+    // The reader may refuse the value itself, naming the file.
+    if let Err(e) = Capture::read_file(&huge, CaptureKind::Rubbing) {
+        assert!(e.to_string().contains("hard_huge.csv"), "{e}");
+    }
+    // Identification must not rely on that: the same capture built in memory.
     let good = Capture::read_file(li_bi("hard_contact_train"), CaptureKind::Rubbing).unwrap();
-    let e = identify(
-        &good,
-        Some(&train),
-        &IdentifyOptions::new(ModelKind::HardFriction),
-    )
-    .unwrap_err();
+    let mut data: Vec<Vec<f64>> = good
+        .columns()
+        .iter()
+        .map(|c| good.column(c).unwrap().to_vec())
+        .collect();
+    let last = data.len() - 1;
+    data[last][7] = 1e308;
+    let Ok(huge) = Capture::new(good.metadata().clone(), good.columns().to_vec(), data) else {
+        return; // refused on construction too: nothing reaches a fit
+    };
+    let source = huge.source().display().to_string();
+    let options = IdentifyOptions::new(ModelKind::HardFriction);
+    let e = identify(&huge, None, &options).unwrap_err();
+    assert!(e.to_string().contains(&source), "{e}");
+    // A sane training capture evaluated on the absurd one: the metric names the test capture.
+    let e = identify(&good, Some(&huge), &options).unwrap_err();
     assert!(
-        matches!(&e, IdentifyError::NonFiniteMetric { path, .. } if path.ends_with("hard_huge.csv")),
+        matches!(&e, IdentifyError::NonFiniteMetric { path, .. } if path == huge.source()),
         "{e}"
     );
 }
