@@ -41,7 +41,8 @@ pub struct BenchReport {
     pub rt_status: Option<RtStatus>,
     /// Busy threads run beside the loop.
     pub load_threads: usize,
-    /// How the loop ended (a watchdog trip or device error ends it early).
+    /// How the loop ended (stalls beyond the watchdog's rules or a device error end it early;
+    /// stalls it survived are in `stats`).
     pub outcome: Result<StopReason, String>,
     /// Rows the recorder wrote.
     pub recorded_rows: u64,

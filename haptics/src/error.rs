@@ -93,6 +93,19 @@ pub enum HapticsError {
         /// How long the loop was silent.
         stall: Duration,
     },
+    /// The haptic thread stalled more often than a run survives; each time the force was
+    /// ramped to zero.
+    #[error(
+        "the haptic thread stalled {stalls} times within {within:?} (the last before tick {tick}); the force was ramped to zero"
+    )]
+    RepeatedStalls {
+        /// Stalls within the window, the last one included.
+        stalls: u32,
+        /// The window they were counted over.
+        within: Duration,
+        /// The first tick after the last stall.
+        tick: u64,
+    },
     /// The configured loop rate is unusable.
     #[error("loop rate {0} Hz is not in (0, 100000]")]
     BadRate(f64),

@@ -21,6 +21,23 @@ pub mod flag {
     pub const MODEL_OUTPUT_NOT_FINITE: u32 = 1 << 5;
     /// The live surface recognizer was fed a non-finite sample (its decision stands).
     pub const RECOGNIZER_INPUT_NOT_FINITE: u32 = 1 << 6;
+    /// The force was held below the command after a stall of the loop (zero on the tick
+    /// after it, then ramping back).
+    pub const STALL_RECOVERY: u32 = 1 << 7;
+}
+
+/// `command` scaled by `scale`, read as 0–1 (NaN as 0). Scaling a filtered command keeps it
+/// finite and within the limits, so the filter need not run again.
+pub fn scale_command(command: &ForceCommand, scale: f64) -> ForceCommand {
+    let s = if scale.is_nan() {
+        0.0
+    } else {
+        scale.clamp(0.0, 1.0)
+    };
+    ForceCommand {
+        force_n: command.force_n * s,
+        gripper_force_n: command.gripper_force_n * s,
+    }
 }
 
 /// What the safety filter changed, as [`flag`] bits.

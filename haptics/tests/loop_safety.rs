@@ -1,5 +1,6 @@
-//! The loop as it runs: pacing and statistics, the watchdog, devices failing mid-run, and
-//! arbitrary controller or model outputs never reaching the device unsafely.
+//! The loop as it runs: pacing and statistics, the watchdog, stalls survived and stalls that
+//! end a run, devices failing mid-run, and arbitrary controller or model outputs never
+//! reaching the device unsafely.
 
 #![allow(clippy::unwrap_used)]
 
@@ -19,9 +20,10 @@ use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use haptics::device::{ForceCommand, HapticDevice};
 use haptics::law::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
 use haptics::rt::{
-    self, Controller, LoopConfig, LoopIo, LoopOutcome, Priority, RtRequest, StopReason, TickInput,
-    TickOutput, WatchdogConfig, ZeroForce,
+    self, Controller, HapticSample, LoopConfig, LoopIo, LoopOutcome, Priority, RtRequest, StopReason,
+    TickInput, TickOutput, WatchdogConfig, ZeroForce,
 };
+use haptics::safety::flag;
 use proptest::prelude::*;
 
 fn device() -> SimOmega7 {
@@ -152,6 +154,152 @@ fn the_watchdog_ramps_the_force_to_zero_when_ticks_stop() {
     assert!(shared.heartbeat.stall() >= watchdog.stall);
     assert_eq!(gate.applied(), ForceCommand::ZERO);
     assert_eq!(gate.force_scale(), 0.0);
+}
+
+/// Pushes with a constant force and stalls for `stall` every `every` ticks.
+struct Stutter {
+    force_n: DVec3,
+    every: u64,
+    stall: Duration,
+}
+
+impl Controller for Stutter {
+    fn tick(&mut self, input: &TickInput<'_>, out: &mut TickOutput) {
+        if input.tick > 0 && input.tick.is_multiple_of(self.every) {
+            std::thread::sleep(self.stall);
+        }
+        out.command = ForceCommand {
+            force_n: self.force_n,
+            gripper_force_n: 0.0,
+        };
+    }
+}
+
+/// A watchdog that counts only stalls of 40 ms and more: a loaded test machine stalls a thread
+/// for up to 20 ms by itself, and these tests are about the stalls they inject. The rules that
+/// end a run are the defaults.
+fn test_watchdog() -> WatchdogConfig {
+    WatchdogConfig {
+        stall: Duration::from_millis(40),
+        ..WatchdogConfig::default()
+    }
+}
+
+/// A real-time 1 kHz loop of `ticks` ticks under `test_watchdog`, recording every sample.
+fn recorded_run<C: Controller + 'static>(
+    controller: C,
+    ticks: u64,
+) -> (
+    LoopOutcome<SimOmega7, C>,
+    Arc<haptics::device::ForceGate>,
+    Arc<rt::LoopShared>,
+    Vec<HapticSample>,
+) {
+    let device = device();
+    let gate = device.gate().clone();
+    let (producer, mut consumer) = rtrb::RingBuffer::<HapticSample>::new(ticks as usize + 16);
+    let io = LoopIo {
+        samples: Some(producer),
+        live: None,
+    };
+    let config = LoopConfig {
+        rt: RtRequest::NONE,
+        watchdog: Some(test_watchdog()),
+        max_ticks: Some(ticks),
+        ..LoopConfig::default()
+    };
+    let handle = rt::spawn(device, controller, io, config).unwrap();
+    let shared = handle.shared().clone();
+    let outcome = handle.join().unwrap();
+    let mut samples = Vec::new();
+    while let Ok(s) = consumer.pop() {
+        samples.push(s);
+    }
+    (outcome, gate, shared, samples)
+}
+
+#[test]
+fn a_stall_is_survived_the_force_drops_to_zero_and_ramps_back_over_100_ticks() {
+    let force = 2.0;
+    let mut controller = push(DVec3::new(0.0, 0.0, force));
+    // 70 ms: a stall, short of the 100 ms that ends a run.
+    controller.stall_at = Some(50);
+    controller.stall = Duration::from_millis(70);
+    let (outcome, gate, shared, samples) = recorded_run(controller, 400);
+    let summary = outcome.result.unwrap();
+    assert_eq!(summary.reason, StopReason::TickLimit);
+    assert_eq!(summary.ticks, 400);
+    assert_eq!(samples.len(), 400);
+    // Counted, with its length (at least the injected sleep).
+    let stats = shared.monitor.snapshot();
+    assert!(
+        summary.stalls >= 1 && stats.stalls == summary.stalls,
+        "{summary:?} {stats:?}"
+    );
+    assert!(stats.longest_stall >= Duration::from_millis(70), "{stats:?}");
+    assert!(shared.heartbeat.trips() >= 1, "the watchdog never saw the stall");
+    println!("{} stalls, longest {:?}", summary.stalls, stats.longest_stall);
+    // Before the stall: full force.
+    assert!(
+        samples[..51]
+            .iter()
+            .all(|s| s.command.force_n.z == force && s.flags == 0)
+    );
+    // The first tick after the stall, the one that detects it, commands nothing.
+    let first = &samples[51];
+    assert_eq!(first.tick, 51);
+    assert_eq!(first.command, ForceCommand::ZERO);
+    assert_ne!(first.flags & flag::STALL_RECOVERY, 0);
+    // Then back linearly, 1 % a tick, over 100 ticks (100 ms of loop time). Another stall
+    // on a busy machine could only hold it lower.
+    for s in &samples[52..151] {
+        let k = (s.tick - 51) as f64;
+        assert!(s.command.force_n.z <= force * k / 100.0 + 1e-9, "{s:?}");
+        assert_ne!(s.flags & flag::STALL_RECOVERY, 0);
+    }
+    if summary.stalls == 1 {
+        for s in &samples[52..151] {
+            let k = (s.tick - 51) as f64;
+            assert!((s.command.force_n.z - force * k / 100.0).abs() < 1e-9, "{s:?}");
+        }
+        assert!(
+            samples[151..]
+                .iter()
+                .all(|s| s.command.force_n.z == force && s.flags == 0)
+        );
+        // The loop took over from the watchdog, which opened the gate again.
+        assert_eq!(gate.force_scale(), 1.0);
+    }
+    // The run ended as any run does: zero force.
+    assert_eq!(gate.applied(), ForceCommand::ZERO);
+}
+
+#[test]
+fn more_than_five_stalls_within_a_second_end_the_run_with_a_typed_error() {
+    let controller = Stutter {
+        force_n: DVec3::new(0.0, 0.0, 2.0),
+        every: 20,
+        stall: Duration::from_millis(50),
+    };
+    let (outcome, gate, shared, samples) = recorded_run(controller, 1000);
+    // Stalls at ticks 20, 40, …: the sixth, seen at tick 121, is one too many (sooner if the
+    // machine added one of its own).
+    match outcome.result {
+        Err(HapticsError::RepeatedStalls {
+            stalls: 6,
+            within,
+            tick,
+        }) => {
+            assert_eq!(within, Duration::from_secs(1));
+            assert!(tick <= 121 && tick > 20, "{tick}");
+            assert_eq!(samples.len() as u64, tick);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(shared.monitor.snapshot().stalls, 6);
+    assert_eq!(gate.applied(), ForceCommand::ZERO);
+    // Between the stalls the run went on.
+    assert!(samples.iter().any(|s| s.tick > 21 && s.command.force_n.z > 0.0));
 }
 
 /// Runs `device` pushing with `force_n` for up to 1000 unpaced ticks.

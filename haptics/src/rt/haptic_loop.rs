@@ -6,6 +6,11 @@
 //! samples leave through a bounded SPSC ring (`rtrb`, dropped and counted when full, never
 //! waited on) and the newest state through a triple buffer (`triple_buffer`, the reader never
 //! blocks the writer), and all statistics are atomics ([`RateMonitor`]).
+//!
+//! A stall (a tick starting more than [`WatchdogConfig::stall`] after the one before) does not
+//! end the run: the watchdog has held the force down meanwhile, the loop commands zero on the
+//! tick after it and ramps back over [`WatchdogConfig::recover`], and the stall is counted
+//! ([`RateStats::stalls`]). Only the rules of [`WatchdogConfig`] end a run on stalls.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -15,10 +20,11 @@ use std::time::{Duration, Instant};
 use super::monitor::{RateMonitor, RateStats};
 use super::pacer::{Pacer, Pacing};
 use super::sched::{self, RtRequest, RtStatus};
+use super::stall::{StallEnd, StallGuard, StallVerdict};
 use super::watchdog::{Heartbeat, Watchdog, WatchdogConfig};
 use crate::device::{DeviceSpecs, DeviceState, ForceCommand, HapticDevice};
 use crate::error::HapticsError;
-use crate::safety::SafetyFilter;
+use crate::safety::{self, SafetyFilter};
 
 /// Controller-defined values carried with each sample (estimated forces, model outputs, …):
 /// eight for a controller, three more for a controller that wraps it (the live surface
@@ -110,7 +116,9 @@ pub struct LoopConfig {
     pub pacing: Pacing,
     /// Real-time scheduling to ask for.
     pub rt: RtRequest,
-    /// Watchdog, or None (unpaced runs of a simulator).
+    /// Watchdog and stall rules, or None (unpaced runs of a simulator; benchmarks that
+    /// measure stalls without acting on them): stalls of a paced loop are then still counted
+    /// against the default bound, but the force is left alone and no stall ends the run.
     pub watchdog: Option<WatchdogConfig>,
     /// Stop after this many ticks.
     pub max_ticks: Option<u64>,
@@ -222,13 +230,20 @@ pub struct RunSummary {
     pub ticks: u64,
     /// Why it stopped.
     pub reason: StopReason,
+    /// Stalls the run went through (see [`WatchdogConfig`]).
+    pub stalls: u64,
 }
 
 /// Runs the loop on the calling thread until stopped, finished or failed.
 ///
 /// Opens the device's force gate and enables its forces at the start, and sends zero force
-/// (and disables forces) at the end, whatever the outcome. Between its first and its last tick this function performs no
-/// heap allocation.
+/// (and disables forces) at the end, whatever the outcome. Between its first and its last tick
+/// this function performs no heap allocation.
+///
+/// A stall is survived (force to zero, then back over [`WatchdogConfig::recover`]) unless
+/// [`WatchdogConfig`]'s rules say otherwise: one stall over `fatal_stall` ends the run with
+/// [`HapticsError::WatchdogTripped`], too many within `stall_window` with
+/// [`HapticsError::RepeatedStalls`]. An unpaced run has no deadlines, so it has no stalls.
 pub fn run<D, C>(
     device: &mut D,
     controller: &mut C,
@@ -249,6 +264,14 @@ where
     let safety = SafetyFilter::new(&specs);
     let monitor = &shared.monitor;
     let heartbeat = &*shared.heartbeat;
+    let stall_rules = config.watchdog.unwrap_or_default();
+    let mut guard = StallGuard::new(&stall_rules, period, config.watchdog.is_some());
+    // An unpaced run without a watchdog is a simulation on the tick clock: nothing is late.
+    let watch_stalls = config.watchdog.is_some() || config.pacing != Pacing::Unpaced;
+    // The watchdog's trips the loop has taken over. One from an earlier run on the same shared
+    // state is over: this run opens the gate below and starts its commands afresh.
+    let mut seen_trips = heartbeat.trips();
+    heartbeat.acknowledge(seen_trips);
 
     // A new run starts with the gate open, even after a previous run's watchdog closed it.
     device.force_override().set_force_scale(1.0);
@@ -272,20 +295,29 @@ where
             break StopReason::ControllerFinished;
         }
         let wake = pacer.wait();
-        if heartbeat.tripped() {
-            safe_stop(device);
-            return Err(HapticsError::WatchdogTripped {
-                tick,
-                stall: heartbeat.stall(),
-            });
-        }
+        let woke_ns = heartbeat.at_ns(wake.at);
+        let gap_ns = previous_wake.map(|p| wake.at.duration_since(p).as_nanos() as u64);
         heartbeat.beat(wake.at);
-        monitor.record_wake(
-            heartbeat.at_ns(wake.at),
-            wake.late.as_nanos() as u64,
-            previous_wake.map(|p| wake.at.duration_since(p).as_nanos() as u64),
-        );
+        monitor.record_wake(woke_ns, wake.late.as_nanos() as u64, gap_ns);
         previous_wake = Some(wake.at);
+        // Read after the beat: a trip counted from here on is one this tick has not answered.
+        let trips = heartbeat.trips();
+        if watch_stalls {
+            match guard.on_tick(woke_ns, gap_ns, trips != seen_trips) {
+                Ok(StallVerdict::Running) => {}
+                Ok(StallVerdict::Stalled(stall)) => monitor.record_stall(stall),
+                Err(end) => {
+                    monitor.record_stall(Duration::from_nanos(gap_ns.unwrap_or(0)));
+                    safe_stop(device);
+                    return Err(match end {
+                        StallEnd::TooLong { stall } => HapticsError::WatchdogTripped { tick, stall },
+                        StallEnd::TooMany { stalls, within } => {
+                            HapticsError::RepeatedStalls { stalls, within, tick }
+                        }
+                    });
+                }
+            }
+        }
 
         let state = match device.read_state() {
             Ok(s) => s,
@@ -306,10 +338,21 @@ where
         };
         out.flags = 0;
         controller.tick(&input, &mut out);
-        let (command, safety_flags) = safety.apply(&out.command);
+        let (command, mut safety_flags) = safety.apply(&out.command);
+        let command = if guard.recovering() {
+            safety_flags |= safety::flag::STALL_RECOVERY;
+            safety::scale_command(&command, guard.scale())
+        } else {
+            command
+        };
         if let Err(e) = device.command(&command) {
             safe_stop(device);
             return Err(e.in_loop_at(tick));
+        }
+        if watch_stalls && trips != seen_trips {
+            // This tick's command went out at the ramp's start: the gate may open again.
+            heartbeat.acknowledge(trips);
+            seen_trips = trips;
         }
         applied = command;
         let sample = HapticSample {
@@ -340,7 +383,11 @@ where
         tick += 1;
     };
     safe_stop(device);
-    Ok(RunSummary { ticks: tick, reason })
+    Ok(RunSummary {
+        ticks: tick,
+        reason,
+        stalls: guard.stalls(),
+    })
 }
 
 /// Zero force, forces off; errors are ignored because this is already the way out.

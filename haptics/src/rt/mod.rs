@@ -4,6 +4,7 @@ pub mod haptic_loop;
 pub mod monitor;
 pub mod pacer;
 pub mod sched;
+pub mod stall;
 pub mod watchdog;
 
 pub use haptic_loop::{
@@ -13,4 +14,5 @@ pub use haptic_loop::{
 pub use monitor::{Percentiles, RateMonitor, RateStats};
 pub use pacer::{Pacer, Pacing};
 pub use sched::{PinRequest, Pinning, Priority, RtRequest, RtStatus};
+pub use stall::{StallEnd, StallGuard, StallVerdict};
 pub use watchdog::{Heartbeat, Watchdog, WatchdogConfig};

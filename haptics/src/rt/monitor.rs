@@ -131,6 +131,8 @@ pub struct RateMonitor {
     dropped_samples: AtomicU64,
     safety_events: AtomicU64,
     model_clamps: AtomicU64,
+    stalls: AtomicU64,
+    longest_stall_ns: AtomicU64,
 }
 
 impl RateMonitor {
@@ -148,6 +150,8 @@ impl RateMonitor {
             dropped_samples: AtomicU64::new(0),
             safety_events: AtomicU64::new(0),
             model_clamps: AtomicU64::new(0),
+            stalls: AtomicU64::new(0),
+            longest_stall_ns: AtomicU64::new(0),
         }
     }
 
@@ -180,9 +184,19 @@ impl RateMonitor {
         self.dropped_samples.fetch_add(1, Ordering::Relaxed);
     }
 
+    /// Records a stall of this length (the silence between two ticks).
+    pub(crate) fn record_stall(&self, stall: Duration) {
+        self.stalls.fetch_add(1, Ordering::Relaxed);
+        self.longest_stall_ns.fetch_max(
+            u64::try_from(stall.as_nanos()).unwrap_or(u64::MAX),
+            Ordering::Relaxed,
+        );
+    }
+
     pub(crate) fn record_flags(&self, flags: u32) {
         use crate::safety::flag;
-        if flags & !(flag::MODEL_INPUT_CLAMPED) != 0 {
+        // The ramp after a stall is counted as the stall, not tick by tick as safety events.
+        if flags & !(flag::MODEL_INPUT_CLAMPED | flag::STALL_RECOVERY) != 0 {
             self.safety_events.fetch_add(1, Ordering::Relaxed);
         }
         if flags & flag::MODEL_INPUT_CLAMPED != 0 {
@@ -202,6 +216,8 @@ impl RateMonitor {
         self.compute.reset();
         self.overruns.store(0, Ordering::Relaxed);
         self.ticks.store(0, Ordering::Relaxed);
+        self.stalls.store(0, Ordering::Relaxed);
+        self.longest_stall_ns.store(0, Ordering::Relaxed);
     }
 
     /// Everything at once.
@@ -228,6 +244,8 @@ impl RateMonitor {
             dropped_samples: self.dropped_samples.load(Ordering::Relaxed),
             safety_events: self.safety_events.load(Ordering::Relaxed),
             model_clamps: self.model_clamps.load(Ordering::Relaxed),
+            stalls: self.stalls.load(Ordering::Relaxed),
+            longest_stall: Duration::from_nanos(self.longest_stall_ns.load(Ordering::Relaxed)),
         }
     }
 }
@@ -272,6 +290,11 @@ pub struct RateStats {
     pub safety_events: u64,
     /// Ticks where a force law clamped its model's inputs to the training range.
     pub model_clamps: u64,
+    /// Stalls: ticks that started more than the watchdog's bound after the previous one
+    /// (the force was ramped to zero and back each time, or the run ended).
+    pub stalls: u64,
+    /// The longest silence between two ticks counted as a stall.
+    pub longest_stall: Duration,
 }
 
 impl RateStats {

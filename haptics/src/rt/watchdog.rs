@@ -4,8 +4,13 @@
 //! one. The watchdog runs on its own thread, watches the heartbeat the haptic thread bumps each
 //! tick, and when a tick is overdue it scales the device's force down through the device's
 //! [`ForceOverride`] — a path that does not need the haptic thread. The ramp (rather than a cut)
-//! avoids a step the operator would feel as a kick. Once started the stop is latched: the gate
-//! stays closed and the loop ends with an error at its next tick.
+//! avoids a step the operator would feel as a kick.
+//!
+//! When ticks resume, the loop takes the force over: it commands zero on its first tick and
+//! ramps back itself ([`super::stall`]), and says so by acknowledging the trip. Only then does
+//! the watchdog open the gate again, so the gate never lets a command through at full scale
+//! that the loop has not already brought down. A stall that ends the run is never
+//! acknowledged: the gate stays closed.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -14,25 +19,54 @@ use std::time::{Duration, Instant};
 
 use crate::device::ForceOverride;
 
-/// Watchdog timing. `stall + ramp + poll` is the worst case from the last tick to zero force.
+/// Watchdog timing and the stall rules. `stall + ramp + poll` is the worst case from the last
+/// tick to zero force.
+///
+/// The run survives a stall and ends only when one stall is longer than `fatal_stall` or
+/// more than `max_stalls` happen within `stall_window`. The defaults and why:
+/// - `fatal_stall` 100 ms: the force is already zero 10 ms into any stall, so the bound is not
+///   about force during the stall but about what comes after it. After 100 ms the device
+///   state the controller holds is no longer the hand's (a hand moving at 0.2 m/s has gone
+///   20 mm, the whole depth of a needle insertion), and 100 ms is about where an operator
+///   starts to react to the lost force (reaction times are 150–250 ms); giving force back to a
+///   hand that has already pushed on would be a surprise, so such a run ends.
+/// - `max_stalls` 5 within `stall_window` 1 s: every stall costs its `recover` time (100 ms)
+///   of reduced force, so a sixth stall within a second means the force has been below what
+///   the model says for most of that second — the rendering is no longer the tissue, and the
+///   machine is not keeping 1 kHz. Occasional host stalls (a few per minute on a busy virtual
+///   machine) are survived.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WatchdogConfig {
-    /// How long after the last tick the watchdog starts ramping.
+    /// How long after the last tick the watchdog starts ramping; a tick starting later than
+    /// this after the previous one is a stall.
     pub stall: Duration,
     /// How long the ramp from full force to zero takes.
     pub ramp: Duration,
     /// How often the watchdog looks.
     pub poll: Duration,
+    /// How long the loop takes to bring the force back from zero after a stall.
+    pub recover: Duration,
+    /// A single stall longer than this ends the run.
+    pub fatal_stall: Duration,
+    /// More stalls than this within `stall_window` end the run (at most 31 are tracked).
+    pub max_stalls: u32,
+    /// The window `max_stalls` is counted over.
+    pub stall_window: Duration,
 }
 
 impl Default for WatchdogConfig {
     /// 4 ms + 5 ms + 0.5 ms: zero force within 10 ms of the last tick, and a margin of four
-    /// periods at 1 kHz before a late tick trips it.
+    /// periods at 1 kHz before a late tick trips it; force back over 100 ms; the run ends on a
+    /// stall over 100 ms or on more than 5 stalls within 1 s (see the type's docs for why).
     fn default() -> Self {
         Self {
             stall: Duration::from_millis(4),
             ramp: Duration::from_millis(5),
             poll: Duration::from_micros(500),
+            recover: Duration::from_millis(100),
+            fatal_stall: Duration::from_millis(100),
+            max_stalls: 5,
+            stall_window: Duration::from_secs(1),
         }
     }
 }
@@ -65,6 +99,8 @@ pub struct Heartbeat {
     beats: AtomicU64,
     tripped: AtomicBool,
     trips: AtomicU64,
+    /// The trip count the loop last took over from (see the module docs).
+    acknowledged: AtomicU64,
     /// How late the tick that tripped the watchdog was, ns (the largest stall seen).
     stall_ns: AtomicU64,
 }
@@ -78,6 +114,7 @@ impl Heartbeat {
             beats: AtomicU64::new(0),
             tripped: AtomicBool::new(false),
             trips: AtomicU64::new(0),
+            acknowledged: AtomicU64::new(0),
             stall_ns: AtomicU64::new(0),
         }
     }
@@ -102,17 +139,23 @@ impl Heartbeat {
         self.beats.load(Ordering::Relaxed)
     }
 
-    /// Whether the watchdog has stopped the force.
+    /// Whether the watchdog is holding the force down (a stall the loop has not taken over).
     pub fn tripped(&self) -> bool {
         self.tripped.load(Ordering::Acquire)
     }
 
     /// How many times the watchdog tripped.
     pub fn trips(&self) -> u64 {
-        self.trips.load(Ordering::Relaxed)
+        self.trips.load(Ordering::Acquire)
     }
 
-    /// The stall that tripped it.
+    /// The loop has commanded zero after trip number `trips` and ramps the force itself from
+    /// here; the watchdog may open the gate again.
+    pub(crate) fn acknowledge(&self, trips: u64) {
+        self.acknowledged.fetch_max(trips, Ordering::Release);
+    }
+
+    /// The longest stall the watchdog saw.
     pub fn stall(&self) -> Duration {
         Duration::from_nanos(self.stall_ns.load(Ordering::Relaxed))
     }
@@ -189,17 +232,24 @@ fn watch(config: &WatchdogConfig, heartbeat: &Heartbeat, output: &dyn ForceOverr
         let now = heartbeat.now_ns();
         let last = heartbeat.last_ns.load(Ordering::Acquire);
         let elapsed = Duration::from_nanos(now.saturating_sub(last));
-        if elapsed <= config.stall && !heartbeat.tripped() {
+        if elapsed <= config.stall {
+            // Ticking again. Open the gate only once the loop has taken the force down itself
+            // (its commands now start from zero), never before: until then the last command
+            // at full scale is what the gate would let through.
+            if heartbeat.tripped() && heartbeat.acknowledged.load(Ordering::Acquire) >= heartbeat.trips() {
+                heartbeat.tripped.store(false, Ordering::Release);
+                output.set_force_scale(1.0);
+            }
             continue;
         }
         if !heartbeat.tripped() {
+            heartbeat.trips.fetch_add(1, Ordering::AcqRel);
             heartbeat.tripped.store(true, Ordering::Release);
-            heartbeat.trips.fetch_add(1, Ordering::Relaxed);
         }
         heartbeat
             .stall_ns
             .fetch_max(elapsed.as_nanos() as u64, Ordering::Relaxed);
-        // Latched: once ramping, the scale only goes down, even if ticks resume.
+        // Within one stall the scale only goes down.
         let scale = config.scale_after(elapsed).min(output.force_scale());
         output.set_force_scale(scale);
     }
