@@ -179,6 +179,6 @@ fn an_abandoned_recording_keeps_the_old_file_and_all_its_rows_beside_it() {
     assert_eq!(result.unwrap().1.rows, 200);
     assert_eq!(std::fs::read(&path).unwrap(), old);
     assert_eq!(entries(dir.path()), ["run.csv", "run.csv.partial"]);
-    let partial = Capture::read_file(&partial_path(&path), CaptureKind::Insertion).unwrap();
+    let partial = Capture::read_file(partial_path(&path), CaptureKind::Insertion).unwrap();
     assert_eq!(partial.len(), 200);
 }

@@ -47,6 +47,10 @@ pub struct SegmentSummary {
     pub period_error_p99_us: f64,
     /// Ticks started over 2 ms late.
     pub late_over_2ms: u64,
+    /// Stalls of the loop it rode out (force ramped to zero, then back).
+    pub stalls: u64,
+    /// The longest of them, ms (0 without one).
+    pub longest_stall_ms: f64,
     /// Largest force norm sent to the device, N.
     pub max_command_n: f64,
     /// The device's limit, N.
@@ -160,6 +164,8 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         rate_error: st.rate_error(),
         period_error_p99_us: st.period_error.p99.as_secs_f64() * 1e6,
         late_over_2ms: st.late_over_2ms,
+        stalls: st.stalls,
+        longest_stall_ms: st.longest_stall.as_secs_f64() * 1e3,
         max_command_n,
         device_limit_n: run.max_force_n,
         non_finite_commands: non_finite,
