@@ -16,6 +16,9 @@
 //! ```text
 //! PALPUS_FUZZ_INPUTS=1000000 cargo test --release --locked --test fuzz_parsers -- --nocapture --test-threads 1
 //! ```
+//!
+//! A failing mutant is written under the temp dir (`palpus-fuzz/TARGET-SEED.bin`);
+//! `PALPUS_FUZZ_REPLAY=` that file parses it alone again and prints what happened.
 
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 #![allow(clippy::print_stdout)] // The per-target summary is this test's report.
