@@ -6,6 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use capture::kind::{FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S};
 use common::{fails, json, nakano_captures, succeeds, text};
 use haptics::sim::protocols::sinapov::scratch_capture;
 use haptics::sim::world::scratch::{Behaviour, household_surfaces};
@@ -1034,11 +1035,11 @@ fn write_rubbing(dir: &Path, name: &str, surface: &str, amplitude_m: f64, second
         .collect();
     let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0).with("surface", surface);
     let columns = [
-        "time_s",
-        "tangential_position_m",
-        "normal_position_m",
-        "normal_force_n",
-        "friction_force_n",
+        TIME_S,
+        TANGENTIAL_POSITION_M,
+        NORMAL_POSITION_M,
+        NORMAL_FORCE_N,
+        FRICTION_FORCE_N,
     ]
     .map(String::from)
     .to_vec();

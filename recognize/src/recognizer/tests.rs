@@ -8,6 +8,7 @@ use crate::features::{FeatureSet, NakanoWindowing};
 use crate::knn::KnnParams;
 use crate::som::SomParams;
 use crate::svc::{CSearch, Svc, SvcParams};
+use capture::kind::{FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S};
 use capture::{Capture, CaptureKind, Metadata};
 
 /// A rubbing capture of a sine roughness of `amplitude_m` and `wavelength_m` with friction
@@ -43,11 +44,11 @@ fn rubbing_at(
         .collect();
     let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0).with(LABEL_KEY, surface);
     let columns = [
-        "time_s",
-        "tangential_position_m",
-        "normal_position_m",
-        "normal_force_n",
-        "friction_force_n",
+        TIME_S,
+        TANGENTIAL_POSITION_M,
+        NORMAL_POSITION_M,
+        NORMAL_FORCE_N,
+        FRICTION_FORCE_N,
     ]
     .map(String::from)
     .to_vec();
