@@ -1,14 +1,13 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use palpus::cli::{Cli, run};
+use palpus::cli::{Cli, describe, run};
 
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            // `{:#}` prints the whole chain: what we were doing, then why it failed.
-            eprintln!("error: {error:#}");
+            eprintln!("error: {}", describe(&error));
             ExitCode::FAILURE
         }
     }

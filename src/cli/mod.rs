@@ -46,6 +46,21 @@ enum Command {
 }
 
 /// Runs the parsed command line.
+/// The whole chain of `error` on one line: what was being done, then why it failed. Many
+/// errors already quote their cause in their own message (`…: {source}`), so a cause whose text
+/// is already there is not repeated.
+pub fn describe(error: &anyhow::Error) -> String {
+    let mut text = error.to_string();
+    for cause in error.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run_cmd::run(&args),
@@ -57,5 +72,31 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(args) => bench_cmd::run(&args),
         Command::Recognize(args) => recognize_cmd::run(&args),
         Command::Import(args) => import_cmd::run(&args),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::describe;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("model `m`: {source}")]
+    struct Quoting {
+        source: std::io::Error,
+    }
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("model `m`")]
+    struct Silent {
+        source: std::io::Error,
+    }
+
+    #[test]
+    fn a_cause_is_told_once_whether_or_not_the_message_quotes_it() {
+        let io = || std::io::Error::other("disk on fire");
+        let quoting = anyhow::Error::new(Quoting { source: io() }).context("resolving");
+        assert_eq!(describe(&quoting), "resolving: model `m`: disk on fire");
+        let silent = anyhow::Error::new(Silent { source: io() }).context("resolving");
+        assert_eq!(describe(&silent), "resolving: model `m`: disk on fire");
     }
 }
