@@ -6,13 +6,30 @@
 //! Any CSV file with a header row. The delimiter is detected from the header line among `,`,
 //! `;` and tab (the most frequent one outside quotes wins; a single column means `,`). Lines
 //! starting with `#` and blank lines are skipped, header names may be quoted, and fields are
-//! trimmed. Columns the [`ColumnMap`] does not mention are ignored; every mapped cell must be
+//! trimmed. A file without a header row is read with [`Header::Named`] (`--columns a,b,c`)
+//! or [`Header::Numbered`] (`--no-header`: columns `0`, `1`, `2`, ... so `--map` names them
+//! by index); then its first line is data. When a header row is expected and a mapped column
+//! is missing, a first line made only of numbers is said to look like data.
+//!
+//! A delimiter at the end of every line (`t,x,Fz,` — robot-middleware exports write one) is
+//! tolerated without an option: the header's empty last name is ignored, and rows may have
+//! one field more than the header as long as that field is empty. Whether rows carry it is
+//! decided by the first data row and must then hold for every row, and a non-empty extra
+//! field is an error naming its line and field, so a row with a value too many is never
+//! read as a trailing delimiter. Automatic because the one shape it accepts, an empty field
+//! after the last named one on every row, holds no data to misread. Columns the [`ColumnMap`] does not mention are ignored; every mapped cell must be
 //! a finite decimal number (a decimal comma is an error, not a guess) whose value in SI units
 //! is within its target column's [`magnitude_limit`] (±10⁶ SI, ±10¹⁰ s for time): a logger's
 //! `1e308` sentinel would otherwise pass as finite and the low-pass would spread it over
 //! every output sample. With [`ImportSpec::drop_implausible`] (`--drop-implausible`), rows
 //! with a non-finite or out-of-range mapped value are skipped and counted instead; the
 //! resampling then bridges them like any gap.
+//!
+//! Repeated timestamps (consecutive rows with the same time, as loggers that stamp with a
+//! coarse clock write) are an error by default; [`ImportSpec::repeated_time`]
+//! (`--repeated-time mean|drop`) merges each run of them into its mean or keeps its first
+//! row, counted in [`Imported::rows_repeated`]. Only consecutive equal times are merged: a
+//! time that goes back stays an error.
 //!
 //! # Column map
 //!
@@ -159,6 +176,47 @@ pub struct ImportSpec {
     /// Skip rows with a mapped value that is not finite or beyond its target's
     /// [`magnitude_limit`] (counted in [`Imported::rows_dropped`]) instead of failing on them.
     pub drop_implausible: bool,
+    /// Where the column names come from (default: the first line).
+    pub header: Header,
+    /// What to do with consecutive rows of the same time (default: an error).
+    pub repeated_time: RepeatedTime,
+}
+
+/// Where an input's column names come from.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Header {
+    /// The first line that is not a comment or blank names the columns.
+    #[default]
+    FirstLine,
+    /// The file has no header row; these are its columns' names (`--columns`).
+    Named(Vec<String>),
+    /// The file has no header row; its columns are named `0`, `1`, `2`, ... (`--no-header`).
+    Numbered,
+}
+
+/// What to do with consecutive input rows that have the same time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RepeatedTime {
+    /// Refuse the input, naming the line (time must strictly increase).
+    #[default]
+    Error,
+    /// Replace each run of rows with the same time by one row, the mean of every column.
+    Mean,
+    /// Keep the first row of each run of rows with the same time.
+    Drop,
+}
+
+impl std::str::FromStr for RepeatedTime {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "error" => Ok(RepeatedTime::Error),
+            "mean" => Ok(RepeatedTime::Mean),
+            "drop" => Ok(RepeatedTime::Drop),
+            _ => Err(format!("`{s}`: expected mean, drop or error")),
+        }
+    }
 }
 
 impl ImportSpec {
@@ -173,6 +231,8 @@ impl ImportSpec {
             metadata: Vec::new(),
             max_upsample: DEFAULT_MAX_UPSAMPLE,
             drop_implausible: false,
+            header: Header::FirstLine,
+            repeated_time: RepeatedTime::Error,
         }
     }
 }
@@ -215,11 +275,15 @@ impl fmt::Display for Resampling {
 pub struct Imported {
     /// The capture (not yet written).
     pub capture: Capture,
-    /// Data rows read from the input and used (without the dropped ones).
+    /// Data rows read from the input and used (without the dropped ones, and counting each
+    /// run of repeated times merged by [`ImportSpec::repeated_time`] once).
     pub rows_in: usize,
     /// Rows skipped for a non-finite or implausible value (with
     /// [`ImportSpec::drop_implausible`]; else 0).
     pub rows_dropped: usize,
+    /// Rows merged into the row before them (or dropped) for repeating its time (with
+    /// [`RepeatedTime::Mean`] or [`RepeatedTime::Drop`]; else 0).
+    pub rows_repeated: usize,
     /// The input's mean rate, Hz: `(rows − 1) / (last time − first time)`.
     pub source_rate_hz: f64,
     /// The output rate, Hz.
@@ -274,6 +338,21 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
             }
         }
     }
+    if spec.repeated_time != RepeatedTime::Error && time_entry.is_none() {
+        return Err(bad_spec(
+            "--repeated-time needs a time column (`time_s=<column>` in --map); with \
+             --input-rate-hz every row has its own time"
+                .into(),
+        ));
+    }
+    if let Header::Named(names) = &spec.header
+        && (names.is_empty() || names.iter().any(|n| n.trim().is_empty()))
+    {
+        return Err(bad_spec(format!(
+            "--columns `{}`: every column needs a name (`a,b,c`)",
+            names.join(",")
+        )));
+    }
     if !(spec.max_upsample.is_finite() && spec.max_upsample >= 1.0) {
         return Err(bad_spec(format!(
             "--max-upsample {}: must be finite and at least 1",
@@ -292,7 +371,14 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     }
     meta.validate().map_err(|kind| bad_spec(metadata_reason(kind)))?;
 
-    let table = read_table(path, &spec.map, spec.drop_implausible)?;
+    let mut table = read_table(path, spec)?;
+    let rows_repeated = match (time_entry, spec.repeated_time) {
+        (Some(entry), RepeatedTime::Mean | RepeatedTime::Drop) => {
+            let index = spec.map.entries.iter().position(|e| e.target == entry.target);
+            index.map_or(0, |i| merge_repeated_times(&mut table, i, spec.repeated_time))
+        }
+        _ => 0,
+    };
     let rows_in = table.lines.len();
     if rows_in < 2 {
         return Err(fail(CaptureErrorKind::TooFewRows(rows_in)));
@@ -441,6 +527,7 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         capture,
         rows_in,
         rows_dropped: table.dropped,
+        rows_repeated,
         source_rate_hz,
         rate_hz,
         resampling,

@@ -12,14 +12,12 @@ pub(super) struct Table {
     pub(super) dropped: usize,
 }
 
-/// Reads the mapped columns of `path`. A mapped value that is not finite or beyond its target's
-/// [`magnitude_limit`] after conversion is an error naming line and column, or, with
-/// `drop_implausible`, drops its row.
-pub(super) fn read_table(
-    path: &Path,
-    map: &ColumnMap,
-    drop_implausible: bool,
-) -> Result<Table, CaptureError> {
+/// Reads the mapped columns of `path`, the column names coming from [`ImportSpec::header`]. A
+/// mapped value that is not finite or beyond its target's [`magnitude_limit`] after conversion
+/// is an error naming line and column, or, with [`ImportSpec::drop_implausible`], drops its
+/// row. A trailing delimiter is tolerated as the [module documentation](super) says.
+pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, CaptureError> {
+    let (map, drop_implausible) = (&spec.map, spec.drop_implausible);
     let fail = |kind| CaptureError::new(path, kind);
     let bytes = std::fs::read(path).map_err(|source| fail(CaptureErrorKind::CannotRead(source)))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
@@ -39,23 +37,56 @@ pub(super) fn read_table(
     let is_blank = |record: &csv::ByteRecord| record.iter().all(<[u8]>::is_empty);
 
     let mut record = csv::ByteRecord::new();
-    let header: Vec<String> = loop {
+    // The first line that is not a comment or blank: the header, or, without one, the first
+    // data row (then it is kept in `record` and read as data below).
+    let has_first = loop {
         match reader.read_byte_record(&mut record) {
-            Ok(false) => return Err(fail(CaptureErrorKind::NoHeader)),
+            Ok(false) => break false,
             Ok(true) if is_blank(&record) => continue,
-            Ok(true) => {
-                break record
-                    .iter()
-                    .map(|name| String::from_utf8_lossy(name).into_owned())
-                    .collect();
-            }
+            Ok(true) => break true,
             Err(e) => return Err(csv_error(e, &mut lines, 1)),
         }
     };
+    // Without a trailing delimiter an empty last field is a column of its own; with one, every
+    // line ends in an empty field, so the first line's empty last field is the delimiter's.
+    let width_of = |record: &csv::ByteRecord| match record.iter().next_back() {
+        Some(b"") if record.len() > 1 => record.len() - 1,
+        _ => record.len(),
+    };
+    let mut header: Vec<String> = match &spec.header {
+        Header::FirstLine if !has_first => return Err(fail(CaptureErrorKind::NoHeader)),
+        Header::FirstLine => record
+            .iter()
+            .map(|name| String::from_utf8_lossy(name).into_owned())
+            .collect(),
+        Header::Named(names) => names.iter().map(|name| name.trim().to_owned()).collect(),
+        Header::Numbered => (0..width_of(&record)).map(|i| i.to_string()).collect(),
+    };
+    if matches!(spec.header, Header::FirstLine) && width_of(&record) < header.len() {
+        header.pop();
+    }
+    let mut pending = has_first && !matches!(spec.header, Header::FirstLine);
+    // A first line of numbers read as a header is the usual cause of a missing column.
+    let looks_like_data = matches!(spec.header, Header::FirstLine)
+        && header
+            .iter()
+            .all(|name| name.parse::<f64>().is_ok_and(f64::is_finite));
     let mut indices = Vec::with_capacity(map.entries.len());
     for entry in &map.entries {
         let matches: Vec<usize> = (0..header.len()).filter(|&i| header[i] == entry.source).collect();
         match matches.as_slice() {
+            [] if looks_like_data => {
+                return Err(fail(CaptureErrorKind::BadMap {
+                    entry: entry.text.clone(),
+                    reason: format!(
+                        "the input has no column `{}`: its first line `{}` looks like data, not \
+                         a header; use --no-header (columns named 0, 1, 2, ...) or --columns",
+                        entry.source,
+                        header.join(",")
+                    ),
+                })
+                .at_line(record.position().map_or(1, |p| lines.line_at(p.byte()))));
+            }
             [] => {
                 return Err(fail(CaptureErrorKind::UnknownSource {
                     entry: entry.text.as_str().into(),
@@ -82,24 +113,48 @@ pub(super) fn read_table(
     let limits: Vec<f64> = map.entries.iter().map(|e| magnitude_limit(&e.target)).collect();
     let mut row = Vec::with_capacity(map.entries.len());
     let mut last_line = 1;
+    let width = header.len();
+    // Whether rows end in an empty extra field (a trailing delimiter): the first row decides.
+    let mut trailing: Option<bool> = None;
     loop {
-        match reader.read_byte_record(&mut record) {
-            Ok(false) => break,
-            Ok(true) if is_blank(&record) => continue,
-            Ok(true) => {}
-            Err(e) => return Err(csv_error(e, &mut lines, last_line + 1)),
+        if pending {
+            pending = false;
+        } else {
+            match reader.read_byte_record(&mut record) {
+                Ok(false) => break,
+                Ok(true) if is_blank(&record) => continue,
+                Ok(true) => {}
+                Err(e) => return Err(csv_error(e, &mut lines, last_line + 1)),
+            }
         }
         let line = match record.position() {
             Some(position) => lines.line_at(position.byte()),
             None => last_line + 1,
         };
         last_line = line;
-        if record.len() != header.len() {
-            let kind = CaptureErrorKind::HeaderFieldCount {
-                expected: header.len(),
-                found: record.len(),
+        let found = record.len();
+        let count_error = |expected: usize| {
+            let kind = match spec.header {
+                Header::Named(_) => CaptureErrorKind::BadSpec(format!(
+                    "--columns names {width} columns, but this row has {found} fields"
+                )),
+                _ => CaptureErrorKind::HeaderFieldCount { expected, found },
             };
-            return Err(fail(kind).at_line(line));
+            fail(kind).at_line(line)
+        };
+        let extra = found == width + 1;
+        if extra && !record[width].is_empty() {
+            // A value past the last named column is data the map cannot reach, not a
+            // trailing delimiter.
+            let field = format!("field {} (after the last named column)", width + 1);
+            return Err(count_error(width).in_column(field));
+        }
+        let expected = match *trailing.get_or_insert(extra) {
+            true => width + 1,
+            false => width,
+        };
+        if found != expected {
+            return Err(count_error(expected));
         }
         row.clear();
         let mut implausible = false;
@@ -146,6 +201,37 @@ pub(super) fn read_table(
         table.lines.push(line);
     }
     Ok(table)
+}
+
+/// Replaces each run of consecutive rows with the same value in column `time` by one row:
+/// the run's mean ([`RepeatedTime::Mean`]) or its first row (otherwise), at the first row's
+/// line. Returns how many rows were removed.
+pub(super) fn merge_repeated_times(table: &mut Table, time: usize, mode: RepeatedTime) -> usize {
+    let rows = table.lines.len();
+    let mut kept = 0;
+    let mut start = 0;
+    while start < rows {
+        let t = table.columns[time][start];
+        let end = (start + 1..rows)
+            .find(|&i| table.columns[time][i] != t)
+            .unwrap_or(rows);
+        for (c, column) in table.columns.iter_mut().enumerate() {
+            // The time column keeps its value exactly: a sum divided back may round.
+            column[kept] = if mode == RepeatedTime::Mean && c != time {
+                column[start..end].iter().sum::<f64>() / (end - start) as f64
+            } else {
+                column[start]
+            };
+        }
+        table.lines[kept] = table.lines[start];
+        kept += 1;
+        start = end;
+    }
+    for column in &mut table.columns {
+        column.truncate(kept);
+    }
+    table.lines.truncate(kept);
+    rows - kept
 }
 
 /// 1-based line numbers of ascending byte offsets, counting newlines incrementally.

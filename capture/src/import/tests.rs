@@ -520,3 +520,184 @@ fn resampled_output_stays_within_the_limits() {
     let path = step("half.csv", 5e5);
     assert_eq!(import_csv(&path, &spec).unwrap().len(), 40);
 }
+
+#[test]
+fn a_trailing_delimiter_is_ignored_with_or_without_one_on_the_header() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in [
+        ("both.csv", "t,x,Fz,\n0,1,0.3,\n10,2,0.4,\n20,3,0.5,\n"),
+        ("rows.csv", "t,x,Fz\n0,1,0.3,\n10,2,0.4,\n20,3,0.5,\n"),
+        ("header.csv", "t,x,Fz,\n0,1,0.3\n10,2,0.4\n20,3,0.5\n"),
+    ] {
+        let path = write(dir.path(), name, text);
+        let c = import_csv(&path, &rubbing(RUB_MAP)).unwrap();
+        assert_eq!(c.column("normal_force_n").unwrap(), &[0.3, 0.4, 0.5], "{name}");
+    }
+    // Without a header the first row's empty last field is the delimiter's, not column `3`.
+    let path = write(dir.path(), "numbered.csv", "0,1,0.3,\n10,2,0.4,\n20,3,0.5,\n");
+    let mut spec = rubbing("time_s=0[ms],tangential_position_m=1[mm],normal_force_n=2");
+    spec.header = Header::Numbered;
+    assert_eq!(import_csv(&path, &spec).unwrap().len(), 3);
+    spec.map = map("time_s=0[ms],tangential_position_m=1[mm],normal_force_n=3");
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(matches!(e.kind, CaptureErrorKind::UnknownSource { .. }), "{e}");
+}
+
+#[test]
+fn a_trailing_field_must_be_empty_and_on_every_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "value.csv", "t,x,Fz\n0,1,0.3,\n10,2,0.4,9\n");
+    let e = import_csv(&path, &rubbing(RUB_MAP)).unwrap_err();
+    assert!(
+        matches!(
+            e.kind,
+            CaptureErrorKind::HeaderFieldCount {
+                expected: 3,
+                found: 4
+            }
+        ),
+        "{e}"
+    );
+    assert_eq!(
+        (e.line, e.column.as_deref()),
+        (Some(3), Some("field 4 (after the last named column)"))
+    );
+    // The first row decides; a later row without the delimiter does not match it.
+    let path = write(dir.path(), "mixed.csv", "t,x,Fz\n# note\n0,1,0.3,\n10,2,0.4\n");
+    let e = import_csv(&path, &rubbing(RUB_MAP)).unwrap_err();
+    assert!(
+        matches!(
+            e.kind,
+            CaptureErrorKind::HeaderFieldCount {
+                expected: 4,
+                found: 3
+            }
+        ),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(4));
+    // Two extra fields are not a trailing delimiter.
+    let path = write(dir.path(), "two.csv", "t,x,Fz\n0,1,0.3,,\n10,2,0.4,,\n");
+    let e = import_csv(&path, &rubbing(RUB_MAP)).unwrap_err();
+    assert!(matches!(e.kind, CaptureErrorKind::HeaderFieldCount { .. }), "{e}");
+    assert_eq!(e.line, Some(2));
+}
+
+#[test]
+fn a_header_less_file_takes_names_or_indices_and_a_numeric_header_gets_a_hint() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "raw.csv", "# rig 3\n\n0;1;0.3\n10;2;0.4\n20;3;0.5\n");
+    let e = import_csv(&path, &rubbing(RUB_MAP)).unwrap_err();
+    assert_eq!(e.line, Some(3), "{e}");
+    match &e.kind {
+        CaptureErrorKind::BadMap { entry, reason } => {
+            assert_eq!(entry, "time_s=t[ms]");
+            assert!(reason.contains("`0,1,0.3` looks like data"), "{reason}");
+            assert!(
+                reason.contains("--no-header") && reason.contains("--columns"),
+                "{reason}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+
+    let mut spec = rubbing(RUB_MAP);
+    spec.header = Header::Named(vec!["t".into(), " x ".into(), "Fz".into()]);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!(imported.rows_in, 3);
+    assert_eq!(imported.capture.time(), &[0.0, 0.01, 0.02]);
+    assert_eq!(
+        imported.capture.column("tangential_position_m").unwrap(),
+        &[0.001, 0.002, 0.003]
+    );
+
+    spec.header = Header::Numbered;
+    spec.map = map("time_s=0[ms],tangential_position_m=1[mm],normal_force_n=2");
+    let numbered = import_csv(&path, &spec).unwrap();
+    assert_eq!(numbered.time(), imported.capture.time());
+    assert_eq!(
+        numbered.column("normal_force_n").unwrap(),
+        imported.capture.column("normal_force_n").unwrap()
+    );
+
+    // A header of names that is missing a column gets no hint.
+    let path = write(dir.path(), "named.csv", "t,x,F\n0,1,0.3\n10,2,0.4\n");
+    let e = import_csv(&path, &rubbing(RUB_MAP)).unwrap_err();
+    assert!(matches!(e.kind, CaptureErrorKind::UnknownSource { .. }), "{e}");
+
+    let mut spec = rubbing(RUB_MAP);
+    spec.header = Header::Named(vec!["t".into(), String::new(), "Fz".into()]);
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::BadSpec(r) if r.contains("--columns")),
+        "{e}"
+    );
+    spec.header = Header::Named(["t", "x", "Fz", "Fx"].map(String::from).to_vec());
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::BadSpec(r) if r.contains("this row has 3 fields")),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(1));
+}
+
+#[test]
+fn repeated_times_merge_into_their_mean_or_keep_the_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "repeat.csv",
+        "t,x,Fz\n0,1,0.3\n0,3,0.5\n0,5,0.7\n10,2,0.4\n20,3,0.5\n20,4,0.6\n",
+    );
+    let e = import_csv(&path, &rubbing(RUB_MAP)).unwrap_err();
+    assert!(
+        matches!(e.kind, CaptureErrorKind::RowTimeNotIncreasing { .. }),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(3));
+
+    let mut spec = rubbing(RUB_MAP);
+    spec.repeated_time = RepeatedTime::Mean;
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!((imported.rows_in, imported.rows_repeated), (3, 3));
+    assert_eq!(imported.capture.time(), &[0.0, 0.01, 0.02]);
+    let x = imported.capture.column("tangential_position_m").unwrap();
+    assert!(
+        x.iter()
+            .zip([0.003, 0.002, 0.0035])
+            .all(|(a, b)| (a - b).abs() < 1e-15),
+        "{x:?}"
+    );
+
+    spec.repeated_time = RepeatedTime::Drop;
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!((imported.rows_in, imported.rows_repeated), (3, 3));
+    assert_eq!(
+        imported.capture.column("normal_force_n").unwrap(),
+        &[0.3, 0.4, 0.5]
+    );
+
+    // Only equal times merge: a time going back is still refused, at its line.
+    let path = write(
+        dir.path(),
+        "back.csv",
+        "t,x,Fz\n0,1,0.3\n10,2,0.4\n10,2,0.4\n5,3,0.5\n",
+    );
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(e.kind, CaptureErrorKind::RowTimeNotIncreasing { .. }),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(5));
+
+    "mean".parse::<RepeatedTime>().unwrap();
+    assert!("average".parse::<RepeatedTime>().is_err());
+    let mut spec = rubbing("tangential_position_m=x[mm],normal_force_n=Fz");
+    spec.input_rate_hz = Some(100.0);
+    spec.repeated_time = RepeatedTime::Mean;
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(&e.kind, CaptureErrorKind::BadSpec(r) if r.contains("--repeated-time")),
+        "{e}"
+    );
+}
