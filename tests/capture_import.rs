@@ -528,3 +528,155 @@ fn implausible_values_are_refused_or_dropped() {
     );
     assert!(e.to_string().contains("-1e300 is outside ±1e6"), "{e}");
 }
+
+/// A committed input shaped like a public dataset's quirk (`tests/fixtures/import/`).
+fn fixture(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/import")
+        .join(name)
+}
+
+#[test]
+fn a_header_less_file_is_read_by_index_or_by_given_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.csv");
+    let input = fixture("headerless.csv");
+
+    // Read as if its first row named the columns, the file gets told what it looks like.
+    let o = import(
+        &input,
+        &out,
+        &["--map", "time_s=t,tangential_position_m=x,normal_force_n=Fz"],
+    );
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("headerless.csv:1:"), "{t}");
+    assert!(
+        t.contains("looks like data") && t.contains("--no-header") && t.contains("--columns"),
+        "{t}"
+    );
+    assert!(!out.exists());
+
+    let cases: [&[&str]; 2] = [
+        &[
+            "--no-header",
+            "--map",
+            "time_s=0,tangential_position_m=1,normal_force_n=2",
+        ],
+        &[
+            "--columns",
+            "t,x,Fz",
+            "--map",
+            "time_s=t,tangential_position_m=x,normal_force_n=Fz",
+        ],
+    ];
+    for args in cases {
+        let t = text(&success(import(&input, &out, args)));
+        assert!(t.contains("imported 5 rows"), "{args:?}: {t}");
+        let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+        assert_eq!(c.time(), &[0.0, 0.001, 0.002, 0.003, 0.004], "{args:?}");
+        assert_eq!(
+            c.column("normal_force_n").unwrap(),
+            &[0.3, 0.302, 0.304, 0.306, 0.308],
+            "{args:?}"
+        );
+    }
+
+    // Names for fewer columns than the file has are an error at the first row.
+    let o = import(
+        &input,
+        &out,
+        &[
+            "--columns",
+            "t,x",
+            "--map",
+            "time_s=t,tangential_position_m=x,normal_force_n=x",
+        ],
+    );
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains(
+            "headerless.csv:1: column `field 3 (after the last named column)`: --columns \
+             names 2 columns, but this row has 3 fields"
+        ),
+        "{t}"
+    );
+}
+
+#[test]
+fn repeated_timestamps_are_refused_merged_or_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.csv");
+    let input = fixture("repeated_time.csv");
+    let map = "time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz";
+
+    let o = import(&input, &out, &["--map", map]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("repeated_time.csv:4: column `t`: time 0.001 s is not after"),
+        "{t}"
+    );
+    assert!(!out.exists());
+
+    let close =
+        |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--repeated-time", "mean"],
+    )));
+    assert!(
+        t.contains("imported 5 rows") && t.contains("3 row(s) repeating the previous row's time merged"),
+        "{t}"
+    );
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(c.time(), &[0.0, 0.001, 0.002, 0.003, 0.004]);
+    let x = c.column("tangential_position_m").unwrap();
+    assert!(close(x, &[1.0e-3, 1.2e-3, 1.2e-3, 1.5e-3, 1.4e-3]), "{x:?}");
+    let fz = c.column("normal_force_n").unwrap();
+    assert!(close(fz, &[0.30, 0.32, 0.32, 0.35, 0.34]), "{fz:?}");
+
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--repeated-time", "drop"],
+    )));
+    assert!(
+        t.contains("imported 5 rows") && t.contains("3 row(s) repeating the previous row's time dropped"),
+        "{t}"
+    );
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(
+        c.column("normal_force_n").unwrap(),
+        &[0.30, 0.31, 0.32, 0.33, 0.34]
+    );
+}
+
+#[test]
+fn a_delimiter_ending_every_line_is_ignored_but_a_value_there_is_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.csv");
+    let map = "time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz";
+
+    let t = text(&success(import(
+        &fixture("trailing_delimiter.csv"),
+        &out,
+        &["--map", map],
+    )));
+    assert!(t.contains("imported 4 rows"), "{t}");
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(c.column("normal_force_n").unwrap(), &[0.30, 0.31, 0.32, 0.33]);
+
+    let o = import(&fixture("trailing_value.csv"), &out, &["--map", map]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains(
+            "trailing_value.csv:3: column `field 4 (after the last named column)`: expected 3 \
+             fields like the header, found 4"
+        ),
+        "{t}"
+    );
+}

@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use capture::CaptureKind;
-use capture::import::{ColumnMap, DEFAULT_MAX_UPSAMPLE, ImportSpec, import_csv, import_csv_report};
+use capture::import::{
+    ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, RepeatedTime, import_csv, import_csv_report,
+};
 use capture::sha256_hex;
 use clap::Args;
 use recognize::LabelledCapture;
@@ -12,7 +14,8 @@ use recognize::LabelledCapture;
 /// Import a CSV log recorded with another tool as a capture.
 ///
 /// Reads a CSV file with a header row (`,`, `;` or tab delimited, detected; `#` lines and
-/// blank lines skipped), takes the columns named in --map, converts them to SI units,
+/// blank lines skipped; --no-header or --columns for a file without a header row; a delimiter
+/// ending every line is ignored), takes the columns named in --map, converts them to SI units,
 /// resamples them onto a uniform grid and writes a capture that `palpus identify` and the
 /// recognizers read like any other.
 ///
@@ -38,6 +41,9 @@ use recognize::LabelledCapture;
 /// within ±1e6 (±1e10 s for time): larger is a wrong unit or a logger's sentinel, and one
 /// such value would spread over every resampled row. --drop-implausible skips such rows
 /// (and non-finite ones) instead and says how many.
+///
+/// Time must strictly increase; --repeated-time mean|drop merges consecutive rows with the
+/// same time into their mean or keeps the first of them, and says how many rows went.
 #[derive(Debug, Args)]
 pub(crate) struct ImportArgs {
     /// The CSV file to import.
@@ -65,6 +71,19 @@ pub(crate) struct ImportArgs {
     /// for time) instead of failing; the number skipped is printed.
     #[arg(long)]
     drop_implausible: bool,
+    /// The file has no header row: its first line is data and its columns are named 0, 1,
+    /// 2, ... so --map refers to them by index (`time_s=0[ms],normal_force_n=2`).
+    #[arg(long)]
+    no_header: bool,
+    /// The file has no header row: these are its columns' names, comma-separated
+    /// (`--columns t,x,Fz`), and its first line is data.
+    #[arg(long, value_name = "NAMES", conflicts_with = "no_header")]
+    columns: Option<String>,
+    /// Consecutive rows with the same time: `error` (refuse the file), `mean` (merge them
+    /// into one row, the mean of each column) or `drop` (keep the first); the number of rows
+    /// merged or dropped is printed.
+    #[arg(long, value_name = "MODE", default_value = "error", value_parser = parse_repeated_time)]
+    repeated_time: RepeatedTime,
     /// The `device` recorded in the metadata.
     #[arg(long, default_value = "imported", value_name = "NAME")]
     device: String,
@@ -82,6 +101,10 @@ pub(crate) struct ImportArgs {
 
 fn parse_kind(s: &str) -> Result<CaptureKind, String> {
     s.parse().map_err(|e: capture::UnknownKind| e.to_string())
+}
+
+fn parse_repeated_time(s: &str) -> Result<RepeatedTime, String> {
+    s.parse()
 }
 
 fn parse_meta(s: &str) -> Result<(String, String), String> {
@@ -102,6 +125,12 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
         metadata: args.meta.clone(),
         max_upsample: args.max_upsample,
         drop_implausible: args.drop_implausible,
+        header: match (&args.columns, args.no_header) {
+            (Some(names), _) => Header::Named(names.split(',').map(|n| n.trim().to_owned()).collect()),
+            (None, true) => Header::Numbered,
+            (None, false) => Header::FirstLine,
+        },
+        repeated_time: args.repeated_time,
     };
     // Import errors name the input file (and line, column or map entry) themselves.
     let imported = import_csv_report(&args.input, &spec)?;
@@ -129,6 +158,16 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
             println!(
                 "dropped {} row(s) with a non-finite or implausible value (--drop-implausible)",
                 imported.rows_dropped
+            );
+        }
+        if imported.rows_repeated > 0 {
+            let how = match args.repeated_time {
+                RepeatedTime::Mean => "merged into the row before them",
+                _ => "dropped",
+            };
+            println!(
+                "{} row(s) repeating the previous row's time {how} (--repeated-time)",
+                imported.rows_repeated
             );
         }
     }
