@@ -1,16 +1,20 @@
 //! `palpus identify`.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use capture::{Capture, CaptureKind};
+use capture::signal::pseudo_differentiate;
+use capture::{Capture, CaptureKind, kind};
 use clap::{Args, ValueEnum};
 use identify::{
-    IdentifyOptions, Metrics, ModelBody, ModelKind, Report, ScaledSvr, SearchGrid, SearchPoint, best,
-    identify, search,
+    IdentifyOptions, Metrics, ModelBody, ModelFile, ModelKind, Report, ScaledSvr, SearchGrid, SearchPoint,
+    best, identify, search,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use svm::write_libsvm_model;
+
+use crate::plots::FitSet;
 
 /// Identify a model from a capture with ε-SVR and compare it with the baselines.
 ///
@@ -27,6 +31,10 @@ use svm::write_libsvm_model;
 /// The report compares the SVR with Coulomb+viscous least squares (friction models) and an
 /// RBF network by AISE, error bound max|F − F̂| and RMSE, on --test if given, else on the
 /// training capture.
+///
+/// --predictions and --plot show the fit against the data: every row the model describes
+/// (needle: the in-tissue rows), not only the rows it was fitted on, of the training capture
+/// and of --test.
 #[derive(Debug, Args)]
 pub(crate) struct IdentifyArgs {
     /// Training capture.
@@ -64,6 +72,17 @@ pub(crate) struct IdentifyArgs {
     /// Every model: at most this many training rows, evenly spaced over the capture.
     #[arg(long, value_name = "N", default_value_t = identify::DEFAULT_MAX_FIT_SAMPLES)]
     max_fit_samples: usize,
+    /// Write the model's prediction at every sample of the training and test captures (CSV:
+    /// set, the model's inputs, measured force, predicted_<force>, residual).
+    #[arg(long, value_name = "FILE.csv")]
+    predictions: Option<PathBuf>,
+    /// Draw measured against predicted force (PNG): needle against depth, friction against
+    /// normal force (soft contact: coloured by speed band).
+    #[arg(long, value_name = "FILE.png")]
+    plot: Option<PathBuf>,
+    /// Size of the --plot image.
+    #[arg(long, value_name = "WxH", default_value = "1100x750", value_parser = parse_size)]
+    plot_size: [u32; 2],
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -144,6 +163,20 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     if let Some(out) = &args.out {
         identified.model.save(out)?;
     }
+    if args.predictions.is_some() || args.plot.is_some() {
+        let model = &identified.model;
+        let mut sets = vec![fit_set("train", &train, model)?];
+        if let Some(t) = &test {
+            sets.push(fit_set("test", t, model)?);
+        }
+        if let Some(path) = &args.predictions {
+            write_predictions(path, model, &sets)?;
+        }
+        if let Some(path) = &args.plot {
+            let [w, h] = args.plot_size;
+            crate::plots::write_fit_plot(path, (w, h), model, &sets)?;
+        }
+    }
     if let Some(path) = &args.libsvm {
         match &identified.model.body {
             ModelBody::Single(m) => write_libsvm(m, path)?,
@@ -166,6 +199,97 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         print_table(&identified.report, args);
     }
     Ok(())
+}
+
+/// `identify` differentiates position with this time constant when a capture has no velocity
+/// column (Li & Bi's Eq. 13); the predictions must see the inputs the model was fitted on.
+const PSEUDO_DIFF_TAU_S: f64 = 0.01;
+
+/// The rows of `capture` the model describes, its inputs as the model reads them, and the
+/// model's output at each: every row for the friction models, the rows in tissue (depth > 0)
+/// for the needle, as `identify` selects them.
+fn fit_set(label: &'static str, capture: &Capture, model: &ModelFile) -> anyhow::Result<FitSet> {
+    let column = |name: &str| -> anyhow::Result<Vec<f64>> {
+        if capture.has_column(name) {
+            return Ok(capture.column(name)?.to_vec());
+        }
+        let position = match name {
+            kind::TANGENTIAL_VELOCITY_MPS => kind::TANGENTIAL_POSITION_M,
+            kind::VELOCITY_MPS => kind::DEPTH_M,
+            _ => return Ok(capture.column(name)?.to_vec()),
+        };
+        pseudo_differentiate(capture.time(), capture.column(position)?, PSEUDO_DIFF_TAU_S)
+            .with_context(|| format!("{}: differentiating {position}", capture.source().display()))
+    };
+    let all_inputs = model
+        .inputs
+        .iter()
+        .map(|q| column(&q.name))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let all_measured = column(&model.output.name)?;
+    let rows: Vec<usize> = if model.kind == ModelKind::NeedlePuncture {
+        let depth = capture.column(kind::DEPTH_M)?;
+        (0..capture.len()).filter(|&i| depth[i] > 0.0).collect()
+    } else {
+        (0..capture.len()).collect()
+    };
+    let inputs: Vec<Vec<f64>> = all_inputs
+        .iter()
+        .map(|col| rows.iter().map(|&i| col[i]).collect())
+        .collect();
+    let predicted = (0..rows.len())
+        .map(|r| {
+            let x: Vec<f64> = inputs.iter().map(|col| col[r]).collect();
+            model.predict(&x)
+        })
+        .collect();
+    Ok(FitSet {
+        label,
+        inputs,
+        measured: rows.iter().map(|&i| all_measured[i]).collect(),
+        predicted,
+    })
+}
+
+/// Writes `sets` as CSV: `set`, the model's inputs and output under their capture column
+/// names, `predicted_<output>` and `residual_<unit>` (measured − predicted), numbers in full
+/// precision so that a reader recomputes the model's outputs exactly.
+fn write_predictions(path: &Path, model: &ModelFile, sets: &[FitSet]) -> anyhow::Result<()> {
+    let output = &model.output.name;
+    // Column names end in their unit (`axial_force_n`).
+    let unit = output.rsplit_once('_').map_or(output.as_str(), |(_, u)| u);
+    capture::write_atomically(path, |w| -> std::io::Result<()> {
+        write!(w, "set")?;
+        for q in &model.inputs {
+            write!(w, ",{}", q.name)?;
+        }
+        writeln!(w, ",{output},predicted_{output},residual_{unit}")?;
+        for set in sets {
+            for (r, (&measured, &predicted)) in set.measured.iter().zip(&set.predicted).enumerate() {
+                write!(w, "{}", set.label)?;
+                for col in &set.inputs {
+                    write!(w, ",{}", col[r])?;
+                }
+                writeln!(w, ",{measured},{predicted},{}", measured - predicted)?;
+            }
+        }
+        Ok(())
+    })
+    .with_context(|| format!("writing {}", path.display()))
+}
+
+/// `WIDTHxHEIGHT`, each side 16–8192 px.
+fn parse_size(s: &str) -> Result<[u32; 2], String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT"))?;
+    let n = |v: &str| {
+        v.parse::<u32>()
+            .ok()
+            .filter(|v| (16..=8192).contains(v))
+            .ok_or_else(|| format!("`{s}`: each side must be 16–8192 px"))
+    };
+    Ok([n(w)?, n(h)?])
 }
 
 fn with_suffix(path: &Path, suffix: &str) -> PathBuf {

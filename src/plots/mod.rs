@@ -5,6 +5,7 @@
 //! and writing it as PNG ([`render()`], [`write_png_rgb`]), and [`PlotError`].
 
 pub mod categories;
+pub mod fit;
 pub mod recognition;
 pub mod session;
 
@@ -18,6 +19,7 @@ use plotters::prelude::*;
 use plotters::style::FontStyle;
 
 pub use categories::write_scatter;
+pub use fit::{FitSet, write_fit_plot};
 pub use recognition::{
     confusion_size, som_components_size, som_density_size, som_map_size, write_confusion, write_eval_plots,
     write_som_components, write_som_density, write_som_map,
