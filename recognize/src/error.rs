@@ -253,6 +253,14 @@ pub enum RecognizeError {
         /// Weights.
         weights: usize,
     },
+    /// Probability vectors and decisions differ in count.
+    #[error("{probabilities} probability vectors but {labels} decisions")]
+    LabelCount {
+        /// Probability vectors.
+        probabilities: usize,
+        /// Decisions.
+        labels: usize,
+    },
     /// Probability vectors differ in length.
     #[error("classifier {index} gives {got} class probabilities, expected {expected}")]
     FusionClasses {

@@ -6,6 +6,7 @@
 //! can be [merged](ConfusionMatrix::merge): pooled counts over runs of equal size give the
 //! average of the runs' rates, as Fig. 4.15 averages 10 SOM seeds.
 
+use std::cmp::Ordering;
 use std::fmt::{Display, Write as _};
 
 use crate::RecognizeError;
@@ -110,9 +111,20 @@ impl<L: PartialEq + std::fmt::Debug> ConfusionMatrix<L> {
 }
 
 impl<L: PartialEq + std::fmt::Debug + Display> ConfusionMatrix<L> {
-    /// The matrix as text: one row per true class, columns numbered as the rows, values in
-    /// percent of the row, and the class's rate at the end.
+    /// The row (and column) indices in natural order of the classes' names
+    /// ([`natural_cmp`]): `mat2` before `mat10`, as a reader counts them.
+    pub fn natural_order(&self) -> Vec<usize> {
+        let names: Vec<String> = self.classes.iter().map(ToString::to_string).collect();
+        let mut order: Vec<usize> = (0..names.len()).collect();
+        order.sort_by(|&a, &b| natural_cmp(&names[a], &names[b]));
+        order
+    }
+
+    /// The matrix as text: one row per true class in natural order of the names
+    /// ([`ConfusionMatrix::natural_order`]), columns numbered as the rows, values in percent of
+    /// the row, the class's rate at the end, and the accuracy over every decision counted.
     pub fn to_text(&self) -> String {
+        let order = self.natural_order();
         let width = self
             .classes
             .iter()
@@ -126,18 +138,63 @@ impl<L: PartialEq + std::fmt::Debug + Display> ConfusionMatrix<L> {
         }
         header.push_str("    rate\n");
         let mut text = header;
-        for (i, (class, row)) in self.classes.iter().zip(self.row_percent()).enumerate() {
-            let _ = write!(text, "{:>2}  {:<width$}   ", i + 1, class.to_string());
-            for v in &row {
-                let _ = write!(text, "{v:>6.1}");
+        let percent = self.row_percent();
+        for (shown, &i) in order.iter().enumerate() {
+            let _ = write!(
+                text,
+                "{:>2}  {:<width$}   ",
+                shown + 1,
+                self.classes[i].to_string()
+            );
+            for &j in &order {
+                let _ = write!(text, "{:>6.1}", percent[i][j]);
             }
-            let _ = writeln!(text, "  {:>5.1} %", row[i]);
+            let _ = writeln!(text, "  {:>5.1} %", percent[i][i]);
         }
         if let Some(a) = self.accuracy() {
-            let _ = writeln!(text, "accuracy {:.1} % over {} samples", 100.0 * a, self.total());
+            let _ = writeln!(
+                text,
+                "accuracy {:.1} % over {} decisions",
+                100.0 * a,
+                self.total()
+            );
         }
         text
     }
+}
+
+/// Natural order of names: runs of ASCII digits compare as numbers (`mat2` < `mat10`, and
+/// `mat02` = `mat2` numerically, the shorter spelling first), everything else as text; names
+/// equal that way fall back to plain string order, so the order is total.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let (mut x, mut y) = (a, b);
+    while let (Some(cx), Some(cy)) = (x.chars().next(), y.chars().next()) {
+        let order = if cx.is_ascii_digit() && cy.is_ascii_digit() {
+            let (nx, rest_x) = split_digits(x);
+            let (ny, rest_y) = split_digits(y);
+            (x, y) = (rest_x, rest_y);
+            let (tx, ty) = (nx.trim_start_matches('0'), ny.trim_start_matches('0'));
+            // Without leading zeros, a longer run is a larger number; equal lengths compare
+            // digit by digit, so runs of any length never overflow.
+            tx.len()
+                .cmp(&ty.len())
+                .then_with(|| tx.cmp(ty))
+                .then_with(|| nx.len().cmp(&ny.len()))
+        } else {
+            (x, y) = (&x[cx.len_utf8()..], &y[cy.len_utf8()..]);
+            cx.cmp(&cy)
+        };
+        if order != Ordering::Equal {
+            return order;
+        }
+    }
+    x.len().cmp(&y.len()).then_with(|| a.cmp(b))
+}
+
+/// The leading ASCII digits of `s`, and the rest.
+fn split_digits(s: &str) -> (&str, &str) {
+    let end = s.find(|c: char| !c.is_ascii_digit()).unwrap_or(s.len());
+    s.split_at(end)
 }
 
 #[cfg(test)]
@@ -161,6 +218,57 @@ mod tests {
         assert!(text.contains(" 1  a"), "{text}");
         assert!(text.contains("50.0"), "{text}");
         assert!(text.contains("accuracy 60.0 %"), "{text}");
+        assert!(text.contains("over 5 decisions"), "{text}");
+    }
+
+    #[test]
+    fn names_sort_naturally() {
+        let mut names = vec![
+            "mat10", "mat2", "mat1", "mat11", "b", "a9b", "a10", "mat02", "mat",
+        ];
+        names.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            names,
+            [
+                "a9b", "a10", "b", "mat", "mat1", "mat2", "mat02", "mat10", "mat11"
+            ]
+        );
+        assert_eq!(
+            natural_cmp("x99999999999999999999999", "x100000000000000000000000"),
+            Ordering::Less
+        );
+        assert_eq!(natural_cmp("same", "same"), Ordering::Equal);
+    }
+
+    #[test]
+    fn text_shows_classes_in_natural_order() {
+        let classes: Vec<String> = ["mat1", "mat10", "mat11", "mat2"].map(String::from).to_vec();
+        let mut m = ConfusionMatrix::new(classes).expect("distinct");
+        // mat2 is taken for mat10 once in two; every other class is always right.
+        for (t, p) in [
+            ("mat1", "mat1"),
+            ("mat10", "mat10"),
+            ("mat11", "mat11"),
+            ("mat2", "mat2"),
+            ("mat2", "mat10"),
+        ] {
+            m.add(&t.to_owned(), &p.to_owned()).expect("known");
+        }
+        assert_eq!(m.natural_order(), vec![0, 3, 1, 2]);
+        let text = m.to_text();
+        let rows: Vec<&str> = text.lines().skip(1).take(4).collect();
+        let names: Vec<&str> = rows
+            .iter()
+            .map(|r| r.split_whitespace().nth(1).expect("name"))
+            .collect();
+        assert_eq!(names, ["mat1", "mat2", "mat10", "mat11"], "{text}");
+        // Columns follow the rows: mat2's row is 0, 50, 50, 0 in that order.
+        let cells: Vec<&str> = rows[1].split_whitespace().skip(2).take(4).collect();
+        assert_eq!(cells, ["0.0", "50.0", "50.0", "0.0"], "{text}");
+        assert!(rows[1].ends_with("50.0 %"), "{text}");
+        assert!(text.contains("accuracy 80.0 % over 5 decisions"), "{text}");
+        // The matrix itself keeps its classes' order.
+        assert_eq!(m.classes()[1], "mat10");
     }
 
     #[test]

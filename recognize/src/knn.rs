@@ -388,11 +388,70 @@ impl ReliabilityFusion {
         fuse(&probabilities, &weights)
     }
 
-    /// The most likely class ([`argmax`] of [`ReliabilityFusion::predict_proba`]).
+    /// The most likely class: [`fused_label`] of the behaviours performed, so that one
+    /// behaviour alone answers exactly as its own [`Knn::predict`].
     pub fn predict(&self, queries: &[Option<&[f64]>]) -> Result<usize, RecognizeError> {
-        let p = self.predict_proba(queries)?;
-        argmax(&p).ok_or(RecognizeError::NothingToFuse)
+        if queries.len() != self.models.len() {
+            return Err(RecognizeError::QueryCount {
+                queries: queries.len(),
+                behaviours: self.models.len(),
+            });
+        }
+        let (mut labels, mut probabilities, mut weights) = (Vec::new(), Vec::new(), Vec::new());
+        for (behaviour, (q, (model, &w))) in queries
+            .iter()
+            .zip(self.models.iter().zip(&self.weights))
+            .enumerate()
+        {
+            if let Some(q) = q {
+                let wrap = |source| RecognizeError::FusedBehaviour {
+                    behaviour,
+                    source: Box::new(source),
+                };
+                labels.push(model.predict(q).map_err(wrap)?);
+                probabilities.push(model.predict_proba(q).map_err(wrap)?);
+                weights.push(w);
+            }
+        }
+        fused_label(&labels, &probabilities, &weights)
     }
+}
+
+/// The decision of fused scratches, each given as its classifier's own decision (`labels`),
+/// its class probabilities and its weight: the argmax of [`fuse`], classes within 1e-12 of
+/// the best counting as tied and the tie going to the decision of the heaviest scratch among
+/// them (the first, among equal weights), else to the lowest class index.
+///
+/// A single scratch keeps its own decision: with nothing to fuse, fusing must not change it,
+/// and a classifier's decision need not be the lowest-index argmax of its probabilities
+/// (k-NN breaks a tie of votes by the nearest neighbour; an SVM votes one-vs-one while its
+/// probabilities are pairwise-coupled).
+pub fn fused_label<P: AsRef<[f64]>>(
+    labels: &[usize],
+    probabilities: &[P],
+    weights: &[f64],
+) -> Result<usize, RecognizeError> {
+    if labels.len() != probabilities.len() {
+        return Err(RecognizeError::LabelCount {
+            probabilities: probabilities.len(),
+            labels: labels.len(),
+        });
+    }
+    let fused = fuse(probabilities, weights)?;
+    if let [only] = labels {
+        return Ok(*only);
+    }
+    let best = fused.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let tied = |l: usize| fused.get(l).is_some_and(|&v| v >= best - 1e-12);
+    let mut order: Vec<usize> = (0..labels.len()).collect();
+    // Stable: among equal weights the earlier scratch stays first.
+    order.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]));
+    order
+        .into_iter()
+        .map(|i| labels[i])
+        .find(|&l| tied(l))
+        .or_else(|| argmax(&fused))
+        .ok_or(RecognizeError::NothingToFuse)
 }
 
 /// Reliability-weighted fusion: `Σ_b w_b·p_b / Σ_b w_b`, a probability vector again when the
@@ -610,6 +669,52 @@ mod tests {
             alone.iter().zip(a).all(|(f, e)| (f - e).abs() < 1e-12),
             "{alone:?}"
         );
+    }
+
+    #[test]
+    fn fusing_one_behaviour_keeps_its_own_decision() {
+        // Near the origin, the three nearest points are one of each class (k = 3): k-NN names
+        // the nearest neighbour's class, while the lowest-index argmax of the probabilities
+        // would name class 0. With nothing to fuse, fusion must agree with k-NN. The far points
+        // give the cross-validation (by group) of the weight enough to train on.
+        static X: [[f64; 1]; 6] = [[0.0], [5.0], [10.0], [-100.0], [100.0], [110.0]];
+        let labels = [0, 1, 2, 0, 1, 2];
+        let groups = [0, 0, 0, 1, 1, 1];
+        let params = KnnParams::default().k(3).scaling(FeatureScaling::None);
+        let data = BehaviourData {
+            features: &X,
+            labels: &labels,
+            groups: &groups,
+        };
+        let knn = Knn::fit(params, &X, &labels, 3).expect("valid");
+        let fusion = ReliabilityFusion::fit(params, &[data], 3, 3).expect("valid");
+        for q in [[9.0], [4.0], [0.5], [7.6]] {
+            let p = knn.predict_proba(&q).expect("valid");
+            let single = knn.predict(&q).expect("valid");
+            assert_eq!(fusion.predict(&[Some(&q)]).expect("valid"), single, "{q:?}");
+            assert_eq!(
+                fused_label(&[single], &[&p], &[0.7]).expect("valid"),
+                single,
+                "{q:?}"
+            );
+        }
+        assert_eq!(argmax(&knn.predict_proba(&[9.0]).expect("valid")), Some(0));
+        assert_eq!(knn.predict(&[9.0]).expect("valid"), 2);
+        // A single scratch keeps its decision whatever its probabilities say (an SVM's vote).
+        assert_eq!(fused_label(&[1], &[[0.6, 0.3, 0.1]], &[1.0]).expect("valid"), 1);
+        // Several: a tie goes to the heaviest scratch's decision among the tied classes.
+        let tie = [[0.5, 0.5, 0.0], [0.5, 0.5, 0.0]];
+        assert_eq!(fused_label(&[0, 1], &tie, &[0.4, 0.8]).expect("valid"), 1);
+        assert_eq!(fused_label(&[0, 1], &tie, &[0.8, 0.4]).expect("valid"), 0);
+        // No scratch's decision among the tied classes: the lowest index.
+        assert_eq!(fused_label(&[2, 2], &tie, &[0.8, 0.4]).expect("valid"), 0);
+        assert!(matches!(
+            fused_label(&[0], &tie, &[1.0, 1.0]),
+            Err(RecognizeError::LabelCount {
+                probabilities: 2,
+                labels: 1
+            })
+        ));
     }
 
     #[test]

@@ -14,7 +14,9 @@ use crate::RecognizeError;
 use crate::eval::ConfusionMatrix;
 use crate::features::spectral::SpectrogramPlan;
 use crate::features::{WindowlessCapture, windows};
-use crate::knn::{argmax, fuse};
+#[cfg(doc)]
+use crate::knn::fuse;
+use crate::knn::fused_label;
 
 /// One behaviour's scratches classified alone, in a [`FusedEvaluation`].
 #[derive(Debug, Clone)]
@@ -32,7 +34,8 @@ pub struct BehaviourScore {
 /// The evaluated captures are grouped by surface and [`TRIAL_KEY`]: a group is one object
 /// explored by one or more behaviours; a capture without a trial is a group of its own. Each
 /// group gets one decision, the argmax of its scratches' class probabilities averaged with the
-/// behaviours' weights ([`RecognizerFile::fusion_weights`], [`fuse`]).
+/// behaviours' weights ([`RecognizerFile::fusion_weights`], [`fuse`], [`fused_label`]); a
+/// group of one scratch keeps that scratch's own decision.
 #[derive(Debug, Clone)]
 pub struct FusedEvaluation {
     /// One decision per group, by true and predicted class.
@@ -97,8 +100,8 @@ pub struct Evaluation {
     pub windowless: Vec<WindowlessCapture>,
 }
 
-/// The scratches of one trial: each one's behaviour index and class probabilities.
-type TrialScratches = Vec<(usize, Vec<f64>)>;
+/// The scratches of one trial: each one's behaviour index, decision and class probabilities.
+type TrialScratches = Vec<(usize, usize, Vec<f64>)>;
 
 impl RecognizerFile {
     /// Fuses the behaviours of each trial of `captures` (see [`FusedEvaluation`]); `None` for a
@@ -131,8 +134,11 @@ impl RecognizerFile {
             };
             matrix.add(&self.classes[truth], &self.classes[label])?;
             match trial_of(c) {
-                Some(trial) => trials.entry((truth, trial.to_owned())).or_default().push((b, p)),
-                None => singles.push((truth, vec![(b, p)])),
+                Some(trial) => trials
+                    .entry((truth, trial.to_owned()))
+                    .or_default()
+                    .push((b, label, p)),
+                None => singles.push((truth, vec![(b, label, p)])),
             }
         }
         let mut confusion = ConfusionMatrix::new(self.classes.clone())?;
@@ -144,17 +150,17 @@ impl RecognizerFile {
             .collect();
         for (truth, members) in &groups {
             multi_scratch_groups += usize::from(members.len() > 1);
-            let p: Vec<&[f64]> = members.iter().map(|(_, p)| p.as_slice()).collect();
-            let w: Vec<f64> = members.iter().map(|(b, _)| weights[*b]).collect();
-            let fused = match fuse(&p, &w) {
-                Err(RecognizeError::ZeroTotalWeight) => fuse(&p, &vec![1.0; p.len()]),
+            let l: Vec<usize> = members.iter().map(|(_, l, _)| *l).collect();
+            let p: Vec<&[f64]> = members.iter().map(|(_, _, p)| p.as_slice()).collect();
+            let w: Vec<f64> = members.iter().map(|(b, _, _)| weights[*b]).collect();
+            let label = match fused_label(&l, &p, &w) {
+                Err(RecognizeError::ZeroTotalWeight) => fused_label(&l, &p, &vec![1.0; p.len()]),
                 other => other,
             }
             .map_err(|e| RecognizeError::UnusableCapture {
                 path: PathBuf::from(&self.classes[*truth]),
                 reason: format!("fusing a trial's behaviours: {e}"),
             })?;
-            let label = argmax(&fused).unwrap_or(0);
             confusion.add(&self.classes[*truth], &self.classes[label])?;
         }
         let per_behaviour = alone
