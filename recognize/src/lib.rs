@@ -28,21 +28,21 @@ pub use category::{
     similarity_from_confusion,
 };
 pub use error::RecognizeError;
-pub use eval::ConfusionMatrix;
+pub use eval::{ConfusionMatrix, natural_cmp};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
 pub use features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling,
     WindowlessCapture,
 };
-pub use knn::{BehaviourData, FeatureScaling, Knn, KnnParams, ReliabilityFusion, argmax, fuse};
+pub use knn::{BehaviourData, FeatureScaling, Knn, KnnParams, ReliabilityFusion, argmax, fuse, fused_label};
 pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{
     BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,
     Decision, Evaluation, FusedEvaluation, KnnTrainer, LABEL_KEY, LabelledCapture, Method, RECOGNIZER_FORMAT,
     RECOGNIZER_VERSION, RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer,
-    SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, WINDOW_SVM_FALLBACK_C, recording_groups, som_nodes,
-    som_params, train, trial_groups, window_svc_params,
+    SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, UnmappedClasses, WINDOW_SVM_FALLBACK_C,
+    recording_groups, som_nodes, som_params, train, trial_groups, window_som_nodes, window_svc_params,
 };
 pub use som::{Normalization, Som, SomParams};
 pub use svc::{CSearch, Svc, SvcParams};

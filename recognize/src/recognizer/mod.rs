@@ -33,7 +33,8 @@ pub use grouping::{TRIAL_KEY, recording_groups, trial_groups};
 pub use labelled::{BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture};
 pub use train::{
     CV_FOLDS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainSettings,
-    Trainer, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_svc_params,
+    Trainer, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_som_nodes,
+    window_svc_params,
 };
 
 #[cfg(test)]

@@ -359,7 +359,7 @@ fn train_picks_the_trainer_of_the_method_and_features() {
         assert_eq!(method.trainer().method(), method);
         let settings = TrainSettings {
             window_s: 0.5,
-            train_window_s: 0.5,
+            train_window_s: Some(0.5),
             features: FeatureSet::Nakano,
             ..TrainSettings::new(method)
         };
@@ -390,7 +390,7 @@ fn training_refuses_a_class_whose_captures_give_no_window() {
     for method in [Method::Som, Method::Knn] {
         let settings = TrainSettings {
             window_s: 0.5,
-            train_window_s: 0.5,
+            train_window_s: Some(0.5),
             features: FeatureSet::Nakano,
             ..TrainSettings::new(method)
         };
@@ -454,4 +454,116 @@ fn evaluation_refuses_no_decisions_and_lists_captures_without_one() {
     assert_eq!(eval.windowless.len(), 1);
     assert_eq!(eval.windowless[0].path, Path::new("fine-short.csv"));
     assert_eq!((eval.captures, eval.never_correct), (4, 1));
+}
+
+#[test]
+fn knn_and_svm_train_on_windows_of_their_decision_length_and_the_som_on_the_papers() {
+    let captures = three_surfaces(4.0);
+    for (method, expected_s) in [(Method::Knn, 0.6), (Method::Svm, 0.6), (Method::Som, 1.0)] {
+        let settings = TrainSettings {
+            window_s: 0.6,
+            features: FeatureSet::Nakano,
+            ..TrainSettings::new(method)
+        };
+        assert_eq!(settings.training_window_s(), expected_s, "{method:?}");
+        let model = train(&captures, &settings).expect("train");
+        let windowing = model.windowing().expect("windowed");
+        assert!(
+            (windowing.training_window_s() - expected_s).abs() < 1e-12,
+            "{method:?}"
+        );
+        assert!((windowing.window_s() - 0.6).abs() < 1e-12, "{method:?}");
+        // A training window set is the one used.
+        let set = TrainSettings {
+            train_window_s: Some(0.5),
+            ..settings
+        };
+        assert_eq!(set.training_window_s(), 0.5);
+        let model = train(&captures, &set).expect("train");
+        let training_s = model.windowing().expect("windowed").training_window_s();
+        assert!((training_s - 0.5).abs() < 1e-12, "{method:?}");
+    }
+}
+
+/// Rubbing captures of `n` surfaces, `surface_00`…, each a different roughness and friction.
+fn many_surfaces(n: usize, seconds: f64) -> Vec<LabelledCapture> {
+    (0..n)
+        .map(|i| {
+            let i_f = i as f64;
+            rubbing(
+                &format!("surface_{i:02}"),
+                2e-6 * (1.0 + i_f),
+                0.3e-3 + 0.1e-3 * (i_f % 5.0),
+                0.05 + 0.02 * i_f,
+                seconds,
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_map_grows_with_the_classes_and_names_the_classes_it_cannot_answer() {
+    // The thesis's 12 nodes up to its seven surfaces; two per class beyond.
+    assert_eq!(window_som_nodes(3), 12);
+    assert_eq!(window_som_nodes(7), 12);
+    assert_eq!(window_som_nodes(8), 16);
+    assert_eq!(window_som_nodes(20), 40);
+    let som_of = |model: &RecognizerFile| match &model.body {
+        RecognizerBody::Som { som, .. } => som.node_labels().len(),
+        other => panic!("not a SOM: {other:?}"),
+    };
+    let settings = TrainSettings {
+        window_s: 0.5,
+        train_window_s: Some(0.5),
+        ..TrainSettings::new(Method::Som)
+    };
+    let paper = train(&three_surfaces(4.0), &settings).expect("train");
+    assert_eq!(som_of(&paper), 12);
+    assert_eq!(paper.classes_without_nodes(), []);
+    // Fourteen surfaces: 28 nodes; twelve could not give each its own.
+    let many = many_surfaces(14, 3.0);
+    let grown = train(&many, &settings).expect("train");
+    assert_eq!(som_of(&grown), 28);
+    let unmapped = grown.classes_without_nodes();
+    let twelve = train(
+        &many,
+        &TrainSettings {
+            som_nodes: Some(12),
+            ..settings.clone()
+        },
+    )
+    .expect("train");
+    assert_eq!(som_of(&twelve), 12);
+    let missing = twelve.classes_without_nodes();
+    assert_eq!(missing.len(), 1, "{missing:?}");
+    assert!(missing[0].classes.len() >= 2, "{missing:?}");
+    assert_eq!((missing[0].behaviour, missing[0].nodes), (None, 12));
+    assert!(
+        unmapped.iter().map(|m| m.classes.len()).sum::<usize>() < missing[0].classes.len(),
+        "{unmapped:?} vs {missing:?}"
+    );
+    // Fewer nodes than classes: the classes left out are named, in the recognizer's order.
+    let two = train(
+        &three_surfaces(4.0),
+        &TrainSettings {
+            som_nodes: Some(2),
+            ..settings
+        },
+    )
+    .expect("train");
+    let missing = two.classes_without_nodes();
+    assert_eq!(missing.len(), 1);
+    assert_eq!(missing[0].classes.len(), 1, "{missing:?}");
+    assert!(two.classes.iter().any(|c| c == missing[0].classes[0]));
+    // Other recognizers have no map.
+    let knn = train(
+        &three_surfaces(4.0),
+        &TrainSettings {
+            window_s: 0.5,
+            features: FeatureSet::Nakano,
+            ..TrainSettings::new(Method::Knn)
+        },
+    )
+    .expect("train");
+    assert_eq!(knn.classes_without_nodes(), []);
 }

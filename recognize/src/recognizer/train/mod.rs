@@ -12,7 +12,9 @@ mod svm;
 use std::collections::{BTreeMap, BTreeSet};
 
 pub use knn::KnnTrainer;
-pub use som::{SCRATCH_SOM_NORMALIZATION, SomTrainer, som_nodes, som_params};
+pub use som::{
+    SCRATCH_SOM_NORMALIZATION, SomTrainer, UnmappedClasses, som_nodes, som_params, window_som_nodes,
+};
 pub use svm::{SvmTrainer, WINDOW_SVM_FALLBACK_C, window_svc_params};
 
 use super::labelled::{check_rate, class_index, class_list};
@@ -78,8 +80,9 @@ pub struct TrainSettings {
     pub features: FeatureSet,
     /// Windowed features (nakano, both): decision window, s.
     pub window_s: f64,
-    /// Windowed features: window of the training vectors, s.
-    pub train_window_s: f64,
+    /// Windowed features: window of the training vectors, s; `None` for the method's default
+    /// ([`TrainSettings::training_window_s`]).
+    pub train_window_s: Option<f64>,
     /// Windowed features: time between decisions (and between training windows), s.
     pub hop_s: f64,
     /// SOM: seed of the map's initial vectors and presentation order.
@@ -93,25 +96,43 @@ pub struct TrainSettings {
     pub c: SvmC,
     /// The histogram's cell scaling.
     pub cell_scale: CellScale,
+    /// SOM: nodes of each map; `None` for as many as the classes need ([`window_som_nodes`]
+    /// over windows, [`som_nodes`] over whole scratches).
+    pub som_nodes: Option<usize>,
 }
 
 impl TrainSettings {
-    /// The defaults of `method`: its own features, [`DECISION_WINDOW_S`] decision windows on
-    /// [`TRAINING_WINDOW_S`] training windows every [`HOP_S`], seed 0,
-    /// [`Normalization::LogWithinClass`], k = 3, C chosen by cross-validation
-    /// ([`SvmC::auto`]), mean cells.
+    /// The defaults of `method`: its own features, [`DECISION_WINDOW_S`] decision windows
+    /// every [`HOP_S`] on the method's training windows
+    /// ([`TrainSettings::training_window_s`]), seed 0, [`Normalization::LogWithinClass`], k = 3,
+    /// C chosen by cross-validation ([`SvmC::auto`]), mean cells, maps sized by their classes.
     pub fn new(method: Method) -> Self {
         Self {
             method,
             features: method.default_features(),
             window_s: DECISION_WINDOW_S,
-            train_window_s: TRAINING_WINDOW_S,
+            train_window_s: None,
             hop_s: HOP_S,
             seed: 0,
             normalization: Normalization::LogWithinClass,
             k: PAPER_K,
             c: SvmC::auto(),
             cell_scale: CellScale::Mean,
+            som_nodes: None,
+        }
+    }
+
+    /// The window of the training vectors, s: the one set, else the SOM's
+    /// [`TRAINING_WINDOW_S`] (Nakano's protocol: many short, varied windows from one run per
+    /// surface, and the map generalises to longer decision windows), else the decision window.
+    /// k-NN and SVM compare a decision window with training vectors directly, so vectors of
+    /// another length sit elsewhere in feature space (a variance over 1 s is not one over 3 s):
+    /// they train on windows of the length they decide on.
+    pub fn training_window_s(&self) -> f64 {
+        match (self.train_window_s, self.method) {
+            (Some(s), _) => s,
+            (None, Method::Som) => TRAINING_WINDOW_S,
+            (None, Method::Knn | Method::Svm) => self.window_s,
         }
     }
 
@@ -121,7 +142,8 @@ impl TrainSettings {
             .first()
             .map(|c| c.capture.metadata().rate_hz())
             .ok_or(RecognizeError::NoTrainingData)?;
-        NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?.with_training_window_s(self.train_window_s)
+        NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?
+            .with_training_window_s(self.training_window_s())
     }
 }
 

@@ -33,7 +33,9 @@ impl Trainer for SomTrainer {
         captures: &[LabelledCapture],
         settings: &TrainSettings,
     ) -> Result<RecognizerFile, RecognizeError> {
+        let classes = class_list(captures).len();
         let params = SomParams {
+            nodes: settings.som_nodes.unwrap_or(window_som_nodes(classes)),
             seed: settings.seed,
             normalization: settings.normalization,
             ..SomParams::default()
@@ -47,8 +49,8 @@ impl Trainer for SomTrainer {
                 settings.cell_scale,
             ),
             FeatureSet::Spectral => {
-                let classes = class_list(captures).len();
                 let params = SomParams {
+                    nodes: settings.som_nodes.unwrap_or(som_nodes(classes)),
                     normalization: SCRATCH_SOM_NORMALIZATION,
                     ..som_params(classes, settings.seed)
                 };
@@ -63,6 +65,23 @@ impl Trainer for SomTrainer {
 /// class's spread and for the boundaries between classes along the line).
 pub fn som_nodes(classes: usize) -> usize {
     12.max(3 * classes)
+}
+
+/// Surfaces of Nakano's protocol (thesis Table 3.3's map of 12 nodes was sized for them).
+const PAPER_SURFACES: usize = 7;
+
+/// Nodes of a SOM over rubbing windows of `classes` classes: the thesis's 12 for up to its
+/// seven surfaces (so Nakano's protocol is unchanged), two per class beyond. A node answers
+/// one class, so a map with fewer nodes than classes can never name some of them; with twelve
+/// nodes for twenty surfaces, nine or ten own no node. Two per class leaves room for a class's
+/// spread and a boundary on each side along the line.
+pub fn window_som_nodes(classes: usize) -> usize {
+    let paper = SomParams::default().nodes;
+    if classes <= PAPER_SURFACES {
+        paper
+    } else {
+        paper.max(2 * classes)
+    }
 }
 
 /// The default SOM parameters for `classes` classes with `seed`: Table 3.3's, with
@@ -83,7 +102,56 @@ pub fn som_params(classes: usize, seed: u64) -> SomParams {
 /// 0.74–0.93.
 pub const SCRATCH_SOM_NORMALIZATION: Normalization = Normalization::LogWithinClass;
 
+/// Classes that label no node of one map of a SOM recognizer
+/// ([`RecognizerFile::classes_without_nodes`]): the map can never answer them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnmappedClasses<'a> {
+    /// The map's behaviour, for one map per behaviour; `None` for a map over windows.
+    pub behaviour: Option<&'a str>,
+    /// Nodes of the map.
+    pub nodes: usize,
+    /// The classes, in the recognizer's order.
+    pub classes: Vec<&'a str>,
+}
+
 impl RecognizerFile {
+    /// For each map of a SOM recognizer, the classes no node answers (none listed when every
+    /// class owns a node; always empty for other recognizers). A node takes the majority class
+    /// of the training vectors it wins, so a class whose vectors all lose to other classes'
+    /// nodes is never decided, however close a query comes to it.
+    pub fn classes_without_nodes(&self) -> Vec<UnmappedClasses<'_>> {
+        fn unmapped<'a>(
+            classes: &'a [String],
+            behaviour: Option<&'a str>,
+            som: &Som<usize>,
+        ) -> UnmappedClasses<'a> {
+            UnmappedClasses {
+                behaviour,
+                nodes: som.node_labels().len(),
+                classes: classes
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| !som.node_labels().contains(i))
+                    .map(|(_, c)| c.as_str())
+                    .collect(),
+            }
+        }
+        let maps = match &self.body {
+            RecognizerBody::Som { som, .. } | RecognizerBody::SomWindows { som, .. } => {
+                vec![unmapped(&self.classes, None, som)]
+            }
+            RecognizerBody::SomScratches { behaviours, .. } => behaviours
+                .iter()
+                .map(|b| unmapped(&self.classes, b.behaviour.as_deref(), &b.som))
+                .collect(),
+            RecognizerBody::Knn { .. }
+            | RecognizerBody::Svm { .. }
+            | RecognizerBody::KnnWindows { .. }
+            | RecognizerBody::SvmWindows { .. } => Vec::new(),
+        };
+        maps.into_iter().filter(|m| !m.classes.is_empty()).collect()
+    }
+
     /// Trains Nakano's SOM on the training windows of `captures` (see
     /// [`NakanoWindowing::with_training_window_s`]); it decides on the decision windows.
     pub fn train_som(
