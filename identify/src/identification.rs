@@ -150,6 +150,17 @@ pub(crate) struct FrictionData {
     pub(crate) commanded_mps: Option<Vec<f64>>,
 }
 
+/// Column `name` of `c` as identification reads it: the column itself, or — for a velocity the
+/// capture does not record — its position pseudo-differentiated (Li & Bi Eq. 13), so that
+/// whoever evaluates a model on a capture sees the inputs it was fitted on.
+pub fn model_column(c: &Capture, name: &str) -> Result<Vec<f64>, IdentifyError> {
+    match name {
+        kind::TANGENTIAL_VELOCITY_MPS => velocity(c, name, kind::TANGENTIAL_POSITION_M),
+        kind::VELOCITY_MPS => velocity(c, name, kind::DEPTH_M),
+        _ => Ok(c.column(name)?.to_vec()),
+    }
+}
+
 fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result<Vec<f64>, IdentifyError> {
     if c.has_column(velocity_column) {
         return Ok(c.column(velocity_column)?.to_vec());

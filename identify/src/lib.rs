@@ -20,7 +20,7 @@ pub use baselines::{CentrePlacement, CoulombViscous, RbfNetwork, RbfNetworkParam
 pub use error::IdentifyError;
 pub use identification::{
     ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, Identified, IdentifyOptions, MAX_SEGMENT_SAMPLES, Report,
-    identify,
+    identify, model_column,
 };
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,

@@ -4,7 +4,6 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use capture::signal::pseudo_differentiate;
 use capture::{Capture, CaptureKind, kind};
 use clap::{Args, ValueEnum};
 use identify::{
@@ -81,7 +80,7 @@ pub(crate) struct IdentifyArgs {
     #[arg(long, value_name = "FILE.png")]
     plot: Option<PathBuf>,
     /// Size of the --plot image.
-    #[arg(long, value_name = "WxH", default_value = "1100x750", value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", default_value = "1100x750", value_parser = super::parse_size)]
     plot_size: [u32; 2],
     /// Print one JSON object instead of the table.
     #[arg(long)]
@@ -201,26 +200,11 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `identify` differentiates position with this time constant when a capture has no velocity
-/// column (Li & Bi's Eq. 13); the predictions must see the inputs the model was fitted on.
-const PSEUDO_DIFF_TAU_S: f64 = 0.01;
-
 /// The rows of `capture` the model describes, its inputs as the model reads them, and the
 /// model's output at each: every row for the friction models, the rows in tissue (depth > 0)
 /// for the needle, as `identify` selects them.
 fn fit_set(label: &'static str, capture: &Capture, model: &ModelFile) -> anyhow::Result<FitSet> {
-    let column = |name: &str| -> anyhow::Result<Vec<f64>> {
-        if capture.has_column(name) {
-            return Ok(capture.column(name)?.to_vec());
-        }
-        let position = match name {
-            kind::TANGENTIAL_VELOCITY_MPS => kind::TANGENTIAL_POSITION_M,
-            kind::VELOCITY_MPS => kind::DEPTH_M,
-            _ => return Ok(capture.column(name)?.to_vec()),
-        };
-        pseudo_differentiate(capture.time(), capture.column(position)?, PSEUDO_DIFF_TAU_S)
-            .with_context(|| format!("{}: differentiating {position}", capture.source().display()))
-    };
+    let column = |name: &str| -> anyhow::Result<Vec<f64>> { Ok(identify::model_column(capture, name)?) };
     let all_inputs = model
         .inputs
         .iter()
@@ -276,20 +260,6 @@ fn write_predictions(path: &Path, model: &ModelFile, sets: &[FitSet]) -> anyhow:
         Ok(())
     })
     .with_context(|| format!("writing {}", path.display()))
-}
-
-/// `WIDTHxHEIGHT`, each side 16–8192 px.
-fn parse_size(s: &str) -> Result<[u32; 2], String> {
-    let (w, h) = s
-        .split_once('x')
-        .ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT"))?;
-    let n = |v: &str| {
-        v.parse::<u32>()
-            .ok()
-            .filter(|v| (16..=8192).contains(v))
-            .ok_or_else(|| format!("`{s}`: each side must be 16–8192 px"))
-    };
-    Ok([n(w)?, n(h)?])
 }
 
 fn with_suffix(path: &Path, suffix: &str) -> PathBuf {

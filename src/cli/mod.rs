@@ -61,6 +61,20 @@ pub fn describe(error: &anyhow::Error) -> String {
     text
 }
 
+/// An image size `WIDTHxHEIGHT`, each side 16–8192 px (what every PNG the CLI draws accepts).
+fn parse_size(s: &str) -> Result<[u32; 2], String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT"))?;
+    let n = |v: &str| {
+        v.parse::<u32>()
+            .ok()
+            .filter(|v| (16..=8192).contains(v))
+            .ok_or_else(|| format!("`{s}`: each side must be 16–8192 px"))
+    };
+    Ok([n(w)?, n(h)?])
+}
+
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run_cmd::run(&args),

@@ -30,7 +30,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     out: PathBuf,
     /// Image size.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    #[arg(long, default_value = "1280x720", value_parser = super::parse_size)]
     size: [u32; 2],
     /// Multisampling: 1 or 4.
     #[arg(long, default_value_t = 4)]
@@ -44,19 +44,6 @@ pub(crate) struct RenderArgs {
     /// Where identified models are cached.
     #[arg(long, value_name = "DIR")]
     cache_dir: Option<PathBuf>,
-}
-
-fn parse_size(s: &str) -> Result<[u32; 2], String> {
-    let (w, h) = s
-        .split_once('x')
-        .ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT"))?;
-    let n = |v: &str| {
-        v.parse::<u32>()
-            .ok()
-            .filter(|v| (16..=8192).contains(v))
-            .ok_or_else(|| format!("`{s}`: each side must be 16–8192 px"))
-    };
-    Ok([n(w)?, n(h)?])
 }
 
 #[derive(Debug, Deserialize)]
