@@ -4,11 +4,71 @@ use clap::Parser;
 use palpus::cli::{Cli, describe, run};
 
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
+    let quiet = QuietRuntimeDir::install();
+    let code = match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {}", describe(&error));
             ExitCode::FAILURE
         }
+    };
+    drop(quiet);
+    code
+}
+
+/// Where `XDG_RUNTIME_DIR` is unset (or not an absolute path), it names an empty directory of this process's own for the
+/// process's life.
+///
+/// wgpu enables every window-system instance extension the Vulkan loader offers, even for a
+/// headless instance, and has no way to leave them out. Seeing `VK_KHR_wayland_surface`
+/// enabled, Mesa's device-select layer (an implicit layer of mesa-vulkan-drivers) asks the
+/// Wayland compositor which GPU it runs on at every device enumeration, and libwayland-client
+/// prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment." when the variable
+/// is unset — on every headless render on a machine without a session (CI, ssh, containers),
+/// though nothing is wrong. With the variable naming an empty directory the connection attempt
+/// finds no socket and fails silently; the device is chosen as before, and a window falls back
+/// to X11 exactly as it does without the variable (a Wayland socket lives in that directory).
+/// The directory is private (0700), so no one else can put a socket there, and removed at exit.
+struct QuietRuntimeDir {
+    dir: std::path::PathBuf,
+}
+
+impl QuietRuntimeDir {
+    #[cfg(unix)]
+    fn install() -> Option<Self> {
+        use std::os::unix::fs::DirBuilderExt;
+
+        const VAR: &str = "XDG_RUNTIME_DIR";
+        // libwayland takes only an absolute path; anything else it reports as invalid.
+        if std::env::var_os(VAR).is_some_and(|v| std::path::Path::new(&v).is_absolute()) {
+            return None;
+        }
+        let base = std::env::temp_dir();
+        // `mkdir` fails on any existing entry, symlinks included, so a name someone else got to
+        // first is never used.
+        let dir = (0..8).find_map(|n| {
+            let dir = base.join(format!("palpus-runtime-{}-{n}", std::process::id()));
+            std::fs::DirBuilder::new()
+                .mode(0o700)
+                .create(&dir)
+                .ok()
+                .map(|()| dir)
+        })?;
+        // SAFETY: the first thing `main` does, before any other thread exists, so nothing can
+        // read the environment while it is written.
+        unsafe { std::env::set_var(VAR, &dir) };
+        Some(Self { dir })
+    }
+
+    #[cfg(not(unix))]
+    fn install() -> Option<Self> {
+        None
+    }
+}
+
+impl Drop for QuietRuntimeDir {
+    fn drop(&mut self) {
+        // Only failed connection attempts looked inside, so it is still empty.
+        let _ = std::fs::remove_dir(&self.dir);
     }
 }

@@ -58,13 +58,7 @@ pub struct Gpu {
 impl Gpu {
     /// Opens the first adapter found on the backends of `options`, for offscreen rendering.
     pub fn headless(options: &GpuOptions) -> Result<Self, RenderError> {
-        let adapter = {
-            // One headless opening at a time: the quiet runtime directory is process-wide.
-            let _serial = HEADLESS_INIT.lock().unwrap_or_else(|e| e.into_inner());
-            let _quiet = QuietRuntimeDir::install();
-            Self::headless_adapter(options)?
-        };
-        Self::open(adapter)
+        Self::open(Self::headless_adapter(options)?)
     }
 
     fn headless_adapter(options: &GpuOptions) -> Result<wgpu::Adapter, RenderError> {
@@ -152,81 +146,6 @@ impl Gpu {
         } else {
             1
         }
-    }
-}
-
-/// Held while a headless adapter is looked for, so that two openings never install or remove the
-/// quiet runtime directory under each other.
-static HEADLESS_INIT: Mutex<()> = Mutex::new(());
-
-const RUNTIME_DIR_VAR: &str = "XDG_RUNTIME_DIR";
-
-/// While alive, `XDG_RUNTIME_DIR` names an empty directory of this process's own, where it was
-/// unset before.
-///
-/// wgpu enables every window-system instance extension the Vulkan loader offers, even for a
-/// headless instance, and wgpu 30 has no way to leave them out. Seeing `VK_KHR_wayland_surface`
-/// enabled, Mesa's device-select layer (an implicit layer that ships with mesa-vulkan-drivers)
-/// asks the Wayland compositor which GPU it runs on at every `vkEnumeratePhysicalDevices`, and
-/// libwayland-client prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment."
-/// when the variable is unset — on every headless run on a machine without a session (CI, ssh,
-/// containers), though nothing is wrong and the adapter opens. With the variable naming an
-/// empty directory the connection attempt finds no socket and fails silently; the layer then
-/// picks the device exactly as before, since the compositor could not be asked either way.
-///
-/// The directory is private (0700) so that no one else can put a socket there, and is removed,
-/// with the variable, once the adapter is found: no later code of the process sees it. A set
-/// variable is never touched, nor is the windowed path, which needs the real one.
-struct QuietRuntimeDir {
-    dir: std::path::PathBuf,
-}
-
-impl QuietRuntimeDir {
-    /// Installs the directory when `XDG_RUNTIME_DIR` is unset. `None` when it is set or no
-    /// private directory could be made; the only cost then is the noise on stderr.
-    #[cfg(unix)]
-    fn install() -> Option<Self> {
-        use std::os::unix::fs::DirBuilderExt;
-        use std::sync::atomic::{AtomicU32, Ordering};
-
-        static NEXT: AtomicU32 = AtomicU32::new(0);
-        if std::env::var_os(RUNTIME_DIR_VAR).is_some() {
-            return None;
-        }
-        let base = std::env::temp_dir();
-        // `mkdir` fails on any existing entry, symlinks included, so a name someone else got to
-        // first is never used; a few fresh names are tried before giving up.
-        let dir = (0..8).find_map(|_| {
-            let n = NEXT.fetch_add(1, Ordering::Relaxed);
-            let dir = base.join(format!("palpus-runtime-{}-{n}", std::process::id()));
-            std::fs::DirBuilder::new()
-                .mode(0o700)
-                .create(&dir)
-                .ok()
-                .map(|()| dir)
-        })?;
-        // SAFETY: the environment may not be written while another thread reads it through
-        // libc. Rust readers take std's environment lock; the C code that reads it during the
-        // search (the Vulkan loader, its layers and drivers, EGL) runs on this thread, and
-        // HEADLESS_INIT keeps other headless openings out. palpus opens headless renderers on
-        // its main thread before or after a session, when no device or haptic thread runs.
-        unsafe { std::env::set_var(RUNTIME_DIR_VAR, &dir) };
-        Some(QuietRuntimeDir { dir })
-    }
-
-    #[cfg(not(unix))]
-    fn install() -> Option<Self> {
-        None
-    }
-}
-
-impl Drop for QuietRuntimeDir {
-    fn drop(&mut self) {
-        // SAFETY: as for `set_var` in `install`; this runs under the same HEADLESS_INIT guard.
-        unsafe { std::env::remove_var(RUNTIME_DIR_VAR) };
-        // Only a failed connection attempt ever looked inside, so it is still empty; if removing
-        // it fails, an empty private directory in the temporary folder is all that is left.
-        let _ = std::fs::remove_dir(&self.dir);
     }
 }
 
