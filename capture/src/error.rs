@@ -278,8 +278,28 @@ pub enum CaptureErrorKind {
     },
     /// A mapped cell of an imported log is NaN or infinite, also after unit conversion (the
     /// cell's text is kept).
-    #[error("`{0}` is not finite")]
+    #[error(
+        "`{0}` is not finite (skip such rows with --non-finite drop, or interpolate them with --non-finite bridge)"
+    )]
     NotFiniteText(String),
+    /// A run of non-finite cells of an imported log cannot be bridged (`--non-finite bridge`):
+    /// too long, at an end of the file, or in the time column.
+    #[error("cannot bridge non-finite values: {0}")]
+    CannotBridge(String),
+    /// With time taken from position at a known speed, the position of an imported log did
+    /// not strictly advance in the stroke direction (the sign of the speed).
+    #[error(
+        "position {current_m} m does not advance from the previous row's {previous_m} m in the \
+         stroke direction of --speed-mps {speed_mps} (position must be strictly monotonic)"
+    )]
+    PositionNotMonotonic {
+        /// Previous position, m.
+        previous_m: f64,
+        /// This position, m.
+        current_m: f64,
+        /// The speed time is derived with, m/s (its sign is the stroke direction).
+        speed_mps: f64,
+    },
     /// A mapped cell of an imported log is beyond the target column's plausible magnitude
     /// after unit conversion (the cell's text is kept; see
     /// [`magnitude_limit`](super::kind::magnitude_limit)).

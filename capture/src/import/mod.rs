@@ -22,8 +22,21 @@
 //! is within its target column's [`magnitude_limit`] (±10⁶ SI, ±10¹⁰ s for time): a logger's
 //! `1e308` sentinel would otherwise pass as finite and the low-pass would spread it over
 //! every output sample. With [`ImportSpec::drop_implausible`] (`--drop-implausible`), rows
-//! with a non-finite or out-of-range mapped value are skipped and counted instead; the
+//! with a finite but out-of-range mapped value are skipped and counted instead; the
 //! resampling then bridges them like any gap.
+//!
+//! Non-finite cells (`nan`, `inf`, or a value that overflows on conversion) follow
+//! [`ImportSpec::non_finite`] (`--non-finite error|drop|bridge`): an error naming line and
+//! column, the row skipped, or the cell interpolated linearly in time from the finite cells
+//! before and after it in its column ([`NonFinite::Bridge`]). A bridge spans at most
+//! [`MAX_BRIDGE_ROWS`] consecutive rows, needs a finite neighbour on both sides (not at the
+//! file's first or last row) and never applies to time, which places the row: anything else
+//! is an error that says so, since a longer gap is missing data, not a dropout. Unset, the
+//! mode is `drop` with `--drop-implausible` (which has always skipped non-finite rows) and
+//! `error` without; so `--drop-implausible` decides about finite values, `--non-finite`, when
+//! given, about NaN and infinity. Dropped rows are counted in [`Imported::rows_dropped`]
+//! (those for a non-finite cell also in [`Imported::rows_non_finite`]), bridged cells in
+//! [`Imported::cells_bridged`].
 //!
 //! Repeated timestamps (consecutive rows with the same time, as loggers that stamp with a
 //! coarse clock write) are an error by default; [`ImportSpec::repeated_time`]
@@ -43,21 +56,31 @@
 //!
 //! # Time and resampling
 //!
-//! Time comes from the column mapped to `time_s`, or, for logs without one, from the input
-//! rate (`input_rate_hz`: sample `i` at `i / rate`). It must be finite and strictly
-//! increasing. The output is a uniform grid at the target rate starting at the first input
-//! time (`t0 + k / rate`, up to the last input time):
+//! Time comes from the column mapped to `time_s`; for logs without one, from the input
+//! rate (`input_rate_hz`: sample `i` at `i / rate`); or, for curves digitized against
+//! position (force–depth plots have no time), from a position column at a known constant
+//! speed ([`ImportSpec::time_from_position`], `--time-from-position 'depth[mm]' --speed-mps
+//! 0.005`): `time = (position − first position) / speed`. The position's unit is required,
+//! and the speed's sign is the stroke direction: the position must strictly advance in it
+//! (a row that does not is an error naming its line; equal positions are repeated times, see
+//! below). It must be finite and strictly increasing. The output is a uniform grid at the
+//! target rate starting at the first input time (`t0 + k / rate`, up to the last input time).
+//! Which of the three paths below is taken depends on the measured mean rate compared with
+//! the target, with a relative tolerance [`RATE_TOLERANCE`] (1 %), so two logs of the same
+//! nominal rate take the same path whatever their clock's error:
 //!
 //! * **Pass-through.** If every input interval is within 1e-6 (relative) of the target
 //!   period, the samples already are that grid: times and values are copied unchanged (after
 //!   unit conversion). A capture written at 1 kHz and re-imported at 1 kHz is bit-for-bit
 //!   the converted input.
-//! * **Interpolation.** When upsampling, or at the same mean rate with jittered timestamps,
-//!   each output sample is the linear interpolation of the two input samples around it.
+//! * **Interpolation.** When the input's mean rate is below the target's `1 + RATE_TOLERANCE`
+//!   times (upsampling, or the same nominal rate with a clock error or jittered timestamps),
+//!   each output sample is the linear interpolation of the two input samples around it. For
+//!   an input up to 1 % faster, what is not low-passed lies in the top 1 % of its band.
 //!   Linear interpolation adds no overshoot and its error is bounded by `h² / 8 · max|x''|`
 //!   (`h` the input interval); it cannot create detail the input did not record.
-//! * **Low-pass, then interpolation.** When the target rate is below the input's mean rate,
-//!   content above the new Nyquist frequency would fold back into the band the models use
+//! * **Low-pass, then interpolation.** When the input's mean rate is above the target's
+//!   `1 + RATE_TOLERANCE` times, content above the new Nyquist frequency would fold back into the band the models use
 //!   (a 2 kHz vibration sampled at 1 kHz turns into a constant offset). So each column is
 //!   first put on a uniform grid at the input's mean rate: as is if the input is uniform,
 //!   else by linear interpolation, which removes the timestamp jitter without discarding
@@ -119,10 +142,18 @@ use table::*;
 pub use units::*;
 
 /// Metadata keys [`import_csv`] sets itself; the caller's extra metadata may not use them.
-pub const IMPORT_KEYS: [&str; 3] = ["source", "map", "source_rate_hz"];
+pub const IMPORT_KEYS: [&str; 4] = ["source", "map", "source_rate_hz", "time_from"];
 
 /// Relative tolerance on sampling intervals under which an input counts as uniform.
 pub const UNIFORM_TOLERANCE: f64 = 1e-6;
+
+/// Relative tolerance between the input's mean rate and the target rate under which they
+/// count as the same rate: the input is interpolated onto the grid, not low-passed.
+pub const RATE_TOLERANCE: f64 = 0.01;
+
+/// Most consecutive non-finite cells of one column [`NonFinite::Bridge`] interpolates over
+/// (10 ms at 1 kHz): a dropout, where a longer run is missing data.
+pub const MAX_BRIDGE_ROWS: usize = 10;
 
 /// Anti-aliasing cut-off as a fraction of the target rate.
 pub const CUTOFF_FRACTION: f64 = 0.4;
@@ -173,9 +204,15 @@ pub struct ImportSpec {
     /// [`DEFAULT_MAX_UPSAMPLE`]); never more than [`MAX_OUTPUT_ROWS`] when it grows. Must be
     /// finite and at least 1.
     pub max_upsample: f64,
-    /// Skip rows with a mapped value that is not finite or beyond its target's
-    /// [`magnitude_limit`] (counted in [`Imported::rows_dropped`]) instead of failing on them.
+    /// Skip rows with a finite mapped value beyond its target's [`magnitude_limit`] (counted
+    /// in [`Imported::rows_dropped`]) instead of failing on them.
     pub drop_implausible: bool,
+    /// What to do with non-finite mapped cells; `None`: [`NonFinite::Drop`] with
+    /// `drop_implausible`, else [`NonFinite::Error`].
+    pub non_finite: Option<NonFinite>,
+    /// Derive time from a position column at a constant speed (no `time_s` in the map and no
+    /// `input_rate_hz` then).
+    pub time_from_position: Option<TimeFromPosition>,
     /// Where the column names come from (default: the first line).
     pub header: Header,
     /// What to do with consecutive rows of the same time (default: an error).
@@ -206,6 +243,105 @@ pub enum RepeatedTime {
     Drop,
 }
 
+/// What to do with a non-finite mapped cell (`nan`, `inf`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NonFinite {
+    /// Refuse the input, naming line and column.
+    #[default]
+    Error,
+    /// Skip the row.
+    Drop,
+    /// Interpolate the cell linearly in time from its column's finite neighbours (at most
+    /// [`MAX_BRIDGE_ROWS`] in a row, not at the file's ends, not in the time column).
+    Bridge,
+}
+
+impl std::str::FromStr for NonFinite {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "error" => Ok(NonFinite::Error),
+            "drop" => Ok(NonFinite::Drop),
+            "bridge" => Ok(NonFinite::Bridge),
+            _ => Err(format!("`{s}`: expected drop, bridge or error")),
+        }
+    }
+}
+
+/// Time from position at a constant speed: `time = (position − first position) / speed`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeFromPosition {
+    /// The input column holding the position.
+    pub source: String,
+    /// The position's unit (a length unit of the [unit table](unit_to_si)).
+    pub unit: String,
+    /// The speed, m/s; its sign is the direction the position advances in.
+    pub speed_mps: f64,
+    scale: Scale,
+}
+
+impl TimeFromPosition {
+    /// `column` is `name[unit]` with a length unit (`depth[mm]`); the speed must be finite
+    /// and non-zero.
+    pub fn new(column: &str, speed_mps: f64) -> Result<Self, CaptureError> {
+        let bad = |reason: String| {
+            CaptureError::without_file(CaptureErrorKind::BadSpec(format!(
+                "--time-from-position `{column}`: {reason}"
+            )))
+        };
+        let units = units_of(Quantity::Length);
+        let (name, unit) = column
+            .trim()
+            .strip_suffix(']')
+            .and_then(|rest| rest.rsplit_once('['))
+            .map(|(name, unit)| (name.trim(), unit.trim()))
+            .ok_or_else(|| {
+                bad(format!(
+                    "give the position's unit in brackets, e.g. `depth[mm]` ({units})"
+                ))
+            })?;
+        if name.is_empty() {
+            return Err(bad("no column name before the unit".into()));
+        }
+        let scale = match unit_scale(unit) {
+            Some((Quantity::Length, scale)) => scale,
+            _ => return Err(bad(format!("`{unit}` is not a length unit ({units})"))),
+        };
+        if !(speed_mps.is_finite() && speed_mps != 0.0) {
+            return Err(bad(format!(
+                "--speed-mps {speed_mps}: must be finite and non-zero (its sign is the stroke \
+                 direction)"
+            )));
+        }
+        Ok(TimeFromPosition {
+            source: name.to_owned(),
+            unit: unit.to_owned(),
+            speed_mps,
+            scale,
+        })
+    }
+
+    /// The map entry reading the position as seconds from an arbitrary origin.
+    fn time_entry(&self) -> MapEntry {
+        MapEntry {
+            target: TIME_S.to_owned(),
+            source: self.source.clone(),
+            unit: Some(self.unit.clone()),
+            scale: Scale {
+                mul: self.scale.mul,
+                div: self.scale.div * self.speed_mps,
+            },
+            text: format!("--time-from-position {}[{}]", self.source, self.unit),
+        }
+    }
+
+    /// The `time_from` metadata value.
+    fn describe(&self) -> String {
+        format!("{}[{}]@{}mps", self.source, self.unit, self.speed_mps)
+    }
+}
+
 impl std::str::FromStr for RepeatedTime {
     type Err = String;
 
@@ -231,6 +367,8 @@ impl ImportSpec {
             metadata: Vec::new(),
             max_upsample: DEFAULT_MAX_UPSAMPLE,
             drop_implausible: false,
+            non_finite: None,
+            time_from_position: None,
             header: Header::FirstLine,
             repeated_time: RepeatedTime::Error,
         }
@@ -278,9 +416,13 @@ pub struct Imported {
     /// Data rows read from the input and used (without the dropped ones, and counting each
     /// run of repeated times merged by [`ImportSpec::repeated_time`] once).
     pub rows_in: usize,
-    /// Rows skipped for a non-finite or implausible value (with
-    /// [`ImportSpec::drop_implausible`]; else 0).
+    /// Rows skipped for an implausible value (with [`ImportSpec::drop_implausible`]) or a
+    /// non-finite one (with [`NonFinite::Drop`]).
     pub rows_dropped: usize,
+    /// Of [`Imported::rows_dropped`], those skipped for a non-finite value.
+    pub rows_non_finite: usize,
+    /// Non-finite cells interpolated from their neighbours ([`NonFinite::Bridge`]).
+    pub cells_bridged: usize,
     /// Rows merged into the row before them (or dropped) for repeating its time (with
     /// [`RepeatedTime::Mean`] or [`RepeatedTime::Drop`]; else 0).
     pub rows_repeated: usize,
@@ -306,6 +448,29 @@ pub fn import_csv(path: &Path, spec: &ImportSpec) -> Result<Capture, CaptureErro
 pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, CaptureError> {
     let fail = |kind| CaptureError::new(path, kind);
     let bad_spec = |reason: String| fail(CaptureErrorKind::BadSpec(reason));
+    let with_time;
+    let spec = match &spec.time_from_position {
+        Some(from) => {
+            if let Some(entry) = spec.map.get(TIME_S) {
+                return Err(bad_spec(format!(
+                    "time is given twice: by --map entry `{}` and by --time-from-position; give one",
+                    entry.text
+                )));
+            }
+            if spec.input_rate_hz.is_some() {
+                return Err(bad_spec(
+                    "time is given twice: by --input-rate-hz and by --time-from-position; give one".into(),
+                ));
+            }
+            // Time is read like a mapped column, so units, limits, non-finite cells and
+            // repeated values are handled as for a time column.
+            let mut extended = spec.clone();
+            extended.map.entries.push(from.time_entry());
+            with_time = extended;
+            &with_time
+        }
+        None => spec,
+    };
     let time_entry = spec.map.get(TIME_S);
     match (time_entry, spec.input_rate_hz) {
         (None, None) => {
@@ -372,10 +537,20 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     meta.validate().map_err(|kind| bad_spec(metadata_reason(kind)))?;
 
     let mut table = read_table(path, spec)?;
-    let rows_repeated = match (time_entry, spec.repeated_time) {
-        (Some(entry), RepeatedTime::Mean | RepeatedTime::Drop) => {
-            let index = spec.map.entries.iter().position(|e| e.target == entry.target);
-            index.map_or(0, |i| merge_repeated_times(&mut table, i, spec.repeated_time))
+    let time_index = spec.map.entries.iter().position(|e| e.target == TIME_S);
+    let cells_bridged = bridge_non_finite(path, spec, &mut table, time_index)?;
+    // Time from position starts at the first row; `origin` keeps the offset for messages.
+    let stroke = match (&spec.time_from_position, time_index) {
+        (Some(from), Some(i)) => {
+            let origin = table.columns[i].first().copied().unwrap_or(0.0);
+            table.columns[i].iter_mut().for_each(|t| *t -= origin);
+            Some((from.speed_mps, origin))
+        }
+        _ => None,
+    };
+    let rows_repeated = match (time_index, spec.repeated_time) {
+        (Some(i), RepeatedTime::Mean | RepeatedTime::Drop) => {
+            merge_repeated_times(&mut table, i, spec.repeated_time)
         }
         _ => 0,
     };
@@ -387,7 +562,7 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         (Some(entry), _) => {
             let index = spec.map.entries.iter().position(|e| e.target == entry.target);
             let time = index.map(|i| table.columns[i].clone()).unwrap_or_default();
-            check_increasing(path, &entry.source, &time, &table.lines)?;
+            check_increasing(path, &entry.source, &time, &table.lines, stroke)?;
             time
         }
         (None, Some(rate)) => (0..rows_in).map(|i| i as f64 / rate).collect(),
@@ -450,7 +625,9 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         (time.clone(), data, Resampling::PassThrough)
     } else {
         let grid: Vec<f64> = (0..rows_out).map(|k| t0 + k as f64 / rate_hz).collect();
-        if rate_hz < source_rate_hz * (1.0 - UNIFORM_TOLERANCE) {
+        // Only a clearly faster input is low-passed: within the tolerance, a clock's error
+        // must not decide between two different filters for the same nominal rate.
+        if source_rate_hz > rate_hz * (1.0 + RATE_TOLERANCE) {
             // The filter runs on a uniform grid at the input's own mean rate: no resolution
             // is lost, and the images of the input's samples fold back onto themselves
             // rather than into the pass band (a grid at another rate would alias them).
@@ -513,6 +690,9 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         .with("source", metadata_safe(&source_name))
         .with("map", metadata_safe(spec.map.spec()))
         .with("source_rate_hz", snap_rate(source_rate_hz));
+    if let Some(from) = &spec.time_from_position {
+        meta = meta.with("time_from", metadata_safe(&from.describe()));
+    }
     for (key, value) in &spec.metadata {
         meta = meta.with(key, value);
     }
@@ -527,6 +707,8 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         capture,
         rows_in,
         rows_dropped: table.dropped,
+        rows_non_finite: table.dropped_non_finite,
+        cells_bridged,
         rows_repeated,
         source_rate_hz,
         rate_hz,
@@ -580,13 +762,28 @@ fn check_map_against_kind(spec: &ImportSpec) -> Result<(), String> {
     Ok(())
 }
 
-fn check_increasing(file: &Path, column: &str, time: &[f64], lines: &[usize]) -> Result<(), CaptureError> {
+/// Time strictly increases; with time from position (`stroke`: the speed and the first
+/// row's position over it), an error is said in positions.
+fn check_increasing(
+    file: &Path,
+    column: &str,
+    time: &[f64],
+    lines: &[usize],
+    stroke: Option<(f64, f64)>,
+) -> Result<(), CaptureError> {
     for (i, pair) in time.windows(2).enumerate() {
         // Values are finite (checked while reading), so `<=` is the whole negation of `>`.
         if pair[1] <= pair[0] {
-            let kind = CaptureErrorKind::RowTimeNotIncreasing {
-                previous: pair[0],
-                current: pair[1],
+            let kind = match stroke {
+                Some((speed_mps, origin)) => CaptureErrorKind::PositionNotMonotonic {
+                    previous_m: (pair[0] + origin) * speed_mps,
+                    current_m: (pair[1] + origin) * speed_mps,
+                    speed_mps,
+                },
+                None => CaptureErrorKind::RowTimeNotIncreasing {
+                    previous: pair[0],
+                    current: pair[1],
+                },
             };
             return Err(CaptureError::new(file, kind)
                 .at_line(lines[i + 1])

@@ -8,16 +8,22 @@ pub(super) struct Table {
     pub(super) columns: Vec<Vec<f64>>,
     /// 1-based file line of each data row.
     pub(super) lines: Vec<usize>,
-    /// Rows skipped for a non-finite or implausible value (only with `drop_implausible`).
+    /// Rows skipped for an implausible value (with `drop_implausible`) or a non-finite one
+    /// (with [`NonFinite::Drop`]).
     pub(super) dropped: usize,
+    /// Of `dropped`, those for a non-finite value.
+    pub(super) dropped_non_finite: usize,
 }
 
 /// Reads the mapped columns of `path`, the column names coming from [`ImportSpec::header`]. A
-/// mapped value that is not finite or beyond its target's [`magnitude_limit`] after conversion
-/// is an error naming line and column, or, with [`ImportSpec::drop_implausible`], drops its
-/// row. A trailing delimiter is tolerated as the [module documentation](super) says.
+/// finite mapped value beyond its target's [`magnitude_limit`] after conversion is an error
+/// naming line and column, or, with [`ImportSpec::drop_implausible`], drops its row; a
+/// non-finite one is an error, drops its row, or is kept as NaN for [`bridge_non_finite`],
+/// as [`non_finite_mode`] says. A trailing delimiter is tolerated as the
+/// [module documentation](super) says.
 pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, CaptureError> {
     let (map, drop_implausible) = (&spec.map, spec.drop_implausible);
+    let non_finite = non_finite_mode(spec);
     let fail = |kind| CaptureError::new(path, kind);
     let bytes = std::fs::read(path).map_err(|source| fail(CaptureErrorKind::CannotRead(source)))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
@@ -109,6 +115,7 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
         columns: vec![Vec::new(); map.entries.len()],
         lines: Vec::new(),
         dropped: 0,
+        dropped_non_finite: 0,
     };
     let limits: Vec<f64> = map.entries.iter().map(|e| magnitude_limit(&e.target)).collect();
     let mut row = Vec::with_capacity(map.entries.len());
@@ -157,42 +164,60 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
             return Err(count_error(expected));
         }
         row.clear();
-        let mut implausible = false;
-        for ((entry, &i), &limit) in map.entries.iter().zip(&indices).zip(&limits) {
+        for (entry, &i) in map.entries.iter().zip(&indices) {
             let cell = &record[i];
-            let text = || String::from_utf8_lossy(cell).into_owned();
             let value: f64 = std::str::from_utf8(cell)
                 .ok()
                 .and_then(|s| s.parse().ok())
                 .ok_or_else(|| {
-                    fail(CaptureErrorKind::NotNumeric(text()))
-                        .at_line(line)
-                        .in_column(&entry.source)
+                    fail(CaptureErrorKind::NotNumeric(
+                        String::from_utf8_lossy(cell).into_owned(),
+                    ))
+                    .at_line(line)
+                    .in_column(&entry.source)
                 })?;
-            let value = entry.scale.apply(value);
             // Checked after conversion: the limit is in SI units, and a scale can overflow.
-            let plausible = value.abs() <= limit; // false for NaN
-            if drop_implausible && !plausible {
-                implausible = true;
-                break;
-            }
-            if !value.is_finite() {
-                let kind = CaptureErrorKind::NotFiniteText(text());
-                return Err(fail(kind).at_line(line).in_column(&entry.source));
-            }
-            if !plausible {
-                let kind = CaptureErrorKind::ImplausibleText {
-                    text: text().into(),
-                    value,
-                    limit,
-                    target: entry.target.as_str().into(),
-                };
-                return Err(fail(kind).at_line(line).in_column(&entry.source));
-            }
-            row.push(value);
+            row.push(entry.scale.apply(value));
         }
-        if implausible {
+        // A finite implausible value drops its row before any non-finite cell is looked at,
+        // so the row's fate does not depend on the order of the map.
+        let beyond = |(&value, &limit): (&f64, &f64)| value.is_finite() && value.abs() > limit;
+        if drop_implausible && row.iter().zip(&limits).any(beyond) {
             table.dropped += 1;
+            continue;
+        }
+        let mut drop_row = false;
+        for (((entry, &i), &limit), &value) in map.entries.iter().zip(&indices).zip(&limits).zip(&row) {
+            let text = || String::from_utf8_lossy(&record[i]).into_owned();
+            let at = |kind| fail(kind).at_line(line).in_column(&entry.source);
+            if value.is_finite() {
+                if value.abs() > limit {
+                    return Err(at(CaptureErrorKind::ImplausibleText {
+                        text: text().into(),
+                        value,
+                        limit,
+                        target: entry.target.as_str().into(),
+                    }));
+                }
+                continue;
+            }
+            match non_finite {
+                NonFinite::Error => return Err(at(CaptureErrorKind::NotFiniteText(text()))),
+                NonFinite::Drop => drop_row = true,
+                NonFinite::Bridge if entry.target == TIME_S => {
+                    return Err(at(CaptureErrorKind::CannotBridge(format!(
+                        "`{}` is the row's time, which places it; skip such rows with \
+                         --non-finite drop",
+                        text()
+                    ))));
+                }
+                // Kept as is; `bridge_non_finite` fills it once every row is read.
+                NonFinite::Bridge => {}
+            }
+        }
+        if drop_row {
+            table.dropped += 1;
+            table.dropped_non_finite += 1;
             continue;
         }
         for (column, &value) in table.columns.iter_mut().zip(&row) {
@@ -201,6 +226,84 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
         table.lines.push(line);
     }
     Ok(table)
+}
+
+/// The effective [`ImportSpec::non_finite`]: unset, `drop` with `drop_implausible` (which
+/// has always skipped non-finite rows too), else `error`.
+pub(super) fn non_finite_mode(spec: &ImportSpec) -> NonFinite {
+    spec.non_finite.unwrap_or(if spec.drop_implausible {
+        NonFinite::Drop
+    } else {
+        NonFinite::Error
+    })
+}
+
+/// Fills each run of non-finite cells left by [`NonFinite::Bridge`] by linear interpolation in time
+/// between the finite cells before and after it in the same column (by row index where the
+/// time column is absent or does not increase across the run). A run longer than
+/// [`MAX_BRIDGE_ROWS`] or touching the first or last row is an error naming its first line
+/// and the column. Returns the number of cells filled.
+pub(super) fn bridge_non_finite(
+    path: &Path,
+    spec: &ImportSpec,
+    table: &mut Table,
+    time: Option<usize>,
+) -> Result<usize, CaptureError> {
+    if non_finite_mode(spec) != NonFinite::Bridge {
+        return Ok(0);
+    }
+    let rows = table.lines.len();
+    let times: Vec<f64> = match time {
+        Some(i) => table.columns[i].clone(),
+        None => (0..rows).map(|r| r as f64).collect(),
+    };
+    let mut bridged = 0;
+    for (entry, column) in spec.map.entries.iter().zip(table.columns.iter_mut()) {
+        let mut start = 0;
+        while start < rows {
+            if column[start].is_finite() {
+                start += 1;
+                continue;
+            }
+            let end = (start..rows).find(|&r| column[r].is_finite()).unwrap_or(rows);
+            let run = end - start;
+            let fail = |reason: String| {
+                CaptureError::new(path, CaptureErrorKind::CannotBridge(reason))
+                    .at_line(table.lines[start])
+                    .in_column(&entry.source)
+            };
+            let lines = format!("line {} to {}", table.lines[start], table.lines[end - 1]);
+            if start == 0 || end == rows {
+                let side = if start == 0 { "first" } else { "last" };
+                return Err(fail(format!(
+                    "{run} non-finite value(s) ({lines}) reach the file's {side} row, so there \
+                     is no finite value on both sides to interpolate between; skip such rows \
+                     with --non-finite drop"
+                )));
+            }
+            if run > MAX_BRIDGE_ROWS {
+                return Err(fail(format!(
+                    "{run} consecutive non-finite values ({lines}), more than the \
+                     {MAX_BRIDGE_ROWS} a bridge may span; that is missing data, not a dropout \
+                     (skip such rows with --non-finite drop, or split the file)"
+                )));
+            }
+            let (before, after) = (start - 1, end);
+            let (t0, t1) = (times[before], times[after]);
+            let (v0, v1) = (column[before], column[after]);
+            for r in start..end {
+                let w = if t1 > t0 && (t0..=t1).contains(&times[r]) {
+                    (times[r] - t0) / (t1 - t0)
+                } else {
+                    (r - before) as f64 / (after - before) as f64
+                };
+                column[r] = v0 + (v1 - v0) * w;
+            }
+            bridged += run;
+            start = end;
+        }
+    }
+    Ok(bridged)
 }
 
 /// Replaces each run of consecutive rows with the same value in column `time` by one row:

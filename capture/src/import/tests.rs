@@ -701,3 +701,232 @@ fn repeated_times_merge_into_their_mean_or_keep_the_first() {
         "{e}"
     );
 }
+
+#[test]
+fn non_finite_cells_are_errors_dropped_or_bridged() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "t,x,Fz\n0,0,1\n1,1,nan\n2,2,inf\n3,3,4\n4,4,5\n";
+    let path = write(dir.path(), "in.csv", text);
+    let mut spec = rubbing(RUB_MAP);
+    spec.rate_hz = Some(1000.0);
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert_eq!((e.line, e.column.as_deref()), (Some(3), Some("Fz")), "{e}");
+    assert!(e.to_string().contains("--non-finite drop"), "{e}");
+
+    spec.non_finite = Some(NonFinite::Drop);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!(
+        (
+            imported.rows_in,
+            imported.rows_dropped,
+            imported.rows_non_finite,
+            imported.cells_bridged
+        ),
+        (3, 2, 2, 0)
+    );
+
+    spec.non_finite = Some(NonFinite::Bridge);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!(
+        (imported.rows_in, imported.rows_dropped, imported.cells_bridged),
+        (5, 0, 2)
+    );
+    // Linear in time between 1 N at 0 ms and 4 N at 3 ms.
+    let force = imported.capture.column("normal_force_n").unwrap();
+    for (got, want) in force.iter().zip([1.0, 2.0, 3.0, 4.0, 5.0]) {
+        assert!((got - want).abs() < 1e-12, "{force:?}");
+    }
+    // The bridge follows time, not row count: uneven times give uneven steps.
+    let uneven = write(dir.path(), "uneven.csv", "t,x,Fz\n0,0,0\n1,0,nan\n4,0,4\n5,0,5\n");
+    let imported = import_csv_report(&uneven, &spec).unwrap();
+    let force = imported.capture.column("normal_force_n").unwrap();
+    assert!((force[1] - 1.0).abs() < 1e-12, "{force:?}");
+}
+
+#[test]
+fn bridges_are_short_inside_the_file_and_never_in_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut spec = rubbing(RUB_MAP);
+    spec.rate_hz = Some(1000.0);
+    spec.non_finite = Some(NonFinite::Bridge);
+    let mut long = String::from("t,x,Fz\n0,0,0\n");
+    for i in 1..=(MAX_BRIDGE_ROWS + 1) {
+        long += &format!("{i},0,nan\n");
+    }
+    long += &format!("{},0,1\n", MAX_BRIDGE_ROWS + 2);
+    let cases = [
+        (
+            "long.csv",
+            long.as_str(),
+            3,
+            "Fz",
+            "11 consecutive non-finite values (line 3 to 13)",
+        ),
+        (
+            "first.csv",
+            "t,x,Fz\n0,0,nan\n1,0,1\n2,0,2\n",
+            2,
+            "Fz",
+            "file's first row",
+        ),
+        (
+            "last.csv",
+            "t,x,Fz\n0,0,0\n1,0,1\n2,0,inf\n",
+            4,
+            "Fz",
+            "file's last row",
+        ),
+        (
+            "time.csv",
+            "t,x,Fz\n0,0,0\nnan,0,1\n2,0,2\n",
+            3,
+            "t",
+            "the row's time",
+        ),
+    ];
+    for (name, text, line, column, needle) in cases {
+        let e = import_csv(&write(dir.path(), name, text), &spec).unwrap_err();
+        assert!(matches!(e.kind, CaptureErrorKind::CannotBridge(_)), "{e}");
+        assert_eq!((e.line, e.column.as_deref()), (Some(line), Some(column)), "{e}");
+        assert!(e.to_string().contains(needle), "{name}: {e}");
+    }
+    // Exactly the limit is bridged.
+    let mut edge = String::from("t,x,Fz\n0,0,0\n");
+    for i in 1..=MAX_BRIDGE_ROWS {
+        edge += &format!("{i},0,nan\n");
+    }
+    edge += &format!("{},0,11\n", MAX_BRIDGE_ROWS + 1);
+    let imported = import_csv_report(&write(dir.path(), "edge.csv", &edge), &spec).unwrap();
+    assert_eq!(imported.cells_bridged, MAX_BRIDGE_ROWS);
+}
+
+#[test]
+fn drop_implausible_and_non_finite_are_separate_choices() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "t,x,Fz\n0,0,1\n1,0,1e9\n2,0,nan\n3,0,4\n";
+    let path = write(dir.path(), "in.csv", text);
+    let mut spec = rubbing(RUB_MAP);
+    spec.rate_hz = Some(1000.0);
+    spec.drop_implausible = true;
+    // Unset, --non-finite follows --drop-implausible: both rows go.
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!((imported.rows_dropped, imported.rows_non_finite), (2, 1));
+    // Given, it decides about the NaN alone.
+    spec.non_finite = Some(NonFinite::Bridge);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!((imported.rows_dropped, imported.cells_bridged), (1, 1));
+    spec.non_finite = Some(NonFinite::Error);
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(e.kind, CaptureErrorKind::NotFiniteText(_)) && e.line == Some(4),
+        "{e}"
+    );
+    // A row with both is dropped as implausible, whatever the order of the map.
+    let both = write(dir.path(), "both.csv", "t,x,Fz\n0,0,0\n1,nan,1e9\n2,0,2\n");
+    let imported = import_csv_report(&both, &spec).unwrap();
+    assert_eq!((imported.rows_dropped, imported.rows_non_finite), (1, 0));
+    assert_eq!("bridge".parse::<NonFinite>(), Ok(NonFinite::Bridge));
+    assert!("nan".parse::<NonFinite>().is_err());
+}
+
+/// A uniform log at `rate_hz`, 200 rows of a 50 Hz sine.
+fn log_at(dir: &Path, name: &str, rate_hz: f64) -> PathBuf {
+    let mut text = String::from("t,x,Fz\n");
+    for i in 0..200 {
+        let t = i as f64 / rate_hz;
+        text += &format!("{t},0,{}\n", (2.0 * std::f64::consts::PI * 50.0 * t).sin());
+    }
+    write(dir, name, &text)
+}
+
+#[test]
+fn rates_within_the_tolerance_take_the_same_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut spec = rubbing("time_s=t,tangential_position_m=x,normal_force_n=Fz");
+    spec.rate_hz = Some(2200.0);
+    let slow = import_csv_report(&log_at(dir.path(), "slow.csv", 2199.8), &spec).unwrap();
+    let fast = import_csv_report(&log_at(dir.path(), "fast.csv", 2200.1), &spec).unwrap();
+    assert_eq!(slow.resampling, Resampling::Interpolated);
+    assert_eq!(fast.resampling, Resampling::Interpolated);
+    let (a, b) = (
+        slow.capture.column("normal_force_n").unwrap(),
+        fast.capture.column("normal_force_n").unwrap(),
+    );
+    let n = a.len().min(b.len());
+    assert!(n >= 198, "{n}");
+    let worst = a[..n]
+        .iter()
+        .zip(&b[..n])
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-2, "{worst}");
+    // Beyond the tolerance the direction decides: faster is low-passed, slower interpolated.
+    let faster = import_csv_report(&log_at(dir.path(), "faster.csv", 2230.0), &spec).unwrap();
+    assert!(
+        matches!(faster.resampling, Resampling::LowPassed { .. }),
+        "{:?}",
+        faster.resampling
+    );
+    let slower = import_csv_report(&log_at(dir.path(), "slower.csv", 2170.0), &spec).unwrap();
+    assert_eq!(slower.resampling, Resampling::Interpolated);
+}
+
+#[test]
+fn time_from_position_at_a_known_speed() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "curve.csv",
+        "depth_mm,force_N\n0,0\n0.5,0.1\n1,0.3\n1.5,0.2\n2,0.6\n",
+    );
+    let insertion = |map_text: &str| ImportSpec::new(CaptureKind::Insertion, map(map_text));
+    let mut spec = insertion("depth_m=depth_mm[mm],axial_force_n=force_N");
+    spec.time_from_position = Some(TimeFromPosition::new("depth_mm[mm]", 0.005).unwrap());
+    spec.rate_hz = Some(100.0);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    let c = &imported.capture;
+    // 2 mm at 5 mm/s is 0.4 s: 41 samples at 100 Hz, depth 0.05 mm per sample.
+    assert_eq!(c.len(), 41);
+    let depth = c.column("depth_m").unwrap();
+    assert!(
+        (depth[10] - 0.5e-3).abs() < 1e-12 && (depth[40] - 2e-3).abs() < 1e-12,
+        "{depth:?}"
+    );
+    assert_eq!(c.metadata().get("time_from"), Some("depth_mm[mm]@0.005mps"));
+    assert!((imported.source_rate_hz - 10.0).abs() < 1e-9);
+
+    // Withdrawal: the position decreases, so the speed is negative.
+    let back = write(dir.path(), "back.csv", "depth_mm,force_N\n2,0\n1,0.1\n0,0.2\n");
+    spec.time_from_position = Some(TimeFromPosition::new("depth_mm[mm]", -0.005).unwrap());
+    assert_eq!(import_csv(&back, &spec).unwrap().len(), 41);
+    // Against the stroke: an error naming the line, in positions.
+    let e = import_csv(&path, &spec).unwrap_err();
+    assert!(
+        matches!(e.kind, CaptureErrorKind::PositionNotMonotonic { .. }),
+        "{e}"
+    );
+    assert_eq!((e.line, e.column.as_deref()), (Some(3), Some("depth_mm")), "{e}");
+    assert!(
+        e.to_string().contains("position 0.0005 m does not advance"),
+        "{e}"
+    );
+
+    // The unit is required and must be a length; the speed non-zero; time given once.
+    for (column, speed, needle) in [
+        ("depth_mm", 0.005, "unit in brackets"),
+        ("depth_mm[ms]", 0.005, "not a length unit"),
+        ("depth_mm[mm]", 0.0, "finite and non-zero"),
+        ("[mm]", 0.005, "no column name"),
+    ] {
+        let e = TimeFromPosition::new(column, speed).unwrap_err();
+        assert!(e.to_string().contains(needle), "{column}: {e}");
+    }
+    let mut twice = insertion("time_s=depth_mm,depth_m=depth_mm[mm],axial_force_n=force_N");
+    twice.time_from_position = Some(TimeFromPosition::new("depth_mm[mm]", 0.005).unwrap());
+    assert!(
+        import_csv(&path, &twice)
+            .unwrap_err()
+            .to_string()
+            .contains("given twice")
+    );
+}
