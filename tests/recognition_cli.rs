@@ -279,9 +279,12 @@ fn knn_and_svm_train_and_eval_on_scratch_captures() {
         // One decision per scratch, made when it ends.
         assert_eq!(report["window_s"], report["decision_latency_s"]);
         assert!(report["window_s"].as_f64().expect("window") > 1.0, "{report}");
-        // One behaviour: each (surface, trial) is one scratch, "fused" alone.
+        // One behaviour: each (surface, trial) is one scratch, "fused" alone, which must
+        // decide exactly as the scratch alone.
         assert_eq!(report["fused"]["groups"], 12, "{report}");
         assert_eq!(report["fused"]["multi_scratch_groups"], 0, "{report}");
+        assert_eq!(report["fused"]["confusion"], report["confusion"], "{report}");
+        assert_eq!(report["fused"]["accuracy"], report["accuracy"], "{report}");
     }
 }
 
@@ -759,7 +762,16 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
     for (method, floor, worst_floor) in [("knn", 0.98, 0.95), ("svm", 0.93, 0.7)] {
         let model = dir.path().join(format!("{method}_nakano.json"));
         let model_s = model.to_string_lossy().into_owned();
-        let (summary, file) = train_model(method, &["--features", "nakano"], &model, &train_s);
+        // The SOM's 1 s training windows, set apart from the 3 s decision windows (k-NN and
+        // SVM would train on 3 s ones by default): training says so.
+        let options = ["--features", "nakano", "--train-window-s", "1"];
+        let out = succeeds(&args(&train_head(method, &options, &model_s), &train_s));
+        let (summary, file) = (text(&out), read_json(&model));
+        let warned = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(
+            warned.contains("warning: training on 1 s windows but deciding on 3 s ones"),
+            "{warned}"
+        );
         assert!(summary.contains("over nakano features"), "{summary}");
         assert_eq!(file["features"], "nakano");
         assert_eq!(file["body"]["method"], format!("{method}_windows"));
@@ -967,7 +979,10 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
     for method in ["knn", "svm", "som"] {
         let model = dir.path().join(format!("{method}_both.json"));
         let model_s = model.to_string_lossy().into_owned();
-        let (_, file) = train_model(method, &["--features", "both"], &model, &train_s);
+        // All three on the SOM's 1 s training windows (k-NN and SVM default to the decision
+        // window), so that each trains on the same 259 vectors.
+        let options = ["--features", "both", "--train-window-s", "1"];
+        let (_, file) = train_model(method, &options, &model, &train_s);
         assert_eq!(file["features"], "both");
         assert_eq!(file["body"]["method"], format!("{method}_windows"));
         let names = file["feature_names"].as_array().expect("names");
@@ -1091,6 +1106,67 @@ fn captures_without_a_window_are_named_in_train_and_eval() {
     let shown = text(&succeeds(&args(&eval, &mixed)));
     assert!(
         shown.contains("warning: capture") && shown.contains("fine-short.csv is 0.400 s long"),
+        "{shown}"
+    );
+}
+
+/// Defaults that follow the data: k-NN over windows trains on windows of its decision length
+/// (and says nothing), a map too small for its surfaces names those it can never answer, and
+/// confusion tables list surfaces in natural order (sandpaper #80 before #120).
+#[test]
+fn training_windows_map_size_and_table_order_follow_the_data() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (train, test) = nakano_runs(dir.path());
+    let (train_s, test_s) = (strings(&train), strings(&test));
+
+    let knn = dir.path().join("knn.json");
+    let knn_s = knn.to_string_lossy().into_owned();
+    let out = succeeds(&args(
+        &train_head("knn", &["--features", "nakano", "--window-s", "2"], &knn_s),
+        &train_s,
+    ));
+    assert!(!text(&out).contains("warning"), "{}", text(&out));
+    let file = read_json(&knn);
+    assert_eq!(file["body"]["windowing"]["window_samples"], 2000);
+    assert_eq!(file["body"]["windowing"]["training_window_samples"], 2000);
+
+    // Two nodes for seven surfaces: five can never be named, and training names them.
+    let som = dir.path().join("som.json");
+    let som_s = som.to_string_lossy().into_owned();
+    let out = succeeds(&args(&train_head("som", &["--som-nodes", "2"], &som_s), &train_s));
+    let file = read_json(&som);
+    assert_eq!(file["body"]["som"]["reference"].as_array().map(Vec::len), Some(2));
+    let warned = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(
+        warned.contains("warning: 5 of 7 classes own no node of the map (2 nodes)"),
+        "{warned}"
+    );
+    let labels: Vec<usize> = file["body"]["som"]["labels"]
+        .as_array()
+        .map(|l| l.iter().filter_map(Value::as_u64).map(|l| l as usize).collect())
+        .unwrap_or_default();
+    assert_eq!(labels.len(), 2, "{file}");
+    let classes = file["classes"].as_array().expect("classes");
+    for (i, class) in classes.iter().enumerate() {
+        let name = class.as_str().expect("name");
+        assert_eq!(!labels.contains(&i), warned.contains(name), "{name}: {warned}");
+    }
+    fails_with(
+        &args(&train_head("som", &["--som-nodes", "0"], &som_s), &train_s),
+        &["--som-nodes"],
+    );
+
+    // The table lists #80 before #120 though the classes sort the other way as text.
+    let shown = text(&succeeds(&args(&["recognize", "eval", &knn_s], &test_s)));
+    let row = |name: &str| {
+        shown
+            .find(&format!("  {name} "))
+            .unwrap_or_else(|| panic!("{name}: {shown}"))
+    };
+    assert!(row("sandpaper_80") < row("sandpaper_120"), "{shown}");
+    assert!(row("sandpaper_240") < row("sandpaper_400"), "{shown}");
+    assert!(
+        shown.contains(" decisions\n") && !shown.contains(" samples\n"),
         "{shown}"
     );
 }

@@ -33,9 +33,11 @@ enum RecognizeWhat {
 /// Train a recognizer on captures and write it as JSON.
 ///
 /// som: Nakano's five rubbing features (roughness and friction) over sliding windows, decided
-/// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes, σ 1.6, 10 000 presentations)
-/// trained on short windows (many, varied ones from a single run per surface) and deciding on
-/// long ones (more roughness waves per decision, at the cost of latency).
+/// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes up to 7 surfaces, two per surface
+/// beyond, see --som-nodes; σ 1.6, 10 000 presentations) trained on short windows (many, varied
+/// ones from a single run per surface) and deciding on long ones (more roughness waves per
+/// decision, at the cost of latency). Training warns when a surface owns no node of the map: the
+/// recognizer can never name it.
 /// knn: Sinapov's spectrotemporal histogram of each scratch, k-NN (k = 3) per behaviour.
 /// svm: the same histograms, a one-vs-one C-SVC per behaviour (degree-2 polynomial kernel,
 /// pairwise-coupled probabilities), C chosen per behaviour by cross-validation (see --c).
@@ -45,9 +47,10 @@ enum RecognizeWhat {
 /// captures: its reliability weight when `eval` fuses the behaviours of a trial.
 ///
 /// --features crosses methods and features (default: the method's own, as above):
-/// nakano with knn/svm: windowed exactly like the SOM (--window-s, --train-window-s, --hop-s),
-/// one classifier over all windows, each feature log-scaled where positive, centred and divided
-/// by its pooled within-surface standard deviation (the SOM's scaling, without unit length);
+/// nakano with knn/svm: windowed like the SOM (--window-s, --hop-s) but trained on windows of
+/// the decision length unless --train-window-s says otherwise, one classifier over all windows,
+/// each feature log-scaled where positive, centred and divided by its pooled within-surface
+/// standard deviation (the SOM's scaling, without unit length);
 /// k-NN k = 3, or a C-SVC (degree-2 polynomial, γ = 1/5; 1/130 for both) whose C is
 /// cross-validated with whole runs held out (metadata `trial` or `run`) when every surface has
 /// two runs, else 10.
@@ -181,7 +184,24 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     }
     print_reliabilities(&model, trained_s);
     print_window_c(&model);
+    warn_unmapped(&model);
     Ok(())
+}
+
+/// Warns on stderr about each SOM whose nodes leave classes unnamed, naming them.
+fn warn_unmapped(model: &RecognizerFile) {
+    for m in model.classes_without_nodes() {
+        let map = m
+            .behaviour
+            .map_or_else(|| "the map".to_owned(), |b| format!("the map of behaviour {b}"));
+        eprintln!(
+            "warning: {} of {} classes own no node of {map} ({} nodes) and can never be recognized: {}; more nodes (--som-nodes) may help",
+            m.classes.len(),
+            model.classes.len(),
+            m.nodes,
+            m.classes.join(", ")
+        );
+    }
 }
 
 /// The C of an SVM over windows, and how it was chosen.

@@ -3,9 +3,7 @@
 //! [`recognize::TrainSettings`].
 
 use clap::{Args, ValueEnum};
-use recognize::{
-    DECISION_WINDOW_S, FeatureSet, HOP_S, Normalization, SvmC, TRAINING_WINDOW_S, TrainSettings,
-};
+use recognize::{DECISION_WINDOW_S, FeatureSet, HOP_S, Normalization, SvmC, TrainSettings};
 
 /// A recognizer to train: its method and how (`train` and `cv`).
 #[derive(Debug, Args)]
@@ -36,13 +34,21 @@ pub(crate) struct TrainOptions {
     /// filters' 0.27 s lookahead).
     #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
     window_s: f64,
-    /// Windowed features (nakano, both): window of the training vectors, s.
-    #[arg(long, default_value_t = TRAINING_WINDOW_S, value_name = "S")]
-    train_window_s: f64,
+    /// Windowed features (nakano, both): window of the training vectors, s. Default: som
+    /// 1 s (Nakano's protocol); knn and svm the decision window (--window-s),
+    /// since they compare decision windows with training vectors of the same length. Set apart
+    /// from the decision window, training warns.
+    #[arg(long, value_name = "S")]
+    train_window_s: Option<f64>,
     /// Windowed features (nakano, both): time between decisions (and between training
     /// windows), s.
     #[arg(long, default_value_t = HOP_S, value_name = "S")]
     hop_s: f64,
+    /// som: nodes of each map. Default: over windows (nakano, both) the thesis's 12 for up to
+    /// its 7 surfaces, two per class beyond; over whole scratches (spectral) three per class, at
+    /// least 12. A node answers one class: training warns when a class owns none.
+    #[arg(long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+    som_nodes: Option<usize>,
     /// som: seed of the map's initial vectors and presentation order.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -124,12 +130,14 @@ impl From<Features> for FeatureSet {
 
 impl TrainOptions {
     /// The settings of a `method` recognizer: the features asked for, else the method's own.
+    /// Warns on stderr, once, when training and decision windows were set apart.
     pub(crate) fn settings(&self, method: Method) -> TrainSettings {
         let method = recognize::Method::from(method);
-        TrainSettings {
+        let settings = TrainSettings {
             features: self.features.map_or(method.default_features(), FeatureSet::from),
             window_s: self.window_s,
             train_window_s: self.train_window_s,
+            som_nodes: self.som_nodes,
             hop_s: self.hop_s,
             seed: self.seed,
             normalization: match self.scaling {
@@ -143,6 +151,25 @@ impl TrainOptions {
                 CArg::Fixed(c) => SvmC::Fixed(c),
             },
             ..TrainSettings::new(method)
+        };
+        if let Some(warning) = window_warning(&settings) {
+            eprintln!("{warning}");
         }
+        settings
     }
+}
+
+/// The warning for training windows set to another length than the decision windows: the
+/// vectors decided on then differ from those trained on (a roughness variance over 1 s is not
+/// one over 3 s), which can cost much accuracy. `None` when they agree, when the training
+/// window was left to its default, or when the features are not windowed.
+fn window_warning(settings: &TrainSettings) -> Option<String> {
+    let train_s = settings.train_window_s?;
+    let windowed = !matches!(settings.features, FeatureSet::Spectral);
+    (windowed && (train_s - settings.window_s).abs() > 1e-9).then(|| {
+        format!(
+            "warning: training on {train_s} s windows but deciding on {} s ones (--train-window-s, --window-s): vectors of different lengths may not compare",
+            settings.window_s
+        )
+    })
 }
