@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use capture::CaptureKind;
 use capture::import::{
-    ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, RepeatedTime, import_csv, import_csv_report,
+    ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, TimeFromPosition,
+    import_csv, import_csv_report,
 };
 use capture::sha256_hex;
 use clap::Args;
@@ -29,18 +30,27 @@ use recognize::LabelledCapture;
 /// Units: s ms us, m cm mm um, N mN kN, m/s cm/s mm/s, m/s2 mm/s2 g (9.80665 m/s2). Every
 /// required column of the kind must be mapped (time may come from --input-rate-hz instead).
 ///
-/// Resampling: an input already uniform at the output rate is copied unchanged; upsampling
-/// or jittered timestamps use linear interpolation; downsampling first removes what the new
-/// rate cannot represent with a zero-phase low-pass (4th-order Butterworth forwards and
-/// backwards, cut-off 0.4 × the output rate), so fast vibrations do not alias into slow
-/// forces. The metadata records the source file, the map and the source rate.
+/// Resampling: an input already uniform at the output rate is copied unchanged; an input
+/// whose mean rate is below 1.01 × the output rate (upsampling, or the same nominal rate
+/// with a clock error or jitter) is linearly interpolated; a faster one first has what the
+/// new rate cannot represent removed by a zero-phase low-pass (4th-order Butterworth
+/// forwards and backwards, cut-off 0.4 × the output rate), so fast vibrations do not alias
+/// into slow forces. The metadata records the source file, the map and the source rate.
+///
+/// Time from position: a curve digitized against position (force–depth) has no time;
+/// --time-from-position 'depth[mm]' --speed-mps 0.005 sets time = (depth − first depth) /
+/// speed. The unit is required; the speed's sign is the stroke direction, in which the
+/// position must strictly advance.
 ///
 /// Limits, checked before anything is allocated or written: rates from 1 Hz to 100 kHz; the
 /// output at most --max-upsample times the input's rows (default 1000), and never more than
 /// 10^7 rows when it is bigger than the input. Every mapped value, in SI units, must be
 /// within ±1e6 (±1e10 s for time): larger is a wrong unit or a logger's sentinel, and one
 /// such value would spread over every resampled row. --drop-implausible skips such rows
-/// (and non-finite ones) instead and says how many.
+/// instead and says how many. Non-finite cells (nan, inf) follow --non-finite
+/// error|drop|bridge: bridge interpolates runs of at most 10 rows in time from the finite
+/// values around them (not at the file's ends, not in time); unset, it is drop with
+/// --drop-implausible and error without.
 ///
 /// Time must strictly increase; --repeated-time mean|drop merges consecutive rows with the
 /// same time into their mean or keeps the first of them, and says how many rows went.
@@ -67,10 +77,34 @@ pub(crate) struct ImportArgs {
     /// bigger than the input is capped at 10^7 rows whatever this says.
     #[arg(long, value_name = "FACTOR", default_value_t = DEFAULT_MAX_UPSAMPLE)]
     max_upsample: f64,
-    /// Skip rows with a mapped value that is not finite or beyond ±1e6 in SI units (±1e10 s
-    /// for time) instead of failing; the number skipped is printed.
+    /// Skip rows with a finite mapped value beyond ±1e6 in SI units (±1e10 s for time)
+    /// instead of failing; the number skipped is printed.
     #[arg(long)]
     drop_implausible: bool,
+    /// Non-finite mapped cells (nan, inf): `error` (refuse the file), `drop` (skip the row)
+    /// or `bridge` (interpolate in time from the column's finite neighbours, at most 10 rows
+    /// in a row, not at the file's ends, not in time); the number dropped or bridged is
+    /// printed. Default: drop with --drop-implausible, else error.
+    #[arg(long, value_name = "MODE", value_parser = parse_non_finite)]
+    non_finite: Option<NonFinite>,
+    /// Take time from this position column at --speed-mps: `depth[mm]` (the unit in
+    /// brackets is required). time = (position − first position) / speed.
+    #[arg(
+        long,
+        value_name = "COLUMN[UNIT]",
+        requires = "speed_mps",
+        conflicts_with = "input_rate_hz"
+    )]
+    time_from_position: Option<String>,
+    /// With --time-from-position: the constant speed, m/s; negative if the position
+    /// decreases during the stroke.
+    #[arg(
+        long,
+        value_name = "M_PER_S",
+        requires = "time_from_position",
+        allow_negative_numbers = true
+    )]
+    speed_mps: Option<f64>,
     /// The file has no header row: its first line is data and its columns are named 0, 1,
     /// 2, ... so --map refers to them by index (`time_s=0[ms],normal_force_n=2`).
     #[arg(long)]
@@ -107,6 +141,10 @@ fn parse_repeated_time(s: &str) -> Result<RepeatedTime, String> {
     s.parse()
 }
 
+fn parse_non_finite(s: &str) -> Result<NonFinite, String> {
+    s.parse()
+}
+
 fn parse_meta(s: &str) -> Result<(String, String), String> {
     match s.split_once('=') {
         Some((key, value)) if !key.is_empty() => Ok((key.to_owned(), value.to_owned())),
@@ -125,6 +163,11 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
         metadata: args.meta.clone(),
         max_upsample: args.max_upsample,
         drop_implausible: args.drop_implausible,
+        non_finite: args.non_finite,
+        time_from_position: match (&args.time_from_position, args.speed_mps) {
+            (Some(column), Some(speed)) => Some(TimeFromPosition::new(column, speed)?),
+            _ => None,
+        },
         header: match (&args.columns, args.no_header) {
             (Some(names), _) => Header::Named(names.split(',').map(|n| n.trim().to_owned()).collect()),
             (None, true) => Header::Numbered,
@@ -154,10 +197,20 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
             args.out.display(),
             imported.resampling
         );
-        if imported.rows_dropped > 0 {
+        let implausible = imported.rows_dropped - imported.rows_non_finite;
+        if implausible > 0 {
+            println!("dropped {implausible} row(s) with an implausible value (--drop-implausible)");
+        }
+        if imported.rows_non_finite > 0 {
             println!(
-                "dropped {} row(s) with a non-finite or implausible value (--drop-implausible)",
-                imported.rows_dropped
+                "dropped {} row(s) with a non-finite value (--non-finite drop)",
+                imported.rows_non_finite
+            );
+        }
+        if imported.cells_bridged > 0 {
+            println!(
+                "bridged {} non-finite cell(s) by linear interpolation in time (--non-finite bridge)",
+                imported.cells_bridged
             );
         }
         if imported.rows_repeated > 0 {
