@@ -680,3 +680,191 @@ fn a_delimiter_ending_every_line_is_ignored_but_a_value_there_is_not() {
         "{t}"
     );
 }
+
+/// Sensor dropouts written as `nan`/`inf`: refused by default, skipped or bridged on request,
+/// and the import says how many.
+#[test]
+fn non_finite_cells_are_refused_dropped_or_bridged() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.csv");
+    let input = fixture("non_finite.csv");
+    let map = "time_s=t_ms[ms],tangential_position_m=x_mm[mm],normal_force_n=Fz_N,friction_force_n=Fx_N";
+
+    let o = import(&input, &out, &["--map", map, "--rate-hz", "1000"]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("non_finite.csv:6: column `Fz_N`: `nan` is not finite") && t.contains("--non-finite"),
+        "{t}"
+    );
+    assert!(!out.exists());
+
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--rate-hz", "1000", "--non-finite", "drop"],
+    )));
+    assert!(
+        t.contains("imported 9 rows") && t.contains("dropped 3 row(s) with a non-finite value"),
+        "{t}"
+    );
+
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--rate-hz", "1000", "--non-finite", "bridge"],
+    )));
+    assert!(
+        t.contains("imported 12 rows") && t.contains("bridged 3 non-finite cell(s)"),
+        "{t}"
+    );
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    // The fixture's columns are straight lines, so the bridge restores them exactly.
+    let fz = c.column("normal_force_n").unwrap();
+    let fx = c.column("friction_force_n").unwrap();
+    for i in 0..12 {
+        assert!((fz[i] - (0.30 + 0.01 * i as f64)).abs() < 1e-9, "{fz:?}");
+        assert!((fx[i] - (0.10 + 0.005 * i as f64)).abs() < 1e-9, "{fx:?}");
+    }
+
+    // --drop-implausible alone still skips non-finite rows; --non-finite overrides it.
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--rate-hz", "1000", "--drop-implausible"],
+    )));
+    assert!(t.contains("dropped 3 row(s) with a non-finite value"), "{t}");
+    let t = text(&success(import(
+        &input,
+        &out,
+        &[
+            "--map",
+            map,
+            "--rate-hz",
+            "1000",
+            "--drop-implausible",
+            "--non-finite",
+            "bridge",
+        ],
+    )));
+    assert!(t.contains("bridged 3") && !t.contains("dropped"), "{t}");
+
+    let o = import(
+        &input,
+        &out,
+        &["--map", map, "--rate-hz", "1000", "--non-finite", "zero"],
+    );
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("expected drop, bridge or error"),
+        "{}",
+        text(&o)
+    );
+}
+
+/// Two logs of the same nominal rate whose clocks err to either side of it are resampled the
+/// same way: interpolated, not one interpolated and the other low-passed.
+#[test]
+fn logs_of_the_same_nominal_rate_take_the_same_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = "time_s=t_s,tangential_position_m=x_m,normal_force_n=Fz_N";
+    let mut forces = Vec::new();
+    for name in ["rate_2199_8hz.csv", "rate_2200_1hz.csv"] {
+        let out = dir.path().join(name);
+        let t = text(&success(import(
+            &fixture(name),
+            &out,
+            &["--map", map, "--rate-hz", "2200"],
+        )));
+        assert!(
+            t.contains("at 2200 Hz") && t.contains("(linear interpolation)") && !t.contains("low-pass"),
+            "{name}: {t}"
+        );
+        let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+        forces.push(c.column("normal_force_n").unwrap().to_vec());
+    }
+    let n = forces[0].len().min(forces[1].len());
+    assert!(n >= 118, "{n}");
+    // A 100 Hz, 0.05 N sine on grids 0.014 % apart: the same samples to well within 1e-3 N.
+    let worst = forces[0][..n]
+        .iter()
+        .zip(&forces[1][..n])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    println!("2199.8 Hz vs 2200.1 Hz log at 2200 Hz: largest difference {worst:.2e} N");
+    assert!(worst < 1e-3, "{worst}");
+    let o = palpus(&["import", "--help"]);
+    assert!(text(&o).contains("1.01"), "{}", text(&o));
+}
+
+/// A force-depth curve digitized from a figure has no time: it comes from the depth at the
+/// insertion speed, and the curve is resampled like any log.
+#[test]
+fn time_is_derived_from_position_at_a_known_speed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.csv");
+    let run = |input: &Path, speed: &str| {
+        palpus(&[
+            "import",
+            input.to_str().unwrap(),
+            "--kind",
+            "insertion",
+            "--out",
+            out.to_str().unwrap(),
+            "--map",
+            "depth_m=depth_mm[mm],axial_force_n=force_N",
+            "--time-from-position",
+            "depth_mm[mm]",
+            "--speed-mps",
+            speed,
+            "--rate-hz",
+            "100",
+        ])
+    };
+    let t = text(&success(run(&fixture("force_depth_digitized.csv"), "0.005")));
+    assert!(t.contains("imported 30 rows"), "{t}");
+    let c = Capture::read_file(&out, CaptureKind::Insertion).unwrap();
+    // 11.5 mm at 5 mm/s: 2.3 s, 231 samples 0.05 mm apart.
+    assert_eq!(c.len(), 231);
+    let depth = c.column("depth_m").unwrap();
+    for (k, d) in depth.iter().enumerate() {
+        assert!((d - k as f64 * 5e-5).abs() < 1e-9, "{k}: {d}");
+    }
+    let force = c.column("axial_force_n").unwrap();
+    assert!((force[120] - 0.72).abs() < 1e-9, "{}", force[120]);
+    assert_eq!(c.metadata().get("time_from"), Some("depth_mm[mm]@0.005mps"));
+
+    // Against the stroke: the line where the depth goes back is named.
+    let back = dir.path().join("back.csv");
+    std::fs::write(&back, "depth_mm,force_N\n0,0\n1,0.1\n0.9,0.2\n2,0.3\n").unwrap();
+    let o = run(&back, "0.005");
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("back.csv:4: column `depth_mm`: position 0.0009 m does not advance"),
+        "{t}"
+    );
+    // A negative speed is a withdrawal: the same file read backwards fails at its first row.
+    let o = run(&fixture("force_depth_digitized.csv"), "-0.005");
+    assert!(text(&o).contains("force_depth_digitized.csv:4:"), "{}", text(&o));
+    // The unit is required.
+    let o = palpus(&[
+        "import",
+        "x.csv",
+        "--kind",
+        "insertion",
+        "--out",
+        out.to_str().unwrap(),
+        "--map",
+        "depth_m=depth_mm[mm],axial_force_n=force_N",
+        "--time-from-position",
+        "depth_mm",
+        "--speed-mps",
+        "0.005",
+    ]);
+    assert!(text(&o).contains("unit in brackets"), "{}", text(&o));
+    let help = text(&palpus(&["import", "--help"]));
+    for needle in ["--time-from-position", "--speed-mps", "--non-finite"] {
+        assert!(help.contains(needle), "`{needle}` missing from:\n{help}");
+    }
+}
