@@ -18,7 +18,7 @@ pub struct MapEntry {
 }
 
 /// Which input column becomes which capture column, and how to convert it: the parsed form
-/// of `--map` (see the [module documentation](self)).
+/// of `--map` (see the [module documentation](super)).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ColumnMap {
     pub(super) entries: Vec<MapEntry>,

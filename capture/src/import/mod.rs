@@ -63,7 +63,7 @@
 //! 0.005`): `time = (position − first position) / speed`. The position's unit is required,
 //! and the speed's sign is the stroke direction: the position must strictly advance in it
 //! (a row that does not is an error naming its line; equal positions are repeated times, see
-//! below). It must be finite and strictly increasing. The output is a uniform grid at the
+//! below). Time must be finite and strictly increasing. The output is a uniform grid at the
 //! target rate starting at the first input time (`t0 + k / rate`, up to the last input time).
 //! Which of the three paths below is taken depends on the measured mean rate compared with
 //! the target, with a relative tolerance [`RATE_TOLERANCE`] (1 %), so two logs of the same
@@ -380,7 +380,8 @@ impl ImportSpec {
 pub enum Resampling {
     /// The input already was the output grid; values copied.
     PassThrough,
-    /// Linear interpolation (upsampling, or removing jitter at the same rate).
+    /// Linear interpolation (upsampling, or an input rate within [`RATE_TOLERANCE`] of the
+    /// target: jitter or a clock's error at the same nominal rate).
     Interpolated,
     /// Zero-phase low-pass on a uniform intermediate grid, then sampling at the output grid.
     LowPassed {
