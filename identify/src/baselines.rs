@@ -5,8 +5,10 @@
 //!   gives "the Coulomb friction as proportional to the normal pressure and the viscous friction
 //!   as proportional to the relative velocity" and reports two parameters (0.7648 and 0.8333),
 //!   so the default fit is `F = μ·P + c·v` with no intercept; [`CoulombViscous::fit_with_intercept`]
-//!   adds a constant term for comparison. For the needle the paper calls a physical model
-//!   "unsuitable", so the needle's only baseline is the RBF network.
+//!   adds a constant term for comparison. It does not apply to a needle (no normal force).
+//! * [`CoulombViscousStiffness`]: the needle's physical baseline `F = Fc·sgn(v) + c·v + k·depth`.
+//!   The paper calls a physical model "unsuitable" for the needle and compares only with the RBF
+//!   network; this simplest one shows by how much.
 //! * [`RbfNetwork`]: a Gaussian radial-basis-function network built the way it is usually done
 //!   (the paper used MATLAB's toolbox): inputs scaled to the unit box, centres by seeded k-means
 //!   (or an even grid), one shared width from the centres' spacing, and output weights plus a bias
@@ -114,6 +116,59 @@ impl CoulombViscous {
             .zip(velocity_mps)
             .map(|(&p, &v)| self.predict(p, v))
             .collect())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Coulomb + viscous + stiffness (needle)
+// ---------------------------------------------------------------------------------------------
+
+/// The needle's physical baseline `F = Fc·sgn(v) + c·v + k·depth`, fitted by linear least
+/// squares.
+///
+/// [`CoulombViscous`] is a friction law of velocity and normal force: a needle has no normal
+/// force, and its axial force grows with depth while the shaft is in tissue. This is the
+/// simplest law that says so: a constant friction on the shaft against the motion, a viscous
+/// term, and a spring in depth (Okamura's stiffness and friction terms, linearised). It has no
+/// puncture event, which is what the ε-SVR has to beat it on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoulombViscousStiffness {
+    /// Coulomb force Fc, N: the constant part, against the motion.
+    pub coulomb_n: f64,
+    /// Viscous coefficient c, N·s/m.
+    pub viscous_nspm: f64,
+    /// Stiffness k, N/m of depth.
+    pub stiffness_npm: f64,
+}
+
+impl CoulombViscousStiffness {
+    /// Least-squares fit of `F = Fc·sgn(v) + c·v + k·depth` (no intercept: at rest at the
+    /// surface the law gives no force).
+    pub fn fit(depth_m: &[f64], velocity_mps: &[f64], force_n: &[f64]) -> Result<Self, IdentifyError> {
+        let n = force_n.len();
+        if n == 0 {
+            return Err(IdentifyError::Empty);
+        }
+        check_series(kind::DEPTH_M, depth_m, n)?;
+        check_series(kind::VELOCITY_MPS, velocity_mps, n)?;
+        check_series(kind::AXIAL_FORCE_N, force_n, n)?;
+        let a = DMatrix::from_fn(n, 3, |i, j| match j {
+            0 => sign(velocity_mps[i]),
+            1 => velocity_mps[i],
+            _ => depth_m[i],
+        });
+        let b = DVector::from_column_slice(force_n);
+        let x = least_squares(a, b, Rank::Required("Coulomb+viscous+stiffness"))?;
+        Ok(Self {
+            coulomb_n: x[0],
+            viscous_nspm: x[1],
+            stiffness_npm: x[2],
+        })
+    }
+
+    /// Axial force, N.
+    pub fn predict(&self, depth_m: f64, velocity_mps: f64) -> f64 {
+        self.coulomb_n * sign(velocity_mps) + self.viscous_nspm * velocity_mps + self.stiffness_npm * depth_m
     }
 }
 

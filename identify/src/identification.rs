@@ -25,7 +25,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::baselines::{CoulombViscous, RbfNetwork, RbfNetworkParams};
+use crate::baselines::{CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
 use crate::error::IdentifyError;
 use crate::metrics::Metrics;
 use capture::kind;
@@ -91,6 +91,9 @@ pub struct ComparedMetrics {
     pub svr: Metrics,
     /// Coulomb (∝ normal force) + viscous (∝ velocity) least squares; friction models only.
     pub coulomb_viscous: Option<Metrics>,
+    /// `F = Fc·sgn(v) + c·v + k·depth` least squares ([`CoulombViscousStiffness`]); the
+    /// needle only, whose force no friction law describes.
+    pub coulomb_viscous_stiffness: Option<Metrics>,
     /// RBF network (k-means centres, least-squares weights).
     pub rbf_network: Metrics,
 }
@@ -130,6 +133,79 @@ pub struct Report {
     pub stage1: Vec<[f64; 3]>,
     /// Hyperparameters used.
     pub hyperparameters: Vec<SvrHyper>,
+    /// Inputs of which the test capture leaves the training domain (see [`out_of_domain`]):
+    /// empty without a test capture or when it stays inside.
+    pub test_out_of_domain: Vec<OutOfDomain>,
+}
+
+/// How far past either end of a training range, as a fraction of its width, a value may lie
+/// and still count as inside it in [`out_of_domain`]. The training range is the extreme of the
+/// samples the model was fitted on (the needle's: 350 of thousands), so a held-out capture
+/// of the same protocol grazes its ends by noise alone (the committed needle test capture by
+/// 2e-6 m of depth, the hard-contact one by 0.01 N); an RBF kernel on inputs scaled to [0, 1]
+/// still reaches a few per cent past them.
+pub const DOMAIN_MARGIN: f64 = 0.05;
+
+/// How far one input of a capture leaves a model's training domain
+/// ([`ModelFile::input_range`]), over the rows the model describes ([`model_rows`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutOfDomain {
+    /// The input's column name.
+    pub input: String,
+    /// Fraction of the rows whose value lies outside `range` by more than [`DOMAIN_MARGIN`] of
+    /// its width, in (0, 1].
+    pub fraction: f64,
+    /// Smallest value of the input over those rows (all of them, inside or not).
+    pub min: f64,
+    /// Largest value of the input over those rows.
+    pub max: f64,
+    /// The training range, `[lo, hi]`.
+    pub range: [f64; 2],
+}
+
+/// The rows of `c` a model of `model_kind` describes: every row for the friction models, the rows
+/// in tissue (depth > 0) for the needle, as identification selects them.
+pub fn model_rows(model_kind: ModelKind, c: &Capture) -> Result<Vec<usize>, IdentifyError> {
+    Ok(match model_kind {
+        ModelKind::NeedlePuncture => {
+            let depth = c.column(kind::DEPTH_M)?;
+            (0..c.len()).filter(|&i| depth[i] > 0.0).collect()
+        }
+        ModelKind::HardFriction | ModelKind::SoftFriction => (0..c.len()).collect(),
+    })
+}
+
+/// The inputs of `model` that `test` takes outside the training domain (by more than
+/// [`DOMAIN_MARGIN`] of a range's width), in the model's input order; empty when every
+/// described row lies inside. An SVR extrapolates to its bias away
+/// from its support vectors, so a held-out score on such data says little about the model:
+/// whoever reports it should say so.
+pub fn out_of_domain(model: &ModelFile, test: &Capture) -> Result<Vec<OutOfDomain>, IdentifyError> {
+    let rows = model_rows(model.kind, test)?;
+    let mut out = Vec::new();
+    if rows.is_empty() {
+        return Ok(out);
+    }
+    for (q, &[lo, hi]) in model.inputs.iter().zip(&model.input_range) {
+        let column = model_column(test, &q.name)?;
+        let values = rows.iter().map(|&i| column[i]);
+        let margin = DOMAIN_MARGIN * (hi - lo);
+        let outside = values
+            .clone()
+            .filter(|&v| v < lo - margin || v > hi + margin)
+            .count();
+        if outside == 0 {
+            continue;
+        }
+        out.push(OutOfDomain {
+            input: q.name.clone(),
+            fraction: outside as f64 / rows.len() as f64,
+            min: values.clone().fold(f64::INFINITY, f64::min),
+            max: values.fold(f64::NEG_INFINITY, f64::max),
+            range: [lo, hi],
+        });
+    }
+    Ok(out)
 }
 
 /// A model and its report.
@@ -419,7 +495,7 @@ fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         hyper,
         (tr.len(), all.len(), tr.len()),
         (train_metrics, svr_metrics),
-        (Some(cv), net),
+        (Some(cv), None, net),
         &[&f],
         started,
         range(&all.normal_force_n, 1),
@@ -601,7 +677,7 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         hyper,
         (stage1.len(), all.len(), fit_rows),
         (train_metrics, svr_metrics),
-        (Some(cv), net),
+        (Some(cv), None, net),
         &all_fits,
         started,
         range(&x_range, 2),
@@ -681,6 +757,16 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
     };
     let net_pred = rbf_network(&x, 2, &y, &x_ev)?;
     let net_metrics = metrics(&t_ev, &y_ev, &net_pred)?;
+    // The physical baseline trains on the samples the SVR and the network train on.
+    let column = |xx: &[f64], k: usize| -> Vec<f64> { xx.iter().skip(k).step_by(2).copied().collect() };
+    let law = CoulombViscousStiffness::fit(&column(&x, 0), &column(&x, 1), &y).map_err(|e| {
+        IdentifyError::Baseline {
+            what: "Coulomb+viscous+stiffness",
+            source: Box::new(e),
+        }
+    })?;
+    let law_pred: Vec<f64> = x_ev.chunks_exact(2).map(|r| law.predict(r[0], r[1])).collect();
+    let law_metrics = metrics(&t_ev, &y_ev, &law_pred)?;
     let hyper = vec![SvrHyper {
         label: "svr".into(),
         c,
@@ -706,7 +792,7 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
         hyper,
         (y.len(), y_all.len(), y.len()),
         (train_metrics, svr_metrics),
-        (None, net_metrics),
+        (None, Some(law_metrics), net_metrics),
         &[&f],
         started,
         range(&x, 2),
@@ -726,7 +812,7 @@ fn finish(
     hyper: Vec<SvrHyper>,
     (n_train, n_rows, n_fit_rows): (usize, usize, usize),
     (train_metrics, svr_metrics): (Metrics, Metrics),
-    (coulomb_viscous, rbf_network): (Option<Metrics>, Metrics),
+    (coulomb_viscous, coulomb_viscous_stiffness, rbf_network): (Option<Metrics>, Option<Metrics>, Metrics),
     fits: &[&SvrFit],
     started: Instant,
     input_range: Vec<[f64; 2]>,
@@ -742,7 +828,7 @@ fn finish(
     } else {
         fits.iter().collect()
     };
-    let report = Report {
+    let mut report = Report {
         model: kind.short_name().into(),
         n_train,
         n_rows,
@@ -758,10 +844,12 @@ fn finish(
         metrics: ComparedMetrics {
             svr: svr_metrics,
             coulomb_viscous,
+            coulomb_viscous_stiffness,
             rbf_network,
         },
         stage1,
         hyperparameters: hyper.clone(),
+        test_out_of_domain: Vec::new(),
     };
     let mut training = vec![capture_ref(train.source())];
     training.retain(|r| !r.path.as_os_str().is_empty());
@@ -780,6 +868,9 @@ fn finish(
         input_range,
     };
     check_written(&report, &model, train, test)?;
+    if let Some(t) = test {
+        report.test_out_of_domain = out_of_domain(&model, t)?;
+    }
     Ok(Identified { model, report })
 }
 
@@ -809,6 +900,12 @@ fn check_written(
         "Coulomb+viscous",
         eval,
         m.coulomb_viscous,
+    ));
+    all.push((
+        report.evaluated_on.as_str(),
+        "Coulomb+viscous+stiffness",
+        eval,
+        m.coulomb_viscous_stiffness,
     ));
     for (data, model_name, capture, metrics) in all {
         let Some(metrics) = metrics else { continue };

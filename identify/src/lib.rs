@@ -16,11 +16,11 @@ mod metrics;
 mod model_file;
 mod search;
 
-pub use baselines::{CentrePlacement, CoulombViscous, RbfNetwork, RbfNetworkParams};
+pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
 pub use error::IdentifyError;
 pub use identification::{
-    ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, Identified, IdentifyOptions, MAX_SEGMENT_SAMPLES, Report,
-    identify, model_column,
+    ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, Identified, IdentifyOptions,
+    MAX_SEGMENT_SAMPLES, OutOfDomain, Report, identify, model_column, model_rows, out_of_domain,
 };
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
