@@ -4,11 +4,11 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use capture::{Capture, CaptureKind, kind};
+use capture::{Capture, CaptureKind};
 use clap::{Args, ValueEnum};
 use identify::{
-    IdentifyOptions, Metrics, ModelBody, ModelFile, ModelKind, Report, ScaledSvr, SearchGrid, SearchPoint,
-    best, identify, search,
+    IdentifyOptions, Metrics, ModelBody, ModelFile, ModelKind, OutOfDomain, Report, ScaledSvr, SearchGrid,
+    SearchPoint, best, identify, search,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use svm::write_libsvm_model;
@@ -27,9 +27,11 @@ use crate::plots::FitSet;
 /// evenly spaced rows (first and last kept, the same rows every run), and a line on stderr
 /// says how many of how many were used. Metrics use every row.
 ///
-/// The report compares the SVR with Coulomb+viscous least squares (friction models) and an
-/// RBF network by AISE, error bound max|F − F̂| and RMSE, on --test if given, else on the
-/// training capture.
+/// The report compares the SVR with Coulomb+viscous least squares (friction models;
+/// F = Fc·sgn(v) + c·v + k·depth for the needle) and an RBF network by AISE, error bound
+/// max|F − F̂| and RMSE, on --test if given, else on the training capture. A warning on stderr
+/// (and `test_out_of_domain` in --json) says which inputs of --test leave the training range
+/// (by more than 5 % of its width).
 ///
 /// --predictions and --plot show the fit against the data: every row the model describes
 /// (needle: the in-tissue rows), not only the rows it was fitted on, of the training capture
@@ -85,6 +87,10 @@ pub(crate) struct IdentifyArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
+    /// Print nothing but errors: no progress, table or warnings (--json still prints its
+    /// object, whose `test_out_of_domain` keeps the warnings).
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -121,7 +127,12 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let explored = if args.search {
         let grid = SearchGrid::default_for(kind);
-        let bar = ProgressBar::new(0).with_style(
+        let bar = if args.quiet {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new(0)
+        }
+        .with_style(
             ProgressStyle::with_template("cross-validating {bar:30} {pos}/{len} grid points {elapsed}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
@@ -142,7 +153,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     let identified =
         identify(&train, test.as_ref(), &options).with_context(|| format!("identifying a {kind} model"))?;
     let r = &identified.report;
-    if r.n_fit_rows < r.n_rows {
+    if r.n_fit_rows < r.n_rows && !args.quiet {
         let limit = match kind {
             ModelKind::NeedlePuncture if args.max_samples <= args.max_fit_samples => "--max-samples",
             _ => "--max-fit-samples",
@@ -185,13 +196,18 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
             }
         }
     }
+    if !args.quiet {
+        for o in &r.test_out_of_domain {
+            eprintln!("warning: {}", out_of_domain_line(o));
+        }
+    }
     if args.json {
         let mut report = serde_json::to_value(&identified.report)?;
         if let Some(object) = report.as_object_mut() {
             object.insert("search".into(), serde_json::to_value(&explored)?);
         }
         println!("{report}");
-    } else {
+    } else if !args.quiet {
         if !explored.is_empty() {
             print_frontier(&explored);
         }
@@ -211,12 +227,7 @@ fn fit_set(label: &'static str, capture: &Capture, model: &ModelFile) -> anyhow:
         .map(|q| column(&q.name))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let all_measured = column(&model.output.name)?;
-    let rows: Vec<usize> = if model.kind == ModelKind::NeedlePuncture {
-        let depth = capture.column(kind::DEPTH_M)?;
-        (0..capture.len()).filter(|&i| depth[i] > 0.0).collect()
-    } else {
-        (0..capture.len()).collect()
-    };
+    let rows = identify::model_rows(model.kind, capture)?;
     let inputs: Vec<Vec<f64>> = all_inputs
         .iter()
         .map(|col| rows.iter().map(|&i| col[i]).collect())
@@ -344,5 +355,46 @@ fn print_table(r: &Report, args: &IdentifyArgs) {
     if let Some(cv) = &r.metrics.coulomb_viscous {
         row("Coulomb+viscous", cv);
     }
+    if let Some(law) = &r.metrics.coulomb_viscous_stiffness {
+        row("Fc+c·v+k·depth", law);
+    }
     row("RBF network", &r.metrics.rbf_network);
+    if r.metrics.coulomb_viscous.is_none() {
+        println!(
+            "  (no Coulomb+viscous: it is a friction law of velocity and normal force and does not \
+             apply to puncture force; Fc+c·v+k·depth is F = Fc·sgn(v) + c·v + k·depth by least squares)"
+        );
+    }
+}
+
+/// "12.3 % of test samples have velocity_mps outside the training range [0.001, 0.01] (up to
+/// 0.025)".
+fn out_of_domain_line(o: &OutOfDomain) -> String {
+    let [lo, hi] = o.range;
+    let reach = match (o.min < lo, o.max > hi) {
+        (true, true) => format!("from {} to {}", sig(o.min), sig(o.max)),
+        (true, false) => format!("down to {}", sig(o.min)),
+        _ => format!("up to {}", sig(o.max)),
+    };
+    format!(
+        "{:.1} % of test samples have {} outside the training range [{}, {}] ({reach})",
+        o.fraction * 100.0,
+        o.input,
+        sig(lo),
+        sig(hi)
+    )
+}
+
+/// `x` to 3 significant digits, in the shortest form that shows them.
+fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let scale = 10f64.powi(2 - x.abs().log10().floor() as i32);
+    let rounded = (x * scale).round() / scale;
+    if rounded.is_finite() && rounded != 0.0 {
+        format!("{rounded}")
+    } else {
+        format!("{x:.2e}")
+    }
 }
