@@ -93,9 +93,20 @@ pub struct Knn {
 }
 
 /// The lazily built k-d tree of a [`Knn`]. It is derived from the training points alone, so
-/// two classifiers are equal whether or not either has built it yet.
-#[derive(Debug, Clone, Default)]
+/// two classifiers are equal whether or not either has built it yet, and printing one says
+/// only whether it is built (the tree repeats every training point).
+#[derive(Clone, Default)]
 struct SearchIndex(OnceLock<KdTree>);
+
+impl std::fmt::Debug for SearchIndex {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.get().is_some() {
+            "SearchIndex(built)"
+        } else {
+            "SearchIndex(not built)"
+        })
+    }
+}
 
 impl PartialEq for SearchIndex {
     fn eq(&self, _: &Self) -> bool {
