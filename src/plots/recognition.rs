@@ -169,6 +169,19 @@ pub fn confusion_size(classes: usize) -> (u32, u32) {
 
 /// Draws the row-normalised confusion matrix (`percent[truth][predicted]`).
 pub fn write_confusion(path: &Path, classes: &[String], percent: &[Vec<f64>]) -> Result<(), PlotError> {
+    // Rows and columns in natural order of the names (`mat2` before `mat10`), as the text table.
+    let mut order: Vec<usize> = (0..classes.len()).collect();
+    order.sort_by(|&a, &b| recognize::natural_cmp(&classes[a], &classes[b]));
+    let classes: Vec<&String> = order.iter().map(|&i| &classes[i]).collect();
+    let percent: Vec<Vec<f64>> = order
+        .iter()
+        .map(|&t| {
+            order
+                .iter()
+                .map(|&p| percent.get(t).and_then(|row| row.get(p)).copied().unwrap_or(0.0))
+                .collect()
+        })
+        .collect();
     let size = confusion_size(classes.len());
     render(path, size, |root| {
         let (cw, ch) = CM_CELL;
