@@ -231,14 +231,36 @@ pub enum RecognizeError {
     #[error("the classifier was fitted without probability estimates")]
     NoProbability,
     /// The solver did not converge within its iteration limit.
-    #[error("SMO did not converge in {iterations} iterations (classes {first}, {second})")]
+    #[error("SMO did not converge in {iterations} iterations at C = {c:e} (classes {first}, {second})")]
     NotConverged {
         /// Iterations run.
         iterations: usize,
+        /// The box constraint of the failed fit.
+        c: f64,
         /// First class of the pair.
         first: usize,
         /// Second class of the pair.
         second: usize,
+    },
+    /// [`RecognizeError::NotConverged`] with the classes by name, as a recognizer knows them.
+    #[error(
+        "SMO did not converge in {iterations} iterations at C = {c:e} (classes `{first}` and `{second}`)"
+    )]
+    PairNotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// The box constraint of the failed fit.
+        c: f64,
+        /// First class of the pair.
+        first: String,
+        /// Second class of the pair.
+        second: String,
+    },
+    /// No candidate of a C search could be fitted.
+    #[error("every candidate C failed: {}", c_failures(failures))]
+    EveryCFailed {
+        /// Each candidate and why its fit failed.
+        failures: Vec<(f64, RecognizeError)>,
     },
 
     // --- Fusing classifiers ---
@@ -480,6 +502,15 @@ pub enum RecognizeError {
     },
 }
 
+/// Each failed C and its reason, one after the other.
+fn c_failures(failures: &[(f64, RecognizeError)]) -> String {
+    failures
+        .iter()
+        .map(|(c, e)| format!("C = {c:e}: {e}"))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 /// The captures and their reasons, one after the other.
 fn windowless_list(captures: &[WindowlessCapture]) -> String {
     captures
@@ -498,6 +529,32 @@ impl RecognizeError {
     /// Wraps an SVC's error, naming the classifier's behaviour (none for one over windows).
     pub(crate) fn svc(behaviour: Option<&str>) -> impl Fn(Self) -> Self + '_ {
         Self::classifier("SVC", behaviour)
+    }
+
+    /// Puts class names on the classes that `self` (or a failure it lists) gives by index into
+    /// `classes`; anything else unchanged.
+    pub(crate) fn with_class_names(self, classes: &[String]) -> Self {
+        let name = |i: usize| classes.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
+        match self {
+            Self::NotConverged {
+                iterations,
+                c,
+                first,
+                second,
+            } => Self::PairNotConverged {
+                iterations,
+                c,
+                first: name(first),
+                second: name(second),
+            },
+            Self::EveryCFailed { failures } => Self::EveryCFailed {
+                failures: failures
+                    .into_iter()
+                    .map(|(c, e)| (c, e.with_class_names(classes)))
+                    .collect(),
+            },
+            e => e,
+        }
     }
 
     fn classifier<'a>(classifier: &'static str, behaviour: Option<&'a str>) -> impl Fn(Self) -> Self + 'a {

@@ -18,9 +18,10 @@ pub struct CvPoint {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CSearch {
     /// Folds of the cross-validation (whole groups per fold, see
-    /// [`super::knn::group_folds`]).
+    /// [`crate::knn::group_folds`]).
     pub folds: usize,
-    /// Every candidate, in the order tried.
+    /// Every candidate that could be fitted, in the order tried (ascending C); one whose fit
+    /// did not converge is left out (see [`select_c_observed`]).
     pub grid: Vec<CvPoint>,
     /// The most accurate candidate; ties go to the smaller C (the wider margin).
     pub chosen_c: f64,
@@ -64,7 +65,7 @@ impl CSearch {
 }
 
 /// Accuracy of an SVC with `params` under cross-validation by group
-/// ([`super::knn::group_folds`]): all vectors of a group (a trial) are held out together.
+/// ([`crate::knn::group_folds`]): all vectors of a group (a trial) are held out together.
 ///
 /// A training fold that lacks some classes is fitted on the classes it has, and the held-out
 /// vectors of the missing ones count as wrong (the classifier cannot name them); a fold with a
@@ -84,13 +85,13 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     };
     let mut correct = 0usize;
     for f in 0..folds {
-        correct += fold_correct(params, features, labels, &fold, f, classes)?;
+        correct += fold_correct(params, features, labels, &fold, f, classes, &|| {})?;
     }
     Ok(correct as f64 / features.len() as f64)
 }
 
 /// Picks C from `grid` by [`cross_validated_accuracy`] with `params`' other settings: the most
-/// accurate C, ties to the smaller one.
+/// accurate C, ties to the smaller one. [`select_c_observed`] without progress.
 pub fn select_c<V: AsRef<[f64]>>(
     params: SvcParams,
     grid: &[f64],
@@ -100,7 +101,38 @@ pub fn select_c<V: AsRef<[f64]>>(
     classes: usize,
     folds: usize,
 ) -> Result<CSearch, RecognizeError> {
-    let (_, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
+    select_c_observed(
+        params,
+        grid,
+        features,
+        labels,
+        groups,
+        classes,
+        folds,
+        &no_progress,
+    )
+}
+
+/// [`select_c`], reporting to `progress` one [`FitEvent::Step`] whose units are the binary
+/// machines of every candidate's every fold.
+///
+/// A candidate whose fit does not converge (or fails numerically) in some fold is left out of
+/// the search with a [`FitEvent::SkippedC`]: one C at which SMO cannot finish says nothing
+/// about the others. Only when every candidate fails is it an error
+/// ([`RecognizeError::EveryCFailed`], listing them); the result lists the candidates that
+/// could be cross-validated.
+#[allow(clippy::too_many_arguments)]
+pub fn select_c_observed<V: AsRef<[f64]>>(
+    params: SvcParams,
+    grid: &[f64],
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+    progress: Progress<'_>,
+) -> Result<CSearch, RecognizeError> {
+    let (fold, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
     let mut order: Vec<f64> = grid.to_vec();
     order.sort_by(f64::total_cmp);
     order.dedup();
@@ -112,21 +144,79 @@ pub fn select_c<V: AsRef<[f64]>>(
             reason: "an empty grid of C values",
         });
     }
+    let machines: usize = (0..used)
+        .map(|f| {
+            let mut present: Vec<usize> = labels
+                .iter()
+                .zip(&fold)
+                .filter(|&(_, &g)| g != f)
+                .map(|(&y, _)| y)
+                .collect();
+            present.sort_unstable();
+            present.dedup();
+            present.len() * present.len().saturating_sub(1) / 2
+        })
+        .sum();
+    progress(FitEvent::Step {
+        what: "searching C (machines × folds × candidates)",
+        total: machines * order.len(),
+    });
+    let tick = || progress(FitEvent::Advance);
+    let params = SvcParams {
+        probability: false,
+        ..params
+    };
     let mut points = Vec::with_capacity(order.len());
+    let mut failures = Vec::new();
     for &c in &order {
-        let accuracy = cross_validated_accuracy(
-            SvcParams { c, ..params },
-            features,
-            labels,
-            groups,
-            classes,
-            folds,
-        )?;
-        points.push(CvPoint { c, accuracy });
+        let mut correct = 0usize;
+        let mut failed = None;
+        for f in 0..used {
+            match fold_correct(
+                SvcParams { c, ..params },
+                features,
+                labels,
+                &fold,
+                f,
+                classes,
+                &tick,
+            ) {
+                Ok(n) => correct += n,
+                Err(RecognizeError::NotConverged {
+                    iterations,
+                    c: _,
+                    first,
+                    second,
+                }) => {
+                    failed = Some((iterations, first, second));
+                    break;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        match failed {
+            None => points.push(CvPoint {
+                c,
+                accuracy: correct as f64 / features.len() as f64,
+            }),
+            Some((iterations, first, second)) => {
+                let error = || RecognizeError::NotConverged {
+                    iterations,
+                    c,
+                    first,
+                    second,
+                };
+                progress(FitEvent::SkippedC { c, error: error() });
+                failures.push((c, error()));
+            }
+        }
     }
     // Ascending C, so a strict improvement is needed to move to a larger one.
+    let Some(&first) = points.first() else {
+        return Err(RecognizeError::EveryCFailed { failures });
+    };
     let best = points.iter().fold(
-        points[0],
+        first,
         |best, p| if p.accuracy > best.accuracy { *p } else { best },
     );
     Ok(CSearch {
@@ -160,7 +250,8 @@ pub(super) fn cv_folds(
     })
 }
 
-/// Held-out vectors of fold `f` classified correctly by an SVC fitted on the other folds.
+/// Held-out vectors of fold `f` classified correctly by an SVC fitted on the other folds;
+/// `tick` after each of its binary machines.
 pub(super) fn fold_correct<V: AsRef<[f64]>>(
     params: SvcParams,
     features: &[V],
@@ -168,6 +259,7 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     fold: &[usize],
     f: usize,
     classes: usize,
+    tick: &dyn Fn(),
 ) -> Result<usize, RecognizeError> {
     let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
         .iter()
@@ -201,7 +293,23 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
         .iter()
         .map(|y| present.binary_search(y).unwrap_or(0))
         .collect();
-    let svc = Svc::fit(params, &train_x, &compact, present.len())?;
+    // The fit sees the fold's classes as 0..m; its errors name the caller's classes.
+    let global = |i: usize| present.get(i).copied().unwrap_or(i);
+    let svc = Svc::fit_pairs(params, &train_x, &compact, present.len(), tick).map_err(|e| match e {
+        RecognizeError::NotConverged {
+            iterations,
+            c,
+            first,
+            second,
+        } => RecognizeError::NotConverged {
+            iterations,
+            c,
+            first: global(first),
+            second: global(second),
+        },
+        RecognizeError::EmptyClass { class } => RecognizeError::EmptyClass { class: global(class) },
+        e => e,
+    })?;
     let mut correct = 0;
     for (x, y) in held_out {
         correct += usize::from(present[svc.predict(x)?] == y);

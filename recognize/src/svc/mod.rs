@@ -29,7 +29,7 @@ use svm::{GramRows, Kernel, SelectionCurvature, SmoSettings, SmoSolution};
 mod c_search;
 mod probability;
 
-pub use c_search::{C_GRID, CSearch, CvPoint, cross_validated_accuracy, select_c};
+pub use c_search::{C_GRID, CSearch, CvPoint, cross_validated_accuracy, select_c, select_c_observed};
 pub use probability::{pairwise_coupling, sigmoid_predict, sigmoid_train};
 
 /// Hyperparameters, checked when fitting.
@@ -47,7 +47,46 @@ pub struct SvcParams {
     pub probability: bool,
     /// Seed of the probability cross-validation's folds.
     pub seed: u64,
+    /// Most SMO iterations per binary machine; 0 for the solver's own budget (at least 10⁷).
+    /// Recognizer files written before it existed read as 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub max_iterations: usize,
 }
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// What a fit or a C search reports while it runs: the library prints nothing itself, so a
+/// caller that wants a progress bar or warnings passes a [`Progress`] that shows them.
+#[derive(Debug)]
+pub enum FitEvent {
+    /// A step of `total` units began (units of different steps are alike in cost only roughly).
+    Step {
+        /// What the step does.
+        what: &'static str,
+        /// Its units.
+        total: usize,
+    },
+    /// One more unit of a step done.
+    Advance,
+    /// A candidate of a C search could not be fitted (the solver did not converge, or failed
+    /// numerically) and was left out; the search goes on with the others.
+    SkippedC {
+        /// The candidate.
+        c: f64,
+        /// Why its fit failed.
+        error: RecognizeError,
+    },
+    /// A line for the user, e.g. a [`FitEvent::SkippedC`] put in the caller's terms.
+    Warning(String),
+}
+
+/// Receives [`FitEvent`]s, possibly from several threads at once.
+pub type Progress<'a> = &'a (dyn Fn(FitEvent) + Sync);
+
+/// A [`Progress`] that drops every event.
+pub fn no_progress(_: FitEvent) {}
 
 impl Default for SvcParams {
     /// C = 10⁴, `(a·b / 125 + 1)²` (degree 2, γ = 1/125 for Sinapov's 125-cell histograms),
@@ -70,6 +109,7 @@ impl Default for SvcParams {
             scaling: FeatureScaling::MinMax,
             probability: true,
             seed: 0,
+            max_iterations: 0,
         }
     }
 }
@@ -83,6 +123,7 @@ impl SvcParams {
             .c(self.c)
             .stop(self.tolerance)
             .selection(SelectionCurvature::NonPositiveToTau)
+            .max_iterations(self.max_iterations)
             .build()
             .map_err(|e| match e {
                 svm::SvmError::InvalidHyperparameter { name, value, reason } => RecognizeError::Parameter {
@@ -166,6 +207,43 @@ impl Svc {
         labels: &[usize],
         classes: usize,
     ) -> Result<Self, RecognizeError> {
+        Self::fit_pairs(params, features, labels, classes, &|| {})
+    }
+
+    /// [`Svc::fit`], reporting to `progress` one [`FitEvent::Step`] whose units are the binary
+    /// machines and, with probabilities, each machine's sigmoid folds.
+    pub fn fit_observed<V: AsRef<[f64]>>(
+        params: SvcParams,
+        features: &[V],
+        labels: &[usize],
+        classes: usize,
+        progress: Progress<'_>,
+    ) -> Result<Self, RecognizeError> {
+        let pairs = classes * classes.saturating_sub(1) / 2;
+        let per_pair = if params.probability {
+            1 + PROBABILITY_FOLDS
+        } else {
+            1
+        };
+        progress(FitEvent::Step {
+            what: if params.probability {
+                "fitting machines and sigmoids"
+            } else {
+                "fitting machines"
+            },
+            total: pairs * per_pair,
+        });
+        Self::fit_pairs(params, features, labels, classes, &|| progress(FitEvent::Advance))
+    }
+
+    /// [`Svc::fit`], calling `tick` after each binary machine and each sigmoid fold.
+    pub(super) fn fit_pairs<V: AsRef<[f64]>>(
+        params: SvcParams,
+        features: &[V],
+        labels: &[usize],
+        classes: usize,
+        tick: &dyn Fn(),
+    ) -> Result<Self, RecognizeError> {
         let settings = params.smo_settings()?;
         if features.is_empty() || features.len() != labels.len() {
             return Err(RecognizeError::Counts {
@@ -209,11 +287,13 @@ impl Svc {
                 let all: Vec<usize> = (0..members.len()).collect();
                 let not_converged = || RecognizeError::NotConverged {
                     iterations: settings.iteration_budget(members.len()),
+                    c: params.c,
                     first: i,
                     second: j,
                 };
                 let SmoSolution { alpha, rho, .. } =
                     solve(&gram(&all), &y, &settings).ok_or_else(not_converged)?;
+                tick();
                 let support = members
                     .iter()
                     .zip(alpha.iter().zip(&y))
@@ -221,8 +301,9 @@ impl Svc {
                     .map(|(&t, (a, yt))| (t, a * yt))
                     .collect();
                 let sigmoid = if params.probability {
-                    let dec = cross_validated_decisions(&members, &y, &params, &settings, &row, &mut rng)
-                        .ok_or_else(not_converged)?;
+                    let dec =
+                        cross_validated_decisions(&members, &y, &params, &settings, &row, &mut rng, tick)
+                            .ok_or_else(not_converged)?;
                     Some(sigmoid_train(&dec, &y))
                 } else {
                     None
@@ -378,6 +459,7 @@ fn cross_validated_decisions<'a>(
     settings: &SmoSettings,
     row: &impl Fn(usize) -> &'a [f64],
     rng: &mut SplitMix64,
+    tick: &dyn Fn(),
 ) -> Option<Vec<f64>> {
     let n = members.len();
     // A Fisher–Yates shuffle, then folds of consecutive positions (libsvm's layout).
@@ -404,6 +486,7 @@ fn cross_validated_decisions<'a>(
                 0.0
             };
             test.iter().for_each(|&t| dec[t] = v);
+            tick();
             continue;
         }
         let m = train.len();
@@ -427,6 +510,7 @@ fn cross_validated_decisions<'a>(
                 .sum::<f64>()
                 - rho;
         }
+        tick();
     }
     Some(dec)
 }
@@ -474,6 +558,7 @@ mod tests {
             scaling: FeatureScaling::None,
             probability: false,
             seed: 0,
+            max_iterations: 0,
         };
         let svc = Svc::fit(params, &f.x_train, &f.y_train, f.classes).expect("fit");
         let mut worst: f64 = 0.0;
@@ -660,6 +745,87 @@ mod tests {
         let a = cross_validated_accuracy(SvcParams { c: 1.0, ..params }, &x, &lonely, &groups, 4, 4)
             .expect("folds without class 3 still fit");
         assert!(a < brute[2], "{a} vs {}", brute[2]);
+    }
+
+    #[test]
+    fn a_candidate_that_does_not_converge_is_skipped_with_a_warning() {
+        let (x, y, groups) = overlapping_blobs(4, 6);
+        // On these overlapping classes 200 SMO iterations finish C = 10⁻² and 1 (about 50
+        // needed) but not C ≥ 100 (over 500 needed): the large C stands for one whose fit
+        // would run out the solver's budget.
+        let params = SvcParams {
+            kernel: Kernel::Polynomial {
+                gamma: 1.0,
+                coef0: 1.0,
+                degree: 2,
+            },
+            scaling: FeatureScaling::None,
+            max_iterations: 200,
+            ..SvcParams::default()
+        };
+        let events = std::sync::Mutex::new(Vec::new());
+        let record = |e: FitEvent| events.lock().expect("events").push(e);
+        let search = select_c_observed(params, &[1e4, 1e-2, 1.0], &x, &y, &groups, 3, 4, &record)
+            .expect("the converging candidates are searched");
+        assert_eq!(search.grid.iter().map(|p| p.c).collect::<Vec<_>>(), [1e-2, 1.0]);
+        assert_eq!(search.chosen_c, 1.0, "{search:?}");
+        let events = events.into_inner().expect("events");
+        let skipped: Vec<String> = events
+            .iter()
+            .filter_map(|e| match e {
+                FitEvent::SkippedC { c, error } => Some(format!("{c:e}: {error}")),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(skipped.len(), 1, "{events:?}");
+        assert!(
+            skipped[0].starts_with("1e4: SMO did not converge in 200 iterations at C = 1e4 (classes "),
+            "{skipped:?}"
+        );
+        // One step whose units are the machines of every candidate and fold (3 pairs × 4
+        // folds × 3 candidates); the skipped candidate stops at its first failure.
+        assert!(
+            matches!(events[0], FitEvent::Step { total: 36, .. }),
+            "{events:?}"
+        );
+        let advanced = events.iter().filter(|e| matches!(e, FitEvent::Advance)).count();
+        assert!((24..36).contains(&advanced), "{advanced}");
+
+        // Every candidate failing is an error that lists each.
+        match select_c(params, &[1e2, 1e4], &x, &y, &groups, 3, 4) {
+            Err(e @ RecognizeError::EveryCFailed { .. }) => {
+                let text = e.to_string();
+                assert!(
+                    text.starts_with("every candidate C failed: C = 1e2: SMO did not converge")
+                        && text.contains("; C = 1e4: SMO did not converge in 200 iterations at C = 1e4"),
+                    "{text}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_fold_without_a_class_names_the_callers_classes() {
+        let (x, y, _) = overlapping_blobs(2, 6);
+        // Fold 0 holds every vector of class 0, so the fold's fit sees classes 1 and 2 as its
+        // own 0 and 1; 5 iterations are too few for any pair.
+        let fold: Vec<usize> = y.iter().map(|&l| usize::from(l != 0)).collect();
+        let params = SvcParams {
+            scaling: FeatureScaling::None,
+            probability: false,
+            max_iterations: 5,
+            ..SvcParams::default()
+        };
+        assert!(matches!(
+            c_search::fold_correct(params, &x, &y, &fold, 0, 3, &|| {}),
+            Err(RecognizeError::NotConverged {
+                iterations: 5,
+                first: 1,
+                second: 2,
+                ..
+            })
+        ));
     }
 
     #[test]

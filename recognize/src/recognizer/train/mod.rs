@@ -27,9 +27,9 @@ use crate::features::{
 };
 use crate::knn::PAPER_K;
 use crate::som::Normalization;
-use crate::svc::CSearch;
 #[cfg(doc)]
 use crate::svc::SvcParams;
+use crate::svc::{CSearch, Progress, no_progress};
 
 /// Which classifier a recognizer trains.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -159,6 +159,18 @@ pub trait Trainer: Sync {
         captures: &[LabelledCapture],
         settings: &TrainSettings,
     ) -> Result<RecognizerFile, RecognizeError>;
+
+    /// [`Trainer::train`], telling `progress` how far its long steps are and what it skipped;
+    /// a trainer without long steps reports nothing.
+    fn train_observed(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+        progress: Progress<'_>,
+    ) -> Result<RecognizerFile, RecognizeError> {
+        let _ = progress;
+        self.train(captures, settings)
+    }
 }
 
 /// Trains the recognizer `settings` describe on `captures`: checks that the captures carry the
@@ -167,8 +179,20 @@ pub fn train(
     captures: &[LabelledCapture],
     settings: &TrainSettings,
 ) -> Result<RecognizerFile, RecognizeError> {
-    settings.features.check_columns(captures)?;
-    settings.method.trainer().train(captures, settings)
+    settings.train_observed(captures, &no_progress)
+}
+
+impl TrainSettings {
+    /// [`train`], with `progress` told of the trainer's steps and warnings (an SVM's C search
+    /// and machines; see [`Trainer::train_observed`]): the library prints nothing itself.
+    pub fn train_observed(
+        &self,
+        captures: &[LabelledCapture],
+        progress: Progress<'_>,
+    ) -> Result<RecognizerFile, RecognizeError> {
+        self.features.check_columns(captures)?;
+        self.method.trainer().train_observed(captures, self, progress)
+    }
 }
 
 /// Most folds of the cross-validations run on the training captures of a k-NN or SVM

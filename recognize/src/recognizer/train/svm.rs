@@ -17,7 +17,7 @@ use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
 use crate::recognizer::{BehaviourSvc, LabelledCapture, RecognizerBody, RecognizerFile};
-use crate::svc::{CSearch, Svc, SvcParams, select_c};
+use crate::svc::{CSearch, FitEvent, Progress, Svc, SvcParams, no_progress, select_c_observed};
 use svm::Kernel;
 
 /// Trains SVM recognizers with `settings.c`: one SVC per behaviour over whole-scratch
@@ -36,19 +36,71 @@ impl Trainer for SvmTrainer {
         captures: &[LabelledCapture],
         settings: &TrainSettings,
     ) -> Result<RecognizerFile, RecognizeError> {
+        self.train_observed(captures, settings, &no_progress)
+    }
+
+    fn train_observed(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+        progress: Progress<'_>,
+    ) -> Result<RecognizerFile, RecognizeError> {
         match settings.features {
-            FeatureSet::Spectral => {
-                RecognizerFile::train_svm(captures, SvcParams::default(), &settings.c, settings.cell_scale)
-            }
-            windowed => RecognizerFile::train_svm_windows(
+            FeatureSet::Spectral => RecognizerFile::train_svm_observed(
+                captures,
+                SvcParams::default(),
+                &settings.c,
+                settings.cell_scale,
+                progress,
+            ),
+            windowed => RecognizerFile::train_svm_windows_observed(
                 captures,
                 settings.windowing(captures)?,
                 windowed,
                 &settings.c,
                 settings.cell_scale,
+                progress,
             ),
         }
     }
+}
+
+/// What an SVM recognizer calls the classifier that `name` (a behaviour, or none) trains, for
+/// errors and warnings: the behaviour, or `(no behaviour)` for captures without one.
+fn behaviour_label(name: Option<&str>) -> &str {
+    name.unwrap_or("(no behaviour)")
+}
+
+/// What an SVM over windows of `features` is called in errors and warnings.
+fn windows_label(features: FeatureSet) -> String {
+    format!("{features} windows")
+}
+
+/// `progress`, with each [`FitEvent::SkippedC`] of the classifier `label` turned into a
+/// one-line [`FitEvent::Warning`] that names the classes and the classifier.
+fn naming_progress<'a>(
+    progress: Progress<'a>,
+    classes: &'a [String],
+    label: &'a str,
+) -> impl Fn(FitEvent) + Sync + 'a {
+    move |event| match event {
+        FitEvent::SkippedC { c, error } => progress(FitEvent::Warning(skipped_c_warning(
+            c,
+            error.with_class_names(classes),
+            label,
+        ))),
+        other => progress(other),
+    }
+}
+
+/// The warning for a candidate C left out of the search of classifier `label`.
+fn skipped_c_warning(c: f64, error: RecognizeError, label: &str) -> String {
+    format!("C = {c:e} skipped for the SVC of behaviour `{label}`: {error}; searching the other candidates")
+}
+
+/// Wraps an SVC's error with the classifier's name (`label`) and the classes' names.
+fn svc_error<'a>(label: &'a str, classes: &'a [String]) -> impl Fn(RecognizeError) -> RecognizeError + 'a {
+    move |e| RecognizeError::svc(Some(label))(e.with_class_names(classes))
 }
 
 /// The SVC of a k-NN/SVM over windows: degree-2 polynomial `(γ a·b + 1)²` with γ = 1/dim (1/5
@@ -91,17 +143,40 @@ impl RecognizerFile {
         c: &SvmC,
         cell_scale: CellScale,
     ) -> Result<Self, RecognizeError> {
+        Self::train_svm_observed(captures, params, c, cell_scale, &no_progress)
+    }
+
+    /// [`RecognizerFile::train_svm`], telling `progress` of each behaviour's C search and
+    /// machines, and warning of each candidate C left out (see [`select_c_observed`]).
+    pub fn train_svm_observed(
+        captures: &[LabelledCapture],
+        params: SvcParams,
+        c: &SvmC,
+        cell_scale: CellScale,
+        progress: Progress<'_>,
+    ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
         let fit_one =
             |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSvc, RecognizeError> {
-                let svc_error = RecognizeError::svc(*name);
+                let label = behaviour_label(*name);
+                let svc_error = svc_error(label, &classes);
+                let progress = naming_progress(progress, &classes, label);
                 let chosen = c
                     .choose(SvmC::FALLBACK, |grid| {
-                        Some(select_c(params, grid, x, y, groups, classes.len(), CV_FOLDS))
+                        Some(select_c_observed(
+                            params,
+                            grid,
+                            x,
+                            y,
+                            groups,
+                            classes.len(),
+                            CV_FOLDS,
+                            &progress,
+                        ))
                     })
                     .map_err(&svc_error)?;
-                let svc = Svc::fit(
+                let svc = Svc::fit_observed(
                     SvcParams {
                         c: chosen.c,
                         ..params
@@ -109,6 +184,7 @@ impl RecognizerFile {
                     x,
                     y,
                     classes.len(),
+                    &progress,
                 )
                 .map_err(&svc_error)?;
                 Ok(BehaviourSvc {
@@ -142,6 +218,19 @@ impl RecognizerFile {
         c: &SvmC,
         cell_scale: CellScale,
     ) -> Result<Self, RecognizeError> {
+        Self::train_svm_windows_observed(captures, windowing, features, c, cell_scale, &no_progress)
+    }
+
+    /// [`RecognizerFile::train_svm_windows`], telling `progress` of the C search and the
+    /// machines, and warning of each candidate C left out (see [`select_c_observed`]).
+    pub fn train_svm_windows_observed(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        c: &SvmC,
+        cell_scale: CellScale,
+        progress: Progress<'_>,
+    ) -> Result<Self, RecognizeError> {
         let ScaledWindows {
             classes,
             scaling,
@@ -150,14 +239,19 @@ impl RecognizerFile {
             groups,
         } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
         let params = window_svc_params(features.dim());
-        let svc_error = RecognizeError::svc(None);
+        let label = windows_label(features);
+        // The recognizer takes `classes`; errors and warnings borrow their names meanwhile.
+        let names = classes.clone();
+        let svc_error = svc_error(&label, &names);
+        let progress = naming_progress(progress, &names, &label);
         let chosen = c
             .choose(WINDOW_SVM_FALLBACK_C, |grid| {
-                every_class_in_two_groups(&y, &groups)
-                    .then(|| select_c(params, grid, &x, &y, &groups, classes.len(), CV_FOLDS))
+                every_class_in_two_groups(&y, &groups).then(|| {
+                    select_c_observed(params, grid, &x, &y, &groups, classes.len(), CV_FOLDS, &progress)
+                })
             })
             .map_err(&svc_error)?;
-        let svc = Svc::fit(
+        let svc = Svc::fit_observed(
             SvcParams {
                 c: chosen.c,
                 ..params
@@ -165,6 +259,7 @@ impl RecognizerFile {
             &x,
             &y,
             classes.len(),
+            &progress,
         )
         .map_err(&svc_error)?;
         Ok(Self::assemble(
@@ -181,5 +276,88 @@ impl RecognizerFile {
             captures,
             x.len(),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::error::Error;
+
+    /// An error and its sources, outer to inner, as the command line prints them.
+    fn chain(e: &dyn Error) -> String {
+        let mut text = e.to_string();
+        let mut source = e.source();
+        while let Some(s) = source {
+            text.push_str(": ");
+            text.push_str(&s.to_string());
+            source = s.source();
+        }
+        text
+    }
+
+    #[test]
+    fn errors_and_warnings_name_the_classes_and_the_behaviour() {
+        let classes: Vec<String> = ["felt", "sandpaper_80", "styrol_rough"]
+            .map(String::from)
+            .to_vec();
+        let failed = |c| RecognizeError::NotConverged {
+            iterations: 10_000_000,
+            c,
+            first: 1,
+            second: 2,
+        };
+        let e = svc_error("lateral scratch", &classes)(failed(1e5));
+        assert_eq!(
+            chain(&e),
+            "SVC of behaviour `lateral scratch`: SMO did not converge in 10000000 iterations at C = 1e5 \
+             (classes `sandpaper_80` and `styrol_rough`)"
+        );
+        // Every candidate failed: each listed, by class name.
+        let label = windows_label(FeatureSet::Nakano);
+        let e = svc_error(&label, &classes)(RecognizeError::EveryCFailed {
+            failures: vec![(1e4, failed(1e4)), (1e5, failed(1e5))],
+        });
+        let text = chain(&e);
+        assert!(
+            text.starts_with("SVC of behaviour `nakano windows`: every candidate C failed: C = 1e4: ")
+                && text.contains("C = 1e5: SMO did not converge")
+                && !text.contains("classes 1, 2")
+                && text.matches("`sandpaper_80` and `styrol_rough`").count() == 2,
+            "{text}"
+        );
+        // Captures without a behaviour still name their classifier.
+        assert_eq!(behaviour_label(None), "(no behaviour)");
+        let e = svc_error(behaviour_label(None), &classes)(failed(1.0));
+        assert!(
+            chain(&e).starts_with("SVC of behaviour `(no behaviour)`: "),
+            "{}",
+            chain(&e)
+        );
+
+        // A skipped candidate reaches the caller as one warning line in the recognizer's terms.
+        let lines = std::sync::Mutex::new(Vec::new());
+        let sink = |e: FitEvent| {
+            if let FitEvent::Warning(line) = e {
+                lines.lock().expect("lines").push(line);
+            }
+        };
+        {
+            let progress = naming_progress(&sink, &classes, "poke");
+            progress(FitEvent::SkippedC {
+                c: 1e5,
+                error: failed(1e5),
+            });
+            progress(FitEvent::Advance);
+        }
+        let lines = lines.into_inner().expect("lines");
+        assert_eq!(
+            lines,
+            [
+                "C = 1e5 skipped for the SVC of behaviour `poke`: SMO did not converge in 10000000 \
+                 iterations at C = 1e5 (classes `sandpaper_80` and `styrol_rough`); searching the other \
+                 candidates"
+            ]
+        );
     }
 }
