@@ -161,7 +161,7 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
     let captures = args.input.read(&args.captures, None)?;
     let start = std::time::Instant::now();
-    let model = recognize::train(&captures, &args.training.settings())?;
+    let model = args.training.train_with_progress(&captures)?;
     let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)

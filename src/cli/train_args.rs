@@ -3,7 +3,11 @@
 //! [`recognize::TrainSettings`].
 
 use clap::{Args, ValueEnum};
-use recognize::{DECISION_WINDOW_S, FeatureSet, HOP_S, Normalization, SvmC, TrainSettings};
+use indicatif::{ProgressBar, ProgressStyle};
+use recognize::svc::FitEvent;
+use recognize::{
+    DECISION_WINDOW_S, FeatureSet, HOP_S, LabelledCapture, Normalization, RecognizerFile, SvmC, TrainSettings,
+};
 
 /// A recognizer to train: its method and how (`train` and `cv`).
 #[derive(Debug, Args)]
@@ -19,6 +23,31 @@ impl Training {
     /// The library's settings for it.
     pub(crate) fn settings(&self) -> TrainSettings {
         self.options.settings(self.method)
+    }
+
+    /// Trains on `captures` with a progress bar on stderr over the trainer's long steps (an
+    /// SVM's C search, machines and probability sigmoids; shown only on a terminal) and its
+    /// warnings (a candidate C left out) printed above the bar as they happen.
+    pub(crate) fn train_with_progress(&self, captures: &[LabelledCapture]) -> anyhow::Result<RecognizerFile> {
+        let bar = ProgressBar::new(0).with_style(
+            ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} {elapsed} (eta {eta})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        let progress = |event: FitEvent| match event {
+            // Steps of behaviours trained in parallel share the bar: their units add up.
+            FitEvent::Step { what, total } => {
+                bar.inc_length(total as u64);
+                bar.set_message(what);
+            }
+            FitEvent::Advance => bar.inc(1),
+            FitEvent::SkippedC { c, error } => {
+                bar.suspend(|| eprintln!("warning: C = {c:e} skipped: {error}"));
+            }
+            FitEvent::Warning(line) => bar.suspend(|| eprintln!("warning: {line}")),
+        };
+        let trained = self.settings().train_observed(captures, &progress);
+        bar.finish_and_clear();
+        Ok(trained?)
     }
 }
 
