@@ -236,30 +236,41 @@ impl Knn {
     /// Class probabilities: the fraction of the `k` neighbours with each label (the paper's and
     /// WEKA's, unweighted by distance).
     pub fn predict_proba(&self, query: &[f64]) -> Result<Vec<f64>, RecognizeError> {
+        Ok(self.votes(&self.neighbours(query)?).1)
+    }
+
+    /// [`Knn::predict`] and [`Knn::predict_proba`] from one neighbour search.
+    pub fn predict_with_proba(&self, query: &[f64]) -> Result<(usize, Vec<f64>), RecognizeError> {
+        Ok(self.votes(&self.neighbours(query)?))
+    }
+
+    /// The label and the class probabilities the `neighbours` of a query vote for.
+    fn votes(&self, neighbours: &[usize]) -> (usize, Vec<f64>) {
+        let mut votes = vec![0usize; self.classes];
+        for &i in neighbours {
+            votes[self.labels[i]] += 1;
+        }
+        let best = votes.iter().copied().max().unwrap_or(0);
+        // `neighbours` is non-empty (k ≥ 1 and at least k points), so `find` succeeds; the
+        // fallback only keeps this free of panics.
+        let label = neighbours
+            .iter()
+            .map(|&i| self.labels[i])
+            .find(|&l| votes[l] == best)
+            .unwrap_or(0);
+        // Summed a vote at a time, as always: `n / k` can differ in the last bit.
         let mut p = vec![0.0; self.classes];
-        for i in self.neighbours(query)? {
+        for &i in neighbours {
             p[self.labels[i]] += 1.0 / self.k as f64;
         }
-        Ok(p)
+        (label, p)
     }
 
     /// Most likely class. When several classes share the most votes (e.g. three different
     /// labels with `k = 3`), the one of the nearest neighbour among them wins — the 1-NN answer
     /// restricted to the tie, rather than an arbitrary class index.
     pub fn predict(&self, query: &[f64]) -> Result<usize, RecognizeError> {
-        let neighbours = self.neighbours(query)?;
-        let mut votes = vec![0usize; self.classes];
-        for &i in &neighbours {
-            votes[self.labels[i]] += 1;
-        }
-        let best = votes.iter().copied().max().unwrap_or(0);
-        // `neighbours` is non-empty (k ≥ 1 and at least k points), so `find` succeeds; the
-        // fallback only keeps this free of panics.
-        Ok(neighbours
-            .iter()
-            .map(|&i| self.labels[i])
-            .find(|&l| votes[l] == best)
-            .unwrap_or(0))
+        Ok(self.votes(&self.neighbours(query)?).0)
     }
 }
 
@@ -880,6 +891,10 @@ mod tests {
                 let expected = sorted_reference(&knn, q);
                 prop_assert_eq!(&knn.neighbours(q).expect("valid"), &expected);
                 prop_assert_eq!(&knn.neighbours_exhaustive(q).expect("valid"), &expected);
+                // One search for both answers gives each answer bit for bit.
+                let (label, p) = knn.predict_with_proba(q).expect("valid");
+                prop_assert_eq!(label, knn.predict(q).expect("valid"));
+                prop_assert_eq!(p, knn.predict_proba(q).expect("valid"));
             }
         }
     }

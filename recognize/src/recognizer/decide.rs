@@ -252,11 +252,7 @@ trait Classifier {
 
 impl Classifier for Knn {
     fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizeError> {
-        let error = RecognizeError::knn(behaviour);
-        Ok((
-            self.predict(v).map_err(&error)?,
-            self.predict_proba(v).map_err(error)?,
-        ))
+        self.predict_with_proba(v).map_err(RecognizeError::knn(behaviour))
     }
 }
 
