@@ -868,3 +868,79 @@ fn time_is_derived_from_position_at_a_known_speed() {
         assert!(help.contains(needle), "`{needle}` missing from:\n{help}");
     }
 }
+
+#[test]
+fn packed_rows_are_unrolled_into_consecutive_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.csv");
+    let input = fixture("packed_rows.csv");
+    let map = "time_s=time_ms[ms],tangential_position_m=x_mm[mm],normal_force_n=force_n,\
+               accel_x_mps2=acc";
+
+    // 8 rows at 100 Hz, ten accelerometer samples each: 80 samples 1 ms apart, a uniform
+    // 1 kHz timeline that is passed through.
+    let t = text(&success(import(
+        &input,
+        &out,
+        &["--map", map, "--unroll", "acc=acc_0..acc_9", "--rate-hz", "1000"],
+    )));
+    assert!(
+        t.contains("imported 80 rows") && t.contains("passed through"),
+        "{t}"
+    );
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(c.len(), 80);
+    let acc = c.column("accel_x_mps2").unwrap();
+    let force = c.column("normal_force_n").unwrap();
+    for (j, (&t, (&a, &f))) in c.time().iter().zip(acc.iter().zip(force)).enumerate() {
+        assert!((t - j as f64 * 1e-3).abs() < 1e-9, "sample {j} at {t} s");
+        // Row i, column acc_k holds i * 10 + k: the sample's index.
+        assert!((a - j as f64).abs() < 1e-9, "sample {j}: {a}");
+        // The force rises 0.5 N a row: interpolated, 0.05 N a sample; the last row holds.
+        let expected = if j < 70 { 0.05 * j as f64 } else { 3.5 };
+        assert!(
+            (f - expected).abs() < 1e-9,
+            "sample {j}: {f} N, expected {expected}"
+        );
+    }
+
+    // Held, the force is a staircase.
+    success(import(
+        &input,
+        &out,
+        &[
+            "--map",
+            map,
+            "--unroll",
+            "acc=acc_0..acc_9",
+            "--unroll-slow",
+            "hold",
+            "--rate-hz",
+            "1000",
+        ],
+    ));
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    let force = c.column("normal_force_n").unwrap();
+    assert!(
+        force
+            .iter()
+            .enumerate()
+            .all(|(j, &f)| (f - 0.5 * (j / 10) as f64).abs() < 1e-12),
+        "{force:?}"
+    );
+
+    // A range that leaves out a packed column, and one that names a column the file lacks.
+    for (range, says) in [
+        ("acc=acc_0..acc_8", "column `acc_9`, next to the range"),
+        ("acc=acc_0..acc_10", "`acc_10`"),
+    ] {
+        let o = import(
+            &input,
+            &out,
+            &["--map", map, "--unroll", range, "--rate-hz", "1000"],
+        );
+        let t = text(&o);
+        assert!(!o.status.success(), "{range}: {t}");
+        assert!(t.contains("packed_rows.csv") && t.contains(says), "{range}: {t}");
+    }
+}

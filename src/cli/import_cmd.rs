@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use capture::CaptureKind;
 use capture::import::{
-    ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, TimeFromPosition,
-    import_csv, import_csv_report,
+    ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, SlowColumns,
+    TimeFromPosition, Unroll, import_csv, import_csv_report,
 };
 use capture::sha256_hex;
 use clap::Args;
@@ -54,6 +54,12 @@ use recognize::LabelledCapture;
 ///
 /// Time must strictly increase; --repeated-time mean|drop merges consecutive rows with the
 /// same time into their mean or keeps the first of them, and says how many rows went.
+///
+/// Packed rows: --unroll 'acc=acc_0..acc_21' reads the columns acc_0 to acc_21 of each row
+/// as 22 consecutive samples of a virtual column `acc` (spaced evenly up to the next row's
+/// time; the last row over the median row interval) that --map reads like any other
+/// (`accel_x_mps2=acc[g]`); the other mapped columns are interpolated between rows (or held,
+/// --unroll-slow hold). Needs a time column.
 #[derive(Debug, Args)]
 pub(crate) struct ImportArgs {
     /// The CSV file to import.
@@ -118,6 +124,15 @@ pub(crate) struct ImportArgs {
     /// merged or dropped is printed.
     #[arg(long, value_name = "MODE", default_value = "error", value_parser = parse_repeated_time)]
     repeated_time: RepeatedTime,
+    /// A fast channel packed several samples per row: `NAME=PREFIX_0..PREFIX_N`
+    /// (`acc=acc_0..acc_21`). Each row's packed columns become consecutive samples of the
+    /// virtual column NAME, spaced evenly over the row's interval, which --map then reads.
+    #[arg(long, value_name = "NAME=FIRST..LAST")]
+    unroll: Option<String>,
+    /// With --unroll: how the other mapped columns fill the unrolled samples between rows:
+    /// `interpolate` (linearly, towards the next row) or `hold` (the row's value).
+    #[arg(long, value_name = "MODE", default_value = "interpolate", value_parser = parse_slow, requires = "unroll")]
+    unroll_slow: SlowColumns,
     /// The `device` recorded in the metadata.
     #[arg(long, default_value = "imported", value_name = "NAME")]
     device: String,
@@ -142,6 +157,10 @@ fn parse_repeated_time(s: &str) -> Result<RepeatedTime, String> {
 }
 
 fn parse_non_finite(s: &str) -> Result<NonFinite, String> {
+    s.parse()
+}
+
+fn parse_slow(s: &str) -> Result<SlowColumns, String> {
     s.parse()
 }
 
@@ -174,6 +193,10 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
             (None, false) => Header::FirstLine,
         },
         repeated_time: args.repeated_time,
+        unroll: match &args.unroll {
+            Some(text) => Some(Unroll::parse(text, args.unroll_slow)?),
+            None => None,
+        },
     };
     // Import errors name the input file (and line, column or map entry) themselves.
     let imported = import_csv_report(&args.input, &spec)?;

@@ -44,6 +44,24 @@
 //! row, counted in [`Imported::rows_repeated`]. Only consecutive equal times are merged: a
 //! time that goes back stays an error.
 //!
+//! # Packed rows
+//!
+//! Some rigs log a fast channel several samples per row: a 2.2 kHz accelerometer as 22
+//! columns `acc_0` to `acc_21` of each 100 Hz row, with one timestamp per row.
+//! [`ImportSpec::unroll`] (`--unroll 'acc=acc_0..acc_21'`, see [`Unroll`]) makes the packed
+//! columns of each row consecutive samples of a virtual column `acc`, spaced evenly over the
+//! row's interval (the time to the next row; for the last row, the median row interval), and
+//! `--map` reads `acc` like any other column (`accel_x_mps2=acc[g]`). The other mapped
+//! columns are linearly interpolated between their row's value and the next row's
+//! ([`SlowColumns::Interpolate`], the default: a slow force sampled once a row is a line
+//! between rows, not a staircase) or held over the row ([`SlowColumns::Hold`],
+//! `--unroll-slow hold`); the last row holds its values. Each packed column is read, checked
+//! and bridged like a mapped one, before unrolling; the unrolled samples then go through
+//! the resampling below like any input, and [`Imported::rows_in`] counts them. Needs a time
+//! column; a packed column missing, a column next to the range (`acc_22`: samples left out
+//! would shift the rest), or row times that do not increase is an error naming the file and
+//! the column (and line).
+//!
 //! # Column map
 //!
 //! `--map` is a comma-separated list of `target=source` entries: `target` is a capture column
@@ -135,11 +153,13 @@ mod column_map;
 mod resample;
 mod table;
 mod units;
+mod unroll;
 
 pub use column_map::*;
 use resample::*;
 use table::*;
 pub use units::*;
+pub use unroll::*;
 
 /// Metadata keys [`import_csv`] sets itself; the caller's extra metadata may not use them.
 pub const IMPORT_KEYS: [&str; 4] = ["source", "map", "source_rate_hz", "time_from"];
@@ -217,6 +237,9 @@ pub struct ImportSpec {
     pub header: Header,
     /// What to do with consecutive rows of the same time (default: an error).
     pub repeated_time: RepeatedTime,
+    /// A fast channel packed several samples per row, unrolled into a virtual column that
+    /// the map reads (`--unroll`); needs a time column.
+    pub unroll: Option<Unroll>,
 }
 
 /// Where an input's column names come from.
@@ -371,6 +394,7 @@ impl ImportSpec {
             time_from_position: None,
             header: Header::FirstLine,
             repeated_time: RepeatedTime::Error,
+            unroll: None,
         }
     }
 }
@@ -415,7 +439,8 @@ pub struct Imported {
     /// The capture (not yet written).
     pub capture: Capture,
     /// Data rows read from the input and used (without the dropped ones, and counting each
-    /// run of repeated times merged by [`ImportSpec::repeated_time`] once).
+    /// run of repeated times merged by [`ImportSpec::repeated_time`] once); with
+    /// [`ImportSpec::unroll`], the unrolled samples.
     pub rows_in: usize,
     /// Rows skipped for an implausible value (with [`ImportSpec::drop_implausible`]) or a
     /// non-finite one (with [`NonFinite::Drop`]).
@@ -537,9 +562,19 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     }
     meta.validate().map_err(|kind| bad_spec(metadata_reason(kind)))?;
 
-    let mut table = read_table(path, spec)?;
-    let time_index = spec.map.entries.iter().position(|e| e.target == TIME_S);
-    let cells_bridged = bridge_non_finite(path, spec, &mut table, time_index)?;
+    // Packed columns are read as columns of their own and unrolled once the rows are clean.
+    let packed;
+    let (read_spec, groups) = match &spec.unroll {
+        Some(unroll) => {
+            let (expanded, groups) = expand(spec, unroll).map_err(&bad_spec)?;
+            packed = expanded;
+            (&packed, Some(groups))
+        }
+        None => (spec, None),
+    };
+    let mut table = read_table(path, read_spec)?;
+    let time_index = read_spec.map.entries.iter().position(|e| e.target == TIME_S);
+    let cells_bridged = bridge_non_finite(path, read_spec, &mut table, time_index)?;
     // Time from position starts at the first row; `origin` keeps the offset for messages.
     let stroke = match (&spec.time_from_position, time_index) {
         (Some(from), Some(i)) => {
@@ -555,6 +590,23 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         }
         _ => 0,
     };
+    if let (Some(unroll), Some(groups), Some(entry)) = (&spec.unroll, &groups, time_entry) {
+        if table.lines.len() < 2 {
+            return Err(fail(CaptureErrorKind::TooFewRows(table.lines.len())));
+        }
+        // Each row's samples are spread over its interval, so rows must be in time order.
+        let rows = time_index
+            .map(|i| table.columns[i].as_slice())
+            .unwrap_or_default();
+        check_increasing(path, &entry.source, rows, &table.lines, stroke)?;
+        let time = spec
+            .map
+            .entries
+            .iter()
+            .position(|e| e.target == TIME_S)
+            .unwrap_or(0);
+        table = unroll_rows(table, groups, time, unroll);
+    }
     let rows_in = table.lines.len();
     if rows_in < 2 {
         return Err(fail(CaptureErrorKind::TooFewRows(rows_in)));

@@ -71,6 +71,9 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
     if matches!(spec.header, Header::FirstLine) && width_of(&record) < header.len() {
         header.pop();
     }
+    if let Some(unroll) = &spec.unroll {
+        check_range(unroll, &header).map_err(|reason| fail(CaptureErrorKind::BadSpec(reason)))?;
+    }
     let mut pending = has_first && !matches!(spec.header, Header::FirstLine);
     // A first line of numbers read as a header is the usual cause of a missing column.
     let looks_like_data = matches!(spec.header, Header::FirstLine)

@@ -930,3 +930,178 @@ fn time_from_position_at_a_known_speed() {
             .contains("given twice")
     );
 }
+
+const PACKED: &str = "t,x,Fz,a_0,a_1,a_2,a_3\n\
+                      0,1,0.1,0,1,2,3\n\
+                      4,2,0.5,4,5,6,7\n\
+                      12,3,0.9,8,9,10,11\n";
+
+fn packed(slow: SlowColumns) -> ImportSpec {
+    let mut spec = rubbing("time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz,accel_x_mps2=acc");
+    spec.unroll = Some(Unroll::parse("acc=a_0..a_3", slow).unwrap());
+    spec
+}
+
+#[test]
+fn unroll_parses_ranges_and_rejects_bad_ones() {
+    let u = Unroll::parse(" acc = acc_0..acc_3 ", SlowColumns::Hold).unwrap();
+    assert_eq!(u.name, "acc");
+    assert_eq!(u.columns, ["acc_0", "acc_1", "acc_2", "acc_3"]);
+    assert_eq!(u.slow, SlowColumns::Hold);
+    let padded = Unroll::parse("v=ch08..ch11", SlowColumns::Interpolate).unwrap();
+    assert_eq!(padded.columns, ["ch08", "ch09", "ch10", "ch11"]);
+    assert_eq!(
+        Unroll::parse("v=3..5", SlowColumns::Hold).unwrap().columns,
+        ["3", "4", "5"]
+    );
+    for (text, reason) in [
+        ("acc_0..acc_3", "expected NAME=PREFIX_0..PREFIX_N"),
+        ("=a_0..a_3", "no virtual column name"),
+        ("acc=a_0-a_3", "expected NAME=PREFIX_0..PREFIX_N"),
+        ("acc=a_x..a_3", "must end in a number"),
+        ("acc=a_0..b_3", "different prefixes `a_` and `b_`"),
+        ("acc=a_3..a_3", "at least two columns"),
+        ("acc=a_0..a_99999", "at most 10000"),
+        ("a_1=a_0..a_3", "also one of the packed columns"),
+    ] {
+        let e = Unroll::parse(text, SlowColumns::Interpolate)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("--unroll `{text}`")) && e.contains(reason),
+            "{text}: {e}"
+        );
+    }
+    assert_eq!("hold".parse(), Ok(SlowColumns::Hold));
+    assert_eq!("interpolate".parse(), Ok(SlowColumns::Interpolate));
+    assert!("linear".parse::<SlowColumns>().is_err());
+}
+
+#[test]
+fn packed_rows_unroll_over_each_rows_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "packed.csv", PACKED);
+    // Rows 4 ms then 8 ms apart; the last row spans the median interval, 6 ms.
+    let expected_time: [f64; 12] = [0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 13.5, 15.0, 16.5];
+    let close =
+        |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+
+    let mut spec = packed(SlowColumns::Interpolate);
+    spec.rate_hz = Some(2000.0);
+    let imported = import_csv_report(&path, &spec).unwrap();
+    assert_eq!(imported.rows_in, 12);
+    assert_eq!(imported.resampling, Resampling::Interpolated);
+    let c = &imported.capture;
+    assert_eq!(
+        c.columns(),
+        &[
+            "time_s",
+            "tangential_position_m",
+            "normal_force_n",
+            "accel_x_mps2"
+        ]
+    );
+    // 0 to 16.5 ms at 2 kHz; the accelerometer's samples at their unrolled times.
+    assert_eq!(c.len(), 34);
+    let acc = c.column("accel_x_mps2").unwrap();
+    for (i, &t_ms) in expected_time.iter().enumerate() {
+        let k = (t_ms * 2.0).round() as usize;
+        assert!((c.time()[k] - t_ms * 1e-3).abs() < 1e-12);
+        assert!(
+            (acc[k] - i as f64).abs() < 1e-9,
+            "sample {i} at {t_ms} ms: {}",
+            acc[k]
+        );
+    }
+    // The force is a line between rows; the last row holds.
+    let fz = c.column("normal_force_n").unwrap();
+    assert!(
+        (fz[2] - 0.2).abs() < 1e-12 && (fz[16] - 0.7).abs() < 1e-12,
+        "{fz:?}"
+    );
+    assert!((fz[33] - 0.9).abs() < 1e-12, "{fz:?}");
+
+    // Held: each row's samples take its value; the packed samples are unchanged.
+    let mut spec = packed(SlowColumns::Hold);
+    spec.rate_hz = Some(2000.0);
+    let c = import_csv(&path, &spec).unwrap();
+    let fz = c.column("normal_force_n").unwrap();
+    assert!(
+        close(
+            &[fz[2], fz[6], fz[8], fz[16], fz[24], fz[33]],
+            &[0.1, 0.1, 0.5, 0.5, 0.9, 0.9]
+        ),
+        "{fz:?}"
+    );
+    assert!(close(
+        &expected_time.map(|t| c.column("accel_x_mps2").unwrap()[(t * 2.0).round() as usize]),
+        &std::array::from_fn::<f64, 12, _>(|i| i as f64)
+    ));
+}
+
+#[test]
+fn packed_rows_errors_name_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = |name: &str, text: &str, spec: &ImportSpec| {
+        let path = write(dir.path(), name, text);
+        import_csv(&path, spec).unwrap_err()
+    };
+    let spec = packed(SlowColumns::Interpolate);
+
+    // A packed column missing from the header.
+    let e = err("missing.csv", &PACKED.replacen(",a_2,", ",b_2,", 1), &spec);
+    assert!(matches!(e.kind, CaptureErrorKind::UnknownSource { .. }), "{e}");
+    let text = e.to_string();
+    assert!(text.contains("missing.csv") && text.contains("`a_2`"), "{text}");
+
+    // A column past the range would be a sample left out.
+    let wider = "t,x,Fz,a_0,a_1,a_2,a_3,a_4\n0,1,0.1,0,1,2,3,4\n4,2,0.5,4,5,6,7,8\n";
+    let text = err("wider.csv", wider, &spec).to_string();
+    assert!(
+        text.contains("wider.csv") && text.contains("column `a_4`, next to the range"),
+        "{text}"
+    );
+
+    // A row with fewer packed samples than the header.
+    let short = "t,x,Fz,a_0,a_1,a_2,a_3\n0,1,0.1,0,1,2,3\n4,2,0.5,4,5,6\n";
+    let e = err("short.csv", short, &spec);
+    assert_eq!(e.line, Some(3), "{e}");
+    assert!(
+        matches!(
+            e.kind,
+            CaptureErrorKind::HeaderFieldCount {
+                expected: 7,
+                found: 6
+            }
+        ),
+        "{e}"
+    );
+
+    // An empty packed cell.
+    let empty = "t,x,Fz,a_0,a_1,a_2,a_3\n0,1,0.1,0,1,2,3\n4,2,0.5,4,,6,7\n";
+    let e = err("empty.csv", empty, &spec);
+    assert_eq!((e.line, e.column.as_deref()), (Some(3), Some("a_1")), "{e}");
+
+    // Row times that go back.
+    let back = "t,x,Fz,a_0,a_1,a_2,a_3\n0,1,0.1,0,1,2,3\n4,2,0.5,4,5,6,7\n3,3,0.9,8,9,10,11\n";
+    let e = err("back.csv", back, &spec);
+    assert_eq!((e.line, e.column.as_deref()), (Some(4), Some("t")), "{e}");
+    assert!(
+        matches!(e.kind, CaptureErrorKind::RowTimeNotIncreasing { .. }),
+        "{e}"
+    );
+
+    // The virtual name clashing with a real column, no map entry reading it, no time column.
+    let clash = "t,x,Fz,acc,a_0,a_1,a_2,a_3\n0,1,0.1,9,0,1,2,3\n4,2,0.5,9,4,5,6,7\n";
+    let text = err("clash.csv", clash, &spec).to_string();
+    assert!(text.contains("already has a column `acc`"), "{text}");
+    let mut unused = rubbing("time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz");
+    unused.unroll = spec.unroll.clone();
+    let text = err("unused.csv", PACKED, &unused).to_string();
+    assert!(text.contains("no --map entry reads `acc`"), "{text}");
+    let mut no_time = rubbing("tangential_position_m=x[mm],normal_force_n=Fz,accel_x_mps2=acc");
+    no_time.unroll = spec.unroll.clone();
+    no_time.input_rate_hz = Some(100.0);
+    let text = err("no_time.csv", PACKED, &no_time).to_string();
+    assert!(text.contains("needs a time column"), "{text}");
+}
