@@ -55,6 +55,16 @@ pub const ACCEL_X_MPS2: &str = "accel_x_mps2";
 pub const ACCEL_Y_MPS2: &str = "accel_y_mps2";
 /// Tool-mounted accelerometer, z axis, in m/s^2 (sensor frame).
 pub const ACCEL_Z_MPS2: &str = "accel_z_mps2";
+/// Single-axis vibration sensor on the tool (a one-axis accelerometer or piezo pickup), along
+/// the sensor's own axis, in m/s^2. An alternative to the three `accel_*_mps2` axes for rigs
+/// that have only one.
+///
+/// It must be in m/s², not raw ADC counts: the spectrotemporal features keep the vibration's
+/// amplitude by default (only their optional unit-sum scaling is gain-invariant), so two
+/// sensors in different counts would not be comparable. A logger's counts are converted on
+/// import with a scale factor, `vibration_mps2=adc*0.0049` (the sensor's m/s² per count), or
+/// a unit and a factor, `vibration_mps2=adc[g]*0.001` for counts of milli-g.
+pub const VIBRATION_MPS2: &str = "vibration_mps2";
 
 // --- Insertion columns -----------------------------------------------------
 
@@ -112,6 +122,7 @@ const RUBBING_OPTIONAL: &[&str] = &[
     ACCEL_X_MPS2,
     ACCEL_Y_MPS2,
     ACCEL_Z_MPS2,
+    VIBRATION_MPS2,
 ];
 const INSERTION_REQUIRED: &[&str] = &[TIME_S, DEPTH_M, AXIAL_FORCE_N];
 const INSERTION_OPTIONAL: &[&str] = &[VELOCITY_MPS, COMMANDED_VELOCITY_MPS];
@@ -225,6 +236,8 @@ mod tests {
         );
         assert!(!CaptureKind::Insertion.allows_column("friction_force_n"));
         assert!(!CaptureKind::Rubbing.allows_column("depth_m"));
+        assert!(CaptureKind::Rubbing.allows_column(VIBRATION_MPS2));
+        assert!(!CaptureKind::Insertion.allows_column(VIBRATION_MPS2));
     }
 
     #[test]

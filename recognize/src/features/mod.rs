@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{LabelledCapture, RecognizeError};
 use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLUMN};
-use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan};
+use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION_COLUMN};
 
 pub use scaling::WindowScaling;
 pub use windowing::{DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowlessCapture};
@@ -78,7 +78,8 @@ impl FeatureSet {
 
     /// The columns of `capture` these features need but it lacks (empty when it has them all).
     /// Nakano's friction comes from `friction_force_n` or, without it, from the reaction-force
-    /// observer over `tangential_command_force_n`.
+    /// observer over `tangential_command_force_n`. `spectral` reads the three accelerometer axes
+    /// or, without them, the single-axis `vibration_mps2`; `both` needs the three axes.
     pub fn missing_columns(self, capture: &LabelledCapture) -> Vec<String> {
         let has = |name: &str| capture.capture.columns().iter().any(|c| c == name);
         let mut missing = Vec::new();
@@ -93,7 +94,17 @@ impl FeatureSet {
             }
         }
         if matches!(self, Self::Spectral | Self::Both) {
+            let before = missing.len();
             missing.extend(ACCEL_COLUMNS.iter().filter(|c| !has(c)).map(|c| (*c).to_owned()));
+            // A whole scratch's histogram also works from one axis; `both`'s windows still
+            // read the three.
+            if self == Self::Spectral && missing.len() > before {
+                if has(VIBRATION_COLUMN) {
+                    missing.truncate(before);
+                } else if let Some(last) = missing.last_mut() {
+                    last.push_str(&format!(" (or, instead of the three axes, {VIBRATION_COLUMN})"));
+                }
+            }
         }
         missing
     }

@@ -11,6 +11,19 @@
 //! The paper fixes the counts (100, 129, 5, 25) but not the frame hop, the window function, the
 //! moving average's edges or how a histogram cell is scaled; those choices are documented on the
 //! items below.
+//!
+//! # Single-axis sensors
+//!
+//! A rig with one vibration axis ([`VIBRATION_COLUMN`], m/s²) has no magnitude to take: its
+//! signal `s_j` replaces `m_j` in step 1 and steps 2–4 are unchanged. This is the same
+//! spectrogram as the three-axis one whenever the magnitude *is* that axis: for axes
+//! `(0, 0, s)` the magnitude is `|s_j|`, which equals `s_j` when `s` never goes negative and
+//! `−s_j` when it never goes positive (a DC-coupled sensor carrying gravity larger than the
+//! vibration is one or the other), and a sign flip leaves every `|X_k|` unchanged — so both
+//! give the same histogram, bit for bit. The signed signal rather than `|s_j|` is used because
+//! an AC-coupled sensor oscillates around zero, and rectifying it would fold the vibration into
+//! twice its frequency. A capture with both the three axes and the single one is read from the
+//! three axes, so its features are those it had before the single axis existed.
 
 use std::sync::Arc;
 
@@ -46,6 +59,10 @@ pub const ACCEL_COLUMNS: [&str; 3] = [
     capture::kind::ACCEL_Y_MPS2,
     capture::kind::ACCEL_Z_MPS2,
 ];
+
+/// The single-axis vibration column, the alternative to [`ACCEL_COLUMNS`] (see the
+/// [module documentation](self#single-axis-sensors)).
+pub const VIBRATION_COLUMN: &str = capture::kind::VIBRATION_MPS2;
 
 /// How a histogram cell is scaled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -215,22 +232,50 @@ impl SpectrogramPlan {
         scale: CellScale,
     ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
         let m = magnitude(x, y, z)?;
+        self.signal_features(&m, scale)
+    }
+
+    /// The pipeline on a single-axis vibration signal: the signal takes the magnitude's place,
+    /// then moving-average deviation, spectrogram, histogram (see the
+    /// [module documentation](self#single-axis-sensors) for how it relates to three axes).
+    pub fn single_axis_features(
+        &self,
+        signal: &[f64],
+        scale: CellScale,
+    ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
+        // Checked before the moving average, which would smear one bad sample over 100.
+        if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
+            return Err(RecognizeError::NonFiniteSample { index });
+        }
+        self.signal_features(signal, scale)
+    }
+
+    /// Steps 2–4 on a finite per-sample signal (the magnitude, or a single axis).
+    fn signal_features(&self, m: &[f64], scale: CellScale) -> Result<[f64; FEATURE_LEN], RecognizeError> {
         if m.len() < MIN_SAMPLES {
             return Err(RecognizeError::TooShort {
                 samples: m.len(),
                 needed: MIN_SAMPLES,
             });
         }
-        let d = moving_average_deviation(&m);
+        let d = moving_average_deviation(m);
         Ok(histogram(&self.spectrogram(&d)?, scale))
     }
 
-    /// Features of a capture's [`ACCEL_COLUMNS`].
+    /// Features of a capture's [`ACCEL_COLUMNS`] when it has all three, else of its
+    /// [`VIBRATION_COLUMN`]. A capture with neither fails on its first missing axis.
     pub fn capture_features(
         &self,
         capture: &Capture,
         scale: CellScale,
     ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
+        let has_axes = ACCEL_COLUMNS.iter().all(|name| capture.has_column(name));
+        if !has_axes && capture.has_column(VIBRATION_COLUMN) {
+            let signal = capture
+                .column(VIBRATION_COLUMN)
+                .map_err(RecognizeError::NoAccelerometer)?;
+            return self.single_axis_features(signal, scale);
+        }
         let [x, y, z] = ACCEL_COLUMNS;
         let column = |name| capture.column(name).map_err(RecognizeError::NoAccelerometer);
         self.features(column(x)?, column(y)?, column(z)?, scale)
@@ -450,6 +495,142 @@ mod tests {
         let err = SpectrogramPlan::new()
             .capture_features(&capture, CellScale::Mean)
             .expect_err("no y axis");
+        assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
+    }
+
+    /// A rubbing capture at 400 Hz carrying `accel` as `(column, samples)` pairs.
+    fn accel_capture(accel: Vec<(&str, Vec<f64>)>) -> Capture {
+        use capture::{CaptureKind, Metadata};
+        let n = accel[0].1.len();
+        let mut names = vec![
+            capture::kind::TIME_S.to_owned(),
+            capture::kind::TANGENTIAL_POSITION_M.to_owned(),
+            capture::kind::NORMAL_FORCE_N.to_owned(),
+        ];
+        let mut columns = vec![
+            (0..n).map(|i| i as f64 / RATE_HZ).collect(),
+            vec![0.0; n],
+            vec![0.0; n],
+        ];
+        for (name, values) in accel {
+            names.push(name.to_owned());
+            columns.push(values);
+        }
+        Capture::new(
+            Metadata::new(CaptureKind::Rubbing, "test", RATE_HZ),
+            names,
+            columns,
+        )
+        .expect("a valid rubbing capture")
+    }
+
+    /// Two tones on different axes plus gravity on z, so the magnitude mixes all three.
+    fn three_axes(n: usize) -> [Vec<f64>; 3] {
+        let wave = |freq_hz: f64, amp: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| amp * (2.0 * std::f64::consts::PI * freq_hz * i as f64 / RATE_HZ).sin())
+                .collect()
+        };
+        let z = wave(43.0, 0.4).into_iter().map(|v| G + v).collect();
+        [wave(120.0, 0.7), wave(17.0, 0.2), z]
+    }
+
+    #[test]
+    fn a_single_axis_capture_gives_the_spectrum_of_that_axis() {
+        let plan = SpectrogramPlan::new();
+        let [_, _, z] = tone(2000, 78.125, 0.5, 0);
+        let capture = accel_capture(vec![(VIBRATION_COLUMN, z.clone())]);
+        for scale in [CellScale::Mean, CellScale::UnitSum] {
+            let h = plan.capture_features(&capture, scale).expect("single axis");
+            assert_eq!(h, plan.single_axis_features(&z, scale).expect("long enough"));
+            // The tone, in its bin, as on three axes.
+            let in_bin: f64 = (0..TIME_BINS).map(|t| cell(&h, t, 9)).sum();
+            let total: f64 = h.iter().sum();
+            assert!(in_bin > 0.97 * total, "{scale:?}: {in_bin} of {total}");
+        }
+        // Length and finiteness are checked as on three axes.
+        assert!(matches!(
+            plan.single_axis_features(&z[..MIN_SAMPLES - 1], CellScale::Mean),
+            Err(RecognizeError::TooShort {
+                samples: 767,
+                needed: 768
+            })
+        ));
+        let mut nan = z;
+        nan[7] = f64::INFINITY;
+        assert!(matches!(
+            plan.single_axis_features(&nan, CellScale::Mean),
+            Err(RecognizeError::NonFiniteSample { index: 7 })
+        ));
+    }
+
+    #[test]
+    fn three_axis_captures_keep_their_features() {
+        let plan = SpectrogramPlan::new();
+        let [x, y, z] = three_axes(3000);
+        let axes = accel_capture(vec![
+            (ACCEL_COLUMNS[0], x.clone()),
+            (ACCEL_COLUMNS[1], y.clone()),
+            (ACCEL_COLUMNS[2], z.clone()),
+        ]);
+        // A single axis next to the three is ignored: the three axes win.
+        let both = accel_capture(vec![
+            (ACCEL_COLUMNS[0], x.clone()),
+            (ACCEL_COLUMNS[1], y.clone()),
+            (ACCEL_COLUMNS[2], z.clone()),
+            (VIBRATION_COLUMN, x.clone()),
+        ]);
+        for scale in [CellScale::Mean, CellScale::UnitSum] {
+            // The three-axis pipeline as it was: magnitude, deviation, spectrogram, histogram.
+            let m = magnitude(&x, &y, &z).expect("equal axes");
+            let before = histogram(
+                &plan.spectrogram(&moving_average_deviation(&m)).expect("long"),
+                scale,
+            );
+            assert_eq!(plan.features(&x, &y, &z, scale).expect("long"), before);
+            assert_eq!(plan.capture_features(&axes, scale).expect("axes"), before);
+            assert_eq!(plan.capture_features(&both, scale).expect("axes"), before);
+            assert_ne!(plan.single_axis_features(&x, scale).expect("long"), before);
+        }
+    }
+
+    /// The identity between the pipelines: for axes `(0, 0, s)` with `s` of one sign, the
+    /// magnitude is `±s` exactly, and `|X_k|` of `−s` is that of `s`, so the histograms agree
+    /// bit for bit. A signal that crosses zero is rectified by the magnitude, and differs.
+    #[test]
+    fn one_nonzero_axis_of_one_sign_gives_the_single_axis_histogram() {
+        let plan = SpectrogramPlan::new();
+        let n = 2500;
+        let [zero, _, up] = tone(n, 61.0, 0.8, 300);
+        let down: Vec<f64> = up.iter().map(|v| -v).collect();
+        let crossing: Vec<f64> = up.iter().map(|v| v - G).collect();
+        for scale in [CellScale::Mean, CellScale::UnitSum] {
+            for s in [&up, &down] {
+                let single = accel_capture(vec![(VIBRATION_COLUMN, s.clone())]);
+                let axes = accel_capture(vec![
+                    (ACCEL_COLUMNS[0], zero.clone()),
+                    (ACCEL_COLUMNS[1], zero.clone()),
+                    (ACCEL_COLUMNS[2], s.clone()),
+                ]);
+                assert_eq!(
+                    plan.capture_features(&single, scale).expect("single axis"),
+                    plan.capture_features(&axes, scale).expect("three axes"),
+                    "{scale:?}"
+                );
+            }
+            assert_ne!(
+                plan.single_axis_features(&crossing, scale).expect("long"),
+                plan.features(&zero, &zero, &crossing, scale).expect("long"),
+            );
+        }
+    }
+
+    #[test]
+    fn a_capture_with_neither_is_a_typed_error() {
+        let capture = accel_capture(vec![(capture::kind::FRICTION_FORCE_N, vec![0.0; MIN_SAMPLES])]);
+        let err = SpectrogramPlan::new()
+            .capture_features(&capture, CellScale::Mean)
+            .expect_err("no accelerometer");
         assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
     }
 }
