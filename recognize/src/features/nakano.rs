@@ -23,6 +23,18 @@
 //! sandpapers' and styrols' roughness (wavelengths ≈ 0.3–2 mm) and removes the sheet's waviness
 //! (≳ 10 mm) and any tilt of the sample. It was chosen by that reasoning, not tuned on test runs.
 //!
+//! **Following the speed**: both averages are lengths of travel (the thesis only says "a high
+//! pass filter"; the cut-offs here are wavelengths), so a fixed length in samples cuts at a
+//! wavelength proportional to the rubbing speed: at 20 mm/s the 2.5 mm cut-off would become
+//! 10 mm and pass the waviness. With [`NakanoConfig::follow_speed`] set, the half-widths at each
+//! sample are scaled by the travel per sample measured around it ([`SpeedFollowing`]), up to
+//! maxima that set the lookahead. At the reference speed the widths are exactly the nominal
+//! ones, so the features are those of the fixed filters (to rounding, ≤ 1e-13 relative on the
+//! simulated 5 mm/s runs); on a simulated surface rubbed at 2 and 20 mm/s the roughness features
+//! stay within 10 % of those at 5 mm/s (`tests/nakano_speed.rs`), against up to +2500 % with
+//! fixed filters. The friction features are not filtered here: what speed does to them (through
+//! the force observer's time-domain low-pass) is the sensor's.
+//!
 //! **Variance of roughness** (Eq. 2.19): the thesis prints `(mean|z_r| − z_r[i])²`, which reads
 //! as a typo for the sample variance the text names; we use the variance of `z_r` about its own
 //! mean (divided by `n`, as Eq. 2.19).
@@ -150,20 +162,46 @@ impl Rfob {
 }
 
 /// The two zero-phase moving averages, as half-widths in samples.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NakanoConfig {
     /// Half-width `H` of the detrending average: roughness = height − mean of `2H + 1` samples.
     pub highpass_half_width: usize,
     /// Half-width `S` of the smoothing before wave counting (mean of `2S + 1` samples).
     pub smoothing_half_width: usize,
+    /// When set, both half-widths are scaled at every sample by the measured travel per sample,
+    /// so that they span the same travel at any rubbing speed (see [`SpeedFollowing`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub follow_speed: Option<SpeedFollowing>,
+}
+
+/// How the filters follow the rubbing speed.
+///
+/// The cut-offs are wavelengths of travel, so a filter of fixed length in samples cuts at a
+/// wavelength proportional to the speed. Following the speed, the half-widths at sample `i` are
+/// `H · step_ref / step_i` and `S · step_ref / step_i` (rounded), where `step_i` is the travel
+/// per sample measured over the `2·max_highpass_half_width + 1` samples centred on `i` — wide
+/// enough that the encoder's quantization and noise barely move it, centred so that it needs
+/// no lookahead beyond the filters'. They are capped at the maximum half-widths, which set the
+/// lookahead: below the speed where the cap is reached, the filters span less travel than
+/// asked. The detrending half-width is at least 1 sample.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SpeedFollowing {
+    /// Travel per sample at which `H` and `S` span their wavelengths, m.
+    pub reference_step_m: f64,
+    /// Largest detrending half-width, samples.
+    pub max_highpass_half_width: usize,
+    /// Largest smoothing half-width, samples.
+    pub max_smoothing_half_width: usize,
 }
 
 impl Default for NakanoConfig {
-    /// 2.5 mm cut-off and 0.2 mm smoothing at 5 mm/s and 1 kHz (`H` = 250, `S` = 20).
+    /// 2.5 mm cut-off and 0.2 mm smoothing at 5 mm/s and 1 kHz (`H` = 250, `S` = 20), fixed in
+    /// samples (not following the speed).
     fn default() -> Self {
         Self {
             highpass_half_width: 250,
             smoothing_half_width: 20,
+            follow_speed: None,
         }
     }
 }
@@ -211,12 +249,107 @@ impl NakanoConfig {
         Ok(Self {
             highpass_half_width: h as usize,
             smoothing_half_width: s as usize,
+            follow_speed: None,
         })
     }
 
-    /// Samples the filters need beyond a window's last sample (and before its first): `H + S`.
+    /// The same filters following the measured speed ([`SpeedFollowing`]): they span their
+    /// travel at `rate_hz` when the tip moves at `reference_speed_mps`, and at any speed down
+    /// to `slowest_speed_mps`, below which they stay at their longest.
+    pub fn following_speed(
+        self,
+        reference_speed_mps: f64,
+        slowest_speed_mps: f64,
+        rate_hz: f64,
+    ) -> Result<Self, RecognizeError> {
+        let all_positive = [reference_speed_mps, slowest_speed_mps, rate_hz]
+            .iter()
+            .all(|v| v.is_finite() && *v > 0.0);
+        if !all_positive || slowest_speed_mps > reference_speed_mps {
+            return Err(RecognizeError::nakano_config(
+                "speeds and rate must be positive and finite, the slowest speed at most the reference",
+            ));
+        }
+        let stretch = reference_speed_mps / slowest_speed_mps;
+        let longest = |half: usize| (half as f64 * stretch).ceil();
+        let (h, s) = (
+            longest(self.highpass_half_width),
+            longest(self.smoothing_half_width),
+        );
+        if h > 1e7 || s > 1e7 {
+            return Err(RecognizeError::nakano_config(
+                "filter spans more than 10^7 samples",
+            ));
+        }
+        let config = Self {
+            follow_speed: Some(SpeedFollowing {
+                reference_step_m: reference_speed_mps / rate_hz,
+                max_highpass_half_width: (h as usize).max(1),
+                max_smoothing_half_width: s as usize,
+            }),
+            ..self
+        };
+        config.check()?;
+        Ok(config)
+    }
+
+    /// Whether the configuration can be used: a speed-following one needs a positive finite
+    /// reference step and maximum half-widths at least the nominal ones (and at least 1 for the
+    /// detrending, which measures the speed over its span).
+    pub fn check(&self) -> Result<(), RecognizeError> {
+        let Some(follow) = &self.follow_speed else {
+            return Ok(());
+        };
+        let usable = follow.reference_step_m.is_finite()
+            && follow.reference_step_m > 0.0
+            && follow.max_highpass_half_width >= self.highpass_half_width.max(1)
+            && follow.max_smoothing_half_width >= self.smoothing_half_width;
+        if usable {
+            Ok(())
+        } else {
+            Err(RecognizeError::nakano_config(
+                "speed following needs a positive reference step and maximum half-widths at least the nominal ones",
+            ))
+        }
+    }
+
+    /// The longest half-widths the filters take, `(H, S)`: the nominal ones, or the maxima when
+    /// following the speed.
+    pub fn max_half_widths(&self) -> (usize, usize) {
+        match &self.follow_speed {
+            None => (self.highpass_half_width, self.smoothing_half_width),
+            Some(f) => (f.max_highpass_half_width, f.max_smoothing_half_width),
+        }
+    }
+
+    /// Half-widths `(H, S)` at a sample where the tip travels `step_m` per sample (measured as
+    /// [`SpeedFollowing`] says); the nominal ones when not following the speed.
+    pub fn half_widths_at(&self, step_m: f64) -> (usize, usize) {
+        let Some(follow) = &self.follow_speed else {
+            return (self.highpass_half_width, self.smoothing_half_width);
+        };
+        // A stationary tip (step 0) takes the longest filters; the ratio is computed first so
+        // that exactly the reference step gives exactly the nominal widths.
+        let ratio = follow.reference_step_m / step_m;
+        let scale = |half: usize, max: usize| {
+            let w = (half as f64 * ratio).round();
+            if w.is_nan() || w >= max as f64 {
+                max
+            } else {
+                w as usize
+            }
+        };
+        (
+            scale(self.highpass_half_width, follow.max_highpass_half_width).max(1),
+            scale(self.smoothing_half_width, follow.max_smoothing_half_width),
+        )
+    }
+
+    /// Samples the filters need beyond a window's last sample (and before its first): `H + S`
+    /// at their longest.
     pub fn lookahead_samples(&self) -> usize {
-        self.highpass_half_width + self.smoothing_half_width
+        let (h, s) = self.max_half_widths();
+        h + s
     }
 }
 
@@ -308,32 +441,40 @@ impl<'a> NakanoSignals<'a> {
             Some(last) if last <= self.len() => {}
             _ => return Err(out_of_range),
         }
-        let (h, s) = (config.highpass_half_width, config.smoothing_half_width);
-        // Prefix sums of the height relative to the first sample used (keeps the sums small).
+        config.check()?;
+        let (hmax, smax) = config.max_half_widths();
+        // Local indices below are into `z` and `x`, which start at sample `first`.
         let z = &self.height_m[first..end + margin];
+        let x = &self.position_m[first..end + margin];
         let z_ref = z[0];
-        let mut prefix = Vec::with_capacity(z.len() + 1);
-        prefix.push(0.0);
-        let mut acc = 0.0;
-        for &v in z {
-            acc += v - z_ref;
-            prefix.push(acc);
-        }
-        let span = (2 * h + 1) as f64;
-        // Roughness at local index j of `z` (needs j − h ≥ 0 and j + h < z.len()).
-        let rough = |j: usize| (z[j] - z_ref) - (prefix[j + h + 1] - prefix[j - h]) / span;
-        // Roughness over the window and S samples each side, for the smoothing.
-        let offset = margin - s; // local index of sample start − S
-        let r: Vec<f64> = (offset..offset + len + 2 * s).map(rough).collect();
-        let window = &r[s..s + len];
+        // Prefix sums of the height relative to the first sample used (keeps the sums small).
+        let prefix = prefix_sums(z.iter().map(|v| v - z_ref));
+        // Half-widths at local index j (needs j ± hmax inside `x`).
+        let widths = |j: usize| config.half_widths_at(step_m(x[j - hmax], x[j + hmax], hmax));
+        // Roughness at local index j with half-width h (needs j − h ≥ 0 and j + h < z.len()).
+        let rough =
+            |j: usize, h: usize| (z[j] - z_ref) - (prefix[j + h + 1] - prefix[j - h]) / (2 * h + 1) as f64;
+        // Roughness over the window and `smax` samples each side, for the smoothing, with the
+        // smoothing half-width at each of those samples.
+        let offset = margin - smax; // local index of sample start − smax
+        let (r, smooth_widths): (Vec<f64>, Vec<usize>) = (offset..offset + len + 2 * smax)
+            .map(|j| {
+                let (h, s) = widths(j);
+                (rough(j, h), s)
+            })
+            .unzip();
+        let window = &r[smax..smax + len];
         let n = len as f64;
         let mean_abs = window.iter().map(|v| v.abs()).sum::<f64>() / n;
         let mean = window.iter().sum::<f64>() / n;
         let var = window.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
         // Smoothed roughness at each window sample, then upward crossings between neighbours.
-        let smooth_span = (2 * s + 1) as f64;
-        let smoothed: Vec<f64> = (0..len)
-            .map(|i| r[i..=i + 2 * s].iter().sum::<f64>() / smooth_span)
+        let r_prefix = prefix_sums(r.iter().copied());
+        let smoothed: Vec<f64> = (smax..smax + len)
+            .map(|i| {
+                let s = smooth_widths[i];
+                (r_prefix[i + s + 1] - r_prefix[i - s]) / (2 * s + 1) as f64
+            })
             .collect();
         let waves = smoothed
             .windows(2)
@@ -346,6 +487,24 @@ impl<'a> NakanoSignals<'a> {
         let f_var = f.iter().map(|v| (v - f_mean).powi(2)).sum::<f64>() / n;
         Ok([mean_abs, var, wavelength, f_mean, f_var])
     }
+}
+
+/// Sums of the values before each index: `out[k]` = sum of the first `k` values.
+fn prefix_sums(values: impl Iterator<Item = f64>) -> Vec<f64> {
+    let mut out = Vec::with_capacity(values.size_hint().0 + 1);
+    let mut acc = 0.0;
+    out.push(acc);
+    for v in values {
+        acc += v;
+        out.push(acc);
+    }
+    out
+}
+
+/// Travel per sample between two positions `2 · half` samples apart, m (`half` ≥ 1; with 0 the
+/// speed is not followed and the step is unused).
+fn step_m(before: f64, after: f64, half: usize) -> f64 {
+    (after - before).abs() / (2 * half.max(1)) as f64
 }
 
 /// Features of the window of `len` samples starting at `start` of `capture` (see
@@ -451,9 +610,9 @@ pub struct NakanoStream {
     pushed: u64,
     z_ref: Option<f64>,
     f_ref: Option<f64>,
-    heights: Ring<f64>,
+    heights: Ring<HeightSample>,
     height_sum: f64,
-    roughs: Ring<f64>,
+    roughs: Ring<RoughSample>,
     rough_sum: f64,
     delayed: Ring<(f64, f64)>,
     previous_smoothed: Option<f64>,
@@ -465,6 +624,27 @@ pub struct NakanoStream {
     rough_stats: SlidingMoments,
     friction_stats: SlidingMoments,
     crossings: usize,
+}
+
+/// A height sample in the stream's detrending span.
+#[derive(Debug, Clone, Copy)]
+struct HeightSample {
+    /// Height relative to the stream's first sample, m.
+    z: f64,
+    /// Sum of the relative heights pushed before this one, m.
+    before: f64,
+    /// Position along the rubbing direction, m.
+    x: f64,
+}
+
+/// A roughness sample in the stream's smoothing span.
+#[derive(Debug, Clone, Copy)]
+struct RoughSample {
+    r: f64,
+    /// Sum of the roughness before this one, m.
+    before: f64,
+    /// Smoothing half-width at this sample.
+    smoothing: usize,
 }
 
 /// Mean and sum of squared deviations over a sliding window, updated in O(1) per sample with
@@ -507,7 +687,8 @@ impl NakanoStream {
         if window_len < 2 {
             return Err(RecognizeError::WindowTooShort { len: window_len });
         }
-        let (h, s) = (config.highpass_half_width, config.smoothing_half_width);
+        config.check()?;
+        let (h, s) = config.max_half_widths();
         Ok(Self {
             config,
             window_len,
@@ -571,24 +752,53 @@ impl NakanoStream {
     /// Pushes one sample; returns the features of the window that it completes, if any.
     pub fn push(&mut self, position_m: f64, height_m: f64, friction_n: f64) -> Option<StreamWindow> {
         self.pushed += 1;
-        let (h, s) = (self.config.highpass_half_width, self.config.smoothing_half_width);
+        let (hmax, smax) = self.config.max_half_widths();
         let z = height_m - *self.z_ref.get_or_insert(height_m);
         self.delayed.push((position_m, friction_n));
-        self.height_sum += z - self.heights.push(z).unwrap_or(0.0);
+        self.heights.push(HeightSample {
+            z,
+            before: self.height_sum,
+            x: position_m,
+        });
+        self.height_sum += z;
         if !self.heights.is_full() {
             return None;
         }
-        let centre = self.heights.get(h)?;
-        let rough = centre - self.height_sum / (2 * h + 1) as f64;
-        self.rough_sum += rough - self.roughs.push(rough).unwrap_or(0.0);
+        // The centre of the detrending span is `hmax` samples back; the sum of the heights
+        // from `k` samples after the oldest on is the total minus what came before it.
+        let before = |k: usize| {
+            if k == 2 * hmax + 1 {
+                Some(self.height_sum)
+            } else {
+                self.heights.get(k).map(|p| p.before)
+            }
+        };
+        let step = step_m(self.heights.get(0)?.x, self.heights.get(2 * hmax)?.x, hmax);
+        let (h, s) = self.config.half_widths_at(step);
+        let centre = self.heights.get(hmax)?.z;
+        let rough = centre - (before(hmax + h + 1)? - before(hmax - h)?) / (2 * h + 1) as f64;
+        self.roughs.push(RoughSample {
+            r: rough,
+            before: self.rough_sum,
+            smoothing: s,
+        });
+        self.rough_sum += rough;
         if !self.roughs.is_full() {
             return None;
         }
-        let r = self.roughs.get(s)?;
-        let smoothed = self.rough_sum / (2 * s + 1) as f64;
+        let rough_before = |k: usize| {
+            if k == 2 * smax + 1 {
+                Some(self.rough_sum)
+            } else {
+                self.roughs.get(k).map(|p| p.before)
+            }
+        };
+        let RoughSample { r, smoothing: s, .. } = self.roughs.get(smax)?;
+        let smoothed = (rough_before(smax + s + 1)? - rough_before(smax - s)?) / (2 * s + 1) as f64;
         let previous = self.previous_smoothed.replace(smoothed);
-        // The sample H + S back is the newest one whose smoothed roughness is now known; the
-        // delay line holds exactly H + S + 1 samples, so it is the oldest there.
+        // The sample the lookahead (the longest H + S) back is the newest one whose smoothed
+        // roughness is now known; the delay line holds exactly lookahead + 1 samples, so it is
+        // the oldest there.
         let (position, friction) = self.delayed.get(0)?;
         let f = friction - *self.f_ref.get_or_insert(friction);
         let evicted = self.window_rough.push(r);
@@ -610,7 +820,7 @@ impl NakanoStream {
         let n = self.window_len as f64;
         let travel = (self.window_position.get(self.window_len - 1)? - self.window_position.get(0)?).abs();
         let wavelength = travel / self.crossings.max(1) as f64;
-        let lag = (h + s + self.window_len) as u64;
+        let lag = (hmax + smax + self.window_len) as u64;
         Some(StreamWindow {
             start: self.pushed - lag,
             start_position_m: self.window_position.get(0)?,

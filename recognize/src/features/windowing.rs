@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
-use super::nakano::{FEATURES, NakanoConfig, NakanoSignals};
+use super::nakano::{FEATURES, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan};
 use crate::{LabelledCapture, RecognizeError};
 
@@ -36,8 +36,11 @@ pub struct NakanoWindowing {
 
 impl NakanoWindowing {
     /// The protocol's windowing: `window_s` and `hop_s` at `rate_hz`, the filters at that rate
-    /// ([`NakanoConfig::at_rate`]: the same travel whatever the rate), and decisions from 5 mm
-    /// of travel on (thesis Sec. 4.3).
+    /// ([`NakanoConfig::at_rate`]: the same travel whatever the rate) following the measured
+    /// speed at and above the protocol's 5 mm/s (so a faster stroke is filtered over the same
+    /// travel, without lengthening the lookahead; see
+    /// [`NakanoWindowing::following_speeds_down_to`] for slower strokes), and decisions from
+    /// 5 mm of travel on (thesis Sec. 4.3).
     pub fn new(window_s: f64, hop_s: f64, rate_hz: f64) -> Result<Self, RecognizeError> {
         if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
             return Err(RecognizeError::Parameter {
@@ -47,13 +50,16 @@ impl NakanoWindowing {
                 reason: "positive and at most 10^6 Hz",
             });
         }
-        let windowing = Self {
-            filters: NakanoConfig::at_rate(rate_hz).map_err(|_| RecognizeError::Parameter {
+        let filters = NakanoConfig::at_rate(rate_hz)
+            .and_then(|f| f.following_speed(PROTOCOL_SPEED_MPS, PROTOCOL_SPEED_MPS, rate_hz))
+            .map_err(|_| RecognizeError::Parameter {
                 of: "setting",
                 name: "rate_hz",
                 value: rate_hz,
                 reason: "a rate at which Nakano's filters span whole samples",
-            })?,
+            })?;
+        let windowing = Self {
+            filters,
             window_samples: samples("window_s", window_s, rate_hz)?,
             training_window_samples: None,
             hop_samples: samples("hop_s", hop_s, rate_hz)?,
@@ -74,6 +80,30 @@ impl NakanoWindowing {
     pub fn with_window_s(self, window_s: f64) -> Result<Self, RecognizeError> {
         let windowing = Self {
             window_samples: samples("window_s", window_s, self.rate_hz)?,
+            ..self
+        };
+        windowing.check().map_err(setting_error)?;
+        Ok(windowing)
+    }
+
+    /// The same windowing with filters that follow the speed down to `slowest_speed_mps`
+    /// instead of the protocol's 5 mm/s: a slower stroke is filtered over the same travel too,
+    /// at the cost of a longer lookahead (the filters' longest spans), so of decision latency.
+    pub fn following_speeds_down_to(self, slowest_speed_mps: f64) -> Result<Self, RecognizeError> {
+        let invalid = |_| RecognizeError::Parameter {
+            of: "setting",
+            name: "slowest_speed_mps",
+            value: slowest_speed_mps,
+            reason: "positive, at most the protocol's 5 mm/s, and slow enough for filters of at most 10^6 samples",
+        };
+        let nominal = NakanoConfig {
+            follow_speed: None,
+            ..self.filters
+        };
+        let windowing = Self {
+            filters: nominal
+                .following_speed(PROTOCOL_SPEED_MPS, slowest_speed_mps, self.rate_hz)
+                .map_err(invalid)?,
             ..self
         };
         windowing.check().map_err(setting_error)?;
@@ -146,6 +176,30 @@ impl NakanoWindowing {
                     "at most 10^6 samples"
                 };
                 return Err((name, n as f64, reason));
+            }
+        }
+        if let Some(follow) = &self.filters.follow_speed {
+            let maxima = [
+                (
+                    "filters.follow_speed.max_highpass_half_width",
+                    follow.max_highpass_half_width,
+                ),
+                (
+                    "filters.follow_speed.max_smoothing_half_width",
+                    follow.max_smoothing_half_width,
+                ),
+            ];
+            for (name, n) in maxima {
+                if n > MAX_HALF_WIDTH {
+                    return Err((name, n as f64, "at most 10^6 samples"));
+                }
+            }
+            if self.filters.check().is_err() {
+                return Err((
+                    "filters.follow_speed.reference_step_m",
+                    follow.reference_step_m,
+                    "positive and finite, with maximum half-widths at least the nominal ones",
+                ));
             }
         }
         if !(self.start_travel_m.is_finite() && self.start_travel_m >= 0.0) {
