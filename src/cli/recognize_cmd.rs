@@ -57,9 +57,9 @@ enum RecognizeWhat {
 /// spectral with som: one map per behaviour over whole-scratch histograms (3 nodes per class,
 /// at least 12; cells scaled like the rubbing map's features), one decision per scratch, fused
 /// over a trial's behaviours (one-hot votes weighted by cross-validated reliability).
-/// both: on rubbing captures that also carry accelerometer columns, each window's five Nakano
-/// features followed by the 125-cell histogram of the same window's acceleration (windows of at
-/// least 768 samples).
+/// both: on rubbing captures that also carry accelerometer columns (three axes, or a single-axis
+/// vibration_mps2), each window's five Nakano features followed by the 125-cell histogram of the
+/// same window's acceleration (windows of at least 768 samples).
 #[derive(Debug, Args)]
 struct TrainArgs {
     /// Training captures.

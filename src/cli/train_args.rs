@@ -56,7 +56,8 @@ impl Training {
 #[derive(Debug, Args)]
 pub(crate) struct TrainOptions {
     /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
-    /// (rubbing windows with accelerometer columns). Default: som nakano, knn and svm spectral.
+    /// (rubbing windows with accelerometer columns: three axes, or a single-axis
+    /// vibration_mps2). Default: som nakano, knn and svm spectral.
     #[arg(long, value_enum, value_name = "nakano|spectral|both")]
     features: Option<Features>,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the

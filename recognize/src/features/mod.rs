@@ -16,8 +16,9 @@
 //!   histograms of whole scratches, one decision per scratch, fused over a trial's behaviours
 //!   like k-NN and SVM (reliability from cross-validation by trial).
 //! - **`both`** (k-NN, SVM: the window variants; SOM: [`RecognizerBody::SomWindows`](crate::RecognizerBody::SomWindows)): each
-//!   window of a rubbing capture that also has accelerometer columns gets Nakano's five features
-//!   followed by the 125 cells of the spectrotemporal histogram of the same window's samples.
+//!   window of a rubbing capture that also has accelerometer columns (three axes, or the
+//!   single-axis `vibration_mps2`) gets Nakano's five features followed by the 125 cells of the
+//!   spectrotemporal histogram of the same window's samples.
 
 pub mod nakano;
 mod scaling;
@@ -42,8 +43,9 @@ pub enum FeatureSet {
     Nakano,
     /// Sinapov's spectrotemporal histogram of a whole scratch (k-NN's and SVM's default).
     Spectral,
-    /// Per window of a rubbing capture with accelerometer columns: the five Nakano features
-    /// followed by the histogram of the window's acceleration (130 features).
+    /// Per window of a rubbing capture with accelerometer columns (three axes, or a single
+    /// vibration axis): the five Nakano features followed by the histogram of the window's
+    /// acceleration (130 features).
     Both,
 }
 
@@ -78,8 +80,8 @@ impl FeatureSet {
 
     /// The columns of `capture` these features need but it lacks (empty when it has them all).
     /// Nakano's friction comes from `friction_force_n` or, without it, from the reaction-force
-    /// observer over `tangential_command_force_n`. `spectral` reads the three accelerometer axes
-    /// or, without them, the single-axis `vibration_mps2`; `both` needs the three axes.
+    /// observer over `tangential_command_force_n`. `spectral` and `both` read the three
+    /// accelerometer axes or, without them, the single-axis `vibration_mps2`.
     pub fn missing_columns(self, capture: &LabelledCapture) -> Vec<String> {
         let has = |name: &str| capture.capture.columns().iter().any(|c| c == name);
         let mut missing = Vec::new();
@@ -96,9 +98,9 @@ impl FeatureSet {
         if matches!(self, Self::Spectral | Self::Both) {
             let before = missing.len();
             missing.extend(ACCEL_COLUMNS.iter().filter(|c| !has(c)).map(|c| (*c).to_owned()));
-            // A whole scratch's histogram also works from one axis; `both`'s windows still
-            // read the three.
-            if self == Self::Spectral && missing.len() > before {
+            // The histogram (of a whole scratch, or of each window for `both`) also works
+            // from one axis.
+            if missing.len() > before {
                 if has(VIBRATION_COLUMN) {
                     missing.truncate(before);
                 } else if let Some(last) = missing.last_mut() {

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
 use super::nakano::{FEATURES, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
-use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan};
+use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use crate::{LabelledCapture, RecognizeError};
 
 /// Default decision window of a SOM recognizer, s (15 mm of travel at 5 mm/s).
@@ -348,7 +348,10 @@ pub(crate) fn windows(
 
 /// The feature vectors of the windows of `c` that `windowing` picks: Nakano's five features,
 /// followed for [`FeatureSet::Both`] by the spectrotemporal histogram of the window's own
-/// accelerometer samples (`start .. start + window_samples`, all before the decision).
+/// accelerometer samples (`start .. start + window_samples`, all before the decision): of the
+/// three axes' magnitude when the capture has them, else of its single-axis
+/// [`VIBRATION_COLUMN`], as a whole scratch's histogram is
+/// ([`SpectrogramPlan::capture_features`]).
 pub(crate) fn window_vectors(
     c: &LabelledCapture,
     windowing: &NakanoWindowing,
@@ -365,21 +368,40 @@ pub(crate) fn window_vectors(
         features: "spectrotemporal",
         source: Box::new(source),
     };
-    let [x, y, z] = ACCEL_COLUMNS.map(|name| c.capture.column(name));
-    let (x, y, z) = (
-        x.map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))?,
-        y.map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))?,
-        z.map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))?,
-    );
+    let column = |name| {
+        c.capture
+            .column(name)
+            .map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))
+    };
+    let has_axes = ACCEL_COLUMNS.iter().all(|name| c.capture.has_column(name));
+    let axes = if !has_axes && c.capture.has_column(VIBRATION_COLUMN) {
+        Axes::One(column(VIBRATION_COLUMN)?)
+    } else {
+        let [x, y, z] = ACCEL_COLUMNS;
+        Axes::Three(column(x)?, column(y)?, column(z)?)
+    };
     let len = windowing.window_samples;
     nakano
         .into_iter()
         .map(|(s, f)| {
-            let range = s..(s + len).min(x.len());
-            let h = plan
-                .features(&x[range.clone()], &y[range.clone()], &z[range], cell_scale)
-                .map_err(spectral)?;
+            let h = match axes {
+                Axes::Three(x, y, z) => {
+                    let range = s..(s + len).min(x.len());
+                    plan.features(&x[range.clone()], &y[range.clone()], &z[range], cell_scale)
+                }
+                Axes::One(v) => plan.single_axis_features(&v[s..(s + len).min(v.len())], cell_scale),
+            }
+            .map_err(spectral)?;
             Ok((s, f.iter().copied().chain(h).collect()))
         })
         .collect()
+}
+
+/// The accelerometer columns a window's histogram is computed from.
+#[derive(Clone, Copy)]
+enum Axes<'a> {
+    /// The three axes (their magnitude).
+    Three(&'a [f64], &'a [f64], &'a [f64]),
+    /// A single vibration axis.
+    One(&'a [f64]),
 }
