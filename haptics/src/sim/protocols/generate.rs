@@ -9,7 +9,7 @@ use std::str::FromStr;
 use capture::{Capture, CaptureError, write_atomically};
 
 use super::split::Split;
-use super::{li_bi, nakano, sinapov};
+use super::{li_bi, multistream, nakano, sinapov};
 use crate::error::HapticsError;
 use crate::sim::world::scratch::{Behaviour, household_surfaces};
 use crate::sim::world::surface::{SurfacePatch, nakano_surfaces};
@@ -23,6 +23,9 @@ pub enum CaptureSet {
     Nakano,
     /// Sinapov: 20 surfaces + air × 5 behaviours × 10 trials.
     Sinapov,
+    /// A sliding study logged as one CSV per stream on its own clock (not captures: input for
+    /// `palpus import`); only when asked for, never in [`CaptureSet::ALL`].
+    Multistream,
 }
 
 impl CaptureSet {
@@ -35,6 +38,7 @@ impl CaptureSet {
             Self::LiBi => "li_bi",
             Self::Nakano => "nakano",
             Self::Sinapov => "sinapov",
+            Self::Multistream => multistream::FOLDER,
         }
     }
 }
@@ -51,8 +55,11 @@ impl FromStr for CaptureSet {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Self::ALL
             .into_iter()
+            .chain([Self::Multistream])
             .find(|set| set.name() == s.replace('-', "_"))
-            .ok_or_else(|| format!("unknown capture set `{s}` (expected one of: li_bi, nakano, sinapov)"))
+            .ok_or_else(|| {
+                format!("unknown capture set `{s}` (expected one of: li_bi, nakano, sinapov, multistream)")
+            })
     }
 }
 
@@ -150,6 +157,7 @@ pub fn generate(
     let mut sets = sets.to_vec();
     sets.sort();
     sets.dedup();
+    let logs = sets.contains(&CaptureSet::Multistream);
     for set in sets {
         match set {
             CaptureSet::LiBi => {
@@ -213,7 +221,13 @@ pub fn generate(
                     }
                 }
             }
+            // Logs, not captures: written below, once `write` is done with the summary.
+            CaptureSet::Multistream => {}
         }
+    }
+    if logs {
+        let files = multistream::write_logs(out, seed, multistream::TRIALS, progress)?;
+        summary.files.extend(files);
     }
     write_manifest(out, &summary)?;
     Ok(summary)

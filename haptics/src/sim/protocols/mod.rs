@@ -9,6 +9,7 @@
 mod columns;
 pub mod generate;
 pub mod li_bi;
+pub mod multistream;
 pub mod nakano;
 mod seed;
 pub mod sinapov;

@@ -8,6 +8,7 @@ pub(crate) mod tag {
     pub const SOFT: u64 = 2;
     pub const NEEDLE: u64 = 3;
     pub const NAKANO: u64 = 4;
+    pub const MULTISTREAM: u64 = 5;
 }
 
 #[cfg(test)]
