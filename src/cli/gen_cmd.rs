@@ -16,6 +16,11 @@ use haptics::sim::protocols::{CaptureSet, generate};
 /// training and a held-out capture each), Nakano's rubbing of 7 surfaces × 3 runs, and
 /// Sinapov-style scratching of 20 surfaces and air × 5 behaviours × 10 trials. A MANIFEST.csv
 /// lists them. The same seed always gives the same bytes.
+///
+/// Only when asked for (`--only multistream`): a sliding study of the same 20 surfaces written
+/// not as captures but as a rig logs it, one CSV per stream (force, position, velocity at about
+/// 88 Hz on their own jittered clocks; a 2.2 kHz vibration channel packed 22 samples per 100 Hz
+/// row), input for `palpus import`; multistream/README.md says how to import it.
 #[derive(Debug, Args)]
 pub(crate) struct GenArgs {
     /// Folder to write into (created if missing; existing captures are replaced).
@@ -24,7 +29,8 @@ pub(crate) struct GenArgs {
     /// Seed of every noise source and every trial's variation.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Only these sets (comma-separated): li_bi, nakano, sinapov.
+    /// Only these sets (comma-separated): li_bi, nakano, sinapov (the default: all three), and
+    /// multistream (never by default).
     #[arg(long, value_delimiter = ',', value_name = "SET")]
     only: Vec<CaptureSet>,
     /// Print nothing but errors.
