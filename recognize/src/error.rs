@@ -73,6 +73,15 @@ pub enum RecognizeError {
         missing: Vec<String>,
     },
     /// No capture gave a training vector.
+    /// A capture whose samples were dropped ([`crate::LabelledCapture::keep_features`]) was
+    /// asked for features it did not keep.
+    #[error("{}: its samples were dropped after computing its features, and {needed} were not among them", path.display())]
+    FeaturesNotKept {
+        /// The capture.
+        path: PathBuf,
+        /// The features asked for.
+        needed: String,
+    },
     #[error("no training windows: every capture is shorter than one window after the start travel")]
     NoTrainingData,
     /// A class's captures gave no training window, so the recognizer could never answer it.

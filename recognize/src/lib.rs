@@ -39,10 +39,11 @@ pub use knn::{BehaviourData, FeatureScaling, Knn, KnnParams, ReliabilityFusion, 
 pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{
     BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,
-    Decision, Evaluation, FusedEvaluation, KnnTrainer, LABEL_KEY, LabelledCapture, Method, RECOGNIZER_FORMAT,
-    RECOGNIZER_VERSION, RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer,
-    SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, UnmappedClasses, WINDOW_SVM_FALLBACK_C,
-    recording_groups, som_nodes, som_params, train, trial_groups, window_som_nodes, window_svc_params,
+    Decision, Evaluation, FEW_TRAINING_VECTORS, FeatureNeeds, FusedEvaluation, KnnTrainer, LABEL_KEY,
+    LabelledCapture, Method, RECOGNIZER_FORMAT, RECOGNIZER_VERSION, RecognizerBody, RecognizerFile,
+    SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer, SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer,
+    TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, recording_groups, som_nodes, som_params, train,
+    trial_groups, window_som_nodes, window_svc_params,
 };
 pub use som::{Normalization, Som, SomParams};
 pub use svc::{CSearch, Svc, SvcParams};

@@ -33,7 +33,7 @@ use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION
 
 pub use scaling::WindowScaling;
 pub use windowing::{DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowlessCapture};
-pub(crate) use windowing::{window_vectors, windows};
+pub(crate) use windowing::{Travel, window_vectors, windows};
 
 /// Which features a recognizer computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -152,6 +152,12 @@ pub(crate) fn capture_histogram(
     c: &LabelledCapture,
     scale: CellScale,
 ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
+    if let Some(kept) = c.kept() {
+        return kept
+            .histogram(scale)
+            .copied()
+            .ok_or_else(|| c.not_kept(format!("the histogram of the whole capture ({scale:?} cells)")));
+    }
     plan.capture_features(&c.capture, scale)
         .map_err(|source| RecognizeError::Features {
             path: c.reference.path.clone(),

@@ -7,6 +7,7 @@ use super::FeatureSet;
 use super::nakano::{FEATURES, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use crate::{LabelledCapture, RecognizeError};
+use capture::Capture;
 
 /// Default decision window of a SOM recognizer, s (15 mm of travel at 5 mm/s).
 pub const DECISION_WINDOW_S: f64 = 3.0;
@@ -282,11 +283,14 @@ impl WindowlessCapture {
         let rate = windowing.rate_hz;
         let margin = windowing.filters.lookahead_samples();
         let len = windowing.window_samples;
-        let samples = c.capture.len();
+        let samples = c.samples();
         let secs = |n: usize| n as f64 / rate;
-        let position: &[f64] = NakanoSignals::from_capture(&c.capture).map_or(&[], |s| s.position_m());
         let travel_mm = |at: f64| 1e3 * at;
         let start = windowing.start_travel_m;
+        let travel = match c.kept() {
+            Some(kept) => kept.travel().clone(),
+            None => Travel::of(&c.capture, [start]),
+        };
         let reason = if samples < len + 2 * margin {
             format!(
                 "is {:.3} s long; a {kind} window needs {} s, {:.3} s with the filters' margins",
@@ -295,23 +299,20 @@ impl WindowlessCapture {
                 secs(len + 2 * margin)
             )
         } else {
-            let x0 = position.first().copied().unwrap_or_default();
-            match position.iter().position(|x| (x - x0).abs() >= start) {
-                None => {
-                    let most = position.iter().map(|x| (x - x0).abs()).fold(0.0, f64::max);
-                    format!(
-                        "moves its tip only {:.3} mm (no sliding contact?); a {kind} window starts after {} mm of travel",
-                        travel_mm(most),
-                        travel_mm(start)
-                    )
-                }
-                Some(at) => format!(
+            match travel.reached(start) {
+                Some(None) => format!(
+                    "moves its tip only {:.3} mm (no sliding contact?); a {kind} window starts after {} mm of travel",
+                    travel_mm(travel.most_m),
+                    travel_mm(start)
+                ),
+                Some(Some(at)) => format!(
                     "reaches {} mm of travel at {:.3} s of its {:.3} s; no {} s {kind} window fits after that",
                     travel_mm(start),
                     secs(at),
                     secs(samples),
                     secs(len)
                 ),
+                None => format!("gave no {kind} window"),
             }
         };
         Self {
@@ -321,11 +322,57 @@ impl WindowlessCapture {
     }
 }
 
+/// How far a capture's tip travels from its first sample: the most, and the first sample at
+/// which it has travelled each of some distances (the start travels of windowings), as
+/// [`WindowlessCapture::of`] explains a capture without windows.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Travel {
+    /// The farthest the tip gets from its first position, m (0 without a position column).
+    most_m: f64,
+    /// Each distance, m, and the first sample at least that far (`None`: never).
+    reached: Vec<(f64, Option<usize>)>,
+}
+
+impl Travel {
+    /// The travel of `capture`'s tip, and when it first covers each of `distances_m`.
+    pub(crate) fn of(capture: &Capture, distances_m: impl IntoIterator<Item = f64>) -> Self {
+        let position: &[f64] = NakanoSignals::from_capture(capture).map_or(&[], |s| s.position_m());
+        let x0 = position.first().copied().unwrap_or_default();
+        let most_m = position.iter().map(|x| (x - x0).abs()).fold(0.0, f64::max);
+        let reached = distances_m
+            .into_iter()
+            .map(|d| (d, position.iter().position(|x| (x - x0).abs() >= d)))
+            .collect();
+        Self { most_m, reached }
+    }
+
+    /// When the tip first covers `distance_m`; `None` when that distance was not measured.
+    fn reached(&self, distance_m: f64) -> Option<Option<usize>> {
+        self.reached
+            .iter()
+            .find(|(d, _)| *d == distance_m)
+            .map(|(_, at)| *at)
+    }
+}
+
 /// Start and features of every decision window of a capture.
 pub(crate) fn windows(
     c: &LabelledCapture,
     windowing: &NakanoWindowing,
 ) -> Result<Vec<(usize, [f64; FEATURES])>, RecognizeError> {
+    if let Some(kept) = c.kept() {
+        let vectors = kept
+            .windows(windowing, FeatureSet::Nakano, CellScale::Mean)
+            .ok_or_else(|| c.not_kept(format!("Nakano's features of {}", describe(windowing))))?;
+        return Ok(vectors
+            .iter()
+            .map(|(s, v)| {
+                let mut f = [0.0; FEATURES];
+                f.copy_from_slice(&v[..FEATURES]);
+                (*s, f)
+            })
+            .collect());
+    }
     let nakano = |source| RecognizeError::Features {
         path: c.reference.path.clone(),
         features: "Nakano",
@@ -359,6 +406,15 @@ pub(crate) fn window_vectors(
     cell_scale: CellScale,
     plan: &SpectrogramPlan,
 ) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
+    if let Some(kept) = c.kept() {
+        let vectors = kept
+            .windows(windowing, features, cell_scale)
+            .ok_or_else(|| c.not_kept(format!("{features} features of {}", describe(windowing))))?;
+        return Ok(vectors
+            .iter()
+            .map(|(s, v)| (*s, v[..features.dim()].to_vec()))
+            .collect());
+    }
     let nakano = windows(c, windowing)?;
     if features != FeatureSet::Both {
         return Ok(nakano.into_iter().map(|(s, f)| (s, f.to_vec())).collect());
@@ -404,4 +460,14 @@ enum Axes<'a> {
     Three(&'a [f64], &'a [f64], &'a [f64]),
     /// A single vibration axis.
     One(&'a [f64]),
+}
+
+/// A windowing in words, for errors: its window, hop and rate.
+fn describe(windowing: &NakanoWindowing) -> String {
+    format!(
+        "{} s windows every {} s at {} Hz",
+        windowing.window_s(),
+        windowing.hop_samples as f64 / windowing.rate_hz,
+        windowing.rate_hz
+    )
 }

@@ -375,7 +375,7 @@ fn behaviour_index(
 fn whole_capture_decision(capture: &LabelledCapture, label: usize, probabilities: &[f64]) -> Decision {
     Decision {
         window_start: 0,
-        decided_at: capture.capture.len().saturating_sub(1),
+        decided_at: capture.samples().saturating_sub(1),
         label,
         confidence: probabilities.get(label).copied().unwrap_or(0.0),
     }

@@ -206,7 +206,7 @@ impl RecognizerFile {
             let c = c.borrow();
             let truth = class_index(&self.classes, c)?;
             let rate_hz = c.capture.metadata().rate_hz();
-            duration_s += c.capture.len() as f64 / rate_hz;
+            duration_s += c.samples() as f64 / rate_hz;
             let decisions = self.decisions(c, windowing.as_ref())?;
             if decisions.is_empty() {
                 windowless.push(match &windowing {

@@ -3,6 +3,9 @@
 
 use std::collections::BTreeSet;
 use std::path::Path;
+use std::sync::Arc;
+
+use super::kept::KeptFeatures;
 
 use crate::RecognizeError;
 use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
@@ -13,9 +16,14 @@ pub const LABEL_KEY: &str = "surface";
 pub const BEHAVIOUR_KEY: &str = "behaviour";
 
 /// A capture with its class, behaviour and hash, as the recognizer sees it.
+///
+/// [`LabelledCapture::keep_features`] computes the features a training or an evaluation will
+/// read and drops the samples, so that many high-rate captures fit in memory.
 #[derive(Debug, Clone)]
 pub struct LabelledCapture {
-    /// The capture.
+    /// The capture; after [`LabelledCapture::keep_features`] only its header, its columns and
+    /// its first sample ([`LabelledCapture::has_samples`] says which, and
+    /// [`LabelledCapture::samples`] counts the samples it had).
     pub capture: Capture,
     /// Its class (metadata `surface`).
     pub label: String,
@@ -23,6 +31,8 @@ pub struct LabelledCapture {
     pub behaviour: Option<String>,
     /// Where it was read from, and the SHA-256 of its bytes.
     pub reference: CaptureRef,
+    /// The features computed before the samples were dropped; `None` while it has them.
+    pub(crate) kept: Option<Arc<KeptFeatures>>,
 }
 
 impl LabelledCapture {
@@ -57,6 +67,7 @@ impl LabelledCapture {
                 path: path.to_owned(),
                 sha256,
             },
+            kept: None,
         })
     }
 }

@@ -20,6 +20,7 @@ mod decide;
 mod evaluate;
 mod file;
 mod grouping;
+mod kept;
 pub(crate) mod labelled;
 mod train;
 
@@ -30,11 +31,12 @@ pub use file::{
     RecognizerFile,
 };
 pub use grouping::{TRIAL_KEY, recording_groups, trial_groups};
+pub use kept::FeatureNeeds;
 pub use labelled::{BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture};
 pub use train::{
-    CV_FOLDS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainSettings,
-    Trainer, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_som_nodes,
-    window_svc_params,
+    CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC,
+    SvmTrainer, TrainSettings, Trainer, TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes,
+    som_params, train, window_som_nodes, window_svc_params,
 };
 
 #[cfg(test)]

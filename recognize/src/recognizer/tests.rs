@@ -6,6 +6,8 @@ use crate::features::histogram_names;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::knn::KnnParams;
+use crate::recognizer::labelled::class_list;
+use crate::recognizer::train::training_windows;
 use crate::som::SomParams;
 use crate::svc::{CSearch, Svc, SvcParams};
 use capture::kind::{FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S};
@@ -566,4 +568,247 @@ fn the_map_grows_with_the_classes_and_names_the_classes_it_cannot_answer() {
     )
     .expect("train");
     assert_eq!(knn.classes_without_nodes(), []);
+}
+
+/// `c` with a single-axis vibration: gravity and a tone whose frequency tells the surface.
+fn with_vibration(c: LabelledCapture, tone_hz: f64) -> LabelledCapture {
+    let capture = &c.capture;
+    let mut columns = capture.columns().to_vec();
+    let mut data = capture.data().to_vec();
+    let vibration = capture
+        .time()
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            9.81 + 0.5 * (std::f64::consts::TAU * tone_hz * t).sin() + 0.05 * ((k * 7919) % 17) as f64 / 17.0
+        })
+        .collect();
+    columns.push(capture::kind::VIBRATION_MPS2.to_owned());
+    data.push(vibration);
+    let meta = capture.metadata().clone();
+    LabelledCapture {
+        capture: Capture::new(meta, columns, data).expect("valid"),
+        ..c
+    }
+}
+
+/// Three surfaces with vibration, two trials each, `seconds` long.
+fn vibrating_surfaces(seconds: f64, trials: std::ops::Range<u32>) -> Vec<LabelledCapture> {
+    let mut out = Vec::new();
+    for t in trials {
+        for (c, tone) in three_surfaces(seconds).into_iter().zip([40.0, 95.0, 150.0]) {
+            let mut c = with_vibration(c, tone + f64::from(t));
+            let meta = c.capture.metadata().clone().with(TRIAL_KEY, t);
+            c.capture =
+                Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec()).expect("valid");
+            c.reference.path = format!("{}_{t}.csv", c.label).into();
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[test]
+fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
+    let train_set = vibrating_surfaces(4.0, 0..2);
+    let mut held_out = vibrating_surfaces(3.0, 2..3);
+    held_out.push(from(
+        with_vibration(rubbing("fine", 5e-6, 0.3e-3, 0.10, 0.9), 40.0),
+        "short.csv",
+    ));
+    let windowed = |method, features| TrainSettings {
+        features,
+        window_s: 1.0,
+        train_window_s: Some(1.0),
+        hop_s: 0.2,
+        c: SvmC::Fixed(10.0),
+        ..TrainSettings::new(method)
+    };
+    let settings = [
+        windowed(Method::Som, FeatureSet::Nakano),
+        windowed(Method::Som, FeatureSet::Both),
+        windowed(Method::Knn, FeatureSet::Nakano),
+        windowed(Method::Svm, FeatureSet::Both),
+        windowed(Method::Som, FeatureSet::Spectral),
+        windowed(Method::Knn, FeatureSet::Spectral),
+        windowed(Method::Svm, FeatureSet::Spectral),
+    ];
+    for s in &settings {
+        let what = format!("{} over {}", s.method.name(), s.features);
+        let needs = FeatureNeeds::training(s, 1000.0).expect("needs");
+        let kept: Vec<LabelledCapture> = train_set
+            .iter()
+            .map(|c| c.clone().keep_features(&needs).expect("keeps"))
+            .collect();
+        assert!(
+            kept.iter().all(|c| !c.has_samples() && c.capture.len() == 1),
+            "{what}"
+        );
+        assert_eq!(kept[0].samples(), train_set[0].capture.len(), "{what}");
+        let model = train(&train_set, s).expect("trains");
+        assert_eq!(train(&kept, s).expect("trains on kept"), model, "{what}");
+        assert_eq!(
+            format!("{:?}", model.som_quality(&kept, true, None).expect("quality")),
+            format!(
+                "{:?}",
+                model.som_quality(&train_set, true, None).expect("quality")
+            ),
+            "{what}"
+        );
+
+        let needs = FeatureNeeds::evaluation(&model, &[]).expect("needs");
+        let kept: Vec<LabelledCapture> = held_out
+            .iter()
+            .map(|c| c.clone().keep_features(&needs))
+            .collect::<Result<_, _>>()
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let (full, from_kept) = (
+            model.evaluate(&held_out, None).expect("evaluates"),
+            model.evaluate(&kept, None).expect("evaluates kept"),
+        );
+        assert_eq!(format!("{from_kept:?}"), format!("{full:?}"), "{what}");
+        assert!(full.confusion.total() > 0, "{what}");
+        assert_eq!(
+            format!("{:?}", model.evaluate_fused(&kept).expect("fuses")),
+            format!("{:?}", model.evaluate_fused(&held_out).expect("fuses")),
+            "{what}"
+        );
+        assert_eq!(
+            format!("{:?}", model.som_quality(&kept, false, None).expect("quality")),
+            format!(
+                "{:?}",
+                model.som_quality(&held_out, false, None).expect("quality")
+            ),
+            "{what}"
+        );
+        if let Some(w) = model.windowing() {
+            // The short capture gives no window, and says why as it would with its samples.
+            assert_eq!(full.windowless.len(), 1, "{what}");
+            // A window length that was not kept is an error, not an evaluation of nothing.
+            let err = model
+                .evaluate(&kept, Some(w.window_s() / 2.0))
+                .expect_err("not kept");
+            assert!(
+                matches!(err, RecognizeError::FeaturesNotKept { .. }),
+                "{what}: {err}"
+            );
+            assert!(err.to_string().contains("were not among them"), "{err}");
+        }
+    }
+    let needs = FeatureNeeds::new().with_histogram(CellScale::Mean);
+    let kept = train_set[0].clone().keep_features(&needs).expect("keeps");
+    let err = kept.keep_features(&needs).expect_err("no samples left");
+    assert!(matches!(err, RecognizeError::FeaturesNotKept { .. }), "{err}");
+}
+
+#[test]
+fn data_warnings_name_classes_with_few_vectors_and_constant_features() {
+    let settings = |method| TrainSettings {
+        window_s: 0.5,
+        train_window_s: Some(0.5),
+        features: FeatureSet::Nakano,
+        ..TrainSettings::new(method)
+    };
+    // Four seconds of each surface give dozens of windows, and every feature varies.
+    assert_eq!(
+        settings(Method::Som)
+            .data_warnings(&three_surfaces(4.0))
+            .expect("warnings"),
+        []
+    );
+    // 1.9 s of cork gives windows from 1 s of travel on, until the window and its margin end.
+    let mut captures = three_surfaces(4.0);
+    captures.push(from(rubbing("cork", 10e-6, 1e-3, 0.15, 1.9), "cork.csv"));
+    let (x, y, _) = training_windows(
+        &captures,
+        &class_list(&captures),
+        &settings(Method::Som).windowing(&captures).expect("windowing"),
+        FeatureSet::Nakano,
+        CellScale::Mean,
+    )
+    .expect("windows");
+    let cork_index = class_list(&captures)
+        .iter()
+        .position(|c| c == "cork")
+        .expect("cork");
+    let cork = y.iter().filter(|&&l| l == cork_index).count();
+    assert!((1..FEW_TRAINING_VECTORS).contains(&cork), "{cork} of {}", x.len());
+    for (method, least) in [(Method::Som, 5), (Method::Knn, 5), (Method::Svm, 5)] {
+        let warnings = settings(method).data_warnings(&captures).expect("warnings");
+        assert_eq!(
+            warnings,
+            [TrainingWarning::FewVectors {
+                behaviour: None,
+                class: "cork".into(),
+                vectors: cork,
+                least,
+            }],
+            "{method:?}"
+        );
+    }
+    // A k-NN needs at least its k.
+    let knn_k = TrainSettings {
+        k: 7,
+        ..settings(Method::Knn)
+    };
+    let warnings = knn_k.data_warnings(&captures).expect("warnings");
+    assert!(
+        matches!(&warnings[..], [TrainingWarning::FewVectors { least: 7, class, .. }] if class == "cork"),
+        "{warnings:?}"
+    );
+    // A flat surface everywhere: the roughness features are 0 in every window.
+    let flat: Vec<LabelledCapture> = [("a", 0.1), ("b", 0.2)]
+        .map(|(s, f)| rubbing(s, 0.0, 1e-3, f, 4.0))
+        .into();
+    let warnings = settings(Method::Som).data_warnings(&flat).expect("warnings");
+    let [TrainingWarning::ConstantFeatures { features, of: 5, .. }] = &warnings[..] else {
+        panic!("{warnings:?}");
+    };
+    let names: Vec<&str> = features.iter().map(|(n, _)| n.as_str()).collect();
+    assert!(
+        names.contains(&"roughness_mean_abs_m") && names.contains(&"roughness_variance_m2"),
+        "{names:?}"
+    );
+    assert!(!names.iter().any(|n| n.starts_with("friction")), "{names:?}");
+    assert!(
+        warnings[0].to_string().contains("constant over all"),
+        "{}",
+        warnings[0]
+    );
+
+    // Whole-scratch histograms: two per class, and a vibration that never changes.
+    let spectral = TrainSettings::new(Method::Knn);
+    let mut scratches = vibrating_surfaces(4.0, 0..2);
+    let warnings = spectral.data_warnings(&scratches).expect("warnings");
+    assert_eq!(warnings.len(), 3, "{warnings:?}");
+    assert!(
+        warnings.iter().all(|w| matches!(
+            w,
+            TrainingWarning::FewVectors {
+                vectors: 2,
+                least: 5,
+                behaviour: None,
+                ..
+            }
+        )),
+        "{warnings:?}"
+    );
+    for c in &mut scratches {
+        let mut data = c.capture.data().to_vec();
+        let last = data.len() - 1;
+        data[last].fill(9.81);
+        c.capture =
+            Capture::new(c.capture.metadata().clone(), c.capture.columns().to_vec(), data).expect("valid");
+    }
+    let warnings = spectral.data_warnings(&scratches).expect("warnings");
+    let constant = warnings.iter().find_map(|w| match w {
+        TrainingWarning::ConstantFeatures {
+            features,
+            of,
+            vectors,
+            ..
+        } => Some((features.len(), *of, *vectors)),
+        TrainingWarning::FewVectors { .. } => None,
+    });
+    assert_eq!(constant, Some((125, 125, 6)), "{warnings:?}");
 }

@@ -8,6 +8,7 @@
 mod knn;
 mod som;
 mod svm;
+mod warnings;
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -16,6 +17,7 @@ pub use som::{
     SCRATCH_SOM_NORMALIZATION, SomTrainer, UnmappedClasses, som_nodes, som_params, window_som_nodes,
 };
 pub use svm::{SvmTrainer, WINDOW_SVM_FALLBACK_C, window_svc_params};
+pub use warnings::{FEW_TRAINING_VECTORS, TrainingWarning};
 
 use super::labelled::{check_rate, class_index, class_list};
 use super::{LabelledCapture, RecognizerBody, RecognizerFile, recording_groups, trial_groups};
@@ -142,6 +144,11 @@ impl TrainSettings {
             .first()
             .map(|c| c.capture.metadata().rate_hz())
             .ok_or(RecognizeError::NoTrainingData)?;
+        self.windowing_at(rate_hz)
+    }
+
+    /// The windowing of windowed features at `rate_hz`.
+    pub fn windowing_at(&self, rate_hz: f64) -> Result<NakanoWindowing, RecognizeError> {
         NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?
             .with_training_window_s(self.training_window_s())
     }

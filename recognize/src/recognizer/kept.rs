@@ -1,0 +1,266 @@
+//! Features computed ahead, so that a capture's samples can be dropped: training and evaluating
+//! on hundreds of high-rate captures then holds one capture's samples at a time, plus every
+//! capture's feature vectors (a few per cent of the samples).
+//!
+//! [`FeatureNeeds`] lists what a training or an evaluation will read (window vectors of given
+//! windowings, whole-capture histograms); [`LabelledCapture::keep_features`] computes exactly
+//! those, by the same functions the recognizers call on samples, and drops the samples. The
+//! recognizers then read the kept vectors, so results are bit-identical to those on the whole
+//! captures; asking a capture without samples for anything it did not keep is a typed error,
+//! never a computation on missing samples.
+
+use std::sync::Arc;
+
+use super::file::{RecognizerBody, RecognizerFile};
+use super::labelled::{LabelledCapture, check_rate};
+use super::train::TrainSettings;
+use crate::RecognizeError;
+use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
+use crate::features::{FeatureSet, NakanoWindowing, Travel, capture_histogram, window_vectors};
+use capture::Capture;
+
+/// The features a training or an evaluation reads from each capture: window vectors (of a
+/// windowing, a feature set and, for [`FeatureSet::Both`], a cell scaling) and whole-capture
+/// histograms (of a cell scaling).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FeatureNeeds {
+    windows: Vec<(NakanoWindowing, FeatureSet, CellScale)>,
+    histograms: Vec<CellScale>,
+}
+
+impl FeatureNeeds {
+    /// Nothing yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Also the vectors of the windows `windowing` picks, of `features` ([`FeatureSet::Nakano`]
+    /// or [`FeatureSet::Both`]; `cell_scale` scales the latter's histograms).
+    pub fn with_windows(
+        mut self,
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        cell_scale: CellScale,
+    ) -> Self {
+        let need = (windowing, features, cell_scale);
+        if !self.windows.contains(&need) {
+            self.windows.push(need);
+        }
+        self
+    }
+
+    /// Also the spectrotemporal histogram of the whole capture, cells scaled by `cell_scale`.
+    pub fn with_histogram(mut self, cell_scale: CellScale) -> Self {
+        if !self.histograms.contains(&cell_scale) {
+            self.histograms.push(cell_scale);
+        }
+        self
+    }
+
+    /// What training as `settings` say on captures sampled at `rate_hz` reads: the training
+    /// windows of windowed features, else each capture's histogram.
+    pub fn training(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
+        let needs = Self::new();
+        Ok(match settings.features {
+            FeatureSet::Spectral => needs.with_histogram(settings.cell_scale),
+            windowed => needs.with_windows(
+                settings.windowing_at(rate_hz)?.training(),
+                windowed,
+                settings.cell_scale,
+            ),
+        })
+    }
+
+    /// What training as `settings` say and then deciding with the trained recognizer read
+    /// (a cross-validation's rounds): [`FeatureNeeds::training`] and the decision windows.
+    pub fn training_and_decisions(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
+        let needs = Self::training(settings, rate_hz)?;
+        Ok(match settings.features {
+            FeatureSet::Spectral => needs,
+            windowed => needs.with_windows(settings.windowing_at(rate_hz)?, windowed, settings.cell_scale),
+        })
+    }
+
+    /// What [`RecognizerFile::evaluate`] with each window length of `window_s` (none: the
+    /// recognizer's own), [`RecognizerFile::evaluate_fused`] and, for a decision window,
+    /// [`RecognizerFile::som_quality`] read with `model`.
+    pub fn evaluation(model: &RecognizerFile, window_s: &[f64]) -> Result<Self, RecognizeError> {
+        let (windowing, features, cell_scale) = match &model.body {
+            RecognizerBody::Som { windowing, .. } => (windowing, FeatureSet::Nakano, CellScale::Mean),
+            RecognizerBody::SomWindows {
+                windowing,
+                cell_scale,
+                ..
+            } => (windowing, FeatureSet::Both, *cell_scale),
+            RecognizerBody::KnnWindows {
+                features,
+                windowing,
+                cell_scale,
+                ..
+            }
+            | RecognizerBody::SvmWindows {
+                features,
+                windowing,
+                cell_scale,
+                ..
+            } => (windowing, *features, *cell_scale),
+            RecognizerBody::Knn { cell_scale, .. }
+            | RecognizerBody::Svm { cell_scale, .. }
+            | RecognizerBody::SomScratches { cell_scale, .. } => {
+                return Ok(Self::new().with_histogram(*cell_scale));
+            }
+        };
+        if window_s.is_empty() {
+            return Ok(Self::new().with_windows(*windowing, features, cell_scale));
+        }
+        window_s.iter().try_fold(Self::new(), |needs, &s| {
+            Ok(needs.with_windows(windowing.with_window_s(s)?, features, cell_scale))
+        })
+    }
+
+    /// Whether nothing is needed.
+    pub fn is_empty(&self) -> bool {
+        self.windows.is_empty() && self.histograms.is_empty()
+    }
+}
+
+/// The windows of one windowing kept for a capture.
+#[derive(Debug)]
+struct KeptWindows {
+    windowing: NakanoWindowing,
+    features: FeatureSet,
+    cell_scale: CellScale,
+    /// Start and feature vector of each window.
+    vectors: Vec<(usize, Vec<f64>)>,
+}
+
+/// The features a capture kept when its samples were dropped.
+#[derive(Debug)]
+pub(crate) struct KeptFeatures {
+    /// Samples the capture had.
+    samples: usize,
+    /// How far its tip travelled, for the reason a capture gave no window.
+    travel: Travel,
+    windows: Vec<KeptWindows>,
+    histograms: Vec<(CellScale, [f64; FEATURE_LEN])>,
+}
+
+impl KeptFeatures {
+    /// Samples the capture had.
+    pub(crate) fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// How far its tip travelled.
+    pub(crate) fn travel(&self) -> &Travel {
+        &self.travel
+    }
+
+    /// The kept vectors of the windows `windowing` picks, of `features` (`cell_scale` matters
+    /// for [`FeatureSet::Both`] only). Nakano's five features are also the first five of
+    /// `both`'s vectors, so either serves a request for them.
+    pub(crate) fn windows(
+        &self,
+        windowing: &NakanoWindowing,
+        features: FeatureSet,
+        cell_scale: CellScale,
+    ) -> Option<&[(usize, Vec<f64>)]> {
+        self.windows
+            .iter()
+            .find(|k| {
+                k.windowing == *windowing
+                    && match features {
+                        FeatureSet::Nakano => true,
+                        _ => k.features == features && k.cell_scale == cell_scale,
+                    }
+            })
+            .map(|k| k.vectors.as_slice())
+    }
+
+    /// The kept histogram of cells scaled by `cell_scale`.
+    pub(crate) fn histogram(&self, cell_scale: CellScale) -> Option<&[f64; FEATURE_LEN]> {
+        self.histograms
+            .iter()
+            .find(|(s, _)| *s == cell_scale)
+            .map(|(_, h)| h)
+    }
+}
+
+impl LabelledCapture {
+    /// Computes the features `needs` lists and drops the samples: `capture` keeps its header
+    /// and columns but only its first sample, and the recognizers read the kept features
+    /// instead (bit-identical to computing them then). A recognizer that asks for features
+    /// not kept gets [`RecognizeError::FeaturesNotKept`]. Errors are those computing the
+    /// features raises (a capture at another rate than a windowing's, a missing column, too
+    /// short a capture for a histogram).
+    pub fn keep_features(self, needs: &FeatureNeeds) -> Result<Self, RecognizeError> {
+        if !self.has_samples() {
+            return Err(RecognizeError::FeaturesNotKept {
+                path: self.reference.path.clone(),
+                needed: "new features (its samples were already dropped)".to_owned(),
+            });
+        }
+        let plan = SpectrogramPlan::new();
+        let mut windows = Vec::with_capacity(needs.windows.len());
+        for &(windowing, features, cell_scale) in &needs.windows {
+            check_rate(&self, windowing.rate_hz)?;
+            let vectors = window_vectors(&self, &windowing, features, cell_scale, &plan)?;
+            windows.push(KeptWindows {
+                windowing,
+                features,
+                cell_scale,
+                vectors,
+            });
+        }
+        let histograms = needs
+            .histograms
+            .iter()
+            .map(|&scale| Ok((scale, capture_histogram(&plan, &self, scale)?)))
+            .collect::<Result<_, RecognizeError>>()?;
+        let kept = KeptFeatures {
+            samples: self.capture.len(),
+            travel: Travel::of(
+                &self.capture,
+                needs.windows.iter().map(|(w, ..)| w.start_travel_m),
+            ),
+            windows,
+            histograms,
+        };
+        let first = first_sample(&self.capture).map_err(RecognizeError::Capture)?;
+        Ok(Self {
+            capture: first,
+            kept: Some(Arc::new(kept)),
+            ..self
+        })
+    }
+
+    /// Whether the capture still has its samples (not since
+    /// [`LabelledCapture::keep_features`]).
+    pub fn has_samples(&self) -> bool {
+        self.kept.is_none()
+    }
+
+    /// Samples of the capture, also after its samples were dropped.
+    pub fn samples(&self) -> usize {
+        self.kept.as_ref().map_or(self.capture.len(), |k| k.samples())
+    }
+
+    /// The features kept when the samples were dropped.
+    pub(crate) fn kept(&self) -> Option<&KeptFeatures> {
+        self.kept.as_deref()
+    }
+
+    /// The error for features `needed` that a capture without samples did not keep.
+    pub(crate) fn not_kept(&self, needed: String) -> RecognizeError {
+        RecognizeError::FeaturesNotKept {
+            path: self.reference.path.clone(),
+            needed,
+        }
+    }
+}
+
+/// `capture`'s header and columns with its first sample only.
+fn first_sample(capture: &Capture) -> Result<Capture, capture::CaptureError> {
+    let data = capture.data().iter().map(|column| column[..1].to_vec()).collect();
+    Capture::new(capture.metadata().clone(), capture.columns().to_vec(), data)
+}
