@@ -944,3 +944,218 @@ fn packed_rows_are_unrolled_into_consecutive_samples() {
         assert!(t.contains("packed_rows.csv") && t.contains(says), "{range}: {t}");
     }
 }
+
+// The signals `tests/fixtures/import/multistream_make.py` sampled on each file's own clock.
+const G_MPS2: f64 = 9.80665;
+
+fn multistream_fz_n(t: f64) -> f64 {
+    2.0 + 0.5 * (2.0 * PI * 0.7 * t).sin()
+}
+
+fn multistream_fx_n(t: f64) -> f64 {
+    0.6 + 0.2 * (2.0 * PI * 0.5 * t).cos()
+}
+
+fn multistream_x_m(t: f64) -> f64 {
+    0.020 * (2.0 * PI * 0.4 * t).sin()
+}
+
+fn multistream_acc_mps2(t: f64) -> f64 {
+    0.3 * G_MPS2 * (2.0 * PI * 40.0 * t).sin()
+}
+
+/// Linear interpolation's error bound `h² / 8 · max|x''|` for `amplitude · sin(2π f t)`
+/// sampled every `h` seconds at most, plus the fixtures' 1e-9 rounding of values.
+fn interpolation_bound(h_s: f64, amplitude: f64, freq_hz: f64) -> f64 {
+    h_s * h_s / 8.0 * amplitude * (2.0 * PI * freq_hz).powi(2) + 1e-9
+}
+
+const MULTISTREAM_MAP: &str = "time_s=t[ms],normal_force_n=Fz,friction_force_n=Fx,\
+                               tangential_position_m=x[mm],accel_x_mps2=acc[g]";
+
+/// `palpus import` of the three multistream fixtures (force, position, packed vibration).
+fn import_multistream(out: &Path, map: &str, args: &[&str]) -> std::process::Output {
+    let (force, position, vib) = (
+        fixture("multistream_force.csv"),
+        fixture("multistream_position.csv"),
+        fixture("multistream_vib_packed.csv"),
+    );
+    let mut all = vec![
+        "import",
+        force.to_str().unwrap(),
+        position.to_str().unwrap(),
+        vib.to_str().unwrap(),
+        "--kind",
+        "rubbing",
+        "--rate-hz",
+        "1000",
+        "--map",
+        map,
+        "--unroll",
+        "acc=acc_0..acc_21",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    all.extend_from_slice(args);
+    palpus(&all)
+}
+
+#[test]
+fn streams_on_separate_clocks_are_joined_onto_one_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("trial.csv");
+    let o = success(import_multistream(
+        &out,
+        MULTISTREAM_MAP,
+        &["--repeated-time", "mean"],
+    ));
+    let said = text(&o);
+    for name in [
+        "multistream_force.csv",
+        "multistream_position.csv",
+        "multistream_vib_packed.csv",
+    ] {
+        assert!(said.contains(name), "{said}");
+    }
+    assert!(
+        said.contains("joined 3 inputs") && said.contains("cut 0.041700 s before"),
+        "{said}"
+    );
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(
+        c.columns(),
+        &[
+            "time_s",
+            "normal_force_n",
+            "friction_force_n",
+            "tangential_position_m",
+            "accel_x_mps2"
+        ]
+    );
+    // The overlap starts at the position log's first time (41.7 ms) and ends by the earliest
+    // last time: the vibration's last unrolled sample, 2943.3 ms + 21/22 of 10 ms.
+    let time = c.time();
+    assert!((time[0] - 0.0417).abs() < 1e-12, "{}", time[0]);
+    let last_vib_s = 2.9433 + 0.010 * 21.0 / 22.0;
+    assert!(time[time.len() - 1] <= last_vib_s + 1e-9 && time[time.len() - 1] > last_vib_s - 0.001);
+    for (k, pair) in time.windows(2).enumerate() {
+        assert!((pair[1] - pair[0] - 0.001).abs() < 1e-9, "interval {k}: {pair:?}");
+    }
+    // Each column against its signal, within the interpolation error of its own clock (the
+    // generator's longest intervals: 1.25/88 s for forces, 1.3/88.5 s for position; the
+    // vibration is interpolated at 2.2 kHz after a low-pass that leaves 40 Hz alone).
+    let checks: [(&str, fn(f64) -> f64, f64); 4] = [
+        (
+            "normal_force_n",
+            multistream_fz_n,
+            interpolation_bound(1.25 / 88.0, 0.5, 0.7),
+        ),
+        (
+            "friction_force_n",
+            multistream_fx_n,
+            interpolation_bound(1.25 / 88.0, 0.2, 0.5),
+        ),
+        (
+            "tangential_position_m",
+            multistream_x_m,
+            interpolation_bound(1.3 / 88.5, 0.020, 0.4),
+        ),
+        (
+            "accel_x_mps2",
+            multistream_acc_mps2,
+            interpolation_bound(1.0 / 2200.0, 0.3 * G_MPS2, 40.0),
+        ),
+    ];
+    for (column, signal, bound) in checks {
+        let values = c.column(column).unwrap();
+        let error = time
+            .iter()
+            .zip(values)
+            .map(|(&t, &v)| (v - signal(t)).abs())
+            .fold(0.0, f64::max);
+        println!("{column}: max error {error:.3e} (bound {bound:.3e})");
+        assert!(error <= bound, "{column}: max error {error} > bound {bound}");
+    }
+    // Every input is recorded with its hash, its part of the map and its own rate.
+    let m = c.metadata();
+    assert_eq!(
+        m.get("source"),
+        Some("multistream_force.csv,multistream_position.csv,multistream_vib_packed.csv")
+    );
+    let bytes = std::fs::read(fixture("multistream_vib_packed.csv")).unwrap();
+    assert_eq!(
+        m.get("source_3_sha256"),
+        Some(capture::sha256_hex(&bytes).as_str())
+    );
+    assert_eq!(m.get("source_3_map"), Some("time_s=t[ms],accel_x_mps2=acc[g]"));
+    assert_eq!(m.get("source_3_rate_hz"), Some("2200"));
+    assert_eq!(
+        m.get("source_2_map"),
+        Some("time_s=t[ms],tangential_position_m=x[mm]")
+    );
+
+    // Keeping the first of the repeated force rows instead of their mean is off by their
+    // 0.05 N spread: the join did merge them.
+    let dropped = dir.path().join("dropped.csv");
+    success(import_multistream(
+        &dropped,
+        MULTISTREAM_MAP,
+        &["--repeated-time", "drop"],
+    ));
+    let d = Capture::read_file(&dropped, CaptureKind::Rubbing).unwrap();
+    let worst = d
+        .time()
+        .iter()
+        .zip(d.column("normal_force_n").unwrap())
+        .map(|(&t, &v)| (v - multistream_fz_n(t)).abs())
+        .fold(0.0, f64::max);
+    assert!(worst > 0.01, "{worst}");
+}
+
+#[test]
+fn joining_errors_name_the_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("trial.csv");
+    // `t` is in every input: as a position it is ambiguous.
+    let map = "time_s=t[ms],normal_force_n=Fz,tangential_position_m=t[mm]";
+    let o = import_multistream(&out, map, &["--repeated-time", "mean"]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("multistream_force.csv")
+            && t.contains("multistream_position.csv")
+            && t.contains("multistream_vib_packed.csv")
+            && t.contains("`N:t`"),
+        "{t}"
+    );
+    // A column no input has: every input's columns are listed.
+    let map = "time_s=t[ms],normal_force_n=Fz,tangential_position_m=pos[mm]";
+    let o = import_multistream(&out, map, &["--repeated-time", "mean"]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("no input has a column `pos`") && t.contains("multistream_position.csv has t, x, valid"),
+        "{t}"
+    );
+    // A clock offset that moves the position log past the others' end.
+    let o = import_multistream(
+        &out,
+        MULTISTREAM_MAP,
+        &["--repeated-time", "mean", "--clock-offset-s", "2=10"],
+    );
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("overlap for 0 sample(s)") && t.contains("multistream_position.csv spans 10.0417 s"),
+        "{t}"
+    );
+    assert!(!out.exists());
+    // A qualified source reads that input without looking at the others.
+    let map = "time_s=t[ms],normal_force_n=Fz,tangential_position_m=2:x[mm],accel_x_mps2=3:acc[g]";
+    success(import_multistream(&out, map, &["--repeated-time", "mean"]));
+    let c = Capture::read_file(&out, CaptureKind::Rubbing).unwrap();
+    assert_eq!(
+        c.metadata().get("source_2_map"),
+        Some("time_s=t[ms],tangential_position_m=2:x[mm]")
+    );
+}

@@ -344,6 +344,51 @@ pub enum CaptureErrorKind {
     /// `Result<_, CaptureError>` small.
     #[error("{0}")]
     TooManyRows(Box<OutputBudget>),
+    /// Of several inputs, none has an unqualified `--map` source column.
+    #[error(
+        "--map entry `{entry}`: no input has a column `{column}` ({})",
+        describe_inputs(inputs)
+    )]
+    SourceInNoInput {
+        /// The map entry.
+        entry: Box<str>,
+        /// The source column looked for.
+        column: Box<str>,
+        /// Each input's file and column names, in input order.
+        inputs: Box<[InputColumns]>,
+    },
+    /// Several inputs have an unqualified `--map` source column, so which one is meant is not
+    /// known.
+    #[error(
+        "--map entry `{entry}`: inputs {} have a column `{column}`; say which with \
+         `N:{column}` (N the input's number)",
+        describe_files(files)
+    )]
+    SourceInSeveralInputs {
+        /// The map entry.
+        entry: Box<str>,
+        /// The source column.
+        column: Box<str>,
+        /// The inputs that have it: 1-based number and file.
+        files: Box<[(usize, PathBuf)]>,
+    },
+    /// The time ranges of several inputs do not overlap for enough output samples to join them.
+    #[error(
+        "the inputs' times overlap for {rows} sample(s) at {rate_hz} Hz, fewer than the \
+         {min_rows} a join needs ({}); check the time columns, their units and --clock-offset-s",
+        describe_ranges(ranges)
+    )]
+    NoOverlap {
+        /// Output samples the overlap holds (0 when the ranges do not meet).
+        rows: usize,
+        /// Output rate, Hz.
+        rate_hz: f64,
+        /// The fewest a join produces.
+        min_rows: usize,
+        /// Each input's file and first and last time, s (clock offset applied), in input
+        /// order.
+        ranges: Box<[(PathBuf, f64, f64)]>,
+    },
 
     // --- Signals (`signal`): slices, so these name indices rather than lines ---
     /// `time_s` and `position_m` differ in length.
@@ -386,6 +431,48 @@ pub enum CaptureErrorKind {
         /// What it must be.
         reason: &'static str,
     },
+}
+
+/// One input of a multi-file import and its column names, for
+/// [`CaptureErrorKind::SourceInNoInput`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputColumns {
+    /// The input file.
+    pub file: PathBuf,
+    /// Its column names (with a virtual `--unroll` column where the file has the packed ones).
+    pub columns: Vec<String>,
+}
+
+fn describe_inputs(inputs: &[InputColumns]) -> String {
+    let list: Vec<String> = inputs
+        .iter()
+        .enumerate()
+        .map(|(i, input)| {
+            format!(
+                "{}: {} has {}",
+                i + 1,
+                input.file.display(),
+                input.columns.join(", ")
+            )
+        })
+        .collect();
+    list.join("; ")
+}
+
+fn describe_files(files: &[(usize, PathBuf)]) -> String {
+    let list: Vec<String> = files
+        .iter()
+        .map(|(n, file)| format!("{n} ({})", file.display()))
+        .collect();
+    list.join(" and ")
+}
+
+fn describe_ranges(ranges: &[(PathBuf, f64, f64)]) -> String {
+    let list: Vec<String> = ranges
+        .iter()
+        .map(|(file, first, last)| format!("{} spans {first} s to {last} s", file.display()))
+        .collect();
+    list.join("; ")
 }
 
 /// An import's output size against its budget (see

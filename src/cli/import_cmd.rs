@@ -1,18 +1,19 @@
 //! `palpus import`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use capture::CaptureKind;
 use capture::import::{
     ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, SlowColumns,
-    TimeFromPosition, Unroll, import_csv, import_csv_report,
+    TimeFromPosition, Unroll, import_csv, import_streams,
 };
 use capture::sha256_hex;
 use clap::Args;
 use recognize::LabelledCapture;
 
-/// Import a CSV log recorded with another tool as a capture.
+/// Import a CSV log recorded with another tool as a capture, or join several logs recorded
+/// on separate clocks into one.
 ///
 /// Reads a CSV file with a header row (`,`, `;` or tab delimited, detected; `#` lines and
 /// blank lines skipped; --no-header or --columns for a file without a header row; a delimiter
@@ -60,11 +61,36 @@ use recognize::LabelledCapture;
 /// time; the last row over the median row interval) that --map reads like any other
 /// (`accel_x_mps2=acc[g]`); the other mapped columns are interpolated between rows (or held,
 /// --unroll-slow hold). Needs a time column.
+///
+/// Several inputs (streams logged in separate files on separate clocks, e.g. forces in one
+/// file, position in another, a packed vibration channel in a third):
+///
+///   palpus import force.csv position.csv vib.csv --kind rubbing --rate-hz 1000
+///     --map 'time_s=t[ms],normal_force_n=Fz,friction_force_n=Fx,tangential_position_m=x[mm],accel_x_mps2=acc[g]'
+///     --unroll 'acc=acc_0..acc_21' --out trial.csv
+///
+/// Inputs are numbered 1, 2, 3 in the order given. `time_s=` names the time column every
+/// input has; each input is read on its own time column. An input whose time column has
+/// another name gets its own entry, `time_s=3:stamp[us]`. Any other source column is looked
+/// up among the inputs: it must be in exactly one of them (the error names the files that
+/// have it, or lists every file's columns if none has); `2:x[mm]` reads it from input 2.
+/// --unroll applies to the input(s) with the packed columns; --no-header, --columns,
+/// --repeated-time, --non-finite and --drop-implausible apply to every input. Each input is
+/// cleaned, then resampled onto the one output grid by the rule above, decided by its own
+/// measured rate (interpolated when below 1.01 × --rate-hz, else low-passed first). The grid
+/// spans the time all inputs cover (what one input has before or after it is cut, and
+/// printed); inputs that overlap for fewer than 4 output samples are an error listing each
+/// file's time range. --clock-offset-s 2=0.013 adds 0.013 s to input 2's times first.
+/// --rate-hz is required. The metadata records every input (source_N, source_N_sha256,
+/// source_N_map, source_N_rate_hz). A loop over trials changes only the file names:
+///
+///   for t in 1 2 3; do palpus import f$t.csv p$t.csv v$t.csv --map ... --out trial$t.csv; done
 #[derive(Debug, Args)]
 pub(crate) struct ImportArgs {
-    /// The CSV file to import.
-    #[arg(value_name = "IN.csv")]
-    input: PathBuf,
+    /// The CSV file(s) to import; several are joined on their own clocks (inputs 1, 2, ...
+    /// in this order).
+    #[arg(value_name = "IN.csv", required = true, num_args = 1..)]
+    inputs: Vec<PathBuf>,
     /// Capture kind to produce: rubbing or insertion.
     #[arg(long, value_parser = parse_kind)]
     kind: CaptureKind,
@@ -72,7 +98,7 @@ pub(crate) struct ImportArgs {
     #[arg(long, value_name = "SPEC")]
     map: String,
     /// Output rate, Hz, from 1 to 100000 (default: the input's rate, which must then be
-    /// uniform).
+    /// uniform; required with several inputs).
     #[arg(long, value_name = "HZ")]
     rate_hz: Option<f64>,
     /// The input's rate, Hz, from 1 to 100000, when it has no time column (row i is at
@@ -133,6 +159,10 @@ pub(crate) struct ImportArgs {
     /// `interpolate` (linearly, towards the next row) or `hold` (the row's value).
     #[arg(long, value_name = "MODE", default_value = "interpolate", value_parser = parse_slow, requires = "unroll")]
     unroll_slow: SlowColumns,
+    /// With several inputs: add this many seconds to input N's times before joining,
+    /// repeatable: `--clock-offset-s 2=0.013` (input 2's clock is 13 ms behind).
+    #[arg(long = "clock-offset-s", value_name = "N=SECONDS", value_parser = parse_offset, allow_hyphen_values = true)]
+    clock_offset_s: Vec<(usize, f64)>,
     /// The `device` recorded in the metadata.
     #[arg(long, default_value = "imported", value_name = "NAME")]
     device: String,
@@ -162,6 +192,13 @@ fn parse_non_finite(s: &str) -> Result<NonFinite, String> {
 
 fn parse_slow(s: &str) -> Result<SlowColumns, String> {
     s.parse()
+}
+
+fn parse_offset(s: &str) -> Result<(usize, f64), String> {
+    let parsed = s
+        .split_once('=')
+        .and_then(|(input, seconds)| Some((input.trim().parse().ok()?, seconds.trim().parse().ok()?)));
+    parsed.ok_or_else(|| format!("`{s}`: expected N=SECONDS (input number, offset in s), e.g. 2=0.013"))
 }
 
 fn parse_meta(s: &str) -> Result<(String, String), String> {
@@ -197,9 +234,11 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
             Some(text) => Some(Unroll::parse(text, args.unroll_slow)?),
             None => None,
         },
+        clock_offsets_s: args.clock_offset_s.clone(),
     };
     // Import errors name the input file (and line, column or map entry) themselves.
-    let imported = import_csv_report(&args.input, &spec)?;
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    let imported = import_streams(&inputs, &spec)?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -208,18 +247,52 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
         .write_file(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     if !args.quiet {
-        // The metadata's `source_rate_hz` is the mean rate, written as an integer when within
-        // 1e-6 of one.
-        let source_rate = imported.capture.metadata().get("source_rate_hz").unwrap_or("?");
-        println!(
-            "imported {} rows at {source_rate} Hz from {} -> {} rows at {} Hz into {} ({})",
-            imported.rows_in,
-            args.input.display(),
-            imported.capture.len(),
-            imported.rate_hz,
-            args.out.display(),
-            imported.resampling
-        );
+        if let [stream] = imported.streams.as_slice() {
+            // The metadata's `source_rate_hz` is the mean rate, written as an integer when
+            // within 1e-6 of one.
+            let source_rate = imported.capture.metadata().get("source_rate_hz").unwrap_or("?");
+            println!(
+                "imported {} rows at {source_rate} Hz from {} -> {} rows at {} Hz into {} ({})",
+                imported.rows_in,
+                stream.file.display(),
+                imported.capture.len(),
+                imported.rate_hz,
+                args.out.display(),
+                imported.resampling
+            );
+        } else {
+            let grid = imported.capture.column(capture::kind::TIME_S)?;
+            println!(
+                "joined {} inputs -> {} rows at {} Hz from {:.6} s to {:.6} s into {}",
+                imported.streams.len(),
+                imported.capture.len(),
+                imported.rate_hz,
+                grid.first().copied().unwrap_or(f64::NAN),
+                grid.last().copied().unwrap_or(f64::NAN),
+                args.out.display()
+            );
+            for (i, stream) in imported.streams.iter().enumerate() {
+                let offset = if stream.clock_offset_s != 0.0 {
+                    format!(", clock offset {} s", stream.clock_offset_s)
+                } else {
+                    String::new()
+                };
+                println!(
+                    "  {}: {} ({}): {} rows at {:.6} Hz from {:.6} s to {:.6} s{offset}; cut {:.6} s \
+                     before and {:.6} s after; {}",
+                    i + 1,
+                    stream.file.display(),
+                    stream.map,
+                    stream.rows_in,
+                    stream.source_rate_hz,
+                    stream.first_time_s,
+                    stream.last_time_s,
+                    stream.cut_start_s,
+                    stream.cut_end_s,
+                    stream.resampling
+                );
+            }
+        }
         let implausible = imported.rows_dropped - imported.rows_non_finite;
         if implausible > 0 {
             println!("dropped {implausible} row(s) with an implausible value (--drop-implausible)");

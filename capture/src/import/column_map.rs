@@ -9,6 +9,9 @@ pub struct MapEntry {
     pub target: String,
     /// The input column read (header name, trimmed).
     pub source: String,
+    /// The input the column is read from, 1-based, when the source is qualified (`2:x`);
+    /// `None`: the one input that has the column (see [`import_streams`]).
+    pub input: Option<usize>,
     /// The unit given in brackets, if any.
     pub unit: Option<String>,
     /// Conversion from the input's values to the target's SI values (unit × factor).
@@ -28,9 +31,12 @@ pub struct ColumnMap {
 impl ColumnMap {
     /// Parses `target=source[unit]`, `target=source*factor` or `target=source[unit]*factor`
     /// entries separated by commas. Spaces around names are ignored. Targets must be capture
-    /// columns (of any kind; [`import_csv`] checks them against the kind), each at most once;
-    /// a unit must be in the [unit table](unit_to_si) and measure the target's quantity; a
-    /// factor must be a finite non-zero number.
+    /// columns (of any kind; [`import_csv`] checks them against the kind), each at most once
+    /// except `time_s`, which may be given once unqualified and once per input (`time_s=t[ms],
+    /// time_s=3:stamp[us]`: every input's time is `t` but the third's, `stamp`); a unit must be
+    /// in the [unit table](unit_to_si) and measure the target's quantity; a factor must be a
+    /// finite non-zero number. A source `N:name` (digits, then `:`) reads `name` from the
+    /// `N`th input (1-based) of [`import_streams`].
     pub fn parse(spec: &str) -> Result<ColumnMap, CaptureError> {
         if spec.trim().is_empty() {
             return Err(CaptureError::without_file(CaptureErrorKind::BadMap {
@@ -41,9 +47,22 @@ impl ColumnMap {
         let mut entries: Vec<MapEntry> = Vec::new();
         for raw in spec.split(',') {
             let entry = parse_entry(raw.trim())?;
-            if entries.iter().any(|e| e.target == entry.target) {
+            // Time is read in every input, so each may name its own time column.
+            let clash = |e: &&MapEntry| {
+                e.target == entry.target && (entry.target != TIME_S || e.input == entry.input)
+            };
+            if let Some(earlier) = entries.iter().find(clash) {
+                let once = format!("target `{}` is mapped more than once", entry.target);
+                let reason = match (entry.target == TIME_S, entry.input) {
+                    (true, Some(n)) => format!("{once} for input {n} (`{}`)", earlier.text),
+                    (true, None) => format!(
+                        "{once} (`{}`); one input's own time column is `time_s=N:column`",
+                        earlier.text
+                    ),
+                    (false, _) => once,
+                };
                 return Err(CaptureError::without_file(CaptureErrorKind::BadMap {
-                    reason: format!("target `{}` is mapped more than once", entry.target),
+                    reason,
                     entry: entry.text,
                 }));
             }
@@ -60,7 +79,7 @@ impl ColumnMap {
         &self.entries
     }
 
-    /// The entry writing `target`, if any.
+    /// The (first) entry writing `target`, if any.
     pub fn get(&self, target: &str) -> Option<&MapEntry> {
         self.entries.iter().find(|e| e.target == target)
     }
@@ -161,12 +180,28 @@ pub(super) fn parse_entry(entry: &str) -> Result<MapEntry, CaptureError> {
             "a unit goes in brackets at the end of the source: `name[unit]`".into(),
         ));
     }
+    // `2:x` reads `x` from the second input; a name with a colon after something other than
+    // digits (`Fz:1`) stays a name.
+    let mut input = None;
+    if let Some((number, name)) = source.split_once(':')
+        && !number.is_empty()
+        && number.trim().chars().all(|c| c.is_ascii_digit())
+    {
+        let n: usize = number.trim().parse().ok().filter(|&n| n >= 1).ok_or_else(|| {
+            bad(format!(
+                "input `{number}` in `{source}`: inputs are numbered from 1"
+            ))
+        })?;
+        input = Some(n);
+        source = name.trim();
+    }
     if source.is_empty() {
         return Err(bad("no source column after `=`".into()));
     }
     Ok(MapEntry {
         target: target.to_owned(),
         source: source.to_owned(),
+        input,
         unit,
         scale,
         text: entry.to_owned(),

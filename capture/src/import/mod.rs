@@ -62,6 +62,44 @@
 //! would shift the rest), or row times that do not increase is an error naming the file and
 //! the column (and line).
 //!
+//! # Several inputs
+//!
+//! Rigs often log each sensor to its own file on its own clock: forces in one at ~88 Hz,
+//! position in another at slightly different instants, a vibration channel packed in a
+//! third. [`import_streams`] joins such files into one capture (`palpus import force.csv
+//! position.csv vib.csv --rate-hz 1000 --map ...`); [`import_csv_report`] is its one-input
+//! case, so a single file goes through the same code.
+//!
+//! Inputs are numbered from 1 in the order given. `time_s=t[ms]` names the time column every
+//! input has, each input being read on its own; `time_s=3:stamp[us]` gives input 3 a time
+//! column of its own (the unqualified entry then serves the others). Any other source is
+//! looked up among the inputs' columns (plus the virtual [`Unroll`] column in the inputs
+//! that have its packed columns) and must be in exactly one: a column in several
+//! ([`SourceInSeveralInputs`](crate::CaptureErrorKind::SourceInSeveralInputs)) or in none
+//! ([`SourceInNoInput`](crate::CaptureErrorKind::SourceInNoInput), listing every input's
+//! columns) is an error naming the files. `2:x[mm]` reads `x` from input 2 whatever the
+//! others have. Every input must give at least one column besides its time. The options on
+//! how to read a file ([`ImportSpec::header`], `repeated_time`, `non_finite`,
+//! `drop_implausible`) apply to every input; [`ImportSpec::unroll`] to the inputs whose
+//! entries read its virtual column.
+//!
+//! Each input is read, cleaned (dropped, bridged, merged rows), unrolled and checked as a
+//! single file is, then shifted by its clock offset if one is given
+//! ([`ImportSpec::clock_offsets_s`], `--clock-offset-s 2=0.013`: 13 ms added to input 2's
+//! times). The output grid runs at [`ImportSpec::rate_hz`] (required) from the latest first
+//! time to the earliest last time of the inputs, so every output sample is inside every
+//! input; what an input has outside is cut and reported ([`StreamReport::cut_start_s`],
+//! [`StreamReport::cut_end_s`]). An overlap of fewer than [`MIN_JOINED_ROWS`] output samples
+//! is an error ([`NoOverlap`](crate::CaptureErrorKind::NoOverlap)) listing each file's time
+//! range. Each input is then resampled onto the grid by the rule below, decided by its own
+//! measured rate: interpolated if it is below `1 + RATE_TOLERANCE` times the output rate,
+//! else low-passed over its whole length first (so the cut adds no filter edge). Nothing is
+//! passed through unchanged: the grid starts at another input's time. The output budget
+//! below holds per input. The metadata names every input in `source` (comma-separated) and,
+//! per input `N`, `source_N` (file name), `source_N_sha256`, `source_N_map` (its entries),
+//! `source_N_rate_hz` (its mean rate) and `source_N_clock_offset_s` where given, instead of
+//! `source_rate_hz`.
+//!
 //! # Column map
 //!
 //! `--map` is a comma-separated list of `target=source` entries: `target` is a capture column
@@ -137,31 +175,35 @@
 //! A [`Capture`] of the requested kind with `time_s` first and the other mapped columns in
 //! the order of the map, and the metadata `device` (default `imported`), `rate_hz` (the
 //! target rate), `units=si`, `source=<input file name>`, `map=<the spec without spaces>`,
-//! `source_rate_hz=<mean input rate>` and the caller's extra keys (e.g. `surface=...`, which
+//! `source_rate_hz=<mean input rate>` (with several inputs, the per-input keys of
+//! [Several inputs](#several-inputs) instead) and the caller's extra keys (e.g. `surface=...`, which
 //! the recognizers read as the class). Derived values are made metadata-safe (`µ` becomes
 //! `u`, other non-printable-ASCII characters `_`); the caller's own values are checked and
 //! rejected with a clear error instead.
 
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::CaptureErrorKind;
 use crate::kind::{CaptureKind, TIME_S, magnitude_limit};
 use crate::{Capture, CaptureError, Metadata, OutputBudget};
 
 mod column_map;
+mod join;
 mod resample;
 mod table;
 mod units;
 mod unroll;
 
 pub use column_map::*;
+use join::*;
 use resample::*;
 use table::*;
 pub use units::*;
 pub use unroll::*;
 
-/// Metadata keys [`import_csv`] sets itself; the caller's extra metadata may not use them.
+/// Metadata keys [`import_csv`] sets itself; the caller's extra metadata may not use them
+/// (nor `source_N...`, set per input by [`import_streams`]).
 pub const IMPORT_KEYS: [&str; 4] = ["source", "map", "source_rate_hz", "time_from"];
 
 /// Relative tolerance on sampling intervals under which an input counts as uniform.
@@ -205,6 +247,10 @@ pub const DEFAULT_MAX_UPSAMPLE: f64 = 1000.0;
 /// already read into memory.
 pub const MAX_OUTPUT_ROWS: usize = 10_000_000;
 
+/// Fewest output samples a join of several inputs may have: a shorter overlap is clocks in
+/// different origins or units (or an offset given wrongly), not a recording.
+pub const MIN_JOINED_ROWS: usize = 4;
+
 /// What to import and how: see [`import_csv`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImportSpec {
@@ -238,8 +284,12 @@ pub struct ImportSpec {
     /// What to do with consecutive rows of the same time (default: an error).
     pub repeated_time: RepeatedTime,
     /// A fast channel packed several samples per row, unrolled into a virtual column that
-    /// the map reads (`--unroll`); needs a time column.
+    /// the map reads (`--unroll`); needs a time column. With several inputs it applies to
+    /// those whose mapped columns read the virtual column.
     pub unroll: Option<Unroll>,
+    /// Clock offsets, s, by 1-based input number (`--clock-offset-s 2=0.013`): the offset is
+    /// added to that input's times before the inputs are joined. Each input at most once.
+    pub clock_offsets_s: Vec<(usize, f64)>,
 }
 
 /// Where an input's column names come from.
@@ -350,6 +400,7 @@ impl TimeFromPosition {
         MapEntry {
             target: TIME_S.to_owned(),
             source: self.source.clone(),
+            input: None,
             unit: Some(self.unit.clone()),
             scale: Scale {
                 mul: self.scale.mul,
@@ -395,6 +446,7 @@ impl ImportSpec {
             header: Header::FirstLine,
             repeated_time: RepeatedTime::Error,
             unroll: None,
+            clock_offsets_s: Vec::new(),
         }
     }
 }
@@ -458,6 +510,47 @@ pub struct Imported {
     pub rate_hz: f64,
     /// How the output grid was filled.
     pub resampling: Resampling,
+    /// Each input, in input order (one for [`import_csv_report`]). With several inputs the
+    /// counts above are their sums, and `source_rate_hz` and `resampling` those of the first
+    /// input; see here for the others.
+    pub streams: Vec<StreamReport>,
+}
+
+/// What the import did with one of its inputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StreamReport {
+    /// The input file.
+    pub file: PathBuf,
+    /// SHA-256 of its bytes, hex.
+    pub sha256: String,
+    /// The `--map` entries read from it (its time included), as written, comma-separated.
+    pub map: String,
+    /// Rows read and used, as [`Imported::rows_in`].
+    pub rows_in: usize,
+    /// Rows skipped, as [`Imported::rows_dropped`].
+    pub rows_dropped: usize,
+    /// Of `rows_dropped`, those for a non-finite value.
+    pub rows_non_finite: usize,
+    /// Non-finite cells bridged.
+    pub cells_bridged: usize,
+    /// Rows merged for a repeated time.
+    pub rows_repeated: usize,
+    /// Its mean rate, Hz, which decided how it was resampled.
+    pub source_rate_hz: f64,
+    /// How it was put on the output grid.
+    pub resampling: Resampling,
+    /// The clock offset added to its times, s (0 unless given).
+    pub clock_offset_s: f64,
+    /// Its first time, s, offset applied.
+    pub first_time_s: f64,
+    /// Its last time, s, offset applied.
+    pub last_time_s: f64,
+    /// How much of its start lies before the output's first sample, s (the other inputs
+    /// start later); 0 for one input.
+    pub cut_start_s: f64,
+    /// How much of its end lies after the output's last grid time, s: the other inputs end
+    /// earlier, or, for one input, less than an output period remains.
+    pub cut_end_s: f64,
 }
 
 // --- Import ------------------------------------------------------------------------------
@@ -470,10 +563,55 @@ pub fn import_csv(path: &Path, spec: &ImportSpec) -> Result<Capture, CaptureErro
     import_csv_report(path, spec).map(|imported| imported.capture)
 }
 
-/// [`import_csv`], also returning the row count, rates and the resampling applied.
+/// [`import_csv`], also returning the row count, rates and the resampling applied: the
+/// one-input case of [`import_streams`].
 pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, CaptureError> {
-    let fail = |kind| CaptureError::new(path, kind);
-    let bad_spec = |reason: String| fail(CaptureErrorKind::BadSpec(reason));
+    import_streams(&[path], spec)
+}
+
+/// Imports several CSV files recorded on separate clocks as one capture, each read on its
+/// own time column and all resampled onto one uniform grid, as the
+/// [module documentation](self#several-inputs) says; one path is [`import_csv_report`].
+///
+/// Every error names the file (or, for an unqualified column found in several inputs or in
+/// none, every input), and the line, column or `--map` entry where one applies.
+pub fn import_streams(paths: &[&Path], spec: &ImportSpec) -> Result<Imported, CaptureError> {
+    let Some(&first) = paths.first() else {
+        return Err(CaptureError::without_file(CaptureErrorKind::BadSpec(
+            "no input file given".into(),
+        )));
+    };
+    let single = paths.len() == 1;
+    let fail = |kind| CaptureError::new(first, kind);
+    // With one input a spec error names it, as the single-file import always did; with
+    // several it concerns them all, and the message names the option.
+    let bad_spec = |reason: String| {
+        let error = CaptureError::without_file(CaptureErrorKind::BadSpec(reason));
+        CaptureError {
+            file: single.then(|| first.to_path_buf()),
+            ..error
+        }
+    };
+    if !single {
+        for (what, given) in [
+            ("--input-rate-hz", spec.input_rate_hz.is_some()),
+            ("--time-from-position", spec.time_from_position.is_some()),
+        ] {
+            if given {
+                return Err(bad_spec(format!(
+                    "{what} is for one input; joining several needs each one's time column \
+                     (`time_s=<column>` in --map)"
+                )));
+            }
+        }
+        if spec.rate_hz.is_none() {
+            return Err(bad_spec(
+                "joining several inputs needs the output rate (--rate-hz): their own rates \
+                 differ"
+                    .into(),
+            ));
+        }
+    }
     let with_time;
     let spec = match &spec.time_from_position {
         Some(from) => {
@@ -550,10 +688,11 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
             spec.max_upsample
         )));
     }
+    let offsets = clock_offsets(paths, spec).map_err(&bad_spec)?;
     // Check the caller's metadata before reading a possibly large file.
     let mut meta = Metadata::new(spec.kind, spec.device.clone(), spec.rate_hz.unwrap_or(1.0));
     for (key, value) in &spec.metadata {
-        if IMPORT_KEYS.contains(&key.as_str()) {
+        if IMPORT_KEYS.contains(&key.as_str()) || is_stream_key(key) {
             return Err(bad_spec(format!(
                 "metadata key `{key}` is set by the import itself (from the input)"
             )));
@@ -562,6 +701,243 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     }
     meta.validate().map_err(|kind| bad_spec(metadata_reason(kind)))?;
 
+    let specs = resolve(paths, spec)?;
+    let streams = paths
+        .iter()
+        .zip(&specs)
+        .zip(&offsets)
+        .map(|((path, file_spec), &offset_s)| read_stream(path, file_spec, offset_s))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    // The grid spans the time all inputs cover; with one input, all of it.
+    let lo = streams
+        .iter()
+        .map(|s| s.time[0])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let hi = streams
+        .iter()
+        .map(|s| s.time[s.time.len() - 1])
+        .fold(f64::INFINITY, f64::min);
+    let rate_hz = match spec.rate_hz {
+        Some(rate) => rate,
+        None => {
+            // Only one input gets here (several need --rate-hz).
+            let stream = &streams[0];
+            let rate = snap_rate(stream.source_rate_hz);
+            if !is_uniform(&stream.time, rate) {
+                let (min, max) = interval_range(&stream.time);
+                return Err(fail(CaptureErrorKind::NotUniform {
+                    min_interval_s: min,
+                    max_interval_s: max,
+                    mean_rate_hz: stream.source_rate_hz,
+                }));
+            }
+            rate
+        }
+    };
+    let span = hi - lo;
+    // The budget is checked in floating point before anything of the output's size exists.
+    let rows_out = (span * rate_hz + UNIFORM_TOLERANCE).floor() + 1.0;
+    if !single && (rows_out.is_nan() || rows_out < MIN_JOINED_ROWS as f64) {
+        return Err(CaptureError::without_file(CaptureErrorKind::NoOverlap {
+            rows: if rows_out > 0.0 { rows_out as usize } else { 0 },
+            rate_hz,
+            min_rows: MIN_JOINED_ROWS,
+            ranges: paths
+                .iter()
+                .zip(&streams)
+                .map(|(path, s)| (path.to_path_buf(), s.time[0], s.time[s.time.len() - 1]))
+                .collect(),
+        }));
+    }
+    let too_many = |path: &Path, rows_in: usize, limit: f64, reason| {
+        CaptureError::new(
+            path,
+            CaptureErrorKind::TooManyRows(Box::new(OutputBudget {
+                rows: rows_out,
+                rate_hz,
+                span_s: span,
+                rows_in,
+                limit,
+                reason,
+            })),
+        )
+    };
+    // Each stream may be upsampled at most --max-upsample times: a stream with too few rows
+    // for the grid is as likely a wrong time unit as a single file is.
+    for (path, stream) in paths.iter().zip(&streams) {
+        let upsample_limit = spec.max_upsample * stream.rows_in as f64;
+        if rows_out.is_nan() || rows_out > upsample_limit {
+            return Err(too_many(
+                path,
+                stream.rows_in,
+                upsample_limit,
+                "the input's rows times --max-upsample",
+            ));
+        }
+    }
+    let (largest, most_rows_in) = paths
+        .iter()
+        .zip(&streams)
+        .map(|(path, s)| (*path, s.rows_in))
+        .max_by_key(|&(_, rows)| rows)
+        .unwrap_or((first, 0));
+    if rows_out > MAX_OUTPUT_ROWS as f64 && rows_out > most_rows_in as f64 {
+        return Err(too_many(
+            largest,
+            most_rows_in,
+            MAX_OUTPUT_ROWS as f64,
+            "the most an import may add, whatever --max-upsample says",
+        ));
+    }
+    let rows_out = rows_out as usize;
+
+    // One input already uniform at the output rate is copied as it is; otherwise every
+    // stream is resampled onto the same grid, each by its own measured rate.
+    let pass_through = single && is_uniform(&streams[0].time, rate_hz);
+    let grid: Vec<f64> = if pass_through {
+        streams[0].time.clone()
+    } else {
+        (0..rows_out).map(|k| lo + k as f64 / rate_hz).collect()
+    };
+    let mut resampled = Vec::with_capacity(streams.len());
+    for stream in &streams {
+        resampled.push(if pass_through {
+            (stream.columns.clone(), Resampling::PassThrough)
+        } else {
+            resample_stream(stream, &grid, rate_hz)
+        });
+    }
+
+    // Column order: time first, then the other targets in map order.
+    let mut columns = vec![TIME_S.to_owned()];
+    let mut data = vec![grid];
+    for entry in spec.map.entries.iter().filter(|e| e.target != TIME_S) {
+        let (s, c) = streams
+            .iter()
+            .enumerate()
+            .find_map(|(s, stream)| {
+                let c = stream.targets.iter().position(|t| *t == entry.target)?;
+                Some((s, c))
+            })
+            .ok_or_else(|| bad_spec(format!("--map entry `{}` was read from no input", entry.text)))?;
+        let column = std::mem::take(&mut resampled[s].0[c]);
+        // Inputs are within their limits, but the low-pass can overshoot a step by a few
+        // percent, so a value just inside a limit may come out just beyond it; refuse rather
+        // than write a capture that no reader would accept.
+        let limit = magnitude_limit(&entry.target);
+        if let Some(&value) = column.iter().find(|v| v.is_nan() || v.abs() > limit) {
+            return Err(
+                CaptureError::new(paths[s], CaptureErrorKind::Implausible { value, limit })
+                    .in_column(&entry.target),
+            );
+        }
+        columns.push(entry.target.clone());
+        data.push(column);
+    }
+
+    let file_name = |path: &Path| {
+        path.file_name()
+            .map(|name| name.to_string_lossy().into_owned())
+            .unwrap_or_else(|| path.display().to_string())
+    };
+    let names: Vec<String> = paths.iter().map(|p| metadata_safe(&file_name(p))).collect();
+    let mut meta = Metadata::new(spec.kind, spec.device.clone(), rate_hz)
+        .with("source", names.join(","))
+        .with("map", metadata_safe(spec.map.spec()));
+    if single {
+        meta = meta.with("source_rate_hz", snap_rate(streams[0].source_rate_hz));
+    } else {
+        for (i, ((name, stream), offset_s)) in names.iter().zip(&streams).zip(&offsets).enumerate() {
+            let key = |what: &str| format!("source_{}{what}", i + 1);
+            meta = meta
+                .with(key(""), name)
+                .with(key("_sha256"), &stream.sha256)
+                .with(key("_map"), metadata_safe(&stream.map))
+                .with(key("_rate_hz"), snap_rate(stream.source_rate_hz));
+            if *offset_s != 0.0 {
+                meta = meta.with(key("_clock_offset_s"), offset_s);
+            }
+        }
+    }
+    if let Some(from) = &spec.time_from_position {
+        meta = meta.with("time_from", metadata_safe(&from.describe()));
+    }
+    for (key, value) in &spec.metadata {
+        meta = meta.with(key, value);
+    }
+    // Should not happen: everything was checked above. If it does, name the input file; the
+    // line dropped is a line of the output, which the user never sees.
+    let capture = Capture::new(meta, columns, data).map_err(|e| CaptureError {
+        file: Some(first.to_path_buf()),
+        line: None,
+        ..e
+    })?;
+    let reports: Vec<StreamReport> = paths
+        .iter()
+        .zip(streams)
+        .zip(resampled)
+        .zip(&offsets)
+        .map(|(((path, stream), (_, resampling)), &clock_offset_s)| {
+            let (first_s, last_s) = (stream.time[0], stream.time[stream.time.len() - 1]);
+            StreamReport {
+                file: path.to_path_buf(),
+                sha256: stream.sha256,
+                map: stream.map,
+                rows_in: stream.rows_in,
+                rows_dropped: stream.rows_dropped,
+                rows_non_finite: stream.rows_non_finite,
+                cells_bridged: stream.cells_bridged,
+                rows_repeated: stream.rows_repeated,
+                source_rate_hz: stream.source_rate_hz,
+                resampling,
+                clock_offset_s,
+                first_time_s: first_s,
+                last_time_s: last_s,
+                cut_start_s: lo - first_s,
+                cut_end_s: last_s - hi,
+            }
+        })
+        .collect();
+    let total = |count: fn(&StreamReport) -> usize| reports.iter().map(count).sum::<usize>();
+    Ok(Imported {
+        capture,
+        rows_in: total(|s| s.rows_in),
+        rows_dropped: total(|s| s.rows_dropped),
+        rows_non_finite: total(|s| s.rows_non_finite),
+        cells_bridged: total(|s| s.cells_bridged),
+        rows_repeated: total(|s| s.rows_repeated),
+        source_rate_hz: reports[0].source_rate_hz,
+        rate_hz,
+        resampling: reports[0].resampling,
+        streams: reports,
+    })
+}
+
+/// One input read, cleaned and on its own clock (offset applied), not yet resampled.
+struct Stream {
+    time: Vec<f64>,
+    /// The capture columns read from it other than time, in map order, and their values.
+    targets: Vec<String>,
+    columns: Vec<Vec<f64>>,
+    rows_in: usize,
+    rows_dropped: usize,
+    rows_non_finite: usize,
+    cells_bridged: usize,
+    rows_repeated: usize,
+    source_rate_hz: f64,
+    sha256: String,
+    /// The map entries read from it, as written.
+    map: String,
+}
+
+/// Reads one input with its own part of the map (`spec`, from [`resolve`]): rows checked,
+/// non-finite cells bridged, repeated times merged, packed rows unrolled, time checked to
+/// increase and shifted by `offset_s`.
+fn read_stream(path: &Path, spec: &ImportSpec, offset_s: f64) -> Result<Stream, CaptureError> {
+    let fail = |kind| CaptureError::new(path, kind);
+    let bad_spec = |reason: String| fail(CaptureErrorKind::BadSpec(reason));
+    let time_entry = spec.map.get(TIME_S);
     // Packed columns are read as columns of their own and unrolled once the rows are clean.
     let packed;
     let (read_spec, groups) = match &spec.unroll {
@@ -572,7 +948,7 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
         }
         None => (spec, None),
     };
-    let mut table = read_table(path, read_spec)?;
+    let mut table = read_table(path, read_spec, false)?;
     let time_index = read_spec.map.entries.iter().position(|e| e.target == TIME_S);
     let cells_bridged = bridge_non_finite(path, read_spec, &mut table, time_index)?;
     // Time from position starts at the first row; `origin` keeps the offset for messages.
@@ -611,7 +987,7 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
     if rows_in < 2 {
         return Err(fail(CaptureErrorKind::TooFewRows(rows_in)));
     }
-    let time: Vec<f64> = match (time_entry, spec.input_rate_hz) {
+    let mut time: Vec<f64> = match (time_entry, spec.input_rate_hz) {
         (Some(entry), _) => {
             let index = spec.map.entries.iter().position(|e| e.target == entry.target);
             let time = index.map(|i| table.columns[i].clone()).unwrap_or_default();
@@ -619,154 +995,87 @@ pub fn import_csv_report(path: &Path, spec: &ImportSpec) -> Result<Imported, Cap
             time
         }
         (None, Some(rate)) => (0..rows_in).map(|i| i as f64 / rate).collect(),
-        (None, None) => Vec::new(), // rejected above
-    };
-    let (t0, t_last) = (time[0], time[rows_in - 1]);
-    let span = t_last - t0;
-    let source_rate_hz = (rows_in - 1) as f64 / span;
-    let rate_hz = match spec.rate_hz {
-        Some(rate) => rate,
-        None => {
-            let rate = snap_rate(source_rate_hz);
-            if !is_uniform(&time, rate) {
-                let (min, max) = interval_range(&time);
-                return Err(fail(CaptureErrorKind::NotUniform {
-                    min_interval_s: min,
-                    max_interval_s: max,
-                    mean_rate_hz: source_rate_hz,
-                }));
-            }
-            rate
+        (None, None) => {
+            return Err(fail(CaptureErrorKind::BadSpec(
+                "no time: map `time_s=<column>` or give the input's rate (--input-rate-hz)".into(),
+            )));
         }
     };
-    // The budget is checked in floating point before anything of the output's size exists.
-    let rows_out = (span * rate_hz + UNIFORM_TOLERANCE).floor() + 1.0;
-    let too_many = |limit: f64, reason| {
-        fail(CaptureErrorKind::TooManyRows(Box::new(OutputBudget {
-            rows: rows_out,
-            rate_hz,
-            span_s: span,
-            rows_in,
-            limit,
-            reason,
-        })))
-    };
-    let upsample_limit = spec.max_upsample * rows_in as f64;
-    if rows_out.is_nan() || rows_out > upsample_limit {
-        return Err(too_many(upsample_limit, "the input's rows times --max-upsample"));
+    if offset_s != 0.0 {
+        time.iter_mut().for_each(|t| *t += offset_s);
     }
-    if rows_out > MAX_OUTPUT_ROWS as f64 && rows_out > rows_in as f64 {
-        return Err(too_many(
-            MAX_OUTPUT_ROWS as f64,
-            "the most an import may add, whatever --max-upsample says",
-        ));
-    }
-    let rows_out = rows_out as usize;
-
-    // Column order: time first, then the other targets in map order.
-    let (order, inputs): (Vec<&str>, Vec<&[f64]>) = spec
+    let source_rate_hz = (rows_in - 1) as f64 / (time[rows_in - 1] - time[0]);
+    let (targets, columns): (Vec<String>, Vec<Vec<f64>>) = spec
         .map
         .entries
         .iter()
-        .zip(&table.columns)
+        .zip(table.columns)
         .filter(|(entry, _)| entry.target != TIME_S)
-        .map(|(entry, column)| (entry.target.as_str(), column.as_slice()))
+        .map(|(entry, column)| (entry.target.clone(), column))
         .unzip();
-
-    let (out_time, mut out_data, resampling) = if is_uniform(&time, rate_hz) {
-        let data = inputs.iter().map(|column| column.to_vec()).collect();
-        (time.clone(), data, Resampling::PassThrough)
-    } else {
-        let grid: Vec<f64> = (0..rows_out).map(|k| t0 + k as f64 / rate_hz).collect();
-        // Only a clearly faster input is low-passed: within the tolerance, a clock's error
-        // must not decide between two different filters for the same nominal rate.
-        if source_rate_hz > rate_hz * (1.0 + RATE_TOLERANCE) {
-            // The filter runs on a uniform grid at the input's own mean rate: no resolution
-            // is lost, and the images of the input's samples fold back onto themselves
-            // rather than into the pass band (a grid at another rate would alias them).
-            let intermediate_rate_hz = snap_rate(source_rate_hz);
-            let cutoff_hz = CUTOFF_FRACTION * rate_hz;
-            let uniform_input = is_uniform(&time, intermediate_rate_hz);
-            let mid_grid: Vec<f64> = if uniform_input {
-                time.clone()
-            } else {
-                (0..rows_in)
-                    .map(|j| t0 + j as f64 / intermediate_rate_hz)
-                    .collect()
-            };
-            let filter = LowPass::butterworth4(cutoff_hz, intermediate_rate_hz);
-            let data = inputs
-                .iter()
-                .map(|column| {
-                    let smooth = if uniform_input {
-                        filter.filtfilt(column)
-                    } else {
-                        filter.filtfilt(&interpolate(&time, column, &mid_grid))
-                    };
-                    interpolate(&mid_grid, &smooth, &grid)
-                })
-                .collect();
-            let resampling = Resampling::LowPassed {
-                cutoff_hz,
-                intermediate_rate_hz,
-            };
-            (grid, data, resampling)
-        } else {
-            let data = inputs
-                .iter()
-                .map(|column| interpolate(&time, column, &grid))
-                .collect();
-            (grid, data, Resampling::Interpolated)
-        }
-    };
-
-    // Inputs are within their limits, but the low-pass can overshoot a step by a few percent,
-    // so a value just inside a limit may come out just beyond it; refuse rather than write a
-    // capture that no reader would accept.
-    for (&name, column) in order.iter().zip::<&Vec<Vec<f64>>>(&out_data) {
-        let limit = magnitude_limit(name);
-        let beyond = |v: &f64| v.is_nan() || v.abs() > limit;
-        if let Some(&value) = column.iter().find(|v| beyond(v)) {
-            return Err(fail(CaptureErrorKind::Implausible { value, limit }).in_column(name));
-        }
-    }
-    let mut columns = vec![TIME_S.to_owned()];
-    columns.extend(order.iter().map(|&name| name.to_owned()));
-    let mut data = vec![out_time];
-    data.append(&mut out_data);
-
-    let source_name = path
-        .file_name()
-        .map(|name| name.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.display().to_string());
-    let mut meta = Metadata::new(spec.kind, spec.device.clone(), rate_hz)
-        .with("source", metadata_safe(&source_name))
-        .with("map", metadata_safe(spec.map.spec()))
-        .with("source_rate_hz", snap_rate(source_rate_hz));
-    if let Some(from) = &spec.time_from_position {
-        meta = meta.with("time_from", metadata_safe(&from.describe()));
-    }
-    for (key, value) in &spec.metadata {
-        meta = meta.with(key, value);
-    }
-    // Should not happen: everything was checked above. If it does, name the input file; the
-    // line dropped is a line of the output, which the user never sees.
-    let capture = Capture::new(meta, columns, data).map_err(|e| CaptureError {
-        file: Some(path.to_path_buf()),
-        line: None,
-        ..e
-    })?;
-    Ok(Imported {
-        capture,
+    Ok(Stream {
+        time,
+        targets,
+        columns,
         rows_in,
         rows_dropped: table.dropped,
         rows_non_finite: table.dropped_non_finite,
         cells_bridged,
         rows_repeated,
         source_rate_hz,
-        rate_hz,
-        resampling,
+        sha256: table.sha256,
+        map: spec.map.spec().to_owned(),
     })
+}
+
+/// Resamples one stream's columns at `grid` by its own measured rate: linear interpolation
+/// when it is not clearly faster than `rate_hz`, else the zero-phase low-pass first.
+fn resample_stream(stream: &Stream, grid: &[f64], rate_hz: f64) -> (Vec<Vec<f64>>, Resampling) {
+    let (time, source_rate_hz) = (&stream.time, stream.source_rate_hz);
+    let (t0, rows_in) = (time[0], time.len());
+    // Only a clearly faster input is low-passed: within the tolerance, a clock's error must
+    // not decide between two different filters for the same nominal rate.
+    if source_rate_hz > rate_hz * (1.0 + RATE_TOLERANCE) {
+        // The filter runs on a uniform grid at the input's own mean rate: no resolution is
+        // lost, and the images of the input's samples fold back onto themselves rather than
+        // into the pass band (a grid at another rate would alias them). It runs over the
+        // whole stream, so cutting it to the other inputs' span adds no edge of its own.
+        let intermediate_rate_hz = snap_rate(source_rate_hz);
+        let cutoff_hz = CUTOFF_FRACTION * rate_hz;
+        let uniform_input = is_uniform(time, intermediate_rate_hz);
+        let mid_grid: Vec<f64> = if uniform_input {
+            time.clone()
+        } else {
+            (0..rows_in)
+                .map(|j| t0 + j as f64 / intermediate_rate_hz)
+                .collect()
+        };
+        let filter = LowPass::butterworth4(cutoff_hz, intermediate_rate_hz);
+        let data = stream
+            .columns
+            .iter()
+            .map(|column| {
+                let smooth = if uniform_input {
+                    filter.filtfilt(column)
+                } else {
+                    filter.filtfilt(&interpolate(time, column, &mid_grid))
+                };
+                interpolate(&mid_grid, &smooth, grid)
+            })
+            .collect();
+        let resampling = Resampling::LowPassed {
+            cutoff_hz,
+            intermediate_rate_hz,
+        };
+        (data, resampling)
+    } else {
+        let data = stream
+            .columns
+            .iter()
+            .map(|column| interpolate(time, column, grid))
+            .collect();
+        (data, Resampling::Interpolated)
+    }
 }
 
 fn metadata_reason(kind: CaptureErrorKind) -> String {

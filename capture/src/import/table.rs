@@ -13,6 +13,10 @@ pub(super) struct Table {
     pub(super) dropped: usize,
     /// Of `dropped`, those for a non-finite value.
     pub(super) dropped_non_finite: usize,
+    /// The input's column names (from the header row, `--columns` or numbered).
+    pub(super) header: Vec<String>,
+    /// SHA-256 of the file's bytes, hex.
+    pub(super) sha256: String,
 }
 
 /// Reads the mapped columns of `path`, the column names coming from [`ImportSpec::header`]. A
@@ -20,13 +24,14 @@ pub(super) struct Table {
 /// naming line and column, or, with [`ImportSpec::drop_implausible`], drops its row; a
 /// non-finite one is an error, drops its row, or is kept as NaN for [`bridge_non_finite`],
 /// as [`non_finite_mode`] says. A trailing delimiter is tolerated as the
-/// [module documentation](super) says.
-pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, CaptureError> {
+/// [module documentation](super) says. With `header_only`, stops after the column names
+/// (no rows, nothing mapped is looked up).
+pub(super) fn read_table(path: &Path, spec: &ImportSpec, header_only: bool) -> Result<Table, CaptureError> {
     let (map, drop_implausible) = (&spec.map, spec.drop_implausible);
     let non_finite = non_finite_mode(spec);
     let fail = |kind| CaptureError::new(path, kind);
-    let bytes = std::fs::read(path).map_err(|source| fail(CaptureErrorKind::CannotRead(source)))?;
-    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let bytes_all = &std::fs::read(path).map_err(|source| fail(CaptureErrorKind::CannotRead(source)))?;
+    let bytes = bytes_all.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes_all);
     let mut reader = csv::ReaderBuilder::new()
         .delimiter(detect_delimiter(bytes))
         .comment(Some(b'#'))
@@ -71,6 +76,17 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
     if matches!(spec.header, Header::FirstLine) && width_of(&record) < header.len() {
         header.pop();
     }
+    let sha256 = crate::sha256_hex(bytes_all);
+    if header_only {
+        return Ok(Table {
+            columns: Vec::new(),
+            lines: Vec::new(),
+            dropped: 0,
+            dropped_non_finite: 0,
+            header,
+            sha256,
+        });
+    }
     if let Some(unroll) = &spec.unroll {
         check_range(unroll, &header).map_err(|reason| fail(CaptureErrorKind::BadSpec(reason)))?;
     }
@@ -100,7 +116,7 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
                 return Err(fail(CaptureErrorKind::UnknownSource {
                     entry: entry.text.as_str().into(),
                     column: entry.source.as_str().into(),
-                    available: header.into(),
+                    available: header.clone().into(),
                 }));
             }
             [i] => indices.push(*i),
@@ -119,11 +135,13 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec) -> Result<Table, Captur
         lines: Vec::new(),
         dropped: 0,
         dropped_non_finite: 0,
+        header,
+        sha256,
     };
     let limits: Vec<f64> = map.entries.iter().map(|e| magnitude_limit(&e.target)).collect();
     let mut row = Vec::with_capacity(map.entries.len());
     let mut last_line = 1;
-    let width = header.len();
+    let width = table.header.len();
     // Whether rows end in an empty extra field (a trailing delimiter): the first row decides.
     let mut trailing: Option<bool> = None;
     loop {

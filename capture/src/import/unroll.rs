@@ -243,5 +243,7 @@ pub(super) fn unroll_rows(table: Table, groups: &[Vec<usize>], time: usize, unro
         lines,
         dropped: table.dropped,
         dropped_non_finite: table.dropped_non_finite,
+        header: table.header,
+        sha256: table.sha256,
     }
 }
