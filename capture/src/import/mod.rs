@@ -548,8 +548,9 @@ pub struct StreamReport {
     /// How much of its start lies before the output's first sample, s (the other inputs
     /// start later); 0 for one input.
     pub cut_start_s: f64,
-    /// How much of its end lies after the output's last grid time, s: the other inputs end
-    /// earlier, or, for one input, less than an output period remains.
+    /// How much of its end lies after the earliest last time of the inputs, s (the other
+    /// inputs end earlier); 0 for one input. The output's last sample is less than one
+    /// output period before that time.
     pub cut_end_s: f64,
 }
 
@@ -1171,3 +1172,6 @@ fn metadata_safe(text: &str) -> String {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod join_tests;
