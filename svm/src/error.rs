@@ -79,6 +79,21 @@ pub enum SvmError {
         /// Tolerance asked for.
         tolerance: f64,
     },
+    /// The solver stopped (at its own tolerance or at a limit) with a solution whose certified
+    /// relative duality gap misses the acceptance threshold: it is not returned.
+    #[error(
+        "{solver} stopped after {iterations} iterations with a certified relative gap of {gap:.3e}, above the acceptance threshold {threshold:.0e}; raise --max-seconds or change C, epsilon or gamma"
+    )]
+    Uncertified {
+        /// Which solver.
+        solver: &'static str,
+        /// Iterations done.
+        iterations: usize,
+        /// Best certified relative gap reached (infinite: the coefficients left their box).
+        gap: f64,
+        /// The acceptance threshold ([`crate::ACCEPT_GAP`]).
+        threshold: f64,
+    },
     /// The time budget ran out.
     #[error(
         "{solver} exceeded its time budget of {budget_s} s after {iterations} iterations (relative gap {gap:.3e})"

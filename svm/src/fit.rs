@@ -4,10 +4,13 @@ use std::time::Instant;
 
 use faer::Mat;
 
+use super::certificate::{self, ACCEPT_GAP, Certificate};
+use super::compensated::Accumulator;
 use super::data::SvrData;
 use super::error::SvmError;
 use super::ipm;
 use super::kernel::Kernel;
+use super::linear_exact;
 use super::model::SvrModel;
 use super::params::{DualSettings, Solver, SvrParams};
 use super::polish::{self, Side};
@@ -15,16 +18,6 @@ use super::smo;
 
 /// Active-set moves allowed to a polish tried during the interior point's run.
 const EARLY_POLISH_ROUNDS: usize = 5;
-
-/// Relative duality gap above which a fit is an error rather than a model.
-pub const ACCEPT_GAP: f64 = 1e-6;
-
-/// Largest |K(xᵢ, xᵢ)|: the scale of kernel values, for rounding bounds.
-fn kernel_scale(kernel: &Kernel, x: &[f64], dim: usize) -> f64 {
-    x.chunks_exact(dim)
-        .map(|r| kernel.eval(r, r).abs())
-        .fold(1.0, f64::max)
-}
 
 /// A fitted model and what it took.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,13 +38,21 @@ pub struct SvrFit {
     pub n_bounded_sv: usize,
     /// Wall-clock seconds of the whole fit.
     pub fit_seconds: f64,
+    /// Certified bound on `(P − P* − resolution) / max(1, |P|)`: see [`SvrFit::relative_gap`].
+    pub certified_gap: f64,
+    /// The primal objective's resolution in f64 (C times the rounding unit of the residuals
+    /// pinned on the tube boundary): `P − P* ≤ relative_gap()·max(1, |P|) + resolution`.
+    pub resolution: f64,
 }
 
 impl SvrFit {
-    /// Relative duality gap `|P + D| / max(1, |P|)`: 0 at the exact optimum (strong duality
-    /// makes the primal minimum equal minus the dual minimum).
+    /// Certified relative duality gap: an upper bound on how far the model's primal objective
+    /// can be above the optimum beyond [`SvrFit::resolution`], relative to `max(1, |P|)`. It
+    /// is `P + D` plus the rounding bounds of their compensated evaluation and the cost of Σβ
+    /// missing 0 by rounding (see the `certificate` module), so it holds whatever produced the
+    /// model; every returned fit has it at most [`ACCEPT_GAP`].
     pub fn relative_gap(&self) -> f64 {
-        (self.primal_objective + self.dual_objective).abs() / self.primal_objective.abs().max(1.0)
+        self.certified_gap
     }
 }
 
@@ -80,6 +81,21 @@ pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFi
     let data = SvrData::new(x, dim, y)?;
     let settings = params.dual_settings(started);
     let kernel = params.kernel();
+    if kernel == Kernel::Linear && dim <= linear_exact::MAX_DIM && params.solver() == Solver::Auto {
+        let sol = linear_exact::solve(&data, &settings)?;
+        let solution = DualSolution {
+            beta: sol.beta,
+            bias: sol.bias,
+            solver: linear_exact::NAME,
+            iterations: sol.iterations,
+            polished: true,
+            kernel_matrix: None,
+            weights: Some(sol.weights),
+        };
+        let mut fit = certify(&kernel, &data, &settings, solution)?;
+        fit.fit_seconds = started.elapsed().as_secs_f64();
+        return Ok(fit);
+    }
     let use_smo = match params.solver() {
         Solver::Smo => true,
         Solver::InteriorPoint => false,
@@ -138,7 +154,7 @@ fn solve_dense(
         let Some(p) = run_polish(classify(sol), rounds) else {
             return false;
         };
-        let ok = certified_optimal(&k, data, settings, &p, certify_below);
+        let ok = certified_optimal(&k, data, settings, kernel, &p, certify_below);
         if ok {
             certified = Some(p);
         }
@@ -148,7 +164,7 @@ fn solve_dense(
     let iterations = sol.iterations;
     let polished = certified.or_else(|| {
         run_polish(classify(&sol), usize::MAX)
-            .filter(|p| certified_optimal(&k, data, settings, p, certify_below))
+            .filter(|p| certified_optimal(&k, data, settings, kernel, p, certify_below))
     });
     match polished {
         Some(p) => Ok(DualSolution {
@@ -186,17 +202,17 @@ fn solve_dense(
     }
 }
 
-/// Packages a solution as a model with its objectives, or refuses it when its own duality gap
-/// does not vouch for it.
+/// Packages a solution as a model with its certificate, or refuses it when the certificate
+/// misses [`ACCEPT_GAP`].
 fn certify(
     kernel: &Kernel,
     data: &SvrData<'_>,
     settings: &DualSettings,
     solution: DualSolution,
 ) -> Result<SvrFit, SvmError> {
-    let (x, dim, y) = (data.x, data.dim, data.y);
-    let (c, epsilon) = (settings.c, settings.epsilon);
-    let n = y.len();
+    let (x, dim) = (data.x, data.dim);
+    let c = settings.c;
+    let n = data.y.len();
     let DualSolution {
         beta,
         bias,
@@ -207,60 +223,21 @@ fn certify(
         weights,
     } = solution;
     let kernel = *kernel;
-
-    // Objectives: from exact primal weights when we have them, else from K, else from kernel
-    // evaluations.
-    let mut kbeta = vec![0.0; n];
-    match (&weights, &k) {
-        (Some(w), _) => {
-            for (i, kb) in kbeta.iter_mut().enumerate() {
-                *kb = x[i * dim..(i + 1) * dim].iter().zip(w).map(|(a, b)| a * b).sum();
-            }
-        }
-        (None, Some(k)) => ipm::mat_vec(k, &beta, &mut kbeta),
-        (None, None) => {
-            for i in 0..n {
-                let xi = &x[i * dim..(i + 1) * dim];
-                kbeta[i] = (0..n)
-                    .filter(|&j| beta[j] != 0.0)
-                    .map(|j| beta[j] * kernel.eval(&x[j * dim..(j + 1) * dim], xi))
-                    .sum();
-            }
-        }
-    }
-    let quad = match &weights {
-        Some(w) => 0.5 * w.iter().map(|v| v * v).sum::<f64>(),
-        None => 0.5 * beta.iter().zip(&kbeta).map(|(b, kb)| b * kb).sum::<f64>(),
-    };
-    let dual_objective = quad + epsilon * beta.iter().map(|b| b.abs()).sum::<f64>()
-        - beta.iter().zip(y).map(|(b, yi)| b * yi).sum::<f64>();
-    let primal_objective = quad + c * (0..n).map(|i| slack(y[i], kbeta[i] + bias, epsilon)).sum::<f64>();
-
-    // Never hand out an answer that its own duality gap does not vouch for (up to what the
-    // arithmetic can resolve: at C ~ 1e11 the objectives' rounding error is part of the budget).
-    // Each fitted value f(xᵢ) = Σⱼ βⱼKᵢⱼ + b carries ~ε_mach·Σⱼ|βⱼKᵢⱼ| of rounding, which the
-    // loss multiplies by C.
-    let abs_beta_sum: f64 = beta.iter().map(|b| b.abs()).sum();
-    let f_rounding = if weights.is_some() {
-        0.0
-    } else {
-        abs_beta_sum * kernel_scale(&kernel, x, dim) + bias.abs()
-    };
-    let rounding = 16.0
-        * n as f64
-        * f64::EPSILON
-        * (abs_beta_sum * (1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs())))
-            + abs_beta_sum * abs_beta_sum * kernel_scale(&kernel, x, dim)
-            + c * f_rounding);
-    let gap = (primal_objective + dual_objective).abs();
-    let within = gap <= ACCEPT_GAP * primal_objective.abs().max(1.0) + rounding;
-    // (NaN fails `within` too.)
-    if !within || !primal_objective.is_finite() {
-        return Err(SvmError::NotConverged {
+    let cert = certificate_of(
+        &kernel,
+        data,
+        settings,
+        &beta,
+        bias,
+        k.as_ref(),
+        weights.as_deref(),
+    );
+    if !cert.accepted() {
+        return Err(SvmError::Uncertified {
             solver,
             iterations,
-            gap: gap / primal_objective.abs().max(1.0),
-            tolerance: ACCEPT_GAP,
+            gap: cert.relative_gap,
+            threshold: ACCEPT_GAP,
         });
     }
 
@@ -279,114 +256,97 @@ fn certify(
     Ok(SvrFit {
         n_bounded_sv: sv.iter().filter(|&&i| beta[i].abs() >= c * (1.0 - 1e-12)).count(),
         model,
-        dual_objective,
-        primal_objective,
+        dual_objective: cert.dual,
+        primal_objective: cert.primal,
         solver,
         iterations,
         polished,
         fit_seconds: 0.0,
+        certified_gap: cert.relative_gap,
+        resolution: cert.resolution,
     })
 }
 
-/// Whether a polished (β, b) is provably optimal: β is dual feasible (Σβ = 0, |β| ≤ C) and the
-/// duality gap is below `relative_gap`. By weak duality no primal point can then do better
-/// than `relative_gap`, whatever produced (β, b).
+/// The certificate of (β, b): from exact primal weights when the solver has them (linear
+/// kernel), else from the kernel matrix, else from kernel evaluations. Every `(Kβ)ᵢ` is a
+/// compensated sum: with β ~ C = 1e11 its terms cancel to O(1).
+fn certificate_of(
+    kernel: &Kernel,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+    beta: &[f64],
+    bias: f64,
+    k: Option<&Mat<f64>>,
+    weights: Option<&[f64]>,
+) -> Certificate {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let n = y.len();
+    let row = |i: usize| &x[i * dim..(i + 1) * dim];
+    let solution = |fitted: &[Accumulator], primal_quad, dual_quad, feature_norms: &[f64]| {
+        certificate::certify(&certificate::Solution {
+            y,
+            c: settings.c,
+            epsilon: settings.epsilon,
+            beta,
+            bias,
+            fitted,
+            primal_quad,
+            dual_quad,
+            feature_norms,
+        })
+    };
+    if let Some(w) = weights {
+        let parts = certificate::linear_parts(x, dim, w, beta);
+        return solution(&parts.fitted, parts.primal_quad, parts.dual_quad, &parts.norms);
+    }
+    let support: Vec<usize> = (0..n).filter(|&j| beta[j] != 0.0).collect();
+    let k_beta: Vec<Accumulator> = (0..n)
+        .map(|i| {
+            let mut acc = Accumulator::new();
+            for &j in &support {
+                let kij = match k {
+                    Some(k) => k[(i, j)],
+                    None => kernel.eval(row(j), row(i)),
+                };
+                acc.add_product(kij, beta[j]);
+            }
+            acc
+        })
+        .collect();
+    let norms: Vec<f64> = (0..n)
+        .map(|i| {
+            let kii = match k {
+                Some(k) => k[(i, i)],
+                None => kernel.eval(row(i), row(i)),
+            };
+            kii.abs().sqrt() * (1.0 + 1e-15)
+        })
+        .collect();
+    let quad = certificate::kernel_quad(beta, &k_beta);
+    solution(&k_beta, quad, quad, &norms)
+}
+
+/// Whether a polished (β, b) is provably optimal to `relative_gap`: the same certificate as
+/// every returned fit, held to the solver's own tolerance instead of [`ACCEPT_GAP`]. By weak
+/// duality no primal point can then do better, whatever produced (β, b).
 fn certified_optimal(
     k: &Mat<f64>,
     data: &SvrData<'_>,
     settings: &DualSettings,
+    kernel: &Kernel,
     p: &polish::Polished,
     relative_gap: f64,
 ) -> bool {
-    let c = settings.c;
-    let total: f64 = p.beta.iter().map(|b| b.abs()).sum();
-    let feasible =
-        p.beta.iter().sum::<f64>().abs() <= 1e-12 * (1.0 + total) && p.beta.iter().all(|b| b.abs() <= c);
-    let o = objectives(k, data, settings, p);
-    feasible && (o.primal + o.dual).abs() <= relative_gap * o.primal.abs().max(1.0) + o.rounding
-}
-
-/// Primal and dual objectives of a solution, and a bound on the rounding error of their sum.
-#[derive(Debug, Clone, Copy)]
-struct Objectives {
-    /// `½‖w‖² + C Σ max(0, |yᵢ − f(xᵢ)| − ε)`.
-    primal: f64,
-    /// `½βᵀKβ + εΣ|β| − yᵀβ`.
-    dual: f64,
-    /// Bound on the rounding error of `primal + dual`.
-    rounding: f64,
-}
-
-/// Primal and dual objectives of a polished solution, and a bound on the rounding error of
-/// their sum.
-///
-/// The dual is evaluated at β honestly. Its quadratic term is `½βᵀKβ`, but with β ~ C = 1e11
-/// the entries of Kβ cancel to O(1) and carry errors ~ε_mach·|K||β| that βᵀ multiplies back up;
-/// for a linear kernel it is evaluated through the feature map as `½‖Σβᵢxᵢ‖²`, which does not
-/// amplify, and otherwise the rounding bound says how far the gap can be trusted.
-fn objectives(k: &Mat<f64>, data: &SvrData<'_>, settings: &DualSettings, p: &polish::Polished) -> Objectives {
-    let (x, dim, y) = (data.x, data.dim, data.y);
-    let (c, epsilon) = (settings.c, settings.epsilon);
-    let n = y.len();
-    let abs_beta: Vec<f64> = p.beta.iter().map(|b| b.abs()).collect();
-    let linear_term =
-        epsilon * abs_beta.iter().sum::<f64>() - p.beta.iter().zip(y).map(|(b, yi)| b * yi).sum::<f64>();
-    let mut rounding = 8.0
-        * n as f64
-        * f64::EPSILON
-        * abs_beta
-            .iter()
-            .zip(y)
-            .map(|(b, yi)| b * (yi.abs() + epsilon))
-            .sum::<f64>();
-    let mut kbeta = vec![0.0; n];
-    ipm::mat_vec(k, &p.beta, &mut kbeta);
-    let (dual_quad, primal) = match &p.weights {
-        Some(w) => {
-            let mut w_beta = vec![0.0; dim];
-            for (i, b) in p.beta.iter().enumerate() {
-                for (wk, xk) in w_beta.iter_mut().zip(&x[i * dim..(i + 1) * dim]) {
-                    *wk += b * xk;
-                }
-            }
-            let f = |i: usize| {
-                x[i * dim..(i + 1) * dim]
-                    .iter()
-                    .zip(w)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-                    + p.bias
-            };
-            let primal = 0.5 * w.iter().map(|v| v * v).sum::<f64>()
-                + c * (0..n).map(|i| slack(y[i], f(i), epsilon)).sum::<f64>();
-            (0.5 * w_beta.iter().map(|v| v * v).sum::<f64>(), primal)
-        }
-        None => {
-            let mut abs_k_beta = vec![0.0; n];
-            for (j, &bj) in abs_beta.iter().enumerate() {
-                for (i, o) in abs_k_beta.iter_mut().enumerate() {
-                    *o += k[(i, j)].abs() * bj;
-                }
-            }
-            rounding += 8.0
-                * n as f64
-                * f64::EPSILON
-                * abs_beta.iter().zip(&abs_k_beta).map(|(a, b)| a * b).sum::<f64>();
-            let quad = 0.5 * p.beta.iter().zip(&kbeta).map(|(b, kb)| b * kb).sum::<f64>();
-            (
-                quad,
-                quad + c
-                    * (0..n)
-                        .map(|i| slack(y[i], kbeta[i] + p.bias, epsilon))
-                        .sum::<f64>(),
-            )
-        }
-    };
-    Objectives {
-        primal,
-        dual: dual_quad + linear_term,
-        rounding,
-    }
+    let cert = certificate_of(
+        kernel,
+        data,
+        settings,
+        &p.beta,
+        p.bias,
+        Some(k),
+        p.weights.as_deref(),
+    );
+    cert.relative_gap <= relative_gap
 }
 
 /// The ε-insensitive loss `max(0, |y − f| − ε)`, with a residual that exceeds ε by less than

@@ -12,6 +12,8 @@
 //! Imports no other palpus crate: identification (`identify`) and surface recognition
 //! (`recognize`) both build on it.
 
+mod certificate;
+mod compensated;
 mod data;
 mod error;
 mod export;
@@ -19,6 +21,7 @@ mod fast;
 mod fit;
 mod ipm;
 mod kernel;
+mod linear_exact;
 mod model;
 mod params;
 mod polish;
@@ -28,7 +31,8 @@ mod smo;
 pub use error::SvmError;
 pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};
 pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, LANES, fast_exp2};
-pub use fit::{ACCEPT_GAP, SvrFit, fit, slack};
+pub use certificate::ACCEPT_GAP;
+pub use fit::{SvrFit, fit, slack};
 pub use kernel::Kernel;
 pub use model::{InputScaling, SvrModel};
 pub use params::{Solver, SvrParams, SvrParamsBuilder};

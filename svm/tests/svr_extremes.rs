@@ -36,7 +36,12 @@ fn certify(
         .unwrap();
     let f = match fit(&params, x, dim, y) {
         Ok(f) => f,
-        Err(e @ (SvmError::NotConverged { .. } | SvmError::Budget { .. } | SvmError::Numerical { .. })) => {
+        Err(
+            e @ (SvmError::NotConverged { .. }
+            | SvmError::Budget { .. }
+            | SvmError::Numerical { .. }
+            | SvmError::Uncertified { .. }),
+        ) => {
             return Err(e);
         }
         Err(e) => panic!("{ctx}: unexpected error {e}"),
@@ -151,7 +156,10 @@ fn degenerate_data_duplicates_constants_and_huge_inputs() {
     let y = [1.0, 1.2, 0.8, 0.0, -1.0];
     for c in [1e-3, 1.0, 1e11] {
         for eps in [0.0, 0.05] {
-            certify(
+            // At C = 1e11 the RBF expansion's β ~ C fixes f(xᵢ) only to ε_mach·Σ|βⱼKᵢⱼ| ~ 1e-5,
+            // which the loss multiplies by C: the certificate may refuse it (a typed error),
+            // never return it unchecked.
+            match certify(
                 &x,
                 1,
                 &y,
@@ -159,8 +167,13 @@ fn degenerate_data_duplicates_constants_and_huge_inputs() {
                 eps,
                 Kernel::Rbf { gamma: 2.0 },
                 &format!("duplicates C {c} ε {eps}"),
-            )
-            .unwrap();
+            ) {
+                Ok(()) => {}
+                Err(e @ SvmError::Uncertified { .. }) if c >= 1e11 => {
+                    println!("duplicates C {c} ε {eps}: {e}")
+                }
+                Err(e) => panic!("duplicates C {c} ε {eps}: {e}"),
+            }
             certify(
                 &x,
                 1,
