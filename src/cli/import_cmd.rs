@@ -81,7 +81,7 @@ use recognize::LabelledCapture;
 /// spans the time all inputs cover (what one input has before or after it is cut, and
 /// printed); inputs that overlap for fewer than 4 output samples are an error listing each
 /// file's time range. --clock-offset-s 2=0.013 adds 0.013 s to input 2's times first.
-/// --rate-hz is required. The metadata records every input (source_N, source_N_sha256,
+/// --rate-hz is required; --input-rate-hz and --time-from-position take one input. The metadata records every input (source_N, source_N_sha256,
 /// source_N_map, source_N_rate_hz). A loop over trials changes only the file names:
 ///
 ///   for t in 1 2 3; do palpus import f$t.csv p$t.csv v$t.csv --map ... --out trial$t.csv; done

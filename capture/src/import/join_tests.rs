@@ -289,6 +289,7 @@ fn a_source_must_be_in_exactly_one_input() {
     assert!(error.to_string().contains("there is no input 3"), "{error}");
 }
 
+/// The capture `inputs` join into at 100 Hz through `map`.
 fn joined(inputs: &[&Path], map: &str) -> Capture {
     import_streams(inputs, &spec(map, 100.0)).unwrap().capture
 }

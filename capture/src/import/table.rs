@@ -25,7 +25,7 @@ pub(super) struct Table {
 /// non-finite one is an error, drops its row, or is kept as NaN for [`bridge_non_finite`],
 /// as [`non_finite_mode`] says. A trailing delimiter is tolerated as the
 /// [module documentation](super) says. With `header_only`, stops after the column names
-/// (no rows, nothing mapped is looked up).
+/// (no rows, nothing mapped is looked up, no hash).
 pub(super) fn read_table(path: &Path, spec: &ImportSpec, header_only: bool) -> Result<Table, CaptureError> {
     let (map, drop_implausible) = (&spec.map, spec.drop_implausible);
     let non_finite = non_finite_mode(spec);
@@ -76,7 +76,6 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec, header_only: bool) -> R
     if matches!(spec.header, Header::FirstLine) && width_of(&record) < header.len() {
         header.pop();
     }
-    let sha256 = crate::sha256_hex(bytes_all);
     if header_only {
         return Ok(Table {
             columns: Vec::new(),
@@ -84,9 +83,10 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec, header_only: bool) -> R
             dropped: 0,
             dropped_non_finite: 0,
             header,
-            sha256,
+            sha256: String::new(),
         });
     }
+    let sha256 = crate::sha256_hex(bytes_all);
     if let Some(unroll) = &spec.unroll {
         check_range(unroll, &header).map_err(|reason| fail(CaptureErrorKind::BadSpec(reason)))?;
     }
