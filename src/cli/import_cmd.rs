@@ -159,8 +159,8 @@ pub(crate) struct ImportArgs {
     /// `interpolate` (linearly, towards the next row) or `hold` (the row's value).
     #[arg(long, value_name = "MODE", default_value = "interpolate", value_parser = parse_slow, requires = "unroll")]
     unroll_slow: SlowColumns,
-    /// With several inputs: add this many seconds to input N's times before joining,
-    /// repeatable: `--clock-offset-s 2=0.013` (input 2's clock is 13 ms behind).
+    /// Add this many seconds to input N's times (before joining several), repeatable:
+    /// `--clock-offset-s 2=0.013` (input 2's clock reads 13 ms less than the others').
     #[arg(long = "clock-offset-s", value_name = "N=SECONDS", value_parser = parse_offset, allow_hyphen_values = true)]
     clock_offset_s: Vec<(usize, f64)>,
     /// The `device` recorded in the metadata.

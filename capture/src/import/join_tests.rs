@@ -412,6 +412,11 @@ fn one_input_is_the_single_file_import() {
     assert_eq!(plain.streams[0].cut_end_s, 0.0);
     assert_eq!(plain.capture.metadata().get("source_rate_hz"), Some("100"));
     assert_eq!(plain.capture.metadata().get("source_1"), None);
+    let mut shifted = spec("time_s=t[ms],normal_force_n=Fz,tangential_position_m=x", 200.0);
+    shifted.clock_offsets_s = vec![(1, 2.0)];
+    let shifted = import_csv_report(&a, &shifted).unwrap().capture;
+    assert_eq!(shifted.time()[0], 2.0);
+    assert_eq!(shifted.metadata().get("source_1_clock_offset_s"), Some("2"));
     let error = import_csv_report(
         &a,
         &spec("time_s=t[ms],normal_force_n=Fz,tangential_position_m=2:x", 200.0),

@@ -98,7 +98,7 @@
 //! below holds per input. The metadata names every input in `source` (comma-separated) and,
 //! per input `N`, `source_N` (file name), `source_N_sha256`, `source_N_map` (its entries),
 //! `source_N_rate_hz` (its mean rate) and `source_N_clock_offset_s` where given, instead of
-//! `source_rate_hz`.
+//! `source_rate_hz`. One input may be given a clock offset too (`source_1_clock_offset_s`).
 //!
 //! # Column map
 //!
@@ -848,6 +848,10 @@ pub fn import_streams(paths: &[&Path], spec: &ImportSpec) -> Result<Imported, Ca
         .with("map", metadata_safe(spec.map.spec()));
     if single {
         meta = meta.with("source_rate_hz", snap_rate(streams[0].source_rate_hz));
+        // Rare for one input, but a shifted clock must not go unrecorded.
+        if offsets[0] != 0.0 {
+            meta = meta.with("source_1_clock_offset_s", offsets[0]);
+        }
     } else {
         for (i, ((name, stream), offset_s)) in names.iter().zip(&streams).zip(&offsets).enumerate() {
             let key = |what: &str| format!("source_{}{what}", i + 1);
