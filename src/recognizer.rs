@@ -10,7 +10,7 @@ use haptics::live_recognizer::Recognizing;
 use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
 #[cfg(doc)]
 use recognize::NakanoWindowing;
-use recognize::{LabelledCapture, Method, RecognizerFile, TrainSettings};
+use recognize::{FeatureNeeds, LabelledCapture, Method, RecognizerFile, TrainSettings};
 
 use crate::scene::Scene;
 use crate::session::report::Recognition;
@@ -84,7 +84,9 @@ pub fn decisions(classes: &[String], run: &SegmentRun) -> Vec<Recognition> {
 }
 
 /// Trains Nakano's SOM on every `*.csv` rubbing capture in `dir`, with the method's defaults
-/// ([`TrainSettings::new`]: the protocol's windows, [`NakanoWindowing::protocol`]).
+/// ([`TrainSettings::new`]: the protocol's windows, [`NakanoWindowing::protocol`]). Each
+/// capture is kept only as its training windows once read, so a folder of many long captures
+/// holds one capture's samples at a time.
 fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading recognizer captures in {}", dir.display()))?
@@ -92,12 +94,19 @@ fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
         .filter(|p| p.extension().is_some_and(|e| e == "csv"))
         .collect();
     paths.sort();
-    let captures = paths
-        .iter()
-        .map(|p| LabelledCapture::read(p).with_context(|| format!("reading {}", p.display())))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    let settings = TrainSettings::new(Method::Som);
+    let mut needs: Option<FeatureNeeds> = None;
+    let mut captures = Vec::with_capacity(paths.len());
+    for p in &paths {
+        let c = LabelledCapture::read(p).with_context(|| format!("reading {}", p.display()))?;
+        let needs = match &needs {
+            Some(n) => n,
+            None => needs.insert(FeatureNeeds::training(&settings, c.capture.metadata().rate_hz())?),
+        };
+        captures.push(c.keep_features(needs)?);
+    }
     if captures.is_empty() {
         anyhow::bail!("no captures in {}", dir.display());
     }
-    Ok(recognize::train(&captures, &TrainSettings::new(Method::Som))?)
+    Ok(recognize::train(&captures, &settings)?)
 }

@@ -4,10 +4,11 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
 use recognize::protocol::{self, SINAPOV_FOLDS, Split};
 use recognize::{
-    CV_FOLDS, ConfusionMatrix, Evaluation, FusedEvaluation, LabelledCapture, RecognizerBody, RecognizerFile,
-    WINDOW_SVM_FALLBACK_C,
+    CV_FOLDS, ConfusionMatrix, Evaluation, FeatureNeeds, FusedEvaluation, LabelledCapture, RecognizerBody,
+    RecognizerFile, WINDOW_SVM_FALLBACK_C,
 };
 
 use super::train_args::{Method, Training};
@@ -34,7 +35,7 @@ enum RecognizeWhat {
 ///
 /// som: Nakano's five rubbing features (roughness and friction) over sliding windows, decided
 /// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes up to 7 surfaces, two per surface
-/// beyond, see --som-nodes; σ 1.6, 10 000 presentations) trained on short windows (many, varied
+/// beyond, see --nodes; σ 1.6, 10 000 presentations) trained on short windows (many, varied
 /// ones from a single run per surface) and deciding on long ones (more roughness waves per
 /// decision, at the cost of latency). Training warns when a surface owns no node of the map: the
 /// recognizer can never name it.
@@ -159,9 +160,15 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 }
 
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
-    let captures = args.input.read(&args.captures, None)?;
+    let settings = args.training.settings();
+    let captures = read_keeping(&args.input, &args.captures, None, |rate_hz| {
+        Ok(FeatureNeeds::training(&settings, rate_hz)?)
+    })?;
+    for warning in settings.data_warnings(&captures)? {
+        eprintln!("warning: {warning}");
+    }
     let start = std::time::Instant::now();
-    let model = args.training.train_with_progress(&captures)?;
+    let model = Training::train_with_progress(&settings, &captures)?;
     let trained_s = start.elapsed().as_secs_f64();
     model
         .save(&args.out)
@@ -188,6 +195,36 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Reads `paths` one at a time and keeps of each only the features `needs` lists (given the
+/// first capture's rate), dropping its samples before the next is read: memory holds one
+/// capture's samples at a time however many captures there are, and the results are those of
+/// the whole captures. A bar on stderr counts the captures read (only on a terminal).
+fn read_keeping(
+    input: &super::import_cmd::MappedCaptures,
+    paths: &[PathBuf],
+    default_rate_hz: Option<f64>,
+    needs: impl Fn(f64) -> anyhow::Result<FeatureNeeds>,
+) -> anyhow::Result<Vec<LabelledCapture>> {
+    let bar = ProgressBar::new(paths.len() as u64).with_style(
+        ProgressStyle::with_template("reading captures {bar:30} {pos}/{len} {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut needed: Option<FeatureNeeds> = None;
+    let mut captures = Vec::with_capacity(paths.len());
+    for path in paths {
+        for c in input.read(std::slice::from_ref(path), default_rate_hz)? {
+            let needs = match &needed {
+                Some(n) => n,
+                None => needed.insert(needs(c.capture.metadata().rate_hz())?),
+            };
+            captures.push(c.keep_features(needs)?);
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(captures)
+}
+
 /// Warns on stderr about each SOM whose nodes leave classes unnamed, naming them.
 fn warn_unmapped(model: &RecognizerFile) {
     for m in model.classes_without_nodes() {
@@ -195,7 +232,7 @@ fn warn_unmapped(model: &RecognizerFile) {
             .behaviour
             .map_or_else(|| "the map".to_owned(), |b| format!("the map of behaviour {b}"));
         eprintln!(
-            "warning: {} of {} classes own no node of {map} ({} nodes) and can never be recognized: {}; more nodes (--som-nodes) may help",
+            "warning: {} of {} classes own no node of {map} ({} nodes) and can never be recognized: {}; more nodes (--nodes) may help",
             m.classes.len(),
             model.classes.len(),
             m.nodes,
@@ -266,9 +303,16 @@ fn print_reliabilities(model: &RecognizerFile, trained_s: f64) {
 
 fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let model = RecognizerFile::load(&args.model)?;
-    let captures = args
-        .input
-        .read(&args.captures, model.windowing().map(|w| w.rate_hz))?;
+    let rate_hz = model.windowing().map(|w| w.rate_hz);
+    // The plots read each capture's samples again; without them, each capture is held only
+    // as the features the evaluation reads.
+    let captures = if args.plots.is_some() {
+        args.input.read(&args.captures, rate_hz)?
+    } else {
+        read_keeping(&args.input, &args.captures, rate_hz, |_| {
+            Ok(FeatureNeeds::evaluation(&model, &args.window_s)?)
+        })?
+    };
     if !args.window_s.is_empty() && model.windowing().is_none() {
         anyhow::bail!(
             "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
@@ -410,7 +454,10 @@ fn print_evaluation(e: &Evaluation, what: &str) {
 }
 
 fn cv(args: &CvArgs) -> anyhow::Result<()> {
-    let captures = args.input.read(&args.captures, None)?;
+    let settings = args.training.settings();
+    let captures = read_keeping(&args.input, &args.captures, None, |rate_hz| {
+        Ok(FeatureNeeds::training_and_decisions(&settings, rate_hz)?)
+    })?;
     if args.seeds > 1 && !matches!(args.training.method, Method::Som) {
         anyhow::bail!(
             "--seeds {} applies to som only: knn and svm train the same way every time",
@@ -427,7 +474,6 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
         },
     };
     let start = std::time::Instant::now();
-    let settings = args.training.settings();
     let result = protocol::run(&captures, split, args.seeds, args.fold, |train, seed| {
         let settings = recognize::TrainSettings {
             seed: settings.seed + seed,

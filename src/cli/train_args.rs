@@ -25,10 +25,14 @@ impl Training {
         self.options.settings(self.method)
     }
 
-    /// Trains on `captures` with a progress bar on stderr over the trainer's long steps (an
-    /// SVM's C search, machines and probability sigmoids; shown only on a terminal) and its
-    /// warnings (a candidate C left out) printed above the bar as they happen.
-    pub(crate) fn train_with_progress(&self, captures: &[LabelledCapture]) -> anyhow::Result<RecognizerFile> {
+    /// Trains on `captures` as `settings` say (this training's [`Training::settings`]) with a
+    /// progress bar on stderr over the trainer's long steps (an SVM's C search, machines and
+    /// probability sigmoids; shown only on a terminal) and its warnings (a candidate C left
+    /// out) printed above the bar as they happen.
+    pub(crate) fn train_with_progress(
+        settings: &TrainSettings,
+        captures: &[LabelledCapture],
+    ) -> anyhow::Result<RecognizerFile> {
         let bar = ProgressBar::new(0).with_style(
             ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} {elapsed} (eta {eta})")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -45,7 +49,7 @@ impl Training {
             }
             FitEvent::Warning(line) => bar.suspend(|| eprintln!("warning: {line}")),
         };
-        let trained = self.settings().train_observed(captures, &progress);
+        let trained = settings.train_observed(captures, &progress);
         bar.finish_and_clear();
         Ok(trained?)
     }
@@ -74,10 +78,16 @@ pub(crate) struct TrainOptions {
     /// windows), s.
     #[arg(long, default_value_t = HOP_S, value_name = "S")]
     hop_s: f64,
-    /// som: nodes of each map. Default: over windows (nakano, both) the thesis's 12 for up to
-    /// its 7 surfaces, two per class beyond; over whole scratches (spectral) three per class, at
-    /// least 12. A node answers one class: training warns when a class owns none.
-    #[arg(long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+    /// som: nodes of each map (also --som-nodes). Default: over windows (nakano, both) the
+    /// thesis's 12 for up to its 7 surfaces, two per class beyond; over whole scratches
+    /// (spectral) three per class, at least 12. A node answers one class: training warns when a
+    /// class owns none.
+    #[arg(
+        long = "nodes",
+        visible_alias = "som-nodes",
+        value_name = "N",
+        value_parser = parse_nodes
+    )]
     som_nodes: Option<usize>,
     /// som: seed of the map's initial vectors and presentation order.
     #[arg(long, default_value_t = 0)]
@@ -113,6 +123,17 @@ fn parse_c(text: &str) -> Result<CArg, String> {
     match text.parse::<f64>() {
         Ok(c) if c.is_finite() && c > 0.0 => Ok(CArg::Fixed(c)),
         _ => Err(format!("`{text}` is neither `auto` nor a positive number")),
+    }
+}
+
+/// `--nodes`: a positive count. The error names the old spelling too, since clap names the
+/// option by its new one whichever was typed.
+fn parse_nodes(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!(
+            "`{text}` is not a node count: a map needs at least one node (--som-nodes is the same option)"
+        )),
     }
 }
 

@@ -200,6 +200,12 @@ impl LabelledCapture {
                 needed: "new features (its samples were already dropped)".to_owned(),
             });
         }
+        // The columns first, so that a capture lacking one is refused as training refuses it.
+        let feature_sets = needs.windows.iter().map(|(_, features, _)| *features);
+        let histograms = needs.histograms.iter().map(|_| FeatureSet::Spectral);
+        for features in feature_sets.chain(histograms) {
+            features.check_columns(std::slice::from_ref(&self))?;
+        }
         let plan = SpectrogramPlan::new();
         let mut windows = Vec::with_capacity(needs.windows.len());
         for &(windowing, features, cell_scale) in &needs.windows {
