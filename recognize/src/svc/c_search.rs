@@ -259,7 +259,7 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     fold: &[usize],
     f: usize,
     classes: usize,
-    tick: &dyn Fn(),
+    tick: &(dyn Fn() + Sync),
 ) -> Result<usize, RecognizeError> {
     let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
         .iter()

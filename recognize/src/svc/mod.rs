@@ -7,9 +7,9 @@
 //! solved by SMO with the second-order working-set selection of Fan, Chen & Lin (2005), the
 //! pair update and the bias (`ρ`, averaged over free vectors) of libsvm's `Solver`, so decision
 //! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. The solver is
-//! [`svm::solve_smo`], the core the ε-SVR uses too, here on a precomputed Gram matrix without
-//! shrinking: a pair of surface classes has tens of training vectors, whose whole Gram matrix
-//! is smaller than one cached SVR row.
+//! [`svm::solve_smo`], the core the ε-SVR uses too, with libsvm's shrinking and kernel rows
+//! computed as the solver first asks for them and cached (libsvm's cache; see `rows.rs`).
+//! The pairs' machines and their probability folds are independent solves, run on all cores.
 //!
 //! **Probabilities.** For each pair, decision values from a 5-fold cross-validation on that
 //! pair's training vectors (folds from a seeded shuffle, as libsvm's) are fitted by Platt's
@@ -24,10 +24,15 @@ use serde::{Deserialize, Serialize};
 use crate::vectors;
 use crate::vectors::FeatureScaling;
 use capture::rng::SplitMix64;
-use svm::{GramRows, Kernel, SelectionCurvature, SmoSettings, SmoSolution};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use svm::{Kernel, SelectionCurvature, SmoSettings, SmoSolution};
 
 mod c_search;
 mod probability;
+mod rows;
+
+use rows::SubsetRows;
 
 pub use c_search::{C_GRID, CSearch, CvPoint, cross_validated_accuracy, select_c, select_c_observed};
 pub use probability::{pairwise_coupling, sigmoid_predict, sigmoid_train};
@@ -115,7 +120,7 @@ impl Default for SvcParams {
 }
 
 impl SvcParams {
-    /// The SMO core's settings: libsvm's C-SVC solver (no shrinking, its selection rule, its
+    /// The SMO core's settings: libsvm's C-SVC solver (shrinking, its selection rule, its
     /// iteration budget), stopping at [`SvcParams::tolerance`].
     fn smo_settings(&self) -> Result<SmoSettings, RecognizeError> {
         self.check()?;
@@ -123,6 +128,7 @@ impl SvcParams {
             .c(self.c)
             .stop(self.tolerance)
             .selection(SelectionCurvature::NonPositiveToTau)
+            .shrinking(true)
             .max_iterations(self.max_iterations)
             .build()
             .map_err(|e| match e {
@@ -167,6 +173,21 @@ impl SvcParams {
             _ => Ok(()),
         }
     }
+}
+
+/// Labelled training vectors exactly as an SVC is fitted on them (scaled, in order), with the
+/// cross-validation group of each: what another SVM library must be given to be compared with
+/// this one (see `recognize/benches/svc.rs`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainingVectors {
+    /// The classes, in the recognizer's order; labels index them.
+    pub classes: Vec<String>,
+    /// The vectors.
+    pub x: Vec<Vec<f64>>,
+    /// Their class indices.
+    pub y: Vec<usize>,
+    /// Their cross-validation groups (the run or trial of the capture each came from).
+    pub groups: Vec<u64>,
 }
 
 /// Folds of the cross-validation behind each pair's sigmoid (libsvm's).
@@ -237,12 +258,16 @@ impl Svc {
     }
 
     /// [`Svc::fit`], calling `tick` after each binary machine and each sigmoid fold.
+    ///
+    /// Every solve (each pair's machine and, with probabilities, its folds' machines) is an
+    /// independent task run on all cores; the folds' shuffles are drawn in pair order first, so
+    /// the result does not depend on the order the tasks finish in.
     pub(super) fn fit_pairs<V: AsRef<[f64]>>(
         params: SvcParams,
         features: &[V],
         labels: &[usize],
         classes: usize,
-        tick: &dyn Fn(),
+        tick: &(dyn Fn() + Sync),
     ) -> Result<Self, RecognizeError> {
         let settings = params.smo_settings()?;
         if features.is_empty() || features.len() != labels.len() {
@@ -258,62 +283,86 @@ impl Svc {
         }
         let scale = params.scaling.fit(features, dim);
         let points = vectors::scaled_rows(features, &scale);
-        let row = |t: usize| &points[t * dim..(t + 1) * dim];
-        let mut rng = SplitMix64::new(params.seed);
-        let mut machines = Vec::with_capacity(classes * classes.saturating_sub(1) / 2);
-        for i in 0..classes {
-            for j in i + 1..classes {
+        let pairs: Vec<Pair> = (0..classes)
+            .flat_map(|i| (i + 1..classes).map(move |j| (i, j)))
+            .map(|(i, j)| {
                 let members: Vec<usize> = (0..labels.len())
                     .filter(|&t| labels[t] == i || labels[t] == j)
                     .collect();
-                let y: Vec<f64> = members
+                let y = members
                     .iter()
                     .map(|&t| if labels[t] == i { 1.0 } else { -1.0 })
                     .collect();
-                let gram = |subset: &[usize]| -> Vec<f64> {
-                    let n = subset.len();
-                    let mut k = vec![0.0; n * n];
-                    for a in 0..n {
-                        for b in a..n {
-                            let v = params
-                                .kernel
-                                .eval(row(members[subset[a]]), row(members[subset[b]]));
-                            k[a * n + b] = v;
-                            k[b * n + a] = v;
-                        }
-                    }
-                    k
-                };
-                let all: Vec<usize> = (0..members.len()).collect();
-                let not_converged = || RecognizeError::NotConverged {
-                    iterations: settings.iteration_budget(members.len()),
-                    c: params.c,
-                    first: i,
-                    second: j,
-                };
-                let SmoSolution { alpha, rho, .. } =
-                    solve(&gram(&all), &y, &settings).ok_or_else(not_converged)?;
-                tick();
-                let support = members
-                    .iter()
-                    .zip(alpha.iter().zip(&y))
-                    .filter(|(_, (a, _))| **a > 0.0)
-                    .map(|(&t, (a, yt))| (t, a * yt))
-                    .collect();
-                let sigmoid = if params.probability {
-                    let dec =
-                        cross_validated_decisions(&members, &y, &params, &settings, &row, &mut rng, tick)
-                            .ok_or_else(not_converged)?;
-                    Some(sigmoid_train(&dec, &y))
-                } else {
-                    None
-                };
-                machines.push(BinarySvc {
+                Pair {
                     classes: (i, j),
-                    support,
-                    rho,
-                    sigmoid,
-                });
+                    members,
+                    y,
+                    order: Vec::new(),
+                }
+            })
+            .collect();
+        let mut pairs = pairs;
+        if params.probability {
+            let mut rng = SplitMix64::new(params.seed);
+            for pair in &mut pairs {
+                // A Fisher–Yates shuffle, then folds of consecutive positions (libsvm's layout).
+                let n = pair.members.len();
+                pair.order = (0..n).collect();
+                for a in (1..n).rev() {
+                    pair.order.swap(a, rng.below(a + 1));
+                }
+            }
+        }
+        let folds = if params.probability { PROBABILITY_FOLDS } else { 0 };
+        let tasks: Vec<(usize, Option<usize>)> = (0..pairs.len())
+            .flat_map(|p| std::iter::once((p, None)).chain((0..folds).map(move |f| (p, Some(f)))))
+            .collect();
+        // Once a solve has failed the fit fails: the tasks not yet started are not run.
+        let failed = AtomicBool::new(false);
+        let outcomes: Vec<Option<Result<Solved, RecognizeError>>> = tasks
+            .par_iter()
+            .map(|&(p, fold)| {
+                if failed.load(Ordering::Relaxed) {
+                    return None;
+                }
+                let pair = &pairs[p];
+                let solved = match fold {
+                    None => pair.solve(&points, dim, &params, &settings).map(Solved::Machine),
+                    Some(f) => pair
+                        .fold_decisions(f, &points, dim, &params, &settings)
+                        .map(Solved::Fold),
+                };
+                if solved.is_err() {
+                    failed.store(true, Ordering::Relaxed);
+                }
+                tick();
+                Some(solved)
+            })
+            .collect();
+        // The first failure in pair order is reported (one of them, if several pairs fail).
+        let mut machines: Vec<BinarySvc> = Vec::with_capacity(pairs.len());
+        let mut decisions: Vec<Vec<f64>> = pairs.iter().map(|p| vec![0.0; p.members.len()]).collect();
+        if let Some(e) = outcomes
+            .iter()
+            .zip(&tasks)
+            .find_map(|(o, &(p, _))| matches!(o, Some(Err(_))).then_some(p))
+        {
+            return Err(pairs[e].not_converged(&settings, params.c));
+        }
+        for (outcome, &(p, _)) in outcomes.into_iter().zip(&tasks) {
+            match outcome {
+                Some(Ok(Solved::Machine(machine))) => machines.push(machine),
+                Some(Ok(Solved::Fold(fold))) => {
+                    for (s, d) in fold {
+                        decisions[p][s] = d;
+                    }
+                }
+                _ => return Err(pairs[p].not_converged(&settings, params.c)),
+            }
+        }
+        if params.probability {
+            for (machine, (pair, dec)) in machines.iter_mut().zip(pairs.iter().zip(&decisions)) {
+                machine.sigmoid = Some(sigmoid_train(dec, &pair.y));
             }
         }
         Ok(Self {
@@ -443,39 +492,81 @@ impl Svc {
     }
 }
 
-/// SMO on the C-SVC dual with Gram matrix `k` (row-major, n × n) and labels ±1 (`p = −1`), by
-/// svm's core; `None` if it did not converge.
-fn solve(k: &[f64], y: &[f64], settings: &SmoSettings) -> Option<SmoSolution> {
-    let mut rows = GramRows::new(k, y.len())?;
-    let linear = vec![-1.0; y.len()];
-    svm::solve_smo(&mut rows, y, &linear, settings).ok()
+/// One pair of classes: its training vectors and, with probabilities, their folds' order.
+struct Pair {
+    /// `(i, j)`, `i < j`.
+    classes: (usize, usize),
+    /// Indices of the pair's training points.
+    members: Vec<usize>,
+    /// +1 for class `i`, −1 for class `j`, per member.
+    y: Vec<f64>,
+    /// The members' positions shuffled; fold `f` holds a consecutive fifth of them.
+    order: Vec<usize>,
 }
 
-/// Decision values of each of a pair's points from a machine trained without its fold.
-fn cross_validated_decisions<'a>(
-    members: &[usize],
-    y: &[f64],
-    params: &SvcParams,
-    settings: &SmoSettings,
-    row: &impl Fn(usize) -> &'a [f64],
-    rng: &mut SplitMix64,
-    tick: &dyn Fn(),
-) -> Option<Vec<f64>> {
-    let n = members.len();
-    // A Fisher–Yates shuffle, then folds of consecutive positions (libsvm's layout).
-    let mut order: Vec<usize> = (0..n).collect();
-    for a in (1..n).rev() {
-        order.swap(a, rng.below(a + 1));
+/// What one task of [`Svc::fit_pairs`] produced.
+enum Solved {
+    /// A pair's machine (no sigmoid yet).
+    Machine(BinarySvc),
+    /// A fold's held-out members (positions in the pair) and their decision values.
+    Fold(Vec<(usize, f64)>),
+}
+
+impl Pair {
+    fn not_converged(&self, settings: &SmoSettings, c: f64) -> RecognizeError {
+        RecognizeError::NotConverged {
+            iterations: settings.iteration_budget(self.members.len()),
+            c,
+            first: self.classes.0,
+            second: self.classes.1,
+        }
     }
-    let mut dec = vec![0.0; n];
-    for fold in 0..PROBABILITY_FOLDS {
+
+    /// The pair's machine on all its members.
+    fn solve(
+        &self,
+        points: &[f64],
+        dim: usize,
+        params: &SvcParams,
+        settings: &SmoSettings,
+    ) -> Result<BinarySvc, RecognizeError> {
+        let mut rows = SubsetRows::new(params.kernel, points, dim, self.members.iter().copied());
+        let SmoSolution { alpha, rho, .. } =
+            solve(&mut rows, &self.y, settings).ok_or_else(|| self.not_converged(settings, params.c))?;
+        let support = self
+            .members
+            .iter()
+            .zip(alpha.iter().zip(&self.y))
+            .filter(|(_, (a, _))| **a > 0.0)
+            .map(|(&t, (a, yt))| (t, a * yt))
+            .collect();
+        Ok(BinarySvc {
+            classes: self.classes,
+            support,
+            rho,
+            sigmoid: None,
+        })
+    }
+
+    /// Decision values of fold `fold`'s members from a machine trained on the other folds.
+    fn fold_decisions(
+        &self,
+        fold: usize,
+        points: &[f64],
+        dim: usize,
+        params: &SvcParams,
+        settings: &SmoSettings,
+    ) -> Result<Vec<(usize, f64)>, RecognizeError> {
+        let n = self.members.len();
         let (begin, end) = (fold * n / PROBABILITY_FOLDS, (fold + 1) * n / PROBABILITY_FOLDS);
-        let test = &order[begin..end];
-        let train: Vec<usize> = order[..begin].iter().chain(&order[end..]).copied().collect();
-        let (positive, negative) = (
-            train.iter().filter(|&&t| y[t] > 0.0).count(),
-            train.iter().filter(|&&t| y[t] < 0.0).count(),
-        );
+        let test = &self.order[begin..end];
+        let train: Vec<usize> = self.order[..begin]
+            .iter()
+            .chain(&self.order[end..])
+            .copied()
+            .collect();
+        let positive = train.iter().filter(|&&t| self.y[t] > 0.0).count();
+        let negative = train.len() - positive;
         // One class only in training: libsvm's fallback, a constant decision of that sign.
         if positive == 0 || negative == 0 {
             let v = if positive > 0 {
@@ -485,34 +576,39 @@ fn cross_validated_decisions<'a>(
             } else {
                 0.0
             };
-            test.iter().for_each(|&t| dec[t] = v);
-            tick();
-            continue;
+            return Ok(test.iter().map(|&t| (t, v)).collect());
         }
-        let m = train.len();
-        let mut k = vec![0.0; m * m];
-        for a in 0..m {
-            for b in a..m {
-                let v = params.kernel.eval(row(members[train[a]]), row(members[train[b]]));
-                k[a * m + b] = v;
-                k[b * m + a] = v;
-            }
-        }
-        let ty: Vec<f64> = train.iter().map(|&t| y[t]).collect();
-        let SmoSolution { alpha, rho, .. } = solve(&k, &ty, settings)?;
-        for &t in test {
-            let x = row(members[t]);
-            dec[t] = train
-                .iter()
-                .zip(alpha.iter().zip(&ty))
-                .filter(|(_, (a, _))| **a > 0.0)
-                .map(|(&s, (a, ys))| a * ys * params.kernel.eval(row(members[s]), x))
-                .sum::<f64>()
-                - rho;
-        }
-        tick();
+        let ty: Vec<f64> = train.iter().map(|&t| self.y[t]).collect();
+        let mut rows = SubsetRows::new(params.kernel, points, dim, train.iter().map(|&t| self.members[t]));
+        let SmoSolution { alpha, rho, .. } =
+            solve(&mut rows, &ty, settings).ok_or_else(|| self.not_converged(settings, params.c))?;
+        let support: Vec<(usize, f64)> = alpha
+            .iter()
+            .zip(&ty)
+            .enumerate()
+            .filter(|(_, (a, _))| **a > 0.0)
+            .map(|(s, (a, ys))| (s, a * ys))
+            .collect();
+        Ok(test
+            .iter()
+            .map(|&t| {
+                let m = self.members[t];
+                let x = &points[m * dim..(m + 1) * dim];
+                let f = support
+                    .iter()
+                    .map(|&(s, coef)| coef * params.kernel.eval(rows.point(s), x))
+                    .sum::<f64>();
+                (t, f - rho)
+            })
+            .collect())
     }
-    Some(dec)
+}
+
+/// SMO on the C-SVC dual with kernel rows `rows` and labels ±1 (`p = −1`), by svm's core;
+/// `None` if it did not converge.
+fn solve(rows: &mut SubsetRows, y: &[f64], settings: &SmoSettings) -> Option<SmoSolution> {
+    let linear = vec![-1.0; y.len()];
+    svm::solve_smo(rows, y, &linear, settings).ok()
 }
 
 #[cfg(test)]
