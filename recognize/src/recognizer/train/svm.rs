@@ -17,7 +17,9 @@ use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
 use crate::recognizer::{BehaviourSvc, LabelledCapture, RecognizerBody, RecognizerFile};
-use crate::svc::{CSearch, FitEvent, Progress, Svc, SvcParams, no_progress, select_c_observed};
+use crate::svc::{
+    CSearch, FitEvent, Progress, Svc, SvcParams, TrainingVectors, no_progress, select_c_observed,
+};
 use svm::Kernel;
 
 /// Trains SVM recognizers with `settings.c`: one SVC per behaviour over whole-scratch
@@ -62,6 +64,45 @@ impl Trainer for SvmTrainer {
                 progress,
             ),
         }
+    }
+}
+
+impl SvmTrainer {
+    /// The vectors an SVM over windows (`settings.features` nakano or both) is fitted on, as
+    /// [`RecognizerFile::train_svm_windows`] builds and scales them, and its SVC parameters with
+    /// C fixed at `c`: for comparing this SVC with another library's on the same problem.
+    pub fn window_vectors(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+        c: f64,
+    ) -> Result<(TrainingVectors, SvcParams), RecognizeError> {
+        settings.features.check_columns(captures)?;
+        let ScaledWindows {
+            classes,
+            x,
+            y,
+            groups,
+            ..
+        } = scaled_training_windows(
+            captures,
+            &settings.windowing(captures)?,
+            settings.features,
+            settings.cell_scale,
+        )?;
+        let params = SvcParams {
+            c,
+            ..window_svc_params(settings.features.dim())
+        };
+        Ok((
+            TrainingVectors {
+                classes,
+                x,
+                y,
+                groups,
+            },
+            params,
+        ))
     }
 }
 
