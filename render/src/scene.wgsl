@@ -81,11 +81,13 @@ fn hash3(p: vec3<f32>) -> f32 {
     return fract(q.x * q.y * q.z * (q.x + q.y + q.z));
 }
 
-// Value noise in 0..1 with smooth interpolation.
-fn noise3(p: vec3<f32>) -> f32 {
+// Value noise in 0..1 with smooth interpolation (x) and its analytic gradient (yzw): one set of
+// eight hashes per fragment instead of four noise evaluations for a finite-difference slope.
+fn noise3_grad(p: vec3<f32>) -> vec4<f32> {
     let i = floor(p);
     let f = fract(p);
     let u = f * f * (3.0 - 2.0 * f);
+    let du = 6.0 * f * (1.0 - f);
     let n000 = hash3(i);
     let n100 = hash3(i + vec3<f32>(1.0, 0.0, 0.0));
     let n010 = hash3(i + vec3<f32>(0.0, 1.0, 0.0));
@@ -94,11 +96,22 @@ fn noise3(p: vec3<f32>) -> f32 {
     let n101 = hash3(i + vec3<f32>(1.0, 0.0, 1.0));
     let n011 = hash3(i + vec3<f32>(0.0, 1.0, 1.0));
     let n111 = hash3(i + vec3<f32>(1.0, 1.0, 1.0));
-    let x00 = mix(n000, n100, u.x);
-    let x10 = mix(n010, n110, u.x);
-    let x01 = mix(n001, n101, u.x);
-    let x11 = mix(n011, n111, u.x);
-    return mix(mix(x00, x10, u.y), mix(x01, x11, u.y), u.z);
+    // Trilinear interpolation written as a polynomial in u, so it differentiates term by term.
+    let k1 = n100 - n000;
+    let k2 = n010 - n000;
+    let k3 = n001 - n000;
+    let k4 = n000 - n100 - n010 + n110;
+    let k5 = n000 - n010 - n001 + n011;
+    let k6 = n000 - n100 - n001 + n101;
+    let k7 = -n000 + n100 + n010 - n110 + n001 - n101 - n011 + n111;
+    let value = n000 + k1 * u.x + k2 * u.y + k3 * u.z + k4 * u.x * u.y + k5 * u.y * u.z + k6 * u.z * u.x
+        + k7 * u.x * u.y * u.z;
+    let grad = du * vec3<f32>(
+        k1 + k4 * u.y + k6 * u.z + k7 * u.y * u.z,
+        k2 + k5 * u.z + k4 * u.x + k7 * u.z * u.x,
+        k3 + k6 * u.x + k5 * u.y + k7 * u.x * u.y,
+    );
+    return vec4<f32>(value, grad);
 }
 
 fn shade(in: VertexOut, front: bool) -> vec4<f32> {
@@ -110,10 +123,9 @@ fn shade(in: VertexOut, front: bool) -> vec4<f32> {
     let roughness = object.surface.x;
     if roughness > 0.0 {
         let p = in.rest_m / max(object.surface.y, 1e-5);
-        let e = 0.35;
-        let h = noise3(p);
-        let grad = vec3<f32>(noise3(p + vec3<f32>(e, 0.0, 0.0)) - h, noise3(p + vec3<f32>(0.0, e, 0.0)) - h,
-            noise3(p + vec3<f32>(0.0, 0.0, e)) - h) / e;
+        let noise = noise3_grad(p);
+        let h = noise.x;
+        let grad = noise.yzw;
         // Bump: remove the normal's own component so only the tangential slope tilts it.
         let slope = grad - dot(grad, n) * n;
         n = normalize(n - roughness * 0.8 * slope);
