@@ -371,7 +371,7 @@ pub fn run(
     if let Some(e) = session.error.take() {
         return Err(e);
     }
-    shown?;
+    println!("window: {}", shown?);
     let mut outcome = std::mem::take(&mut session.outcome);
     outcome.scene = Some(session.scene.clone());
     Ok(outcome)

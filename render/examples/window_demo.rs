@@ -150,7 +150,10 @@ fn main() -> ExitCode {
         stiffness_n_per_m: 450.0,
     };
     match render::window::run(config, &mut demo) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(stats) => {
+            println!("{stats}");
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

@@ -1,5 +1,7 @@
-//! Headless frame-rate benchmark: frames per second at a few sizes, MSAA 1 and 4, overlay on and
-//! off, with a per-stage time breakdown so it is clear where a frame's time goes.
+//! Headless frame-rate benchmark: frames per second at a few sizes, MSAA 1 and 4, overlay off, on
+//! (its data unchanged between frames, as between two refreshes of the window's plots) and live
+//! (new data every frame, so its panel is repainted every frame), with a per-stage time
+//! breakdown so it is clear where a frame's time goes.
 
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -12,12 +14,32 @@ use crate::gpu::GpuOptions;
 use crate::renderer::{Renderer, StageTimes};
 use crate::shapes;
 
+/// Whether and how the overlay is shown in a benchmark row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OverlayMode {
+    Off,
+    /// Shown with the same data every frame: the panel is painted once and copied.
+    On,
+    /// Shown with new plot data every frame: the panel is repainted every frame.
+    Live,
+}
+
+impl OverlayMode {
+    fn label(self) -> &'static str {
+        match self {
+            OverlayMode::Off => "off",
+            OverlayMode::On => "on",
+            OverlayMode::Live => "live",
+        }
+    }
+}
+
 /// What to measure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchOptions {
     pub sizes: Vec<[u32; 2]>,
     pub msaa: Vec<u32>,
-    pub overlay: Vec<bool>,
+    pub overlay: Vec<OverlayMode>,
     /// Frames timed per configuration (after one warm-up frame).
     pub frames: u32,
     pub gpu: GpuOptions,
@@ -28,7 +50,7 @@ impl Default for BenchOptions {
         BenchOptions {
             sizes: vec![[640, 480], [1280, 720]],
             msaa: vec![1, 4],
-            overlay: vec![false, true],
+            overlay: vec![OverlayMode::Off, OverlayMode::On, OverlayMode::Live],
             frames: 30,
             gpu: GpuOptions::default(),
         }
@@ -42,7 +64,7 @@ pub struct BenchRow {
     pub width: u32,
     pub height: u32,
     pub msaa: u32,
-    pub overlay: bool,
+    pub overlay: OverlayMode,
     pub fps: f64,
     pub frame_ms: f64,
     /// Scene (and overlay) passes: uniforms, encoding, submit and execution.
@@ -74,7 +96,7 @@ impl BenchTable {
                 r.width,
                 r.height,
                 r.msaa,
-                if r.overlay { "on" } else { "off" },
+                r.overlay.label(),
                 r.fps,
                 r.frame_ms,
                 r.draw_ms,
@@ -103,6 +125,23 @@ pub fn bench_frame(overlay: bool) -> Frame {
     frame
 }
 
+/// The benchmark frame for frame number `i`: in [`OverlayMode::Live`] the force-time plot has
+/// scrolled by one sample and the loop rate has changed, as in a running session.
+fn frame_at(base: &Frame, mode: OverlayMode, i: u32) -> Frame {
+    let mut frame = base.clone();
+    if mode == OverlayMode::Live
+        && let Some(overlay) = frame.overlay.as_mut()
+    {
+        let shift_s = i as f32 * 0.01;
+        for p in &mut overlay.force_time {
+            p[0] += shift_s;
+            p[1] += 0.05 * (p[0] * 5.0).sin();
+        }
+        overlay.haptic_rate_hz = Some(999.0 + (i % 10) as f32 * 0.1);
+    }
+    frame
+}
+
 /// Runs every configuration of `options`.
 pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
     let frames = options.frames.max(1);
@@ -113,16 +152,21 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
             let mut renderer = Renderer::headless_with(width, height, msaa, &options.gpu)?;
             adapter = renderer.adapter_description();
             for &overlay in &options.overlay {
-                let frame = bench_frame(overlay);
-                renderer.render(&frame)?;
+                let base = bench_frame(overlay != OverlayMode::Off);
+                renderer.render(&frame_at(&base, overlay, 0))?;
+                // Frames are made before timing: only drawing is measured.
+                let timed: Vec<Frame> = (1..=frames).map(|i| frame_at(&base, overlay, i)).collect();
                 let start = Instant::now();
-                for _ in 0..frames {
-                    renderer.render(&frame)?;
+                for frame in &timed {
+                    renderer.render(frame)?;
                 }
                 let frame_s = start.elapsed().as_secs_f64() / f64::from(frames);
+                let split: Vec<Frame> = (1..=frames)
+                    .map(|i| frame_at(&base, overlay, frames + i))
+                    .collect();
                 let mut stages = StageTimes::default();
-                for _ in 0..frames {
-                    renderer.render_timed(&frame, Some(&mut stages))?;
+                for frame in &split {
+                    renderer.render_timed(frame, Some(&mut stages))?;
                 }
                 let per = |d: std::time::Duration| d.as_secs_f64() * 1e3 / f64::from(frames);
                 rows.push(BenchRow {
@@ -153,7 +197,7 @@ mod tests {
             width: 640,
             height: 480,
             msaa: 4,
-            overlay: true,
+            overlay: OverlayMode::On,
             fps: 50.0,
             frame_ms: 20.0,
             draw_ms: 12.0,
@@ -166,18 +210,23 @@ mod tests {
             rows: vec![
                 row.clone(),
                 BenchRow {
-                    overlay: false,
+                    overlay: OverlayMode::Off,
+                    ..row.clone()
+                },
+                BenchRow {
+                    overlay: OverlayMode::Live,
                     ..row
                 },
             ],
         };
         let text = table.to_text();
-        assert_eq!(text.lines().count(), 4);
+        assert_eq!(text.lines().count(), 5);
         assert!(
             text.contains("640x480")
                 && text.contains("50.0")
                 && text.contains(" on ")
                 && text.contains(" off ")
+                && text.contains(" live ")
         );
     }
 }

@@ -1,6 +1,10 @@
 //! The egui overlay: live plots, recognition and loop status, scene and parameter controls.
-//! Built from [`Overlay`] data each frame and painted over the 3-D image in its own pass, the same
-//! way for windows and offscreen images.
+//! Built from [`Overlay`] data each frame, the same way for windows and offscreen images.
+//!
+//! egui's shapes are painted into a texture the size of the side panel only when they change, and
+//! the texture is copied into each frame's panel strip. On a software rasterizer repainting the
+//! panel costs more than the whole 3-D scene, while its content changes at the rate of the plots'
+//! data (or of the user's input), not at the frame rate.
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, StrokeKind, Vec2};
 
@@ -22,9 +26,50 @@ pub(crate) struct Painted {
 pub(crate) struct OverlayLayer {
     ctx: egui::Context,
     renderer: egui_wgpu::Renderer,
+    format: wgpu::TextureFormat,
     /// Last painted shapes, replayed for screenshots.
     last: Option<(Vec<egui::ClippedPrimitive>, f32)>,
+    /// The panel strip as last painted, with what it was painted from.
+    panel: Option<PanelTexture>,
+    /// Panel repaints since creation (tests and benchmarks check that unchanged shapes are not
+    /// painted again).
+    repaints: u64,
     headless_frames: u64,
+}
+
+/// The overlay's pixels for the strip right of `x0_px`, kept between frames.
+struct PanelTexture {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    /// Where the strip starts in the frame, px, and the frame's size.
+    x0_px: u32,
+    frame_size: [u32; 2],
+    clear: [f32; 3],
+    /// The shapes it shows; `None` when it must be repainted (new egui textures).
+    shapes: Option<(Vec<egui::ClippedPrimitive>, f32)>,
+}
+
+/// Where and over what the overlay is painted in one frame.
+pub(crate) struct PanelTarget<'a> {
+    /// The frame's colour texture; the strip is copied into it.
+    pub texture: &'a wgpu::Texture,
+    pub size: [u32; 2],
+    /// The left edge of the strip the overlay owns, px; the scene is not drawn right of it.
+    pub x0_px: u32,
+    /// The frame's background (linear RGB), seen through the panel's translucent fill.
+    pub clear: [f32; 3],
+}
+
+/// Whether two tessellations paint the same pixels (paint callbacks never compare equal).
+fn same_shapes(a: &[egui::ClippedPrimitive], b: &[egui::ClippedPrimitive]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(a, b)| {
+            a.clip_rect == b.clip_rect
+                && match (&a.primitive, &b.primitive) {
+                    (egui::epaint::Primitive::Mesh(a), egui::epaint::Primitive::Mesh(b)) => a == b,
+                    _ => false,
+                }
+        })
 }
 
 impl OverlayLayer {
@@ -36,7 +81,10 @@ impl OverlayLayer {
         OverlayLayer {
             ctx,
             renderer,
+            format,
             last: None,
+            panel: None,
+            repaints: 0,
             headless_frames: 0,
         }
     }
@@ -91,57 +139,189 @@ impl OverlayLayer {
         }
     }
 
+    /// Uploads the frame's egui textures and paints `painted` into `target`: into the panel
+    /// texture and copied when the target can be copied to, else directly over the frame.
     pub fn paint(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        view: &wgpu::TextureView,
-        size: [u32; 2],
+        target: &PanelTarget<'_>,
         painted: &mut Painted,
     ) {
+        let new_textures = !painted.textures.set.is_empty();
         for (id, deltas) in &painted.textures.set {
             for delta in deltas {
                 self.renderer.update_texture(device, queue, *id, delta);
             }
         }
-        self.paint_primitives(
-            device,
-            queue,
-            view,
-            size,
-            &painted.primitives,
-            painted.pixels_per_point,
-        );
+        if new_textures && let Some(panel) = self.panel.as_mut() {
+            panel.shapes = None;
+        }
+        let primitives = std::mem::take(&mut painted.primitives);
+        self.show(device, queue, target, &primitives, painted.pixels_per_point);
         for id in &painted.textures.free {
             self.renderer.free_texture(id);
         }
         // epaint checks in debug builds that every delta was handled before it is dropped.
         painted.textures.clear();
-        self.last = Some((painted.primitives.clone(), painted.pixels_per_point));
+        self.last = Some((primitives, painted.pixels_per_point));
     }
 
     pub fn last_pixels_per_point(&self) -> f32 {
         self.last.as_ref().map_or(1.0, |(_, ppp)| *ppp)
     }
 
-    pub fn repaint_last(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        view: &wgpu::TextureView,
-        size: [u32; 2],
-    ) {
+    /// Paints the previous frame's shapes again.
+    pub fn repaint_last(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, target: &PanelTarget<'_>) {
         if let Some((primitives, ppp)) = self.last.take() {
-            self.paint_primitives(device, queue, view, size, &primitives, ppp);
+            self.show(device, queue, target, &primitives, ppp);
             self.last = Some((primitives, ppp));
         }
     }
 
+    /// How many times the panel texture was painted.
+    pub fn repaints(&self) -> u64 {
+        self.repaints
+    }
+
+    fn show(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        target: &PanelTarget<'_>,
+        primitives: &[egui::ClippedPrimitive],
+        pixels_per_point: f32,
+    ) {
+        let [width, height] = target.size;
+        let x0_px = target.x0_px.min(width.saturating_sub(1));
+        let copyable = target.texture.usage().contains(wgpu::TextureUsages::COPY_DST)
+            && target.texture.format().remove_srgb_suffix() == self.format.remove_srgb_suffix();
+        if !copyable {
+            // A swap chain that cannot be copied to: paint over the frame every time.
+            let view = target.texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(self.format),
+                ..Default::default()
+            });
+            self.repaints += 1;
+            self.paint_primitives(
+                device,
+                queue,
+                &view,
+                None,
+                target.size,
+                primitives,
+                pixels_per_point,
+            );
+            return;
+        }
+        let strip = [width - x0_px, height];
+        let reusable = self.panel.as_ref().is_some_and(|p| {
+            p.x0_px == x0_px
+                && p.frame_size == target.size
+                && p.clear == target.clear
+                && p.shapes
+                    .as_ref()
+                    .is_some_and(|(s, ppp)| *ppp == pixels_per_point && same_shapes(s, primitives))
+        });
+        if !reusable {
+            if !self
+                .panel
+                .as_ref()
+                .is_some_and(|p| p.x0_px == x0_px && p.frame_size == target.size)
+            {
+                let texture = device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("overlay panel"),
+                    size: wgpu::Extent3d {
+                        width: strip[0],
+                        height: strip[1],
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: self.format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                });
+                let view = texture.create_view(&Default::default());
+                self.panel = Some(PanelTexture {
+                    texture,
+                    view,
+                    x0_px,
+                    frame_size: target.size,
+                    clear: target.clear,
+                    shapes: None,
+                });
+            }
+            // egui works in frame coordinates; the strip's texture starts at x0.
+            let dx_pt = x0_px as f32 / pixels_per_point.max(1e-3);
+            let shifted: Vec<egui::ClippedPrimitive> = primitives
+                .iter()
+                .map(|p| {
+                    let mut p = p.clone();
+                    p.clip_rect = p.clip_rect.translate(Vec2::new(-dx_pt, 0.0));
+                    if let egui::epaint::Primitive::Mesh(mesh) = &mut p.primitive {
+                        mesh.translate(Vec2::new(-dx_pt, 0.0));
+                    }
+                    p
+                })
+                .collect();
+            if let Some(panel) = self.panel.take() {
+                let [r, g, b] = target.clear;
+                let clear = wgpu::Color {
+                    r: f64::from(r),
+                    g: f64::from(g),
+                    b: f64::from(b),
+                    a: 1.0,
+                };
+                self.repaints += 1;
+                self.paint_primitives(
+                    device,
+                    queue,
+                    &panel.view,
+                    Some(clear),
+                    strip,
+                    &shifted,
+                    pixels_per_point,
+                );
+                self.panel = Some(PanelTexture {
+                    clear: target.clear,
+                    shapes: Some((primitives.to_vec(), pixels_per_point)),
+                    ..panel
+                });
+            }
+        }
+        let Some(panel) = self.panel.as_ref() else {
+            return;
+        };
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("overlay copy"),
+        });
+        encoder.copy_texture_to_texture(
+            panel.texture.as_image_copy(),
+            wgpu::TexelCopyTextureInfo {
+                texture: target.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: x0_px, y: 0, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: strip[0],
+                height: strip[1],
+                depth_or_array_layers: 1,
+            },
+        );
+        queue.submit([encoder.finish()]);
+    }
+
+    /// Paints `primitives` into `view` (`size` px), over its content or over `clear`.
+    #[allow(clippy::too_many_arguments)] // The GPU handles, the target and what to paint.
     fn paint_primitives(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         view: &wgpu::TextureView,
+        clear: Option<wgpu::Color>,
         size: [u32; 2],
         primitives: &[egui::ClippedPrimitive],
         pixels_per_point: f32,
@@ -164,7 +344,7 @@ impl OverlayLayer {
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
+                        load: clear.map_or(wgpu::LoadOp::Load, wgpu::LoadOp::Clear),
                         store: wgpu::StoreOp::Store,
                     },
                 })],

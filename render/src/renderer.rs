@@ -1,6 +1,7 @@
 //! The renderer: one drawing path for windows and offscreen images. A frame is drawn into a
-//! colour view (a swap-chain image or an offscreen texture); the overlay is painted on top in a
-//! second pass; headless rendering then copies the texture back to the CPU.
+//! colour texture (a swap-chain image or an offscreen texture); the overlay's panel is copied
+//! into the strip the scene leaves free (see [`crate::overlay`]); headless rendering then copies
+//! the texture back to the CPU.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Weak};
@@ -15,7 +16,7 @@ use crate::frame::{Frame, MAX_DIMPLES, Object, UiAction};
 use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions};
 use crate::image::Image;
 use crate::mesh::MeshData;
-use crate::overlay::OverlayLayer;
+use crate::overlay::{OverlayLayer, PanelTarget};
 
 /// Offscreen images: 8-bit sRGB so lighting computed in linear space is encoded on store.
 pub const HEADLESS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -79,7 +80,6 @@ struct Attachments {
 struct Offscreen {
     size: [u32; 2],
     texture: wgpu::Texture,
-    view: wgpu::TextureView,
     readback: wgpu::Buffer,
     padded_row_bytes: u32,
 }
@@ -376,8 +376,8 @@ impl Renderer {
     ) -> Result<(Image, Vec<UiAction>), RenderError> {
         let size = self.offscreen_size()?;
         let input = self.overlay.headless_input(size, 1.0, events);
-        let view = self.offscreen_view()?;
-        let out = self.draw(frame, &view, size, OverlayInput::Run(input), None)?;
+        let texture = self.offscreen_texture()?;
+        let out = self.draw(frame, &texture, OverlayInput::Run(input), None)?;
         let image = self.read_back(None)?;
         Ok((image, out.actions))
     }
@@ -391,8 +391,8 @@ impl Renderer {
     ) -> Result<(Image, Vec<UiAction>), RenderError> {
         let size = self.offscreen_size()?;
         let input = self.overlay.headless_input(size, 1.0, Vec::new());
-        let view = self.offscreen_view()?;
-        let out = self.draw(frame, &view, size, OverlayInput::Run(input), timer.as_deref_mut())?;
+        let texture = self.offscreen_texture()?;
+        let out = self.draw(frame, &texture, OverlayInput::Run(input), timer.as_deref_mut())?;
         let image = self.read_back(timer)?;
         Ok((image, out.actions))
     }
@@ -404,11 +404,17 @@ impl Renderer {
             .ok_or_else(|| RenderError::Gpu("no offscreen target".into()))
     }
 
-    fn offscreen_view(&self) -> Result<wgpu::TextureView, RenderError> {
+    fn offscreen_texture(&self) -> Result<wgpu::Texture, RenderError> {
         self.offscreen
             .as_ref()
-            .map(|o| o.view.clone())
+            .map(|o| o.texture.clone())
             .ok_or_else(|| RenderError::Gpu("no offscreen target".into()))
+    }
+
+    /// How many times the overlay's panel was painted (it is reused while its shapes stay the
+    /// same).
+    pub fn overlay_repaints(&self) -> u64 {
+        self.overlay.repaints()
     }
 
     pub(crate) fn ensure_offscreen(&mut self, size: [u32; 2]) {
@@ -427,10 +433,12 @@ impl Renderer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: self.format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            // COPY_DST: the overlay's panel is copied in.
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
-        let view = texture.create_view(&Default::default());
         let padded_row_bytes = (size[0] * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
@@ -441,7 +449,6 @@ impl Renderer {
         self.offscreen = Some(Offscreen {
             size,
             texture,
-            view,
             readback,
             padded_row_bytes,
         });
@@ -545,16 +552,20 @@ impl Renderer {
         key
     }
 
-    /// Draws `frame` into `view` (`size` px) and paints the overlay over it.
+    /// Draws `frame` into `target` and puts the overlay over it.
     pub(crate) fn draw(
         &mut self,
         frame: &Frame,
-        view: &wgpu::TextureView,
-        size: [u32; 2],
+        target: &wgpu::Texture,
         overlay_input: OverlayInput,
         mut timer: Option<&mut StageTimes>,
     ) -> Result<DrawOutput, RenderError> {
         let start = Instant::now();
+        let size = [target.width(), target.height()];
+        let view = &target.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(self.format),
+            ..Default::default()
+        });
         self.ensure_attachments(size);
         // Forget meshes the app no longer holds.
         self.meshes.retain(|_, m| m.source.strong_count() > 0);
@@ -737,8 +748,14 @@ impl Renderer {
         }
 
         let mut out = DrawOutput::default();
+        let panel = PanelTarget {
+            texture: target,
+            size,
+            x0_px: scene_width,
+            clear: frame.clear_color,
+        };
         if let (Some(_), OverlayInput::Replay { .. }) = (&frame.overlay, &overlay_input) {
-            self.overlay.repaint_last(device, queue, view, size);
+            self.overlay.repaint_last(device, queue, &panel);
         } else if let (Some(overlay), OverlayInput::Run(overlay_input)) = (&frame.overlay, overlay_input) {
             let cpu_start = Instant::now();
             let mut painted = self.overlay.run(overlay, overlay_input);
@@ -746,7 +763,7 @@ impl Renderer {
                 t.overlay_cpu += cpu_start.elapsed();
             }
             let gpu_start = Instant::now();
-            self.overlay.paint(device, queue, view, size, &mut painted);
+            self.overlay.paint(device, queue, &panel, &mut painted);
             out.actions = std::mem::take(&mut painted.actions);
             out.platform_output = Some(std::mem::take(&mut painted.platform_output));
             if let Some(t) = timer {
@@ -874,15 +891,9 @@ impl Renderer {
     pub(crate) fn capture(&mut self, frame: &Frame, size: [u32; 2]) -> Result<Image, RenderError> {
         check_size(size[0], size[1])?;
         self.ensure_offscreen(size);
-        let view = self.offscreen_view()?;
+        let texture = self.offscreen_texture()?;
         let pixels_per_point = self.overlay.last_pixels_per_point();
-        self.draw(
-            frame,
-            &view,
-            size,
-            OverlayInput::Replay { pixels_per_point },
-            None,
-        )?;
+        self.draw(frame, &texture, OverlayInput::Replay { pixels_per_point }, None)?;
         self.read_back(None)
     }
 }

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -12,7 +12,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use crate::error::RenderError;
-use crate::frame::{Frame, UiAction};
+use crate::frame::{Frame, Overlay, UiAction};
 use crate::gpu::{Gpu, GpuOptions, no_adapter};
 use crate::image::Image;
 use crate::renderer::{OverlayInput, Renderer};
@@ -48,6 +48,53 @@ impl Default for WindowConfig {
             screenshot_on_exit: None,
             gpu: GpuOptions::default(),
         }
+    }
+}
+
+/// The overlay's data are taken from the app at most this often: its plots stay smooth, and the
+/// panel (the costliest thing to paint on a software rasterizer) is repainted only then.
+const OVERLAY_INTERVAL: Duration = Duration::from_millis(33);
+
+/// How steadily the window drew: the time between successive frames.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameStats {
+    /// Frames drawn.
+    pub frames: u32,
+    /// Median time between two frames, ms.
+    pub p50_ms: f64,
+    /// 99th percentile of the time between two frames, ms.
+    pub p99_ms: f64,
+    /// Longest time between two frames, ms.
+    pub max_ms: f64,
+}
+
+impl FrameStats {
+    fn from_intervals(frames: u32, mut intervals_ms: Vec<f64>) -> Self {
+        intervals_ms.sort_by(f64::total_cmp);
+        let at = |q: f64| {
+            if intervals_ms.is_empty() {
+                0.0
+            } else {
+                let i = ((intervals_ms.len() - 1) as f64 * q).round() as usize;
+                intervals_ms[i.min(intervals_ms.len() - 1)]
+            }
+        };
+        FrameStats {
+            frames,
+            p50_ms: at(0.5),
+            p99_ms: at(0.99),
+            max_ms: intervals_ms.last().copied().unwrap_or(0.0),
+        }
+    }
+}
+
+impl std::fmt::Display for FrameStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} frames, frame time p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms",
+            self.frames, self.p50_ms, self.p99_ms, self.max_ms
+        )
     }
 }
 
@@ -131,10 +178,17 @@ struct App<'a> {
     screenshot_requested: bool,
     last_frame_at: Option<Instant>,
     frames_drawn: u32,
+    /// Time between successive frames, ms.
+    intervals_ms: Vec<f64>,
+    /// The overlay data shown, and when they were taken from the app.
+    overlay_shown: Option<(Overlay, Instant)>,
+    /// The user changed something through the overlay: show the app's answer at once.
+    overlay_stale: bool,
 }
 
-/// Opens the window and runs until it is closed (or `exit_after_frames` frames are drawn).
-pub fn run(config: WindowConfig, app: &mut dyn WindowApp) -> Result<(), RenderError> {
+/// Opens the window and runs until it is closed (or `exit_after_frames` frames are drawn);
+/// returns how steadily it drew.
+pub fn run(config: WindowConfig, app: &mut dyn WindowApp) -> Result<FrameStats, RenderError> {
     if config.msaa != 1 && config.msaa != 4 {
         return Err(RenderError::BadMsaa(config.msaa));
     }
@@ -157,13 +211,16 @@ pub fn run(config: WindowConfig, app: &mut dyn WindowApp) -> Result<(), RenderEr
         screenshot_requested: false,
         last_frame_at: None,
         frames_drawn: 0,
+        intervals_ms: Vec::new(),
+        overlay_shown: None,
+        overlay_stale: false,
     };
     event_loop
         .run_app(&mut state)
         .map_err(|e| RenderError::Window(e.to_string()))?;
     match state.error {
         Some(e) => Err(e),
-        None => Ok(()),
+        None => Ok(FrameStats::from_intervals(state.frames_drawn, state.intervals_ms)),
     }
 }
 
@@ -229,8 +286,11 @@ impl App<'_> {
             .or_else(|| caps.formats.first().copied())
             .ok_or_else(|| RenderError::Window("the surface offers no formats".into()))?;
         let size = window.inner_size();
+        // Copying into the swap-chain image lets the overlay's panel be painted only when it
+        // changes; without it the overlay is painted over every frame.
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | (caps.usages & wgpu::TextureUsages::COPY_DST);
         let config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            usage,
             format,
             color_space: Default::default(),
             width: size.width.max(1),
@@ -270,13 +330,30 @@ impl App<'_> {
         };
         let now = Instant::now();
         let dt_s = self.last_frame_at.map_or(0.0, |t| (now - t).as_secs_f32());
+        if let Some(t) = self.last_frame_at {
+            self.intervals_ms.push((now - t).as_secs_f64() * 1e3);
+        }
         self.last_frame_at = Some(now);
         let size = [s.config.width, s.config.height];
         self.input.window_size_px = size;
         self.input.scale_factor = s.window.scale_factor() as f32;
         let input = std::mem::take(&mut self.input);
         self.input.keys_down = input.keys_down.clone();
-        let frame = self.app.frame(&input, dt_s);
+        let mut frame = self.app.frame(&input, dt_s);
+        // Between refreshes the overlay shows the data it showed last, so its panel is not
+        // repainted; egui still sees every input event.
+        match (&mut frame.overlay, &self.overlay_shown) {
+            (Some(overlay), Some((shown, at)))
+                if now.duration_since(*at) < OVERLAY_INTERVAL && !self.overlay_stale =>
+            {
+                overlay.clone_from(shown);
+            }
+            (Some(overlay), _) => {
+                self.overlay_shown = Some((overlay.clone(), now));
+                self.overlay_stale = false;
+            }
+            (None, _) => self.overlay_shown = None,
+        }
         let raw = s.egui.take_egui_input(&s.window);
         let texture = match s.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
@@ -287,15 +364,15 @@ impl App<'_> {
             // Occluded, timed out: try again next frame.
             _ => return Ok(()),
         };
-        let view = texture.texture.create_view(&Default::default());
         let out = s
             .renderer
-            .draw(&frame, &view, size, OverlayInput::Run(raw), None)?;
+            .draw(&frame, &texture.texture, OverlayInput::Run(raw), None)?;
         s.window.pre_present_notify();
         s.renderer.gpu().queue_ref().present(texture);
         if let Some(platform) = out.platform_output {
             s.egui.handle_platform_output(&s.window, platform);
         }
+        self.overlay_stale |= !out.actions.is_empty();
         for action in out.actions {
             self.app.action(action);
         }

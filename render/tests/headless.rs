@@ -179,3 +179,26 @@ fn overlay_click_on_scene_returns_select_action() {
         other => panic!("no scene action found: {other:?}"),
     }
 }
+
+#[test]
+fn overlay_panel_is_repainted_only_when_its_shapes_change() {
+    let mut r = Renderer::headless(480, 320, 1).unwrap();
+    let mut frame = Frame::new(Camera::look_at(Vec3::new(0.0, 0.0, 1.0), Vec3::ZERO));
+    frame.overlay = Some(demo_overlay());
+    let first = r.render(&frame).unwrap();
+    let painted = r.overlay_repaints();
+    let again = r.render(&frame).unwrap();
+    assert_eq!(r.overlay_repaints(), painted, "unchanged overlay painted again");
+    assert_eq!(first.rgba, again.rgba);
+    // New plot data: the panel is painted again, and shows them.
+    if let Some(o) = frame.overlay.as_mut() {
+        o.force_time.iter_mut().for_each(|p| p[1] += 0.5);
+    }
+    let changed = r.render(&frame).unwrap();
+    assert_eq!(r.overlay_repaints(), painted + 1);
+    assert_ne!(changed.rgba, again.rgba);
+    // A fresh renderer painting the changed frame once gives the same picture.
+    let mut fresh = Renderer::headless(480, 320, 1).unwrap();
+    fresh.render(&frame).unwrap();
+    assert_eq!(fresh.render(&frame).unwrap().rgba, changed.rgba);
+}

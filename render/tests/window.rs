@@ -43,9 +43,11 @@ fn window_draws_frames_and_screenshots_on_exit() {
     };
     let has_display = std::env::var_os("DISPLAY").is_some();
     match run(config, &mut app) {
-        Ok(()) => {
+        Ok(stats) => {
             assert!(has_display);
             assert_eq!(app.frames, 5);
+            assert_eq!(stats.frames, 5);
+            assert!(stats.p50_ms > 0.0 && stats.p99_ms >= stats.p50_ms && stats.max_ms >= stats.p99_ms);
             let image = Image::load_png(&shot).unwrap();
             assert_eq!([image.width, image.height], app.last_size);
             assert!(

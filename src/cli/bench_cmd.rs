@@ -17,13 +17,16 @@ pub(crate) struct BenchArgs {
 enum BenchWhat {
     Loop(LoopArgs),
     Svr(super::bench_svr::SvrArgs),
+    SvrScale(super::bench_svr::SvrScaleArgs),
     Render(RenderArgs),
 }
 
 /// Frames per second of the renderer, headless, with where a frame's time goes.
 ///
-/// Draws the needle-in-tissue demo frame at 640×480 and 1280×720, MSAA 1 and 4, with and
-/// without the overlay, on the first adapter found (Vulkan, then GL; lavapipe where there is
+/// Draws the needle-in-tissue demo frame at 640×480 and 1280×720, MSAA 1 and 4, with the
+/// overlay off, on (the same data every frame, as between two refreshes of the window's plots:
+/// its panel is painted once and copied) and live (new plot data every frame: the panel is
+/// repainted every frame), on the first adapter found (Vulkan, then GL; lavapipe where there is
 /// no GPU). A second pass waits for the device after each stage to split a frame into drawing,
 /// MSAA resolve, overlay CPU work and readback.
 #[derive(Debug, Args)]
@@ -81,6 +84,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     match &args.what {
         BenchWhat::Loop(args) => run_loop(args),
         BenchWhat::Svr(args) => super::bench_svr::run(args),
+        BenchWhat::SvrScale(args) => super::bench_svr::run_scale(args),
         BenchWhat::Render(args) => {
             if args.frames == 0 {
                 anyhow::bail!("--frames must be at least 1");
