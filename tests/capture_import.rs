@@ -964,6 +964,9 @@ fn multistream_acc_mps2(t: f64) -> f64 {
     0.3 * G_MPS2 * (2.0 * PI * 40.0 * t).sin()
 }
 
+/// A signal of time, s, in SI units.
+type Signal = fn(f64) -> f64;
+
 /// Linear interpolation's error bound `h² / 8 · max|x''|` for `amplitude · sin(2π f t)`
 /// sampled every `h` seconds at most, plus the fixtures' 1e-9 rounding of values.
 fn interpolation_bound(h_s: f64, amplitude: f64, freq_hz: f64) -> f64 {
@@ -1044,7 +1047,7 @@ fn streams_on_separate_clocks_are_joined_onto_one_grid() {
     // Each column against its signal, within the interpolation error of its own clock (the
     // generator's longest intervals: 1.25/88 s for forces, 1.3/88.5 s for position; the
     // vibration is interpolated at 2.2 kHz after a low-pass that leaves 40 Hz alone).
-    let checks: [(&str, fn(f64) -> f64, f64); 4] = [
+    let checks: [(&str, Signal, f64); 4] = [
         (
             "normal_force_n",
             multistream_fz_n,
