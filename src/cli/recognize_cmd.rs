@@ -303,6 +303,17 @@ fn print_reliabilities(model: &RecognizerFile, trained_s: f64) {
 
 fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let model = RecognizerFile::load(&args.model)?;
+    if !args.window_s.is_empty() && model.windowing().is_none() {
+        anyhow::bail!(
+            "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
+            args.model.display(),
+            model.method(),
+            model.feature_set()
+        );
+    }
+    if args.window_s.len() > 1 && args.plots.is_some() {
+        anyhow::bail!("--plots draws one evaluation: give a single --window-s with it");
+    }
     let rate_hz = model.windowing().map(|w| w.rate_hz);
     // The plots read each capture's samples again; without them, each capture is held only
     // as the features the evaluation reads.
@@ -313,18 +324,7 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
             Ok(FeatureNeeds::evaluation(&model, &args.window_s)?)
         })?
     };
-    if !args.window_s.is_empty() && model.windowing().is_none() {
-        anyhow::bail!(
-            "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
-            args.model.display(),
-            model.method(),
-            model.feature_set()
-        );
-    }
     if args.window_s.len() > 1 {
-        if args.plots.is_some() {
-            anyhow::bail!("--plots draws one evaluation: give a single --window-s with it");
-        }
         return eval_windows(args, &model, &captures);
     }
     let window_s = args.window_s.first().copied();
@@ -454,16 +454,16 @@ fn print_evaluation(e: &Evaluation, what: &str) {
 }
 
 fn cv(args: &CvArgs) -> anyhow::Result<()> {
-    let settings = args.training.settings();
-    let captures = read_keeping(&args.input, &args.captures, None, |rate_hz| {
-        Ok(FeatureNeeds::training_and_decisions(&settings, rate_hz)?)
-    })?;
     if args.seeds > 1 && !matches!(args.training.method, Method::Som) {
         anyhow::bail!(
             "--seeds {} applies to som only: knn and svm train the same way every time",
             args.seeds
         );
     }
+    let settings = args.training.settings();
+    let captures = read_keeping(&args.input, &args.captures, None, |rate_hz| {
+        Ok(FeatureNeeds::training_and_decisions(&settings, rate_hz)?)
+    })?;
     let split = match (args.split, args.folds) {
         (SplitArg::KFold, folds) => Split::KFold {
             folds: folds.unwrap_or(SINAPOV_FOLDS),
