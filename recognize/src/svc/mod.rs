@@ -26,13 +26,18 @@ use crate::vectors::FeatureScaling;
 use capture::rng::SplitMix64;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
-use svm::{Kernel, SelectionCurvature, SmoSettings, SmoSolution};
+use svm::{Kernel, SelectionCurvature, SmoSettings};
 
 mod c_search;
 mod probability;
-mod rows;
+mod solver;
 
-use rows::SubsetRows;
+use solver::BinarySolution;
+
+/// Memory for one solve's cached kernel rows (scikit-learn's `cache_size` is 200 MB); with
+/// every core solving, that many times this is held. A pair of up to 4,096 training vectors
+/// keeps every row.
+const CACHE_BYTES: usize = 128 << 20;
 
 pub use c_search::{C_GRID, CSearch, CvPoint, cross_validated_accuracy, select_c, select_c_observed};
 pub use probability::{pairwise_coupling, sigmoid_predict, sigmoid_train};
@@ -530,9 +535,8 @@ impl Pair {
         params: &SvcParams,
         settings: &SmoSettings,
     ) -> Result<BinarySvc, RecognizeError> {
-        let mut rows = SubsetRows::new(params.kernel, points, dim, self.members.iter().copied());
-        let SmoSolution { alpha, rho, .. } =
-            solve(&mut rows, &self.y, settings).ok_or_else(|| self.not_converged(settings, params.c))?;
+        let BinarySolution { alpha, rho, .. } = solve(&self.members, &self.y, points, dim, params, settings)
+            .ok_or_else(|| self.not_converged(settings, params.c))?;
         let support = self
             .members
             .iter()
@@ -579,15 +583,14 @@ impl Pair {
             return Ok(test.iter().map(|&t| (t, v)).collect());
         }
         let ty: Vec<f64> = train.iter().map(|&t| self.y[t]).collect();
-        let mut rows = SubsetRows::new(params.kernel, points, dim, train.iter().map(|&t| self.members[t]));
-        let SmoSolution { alpha, rho, .. } =
-            solve(&mut rows, &ty, settings).ok_or_else(|| self.not_converged(settings, params.c))?;
-        let support: Vec<(usize, f64)> = alpha
+        let subset: Vec<usize> = train.iter().map(|&t| self.members[t]).collect();
+        let BinarySolution { alpha, rho, .. } = solve(&subset, &ty, points, dim, params, settings)
+            .ok_or_else(|| self.not_converged(settings, params.c))?;
+        let support: Vec<(&[f64], f64)> = subset
             .iter()
-            .zip(&ty)
-            .enumerate()
+            .zip(alpha.iter().zip(&ty))
             .filter(|(_, (a, _))| **a > 0.0)
-            .map(|(s, (a, ys))| (s, a * ys))
+            .map(|(&p, (a, ys))| (&points[p * dim..(p + 1) * dim], a * ys))
             .collect();
         Ok(test
             .iter()
@@ -596,7 +599,7 @@ impl Pair {
                 let x = &points[m * dim..(m + 1) * dim];
                 let f = support
                     .iter()
-                    .map(|&(s, coef)| coef * params.kernel.eval(rows.point(s), x))
+                    .map(|&(sv, coef)| coef * params.kernel.eval(sv, x))
                     .sum::<f64>();
                 (t, f - rho)
             })
@@ -604,11 +607,27 @@ impl Pair {
     }
 }
 
-/// SMO on the C-SVC dual with kernel rows `rows` and labels ±1 (`p = −1`), by svm's core;
-/// `None` if it did not converge.
-fn solve(rows: &mut SubsetRows, y: &[f64], settings: &SmoSettings) -> Option<SmoSolution> {
-    let linear = vec![-1.0; y.len()];
-    svm::solve_smo(rows, y, &linear, settings).ok()
+/// The binary C-SVC on the points `subset` with labels `y` (±1), with `params`' C and
+/// tolerance and `settings`' iteration budget; `None` if it did not converge.
+fn solve(
+    subset: &[usize],
+    y: &[f64],
+    points: &[f64],
+    dim: usize,
+    params: &SvcParams,
+    settings: &SmoSettings,
+) -> Option<BinarySolution> {
+    solver::solve_binary(
+        params.kernel,
+        points,
+        dim,
+        subset,
+        y,
+        params.c,
+        params.tolerance,
+        settings.iteration_budget(subset.len()),
+        CACHE_BYTES,
+    )
 }
 
 #[cfg(test)]
