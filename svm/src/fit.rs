@@ -77,12 +77,38 @@ struct DualSolution {
 
 /// Fits an ε-SVR to `n` samples: `x` is `n × dim` row-major, `y` has `n` targets.
 pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFit, SvmError> {
+    fit_observed(params, x, dim, y, &|_| {})
+}
+
+/// Where a running fit stands, shown to the observer of [`fit_observed`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitProgress {
+    /// The solver running.
+    pub solver: &'static str,
+    /// Its iterations so far.
+    pub iterations: usize,
+    /// The relative gap of its current iterate (the interior point's complementarity gap;
+    /// infinite where the solver has none until it stops).
+    pub gap: f64,
+    /// Seconds since the fit started.
+    pub elapsed_s: f64,
+}
+
+/// [`fit`], calling `observer` as the solver advances (each interior-point iteration, every few
+/// active-set steps), so that a caller can show progress on long fits.
+pub fn fit_observed(
+    params: &SvrParams,
+    x: &[f64],
+    dim: usize,
+    y: &[f64],
+    observer: &dyn Fn(&FitProgress),
+) -> Result<SvrFit, SvmError> {
     let started = Instant::now();
     let data = SvrData::new(x, dim, y)?;
     let settings = params.dual_settings(started);
     let kernel = params.kernel();
     if kernel == Kernel::Linear && dim <= linear_exact::MAX_DIM && params.solver() == Solver::Auto {
-        let sol = linear_exact::solve(&data, &settings)?;
+        let sol = linear_exact::solve(&data, &settings, observer)?;
         let solution = DualSolution {
             beta: sol.beta,
             bias: sol.bias,
@@ -113,7 +139,7 @@ pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFi
             weights: None,
         }
     } else {
-        solve_dense(&kernel, &data, &settings)?
+        solve_dense(&kernel, &data, &settings, observer)?
     };
     let mut fit = certify(&kernel, &data, &settings, solution)?;
     fit.fit_seconds = started.elapsed().as_secs_f64();
@@ -125,6 +151,7 @@ fn solve_dense(
     kernel: &Kernel,
     data: &SvrData<'_>,
     settings: &DualSettings,
+    observer: &dyn Fn(&FitProgress),
 ) -> Result<DualSolution, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let k = kernel_matrix(kernel, x, dim).ok_or_else(|| SvmError::Numerical {
@@ -160,7 +187,7 @@ fn solve_dense(
         }
         ok
     };
-    let sol = ipm::solve(&k, y, settings, &mut accept)?;
+    let sol = ipm::solve(&k, y, settings, &mut accept, observer)?;
     let iterations = sol.iterations;
     let polished = certified.or_else(|| {
         run_polish(classify(&sol), usize::MAX)

@@ -77,6 +77,7 @@ pub(crate) fn solve(
     y: &[f64],
     settings: &DualSettings,
     accept: &mut dyn FnMut(&IpmSolution) -> bool,
+    observer: &dyn Fn(&super::fit::FitProgress),
 ) -> Result<IpmSolution, SvmError> {
     let n = y.len();
     let (c, epsilon, tolerance) = (settings.c, settings.epsilon, settings.tolerance);
@@ -161,6 +162,12 @@ pub(crate) fn solve(
         if (gap < tolerance * 1e-4 && feasible) || mu < 1e-100 {
             return Ok(finish(h, lambda, iteration, gap, true));
         }
+        observer(&super::fit::FitProgress {
+            solver: NAME,
+            iterations: iteration,
+            gap,
+            elapsed_s: settings.started.elapsed().as_secs_f64(),
+        });
         if gap < EARLY_GAP {
             let snapshot = finish(
                 [

@@ -29,6 +29,7 @@ use faer::linalg::solvers::Solve;
 use super::compensated::{Accumulator, two_sum};
 use super::data::SvrData;
 use super::error::SvmError;
+use super::fit::FitProgress;
 use super::params::DualSettings;
 
 /// Input dimensions up to which a linear-kernel fit is solved here (the working set is at most
@@ -111,7 +112,11 @@ impl Rows {
 
 /// Solves the primal exactly (to the rounding of a (d + 1)-square system), or says which limit
 /// stopped it.
-pub(crate) fn solve(data: &SvrData<'_>, settings: &DualSettings) -> Result<LinearSolution, SvmError> {
+pub(crate) fn solve(
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+    observer: &dyn Fn(&FitProgress),
+) -> Result<LinearSolution, SvmError> {
     let (x, d, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
@@ -157,6 +162,14 @@ pub(crate) fn solve(data: &SvrData<'_>, settings: &DualSettings) -> Result<Linea
     let mut rate = vec![0.0; n];
 
     for iteration in 0..max_iterations {
+        if iteration % 32 == 31 {
+            observer(&FitProgress {
+                solver: NAME,
+                iterations: iteration,
+                gap: f64::INFINITY,
+                elapsed_s: settings.started.elapsed().as_secs_f64(),
+            });
+        }
         if iteration % 32 == 31 && settings.over_budget() {
             return Err(SvmError::Budget {
                 solver: NAME,
@@ -165,7 +178,7 @@ pub(crate) fn solve(data: &SvrData<'_>, settings: &DualSettings) -> Result<Linea
                 gap: f64::INFINITY,
             });
         }
-        let g = gradient(&rows, &labels, c);
+        let g = side_sums(&rows, x, &labels);
         // Minimiser of the current piece's quadratic on the working set, or a ray along
         // which it decreases without bound (nothing held and more samples on one side).
         let (direction, max_step, multipliers) = if held.is_empty() {
@@ -173,27 +186,27 @@ pub(crate) fn solve(data: &SvrData<'_>, settings: &DualSettings) -> Result<Linea
             if gb != 0.0 {
                 let mut p = vec![0.0; m];
                 p[d] = -gb.signum();
-                (p, f64::INFINITY, Vec::new())
+                (p, f64::INFINITY, None)
             } else {
                 let p: Vec<f64> = (0..m)
                     .map(|k| {
                         if k < d {
-                            -g[k].value() / h[k] - theta[k]
+                            -c * g[k].value() / h[k] - theta[k]
                         } else {
                             0.0
                         }
                     })
                     .collect();
-                (p, 1.0, Vec::new())
+                (p, 1.0, None)
             }
         } else {
-            let (target, beta) =
-                kkt(&rows, &h, &g, &held, &labels, y, epsilon).ok_or_else(|| SvmError::Numerical {
+            let solution =
+                kkt(&rows, &h, c, &g, &held, &labels, y, epsilon).ok_or_else(|| SvmError::Numerical {
                     solver: NAME,
                     reason: format!("singular working-set system at step {iteration}"),
                 })?;
-            let p: Vec<f64> = target.iter().zip(&theta).map(|(t, v)| t - v).collect();
-            (p, 1.0, beta)
+            let p: Vec<f64> = solution.theta.iter().zip(&theta).map(|(t, v)| t - v).collect();
+            (p, 1.0, Some(solution))
         };
 
         // Ratio test: the first sample a step along `direction` carries onto a boundary.
@@ -263,25 +276,42 @@ pub(crate) fn solve(data: &SvrData<'_>, settings: &DualSettings) -> Result<Linea
                     *t += p;
                 }
                 // At the working set's minimiser: release the held sample whose multiplier is
-                // furthest out of its range, or stop.
-                let tolerance = 1e-12 * c.max(multipliers.iter().fold(0.0f64, |a, b| a.max(b.abs())));
+                // furthest out of its range, or stop. β = Cμ + ν is compared with its bounds with
+                // μ's part snapped to the bound where μ (O(1), from the data) sits on it to its
+                // rounding: then ν alone decides, however large C is. Tolerances scale with the
+                // terms each part is solved from, never with C alone.
                 let mut worst: Option<(f64, usize, Label)> = None;
-                for (slot, (&i, &beta)) in held.iter().zip(&multipliers).enumerate() {
-                    let Label::Held(sigma) = labels[i] else {
-                        continue;
+                if let Some(kkt) = &multipliers {
+                    let mu_tol = 1e-12 * (1.0 + kkt.mu.iter().fold(0.0f64, |a, v| a.max(v.abs())));
+                    let h_theta = h
+                        .iter()
+                        .zip(&theta)
+                        .fold(0.0f64, |a, (hk, t)| a.max((hk * t).abs()));
+                    let nu_tol = 1e-11 * (h_theta + kkt.nu.iter().fold(0.0f64, |a, v| a.max(v.abs())));
+                    // How far C·μ_shift + ν is above 0, if it is.
+                    let above = |mu_shift: f64, nu: f64| -> Option<f64> {
+                        let mu_shift = if mu_shift.abs() <= mu_tol { 0.0 } else { mu_shift };
+                        let value = c * mu_shift + nu;
+                        (value > 1e-12 * c * mu_shift.abs() + nu_tol).then_some(value)
                     };
-                    let (lo, hi) = range(sigma, epsilon, c);
-                    let out = if beta > hi + tolerance {
-                        Some((beta - hi, if hi == 0.0 { Label::Inside } else { Label::Above }))
-                    } else if beta < lo - tolerance {
-                        Some((lo - beta, if lo == 0.0 { Label::Inside } else { Label::Below }))
-                    } else {
-                        None
-                    };
-                    if let Some((size, to)) = out
-                        && worst.is_none_or(|(s, _, _)| size > s)
-                    {
-                        worst = Some((size, slot, to));
+                    for (slot, ((&i, &mu), &nu)) in held.iter().zip(&kkt.mu).zip(&kkt.nu).enumerate() {
+                        let Label::Held(sigma) = labels[i] else {
+                            continue;
+                        };
+                        let (lo, hi) = range(sigma, epsilon, c);
+                        let hi_unit = if hi == 0.0 { 0.0 } else { 1.0 };
+                        let lo_unit = if lo == 0.0 { 0.0 } else { -1.0 };
+                        let out = if let Some(size) = above(mu - hi_unit, nu) {
+                            Some((size, if hi == 0.0 { Label::Inside } else { Label::Above }))
+                        } else {
+                            above(lo_unit - mu, -nu)
+                                .map(|size| (size, if lo == 0.0 { Label::Inside } else { Label::Below }))
+                        };
+                        if let Some((size, to)) = out
+                            && worst.is_none_or(|(s, _, _)| size > s)
+                        {
+                            worst = Some((size, slot, to));
+                        }
                     }
                 }
                 match worst {
@@ -318,36 +348,69 @@ fn held_target(y: f64, sigma: i8, epsilon: f64) -> (f64, f64) {
     two_sum(y, -f64::from(sigma) * epsilon)
 }
 
-/// Gradient of the loss's linear part, `C (Σ_below aᵢ − Σ_above aᵢ)`, compensated.
-fn gradient(rows: &Rows, labels: &[Label], c: f64) -> Vec<Accumulator> {
+/// The loss's linear part per unit C, `ĝ = Σ_below aᵢ − Σ_above aᵢ` (the gradient is Cĝ), in
+/// the scaled coordinates. Kept apart from C so that the multipliers can be split as
+/// `β = Cμ + ν`. Summed over the caller's inputs (compensated) and scaled once,
+/// `(Σ±xᵢ − offset·Σ±1) / scale`: balanced sides then give exactly 0, as they must for the
+/// optimum of the loss to be told apart from the rounding of scaled inputs at C = 1e13.
+fn side_sums(rows: &Rows, x: &[f64], labels: &[Label]) -> Vec<Accumulator> {
     let m = rows.m;
-    let mut g = vec![Accumulator::new(); m];
+    let d = m - 1;
+    let mut sums = vec![Accumulator::new(); d];
+    let mut count = 0i64;
     for (i, label) in labels.iter().enumerate() {
-        let sign = match label {
-            Label::Above => -1.0,
-            Label::Below => 1.0,
+        let sign: i32 = match label {
+            Label::Above => -1,
+            Label::Below => 1,
             _ => continue,
         };
-        for (gk, a) in g.iter_mut().zip(rows.row(i)) {
-            gk.add_product(sign * c, *a);
+        count += i64::from(sign);
+        for (k, acc) in sums.iter_mut().enumerate() {
+            acc.add(f64::from(sign) * x[i * d + k]);
         }
     }
+    let mut g: Vec<Accumulator> = sums
+        .into_iter()
+        .enumerate()
+        .map(|(k, mut acc)| {
+            acc.add_product(-rows.offset[k], count as f64);
+            let mut scaled = Accumulator::new();
+            scaled.add(acc.value() / rows.scale[k]);
+            scaled
+        })
+        .collect();
+    let mut b = Accumulator::new();
+    b.add(count as f64);
+    g.push(b);
     g
 }
 
-/// Minimiser of `½θᵀHθ + gᵀθ` subject to the held samples' equations, with their multipliers:
-/// `[H −Aᵀ; A 0] [θ; β] = [−g; t]`, solved by pivoted LU and two rounds of iterative
-/// refinement on compensated residuals (β is ~C while θ is O(1); the refinement recovers the
-/// digits the solve loses to that spread).
+/// The working set's minimiser and multipliers, `β = Cμ + ν`.
+struct Kkt {
+    theta: Vec<f64>,
+    /// The multipliers' part proportional to C (from the loss's linear part).
+    mu: Vec<f64>,
+    /// The rest (from ½‖w‖² and the targets).
+    nu: Vec<f64>,
+}
+
+/// Minimiser of `½θᵀHθ + Cĝᵀθ` subject to the held samples' equations, with their multipliers:
+/// `[H −Aᵀ; A 0] [θ; β] = [−Cĝ; t]`. The system is linear in (Cĝ, t), so it is solved twice —
+/// for `[−ĝ; 0]` (giving θ₁, μ) and for `[0; t]` (giving θ₂, ν) — and `θ = Cθ₁ + θ₂`,
+/// `β = Cμ + ν`. At C = 1e13 the part of β that decides between two optima of the loss (ν,
+/// from ½‖w‖²) is 1e-18 of β: only split is it resolved. Each solve is a pivoted LU with
+/// iterative refinement on compensated residuals.
+#[allow(clippy::too_many_arguments)]
 fn kkt(
     rows: &Rows,
     h: &[f64],
+    c: f64,
     g: &[Accumulator],
     held: &[usize],
     labels: &[Label],
     y: &[f64],
     epsilon: f64,
-) -> Option<(Vec<f64>, Vec<f64>)> {
+) -> Option<Kkt> {
     let m = rows.m;
     let k = held.len();
     let size = m + k;
@@ -373,45 +436,60 @@ fn kkt(
         })
         .collect();
     let lu = matrix.full_piv_lu();
-    let mut solution = vec![0.0; size];
-    for _round in 0..3 {
-        // Residual of the full system at the current solution, compensated.
-        let residual = Mat::<f64>::from_fn(size, 1, |r, _| {
-            let mut acc = Accumulator::new();
-            if r < m {
-                acc.add_sum(&negate(&g[r]));
-                acc.add_product(-h[r], solution[r]);
-                for (j, &i) in held.iter().enumerate() {
-                    acc.add_product(rows.row(i)[r], solution[m + j]);
+    let solve = |linear_part: bool| -> Option<Vec<f64>> {
+        let mut solution = vec![0.0; size];
+        for _round in 0..3 {
+            // Residual of the full system at the current solution, compensated.
+            let residual = Mat::<f64>::from_fn(size, 1, |r, _| {
+                let mut acc = Accumulator::new();
+                if r < m {
+                    if linear_part {
+                        acc.add_sum(&g[r].negated());
+                    }
+                    acc.add_product(-h[r], solution[r]);
+                    for (j, &i) in held.iter().enumerate() {
+                        acc.add_product(rows.row(i)[r], solution[m + j]);
+                    }
+                } else {
+                    let j = r - m;
+                    if !linear_part {
+                        acc.add(targets[j].0);
+                        acc.add(targets[j].1);
+                    }
+                    for (col, a) in rows.row(held[j]).iter().enumerate() {
+                        acc.add_product(-a, solution[col]);
+                    }
                 }
-            } else {
-                let j = r - m;
-                acc.add(targets[j].0);
-                acc.add(targets[j].1);
-                for (col, a) in rows.row(held[j]).iter().enumerate() {
-                    acc.add_product(-a, solution[col]);
-                }
+                acc.value()
+            });
+            let correction = lu.solve(&residual);
+            for (r, v) in solution.iter_mut().enumerate() {
+                *v += correction[(r, 0)];
             }
-            acc.value()
-        });
-        let correction = lu.solve(&residual);
-        for (r, v) in solution.iter_mut().enumerate() {
-            *v += correction[(r, 0)];
+            if solution.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
         }
-        if solution.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
+        Some(solution)
+    };
+    let mut first = solve(true)?;
+    let second = solve(false)?;
+    // θ₁ = 0 exactly when A is square (Aθ₁ = 0), and when the loss's gradient is balanced by the
+    // held rows (Hθ₁ = Aᵀμ − ĝ = 0; H is definite on A's null space). Rounding leaves θ₁ at
+    // ~1e-17 there, which C = 1e13 would turn into a step that swamps the ½‖w‖² part deciding
+    // between optima of the loss.
+    let g_scale = g.iter().fold(0.0f64, |a, v| a.max(v.value().abs()));
+    let mu_scale = first[m..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let h_theta1 = (0..m).fold(0.0f64, |a, r| a.max((h[r] * first[r]).abs()));
+    if k == m || h_theta1 <= 1e-12 * (g_scale + m as f64 * mu_scale) {
+        first[..m].fill(0.0);
     }
-    let theta = solution[..m].to_vec();
-    let beta = solution[m..].to_vec();
-    Some((theta, beta))
-}
-
-/// `−acc`.
-fn negate(acc: &Accumulator) -> Accumulator {
-    let mut out = Accumulator::new();
-    out.add(-acc.value());
-    out
+    let theta: Vec<f64> = (0..m).map(|r| c * first[r] + second[r]).collect();
+    theta.iter().all(|v| v.is_finite()).then(|| Kkt {
+        theta,
+        mu: first[m..].to_vec(),
+        nu: second[m..].to_vec(),
+    })
 }
 
 /// Whether sample `i`'s row is linearly independent of the held rows (relative to its norm;
@@ -498,11 +576,11 @@ fn finish(
 ) -> LinearSolution {
     let m = rows.m;
     let n = y.len();
-    let g = gradient(rows, labels, c);
+    let g = side_sums(rows, x, labels);
     let (theta, multipliers) = if held.is_empty() {
         // Nothing held: w' = −g'/h, and b' anywhere that keeps every sample on its side — the
         // midpoint of the feasible interval.
-        let w: Vec<f64> = (0..d).map(|k| -g[k].value() / h[k]).collect();
+        let w: Vec<f64> = (0..d).map(|k| -c * g[k].value() / h[k]).collect();
         let mut theta = w.clone();
         theta.push(0.0);
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -526,7 +604,13 @@ fn finish(
         (theta, Vec::new())
     } else {
         // The last step ended at exactly this system's solution.
-        kkt(rows, h, &g, held, labels, y, epsilon).unwrap_or_else(|| (vec![0.0; m], vec![0.0; held.len()]))
+        match kkt(rows, h, c, &g, held, labels, y, epsilon) {
+            Some(k) => {
+                let beta = k.mu.iter().zip(&k.nu).map(|(mu, nu)| c * mu + nu).collect();
+                (k.theta, beta)
+            }
+            None => (vec![0.0; m], vec![0.0; held.len()]),
+        }
     };
     let mut beta: Vec<f64> = labels
         .iter()
@@ -571,8 +655,8 @@ fn finish(
     let mut bias = {
         let mut acc = Accumulator::new();
         acc.add(theta[d]);
-        for k in 0..d {
-            acc.add_product(-weights[k], rows.offset[k]);
+        for (w, o) in weights.iter().zip(&rows.offset) {
+            acc.add_product(-w, *o);
         }
         acc.value()
     };
@@ -626,8 +710,8 @@ fn refine_vertex(
         let dw: Vec<f64> = (0..d).map(|k| delta[(k, 0)] / rows.scale[k]).collect();
         let mut db = Accumulator::new();
         db.add(delta[(d, 0)]);
-        for k in 0..d {
-            db.add_product(-dw[k], rows.offset[k]);
+        for (w, o) in dw.iter().zip(&rows.offset) {
+            db.add_product(-w, *o);
         }
         if dw.iter().any(|v| !v.is_finite()) || !db.value().is_finite() {
             return;
