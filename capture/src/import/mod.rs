@@ -109,6 +109,9 @@
 //! scale factor (`Fx*0.001`, `Fy*-1` to flip a sign convention), or both (`x[mm]*-1`). A unit
 //! must measure what the target measures (the target's suffix says it: `_s`, `_m`, `_n`,
 //! `_mps`, `_mps2`), so `friction_force_n=x[mm]` is rejected rather than silently scaled.
+//! A source starting with digits and a colon names an input ([several
+//! inputs](#several-inputs)): `2:x[mm]` is column `x` of input 2, so a column whose own name
+//! starts that way cannot be mapped (`Fz:1` or `t:ms` are names as they stand).
 //!
 //! # Time and resampling
 //!
