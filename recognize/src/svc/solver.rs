@@ -16,6 +16,9 @@ use svm::Kernel;
 /// Curvature floor for non-positive-definite pairs (libsvm's τ).
 const TAU: f64 = 1e-12;
 
+/// Independent accumulators in the working-set scans.
+const LANES: usize = 4;
+
 /// The solution of one binary C-SVC dual.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct BinarySolution {
@@ -130,23 +133,40 @@ impl State<'_> {
     /// libsvm's `select_working_set`: `Some((i, j))`, or `None` when the maximal violation over
     /// the active set is below `stop`.
     ///
-    /// Written without branches on the data (whether a variable may move up or down is as
-    /// good as random), so the loops compile to selects: this is where a fit spends its time.
+    /// The scans avoid branches on the data where they can (whether a variable may move up or
+    /// down is as good as random): this is where a fit spends its time.
     fn select(&mut self, stop: f64) -> Option<(usize, usize)> {
         let (n, c) = (self.active, self.c);
-        let mut gmax = f64::NEG_INFINITY;
-        let mut i_sel = usize::MAX;
+        // The largest −yₜ∇ₜ over I_up, ties to the last such t (libsvm's `>=` scan), kept in
+        // independent lanes so the comparisons do not wait on each other.
+        let mut lane_v = [f64::NEG_INFINITY; LANES];
+        let mut lane_t = [usize::MAX; LANES];
         {
             let (y, alpha, grad) = (&self.q.y[..n], &self.alpha[..n], &self.grad[..n]);
-            for t in 0..n {
-                let (yt, a) = (y[t], alpha[t]);
-                // In I_up: −yₜ∇ₜ can grow.
-                let up = if yt > 0.0 { a < c } else { a > 0.0 };
-                let v = -yt * grad[t];
-                if up & (v >= gmax) {
-                    gmax = v;
-                    i_sel = t;
+            for (chunk, ((ys, als), gs)) in y
+                .chunks(LANES)
+                .zip(alpha.chunks(LANES))
+                .zip(grad.chunks(LANES))
+                .enumerate()
+            {
+                for k in 0..ys.len() {
+                    let (yt, a) = (ys[k], als[k]);
+                    // In I_up: −yₜ∇ₜ can grow.
+                    let up = if yt > 0.0 { a < c } else { a > 0.0 };
+                    let v = -yt * gs[k];
+                    if up & (v >= lane_v[k]) {
+                        lane_v[k] = v;
+                        lane_t[k] = chunk * LANES + k;
+                    }
                 }
+            }
+        }
+        let mut gmax = f64::NEG_INFINITY;
+        let mut i_sel = usize::MAX;
+        for (&v, &t) in lane_v.iter().zip(&lane_t) {
+            if t != usize::MAX && (i_sel == usize::MAX || v > gmax || (v == gmax && t > i_sel)) {
+                gmax = v;
+                i_sel = t;
             }
         }
         if i_sel == usize::MAX {
@@ -156,24 +176,32 @@ impl State<'_> {
         let qi = &self.q.rows[i_sel][..n];
         let (y, alpha, grad, diag) = (&self.q.y[..n], &self.alpha[..n], &self.grad[..n], &self.diag[..n]);
         let (yi, di) = (y[i_sel], diag[i_sel]);
-        let mut gmax2 = f64::NEG_INFINITY;
-        let mut best = f64::INFINITY;
+        let mut lane_max = [f64::NEG_INFINITY; LANES];
+        // The best decrease so far, best_gain / best_quad (0 before any candidate).
+        let (mut best_gain, mut best_quad) = (0.0, 1.0);
         let mut j_sel = usize::MAX;
         for t in 0..n {
             let (yt, a) = (y[t], alpha[t]);
             // In I_low: yₜ∇ₜ can shrink.
             let low = if yt > 0.0 { a > 0.0 } else { a < c };
             let v = yt * grad[t];
-            gmax2 = gmax2.max(if low { v } else { f64::NEG_INFINITY });
+            let lane = &mut lane_max[t % LANES];
+            *lane = lane.max(if low { v } else { f64::NEG_INFINITY });
             let grad_diff = gmax + v;
-            let quad = di + diag[t] - 2.0 * yi * yt * qi[t];
-            let quad = if quad > 0.0 { quad } else { TAU };
-            let decrease = -grad_diff * grad_diff / quad;
-            if low & (grad_diff > 0.0) & (decrease <= best) {
-                best = decrease;
-                j_sel = t;
+            if low & (grad_diff > 0.0) {
+                // The largest decrease gd²/quad, compared as cross products: a division per
+                // candidate was most of a fit's time.
+                let quad = di + diag[t] - 2.0 * yi * yt * qi[t];
+                let quad = if quad > 0.0 { quad } else { TAU };
+                let gain = grad_diff * grad_diff;
+                if gain * best_quad >= best_gain * quad {
+                    best_gain = gain;
+                    best_quad = quad;
+                    j_sel = t;
+                }
             }
         }
+        let gmax2 = lane_max.into_iter().fold(f64::NEG_INFINITY, f64::max);
         (gmax + gmax2 >= stop && j_sel != usize::MAX).then_some((i_sel, j_sel))
     }
 
