@@ -21,7 +21,7 @@
 //! pseudo-differentiation (Eq. 13) when it has none.
 
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
@@ -37,7 +37,7 @@ use crate::model_file::{
     SvrHyper,
 };
 use capture::signal::pseudo_differentiate;
-use svm::{InputScaling, Kernel, SvrFit, SvrParams, fit};
+use svm::{FitProgress, InputScaling, Kernel, SvrFit, SvrParams, fit_observed};
 
 /// Standard gravity, to express the paper's kgf hyperparameters in SI.
 pub(crate) const KGF_N: f64 = 9.806_65;
@@ -308,6 +308,41 @@ pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> 
     })
 }
 
+/// How hard each SVR of an identification may work, and who watches it: the solver tolerance
+/// and wall-clock budget of [`SvrParams`] (None: the library's defaults), and an observer shown
+/// each fit's progress with the fit's name.
+#[derive(Clone, Copy)]
+pub struct FitLimits<'a> {
+    /// Solver tolerance ([`svm::SvrParamsBuilder::tolerance`]).
+    pub tolerance: Option<f64>,
+    /// Wall-clock budget of each fit ([`svm::SvrParamsBuilder::time_budget`]); a fit that
+    /// exceeds it is an error naming the gap it had reached.
+    pub time_budget: Option<Duration>,
+    /// Called as each fit advances.
+    pub observer: &'a dyn Fn(&str, &FitProgress),
+}
+
+fn ignore_progress(_: &str, _: &FitProgress) {}
+
+impl Default for FitLimits<'_> {
+    fn default() -> Self {
+        Self {
+            tolerance: None,
+            time_budget: None,
+            observer: &ignore_progress,
+        }
+    }
+}
+
+impl std::fmt::Debug for FitLimits<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FitLimits")
+            .field("tolerance", &self.tolerance)
+            .field("time_budget", &self.time_budget)
+            .finish_non_exhaustive()
+    }
+}
+
 pub(crate) fn svr(
     what: &str,
     c: f64,
@@ -317,16 +352,33 @@ pub(crate) fn svr(
     dim: usize,
     y: &[f64],
 ) -> Result<SvrFit, IdentifyError> {
-    let params = SvrParams::builder()
-        .c(c)
-        .epsilon(epsilon)
-        .kernel(kernel)
-        .build()
-        .map_err(|source| IdentifyError::Svr {
-            what: what.into(),
-            source,
-        })?;
-    fit(&params, x, dim, y).map_err(|source| IdentifyError::Svr {
+    svr_with(&FitLimits::default(), what, c, epsilon, kernel, x, dim, y)
+}
+
+/// [`svr`] under `limits`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn svr_with(
+    limits: &FitLimits<'_>,
+    what: &str,
+    c: f64,
+    epsilon: f64,
+    kernel: Kernel,
+    x: &[f64],
+    dim: usize,
+    y: &[f64],
+) -> Result<SvrFit, IdentifyError> {
+    let mut builder = SvrParams::builder().c(c).epsilon(epsilon).kernel(kernel);
+    if let Some(t) = limits.tolerance {
+        builder = builder.tolerance(t);
+    }
+    if let Some(b) = limits.time_budget {
+        builder = builder.time_budget(b);
+    }
+    let params = builder.build().map_err(|source| IdentifyError::Svr {
+        what: what.into(),
+        source,
+    })?;
+    fit_observed(&params, x, dim, y, &|p| (limits.observer)(what, p)).map_err(|source| IdentifyError::Svr {
         what: what.into(),
         source,
     })
@@ -372,10 +424,20 @@ pub fn identify(
     test: Option<&Capture>,
     options: &IdentifyOptions,
 ) -> Result<Identified, IdentifyError> {
+    identify_with(train, test, options, &FitLimits::default())
+}
+
+/// [`identify`] with every SVR fit under `limits` (tolerance, time budget, progress).
+pub fn identify_with(
+    train: &Capture,
+    test: Option<&Capture>,
+    options: &IdentifyOptions,
+    limits: &FitLimits<'_>,
+) -> Result<Identified, IdentifyError> {
     let identified = match options.kind {
-        ModelKind::HardFriction => hard(train, test, options),
-        ModelKind::SoftFriction => soft(train, test, options),
-        ModelKind::NeedlePuncture => needle(train, test, options),
+        ModelKind::HardFriction => hard(train, test, options, limits),
+        ModelKind::SoftFriction => soft(train, test, options, limits),
+        ModelKind::NeedlePuncture => needle(train, test, options, limits),
     };
     // Every SVR trains on the training capture: a failed fit names it.
     identified.map_err(|e| match e {
@@ -447,13 +509,19 @@ fn friction_baselines(
     ))
 }
 
-fn hard(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+fn hard(
+    train: &Capture,
+    test: Option<&Capture>,
+    o: &IdentifyOptions,
+    limits: &FitLimits<'_>,
+) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
     let (all, held_out) = train_and_test_data(train, test)?;
     let tr = all.thinned(o.max_fit_samples);
     let ev = held_out.as_ref().unwrap_or(&all);
     let (c, epsilon) = (o.c.unwrap_or(1e11 / KGF_N), o.epsilon.unwrap_or(0.003 * KGF_N));
-    let f = svr(
+    let f = svr_with(
+        limits,
         "hard-contact SVR",
         c,
         epsilon,
@@ -579,7 +647,12 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
     Ok(out)
 }
 
-fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+fn soft(
+    train: &Capture,
+    test: Option<&Capture>,
+    o: &IdentifyOptions,
+    limits: &FitLimits<'_>,
+) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
     let (all, held_out) = train_and_test_data(train, test)?;
     let tr = all.thinned(o.max_fit_samples);
@@ -599,7 +672,8 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
     let eps_m = o.epsilon.unwrap_or(0.002);
     let ws: Vec<f64> = stage1.iter().map(|s| s[1]).collect();
     let ms: Vec<f64> = stage1.iter().map(|s| s[2]).collect();
-    let fw = svr(
+    let fw = svr_with(
+        limits,
         "slope SVR w(v)",
         c2,
         eps_w,
@@ -608,7 +682,8 @@ fn soft(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<
         1,
         &ws,
     )?;
-    let fm = svr(
+    let fm = svr_with(
+        limits,
         "intercept SVR m(v)",
         c2,
         eps_m,
@@ -728,7 +803,12 @@ pub(crate) fn spread((t, x, y): &NeedleSamples, max_samples: usize) -> NeedleSam
     )
 }
 
-fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Result<Identified, IdentifyError> {
+fn needle(
+    train: &Capture,
+    test: Option<&Capture>,
+    o: &IdentifyOptions,
+    limits: &FitLimits<'_>,
+) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
     let all = needle_data(train)?;
     let (_, x, y) = spread(&all, o.max_samples.min(o.max_fit_samples));
@@ -743,7 +823,16 @@ fn needle(train: &Capture, test: Option<&Capture>, o: &IdentifyOptions) -> Resul
         o.epsilon.unwrap_or(0.02),
         o.gamma.unwrap_or(30.0),
     );
-    let f = svr("needle SVR", c, epsilon, Kernel::Rbf { gamma }, &xs, 2, &y)?;
+    let f = svr_with(
+        limits,
+        "needle SVR",
+        c,
+        epsilon,
+        Kernel::Rbf { gamma },
+        &xs,
+        2,
+        &y,
+    )?;
     let model = scaled(f.model.clone(), scaling);
     let (t_ev, x_ev, y_ev) = match test {
         Some(t) => needle_data(t)?,

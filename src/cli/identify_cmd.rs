@@ -2,15 +2,16 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use anyhow::Context;
 use capture::{Capture, CaptureKind};
 use clap::{Args, ValueEnum};
 use identify::{
-    IdentifyOptions, Metrics, ModelBody, ModelFile, ModelKind, OutOfDomain, Report, ScaledSvr, SearchGrid,
-    SearchPoint, best, identify, search,
+    FitLimits, IdentifyOptions, Metrics, ModelBody, ModelFile, ModelKind, OutOfDomain, Report, ScaledSvr,
+    SearchGrid, SearchPoint, best, identify_with, search,
 };
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use svm::write_libsvm_model;
 
 use crate::plots::FitSet;
@@ -84,6 +85,16 @@ pub(crate) struct IdentifyArgs {
     /// Size of the --plot image.
     #[arg(long, value_name = "WxH", default_value = "1100x750", value_parser = super::parse_size)]
     plot_size: [u32; 2],
+    /// Solver tolerance of every SVR fit (relative; the interior point's duality gap, SMO's KKT
+    /// violation). Whatever it is, a model is returned only when its certified relative duality
+    /// gap is at most 1e-6 (svm::ACCEPT_GAP); a fit that misses it is an error with the gap it
+    /// reached.
+    #[arg(long = "tol", value_name = "X")]
+    tolerance: Option<f64>,
+    /// Wall-clock budget of each SVR fit, in seconds (default 60); a fit that runs out is an
+    /// error naming the gap it had reached.
+    #[arg(long, value_name = "S")]
+    max_seconds: Option<f64>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -150,8 +161,47 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     } else {
         Vec::new()
     };
-    let identified =
-        identify(&train, test.as_ref(), &options).with_context(|| format!("identifying a {kind} model"))?;
+    let time_budget = args
+        .max_seconds
+        .map(|s| {
+            if s.is_finite() && s > 0.0 {
+                Ok(Duration::from_secs_f64(s))
+            } else {
+                Err(anyhow::anyhow!(
+                    "--max-seconds {s}: must be a positive number of seconds"
+                ))
+            }
+        })
+        .transpose()?;
+    // A spinner that appears only once a fit has run for a second, with the solver's gap.
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden()).with_style(
+        ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    let shown = std::cell::Cell::new(false);
+    let observer = |what: &str, p: &svm::FitProgress| {
+        if args.quiet || p.elapsed_s < 1.0 {
+            return;
+        }
+        if !shown.replace(true) {
+            bar.set_draw_target(ProgressDrawTarget::stderr());
+            bar.enable_steady_tick(Duration::from_millis(200));
+        }
+        let gap = if p.gap.is_finite() {
+            format!(", gap {:.2e}", p.gap)
+        } else {
+            String::new()
+        };
+        bar.set_message(format!("{what}: {} iteration {}{gap}", p.solver, p.iterations));
+    };
+    let limits = FitLimits {
+        tolerance: args.tolerance,
+        time_budget,
+        observer: &observer,
+    };
+    let identified = identify_with(&train, test.as_ref(), &options, &limits);
+    bar.finish_and_clear();
+    let identified = identified.with_context(|| format!("identifying a {kind} model"))?;
     let r = &identified.report;
     if r.n_fit_rows < r.n_rows && !args.quiet {
         let limit = match kind {

@@ -82,11 +82,14 @@ pub enum SvmError {
     /// The solver stopped (at its own tolerance or at a limit) with a solution whose certified
     /// relative duality gap misses the acceptance threshold: it is not returned.
     #[error(
-        "{solver} stopped after {iterations} iterations with a certified relative gap of {gap:.3e}, above the acceptance threshold {threshold:.0e}; raise --max-seconds or change C, epsilon or gamma"
+        "{solver} stopped ({stopped}) after {iterations} iterations with a certified relative gap of {gap:.3e}, above the acceptance threshold {threshold:.0e}: no model is returned; a tighter tolerance or other C, epsilon or gamma may reach it"
     )]
     Uncertified {
         /// Which solver.
         solver: &'static str,
+        /// Why it stopped (no budget ran out: those are [`SvmError::Budget`] and
+        /// [`SvmError::NotConverged`]).
+        stopped: &'static str,
         /// Iterations done.
         iterations: usize,
         /// Best certified relative gap reached (infinite: the coefficients left their box).

@@ -262,6 +262,11 @@ fn certify(
     if !cert.accepted() {
         return Err(SvmError::Uncertified {
             solver,
+            stopped: if polished {
+                "its exact active set was optimal to its own tolerance"
+            } else {
+                "its own stopping rule was met"
+            },
             iterations,
             gap: cert.relative_gap,
             threshold: ACCEPT_GAP,
