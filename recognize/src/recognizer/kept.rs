@@ -12,10 +12,9 @@
 use std::sync::Arc;
 
 use super::file::{RecognizerBody, RecognizerFile};
-use super::labelled::{LabelledCapture, check_rate};
-use super::train::TrainSettings;
+use super::labelled::{KeptFeatures, KeptWindows, LabelledCapture, check_rate};
 use crate::RecognizeError;
-use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
+use crate::features::spectral::{CellScale, SpectrogramPlan};
 use crate::features::{FeatureSet, NakanoWindowing, Travel, capture_histogram, window_vectors};
 use capture::Capture;
 
@@ -24,8 +23,8 @@ use capture::Capture;
 /// histograms (of a cell scaling).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FeatureNeeds {
-    windows: Vec<(NakanoWindowing, FeatureSet, CellScale)>,
-    histograms: Vec<CellScale>,
+    pub(super) windows: Vec<(NakanoWindowing, FeatureSet, CellScale)>,
+    pub(super) histograms: Vec<CellScale>,
 }
 
 impl FeatureNeeds {
@@ -55,30 +54,6 @@ impl FeatureNeeds {
             self.histograms.push(cell_scale);
         }
         self
-    }
-
-    /// What training as `settings` say on captures sampled at `rate_hz` reads: the training
-    /// windows of windowed features, else each capture's histogram.
-    pub fn training(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
-        let needs = Self::new();
-        Ok(match settings.features {
-            FeatureSet::Spectral => needs.with_histogram(settings.cell_scale),
-            windowed => needs.with_windows(
-                settings.windowing_at(rate_hz)?.training(),
-                windowed,
-                settings.cell_scale,
-            ),
-        })
-    }
-
-    /// What training as `settings` say and then deciding with the trained recognizer read
-    /// (a cross-validation's rounds): [`FeatureNeeds::training`] and the decision windows.
-    pub fn training_and_decisions(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
-        let needs = Self::training(settings, rate_hz)?;
-        Ok(match settings.features {
-            FeatureSet::Spectral => needs,
-            windowed => needs.with_windows(settings.windowing_at(rate_hz)?, windowed, settings.cell_scale),
-        })
     }
 
     /// What [`RecognizerFile::evaluate`] with each window length of `window_s` (none: the
@@ -121,68 +96,6 @@ impl FeatureNeeds {
     /// Whether nothing is needed.
     pub fn is_empty(&self) -> bool {
         self.windows.is_empty() && self.histograms.is_empty()
-    }
-}
-
-/// The windows of one windowing kept for a capture.
-#[derive(Debug)]
-struct KeptWindows {
-    windowing: NakanoWindowing,
-    features: FeatureSet,
-    cell_scale: CellScale,
-    /// Start and feature vector of each window.
-    vectors: Vec<(usize, Vec<f64>)>,
-}
-
-/// The features a capture kept when its samples were dropped.
-#[derive(Debug)]
-pub(crate) struct KeptFeatures {
-    /// Samples the capture had.
-    samples: usize,
-    /// How far its tip travelled, for the reason a capture gave no window.
-    travel: Travel,
-    windows: Vec<KeptWindows>,
-    histograms: Vec<(CellScale, [f64; FEATURE_LEN])>,
-}
-
-impl KeptFeatures {
-    /// Samples the capture had.
-    pub(crate) fn samples(&self) -> usize {
-        self.samples
-    }
-
-    /// How far its tip travelled.
-    pub(crate) fn travel(&self) -> &Travel {
-        &self.travel
-    }
-
-    /// The kept vectors of the windows `windowing` picks, of `features` (`cell_scale` matters
-    /// for [`FeatureSet::Both`] only). Nakano's five features are also the first five of
-    /// `both`'s vectors, so either serves a request for them.
-    pub(crate) fn windows(
-        &self,
-        windowing: &NakanoWindowing,
-        features: FeatureSet,
-        cell_scale: CellScale,
-    ) -> Option<&[(usize, Vec<f64>)]> {
-        self.windows
-            .iter()
-            .find(|k| {
-                k.windowing == *windowing
-                    && match features {
-                        FeatureSet::Nakano => true,
-                        _ => k.features == features && k.cell_scale == cell_scale,
-                    }
-            })
-            .map(|k| k.vectors.as_slice())
-    }
-
-    /// The kept histogram of cells scaled by `cell_scale`.
-    pub(crate) fn histogram(&self, cell_scale: CellScale) -> Option<&[f64; FEATURE_LEN]> {
-        self.histograms
-            .iter()
-            .find(|(s, _)| *s == cell_scale)
-            .map(|(_, h)| h)
     }
 }
 

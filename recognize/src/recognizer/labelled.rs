@@ -5,9 +5,9 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
-use super::kept::KeptFeatures;
-
 use crate::RecognizeError;
+use crate::features::spectral::{CellScale, FEATURE_LEN};
+use crate::features::{FeatureSet, NakanoWindowing, Travel};
 use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
 
 /// Metadata key of a capture's class.
@@ -69,6 +69,68 @@ impl LabelledCapture {
             },
             kept: None,
         })
+    }
+}
+
+/// The windows of one windowing kept for a capture.
+#[derive(Debug)]
+pub(crate) struct KeptWindows {
+    pub(super) windowing: NakanoWindowing,
+    pub(super) features: FeatureSet,
+    pub(super) cell_scale: CellScale,
+    /// Start and feature vector of each window.
+    pub(super) vectors: Vec<(usize, Vec<f64>)>,
+}
+
+/// The features a capture kept when its samples were dropped.
+#[derive(Debug)]
+pub(crate) struct KeptFeatures {
+    /// Samples the capture had.
+    pub(super) samples: usize,
+    /// How far its tip travelled, for the reason a capture gave no window.
+    pub(super) travel: Travel,
+    pub(super) windows: Vec<KeptWindows>,
+    pub(super) histograms: Vec<(CellScale, [f64; FEATURE_LEN])>,
+}
+
+impl KeptFeatures {
+    /// Samples the capture had.
+    pub(crate) fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// How far its tip travelled.
+    pub(crate) fn travel(&self) -> &Travel {
+        &self.travel
+    }
+
+    /// The kept vectors of the windows `windowing` picks, of `features` (`cell_scale` matters
+    /// for [`FeatureSet::Both`] only). Nakano's five features are also the first five of
+    /// `both`'s vectors, so either serves a request for them.
+    pub(crate) fn windows(
+        &self,
+        windowing: &NakanoWindowing,
+        features: FeatureSet,
+        cell_scale: CellScale,
+    ) -> Option<&[(usize, Vec<f64>)]> {
+        self.windows
+            .iter()
+            .find(|k| {
+                k.windowing == *windowing
+                    && match features {
+                        FeatureSet::Nakano => true,
+                        _ => k.features == features && k.cell_scale == cell_scale,
+                    }
+            })
+            .map(|k| k.vectors.as_slice())
+    }
+
+    /// The kept histogram of cells scaled by `cell_scale`.
+    pub(crate) fn histogram(&self, cell_scale: CellScale) -> Option<&[f64; FEATURE_LEN]> {
+        self.histograms
+            .iter()
+            .find(|(s, _)| *s == cell_scale)
+            .map(|(_, h)| h)
     }
 }
 

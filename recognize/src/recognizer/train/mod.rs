@@ -19,6 +19,7 @@ pub use som::{
 pub use svm::{SvmTrainer, WINDOW_SVM_FALLBACK_C, window_svc_params};
 pub use warnings::{FEW_TRAINING_VECTORS, TrainingWarning};
 
+use super::kept::FeatureNeeds;
 use super::labelled::{check_rate, class_index, class_list};
 use super::{LabelledCapture, RecognizerBody, RecognizerFile, recording_groups, trial_groups};
 use crate::RecognizeError;
@@ -151,6 +152,32 @@ impl TrainSettings {
     pub fn windowing_at(&self, rate_hz: f64) -> Result<NakanoWindowing, RecognizeError> {
         NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?
             .with_training_window_s(self.training_window_s())
+    }
+}
+
+impl FeatureNeeds {
+    /// What training as `settings` say on captures sampled at `rate_hz` reads: the training
+    /// windows of windowed features, else each capture's histogram.
+    pub fn training(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
+        let needs = Self::new();
+        Ok(match settings.features {
+            FeatureSet::Spectral => needs.with_histogram(settings.cell_scale),
+            windowed => needs.with_windows(
+                settings.windowing_at(rate_hz)?.training(),
+                windowed,
+                settings.cell_scale,
+            ),
+        })
+    }
+
+    /// What training as `settings` say and then deciding with the trained recognizer read
+    /// (a cross-validation's rounds): [`FeatureNeeds::training`] and the decision windows.
+    pub fn training_and_decisions(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
+        let needs = Self::training(settings, rate_hz)?;
+        Ok(match settings.features {
+            FeatureSet::Spectral => needs,
+            windowed => needs.with_windows(settings.windowing_at(rate_hz)?, windowed, settings.cell_scale),
+        })
     }
 }
 
