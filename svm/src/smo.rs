@@ -22,9 +22,11 @@ use super::kernel::Kernel;
 
 /// The solver's name in errors.
 pub(crate) const NAME: &str = "SMO";
+/// The ε-SVR's SMO when the exact finish on its partition produced the answer.
+pub(crate) const NAME_FINISHED: &str = "SMO + exact finish";
 
-/// Memory for cached kernel rows.
-const CACHE_BYTES: usize = 256 << 20;
+/// Memory for cached kernel rows of the ε-SVR (libsvm's `-m`; scikit-learn's default is 200 MB).
+pub(crate) const CACHE_BYTES: usize = 256 << 20;
 /// Curvature floor for non-positive-definite pairs (libsvm's τ).
 const TAU: f64 = 1e-12;
 
@@ -258,9 +260,54 @@ fn extremes(
     (up, low)
 }
 
+/// Kernel rows as the solver reads them: two at a time (the pair's), by handle, so a cache can
+/// hand out its own storage instead of copies.
+trait PairRows {
+    /// `K(xₛ, xₛ)`.
+    fn diagonal(&self, s: usize) -> f64;
+    /// Makes row `s` available and returns its handle, valid until the fetch after the next.
+    fn fetch(&mut self, s: usize) -> usize;
+    /// The row behind a handle from [`PairRows::fetch`].
+    fn get(&self, handle: usize) -> &[f64];
+}
+
+/// Any [`KernelRows`] as [`PairRows`]: each fetched row is copied into one of two buffers, in
+/// turn, so the last two stay readable together.
+struct Copied<'r, R> {
+    rows: &'r mut R,
+    buffers: [Vec<f64>; 2],
+    next: usize,
+}
+
+impl<'r, R: KernelRows> Copied<'r, R> {
+    fn new(rows: &'r mut R) -> Self {
+        let n = rows.samples();
+        Self {
+            rows,
+            buffers: [vec![0.0; n], vec![0.0; n]],
+            next: 0,
+        }
+    }
+}
+
+impl<R: KernelRows> PairRows for Copied<'_, R> {
+    fn diagonal(&self, s: usize) -> f64 {
+        self.rows.diagonal(s)
+    }
+    fn fetch(&mut self, s: usize) -> usize {
+        let h = self.next;
+        self.next = 1 - h;
+        self.buffers[h].copy_from_slice(self.rows.row(s));
+        h
+    }
+    fn get(&self, handle: usize) -> &[f64] {
+        &self.buffers[handle]
+    }
+}
+
 /// Recomputes the gradient of every variable outside `active` from scratch,
 /// `∇ₜ = pₜ + Σⱼ yₜ yⱼ K(sₜ, sⱼ) αⱼ`, over the non-zero α only.
-fn rebuild_gradient<R: KernelRows, L: Labels>(
+fn rebuild_gradient<R: PairRows, L: Labels>(
     grad: &mut [f64],
     alpha: &[f64],
     active: &[usize],
@@ -272,10 +319,11 @@ fn rebuild_gradient<R: KernelRows, L: Labels>(
     for &t in active {
         inactive[t] = false;
     }
-    if !inactive.iter().any(|&v| v) {
+    let outside: Vec<usize> = (0..m).filter(|&t| inactive[t]).collect();
+    if outside.is_empty() {
         return;
     }
-    for t in (0..m).filter(|&t| inactive[t]) {
+    for &t in &outside {
         grad[t] = vars.linear[t];
     }
     let (labels, n) = (vars.labels, vars.n);
@@ -285,8 +333,9 @@ fn rebuild_gradient<R: KernelRows, L: Labels>(
             continue;
         }
         let (yj, sj) = (labels.label(j), sample(j));
-        let row = rows.row(sj);
-        for t in (0..m).filter(|&t| inactive[t]) {
+        let h = rows.fetch(sj);
+        let row = rows.get(h);
+        for &t in &outside {
             let (yt, st) = (labels.label(t), sample(t));
             grad[t] += yt * yj * row[st] * aj;
         }
@@ -317,29 +366,67 @@ pub fn solve_smo<R: KernelRows>(
         linear,
         n,
     };
-    solve(rows, &vars, settings)
+    solve(&mut Copied::new(rows), &vars, settings, &mut |_, _, _| None)
 }
 
+/// What a solve asks, each time it has converged on every variable, of whoever called it:
+/// `(α, ∇, stop)` → a smaller stop value to go on to, or `None` to finish.
+type Refine<'a> = dyn FnMut(&[f64], &[f64], f64) -> Option<f64> + 'a;
+
 /// [`solve_smo`] for any labelling, with the selection's curvature rule fixed at compile time.
-fn solve<R: KernelRows, L: Labels>(
+fn solve<R: PairRows, L: Labels>(
     rows: &mut R,
     vars: &Variables<'_, L>,
     settings: &SmoSettings,
+    refine: &mut Refine<'_>,
 ) -> Result<SmoSolution, SvmError> {
     match settings.selection {
-        SelectionCurvature::Clamped => solve_with::<R, L, false>(rows, vars, settings),
-        SelectionCurvature::NonPositiveToTau => solve_with::<R, L, true>(rows, vars, settings),
+        SelectionCurvature::Clamped => solve_with::<R, L, false>(rows, vars, settings, refine),
+        SelectionCurvature::NonPositiveToTau => solve_with::<R, L, true>(rows, vars, settings, refine),
+    }
+}
+
+/// libsvm's ρ at (α, ∇): the mean of `yₜ∇ₜ` over free variables, else the middle of the
+/// interval the bounded ones allow.
+fn rho<L: Labels>(alpha: &[f64], grad: &[f64], labels: L, c: f64) -> f64 {
+    let (mut ub, mut lb, mut sum_free, mut n_free) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+    for (t, (&a, &g)) in alpha.iter().zip(grad).enumerate() {
+        let yt = labels.label(t);
+        let yg = yt * g;
+        if a >= c {
+            if yt < 0.0 {
+                ub = ub.min(yg)
+            } else {
+                lb = lb.max(yg)
+            }
+        } else if a <= 0.0 {
+            if yt > 0.0 {
+                ub = ub.min(yg)
+            } else {
+                lb = lb.max(yg)
+            }
+        } else {
+            n_free += 1;
+            sum_free += yg;
+        }
+    }
+    if n_free > 0 {
+        sum_free / n_free as f64
+    } else {
+        0.5 * (ub + lb)
     }
 }
 
 /// The solve; `NON_POSITIVE_TO_TAU` is [`SelectionCurvature::NonPositiveToTau`].
-fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
+fn solve_with<R: PairRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
     rows: &mut R,
     vars: &Variables<'_, L>,
     settings: &SmoSettings,
+    refine: &mut Refine<'_>,
 ) -> Result<SmoSolution, SvmError> {
     let (n, m, linear) = (vars.n, vars.linear.len(), vars.linear);
-    let (c, stop) = (settings.c, settings.stop);
+    let c = settings.c;
+    let mut stop = settings.stop;
     let max_iterations = settings.iteration_budget(m);
     // Copies, so the hot loops keep them in registers rather than reloading them through a
     // reference after every store to the gradient.
@@ -360,8 +447,6 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
     let mut counter = shrink_every;
     let mut active: Vec<usize> = (0..m).collect();
     let mut unshrunk = false;
-    let mut ki = vec![0.0; n];
-    let mut kj = vec![0.0; n];
     let mut iterations = 0;
     let mut violation = f64::INFINITY;
     while iterations < max_iterations {
@@ -411,9 +496,11 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
         let mut gmax2 = f64::NEG_INFINITY;
         let mut best = f64::INFINITY;
         let mut j_sel = usize::MAX;
+        let mut hi = usize::MAX;
         if i_sel != usize::MAX {
-            ki.copy_from_slice(rows.row(sample(i_sel)));
             let si = sample(i_sel);
+            hi = rows.fetch(si);
+            let ki = rows.get(hi);
             // j: the largest second-order decrease among I_low.
             for &t in &active {
                 let yt = label(t);
@@ -447,13 +534,22 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
                 counter = shrink_every;
                 continue;
             }
-            break;
+            match refine(&alpha, &grad, stop) {
+                Some(tighter) if tighter < stop && i_sel != usize::MAX && j_sel != usize::MAX => {
+                    stop = tighter;
+                    unshrunk = false;
+                    counter = shrink_every;
+                    continue;
+                }
+                _ => break,
+            }
         }
         let yi = label(i_sel);
         let si = sample(i_sel);
         let yj = label(j_sel);
         let sj = sample(j_sel);
-        kj.copy_from_slice(rows.row(sj));
+        let hj = rows.fetch(sj);
+        let (ki, kj) = (rows.get(hi), rows.get(hj));
         // Analytic two-variable step, clipped to the box (libsvm's update).
         let qii = diag[si];
         let qjj = diag[sj];
@@ -494,10 +590,10 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
             alpha[i_sel] = ai;
             alpha[j_sel] = aj;
         }
-        let (di, dj) = (alpha[i_sel] - old_i, alpha[j_sel] - old_j);
+        let (di, dj) = (yi * (alpha[i_sel] - old_i), yj * (alpha[j_sel] - old_j));
         for &t in &active {
             let st = sample(t);
-            grad[t] += label(t) * (yi * ki[st] * di + yj * kj[st] * dj);
+            grad[t] += label(t) * (ki[st] * di + kj[st] * dj);
         }
         iterations += 1;
     }
@@ -509,34 +605,7 @@ fn solve_with<R: KernelRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
             tolerance: stop,
         });
     }
-
-    // ρ: average over free variables of yₜ∇ₜ, else the middle of the interval the bounded
-    // ones allow.
-    let (mut ub, mut lb, mut sum_free, mut n_free) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
-    for t in 0..m {
-        let yg = label(t) * grad[t];
-        if alpha[t] >= c {
-            if label(t) < 0.0 {
-                ub = ub.min(yg)
-            } else {
-                lb = lb.max(yg)
-            }
-        } else if alpha[t] <= 0.0 {
-            if label(t) > 0.0 {
-                ub = ub.min(yg)
-            } else {
-                lb = lb.max(yg)
-            }
-        } else {
-            n_free += 1;
-            sum_free += yg;
-        }
-    }
-    let rho = if n_free > 0 {
-        sum_free / n_free as f64
-    } else {
-        0.5 * (ub + lb)
-    };
+    let rho = rho(&alpha, &grad, labels, c);
     Ok(SmoSolution {
         alpha,
         rho,
@@ -560,9 +629,9 @@ fn clip_equal_labels(a: &mut f64, b: &mut f64, sum: f64, c: f64) {
     }
 }
 
-/// Kernel rows computed on demand and cached (least recently used slots within
-/// [`CACHE_BYTES`]).
-struct RowCache<'a> {
+/// Kernel rows computed on demand and cached: least recently used rows are evicted so that the
+/// rows held never take more than the byte budget given (at least two rows, the pair's).
+pub(crate) struct RowCache<'a> {
     kernel: &'a Kernel,
     x: &'a [f64],
     dim: usize,
@@ -573,11 +642,19 @@ struct RowCache<'a> {
     last_used: Vec<u64>,
     rows: Vec<f64>,
     clock: u64,
+    /// Rows computed (cache misses), for the tests and the benchmark.
+    computed: usize,
 }
 
+/// Samples above which a kernel row is computed on all cores: below, a thread hand-off costs
+/// more than the row (measured with `palpus bench svr-scale`).
+const PARALLEL_ROW: usize = 4096;
+
 impl<'a> RowCache<'a> {
-    fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize) -> Self {
-        let slots = (CACHE_BYTES / (8 * n.max(1))).clamp(2, n.max(2));
+    /// A cache of rows of `kernel` over the `n` samples in `x` (`n × dim`, row-major) holding
+    /// at most `budget_bytes` of rows (but always two).
+    pub(crate) fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize, budget_bytes: usize) -> Self {
+        let slots = (budget_bytes / (size_of::<f64>() * n.max(1))).clamp(2, n.max(2));
         Self {
             kernel,
             x,
@@ -589,44 +666,89 @@ impl<'a> RowCache<'a> {
             slot_of: vec![None; n],
             owner: vec![usize::MAX; slots],
             last_used: vec![0; slots],
-            rows: vec![0.0; slots * n],
+            rows: Vec::new(),
             clock: 0,
+            computed: 0,
+        }
+    }
+
+    /// Bytes of row storage allocated so far.
+    #[cfg(test)]
+    pub(crate) fn row_bytes(&self) -> usize {
+        self.rows.capacity() * size_of::<f64>()
+    }
+
+    /// Rows computed so far.
+    #[cfg(test)]
+    pub(crate) fn computed(&self) -> usize {
+        self.computed
+    }
+
+    /// Computes row `i` into `out`.
+    fn compute(kernel: &Kernel, x: &[f64], dim: usize, i: usize, out: &mut [f64]) {
+        let xi = &x[i * dim..(i + 1) * dim];
+        let fill = |start: usize, out: &mut [f64]| {
+            for (j, o) in out.iter_mut().enumerate() {
+                let r = start + j;
+                *o = kernel.eval(xi, &x[r * dim..(r + 1) * dim]);
+            }
+        };
+        if out.len() >= PARALLEL_ROW {
+            let half = out.len() / 2;
+            let (a, b) = out.split_at_mut(half);
+            rayon::join(|| fill(0, a), || fill(half, b));
+        } else {
+            fill(0, out);
         }
     }
 }
 
-impl KernelRows for RowCache<'_> {
-    fn samples(&self) -> usize {
-        self.n
-    }
-
+impl PairRows for RowCache<'_> {
     fn diagonal(&self, s: usize) -> f64 {
         self.diag[s]
     }
 
-    fn row(&mut self, i: usize) -> &[f64] {
+    fn fetch(&mut self, i: usize) -> usize {
         self.clock += 1;
         let n = self.n;
         let slot = match self.slot_of[i] {
             Some(s) => s,
             None => {
-                let s = (0..self.owner.len())
-                    .min_by_key(|&s| self.last_used[s])
-                    .unwrap_or(0);
+                // Slots are filled in order before any is reused, so the storage grows only
+                // as far as the rows asked for.
+                let used = self.rows.len() / n.max(1);
+                let s = if used < self.owner.len() {
+                    // Exactly one row more: a doubling growth would overshoot the budget.
+                    self.rows.reserve_exact(n);
+                    self.rows.resize((used + 1) * n, 0.0);
+                    used
+                } else {
+                    (0..self.owner.len())
+                        .min_by_key(|&s| self.last_used[s])
+                        .unwrap_or(0)
+                };
                 if self.owner[s] != usize::MAX {
                     self.slot_of[self.owner[s]] = None;
                 }
                 self.owner[s] = i;
                 self.slot_of[i] = Some(s);
-                let xi = &self.x[i * self.dim..(i + 1) * self.dim];
-                for j in 0..n {
-                    self.rows[s * n + j] = self.kernel.eval(xi, &self.x[j * self.dim..(j + 1) * self.dim]);
-                }
+                Self::compute(
+                    self.kernel,
+                    self.x,
+                    self.dim,
+                    i,
+                    &mut self.rows[s * n..(s + 1) * n],
+                );
+                self.computed += 1;
                 s
             }
         };
         self.last_used[slot] = self.clock;
-        &self.rows[slot * n..(slot + 1) * n]
+        slot
+    }
+
+    fn get(&self, slot: usize) -> &[f64] {
+        &self.rows[slot * self.n..(slot + 1) * self.n]
     }
 }
 
@@ -639,23 +761,58 @@ pub(crate) struct SvrSmoSolution {
     pub bias: f64,
     /// Pair updates made.
     pub iterations: usize,
+    /// Whether the exact finish on SMO's partition produced it.
+    pub polished: bool,
 }
 
-/// Solves the ε-SVR dual of `data` by SMO with shrinking, until the maximal KKT violation is
-/// below `1e2 · tolerance · (1 + max|y|)` (1e-8 relative at the default tolerance 1e-10, which
-/// keeps the duality gap under [`super::ACCEPT_GAP`]).
+/// libsvm's default stop (its `-e`, scikit-learn's `tol`): the first pass ends at this maximal
+/// KKT violation, in the units of the targets.
+pub(crate) const LIBSVM_STOP: f64 = 1e-3;
+
+/// The relative duality gap the ε-SVR's SMO aims for before it hands its answer to the fit's
+/// certificate: a tenth of what the certificate accepts, so that the certificate's own,
+/// independent evaluation (with its rounding bounds) passes.
+const TARGET_GAP: f64 = 0.1 * crate::ACCEPT_GAP;
+
+/// Relative duality gap `|P + D| / max(1, |P|)` of the split dual's α, read off its gradient:
+/// for the first n variables `∇ₜ = ε − yₜ + (Kβ)ₜ`, so no kernel value is needed.
+fn svr_gap(alpha: &[f64], grad: &[f64], y: &[f64], c: f64, epsilon: f64) -> f64 {
+    let n = y.len();
+    let bias = -rho(alpha, grad, Split { n }, c);
+    let (mut quad, mut linear, mut loss) = (0.0, 0.0, 0.0);
+    for i in 0..n {
+        let beta = alpha[i] - alpha[i + n];
+        let k_beta = grad[i] - (epsilon - y[i]);
+        quad += beta * k_beta;
+        linear += epsilon * beta.abs() - beta * y[i];
+        loss += crate::slack(y[i], k_beta + bias, epsilon);
+    }
+    let primal = 0.5 * quad + c * loss;
+    let dual = 0.5 * quad + linear;
+    let gap = (primal + dual).abs() / primal.abs().max(1.0);
+    if gap.is_finite() { gap } else { f64::INFINITY }
+}
+
+/// Solves the ε-SVR dual of `data` by SMO with shrinking, rows from a [`RowCache`] of
+/// `cache_bytes`: first to libsvm's stop ([`LIBSVM_STOP`]); each time it has converged, the
+/// answer is its own if the duality gap read off the gradient is at most a tenth of
+/// [`crate::ACCEPT_GAP`], else the exact finish on its partition if that one's gap is
+/// (`smo_finish`), else SMO goes on from where it stopped with a stop ten times smaller (down to
+/// `1e2 · tolerance · (1 + max|y|)`). The fit's certificate still decides acceptance.
 pub(crate) fn solve_svr(
     kernel: &Kernel,
     data: &super::data::SvrData<'_>,
     settings: &super::params::DualSettings,
+    cache_bytes: usize,
 ) -> Result<SvrSmoSolution, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let n = y.len();
-    let epsilon = settings.epsilon;
-    let stop = 1e2 * settings.tolerance * (1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs())));
+    let (c, epsilon) = (settings.c, settings.epsilon);
+    let y_scale = 1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let floor = 1e2 * settings.tolerance * y_scale;
     let smo = SmoSettings::builder()
-        .c(settings.c)
-        .stop(stop)
+        .c(c)
+        .stop(LIBSVM_STOP.max(floor))
         .max_iterations(settings.max_iterations)
         .shrinking(true)
         .time_budget(settings.started, settings.time_budget)
@@ -670,12 +827,110 @@ pub(crate) fn solve_svr(
         linear: &linear,
         n,
     };
-    let mut cache = RowCache::new(kernel, x, dim, n);
-    let sol = solve(&mut cache, &vars, &smo)?;
+    let mut cache = RowCache::new(kernel, x, dim, n, cache_bytes);
+    // Each time SMO converges: done if its own gap is small enough; else try the exact finish
+    // on the partition it has found; else go on with a tighter stop.
+    let mut finished: Option<super::smo_finish::Finished> = None;
+    let mut refine = |alpha: &[f64], grad: &[f64], stop: f64| {
+        let gap = svr_gap(alpha, grad, y, c, epsilon);
+        if gap <= TARGET_GAP {
+            return None;
+        }
+        let beta: Vec<f64> = (0..n).map(|i| alpha[i] - alpha[i + n]).collect();
+        let k_beta: Vec<f64> = (0..n).map(|i| grad[i] - (epsilon - y[i])).collect();
+        if let Some(f) = super::smo_finish::finish(kernel, x, dim, y, c, epsilon, &beta, &k_beta, TARGET_GAP)
+            && f.gap <= TARGET_GAP
+        {
+            finished = Some(f);
+            return None;
+        }
+        (stop > floor).then_some((0.1 * stop).max(floor))
+    };
+    let sol = solve(&mut cache, &vars, &smo, &mut refine)?;
+    if let Some(f) = finished {
+        return Ok(SvrSmoSolution {
+            beta: f.beta,
+            bias: f.bias,
+            iterations: sol.iterations,
+            polished: true,
+        });
+    }
     let beta = (0..n).map(|i| sol.alpha[i] - sol.alpha[i + n]).collect();
     Ok(SvrSmoSolution {
         beta,
         bias: -sol.rho,
         iterations: sol.iterations,
+        polished: false,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Inputs on a 1-D grid with a repeated row, so rows are distinguishable and one pair of
+    /// rows is identical.
+    fn grid(n: usize) -> Vec<f64> {
+        (0..n).map(|i| (i.min(n - 2)) as f64 / n as f64).collect()
+    }
+
+    #[test]
+    fn the_row_cache_stays_within_its_budget_and_returns_exact_rows() {
+        let kernel = Kernel::Rbf { gamma: 3.0 };
+        let n = 50;
+        let x = grid(n);
+        // Room for 5 rows of 50 doubles, and a little over.
+        let budget = 5 * n * size_of::<f64>() + 7;
+        let mut cache = RowCache::new(&kernel, &x, 1, n, budget);
+        // Cycle through more rows than fit, twice, checking every value.
+        for round in 0..2 {
+            for i in (0..n).step_by(3) {
+                let h = cache.fetch(i);
+                let row = cache.get(h);
+                for (j, &v) in row.iter().enumerate() {
+                    assert_eq!(
+                        v,
+                        kernel.eval(&x[i..=i], &x[j..=j]),
+                        "row {i} col {j} round {round}"
+                    );
+                }
+                assert!(cache.row_bytes() <= budget, "{} > {budget}", cache.row_bytes());
+            }
+        }
+        // Every fetch of a row not held computes it: 17 distinct rows > 5 slots, so the second
+        // round recomputes them all.
+        assert_eq!(cache.computed(), 2 * n.div_ceil(3));
+        // A pair stays readable together whatever the budget.
+        let mut tiny = RowCache::new(&kernel, &x, 1, n, 0);
+        let (a, b) = (tiny.fetch(3), tiny.fetch(40));
+        assert_eq!(tiny.get(a)[40], tiny.get(b)[3]);
+        assert!(tiny.row_bytes() <= 2 * n * size_of::<f64>());
+    }
+
+    #[test]
+    fn a_small_cache_gives_the_same_svr_solution_as_a_large_one() {
+        let n = 120;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|v| (6.0 * v).sin() + 0.3 * (37.0 * v).cos())
+            .collect();
+        let data = crate::data::SvrData::new(&x, 1, &y).unwrap();
+        let params = crate::SvrParams::builder()
+            .c(10.0)
+            .epsilon(0.05)
+            .kernel(Kernel::Rbf { gamma: 20.0 })
+            .build()
+            .unwrap();
+        let settings = params.dual_settings(Instant::now());
+        let kernel = params.kernel();
+        let big = solve_svr(&kernel, &data, &settings, CACHE_BYTES).unwrap();
+        let small = solve_svr(&kernel, &data, &settings, 3 * n * size_of::<f64>()).unwrap();
+        let largest = big.beta.iter().fold(0.0f64, |m, b| m.max(b.abs()));
+        assert!(largest > 1.0, "a trivial solution tests nothing");
+        for (a, b) in big.beta.iter().zip(&small.beta) {
+            assert!((a - b).abs() <= 1e-6 * 10.0, "{a} vs {b}");
+        }
+        assert!((big.bias - small.bias).abs() <= 1e-6);
+    }
 }
