@@ -140,3 +140,126 @@ pub(crate) fn run(args: &SvrArgs) -> anyhow::Result<()> {
     println!("negative last column: our objective is lower (better) than libsvm's converged one");
     Ok(())
 }
+
+/// Time the needle's ε-SVR fit at growing n on one insertion capture.
+///
+/// Picks `n` in-tissue samples spread evenly over the capture and scales them to the unit box,
+/// as `palpus identify --model needle --max-samples n` does, then fits with the needle's
+/// defaults (C = 100, γ = 30, ε = 0.02 N unless given). Prints, per size: the fit's seconds,
+/// solver, iterations, support vectors, relative duality gap and the process's peak resident
+/// memory so far. With `--dump DIR` it also writes each training set and our predictions on
+/// it (`DIR/svr_scale_n{n}.csv`: x0, x1, y, ours), from which scripts/bench_svr_scale.py fits
+/// scikit-learn's libsvm on the same samples. Run one size per process for per-size memory.
+#[derive(Debug, Args)]
+pub(crate) struct SvrScaleArgs {
+    /// Insertion capture to train on (e.g. li_bi/needle_train.csv from `palpus gen`).
+    #[arg(long, value_name = "CSV")]
+    capture: std::path::PathBuf,
+    /// Training-set sizes (comma-separated; a size above the capture's in-tissue samples takes
+    /// them all).
+    #[arg(long, value_delimiter = ',', default_value = "350,1000,3000")]
+    sizes: Vec<usize>,
+    /// C.
+    #[arg(long, default_value_t = 100.0)]
+    c: f64,
+    /// RBF γ on the scaled inputs.
+    #[arg(long, default_value_t = 30.0)]
+    gamma: f64,
+    /// ε, N.
+    #[arg(long, default_value_t = 0.02)]
+    epsilon: f64,
+    /// Solver: auto, smo or ipm.
+    #[arg(long, default_value = "auto")]
+    solver: String,
+    /// Fit time budget, s.
+    #[arg(long, default_value_t = 600.0)]
+    budget_s: f64,
+    /// Write each training set with our predictions into this folder.
+    #[arg(long, value_name = "DIR")]
+    dump: Option<std::path::PathBuf>,
+}
+
+/// Peak resident memory of this process so far, bytes (Linux: VmHWM; `None` elsewhere).
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// `n` in-tissue samples of `capture` spread evenly (first and last included), inputs
+/// (depth, velocity) row-major and min-max scaled, and the axial force: the needle's training
+/// set as identification picks it.
+fn needle_training_set(capture: &capture::Capture, n: usize) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
+    use capture::kind;
+    use identify::{ModelKind, model_column, model_rows};
+    let rows = model_rows(ModelKind::NeedlePuncture, capture)?;
+    anyhow::ensure!(
+        rows.len() >= 2,
+        "{}: fewer than 2 samples in tissue",
+        capture.source().display()
+    );
+    let depth = model_column(capture, kind::DEPTH_M)?;
+    let velocity = model_column(capture, kind::VELOCITY_MPS)?;
+    let force = model_column(capture, kind::AXIAL_FORCE_N)?;
+    let n_all = rows.len();
+    let n = n.clamp(2, n_all);
+    let pick = (0..n).map(|k| rows[((k as f64) * (n_all - 1) as f64 / (n - 1) as f64).round() as usize]);
+    let (mut x, mut y) = (Vec::with_capacity(2 * n), Vec::with_capacity(n));
+    for i in pick {
+        x.extend([depth[i], velocity[i]]);
+        y.push(force[i]);
+    }
+    let scaled = svm::InputScaling::min_max(&x, 2).apply(&x);
+    Ok((scaled, y))
+}
+
+pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
+    let solver = match args.solver.as_str() {
+        "auto" => Solver::Auto,
+        "smo" => Solver::Smo,
+        "ipm" => Solver::InteriorPoint,
+        other => anyhow::bail!("--solver {other}: expected auto, smo or ipm"),
+    };
+    let capture = capture::Capture::read_file(&args.capture, capture::CaptureKind::Insertion)?;
+    let params = SvrParams::builder()
+        .c(args.c)
+        .epsilon(args.epsilon)
+        .kernel(Kernel::Rbf { gamma: args.gamma })
+        .solver(solver)
+        .time_budget(std::time::Duration::from_secs_f64(args.budget_s))
+        .build()?;
+    if let Some(dir) = &args.dump {
+        std::fs::create_dir_all(dir)?;
+    }
+    println!(
+        "{:>7} {:>9} {:>24} {:>10} {:>7} {:>9} {:>9}",
+        "n", "ours [s]", "solver", "iterations", "SVs", "rel. gap", "peak MB"
+    );
+    for &n in &args.sizes {
+        let (x, y) = needle_training_set(&capture, n)?;
+        let f = fit(&params, &x, 2, &y)?;
+        let peak = peak_rss_bytes().map_or(f64::NAN, |b| b as f64 / 1e6);
+        println!(
+            "{:>7} {:>9.4} {:>24} {:>10} {:>7} {:>9.2e} {:>9.1}",
+            y.len(),
+            f.fit_seconds,
+            f.solver,
+            f.iterations,
+            f.model.coefficients.len(),
+            f.relative_gap(),
+            peak
+        );
+        if let Some(dir) = &args.dump {
+            use std::io::Write;
+            let path = dir.join(format!("svr_scale_n{}.csv", y.len()));
+            let mut out = std::io::BufWriter::new(std::fs::File::create(&path)?);
+            writeln!(out, "x0,x1,y,ours")?;
+            for (r, yi) in x.chunks_exact(2).zip(&y) {
+                writeln!(out, "{:?},{:?},{yi:?},{:?}", r[0], r[1], f.model.predict(r))?;
+            }
+            out.flush()?;
+        }
+    }
+    Ok(())
+}
