@@ -58,3 +58,37 @@ pub fn nakano_captures(dir: &Path) -> Vec<PathBuf> {
     assert_eq!(paths.len(), 21);
     paths
 }
+
+/// One trial of the logs that `palpus gen --only multistream` writes under `dir`: its surface
+/// (`mat07`), trial number (from 1) and its four files, in the order force, position,
+/// velocity, vibration.
+pub struct MultistreamTrial {
+    /// Surface as the file names give it: `mat07`.
+    pub surface: String,
+    /// Trial number as the file names give it, from 1.
+    pub trial: u32,
+    /// `…_force.csv`, `…_position.csv`, `…_velocity.csv`, `…_vibration.csv`.
+    pub files: [PathBuf; 4],
+}
+
+/// Every trial of the multistream logs under `dir`, sorted by surface then trial, found as a
+/// user's shell loop would find them: by the `matNN_trialTT_force.csv` files.
+pub fn multistream_trials(dir: &Path) -> Vec<MultistreamTrial> {
+    let folder = dir.join("multistream");
+    let mut trials: Vec<MultistreamTrial> = std::fs::read_dir(&folder)
+        .expect("multistream folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter_map(|name| {
+            let stem = name.strip_suffix("_force.csv")?.to_owned();
+            let (surface, trial) = stem.split_once("_trial")?;
+            Some(MultistreamTrial {
+                surface: surface.to_owned(),
+                trial: trial.parse().expect("trial number"),
+                files: ["force", "position", "velocity", "vibration"]
+                    .map(|stream| folder.join(format!("{stem}_{stream}.csv"))),
+            })
+        })
+        .collect();
+    trials.sort_by(|a, b| (&a.surface, a.trial).cmp(&(&b.surface, b.trial)));
+    trials
+}

@@ -1,0 +1,197 @@
+//! A researcher's multi-stream logs end to end, with nothing but options: `palpus gen --only
+//! multistream` writes 20 surfaces × 6 trials as a rig logs them (force, position and velocity
+//! at about 88 Hz on their own jittered clocks, some repeated stamps, a 2.2 kHz vibration
+//! channel packed 22 samples per 100 Hz row with a trailing delimiter); `palpus import` joins
+//! each trial's four files into one capture (a loop here standing in for the user's shell
+//! loop); `palpus recognize train` and `eval` run every method with its default options,
+//! trained on trials 1–3 of every surface and evaluated on trials 4–6.
+//!
+//! The thresholds are what the defaults reach today, a little below (deterministic: seed 1,
+//! SOM seed 0), not what they should reach: measured som 68.1 % of 780 windows, knn and svm
+//! over the spectral histograms 45.0 % and 65.0 % of 60 trials, over Nakano's windows 88.1 %
+//! and 84.0 %, over both 89.7 % and 90.6 %; the goal is 90 % for every method and 95 % for
+//! k-NN and SVM. The spectral features' frame is 256 samples whatever the rate, so at the
+//! vibration's 2.2 kHz their 25 frequency bins are 44 Hz wide and most lie above what sliding
+//! at 25 mm/s excites (the same logs imported at 400 Hz give knn 81.7 %, svm 88.3 %). The two
+//! floor mats and the two papers are built alike in the simulated world and stay confused.
+//! Total about 20 s in the test profile.
+
+mod common;
+
+use std::path::Path;
+use std::time::Instant;
+
+use common::{MultistreamTrial, json, multistream_trials, succeeds, text};
+use haptics::sim::protocols::multistream::{IMPORT_MAP, IMPORT_RATE_HZ, IMPORT_UNROLL};
+
+/// Trials 1..=TRAIN_TRIALS of every surface train, the rest test.
+const TRAIN_TRIALS: u32 = 3;
+
+/// The import of one trial, as `multistream/README.md` gives it.
+fn import_args(trial: &MultistreamTrial, out: &Path) -> Vec<String> {
+    let mut args: Vec<String> = vec!["import".into()];
+    args.extend(trial.files.iter().map(|f| f.to_string_lossy().into_owned()));
+    args.extend([
+        "--kind".into(),
+        "rubbing".into(),
+        "--rate-hz".into(),
+        IMPORT_RATE_HZ.to_string(),
+        "--repeated-time".into(),
+        "mean".into(),
+        "--unroll".into(),
+        IMPORT_UNROLL.into(),
+        "--map".into(),
+        IMPORT_MAP.into(),
+        "--meta".into(),
+        format!("surface={}", trial.surface),
+        "--meta".into(),
+        format!("trial={}", trial.trial),
+        "--out".into(),
+        out.to_string_lossy().into_owned(),
+    ]);
+    args
+}
+
+/// A method with its default features, or with `--features`, and the accuracy it must reach.
+struct Case {
+    method: &'static str,
+    features: Option<&'static str>,
+    min_accuracy: f64,
+}
+
+#[test]
+fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
+    let started = Instant::now();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let logs = dir.path().join("logs");
+    let logs_s = logs.to_string_lossy().into_owned();
+    succeeds(&["gen", "--out", &logs_s, "--only", "multistream", "-q"]);
+    let readme = std::fs::read_to_string(logs.join("multistream/README.md")).expect("README");
+    assert!(
+        readme.contains(IMPORT_MAP) && readme.contains(IMPORT_UNROLL),
+        "{readme}"
+    );
+    let trials = multistream_trials(&logs);
+    assert_eq!(trials.len(), 20 * 6, "20 surfaces × 6 trials");
+
+    let captures = dir.path().join("captures");
+    std::fs::create_dir_all(&captures).expect("captures folder");
+    let (mut train, mut test) = (Vec::new(), Vec::new());
+    let mut merged_somewhere = false;
+    for trial in &trials {
+        let out = captures.join(format!("{}_trial{:02}.csv", trial.surface, trial.trial));
+        let args = import_args(trial, &out);
+        let printed = text(&succeeds(&args.iter().map(String::as_str).collect::<Vec<_>>()));
+        merged_somewhere |= printed.contains("merged");
+        let out = out.to_string_lossy().into_owned();
+        if trial.trial <= TRAIN_TRIALS {
+            train.push(out);
+        } else {
+            test.push(out);
+        }
+    }
+    assert!(merged_somewhere, "the repeated stamps were merged somewhere");
+    // One grid at the vibration's rate, every stream on it, over the streams' common span.
+    let first = std::fs::read_to_string(&train[0]).expect("capture");
+    let mut lines = first.lines();
+    let meta = lines.next().expect("metadata");
+    assert!(meta.contains(" rate_hz=2200 "), "{meta}");
+    let vibration_rate_hz: f64 = meta
+        .split(' ')
+        .find_map(|kv| kv.strip_prefix("source_4_rate_hz="))
+        .and_then(|v| v.parse().ok())
+        .expect("the vibration's rate in the metadata");
+    assert!((vibration_rate_hz / 2200.0 - 1.0).abs() < 1e-3, "{meta}");
+    assert_eq!(
+        lines.next(),
+        Some(
+            "time_s,friction_force_n,normal_force_n,tangential_position_m,normal_position_m,\
+             tangential_velocity_mps,vibration_mps2"
+        )
+    );
+    let rows = lines.count();
+    assert!((11_000..11_500).contains(&rows), "{rows} rows");
+    let imported = started.elapsed().as_secs_f64();
+
+    let cases = [
+        Case {
+            method: "som",
+            features: None,
+            min_accuracy: 0.65,
+        },
+        Case {
+            method: "knn",
+            features: None,
+            min_accuracy: 0.42,
+        },
+        Case {
+            method: "svm",
+            features: None,
+            min_accuracy: 0.62,
+        },
+        Case {
+            method: "knn",
+            features: Some("nakano"),
+            min_accuracy: 0.86,
+        },
+        Case {
+            method: "svm",
+            features: Some("nakano"),
+            min_accuracy: 0.82,
+        },
+        Case {
+            method: "knn",
+            features: Some("both"),
+            min_accuracy: 0.87,
+        },
+        Case {
+            method: "svm",
+            features: Some("both"),
+            min_accuracy: 0.88,
+        },
+    ];
+    let mut table = Vec::new();
+    for case in &cases {
+        let model = dir
+            .path()
+            .join(format!(
+                "{}_{}.json",
+                case.method,
+                case.features.unwrap_or("default")
+            ))
+            .to_string_lossy()
+            .into_owned();
+        let mut args = vec!["recognize", "train", "--method", case.method, "--out", &model];
+        if let Some(features) = case.features {
+            args.extend(["--features", features]);
+        }
+        args.extend(train.iter().map(String::as_str));
+        let t0 = Instant::now();
+        succeeds(&args);
+        let train_s = t0.elapsed().as_secs_f64();
+        let mut args = vec!["recognize", "eval", &model, "--json"];
+        args.extend(test.iter().map(String::as_str));
+        let t0 = Instant::now();
+        let report = json(&args);
+        let eval_s = t0.elapsed().as_secs_f64();
+        let accuracy = report["accuracy"].as_f64().expect("accuracy");
+        table.push(format!(
+            "{} {:<8} accuracy {accuracy:.3} (train {train_s:.1} s, eval {eval_s:.1} s)",
+            case.method,
+            report["features"].as_str().unwrap_or("?"),
+        ));
+        assert!(
+            accuracy >= case.min_accuracy,
+            "{} {:?}: {accuracy} < {}\n{report}",
+            case.method,
+            case.features,
+            case.min_accuracy
+        );
+    }
+    eprintln!(
+        "imported {} trials in {imported:.1} s; total {:.1} s\n{}",
+        trials.len(),
+        started.elapsed().as_secs_f64(),
+        table.join("\n")
+    );
+}
