@@ -60,13 +60,29 @@ pub(crate) struct PanelTarget<'a> {
     pub clear: [f32; 3],
 }
 
-/// Whether two tessellations paint the same pixels (paint callbacks never compare equal).
+/// Whether two tessellations paint the same pixels (paint callbacks never compare equal). Floats
+/// are compared by their bits: egui can emit NaN positions, which epaint refuses to compare.
 fn same_shapes(a: &[egui::ClippedPrimitive], b: &[egui::ClippedPrimitive]) -> bool {
+    let rect_bits = |r: &Rect| [r.min.x, r.min.y, r.max.x, r.max.y].map(f32::to_bits);
+    let vertex_bits = |v: &egui::epaint::Vertex| {
+        (
+            [v.pos.x, v.pos.y, v.uv.x, v.uv.y].map(f32::to_bits),
+            v.color.to_array(),
+        )
+    };
     a.len() == b.len()
         && a.iter().zip(b).all(|(a, b)| {
-            a.clip_rect == b.clip_rect
+            rect_bits(&a.clip_rect) == rect_bits(&b.clip_rect)
                 && match (&a.primitive, &b.primitive) {
-                    (egui::epaint::Primitive::Mesh(a), egui::epaint::Primitive::Mesh(b)) => a == b,
+                    (egui::epaint::Primitive::Mesh(a), egui::epaint::Primitive::Mesh(b)) => {
+                        a.texture_id == b.texture_id
+                            && a.indices == b.indices
+                            && a.vertices.len() == b.vertices.len()
+                            && a.vertices
+                                .iter()
+                                .zip(&b.vertices)
+                                .all(|(x, y)| vertex_bits(x) == vertex_bits(y))
+                    }
                     _ => false,
                 }
         })
@@ -567,5 +583,30 @@ fn controls(ui: &mut egui::Ui, o: &Overlay, actions: &mut Vec<UiAction>) {
                 value,
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn primitive(x: f32, color: Color32) -> egui::ClippedPrimitive {
+        let mut mesh = egui::epaint::Mesh::default();
+        mesh.colored_vertex(Pos2::new(x, 1.0), color);
+        mesh.colored_vertex(Pos2::new(2.0, f32::NAN), color);
+        mesh.add_triangle(0, 1, 0);
+        egui::ClippedPrimitive {
+            clip_rect: Rect::from_min_max(Pos2::ZERO, Pos2::new(10.0, 10.0)),
+            primitive: egui::epaint::Primitive::Mesh(mesh),
+        }
+    }
+
+    #[test]
+    fn shapes_with_nan_positions_compare_by_bits() {
+        let a = vec![primitive(1.0, Color32::RED)];
+        assert!(same_shapes(&a, &a.clone()));
+        assert!(!same_shapes(&a, &[primitive(1.5, Color32::RED)]));
+        assert!(!same_shapes(&a, &[primitive(1.0, Color32::BLUE)]));
+        assert!(!same_shapes(&a, &[]));
     }
 }
