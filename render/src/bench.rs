@@ -40,6 +40,9 @@ pub struct BenchOptions {
     pub sizes: Vec<[u32; 2]>,
     pub msaa: Vec<u32>,
     pub overlay: Vec<OverlayMode>,
+    /// Internal resolution scales below 1 to measure too (overlay on), each with its PSNR
+    /// against the full-resolution picture.
+    pub scales: Vec<f32>,
     /// Frames timed per configuration (after one warm-up frame).
     pub frames: u32,
     pub gpu: GpuOptions,
@@ -51,6 +54,7 @@ impl Default for BenchOptions {
             sizes: vec![[640, 480], [1280, 720]],
             msaa: vec![1, 4],
             overlay: vec![OverlayMode::Off, OverlayMode::On, OverlayMode::Live],
+            scales: vec![0.75, 0.5],
             frames: 30,
             gpu: GpuOptions::default(),
         }
@@ -65,6 +69,10 @@ pub struct BenchRow {
     pub height: u32,
     pub msaa: u32,
     pub overlay: OverlayMode,
+    /// Internal resolution of the scene relative to the image.
+    pub scale: f32,
+    /// PSNR of the picture against the same frame at full resolution, dB (`None` at scale 1).
+    pub psnr_db: Option<f64>,
     pub fps: f64,
     pub frame_ms: f64,
     /// Scene (and overlay) passes: uniforms, encoding, submit and execution.
@@ -87,16 +95,18 @@ impl BenchTable {
     pub fn to_text(&self) -> String {
         let mut s = format!("headless render benchmark on {}\n", self.adapter);
         s.push_str(
-            "   size     msaa overlay     fps  frame ms   draw ms resolve ms  ui cpu ms readback ms\n",
+            "   size     msaa overlay scale PSNR dB     fps  frame ms   draw ms resolve ms  ui cpu ms readback ms\n",
         );
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "{:>5}x{:<5} {:>3} {:>7} {:>7.1} {:>9.2} {:>9.2} {:>10.2} {:>10.2} {:>11.2}",
+                "{:>5}x{:<5} {:>3} {:>7} {:>5.2} {:>7} {:>7.1} {:>9.2} {:>9.2} {:>10.2} {:>10.2} {:>11.2}",
                 r.width,
                 r.height,
                 r.msaa,
                 r.overlay.label(),
+                r.scale,
+                r.psnr_db.map_or("-".to_string(), |p| format!("{p:.1}")),
                 r.fps,
                 r.frame_ms,
                 r.draw_ms,
@@ -151,9 +161,21 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
         for &msaa in &options.msaa {
             let mut renderer = Renderer::headless_with(width, height, msaa, &options.gpu)?;
             adapter = renderer.adapter_description();
-            for &overlay in &options.overlay {
+            let mut configs: Vec<(OverlayMode, f32)> = options.overlay.iter().map(|&o| (o, 1.0)).collect();
+            configs.extend(options.scales.iter().map(|&s| (OverlayMode::On, s)));
+            for (overlay, scale) in configs {
+                renderer.set_scale(scale)?;
                 let base = bench_frame(overlay != OverlayMode::Off);
-                renderer.render(&frame_at(&base, overlay, 0))?;
+                let first = renderer.render(&frame_at(&base, overlay, 0))?;
+                let psnr_db = if scale < 1.0 {
+                    renderer.set_scale(1.0)?;
+                    let full = renderer.render(&frame_at(&base, overlay, 0))?;
+                    renderer.set_scale(scale)?;
+                    renderer.render(&frame_at(&base, overlay, 0))?;
+                    crate::golden::psnr_db(&first, &full)
+                } else {
+                    None
+                };
                 // Frames are made before timing: only drawing is measured.
                 let timed: Vec<Frame> = (1..=frames).map(|i| frame_at(&base, overlay, i)).collect();
                 let start = Instant::now();
@@ -174,6 +196,8 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
                     height,
                     msaa: renderer.msaa(),
                     overlay,
+                    scale,
+                    psnr_db,
                     fps: 1.0 / frame_s,
                     frame_ms: frame_s * 1e3,
                     draw_ms: per(stages.draw),
@@ -198,6 +222,8 @@ mod tests {
             height: 480,
             msaa: 4,
             overlay: OverlayMode::On,
+            scale: 1.0,
+            psnr_db: None,
             fps: 50.0,
             frame_ms: 20.0,
             draw_ms: 12.0,
@@ -215,6 +241,8 @@ mod tests {
                 },
                 BenchRow {
                     overlay: OverlayMode::Live,
+                    scale: 0.5,
+                    psnr_db: Some(31.25),
                     ..row
                 },
             ],
@@ -227,6 +255,8 @@ mod tests {
                 && text.contains(" on ")
                 && text.contains(" off ")
                 && text.contains(" live ")
+                && text.contains("31.2")
+                && text.contains("0.50")
         );
     }
 }

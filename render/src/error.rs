@@ -44,6 +44,9 @@ pub enum RenderError {
     /// An MSAA sample count other than 1 or 4.
     #[error("MSAA sample count {0} is not supported; use 1 or 4")]
     BadMsaa(u32),
+    /// An internal resolution scale outside 0.25..=1.
+    #[error("render scale {0} is not supported; use a value from 0.25 to 1")]
+    BadScale(f32),
     /// A validation or out-of-memory error caught from the GPU.
     #[error("the GPU reported an error: {0}")]
     Gpu(String),

@@ -42,6 +42,29 @@ impl Comparison {
     }
 }
 
+/// Peak signal-to-noise ratio of `actual` against `reference` over the RGB channels, dB
+/// (infinite for identical images); `None` when the sizes differ.
+pub fn psnr_db(actual: &Image, reference: &Image) -> Option<f64> {
+    if actual.width != reference.width || actual.height != reference.height {
+        return None;
+    }
+    let (sum, n) = actual
+        .rgba
+        .chunks_exact(4)
+        .zip(reference.rgba.chunks_exact(4))
+        .flat_map(|(a, r)| a[..3].iter().zip(&r[..3]))
+        .fold((0.0f64, 0usize), |(s, n), (a, r)| {
+            let d = f64::from(*a) - f64::from(*r);
+            (s + d * d, n + 1)
+        });
+    let mse = sum / n.max(1) as f64;
+    Some(if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (255.0f64 * 255.0 / mse).log10()
+    })
+}
+
 /// Compares two images pixel by pixel; `None` when their sizes differ.
 pub fn compare(actual: &Image, expected: &Image, channel_threshold: u8) -> Option<Comparison> {
     if actual.width != expected.width || actual.height != expected.height {

@@ -24,6 +24,26 @@ pub const HEADLESS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm
 const OBJECT_SLOT_BYTES: u64 = 256;
 /// Largest image side accepted; lavapipe and most GPUs allow 8192 or more.
 const MAX_SIDE_PX: u32 = 8192;
+/// Smallest internal resolution scale accepted: below it the picture is a blur.
+const MIN_SCALE: f32 = 0.25;
+
+/// Stretches the scene drawn at a lower internal resolution over its part of the frame, with
+/// bilinear filtering (in linear light: the sRGB texture decodes on sampling).
+const UPSCALE_WGSL: &str = "
+@group(0) @binding(0) var scene: texture_2d<f32>;
+@group(0) @binding(1) var bilinear: sampler;
+struct Out { @builtin(position) pos: vec4<f32>, @location(0) uv: vec2<f32> };
+@vertex fn vs(@builtin(vertex_index) i: u32) -> Out {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    var o: Out;
+    o.pos = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+    o.uv = uv;
+    return o;
+}
+@fragment fn fs(o: Out) -> @location(0) vec4<f32> {
+    return textureSample(scene, bilinear, o.uv);
+}
+";
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -75,6 +95,15 @@ struct Attachments {
     size: [u32; 2],
     msaa_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
+    /// The scene at the internal resolution, when it is lower than the frame's.
+    low: Option<(wgpu::TextureView, wgpu::BindGroup)>,
+}
+
+/// What drawing at a lower internal resolution needs.
+struct Upscaler {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
 }
 
 struct Offscreen {
@@ -144,6 +173,9 @@ pub struct Renderer {
     attachments: Option<Attachments>,
     offscreen: Option<Offscreen>,
     overlay: OverlayLayer,
+    /// Internal resolution of the scene relative to the frame (1 = full).
+    scale: f32,
+    upscaler: Option<Upscaler>,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -329,7 +361,99 @@ impl Renderer {
             attachments: None,
             offscreen: None,
             overlay,
+            scale: 1.0,
+            upscaler: None,
         })
+    }
+
+    /// Draws the 3-D scene at `scale` (0.25..=1) times the frame's resolution and stretches it
+    /// over the frame: fewer pixels to shade for a softer picture (the overlay stays sharp).
+    /// 1 draws at full resolution.
+    pub fn set_scale(&mut self, scale: f32) -> Result<(), RenderError> {
+        if !(MIN_SCALE..=1.0).contains(&scale) {
+            return Err(RenderError::BadScale(scale));
+        }
+        self.scale = scale;
+        self.attachments = None;
+        Ok(())
+    }
+
+    /// The internal resolution scale (see [`Renderer::set_scale`]).
+    pub fn scale(&self) -> f32 {
+        self.scale
+    }
+
+    fn ensure_upscaler(&mut self) {
+        let device = &self.gpu.device;
+        let format = self.format;
+        self.upscaler.get_or_insert_with(|| {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("upscale"),
+                source: wgpu::ShaderSource::Wgsl(UPSCALE_WGSL.into()),
+            });
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("upscale"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Texture {
+                            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                            multisampled: false,
+                        },
+                        count: None,
+                    },
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 1,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                        count: None,
+                    },
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("upscale"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("upscale"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("upscale"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            });
+            Upscaler {
+                pipeline,
+                layout,
+                sampler,
+            }
+        });
     }
 
     /// The MSAA sample count in use (1 or 4).
@@ -454,14 +578,51 @@ impl Renderer {
         });
     }
 
+    /// Attachments for a scene of `size` px drawn at `scale` (into a texture of its own below 1).
     fn ensure_attachments(&mut self, size: [u32; 2]) {
         if self.attachments.as_ref().is_some_and(|a| a.size == size) {
             return;
         }
+        let low_size = self.internal_size(size);
+        if self.scale < 1.0 {
+            self.ensure_upscaler();
+        }
+        let low = self.upscaler.as_ref().filter(|_| self.scale < 1.0).map(|up| {
+            let texture = self.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("scene at internal resolution"),
+                size: wgpu::Extent3d {
+                    width: low_size[0],
+                    height: low_size[1],
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: self.format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("upscale"),
+                layout: &up.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Sampler(&up.sampler),
+                    },
+                ],
+            });
+            (view, group)
+        });
         let device = &self.gpu.device;
         let extent = wgpu::Extent3d {
-            width: size[0],
-            height: size[1],
+            width: low_size[0],
+            height: low_size[1],
             depth_or_array_layers: 1,
         };
         let make = |label, format, samples| {
@@ -484,7 +645,13 @@ impl Renderer {
             size,
             msaa_view,
             depth_view,
+            low,
         });
+    }
+
+    /// The scene's size in px at the internal resolution.
+    fn internal_size(&self, size: [u32; 2]) -> [u32; 2] {
+        size.map(|s| ((s as f32 * self.scale).round() as u32).clamp(1, s.max(1)))
     }
 
     fn upload_mesh(&mut self, mesh: &Arc<MeshData>) -> usize {
@@ -666,9 +833,12 @@ impl Renderer {
                 b: f64::from(b),
                 a: 1.0,
             };
+            // Below full resolution the scene goes to its own texture, stretched over the frame
+            // afterwards.
+            let scene_view = att.low.as_ref().map_or(view, |(low, _)| low);
             let (color_view, resolve_target) = match &att.msaa_view {
-                Some(msaa) => (msaa, if split_resolve { None } else { Some(view) }),
-                None => (view, None),
+                Some(msaa) => (msaa, if split_resolve { None } else { Some(scene_view) }),
+                None => (scene_view, None),
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene"),
@@ -693,7 +863,9 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_viewport(0.0, 0.0, scene_width as f32, size[1] as f32, 0.0, 1.0);
+            let [low_w, low_h] = self.internal_size(size);
+            let scene_w = scene_width as f32 * low_w as f32 / size[0] as f32;
+            pass.set_viewport(0.0, 0.0, scene_w, low_h as f32, 0.0, 1.0);
             pass.set_bind_group(0, &self.globals_group, &[]);
             for (i, kind) in order {
                 let item = &items[i];
@@ -729,7 +901,7 @@ impl Renderer {
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: msaa,
                     depth_slice: None,
-                    resolve_target: Some(view),
+                    resolve_target: Some(att.low.as_ref().map_or(view, |(low, _)| low)),
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Load,
                         store: wgpu::StoreOp::Discard,
@@ -744,6 +916,39 @@ impl Renderer {
             wait(device)?;
             if let Some(t) = timer.as_deref_mut() {
                 t.resolve += start.elapsed();
+            }
+        }
+
+        if let (Some((_, group)), Some(up)) = (&att.low, &self.upscaler) {
+            let start = Instant::now();
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("upscale"),
+            });
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("upscale"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&up.pipeline);
+                pass.set_bind_group(0, group, &[]);
+                pass.draw(0..3, 0..1);
+            }
+            queue.submit([encoder.finish()]);
+            if let Some(t) = timer.as_deref_mut() {
+                wait(device)?;
+                t.draw += start.elapsed();
             }
         }
 
@@ -864,11 +1069,16 @@ impl Renderer {
             let mapped = slice
                 .get_mapped_range()
                 .map_err(|e| RenderError::Readback(e.to_string()))?;
-            for row in mapped
-                .chunks(off.padded_row_bytes as usize)
-                .take(off.size[1] as usize)
-            {
-                rgba.extend_from_slice(&row[..row_bytes]);
+            if off.padded_row_bytes as usize == row_bytes {
+                // Rows need no unpadding (widths that are multiples of 64 px): one copy.
+                rgba.extend_from_slice(&mapped[..row_bytes * off.size[1] as usize]);
+            } else {
+                for row in mapped
+                    .chunks(off.padded_row_bytes as usize)
+                    .take(off.size[1] as usize)
+                {
+                    rgba.extend_from_slice(&row[..row_bytes]);
+                }
             }
         }
         off.readback.unmap();

@@ -202,3 +202,30 @@ fn overlay_panel_is_repainted_only_when_its_shapes_change() {
     fresh.render(&frame).unwrap();
     assert_eq!(fresh.render(&frame).unwrap().rgba, changed.rgba);
 }
+
+#[test]
+fn lower_internal_resolution_keeps_the_frame_size_and_costs_measured_quality() {
+    let mut r = Renderer::headless(320, 240, 1).unwrap();
+    let tissue: Vec<_> = shapes::tissue_block().into_iter().map(Arc::new).collect();
+    let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
+    let frame = tissue_scene(
+        &tissue,
+        &needle,
+        NeedleState::Pressing {
+            depth_m: 0.008,
+            radius_m: 0.012,
+        },
+    );
+    let full = r.render(&frame).unwrap();
+    assert!(matches!(r.set_scale(0.1), Err(RenderError::BadScale(_))));
+    assert!(matches!(r.set_scale(f32::NAN), Err(RenderError::BadScale(_))));
+    r.set_scale(0.5).unwrap();
+    let half = r.render(&frame).unwrap();
+    assert_eq!((half.width, half.height), (320, 240));
+    let psnr = render::golden::psnr_db(&half, &full).unwrap();
+    // Softer, not different: the same scene in the same place.
+    assert!(psnr.is_finite() && psnr > 20.0, "PSNR {psnr} dB");
+    r.set_scale(1.0).unwrap();
+    let again = r.render(&frame).unwrap();
+    assert_eq!(render::golden::psnr_db(&again, &full), Some(f64::INFINITY));
+}
