@@ -18,6 +18,8 @@
 //! `PALPUS_SVC_BENCH_REPEATS` (5; the best time of each is compared), `PYTHON` (`python3`,
 //! with numpy and scikit-learn). Timings are wall-clock seconds, so run it on an idle machine.
 
+#![allow(clippy::print_stdout)] // the timings and agreement are this bench's report
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};

@@ -309,14 +309,13 @@ impl State<'_> {
         if free * all > 2 * n * (all - n) {
             for t in n..all {
                 self.q.ensure(t, n);
-                let qt = &self.q.rows[t];
-                let mut g = 0.0;
-                for s in 0..n {
-                    let a = self.alpha[s];
-                    if a > 0.0 && a < self.c {
-                        g += a * qt[s];
-                    }
-                }
+                let c = self.c;
+                let g: f64 = self.q.rows[t][..n]
+                    .iter()
+                    .zip(&self.alpha[..n])
+                    .filter(|&(_, &a)| a > 0.0 && a < c)
+                    .map(|(q, a)| a * q)
+                    .sum();
                 self.grad[t] += g;
             }
         } else {
@@ -324,9 +323,8 @@ impl State<'_> {
                 let a = self.alpha[s];
                 if a > 0.0 && a < self.c {
                     self.q.ensure(s, all);
-                    let qs = &self.q.rows[s];
-                    for t in n..all {
-                        self.grad[t] += a * qs[t];
+                    for (g, q) in self.grad[n..].iter_mut().zip(&self.q.rows[s][n..all]) {
+                        *g += a * q;
                     }
                 }
             }
