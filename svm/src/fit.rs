@@ -108,7 +108,10 @@ pub fn fit_observed(
     let settings = params.dual_settings(started);
     let kernel = params.kernel();
     if kernel == Kernel::Linear && dim <= linear_exact::MAX_DIM && params.solver() == Solver::Auto {
-        let sol = linear_exact::solve(&data, &settings, observer)?;
+        let sol = match linear_exact::solve(&data, &settings, observer) {
+            Ok(sol) => sol,
+            Err(stopped) => return Err(with_certified_gap(&kernel, &data, &settings, stopped)),
+        };
         let solution = DualSolution {
             beta: sol.beta,
             bias: sol.bias,
@@ -128,13 +131,13 @@ pub fn fit_observed(
         Solver::Auto => y.len() > SvrParams::DENSE_LIMIT,
     };
     let solution = if use_smo {
-        let sol = smo::solve_svr(&kernel, &data, &settings, smo::CACHE_BYTES)?;
+        let sol = smo::solve_svr(&kernel, &data, &settings)?;
         DualSolution {
             beta: sol.beta,
             bias: sol.bias,
-            solver: if sol.polished { smo::NAME_FINISHED } else { smo::NAME },
+            solver: smo::NAME,
             iterations: sol.iterations,
-            polished: sol.polished,
+            polished: false,
             kernel_matrix: None,
             weights: None,
         }
@@ -297,6 +300,53 @@ fn certify(
         certified_gap: cert.relative_gap,
         resolution: cert.resolution,
     })
+}
+
+/// A linear solve that hit a limit, as its error with the certified gap of where it stopped.
+fn with_certified_gap(
+    kernel: &Kernel,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+    stopped: linear_exact::Stopped,
+) -> SvmError {
+    let Some(last) = stopped.last else {
+        return stopped.error;
+    };
+    let reached = certificate_of(
+        kernel,
+        data,
+        settings,
+        &last.beta,
+        last.bias,
+        None,
+        Some(&last.weights),
+    )
+    .relative_gap;
+    match stopped.error {
+        SvmError::Budget {
+            solver,
+            budget_s,
+            iterations,
+            ..
+        } => SvmError::Budget {
+            solver,
+            budget_s,
+            iterations,
+            gap: reached,
+        },
+        SvmError::NotConverged {
+            solver,
+            iterations,
+            tolerance,
+            ..
+        } => SvmError::NotConverged {
+            solver,
+            iterations,
+            gap: reached,
+            tolerance,
+        },
+        other => other,
+    }
 }
 
 /// The certificate of (β, b): from exact primal weights when the solver has them (linear

@@ -65,6 +65,16 @@ pub(crate) struct LinearSolution {
     pub iterations: usize,
 }
 
+/// A solve that hit a limit: the error, and the solution of the working set it stopped at
+/// (for the caller to certify, so that the error names the gap reached).
+#[derive(Debug)]
+pub(crate) struct Stopped {
+    /// What stopped it.
+    pub error: SvmError,
+    /// The working set's solution at that point, when it has one.
+    pub last: Option<LinearSolution>,
+}
+
 /// Inputs mapped to `x' = (x − offset) / scale` (per column, onto [−1, 1]): the active-set
 /// systems are then well conditioned whatever the units (inputs ~1e6 with a spread of 1 would
 /// otherwise make every pair of rows (xᵢ, 1) look parallel).
@@ -116,7 +126,7 @@ pub(crate) fn solve(
     data: &SvrData<'_>,
     settings: &DualSettings,
     observer: &dyn Fn(&FitProgress),
-) -> Result<LinearSolution, SvmError> {
+) -> Result<LinearSolution, Stopped> {
     let (x, d, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
@@ -171,11 +181,14 @@ pub(crate) fn solve(
             });
         }
         if iteration % 32 == 31 && settings.over_budget() {
-            return Err(SvmError::Budget {
-                solver: NAME,
-                budget_s: settings.budget_s(),
-                iterations: iteration,
-                gap: f64::INFINITY,
+            return Err(Stopped {
+                error: SvmError::Budget {
+                    solver: NAME,
+                    budget_s: settings.budget_s(),
+                    iterations: iteration,
+                    gap: f64::INFINITY,
+                },
+                last: Some(finish(&rows, x, d, y, c, epsilon, &labels, &held, &h, iteration)),
             });
         }
         let g = side_sums(&rows, x, &labels);
@@ -200,11 +213,13 @@ pub(crate) fn solve(
                 (p, 1.0, None)
             }
         } else {
-            let solution =
-                kkt(&rows, &h, c, &g, &held, &labels, y, epsilon).ok_or_else(|| SvmError::Numerical {
+            let solution = kkt(&rows, &h, c, &g, &held, &labels, y, epsilon).ok_or_else(|| Stopped {
+                error: SvmError::Numerical {
                     solver: NAME,
                     reason: format!("singular working-set system at step {iteration}"),
-                })?;
+                },
+                last: None,
+            })?;
             let p: Vec<f64> = solution.theta.iter().zip(&theta).map(|(t, v)| t - v).collect();
             (p, 1.0, Some(solution))
         };
@@ -266,9 +281,12 @@ pub(crate) fn solve(
                 held.push(i);
             }
             None if max_step.is_infinite() => {
-                return Err(SvmError::Numerical {
-                    solver: NAME,
-                    reason: "the objective decreases without bound along the bias".into(),
+                return Err(Stopped {
+                    error: SvmError::Numerical {
+                        solver: NAME,
+                        reason: "the objective decreases without bound along the bias".into(),
+                    },
+                    last: None,
                 });
             }
             None => {
@@ -324,11 +342,25 @@ pub(crate) fn solve(
             }
         }
     }
-    Err(SvmError::NotConverged {
-        solver: NAME,
-        iterations: max_iterations,
-        gap: f64::INFINITY,
-        tolerance: settings.tolerance,
+    Err(Stopped {
+        error: SvmError::NotConverged {
+            solver: NAME,
+            iterations: max_iterations,
+            gap: f64::INFINITY,
+            tolerance: settings.tolerance,
+        },
+        last: Some(finish(
+            &rows,
+            x,
+            d,
+            y,
+            c,
+            epsilon,
+            &labels,
+            &held,
+            &h,
+            max_iterations,
+        )),
     })
 }
 

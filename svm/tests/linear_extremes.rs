@@ -153,3 +153,25 @@ fn the_hard_contact_table_is_exact_in_all_nine_cells() {
     }
     assert_eq!(cells, 9);
 }
+
+/// A limit is a typed error that names the certified gap of where the solver stopped, never a
+/// model and never an unknown gap.
+#[test]
+fn a_linear_fit_stopped_by_its_iteration_limit_reports_the_gap_it_reached() {
+    let (datasets, _) = load();
+    let (x, y) = &datasets["line_n350"];
+    let params = SvrParams::builder()
+        .c(1e11)
+        .epsilon(1e-4)
+        .kernel(Kernel::Linear)
+        .max_iterations(3)
+        .build()
+        .unwrap();
+    match fit(&params, x, 1, y) {
+        Err(svm::SvmError::NotConverged { iterations, gap, .. }) => {
+            assert_eq!(iterations, 3);
+            assert!(gap.is_finite() && gap > ACCEPT_GAP, "gap {gap}");
+        }
+        other => panic!("expected the iteration limit, got {other:?}"),
+    }
+}
