@@ -131,13 +131,17 @@ pub fn fit_observed(
         Solver::Auto => y.len() > SvrParams::DENSE_LIMIT,
     };
     let solution = if use_smo {
-        let sol = smo::solve_svr(&kernel, &data, &settings)?;
+        let sol = smo::solve_svr(&kernel, &data, &settings, smo::CACHE_BYTES)?;
         DualSolution {
             beta: sol.beta,
             bias: sol.bias,
-            solver: smo::NAME,
+            solver: if sol.polished {
+                smo::NAME_FINISHED
+            } else {
+                smo::NAME
+            },
             iterations: sol.iterations,
-            polished: false,
+            polished: sol.polished,
             kernel_matrix: None,
             weights: None,
         }

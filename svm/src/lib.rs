@@ -27,6 +27,7 @@ mod params;
 mod polish;
 mod sample;
 mod smo;
+mod smo_finish;
 
 pub use error::SvmError;
 pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};
