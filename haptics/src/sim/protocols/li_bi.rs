@@ -15,7 +15,7 @@ use capture::kind::{
     AXIAL_FORCE_N, COMMANDED_VELOCITY_MPS, DEPTH_M, FRICTION_FORCE_N, NORMAL_FORCE_N, TANGENTIAL_POSITION_M,
     TANGENTIAL_VELOCITY_MPS, TIME_S, VELOCITY_MPS,
 };
-use capture::{Capture, CaptureError, CaptureKind, Metadata};
+use capture::{Capture, CaptureError, CaptureErrorKind, CaptureKind, Metadata};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -242,13 +242,63 @@ pub fn needle_speeds_mmps(split: Split) -> &'static [f64] {
     }
 }
 
+/// How the needle protocol logs and how often it repeats its insertions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NeedleProtocol {
+    /// Logging rate, Hz: a divisor of [`CONTROL_RATE_HZ`] (the paper's rig logs at 100 Hz).
+    pub log_rate_hz: u32,
+    /// Times the whole set of speeds is inserted, each insertion at a fresh site.
+    pub rounds: u32,
+}
+
+impl Default for NeedleProtocol {
+    /// The paper's protocol: 100 Hz, one insertion per speed.
+    fn default() -> Self {
+        Self {
+            log_rate_hz: 100,
+            rounds: 1,
+        }
+    }
+}
+
+impl NeedleProtocol {
+    /// Control ticks per logged sample; `None` unless the rate divides [`CONTROL_RATE_HZ`].
+    pub fn log_every(&self) -> Option<usize> {
+        let control = CONTROL_RATE_HZ as u32;
+        (self.log_rate_hz > 0 && control.is_multiple_of(self.log_rate_hz))
+            .then(|| (control / self.log_rate_hz) as usize)
+    }
+}
+
 /// Needle puncture (Sec. III-D, fresh liver): for each speed, a fresh insertion site; the tip
 /// starts 2 mm above the surface, accelerates over 50 ms, inserts to 30 mm, holds 1 s and
 /// withdraws at 10 mm/s to where it started. Logged at 100 Hz.
 pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError> {
+    needle_insertion_with(seed, split, NeedleProtocol::default())
+}
+
+/// [`needle_insertion`] logged at another rate and with the speeds repeated: larger training
+/// sets from the same tissue and rig (benchmarks of the fit at tens of thousands of samples).
+/// The default protocol gives [`needle_insertion`]'s capture, byte for byte.
+///
+/// # Errors
+/// A log rate that does not divide the control rate, or zero rounds, is
+/// [`CaptureErrorKind::BadMetadata`]; otherwise as [`needle_insertion`].
+pub fn needle_insertion_with(
+    seed: u64,
+    split: Split,
+    protocol: NeedleProtocol,
+) -> Result<Capture, CaptureError> {
     let tissue = NeedleTissue::bovine_liver();
     let mut rig = Instruments::new(seed, tag::NEEDLE, split);
-    let log_every = 10;
+    let Some(log_every) = protocol.log_every().filter(|_| protocol.rounds > 0) else {
+        return Err(CaptureError::without_file(CaptureErrorKind::BadMetadata(
+            format!(
+                "needle protocol: log rate {} Hz must divide the {CONTROL_RATE_HZ} Hz control rate and rounds ({}) must be at least 1",
+                protocol.log_rate_hz, protocol.rounds
+            ),
+        )));
+    };
     let (start_m, target_m, withdraw_mps, ramp_s, hold_s, rest_s) = (-0.002, 0.030, 0.010, 0.05, 1.0, 0.3);
     let mut cols = Columns::new(&[
         TIME_S,
@@ -260,7 +310,11 @@ pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError
     let mut per_insertion: Vec<(String, String)> = Vec::new();
     let mut clock = 0usize;
     let speeds = needle_speeds_mmps(split);
-    for (index, &speed_mmps) in speeds.iter().enumerate() {
+    let rounds = speeds
+        .iter()
+        .cycle()
+        .take(speeds.len() * protocol.rounds as usize);
+    for (index, &speed_mmps) in rounds.enumerate() {
         let speed = speed_mmps * 1e-3;
         let mut site = NeedleSite::new(tissue.clone());
         let mut diff = PseudoDifferentiator::new(DT_S, PSEUDO_DIFF_TAU_S);
@@ -319,7 +373,7 @@ pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError
     let speeds_list: Vec<String> = speeds.iter().map(|s| format!("{}", s * 1e-3)).collect();
     let mut full = base_metadata(CaptureKind::Insertion, CONTROL_RATE_HZ / log_every as f64, "li_bi_needle", split, seed)
         .with("tissue", "bovine_liver")
-        .with("insertions", speeds.len())
+        .with("insertions", speeds.len() * protocol.rounds as usize)
         .with("speeds_mps", speeds_list.join(";"))
         .with("target_depth_m", target_m)
         .with("withdraw_speed_mps", withdraw_mps)
@@ -356,4 +410,50 @@ impl Phase {
 fn smooth_ramp(u: f64) -> f64 {
     let u = u.clamp(0.0, 1.0);
     u * u * (3.0 - 2.0 * u)
+}
+
+#[cfg(test)]
+mod needle_protocol_tests {
+    use super::*;
+
+    #[test]
+    fn a_faster_log_and_more_rounds_give_proportionally_more_samples() {
+        let paper = needle_insertion(3, Split::Train).unwrap();
+        let same = needle_insertion_with(3, Split::Train, NeedleProtocol::default()).unwrap();
+        assert_eq!(paper.len(), same.len());
+        assert_eq!(
+            paper.column(AXIAL_FORCE_N).unwrap(),
+            same.column(AXIAL_FORCE_N).unwrap()
+        );
+        let dense = NeedleProtocol {
+            log_rate_hz: 500,
+            rounds: 2,
+        };
+        let big = needle_insertion_with(3, Split::Train, dense).unwrap();
+        // 5× the rate, 2× the insertions: every control tick that was logged at 100 Hz and the
+        // four between, twice over (± one sample per insertion at the ends).
+        let ratio = big.len() as f64 / paper.len() as f64;
+        assert!(
+            (ratio - 10.0).abs() < 0.05,
+            "{} / {} = {ratio}",
+            big.len(),
+            paper.len()
+        );
+        assert_eq!(big.metadata().get("insertions"), Some("10"));
+        let time = big.time();
+        assert!(time.windows(2).all(|w| w[1] > w[0]), "time must increase");
+        for bad in [
+            NeedleProtocol {
+                log_rate_hz: 300,
+                rounds: 1,
+            },
+            NeedleProtocol {
+                log_rate_hz: 100,
+                rounds: 0,
+            },
+        ] {
+            let e = needle_insertion_with(3, Split::Train, bad).unwrap_err();
+            assert!(e.to_string().contains("needle protocol"), "{e}");
+        }
+    }
 }

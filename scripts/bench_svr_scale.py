@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""The needle's ε-SVR fit against scikit-learn's libsvm at growing n, on the same samples.
+
+Run from the repository root after `cargo build --release --locked` (needs numpy and
+scikit-learn; the project's tests do not):
+
+    python3 scripts/bench_svr_scale.py                       # n = 350 … 30000
+    python3 scripts/bench_svr_scale.py --sizes 100000 --libsvm-max 30000
+
+It writes a needle capture logged at 1 kHz with the speeds inserted twice
+(`palpus gen --seed 7 --needle-rate-hz 1000 --needle-rounds 2`, ~150 000 samples in tissue), then
+for each n runs `palpus bench svr-scale` in its own process (so its peak memory is that fit's),
+which picks n in-tissue samples spread evenly, scales them to the unit box as identification
+does, fits with the needle's defaults (C = 100, γ = 30, ε = 0.02) and dumps the training set
+with its predictions. scikit-learn's SVR (kernel='rbf', same C, γ, ε, tol=1e-3 — its default —,
+default cache_size, one thread) fits the same dump. The table: n, our seconds, libsvm's,
+libsvm / ours, our peak resident memory, support vectors (ours, libsvm's), our certified
+relative duality gap, and the largest difference of the two models' predictions on the
+training inputs (libsvm stops at a KKT violation of 1e-3, so a few 1e-3 N is expected).
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+import numpy as np  # noqa: E402
+from sklearn.svm import SVR  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def ours(palpus, capture, n, dump, budget_s):
+    out = subprocess.run(
+        [palpus, "bench", "svr-scale", "--capture", str(capture), "--sizes", str(n),
+         "--dump", str(dump), "--budget-s", str(budget_s)],
+        check=True, capture_output=True, text=True,
+    ).stdout.splitlines()
+    # n, seconds, solver (may hold spaces), iterations, SVs, gap, peak MB
+    f = out[-1].split()
+    return {"n": int(f[0]), "s": float(f[1]), "solver": " ".join(f[2:-4]), "svs": int(f[-3]),
+            "gap": float(f[-2]), "mb": float(f[-1])}
+
+
+def libsvm(path, c, gamma, eps):
+    d = np.loadtxt(path, delimiter=",", skiprows=1)
+    x, y = d[:, :2], d[:, 2]
+    m = SVR(kernel="rbf", C=c, gamma=gamma, epsilon=eps, tol=1e-3)
+    t = time.perf_counter()
+    m.fit(x, y)
+    dt = time.perf_counter() - t
+    diff = float(np.abs(m.predict(x) - d[:, 3]).max())
+    return {"s": dt, "svs": len(m.support_), "diff": diff}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", default="350,1000,3000,8000,30000")
+    ap.add_argument("--libsvm-max", type=int, default=10**9, help="skip libsvm above this n")
+    ap.add_argument("--palpus", default=str(ROOT / "target/release/palpus"))
+    ap.add_argument("--work", default=None, help="folder for the capture and dumps (default: temporary)")
+    ap.add_argument("--budget-s", type=float, default=600.0)
+    a = ap.parse_args()
+    work = Path(a.work or tempfile.mkdtemp(prefix="svr_scale_"))
+    capture = work / "li_bi/needle_train.csv"
+    if not capture.exists():
+        subprocess.run([a.palpus, "gen", "--seed", "7", "--out", str(work), "--needle-rate-hz", "1000",
+                        "--needle-rounds", "2", "-q"], check=True)
+    print(f"{'n':>7} {'ours s':>9} {'libsvm s':>9} {'ratio':>7} {'peak MB':>8} {'SVs':>13} "
+          f"{'our gap':>8} {'max |Δf| N':>11}  solver")
+    for n in [int(s) for s in a.sizes.split(",")]:
+        o = ours(a.palpus, capture, n, work, a.budget_s)
+        dump = work / f"svr_scale_n{o['n']}.csv"
+        if o["n"] <= a.libsvm_max:
+            lib = libsvm(dump, 100.0, 30.0, 0.02)
+            row = (f"{lib['s']:>9.3f} {lib['s'] / o['s']:>6.2f}× {o['mb']:>8.0f} "
+                   f"{o['svs']:>6}/{lib['svs']:<6} {o['gap']:>8.0e} {lib['diff']:>11.1e}")
+        else:
+            row = f"{'skipped':>9} {'':>7} {o['mb']:>8.0f} {o['svs']:>6}/{'':<6} {o['gap']:>8.0e} {'':>11}"
+        print(f"{o['n']:>7} {o['s']:>9.3f} {row}  {o['solver']}", flush=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
