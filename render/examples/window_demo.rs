@@ -151,7 +151,7 @@ fn main() -> ExitCode {
     };
     match render::window::run(config, &mut demo) {
         Ok(stats) => {
-            println!("{stats}");
+            eprintln!("{stats}");
             ExitCode::SUCCESS
         }
         Err(e) => {
