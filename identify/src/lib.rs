@@ -3,7 +3,8 @@
 //! This crate is pure computation on data: it knows nothing of threads, devices or rendering.
 //! It may import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
 //! Top-down: `baselines` and `metrics` (what a model is compared with, and how),
-//! `identification` (Li & Bi's three models), `search` (cross-validated hyperparameters)
+//! `identification` (Li & Bi's three models), `punctures` (puncture events and layers
+//! read from insertion data), `search` (cross-validated hyperparameters)
 //! and `model_file` (models on disk). Every failure of any of them is one [`IdentifyError`]
 //! (`error`), which wraps `capture`'s and `svm`'s errors. This file is the crate's door:
 //! everything public is re-exported here, so callers write `identify::ModelFile`,
@@ -14,6 +15,7 @@ mod error;
 mod identification;
 mod metrics;
 mod model_file;
+mod punctures;
 mod search;
 
 pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
@@ -28,5 +30,9 @@ pub use metrics::{
 pub use model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
     ScaledSvr, SvrHyper,
+};
+pub use punctures::{
+    Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,
+    detect_punctures, force_noise_n, group_layers,
 };
 pub use search::{SearchGrid, SearchPoint, best, search};
