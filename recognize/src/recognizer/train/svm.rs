@@ -107,9 +107,10 @@ impl SvmTrainer {
 }
 
 /// What an SVM recognizer calls the classifier that `name` (a behaviour, or none) trains, for
-/// errors and warnings: the behaviour, or `(no behaviour)` for captures without one.
+/// errors and warnings: the behaviour, or `(no behaviour)` for captures without one (or with
+/// an empty one, which would read as "behaviour ``").
 fn behaviour_label(name: Option<&str>) -> &str {
-    name.unwrap_or("(no behaviour)")
+    name.filter(|n| !n.trim().is_empty()).unwrap_or("(no behaviour)")
 }
 
 /// What an SVM over windows of `features` is called in errors and warnings.
@@ -369,6 +370,8 @@ mod tests {
         );
         // Captures without a behaviour still name their classifier.
         assert_eq!(behaviour_label(None), "(no behaviour)");
+        assert_eq!(behaviour_label(Some("")), "(no behaviour)");
+        assert_eq!(behaviour_label(Some("poke")), "poke");
         let e = svc_error(behaviour_label(None), &classes)(failed(1.0));
         assert!(
             chain(&e).starts_with("SVC of behaviour `(no behaviour)`: "),
