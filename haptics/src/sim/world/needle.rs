@@ -138,6 +138,23 @@ impl NeedleTissue {
             .map(|m| m.depth_m + m.puncture_deflection_m(speed_mps))
     }
 
+    /// Axial force just before membrane `index` ruptures when the needle advances at constant
+    /// `speed_mps` (above the static band): the membrane's puncture force and its viscous
+    /// deflection force, plus — once the surface is breached — the shaft's friction over the
+    /// depth inserted by then. Cutting stops while a membrane is pushed, so it adds nothing.
+    /// This is the peak a recording of this tissue shows at that puncture.
+    pub fn puncture_peak_force_n(&self, index: usize, speed_mps: f64) -> Option<f64> {
+        let m = self.membranes.get(index)?;
+        let v = speed_mps.max(0.0);
+        let depth_m = self.puncture_depth_m(index, v)?;
+        let friction_n = if index > 0 && v > self.static_band_mps {
+            depth_m * (self.coulomb_npm + self.viscous_nspm2 * v)
+        } else {
+            0.0
+        };
+        Some(m.puncture_force_at(v) + m.damping_nspm * v + friction_n)
+    }
+
     /// The parameters as `(name, value)` pairs for capture metadata.
     pub fn parameters(&self) -> Vec<(String, f64)> {
         let mut out = vec![
@@ -307,6 +324,33 @@ mod tests {
                 assert!(before - after > expected_drop, "{k}: {before} -> {after}");
             }
         }
+    }
+
+    #[test]
+    fn puncture_peaks_are_the_largest_forces_before_each_rupture() {
+        let tissue = NeedleTissue::bovine_liver();
+        for speed in [0.001, 0.004, 0.01] {
+            let mut site = NeedleSite::new(tissue.clone());
+            let trace = insert(&mut site, speed, 0.03, 1e-5);
+            let mut from = 0;
+            for (k, &at) in site.puncture_depths_m().iter().enumerate() {
+                let to = trace.iter().position(|&(d, _)| d >= at).unwrap();
+                let simulated = trace[from..to].iter().map(|p| p.1).fold(0.0, f64::max);
+                let predicted = tissue.puncture_peak_force_n(k, speed).unwrap();
+                // One step short of the rupture the force lies below it by the elastic
+                // force's growth over that step.
+                assert!(
+                    (simulated - predicted).abs() < 2e-3 && simulated <= predicted,
+                    "{k} at {speed} m/s: {simulated} vs {predicted}"
+                );
+                from = to;
+            }
+        }
+        assert!(
+            NeedleTissue::bovine_liver()
+                .puncture_peak_force_n(2, 0.001)
+                .is_none()
+        );
     }
 
     #[test]
