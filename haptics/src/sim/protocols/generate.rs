@@ -226,8 +226,18 @@ pub fn generate(
         }
     }
     if logs {
-        let files = multistream::write_logs(out, seed, multistream::TRIALS, progress)?;
-        summary.files.extend(files);
+        multistream::write_logs(out, seed, multistream::TRIALS, &mut |file| {
+            let generated = Generated {
+                path: file.path,
+                protocol: multistream::PROTOCOL,
+                label: file.surface.into(),
+                role: file.stream.into(),
+                rows: file.rows,
+                bytes: file.bytes,
+            };
+            progress(&generated);
+            summary.files.push(generated);
+        })?;
     }
     write_manifest(out, &summary)?;
     Ok(summary)

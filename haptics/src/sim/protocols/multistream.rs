@@ -50,7 +50,6 @@ use std::path::{Path, PathBuf};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::generate::Generated;
 use super::seed::{derive_seed, tag};
 use crate::error::HapticsError;
 use crate::sim::world::profile::{Band, Profile};
@@ -521,20 +520,19 @@ fn speed_at(t_s: f64, speed_mps: f64) -> f64 {
 
 /// Writes every trial of every surface under `out/multistream/`, with a `materials.csv` (surface
 /// number, name, ground truth), a `trials.csv` (what each trial drew) and a `README.md` that says
-/// how to import the logs. `progress` is called after each file.
+/// how to import the logs. `written` is called after each log file.
 pub fn write_logs(
     out: &Path,
     seed: u64,
     trials: u32,
-    progress: &mut dyn FnMut(&Generated),
-) -> Result<Vec<Generated>, HapticsError> {
+    written: &mut dyn FnMut(LogFile),
+) -> Result<(), HapticsError> {
     let folder = out.join(FOLDER);
     fs::create_dir_all(&folder).map_err(|source| HapticsError::Io {
         action: "create",
         path: folder.clone(),
         source,
     })?;
-    let mut written = Vec::new();
     let mut materials =
         String::from("surface_id,name,friction,roughness_rms_m,roughness_wavelength_m,normal_mode_hz\n");
     let mut trial_table =
@@ -565,23 +563,35 @@ pub fn write_logs(
             for (stream, text, rows) in logs.files {
                 let relative = PathBuf::from(FOLDER).join(format!("{stem}_{stream}.csv"));
                 let bytes = write_text(out, &relative, &text)?;
-                let generated = Generated {
+                written(LogFile {
                     path: relative,
-                    protocol: PROTOCOL,
-                    label: s.name.into(),
-                    role: stream.into(),
+                    surface: s.name,
+                    stream,
                     rows,
                     bytes,
-                };
-                progress(&generated);
-                written.push(generated);
+                });
             }
         }
     }
     write_text(out, &PathBuf::from(FOLDER).join("materials.csv"), &materials)?;
     write_text(out, &PathBuf::from(FOLDER).join("trials.csv"), &trial_table)?;
     write_text(out, &PathBuf::from(FOLDER).join("README.md"), &readme(trials))?;
-    Ok(written)
+    Ok(())
+}
+
+/// One log file [`write_logs`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogFile {
+    /// Path relative to the output folder.
+    pub path: PathBuf,
+    /// Name of the surface it is of.
+    pub surface: &'static str,
+    /// Which of [`STREAMS`] it holds.
+    pub stream: &'static str,
+    /// Data rows.
+    pub rows: usize,
+    /// Size on disk.
+    pub bytes: u64,
 }
 
 fn write_text(out: &Path, relative: &Path, text: &str) -> Result<u64, HapticsError> {
