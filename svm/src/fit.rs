@@ -110,7 +110,7 @@ pub fn fit_observed(
     if kernel == Kernel::Linear && dim <= linear_exact::MAX_DIM && params.solver() == Solver::Auto {
         let sol = match linear_exact::solve(&data, &settings, observer) {
             Ok(sol) => sol,
-            Err(stopped) => return Err(with_certified_gap(&kernel, &data, &settings, stopped)),
+            Err(stopped) => return Err(with_certified_gap(&kernel, &data, &settings, *stopped)),
         };
         let solution = DualSolution {
             beta: sol.beta,
@@ -313,8 +313,9 @@ fn with_certified_gap(
     settings: &DualSettings,
     stopped: linear_exact::Stopped,
 ) -> SvmError {
-    let Some(last) = stopped.last else {
-        return stopped.error;
+    let linear_exact::Stopped { error, last } = stopped;
+    let Some(last) = last else {
+        return error;
     };
     let reached = certificate_of(
         kernel,
@@ -326,7 +327,7 @@ fn with_certified_gap(
         Some(&last.weights),
     )
     .relative_gap;
-    match stopped.error {
+    match error {
         SvmError::Budget {
             solver,
             budget_s,

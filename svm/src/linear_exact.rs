@@ -72,7 +72,7 @@ pub(crate) struct Stopped {
     /// What stopped it.
     pub error: SvmError,
     /// The working set's solution at that point, when it has one.
-    pub last: Option<LinearSolution>,
+    pub last: Option<Box<LinearSolution>>,
 }
 
 /// Inputs mapped to `x' = (x − offset) / scale` (per column, onto [−1, 1]): the active-set
@@ -126,7 +126,7 @@ pub(crate) fn solve(
     data: &SvrData<'_>,
     settings: &DualSettings,
     observer: &dyn Fn(&FitProgress),
-) -> Result<LinearSolution, Stopped> {
+) -> Result<LinearSolution, Box<Stopped>> {
     let (x, d, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
@@ -181,15 +181,17 @@ pub(crate) fn solve(
             });
         }
         if iteration % 32 == 31 && settings.over_budget() {
-            return Err(Stopped {
+            return Err(Box::new(Stopped {
                 error: SvmError::Budget {
                     solver: NAME,
                     budget_s: settings.budget_s(),
                     iterations: iteration,
                     gap: f64::INFINITY,
                 },
-                last: Some(finish(&rows, x, d, y, c, epsilon, &labels, &held, &h, iteration)),
-            });
+                last: Some(Box::new(finish(
+                    &rows, x, d, y, c, epsilon, &labels, &held, &h, iteration,
+                ))),
+            }));
         }
         let g = side_sums(&rows, x, &labels);
         // Minimiser of the current piece's quadratic on the working set, or a ray along
@@ -213,12 +215,14 @@ pub(crate) fn solve(
                 (p, 1.0, None)
             }
         } else {
-            let solution = kkt(&rows, &h, c, &g, &held, &labels, y, epsilon).ok_or_else(|| Stopped {
-                error: SvmError::Numerical {
-                    solver: NAME,
-                    reason: format!("singular working-set system at step {iteration}"),
-                },
-                last: None,
+            let solution = kkt(&rows, &h, c, &g, &held, &labels, y, epsilon).ok_or_else(|| {
+                Box::new(Stopped {
+                    error: SvmError::Numerical {
+                        solver: NAME,
+                        reason: format!("singular working-set system at step {iteration}"),
+                    },
+                    last: None,
+                })
             })?;
             let p: Vec<f64> = solution.theta.iter().zip(&theta).map(|(t, v)| t - v).collect();
             (p, 1.0, Some(solution))
@@ -281,13 +285,13 @@ pub(crate) fn solve(
                 held.push(i);
             }
             None if max_step.is_infinite() => {
-                return Err(Stopped {
+                return Err(Box::new(Stopped {
                     error: SvmError::Numerical {
                         solver: NAME,
                         reason: "the objective decreases without bound along the bias".into(),
                     },
                     last: None,
-                });
+                }));
             }
             None => {
                 for (t, p) in theta.iter_mut().zip(&direction) {
@@ -342,14 +346,14 @@ pub(crate) fn solve(
             }
         }
     }
-    Err(Stopped {
+    Err(Box::new(Stopped {
         error: SvmError::NotConverged {
             solver: NAME,
             iterations: max_iterations,
             gap: f64::INFINITY,
             tolerance: settings.tolerance,
         },
-        last: Some(finish(
+        last: Some(Box::new(finish(
             &rows,
             x,
             d,
@@ -360,8 +364,8 @@ pub(crate) fn solve(
             &held,
             &h,
             max_iterations,
-        )),
-    })
+        ))),
+    }))
 }
 
 /// The multiplier range of a held sample.

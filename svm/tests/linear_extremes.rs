@@ -34,7 +34,10 @@ fn floats(v: &Value) -> Vec<f64> {
         .collect()
 }
 
-fn load() -> (HashMap<String, (Vec<f64>, Vec<f64>)>, Vec<Case>) {
+/// Each data set's inputs and targets, by name.
+type Datasets = HashMap<String, (Vec<f64>, Vec<f64>)>;
+
+fn load() -> (Datasets, Vec<Case>) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/linear_extremes.json");
     let json: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let datasets = json["datasets"]
