@@ -51,6 +51,11 @@ fn run_unpaced(args: &[&str], out: &Path, cache: &Path) -> Value {
     report(out)
 }
 
+/// The summary a run wrote.
+fn printed_layers(dir: &Path) -> String {
+    std::fs::read_to_string(dir.join("summary.txt")).unwrap()
+}
+
 fn report(dir: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
@@ -119,6 +124,37 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
         "puncture at {depth} m, truth {truth} m"
     );
     assert!((0.8..1.6).contains(&f(&p["peak_force_n"])), "{p}");
+    // Beside it, the peak the simulated liver gives at that speed.
+    let tissue = haptics::sim::world::needle::NeedleTissue::bovine_liver();
+    let speed = f(&p["speed_mps"]);
+    let truth_peak = tissue.puncture_peak_force_n(0, speed).unwrap();
+    assert!((f(&p["truth_peak_force_n"]) - truth_peak).abs() < 1e-12, "{p}");
+    // Every membrane of that liver is listed, the capsule felt where the model's force gives.
+    let layers = seg["layers"].as_array().unwrap();
+    let names: Vec<&str> = layers.iter().map(|l| l["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["capsule", "vessel_wall"], "{seg}");
+    let capsule = &layers[0];
+    assert_eq!(capsule["status"], "felt", "{capsule}");
+    let felt_speed = f(&capsule["speed_mps"]);
+    assert!(
+        (f(&capsule["truth_depth_m"]) - tissue.puncture_depth_m(0, felt_speed).unwrap()).abs() < 1e-12
+            && (f(&capsule["truth_peak_force_n"]) - tissue.puncture_peak_force_n(0, felt_speed).unwrap())
+                .abs()
+                < 1e-12,
+        "{capsule}"
+    );
+    assert!(
+        (f(&capsule["felt_depth_m"]) - f(&capsule["truth_depth_m"])).abs() < 0.003,
+        "{capsule}"
+    );
+    // Three seconds do not take the needle to the vessel wall's rupture depth: it is listed as
+    // not reached, not silently dropped.
+    assert!(
+        ["missed", "not reached"].contains(&layers[1]["status"].as_str().unwrap()),
+        "{}",
+        layers[1]
+    );
+    assert!(printed_layers(&out).contains("layer vessel_wall:"));
     // The report folder is complete.
     for file in ["summary.txt", "report.json", "force.png"] {
         assert!(out.join(file).is_file(), "{file} missing");

@@ -24,6 +24,33 @@ pub struct Puncture {
     /// Depth at which the simulated liver the model was identified from ruptures at that
     /// speed, m (membrane by index).
     pub truth_depth_m: Option<f64>,
+    /// That simulated liver's axial force just before the same rupture at that speed, N: the
+    /// peak a trainee should feel.
+    pub truth_peak_force_n: Option<f64>,
+}
+
+/// One membrane of the simulated tissue the needle model was identified from, and whether the
+/// rendered force gave way there: the model's force is run through the same puncture detector
+/// as recordings ([`identify::detect_punctures`]), so a membrane the model smooths away is
+/// reported as missed rather than silently absent.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LayerFidelity {
+    /// The membrane (`capsule`, `vessel_wall`).
+    pub name: &'static str,
+    /// `felt`, `missed`, or `not reached` (the needle never went as deep).
+    pub status: &'static str,
+    /// Speed of the tool as it crossed the membrane's depth (at the felt peak when felt), m/s.
+    pub speed_mps: Option<f64>,
+    /// Depth at which the simulated tissue ruptures at that speed, m.
+    pub truth_depth_m: Option<f64>,
+    /// The simulated tissue's force just before that rupture, N.
+    pub truth_peak_force_n: Option<f64>,
+    /// Depth of the rendered force's peak before the drop, m (when felt).
+    pub felt_depth_m: Option<f64>,
+    /// The rendered peak force, N (when felt).
+    pub felt_peak_force_n: Option<f64>,
+    /// How far the rendered force fell, N (when felt).
+    pub felt_drop_n: Option<f64>,
 }
 
 /// The summary of one segment.
@@ -63,6 +90,8 @@ pub struct SegmentSummary {
     pub model_clamps: u64,
     /// Ruptures (needle).
     pub punctures: Vec<Puncture>,
+    /// Every membrane of the simulated tissue, felt or missed (needle).
+    pub layers: Vec<LayerFidelity>,
     /// Deepest tool depth (needle), m.
     pub max_depth_m: Option<f64>,
     /// Largest model force (needle: axial; friction: normal), N.
@@ -86,6 +115,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
             non_finite += 1;
         }
     }
+    let mut layers = Vec::new();
     let (kind, punctures, max_depth_m, max_model_force_n, ratio) = match &run.segment.kind {
         SegmentKind::Needle { .. } => {
             let surface_z_m = if matches!(run.device.as_str(), d if d.starts_with("replay")) {
@@ -94,6 +124,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
                 SURFACE_Z_M
             };
             let punctures = punctures(s);
+            layers = layer_fidelity(s, surface_z_m);
             let depth = s
                 .iter()
                 .map(|x| surface_z_m - x.channels[c::VIRTUAL_Z_M])
@@ -172,6 +203,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         safety_events: st.safety_events,
         model_clamps: st.model_clamps,
         punctures,
+        layers,
         max_depth_m,
         max_model_force_n,
         mean_friction_ratio: ratio,
@@ -209,9 +241,70 @@ fn punctures(s: &[HapticSample]) -> Vec<Puncture> {
                 speed_mps,
                 peak_force_n: peak,
                 truth_depth_m: tissue.puncture_depth_m(index, speed_mps.max(0.0)),
+                truth_peak_force_n: tissue.puncture_peak_force_n(index, speed_mps.max(0.0)),
             });
             peak = 0.0;
         }
     }
     out
+}
+
+/// Every membrane of the simulated liver against the drops of the rendered axial force (see
+/// [`LayerFidelity`]). A detected drop belongs to the membrane whose rupture depth at the
+/// drop's speed is nearest, within the detector's layer gap.
+fn layer_fidelity(s: &[HapticSample], surface_z_m: f64) -> Vec<LayerFidelity> {
+    let tissue = NeedleTissue::bovine_liver();
+    let time: Vec<f64> = s.iter().map(|x| x.time_s).collect();
+    let depth: Vec<f64> = s
+        .iter()
+        .map(|x| surface_z_m - x.channels[c::VIRTUAL_Z_M])
+        .collect();
+    let velocity: Vec<f64> = s.iter().map(|x| -x.channels[c::VIRTUAL_VZ_MPS]).collect();
+    let force: Vec<f64> = s.iter().map(|x| x.channels[c::MODEL_FORCE_Z_N]).collect();
+    let params = identify::PunctureParams::default();
+    // A run that is not a clean series (a stalled clock repeating a time) detects nothing
+    // rather than failing the report; every membrane then reads as missed or not reached.
+    let events = identify::detect_punctures(&time, &depth, &velocity, &force, &params)
+        .map(|d| d.events)
+        .unwrap_or_default();
+    let max_depth_m = depth.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (0..tissue.membranes.len())
+        .map(|k| {
+            let membrane = &tissue.membranes[k];
+            let felt = events
+                .iter()
+                .filter_map(|e| {
+                    let truth = tissue.puncture_depth_m(k, e.speed_mps.max(0.0))?;
+                    let off = (e.depth_m - truth).abs();
+                    (off <= params.layer_gap_m).then_some((off, e))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, e)| *e);
+            // The speed at the membrane: at the felt peak, else where the advancing tool first
+            // met the membrane's resting depth.
+            let speed_mps = felt.map(|e| e.speed_mps).or_else(|| {
+                let i = (0..s.len()).find(|&i| depth[i] >= membrane.depth_m && velocity[i] > 0.0)?;
+                Some(velocity[i])
+            });
+            let truth_depth_m = speed_mps.and_then(|v| tissue.puncture_depth_m(k, v.max(0.0)));
+            // The simulated tissue would have given way had the tool gone that deep.
+            let reached = truth_depth_m.is_some_and(|d| max_depth_m >= d);
+            LayerFidelity {
+                name: membrane.name,
+                status: if felt.is_some() {
+                    "felt"
+                } else if reached {
+                    "missed"
+                } else {
+                    "not reached"
+                },
+                speed_mps,
+                truth_depth_m,
+                truth_peak_force_n: speed_mps.and_then(|v| tissue.puncture_peak_force_n(k, v.max(0.0))),
+                felt_depth_m: felt.map(|e| e.depth_m),
+                felt_peak_force_n: felt.map(|e| e.peak_force_n),
+                felt_drop_n: felt.map(|e| e.drop_n),
+            }
+        })
+        .collect()
 }

@@ -150,15 +150,36 @@ impl SessionReport {
                 let truth = p
                     .truth_depth_m
                     .map_or("-".to_owned(), |d| format!("{:.1} mm", d * 1e3));
+                let truth_peak = p.truth_peak_force_n.map_or("-".to_owned(), |f| {
+                    format!("{f:.2} N, {:+.0} %", 100.0 * (p.peak_force_n - f) / f)
+                });
                 let _ = writeln!(
                     t,
-                    "    puncture {} at {:.2} s: depth {:.1} mm (simulated liver at {:.1} mm/s: {truth}), peak {:.2} N",
+                    "    puncture {} at {:.2} s: depth {:.1} mm (simulated liver at {:.1} mm/s: {truth}), peak {:.2} N (simulated liver: {truth_peak})",
                     i + 1,
                     p.time_s,
                     p.depth_m * 1e3,
                     p.speed_mps * 1e3,
                     p.peak_force_n
                 );
+            }
+            for l in &s.layers {
+                let mm = |m: Option<f64>| m.map_or("-".to_owned(), |m| format!("{:.1} mm", m * 1e3));
+                let n = |f: Option<f64>| f.map_or("-".to_owned(), |f| format!("{f:.2} N"));
+                let truth = format!(
+                    "simulated liver at {}: {}, {}",
+                    l.speed_mps
+                        .map_or("-".to_owned(), |v| format!("{:.1} mm/s", v * 1e3)),
+                    mm(l.truth_depth_m),
+                    n(l.truth_peak_force_n)
+                );
+                let felt = match (l.felt_depth_m, l.felt_peak_force_n, l.felt_drop_n) {
+                    (Some(d), Some(f), Some(drop)) => {
+                        format!("felt at {:.1} mm, peak {f:.2} N, drop {drop:.2} N", d * 1e3)
+                    }
+                    _ => l.status.to_owned(),
+                };
+                let _ = writeln!(t, "    layer {}: {felt} ({truth})", l.name);
             }
             if let Some(d) = s.max_depth_m {
                 let _ = writeln!(
