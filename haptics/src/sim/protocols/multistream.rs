@@ -53,7 +53,9 @@ use rand_chacha::ChaCha8Rng;
 use super::seed::{derive_seed, tag};
 use crate::error::HapticsError;
 use crate::sim::world::profile::{Band, Profile};
-use crate::sim::world::scratch::{STANDARD_GRAVITY_MPS2, ScratchSurface, WORLD_SEED, household_surfaces};
+use crate::sim::world::scratch::{
+    Contact, STANDARD_GRAVITY_MPS2, ScratchSurface, WORLD_SEED, household_surfaces,
+};
 use crate::sim::world::sensor::{Encoder, ForceSensor, LowPass, Noise, round_to};
 use crate::sim::world::surface::{RubbingSurface, SurfacePatch};
 
@@ -145,6 +147,7 @@ pub const STREAMS: [&str; 4] = ["force", "position", "velocity", "vibration"];
 pub struct SlidingSurface {
     /// The surface of the scratch world it realises (never air).
     pub surface: ScratchSurface,
+    contact: Contact,
     patch: SurfacePatch,
     texture: Profile,
 }
@@ -176,6 +179,7 @@ impl SlidingSurface {
         let texture = Profile::synthesize(&bands, TEXTURE_GRID_M, TEXTURE_POINTS, &mut rng);
         Some(Self {
             surface: surface.clone(),
+            contact: contact.clone(),
             patch: SurfacePatch::new(&rubbing),
             texture,
         })
@@ -292,11 +296,7 @@ struct Trace {
 pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64) -> TrialLogs {
     let id = u64::from(surface.surface.id);
     let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, &[tag::MULTISTREAM, id, u64::from(trial)]));
-    let contact = surface
-        .surface
-        .contact
-        .as_ref()
-        .expect("a sliding surface has a contact");
+    let contact = &surface.contact;
     let unit = Noise::new(1.0);
     let speed_mps = SPEED_MPS * (1.0 + rng.random_range(-SPEED_SPREAD..=SPEED_SPREAD));
     let force_n = NORMAL_FORCE_N * (1.0 + rng.random_range(-FORCE_SPREAD..=FORCE_SPREAD));
@@ -539,13 +539,12 @@ pub fn write_logs(
         String::from("stem,name,trial,speed_mps,normal_force_n,track_start_m,normal_mode_hz\n");
     for surface in sliding_surfaces() {
         let s = &surface.surface;
-        if let Some(c) = &s.contact {
-            let _ = writeln!(
-                materials,
-                "{},{},{},{},{},{}",
-                s.id, s.name, c.friction, c.roughness.rms_m, c.roughness.wavelength_m, c.normal_mode_hz
-            );
-        }
+        let c = &surface.contact;
+        let _ = writeln!(
+            materials,
+            "{},{},{},{},{},{}",
+            s.id, s.name, c.friction, c.roughness.rms_m, c.roughness.wavelength_m, c.normal_mode_hz
+        );
         for trial in 0..trials {
             let logs = trial_logs(&surface, trial, seed);
             let stem = trial_stem(s.id, trial);
