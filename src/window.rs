@@ -371,7 +371,12 @@ pub fn run(
     if let Some(e) = session.error.take() {
         return Err(e);
     }
-    println!("window: {}", shown?);
+    let stats = shown?;
+    // One line beside the CLI's own, which announced the window: how steadily it drew.
+    #[allow(clippy::print_stdout)]
+    {
+        println!("window: {stats}");
+    }
     let mut outcome = std::mem::take(&mut session.outcome);
     outcome.scene = Some(session.scene.clone());
     Ok(outcome)
