@@ -50,7 +50,7 @@ enum Side {
 }
 
 /// Partition rounds [`finish`] tries before it gives up.
-const MAX_ROUNDS: usize = 12;
+const MAX_ROUNDS: usize = 20;
 
 /// The exact optimum reached from the partition SMO's `β` implies, given `k_beta = Kβ` at that
 /// `β`: a primal–dual active-set method (solve the free samples' system, move every sample
@@ -160,29 +160,43 @@ pub(crate) fn finish(
             }
         });
         beta = new_beta;
-        // Move every sample on the wrong side (a primal–dual active-set step).
+        // Move the samples on the wrong side (a primal–dual active-set step). A free
+        // coefficient out of its box goes to the bound it crossed first, alone: moving the
+        // residual violators in the same round too makes the steps overshoot and the free
+        // set swell on nearly singular systems.
         let slack_b = 1e-9 * c;
+        let out_of_box = |side: Side, b: f64| match side {
+            Side::Upper => !(-slack_b..=c + slack_b).contains(&b),
+            Side::Lower => !(-c - slack_b..=slack_b).contains(&b),
+            _ => false,
+        };
+        let feasible = !(0..n).any(|i| out_of_box(sides[i], beta[i]));
         let mut changed = false;
-        let mut feasible = true;
         for i in 0..n {
             let r = y[i] - k_beta[i] - bias;
             let b = beta[i];
             let to = match sides[i] {
+                Side::Upper if out_of_box(Side::Upper, b) => {
+                    if b > c {
+                        Side::Above
+                    } else {
+                        Side::Inside
+                    }
+                }
+                Side::Lower if out_of_box(Side::Lower, b) => {
+                    if b < -c {
+                        Side::Below
+                    } else {
+                        Side::Inside
+                    }
+                }
+                _ if !feasible => sides[i],
                 Side::Inside if r > epsilon + tol_r => Side::Upper,
                 Side::Inside if r < -epsilon - tol_r => Side::Lower,
                 Side::Above if r < epsilon - tol_r => Side::Upper,
                 Side::Below if r > -epsilon + tol_r => Side::Lower,
-                Side::Upper if b > c => Side::Above,
-                Side::Upper if b < 0.0 => Side::Inside,
-                Side::Lower if b < -c => Side::Below,
-                Side::Lower if b > 0.0 => Side::Inside,
                 side => side,
             };
-            if matches!(sides[i], Side::Upper) && !(-slack_b..=c + slack_b).contains(&b)
-                || matches!(sides[i], Side::Lower) && !(-c - slack_b..=slack_b).contains(&b)
-            {
-                feasible = false;
-            }
             if to != sides[i] {
                 sides[i] = to;
                 changed = true;
