@@ -34,11 +34,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def ours(palpus, capture, n, dump, budget_s):
-    out = subprocess.run(
+    run = subprocess.run(
         [palpus, "bench", "svr-scale", "--capture", str(capture), "--sizes", str(n),
          "--dump", str(dump), "--budget-s", str(budget_s)],
-        check=True, capture_output=True, text=True,
-    ).stdout.splitlines()
+        capture_output=True, text=True,
+    )
+    if run.returncode != 0:
+        return {"n": n, "error": (run.stderr.strip().splitlines() or ["failed"])[-1]}
+    out = run.stdout.splitlines()
     # n, seconds, solver (may hold spaces), iterations, SVs, gap, peak MB
     f = out[-1].split()
     return {"n": int(f[0]), "s": float(f[1]), "solver": " ".join(f[2:-4]), "svs": int(f[-3]),
@@ -73,6 +76,9 @@ def main():
           f"{'our gap':>8} {'max |Δf| N':>11}  solver")
     for n in [int(s) for s in a.sizes.split(",")]:
         o = ours(a.palpus, capture, n, work, a.budget_s)
+        if "error" in o:
+            print(f"{n:>7} ours failed: {o['error']}", flush=True)
+            continue
         dump = work / f"svr_scale_n{o['n']}.csv"
         if o["n"] <= a.libsvm_max:
             lib = libsvm(dump, 100.0, 30.0, 0.02)
