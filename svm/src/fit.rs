@@ -12,7 +12,7 @@ use super::ipm;
 use super::kernel::Kernel;
 use super::linear_exact;
 use super::model::SvrModel;
-use super::params::{DualSettings, Solver, SvrParams};
+use super::params::{DualSettings, FitProgress, Solver, SvrParams};
 use super::polish::{self, Side};
 use super::smo;
 
@@ -78,20 +78,6 @@ struct DualSolution {
 /// Fits an ε-SVR to `n` samples: `x` is `n × dim` row-major, `y` has `n` targets.
 pub fn fit(params: &SvrParams, x: &[f64], dim: usize, y: &[f64]) -> Result<SvrFit, SvmError> {
     fit_observed(params, x, dim, y, &|_| {})
-}
-
-/// Where a running fit stands, shown to the observer of [`fit_observed`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FitProgress {
-    /// The solver running.
-    pub solver: &'static str,
-    /// Its iterations so far.
-    pub iterations: usize,
-    /// The relative gap of its current iterate (the interior point's complementarity gap;
-    /// infinite where the solver has none until it stops).
-    pub gap: f64,
-    /// Seconds since the fit started.
-    pub elapsed_s: f64,
 }
 
 /// [`fit`], calling `observer` as the solver advances (each interior-point iteration, every few

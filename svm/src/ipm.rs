@@ -19,7 +19,7 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 
 use super::error::SvmError;
-use super::params::DualSettings;
+use super::params::{DualSettings, FitProgress};
 
 const NAME: &str = "interior point";
 
@@ -77,7 +77,7 @@ pub(crate) fn solve(
     y: &[f64],
     settings: &DualSettings,
     accept: &mut dyn FnMut(&IpmSolution) -> bool,
-    observer: &dyn Fn(&super::fit::FitProgress),
+    observer: &dyn Fn(&FitProgress),
 ) -> Result<IpmSolution, SvmError> {
     let n = y.len();
     let (c, epsilon, tolerance) = (settings.c, settings.epsilon, settings.tolerance);
@@ -162,7 +162,7 @@ pub(crate) fn solve(
         if (gap < tolerance * 1e-4 && feasible) || mu < 1e-100 {
             return Ok(finish(h, lambda, iteration, gap, true));
         }
-        observer(&super::fit::FitProgress {
+        observer(&FitProgress {
             solver: NAME,
             iterations: iteration,
             gap,

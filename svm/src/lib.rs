@@ -29,14 +29,14 @@ mod sample;
 mod smo;
 mod smo_finish;
 
+pub use certificate::ACCEPT_GAP;
 pub use error::SvmError;
 pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};
 pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, LANES, fast_exp2};
-pub use certificate::ACCEPT_GAP;
-pub use fit::{FitProgress, SvrFit, fit, fit_observed, slack};
+pub use fit::{SvrFit, fit, fit_observed, slack};
 pub use kernel::Kernel;
 pub use model::{InputScaling, SvrModel};
-pub use params::{Solver, SvrParams, SvrParamsBuilder};
+pub use params::{FitProgress, Solver, SvrParams, SvrParamsBuilder};
 #[doc(hidden)]
 pub use sample::needle_like_model;
 pub use smo::{

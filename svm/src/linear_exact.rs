@@ -29,8 +29,7 @@ use faer::linalg::solvers::Solve;
 use super::compensated::{Accumulator, two_sum};
 use super::data::SvrData;
 use super::error::SvmError;
-use super::fit::FitProgress;
-use super::params::DualSettings;
+use super::params::{DualSettings, FitProgress};
 
 /// Input dimensions up to which a linear-kernel fit is solved here (the working set is at most
 /// d + 1 samples; beyond a few dimensions the dual solvers are the better tool).

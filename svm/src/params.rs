@@ -180,6 +180,20 @@ impl SvrParams {
     }
 }
 
+/// Where a running fit stands, shown to the observer of [`crate::fit_observed`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitProgress {
+    /// The solver running.
+    pub solver: &'static str,
+    /// Its iterations so far.
+    pub iterations: usize,
+    /// The relative gap of its current iterate (the interior point's complementarity gap;
+    /// infinite where the solver has none until it stops).
+    pub gap: f64,
+    /// Seconds since the fit started.
+    pub elapsed_s: f64,
+}
+
 /// What the dual solvers of one fit need, taken once from checked [`SvrParams`]: the box, the
 /// tube, the tolerance and the budgets, with the instant the fit started (budgets count from
 /// it).
