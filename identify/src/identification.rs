@@ -136,6 +136,9 @@ pub struct Report {
     /// Inputs of which the test capture leaves the training domain (see [`out_of_domain`]):
     /// empty without a test capture or when it stays inside.
     pub test_out_of_domain: Vec<OutOfDomain>,
+    /// Needle: every puncture detected in the evaluation capture beside the model's along the
+    /// same strokes ([`crate::compare_punctures`]); empty for the friction models.
+    pub punctures: Vec<crate::PunctureComparison>,
 }
 
 /// How far past either end of a training range, as a fraction of its width, a value may lie
@@ -939,6 +942,7 @@ fn finish(
         stage1,
         hyperparameters: hyper.clone(),
         test_out_of_domain: Vec::new(),
+        punctures: Vec::new(),
     };
     let mut training = vec![capture_ref(train.source())];
     training.retain(|r| !r.path.as_os_str().is_empty());
@@ -959,6 +963,10 @@ fn finish(
     check_written(&report, &model, train, test)?;
     if let Some(t) = test {
         report.test_out_of_domain = out_of_domain(&model, t)?;
+    }
+    if kind == ModelKind::NeedlePuncture {
+        report.punctures =
+            crate::compare_punctures(&model, test.unwrap_or(train), &crate::PunctureParams::default())?;
     }
     Ok(Identified { model, report })
 }

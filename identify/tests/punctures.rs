@@ -239,3 +239,43 @@ fn detected_layers_match_the_generated_captures_metadata() {
         );
     }
 }
+
+#[test]
+fn the_needle_report_sets_every_measured_puncture_beside_the_model() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/captures/li_bi");
+    let train = Capture::read_file(root.join("needle_train.csv"), CaptureKind::Insertion).unwrap();
+    let test = Capture::read_file(root.join("needle_test.csv"), CaptureKind::Insertion).unwrap();
+    let identified = identify::identify(
+        &train,
+        Some(&test),
+        &identify::IdentifyOptions::new(identify::ModelKind::NeedlePuncture),
+    )
+    .unwrap();
+    let rows = &identified.report.punctures;
+    let truth = truth_depths(&test);
+    assert_eq!(rows.len(), truth.iter().map(Vec::len).sum::<usize>(), "{rows:?}");
+    let depth = test.column("depth_m").unwrap();
+    let velocity = test.column("velocity_mps").unwrap();
+    for row in rows {
+        let want = &truth[row.stroke];
+        assert!(
+            want.iter().any(|d| (d - row.measured_depth_m).abs() < 1e-3),
+            "{row:?} vs {want:?}"
+        );
+        // The model's force at the measured peak is the model evaluated there.
+        let i = (0..test.len())
+            .find(|&i| depth[i] == row.measured_depth_m && (velocity[i] - row.speed_mps).abs() < 1e-15)
+            .unwrap();
+        let at = identified.model.predict(&[depth[i], velocity[i]]);
+        assert!((row.model_force_at_measured_n - at).abs() < 1e-12, "{row:?}");
+        // A matched puncture lies within the layer gap; a missed one has no model values.
+        match row.predicted_depth_m {
+            Some(d) => assert!((d - row.measured_depth_m).abs() <= PunctureParams::default().layer_gap_m),
+            None => assert!(row.predicted_peak_force_n.is_none() && row.predicted_drop_n.is_none()),
+        }
+    }
+    // A friction model cannot be compared.
+    let mut friction = identified.model.clone();
+    friction.kind = identify::ModelKind::HardFriction;
+    assert!(identify::compare_punctures(&friction, &test, &PunctureParams::default()).is_err());
+}

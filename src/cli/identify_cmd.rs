@@ -415,6 +415,46 @@ fn print_table(r: &Report, args: &IdentifyArgs) {
              apply to puncture force; Fc+c·v+k·depth is F = Fc·sgn(v) + c·v + k·depth by least squares)"
         );
     }
+    print_punctures(r);
+}
+
+/// Needle: each puncture measured in the evaluation capture beside the model's along the same
+/// stroke (`missed` where the model's force does not give way there).
+fn print_punctures(r: &Report) {
+    if r.punctures.is_empty() {
+        return;
+    }
+    println!(
+        "punctures on {} data (model: the same detector on its force along each stroke):",
+        r.evaluated_on
+    );
+    println!(
+        "  {:>6} {:>8}  {:>21}  {:>27}  {:>17}",
+        "stroke", "v [mm/s]", "depth [mm] meas/model", "peak [N] measured/model", "drop [N] meas/model"
+    );
+    for p in &r.punctures {
+        let (depth, peak, drop) = match (p.predicted_depth_m, p.predicted_peak_force_n, p.predicted_drop_n) {
+            (Some(d), Some(f), Some(drop)) => {
+                (format!("{:.1}", d * 1e3), format!("{f:.3}"), format!("{drop:.3}"))
+            }
+            _ => (
+                "missed".to_owned(),
+                format!("missed, {:.3} there", p.model_force_at_measured_n),
+                "-".to_owned(),
+            ),
+        };
+        println!(
+            "  {:>6} {:>8.2}  {:>8.1} / {:<10}  {:>6.3} / {:<18}  {:>6.3} / {}",
+            p.stroke,
+            p.speed_mps * 1e3,
+            p.measured_depth_m * 1e3,
+            depth,
+            p.measured_peak_force_n,
+            peak,
+            p.measured_drop_n,
+            drop
+        );
+    }
 }
 
 /// "12.3 % of test samples have velocity_mps outside the training range [0.001, 0.01] (up to
