@@ -1,6 +1,8 @@
 //! The puncture detector on signals with known drops and noise, and on the committed needle
 //! captures against the depths their generator recorded in the metadata.
 
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
 use std::path::Path;
 
 use capture::{Capture, CaptureKind};
