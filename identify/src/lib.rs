@@ -22,7 +22,8 @@ pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, Rb
 pub use error::IdentifyError;
 pub use identification::{
     ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits, Identified, IdentifyOptions,
-    MAX_SEGMENT_SAMPLES, OutOfDomain, Report, identify, identify_with, model_column, model_rows, out_of_domain,
+    MAX_SEGMENT_SAMPLES, OutOfDomain, Report, identify, identify_with, model_column, model_rows,
+    out_of_domain,
 };
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
