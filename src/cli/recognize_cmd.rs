@@ -170,6 +170,9 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let model = Training::train_with_progress(&settings, &captures)?;
     let trained_s = start.elapsed().as_secs_f64();
+    // The model keeps its classes in label order; people read them in natural order.
+    let mut class_names: Vec<&str> = model.classes.iter().map(String::as_str).collect();
+    class_names.sort_by(|a, b| recognize::natural_cmp(a, b));
     model
         .save(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
@@ -180,7 +183,7 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
         captures.len(),
         model.n_train,
         model.classes.len(),
-        model.classes.join(", "),
+        class_names.join(", "),
         args.out.display()
     );
     if let Some(q) = model.som_quality(&captures, true, None)? {

@@ -4,7 +4,9 @@
 //! Dual (what is solved): `min ½ βᵀKβ + ε Σ|βᵢ| − yᵀβ` subject to `Σ βᵢ = 0`, `−C ≤ βᵢ ≤ C`,
 //! with `f(x) = Σ βᵢ K(xᵢ, x) + b`.
 //!
-//! One SMO core ([`solve_smo`]) serves the ε-SVR here and the C-SVC of `recognize`.
+//! [`solve_smo`] is the ε-SVR's SMO core. `recognize`'s C-SVC runs the same algorithm in its own
+//! solver laid out as libsvm's (active variables at the front of every array and cached row),
+//! which this crate's row interface cannot express yet; folding the two into one is open work.
 //!
 //! Every fallible function of the crate (fits, libsvm model files, the fast evaluators) returns
 //! the one error type [`SvmError`].

@@ -6,9 +6,9 @@
 //! **Solver.** The C-SVC dual `min ½ αᵀQα − eᵀα, yᵀα = 0, 0 ≤ α ≤ C`, `Q_ij = y_i y_j K_ij`, is
 //! solved by SMO with the second-order working-set selection of Fan, Chen & Lin (2005), the
 //! pair update and the bias (`ρ`, averaged over free vectors) of libsvm's `Solver`, so decision
-//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. The solver is
-//! [`svm::solve_smo`], the core the ε-SVR uses too, with libsvm's shrinking and kernel rows
-//! computed as the solver first asks for them and cached (libsvm's cache; see `rows.rs`).
+//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. The solver
+//! (`solver.rs`) is [`svm::solve_smo`]'s algorithm in libsvm's memory layout, with its
+//! shrinking and kernel rows computed as the solver first asks for them and cached.
 //! The pairs' machines and their probability folds are independent solves, run on all cores.
 //!
 //! **Probabilities.** For each pair, decision values from a 5-fold cross-validation on that
