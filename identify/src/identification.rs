@@ -346,30 +346,37 @@ impl std::fmt::Debug for FitLimits<'_> {
     }
 }
 
-pub(crate) fn svr(
-    what: &str,
-    c: f64,
-    epsilon: f64,
-    kernel: Kernel,
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
-) -> Result<SvrFit, IdentifyError> {
-    svr_with(&FitLimits::default(), what, c, epsilon, kernel, x, dim, y)
+/// One ε-SVR fit to make: hyperparameters and samples, named so that no call site passes seven
+/// positional numbers and slices.
+pub(crate) struct SvrProblem<'a> {
+    pub c: f64,
+    pub epsilon: f64,
+    pub kernel: Kernel,
+    /// Inputs, row-major, `dim` per sample.
+    pub x: &'a [f64],
+    pub dim: usize,
+    pub y: &'a [f64],
 }
 
-/// [`svr`] under `limits`.
-#[allow(clippy::too_many_arguments)]
+/// [`svr_with`] under the default limits.
+pub(crate) fn svr(what: &str, problem: SvrProblem<'_>) -> Result<SvrFit, IdentifyError> {
+    svr_with(&FitLimits::default(), what, problem)
+}
+
+/// Fits `problem` under `limits`; a failure names `what` was being fitted.
 pub(crate) fn svr_with(
     limits: &FitLimits<'_>,
     what: &str,
-    c: f64,
-    epsilon: f64,
-    kernel: Kernel,
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
+    problem: SvrProblem<'_>,
 ) -> Result<SvrFit, IdentifyError> {
+    let SvrProblem {
+        c,
+        epsilon,
+        kernel,
+        x,
+        dim,
+        y,
+    } = problem;
     let mut builder = SvrParams::builder().c(c).epsilon(epsilon).kernel(kernel);
     if let Some(t) = limits.tolerance {
         builder = builder.tolerance(t);
@@ -526,12 +533,14 @@ fn hard(
     let f = svr_with(
         limits,
         "hard-contact SVR",
-        c,
-        epsilon,
-        Kernel::Linear,
-        &tr.normal_force_n,
-        1,
-        &tr.friction_force_n,
+        SvrProblem {
+            c,
+            epsilon,
+            kernel: Kernel::Linear,
+            x: &tr.normal_force_n,
+            dim: 1,
+            y: &tr.friction_force_n,
+        },
     )?;
     let w = f.model.linear_weights().map(|w| w[0]);
     let b = f.model.bias;
@@ -625,12 +634,14 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
         let speed = idx.iter().map(|&i| tr.velocity_mps[i]).sum::<f64>() / idx.len() as f64;
         let fitted = svr(
             &format!("stage-1 SVR at {v} m/s"),
-            c1,
-            eps1,
-            Kernel::Linear,
-            &p,
-            1,
-            &f,
+            SvrProblem {
+                c: c1,
+                epsilon: eps1,
+                kernel: Kernel::Linear,
+                x: &p,
+                dim: 1,
+                y: &f,
+            },
         )?;
         let w = fitted.model.linear_weights().map_or(0.0, |w| w[0]);
         out.points.push([speed, w, fitted.model.bias]);
@@ -678,22 +689,26 @@ fn soft(
     let fw = svr_with(
         limits,
         "slope SVR w(v)",
-        c2,
-        eps_w,
-        Kernel::Rbf { gamma },
-        &v_scaled,
-        1,
-        &ws,
+        SvrProblem {
+            c: c2,
+            epsilon: eps_w,
+            kernel: Kernel::Rbf { gamma },
+            x: &v_scaled,
+            dim: 1,
+            y: &ws,
+        },
     )?;
     let fm = svr_with(
         limits,
         "intercept SVR m(v)",
-        c2,
-        eps_m,
-        Kernel::Rbf { gamma },
-        &v_scaled,
-        1,
-        &ms,
+        SvrProblem {
+            c: c2,
+            epsilon: eps_m,
+            kernel: Kernel::Rbf { gamma },
+            x: &v_scaled,
+            dim: 1,
+            y: &ms,
+        },
     )?;
     let body = ModelBody::TwoStage {
         slope: scaled(fw.model.clone(), scaling.clone()),
@@ -829,12 +844,14 @@ fn needle(
     let f = svr_with(
         limits,
         "needle SVR",
-        c,
-        epsilon,
-        Kernel::Rbf { gamma },
-        &xs,
-        2,
-        &y,
+        SvrProblem {
+            c,
+            epsilon,
+            kernel: Kernel::Rbf { gamma },
+            x: &xs,
+            dim: 2,
+            y: &y,
+        },
     )?;
     let model = scaled(f.model.clone(), scaling);
     let (t_ev, x_ev, y_ev) = match test {

@@ -12,7 +12,8 @@ use serde::Serialize;
 
 use crate::error::IdentifyError;
 use crate::identification::{
-    DEFAULT_MAX_FIT_SAMPLES, FrictionData, KGF_N, friction_data, metrics, needle_data, spread, stage_one, svr,
+    DEFAULT_MAX_FIT_SAMPLES, FrictionData, KGF_N, SvrProblem, friction_data, metrics, needle_data, spread,
+    stage_one, svr,
 };
 use crate::model_file::ModelKind;
 use capture::Capture;
@@ -241,12 +242,14 @@ impl Data {
                         let started = Instant::now();
                         let f = svr(
                             "cross-validation fold",
-                            c,
-                            epsilon,
-                            kernel,
-                            &scaling.apply(&x_tr),
-                            dim,
-                            &y_tr,
+                            SvrProblem {
+                                c,
+                                epsilon,
+                                kernel,
+                                x: &scaling.apply(&x_tr),
+                                dim,
+                                y: &y_tr,
+                            },
                         )?;
                         let fit_s = started.elapsed().as_secs_f64();
                         let mut scaled = vec![0.0; dim];
@@ -289,7 +292,17 @@ impl Data {
                     let started = Instant::now();
                     let fit_column = |name, column: usize| {
                         let targets: Vec<f64> = keep.iter().map(|p| p[column]).collect();
-                        svr(name, c, epsilon, kernel, &vs, 1, &targets)
+                        svr(
+                            name,
+                            SvrProblem {
+                                c,
+                                epsilon,
+                                kernel,
+                                x: &vs,
+                                dim: 1,
+                                y: &targets,
+                            },
+                        )
                     };
                     let w = fit_column("slope fold", 1)?;
                     let m = fit_column("intercept fold", 2)?;
