@@ -1,6 +1,7 @@
 //! Choosing C by cross-validation over a grid, with folds that keep a trial's scratches together.
 
 use super::*;
+use crate::knn::BehaviourData;
 
 /// The values of C that [`select_c`] tries by default: 1 to 10⁵ in decades.
 pub const C_GRID: [f64; 6] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
@@ -72,12 +73,11 @@ impl CSearch {
 /// single class predicts it. Probabilities are not fitted (only votes are scored).
 pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     params: SvcParams,
-    features: &[V],
-    labels: &[usize],
-    groups: &[u64],
+    data: &BehaviourData<'_, V>,
     classes: usize,
     folds: usize,
 ) -> Result<f64, RecognizeError> {
+    let (features, labels, groups) = (data.features, data.labels, data.groups);
     let (fold, folds) = cv_folds(features.len(), labels.len(), groups, folds)?;
     let params = SvcParams {
         probability: false,
@@ -95,22 +95,11 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
 pub fn select_c<V: AsRef<[f64]>>(
     params: SvcParams,
     grid: &[f64],
-    features: &[V],
-    labels: &[usize],
-    groups: &[u64],
+    data: &BehaviourData<'_, V>,
     classes: usize,
     folds: usize,
 ) -> Result<CSearch, RecognizeError> {
-    select_c_observed(
-        params,
-        grid,
-        features,
-        labels,
-        groups,
-        classes,
-        folds,
-        &no_progress,
-    )
+    select_c_observed(params, grid, data, classes, folds, &no_progress)
 }
 
 /// [`select_c`], reporting to `progress` one [`FitEvent::Step`] whose units are the binary
@@ -121,17 +110,15 @@ pub fn select_c<V: AsRef<[f64]>>(
 /// about the others. Only when every candidate fails is it an error
 /// ([`RecognizeError::EveryCFailed`], listing them); the result lists the candidates that
 /// could be cross-validated.
-#[allow(clippy::too_many_arguments)]
 pub fn select_c_observed<V: AsRef<[f64]>>(
     params: SvcParams,
     grid: &[f64],
-    features: &[V],
-    labels: &[usize],
-    groups: &[u64],
+    data: &BehaviourData<'_, V>,
     classes: usize,
     folds: usize,
     progress: Progress<'_>,
 ) -> Result<CSearch, RecognizeError> {
+    let (features, labels, groups) = (data.features, data.labels, data.groups);
     let (fold, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
     let mut order: Vec<f64> = grid.to_vec();
     order.sort_by(f64::total_cmp);

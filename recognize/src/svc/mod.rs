@@ -633,6 +633,16 @@ fn solve(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::knn::BehaviourData;
+
+    /// The triple the cross-validations take, named.
+    fn data<'a, V>(x: &'a [V], y: &'a [usize], groups: &'a [u64]) -> BehaviourData<'a, V> {
+        BehaviourData {
+            features: x,
+            labels: y,
+            groups,
+        }
+    }
 
     #[derive(serde::Deserialize)]
     struct Fixture {
@@ -829,7 +839,7 @@ mod tests {
             .fold(0, |b, (i, &a)| if a > brute[b] { i } else { b });
         // The grid (given unordered, with a repeat) is searched in ascending order.
         let unordered = [1e3, 1.0, 1e-2, 100.0, 1e-1, 10.0, 1.0];
-        let search = select_c(params, &unordered, &x, &y, &groups, 3, 4).expect("search");
+        let search = select_c(params, &unordered, &data(&x, &y, &groups), 3, 4).expect("search");
         eprintln!("brute force {brute:?}, search {search:?}");
         assert_eq!(search.folds, 4);
         assert_eq!(search.grid.iter().map(|p| p.c).collect::<Vec<_>>(), grid);
@@ -850,14 +860,14 @@ mod tests {
         // One group cannot be cross-validated; a class seen in one group only is held out
         // once with no training vector of its own and counts as wrong.
         assert!(matches!(
-            select_c(params, &grid, &x, &y, &[0; 72], 3, 4),
+            select_c(params, &grid, &data(&x, &y, &[0; 72]), 3, 4),
             Err(RecognizeError::TooFewGroups { groups: 1, folds: 4 })
         ));
         // Class 2 of group 0 relabelled as a class 3 found nowhere else.
         let lonely: Vec<usize> = (0..x.len())
             .map(|i| if groups[i] == 0 && y[i] == 2 { 3 } else { y[i] })
             .collect();
-        let a = cross_validated_accuracy(SvcParams { c: 1.0, ..params }, &x, &lonely, &groups, 4, 4)
+        let a = cross_validated_accuracy(SvcParams { c: 1.0, ..params }, &data(&x, &lonely, &groups), 4, 4)
             .expect("folds without class 3 still fit");
         assert!(a < brute[2], "{a} vs {}", brute[2]);
     }
@@ -880,7 +890,7 @@ mod tests {
         };
         let events = std::sync::Mutex::new(Vec::new());
         let record = |e: FitEvent| events.lock().expect("events").push(e);
-        let search = select_c_observed(params, &[1e4, 1e-2, 1.0], &x, &y, &groups, 3, 4, &record)
+        let search = select_c_observed(params, &[1e4, 1e-2, 1.0], &data(&x, &y, &groups), 3, 4, &record)
             .expect("the converging candidates are searched");
         assert_eq!(search.grid.iter().map(|p| p.c).collect::<Vec<_>>(), [1e-2, 1.0]);
         assert_eq!(search.chosen_c, 1.0, "{search:?}");
@@ -907,7 +917,7 @@ mod tests {
         assert!((24..36).contains(&advanced), "{advanced}");
 
         // Every candidate failing is an error that lists each.
-        match select_c(params, &[1e2, 1e4], &x, &y, &groups, 3, 4) {
+        match select_c(params, &[1e2, 1e4], &data(&x, &y, &groups), 3, 4) {
             Err(e @ RecognizeError::EveryCFailed { .. }) => {
                 let text = e.to_string();
                 assert!(

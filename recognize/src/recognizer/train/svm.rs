@@ -12,7 +12,7 @@ use crate::RecognizeError;
 use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
-use crate::knn::FeatureScaling;
+use crate::knn::{BehaviourData, FeatureScaling};
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
@@ -209,9 +209,11 @@ impl RecognizerFile {
                         Some(select_c_observed(
                             params,
                             grid,
-                            x,
-                            y,
-                            groups,
+                            &BehaviourData {
+                                features: x,
+                                labels: y,
+                                groups,
+                            },
                             classes.len(),
                             CV_FOLDS,
                             &progress,
@@ -289,7 +291,18 @@ impl RecognizerFile {
         let chosen = c
             .choose(WINDOW_SVM_FALLBACK_C, |grid| {
                 every_class_in_two_groups(&y, &groups).then(|| {
-                    select_c_observed(params, grid, &x, &y, &groups, classes.len(), CV_FOLDS, &progress)
+                    select_c_observed(
+                        params,
+                        grid,
+                        &BehaviourData {
+                            features: &x,
+                            labels: &y,
+                            groups: &groups,
+                        },
+                        classes.len(),
+                        CV_FOLDS,
+                        &progress,
+                    )
                 })
             })
             .map_err(&svc_error)?;
