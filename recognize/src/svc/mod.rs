@@ -785,6 +785,19 @@ mod tests {
 
     /// Three overlapping classes in the plane, `per_group` points of each in each of `groups`
     /// groups (trials), from a fixed seed.
+    /// A degree-2 polynomial SVC on unscaled inputs, as the blobs' C searches use it.
+    fn blob_params() -> SvcParams {
+        SvcParams {
+            kernel: Kernel::Polynomial {
+                gamma: 1.0,
+                coef0: 1.0,
+                degree: 2,
+            },
+            scaling: FeatureScaling::None,
+            ..SvcParams::default()
+        }
+    }
+
     fn overlapping_blobs(groups: u64, per_group: usize) -> (Vec<[f64; 2]>, Vec<usize>, Vec<u64>) {
         let centres = [[0.0, 0.0], [1.0, 0.2], [0.4, 0.9]];
         let mut rng = SplitMix64::new(7);
@@ -805,15 +818,7 @@ mod tests {
     #[test]
     fn inner_cross_validation_picks_the_c_of_a_brute_force_search() {
         let (x, y, groups) = overlapping_blobs(4, 6);
-        let params = SvcParams {
-            kernel: Kernel::Polynomial {
-                gamma: 1.0,
-                coef0: 1.0,
-                degree: 2,
-            },
-            scaling: FeatureScaling::None,
-            ..SvcParams::default()
-        };
+        let params = blob_params();
         let grid = [1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3];
         // Brute force: leave each group out in turn (4 groups, 4 folds), fit on the rest with
         // every class present, count the held-out points classified right.
@@ -879,14 +884,8 @@ mod tests {
         // needed) but not C ≥ 100 (over 500 needed): the large C stands for one whose fit
         // would run out the solver's budget.
         let params = SvcParams {
-            kernel: Kernel::Polynomial {
-                gamma: 1.0,
-                coef0: 1.0,
-                degree: 2,
-            },
-            scaling: FeatureScaling::None,
             max_iterations: 200,
-            ..SvcParams::default()
+            ..blob_params()
         };
         let events = std::sync::Mutex::new(Vec::new());
         let record = |e: FitEvent| events.lock().expect("events").push(e);
