@@ -1038,16 +1038,8 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
 /// a tip sliding at 5 mm/s, 1 kHz, for `seconds`. Returns its path.
 fn write_rubbing(dir: &Path, name: &str, surface: &str, amplitude_m: f64, seconds: f64) -> String {
     use capture::{Capture, CaptureKind, Metadata};
-    let n = (seconds * 1000.0) as usize;
-    let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
-    let x: Vec<f64> = t.iter().map(|t| 5e-3 * t).collect();
-    let z: Vec<f64> = x
-        .iter()
-        .map(|x| amplitude_m * (x * std::f64::consts::TAU / 1e-3).sin())
-        .collect();
-    let f: Vec<f64> = (0..n)
-        .map(|k| 1e4 * amplitude_m * (1.0 + 0.05 * ((k * 7919) % 13) as f64 / 13.0))
-        .collect();
+    let common::SineRub { t, x, z, f } = common::sine_rub(amplitude_m, seconds, 0);
+    let n = t.len();
     let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0).with("surface", surface);
     let columns = [
         TIME_S,

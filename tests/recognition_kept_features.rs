@@ -11,27 +11,18 @@ use capture::kind::{
     FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S, VIBRATION_MPS2,
 };
 use capture::{Capture, CaptureKind, Metadata};
-use common::{fails, succeeds};
+use common::{SineRub, fails, rub_wobble, sine_rub, succeeds};
 use recognize::{FeatureSet, LabelledCapture, Method, RecognizerFile, TrainSettings};
 
 /// Writes a rub of `surface` at 5 mm/s, 1 kHz, `seconds` long, with a roughness of
 /// `amplitude_m` and a single-axis vibration of tone `tone_hz`, trial `trial`.
 fn write_rub(dir: &Path, surface: &str, amplitude_m: f64, tone_hz: f64, trial: u32, seconds: f64) -> PathBuf {
-    let n = (seconds * 1000.0) as usize;
-    let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
-    let x: Vec<f64> = t.iter().map(|t| 5e-3 * t).collect();
-    let z: Vec<f64> = x
-        .iter()
-        .map(|x| amplitude_m * (x * std::f64::consts::TAU / 1e-3).sin())
-        .collect();
-    let wobble = |k: usize| ((k * 7919 + trial as usize * 31) % 13) as f64 / 13.0;
-    let f: Vec<f64> = (0..n)
-        .map(|k| 1e4 * amplitude_m * (1.0 + 0.05 * wobble(k)))
-        .collect();
+    let SineRub { t, x, z, f } = sine_rub(amplitude_m, seconds, trial);
+    let n = t.len();
     let v: Vec<f64> = t
         .iter()
         .enumerate()
-        .map(|(k, t)| 9.81 + 0.5 * (std::f64::consts::TAU * tone_hz * t).sin() + 0.1 * wobble(k))
+        .map(|(k, t)| 9.81 + 0.5 * (std::f64::consts::TAU * tone_hz * t).sin() + 0.1 * rub_wobble(k, trial))
         .collect();
     let meta = Metadata::new(CaptureKind::Rubbing, "test", 1000.0)
         .with("surface", surface)

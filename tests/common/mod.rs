@@ -92,3 +92,34 @@ pub fn multistream_trials(dir: &Path) -> Vec<MultistreamTrial> {
     trials.sort_by(|a, b| (&a.surface, a.trial).cmp(&(&b.surface, b.trial)));
     trials
 }
+
+/// A rub at 5 mm/s sampled at 1 kHz for `seconds`: a sine roughness of `amplitude_m` with a
+/// 1 mm wavelength, and a friction force proportional to it with a 5 % deterministic wobble
+/// that differs between trials. Columns: time, tangential position, normal position (the
+/// tip's height), friction force.
+pub struct SineRub {
+    pub t: Vec<f64>,
+    pub x: Vec<f64>,
+    pub z: Vec<f64>,
+    pub f: Vec<f64>,
+}
+
+/// The wobble of [`sine_rub`] at sample `k` of trial `trial`, in [0, 1).
+pub fn rub_wobble(k: usize, trial: u32) -> f64 {
+    ((k * 7919 + trial as usize * 31) % 13) as f64 / 13.0
+}
+
+/// See [`SineRub`].
+pub fn sine_rub(amplitude_m: f64, seconds: f64, trial: u32) -> SineRub {
+    let n = (seconds * 1000.0) as usize;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+    let x: Vec<f64> = t.iter().map(|t| 5e-3 * t).collect();
+    let z: Vec<f64> = x
+        .iter()
+        .map(|x| amplitude_m * (x * std::f64::consts::TAU / 1e-3).sin())
+        .collect();
+    let f: Vec<f64> = (0..n)
+        .map(|k| 1e4 * amplitude_m * (1.0 + 0.05 * rub_wobble(k, trial)))
+        .collect();
+    SineRub { t, x, z, f }
+}
