@@ -67,7 +67,9 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     let (train, test) = nakano_runs(dir.path());
     let model = dir.path().join("som.json");
     let model_s = model.to_string_lossy().into_owned();
-    let (summary, file) = train_model("som", &[], &model, &strings(&train));
+    // The thesis's protocol: one 6 s run per surface trains on 1 s windows (259 of them; 3 s
+    // windows, the default, leave 119).
+    let (summary, file) = train_model("som", &["--train-window-s", "1"], &model, &strings(&train));
     assert!(summary.contains("7 classes"), "{summary}");
 
     // The file describes itself: method, classes, windowing, the map's scaling, hashes.
@@ -141,10 +143,20 @@ fn som_train_and_eval_on_generated_rubbing_runs() {
     // held out, three maps per fold, every decision pooled.
     let all_s = strings(&[train.clone(), test.clone()].concat());
     let train_on_one = |options: &[&'static str]| -> Vec<&'static str> {
-        ["recognize", "cv", "--method", "som", "--split", "train-on-one"]
-            .into_iter()
-            .chain(options.iter().copied())
-            .collect()
+        // The thesis's 1 s training windows.
+        [
+            "recognize",
+            "cv",
+            "--method",
+            "som",
+            "--split",
+            "train-on-one",
+            "--train-window-s",
+            "1",
+        ]
+        .into_iter()
+        .chain(options.iter().copied())
+        .collect()
     };
     let cv = json(&args(&train_on_one(&["--seeds", "3", "--json"]), &all_s));
     assert_eq!(cv["split"], "train-on-one");
@@ -654,8 +666,10 @@ fn som_train_and_eval_on_foreign_logs_through_a_column_map() {
                normal_force_n=Fn [mN][mN],friction_force_n=Ft [mN][mN]";
     let model = dir.path().join("som.json");
     let model_s = model.to_string_lossy().into_owned();
+    // Trained as the thesis trains (1 s windows), like the captures it is compared with.
     let mapped = ["--map", map, "--rate-hz", "1000", "--meta", "surface={dir}"];
-    let (_, file) = train_model("som", &mapped, &model, &train_logs);
+    let training = [&mapped[..], &["--train-window-s", "1"]].concat();
+    let (_, file) = train_model("som", &training, &model, &train_logs);
     assert!(
         file["classes"]
             .as_array()
@@ -979,9 +993,9 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
     for method in ["knn", "svm", "som"] {
         let model = dir.path().join(format!("{method}_both.json"));
         let model_s = model.to_string_lossy().into_owned();
-        // All three on the SOM's 1 s training windows (k-NN and SVM default to the decision
-        // window), so that each trains on the same 259 vectors.
-        let options = ["--features", "both", "--train-window-s", "1"];
+        // All three on 2 s training windows (the shortest length a window's histogram takes
+        // in whole frames), so that each trains on the same vectors.
+        let options = ["--features", "both", "--train-window-s", "2"];
         let (_, file) = train_model(method, &options, &model, &train_s);
         assert_eq!(file["features"], "both");
         assert_eq!(file["body"]["method"], format!("{method}_windows"));
@@ -989,7 +1003,7 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
         assert_eq!(names.len(), 130);
         assert_eq!(names[0], "roughness_mean_abs_m");
         assert_eq!(names[5], "histogram_t0_f0");
-        assert_eq!(file["n_train"], 259);
+        assert_eq!(file["n_train"], 189);
         let dim = match method {
             "som" => file["body"]["som"]["reference"][0]
                 .as_array()
@@ -1012,13 +1026,13 @@ fn both_feature_sets_on_rubbing_runs_with_accelerometer_columns() {
         eprintln!("{method} --features both: {accuracy:.3}, worst surface {worst:.3}");
         assert!(accuracy >= 0.9, "{method}: {report}");
 
-        // A 0.5 s window is shorter than the histogram's 768 samples.
+        // A 0.5 s window is shorter than the histogram's 1.92 s (1920 samples at 1 kHz).
         let shown = fails(&args(
             &["recognize", "eval", &model_s, "--window-s", "0.5"],
             &test_s[..1],
         ));
         assert!(
-            shown.contains(&test_s[0]) && shown.contains("needs at least 768"),
+            shown.contains(&test_s[0]) && shown.contains("needs at least 1920"),
             "{shown}"
         );
     }

@@ -90,7 +90,8 @@ fn train_eval_and_cv_on_kept_features_match_the_library_on_whole_captures() {
     let test_paths = write_surfaces(dir.path(), 2..3);
     let (train_s, test_s) = (strings(&train_paths), strings(&test_paths));
     let (whole_train, whole_test) = (read_all(&train_paths), read_all(&test_paths));
-    let window = ["--window-s", "1", "--train-window-s", "1", "--hop-s", "0.2"];
+    // 2 s windows: a window's histogram (k-NN over both) needs 1.92 s.
+    let window = ["--window-s", "2", "--train-window-s", "2", "--hop-s", "0.2"];
     let cases: [(&str, Method, FeatureSet, &[&str]); 3] = [
         ("som", Method::Som, FeatureSet::Nakano, &window),
         ("knn", Method::Knn, FeatureSet::Both, &window),
@@ -103,8 +104,8 @@ fn train_eval_and_cv_on_kept_features_match_the_library_on_whole_captures() {
         let (_, from_cli) = train_cli(method, &options, &model, &train_s);
         let settings = TrainSettings {
             features,
-            window_s: 1.0,
-            train_window_s: (features != FeatureSet::Spectral).then_some(1.0),
+            window_s: 2.0,
+            train_window_s: (features != FeatureSet::Spectral).then_some(2.0),
             hop_s: 0.2,
             c: recognize::SvmC::Fixed(10.0),
             ..TrainSettings::new(library_method)
@@ -148,13 +149,13 @@ fn train_eval_and_cv_on_kept_features_match_the_library_on_whole_captures() {
         "--split",
         "train-on-one",
     ];
-    argv.extend(["--features", "both", "--window-s", "1", "--hop-s", "0.2"]);
+    argv.extend(["--features", "both", "--window-s", "2", "--hop-s", "0.2"]);
     let all_s = strings(&all);
     argv.extend(all_s.iter().map(String::as_str));
     let shown: serde_json::Value = serde_json::from_slice(&succeeds(&argv).stdout).expect("cv prints JSON");
     let settings = TrainSettings {
         features: FeatureSet::Both,
-        window_s: 1.0,
+        window_s: 2.0,
         hop_s: 0.2,
         ..TrainSettings::new(Method::Knn)
     };
@@ -176,13 +177,15 @@ fn train_eval_and_cv_on_kept_features_match_the_library_on_whole_captures() {
 fn training_warns_of_a_class_with_few_vectors_and_the_map_size_is_nodes() {
     let dir = tempfile::tempdir().expect("tempdir");
     let mut paths = write_surfaces(dir.path(), 0..1);
-    let (_, plain) = train_cli("som", &[], &dir.path().join("plain.json"), &strings(&paths));
+    // 1 s windows (decided on and so trained on): the 4 s captures have room for several.
+    let one_s = ["--window-s", "1"];
+    let (_, plain) = train_cli("som", &one_s, &dir.path().join("plain.json"), &strings(&paths));
     assert_eq!(plain.classes.len(), 3);
     // 2.5 s of cork: its 1 s training windows start after 1 s of travel and end 0.27 s before
     // the capture does, so only two fit.
     paths.push(write_rub(dir.path(), "cork", 10e-6, 70.0, 0, 2.5));
     let model = dir.path().join("som.json");
-    let (warned, _) = train_cli("som", &[], &model, &strings(&paths));
+    let (warned, _) = train_cli("som", &one_s, &model, &strings(&paths));
     assert!(
         warned.contains("warning: class cork has 2 training vectors")
             && warned.contains("training vector")
@@ -193,7 +196,12 @@ fn training_warns_of_a_class_with_few_vectors_and_the_map_size_is_nodes() {
 
     // --nodes and its old name --som-nodes size the map; two nodes cannot name four classes.
     for option in ["--nodes", "--som-nodes"] {
-        let (warned, file) = train_cli("som", &[option, "2"], &model, &strings(&paths));
+        let (warned, file) = train_cli(
+            "som",
+            &[option, "2", one_s[0], one_s[1]],
+            &model,
+            &strings(&paths),
+        );
         let recognize::RecognizerBody::Som { som, .. } = &file.body else {
             panic!("not a SOM");
         };

@@ -23,13 +23,13 @@ type Features = Vec<Vec<Vec<[f64; FEATURE_LEN]>>>;
 fn features(scale: CellScale) -> Features {
     let surfaces = household_surfaces();
     let per_surface = |s: usize| -> Vec<Vec<[f64; FEATURE_LEN]>> {
-        let plan = SpectrogramPlan::new();
         Behaviour::ALL
             .iter()
             .map(|&b| {
                 (0..TRIALS)
                     .map(|t| {
                         let capture = scratch_capture(&surfaces[s], b, t, SEED).expect("capture");
+                        let plan = SpectrogramPlan::at_rate(capture.metadata().rate_hz()).expect("rate");
                         plan.capture_features(&capture, scale).expect("features")
                     })
                     .collect()

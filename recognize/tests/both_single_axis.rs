@@ -81,8 +81,9 @@ fn surfaces(trials: std::ops::Range<u32>, three_axes: bool) -> Vec<LabelledCaptu
 fn both(method: Method) -> TrainSettings {
     TrainSettings {
         features: FeatureSet::Both,
-        window_s: 1.0,
-        train_window_s: Some(1.0),
+        // A window's histogram needs five 0.64 s frames at half a frame's hop (1.92 s).
+        window_s: 2.0,
+        train_window_s: Some(2.0),
         hop_s: 0.25,
         c: SvmC::Fixed(10.0),
         ..TrainSettings::new(method)

@@ -34,10 +34,10 @@ enum RecognizeWhat {
 /// Train a recognizer on captures and write it as JSON.
 ///
 /// som: Nakano's five rubbing features (roughness and friction) over sliding windows, decided
-/// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes up to 7 surfaces, two per surface
-/// beyond, see --nodes; σ 1.6, 10 000 presentations) trained on short windows (many, varied
-/// ones from a single run per surface) and deciding on long ones (more roughness waves per
-/// decision, at the cost of latency). Training warns when a surface owns no node of the map: the
+/// every hop from 5 mm of travel on, and a 1-D SOM (12 nodes up to 7 surfaces, sized by the
+/// training windows beyond, see --nodes; σ 1.6, 10 000 presentations or 500 per node) trained
+/// on windows as long as the decision windows (--train-window-s 1 trains as the thesis does, on
+/// more, shorter windows). Training warns when a surface owns no node of the map: the
 /// recognizer can never name it.
 /// knn: Sinapov's spectrotemporal histogram of each scratch, k-NN (k = 3) per behaviour.
 /// svm: the same histograms, a one-vs-one C-SVC per behaviour (degree-2 polynomial kernel,
@@ -48,8 +48,8 @@ enum RecognizeWhat {
 /// captures: its reliability weight when `eval` fuses the behaviours of a trial.
 ///
 /// --features crosses methods and features (default: the method's own, as above):
-/// nakano with knn/svm: windowed like the SOM (--window-s, --hop-s) but trained on windows of
-/// the decision length unless --train-window-s says otherwise, one classifier over all windows,
+/// nakano with knn/svm: windowed like the SOM (--window-s, --hop-s, training windows of the
+/// decision length unless --train-window-s says otherwise), one classifier over all windows,
 /// each feature log-scaled where positive, centred and divided by its pooled within-surface
 /// standard deviation (the SOM's scaling, without unit length);
 /// k-NN k = 3, or a C-SVC (degree-2 polynomial, γ = 1/5; 1/130 for both) whose C is
@@ -60,7 +60,11 @@ enum RecognizeWhat {
 /// over a trial's behaviours (one-hot votes weighted by cross-validated reliability).
 /// both: on rubbing captures that also carry accelerometer columns (three axes, or a single-axis
 /// vibration_mps2), each window's five Nakano features followed by the 125-cell histogram of the
-/// same window's acceleration (windows of at least 768 samples).
+/// same window's acceleration (windows of at least 1.92 s: five 0.64 s frames at half a frame's
+/// hop), each feature set weighing the same in k-NN's and the SVM's distances.
+/// spectral: Sinapov's histogram defined in seconds and hertz (0.25 s moving average, 0.64 s
+/// frames, 0–200 Hz in 25 bins), the paper's sample counts at its 400 Hz, the same physical
+/// bands at any rate.
 #[derive(Debug, Args)]
 struct TrainArgs {
     /// Training captures.

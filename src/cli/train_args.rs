@@ -68,10 +68,11 @@ pub(crate) struct TrainOptions {
     /// filters' 0.27 s lookahead).
     #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
     window_s: f64,
-    /// Windowed features (nakano, both): window of the training vectors, s. Default: som
-    /// 1 s (Nakano's protocol); knn and svm the decision window (--window-s),
-    /// since they compare decision windows with training vectors of the same length. Set apart
-    /// from the decision window, training warns.
+    /// Windowed features (nakano, both): window of the training vectors, s. Default: the
+    /// decision window (--window-s), for every method, since a decision window is compared
+    /// with what was learnt from training vectors and features of another length sit elsewhere.
+    /// Nakano's thesis trains its map on 1 s windows (more of them from one short run per
+    /// surface). Set apart from the decision window, training warns.
     #[arg(long, value_name = "S")]
     train_window_s: Option<f64>,
     /// Windowed features (nakano, both): time between decisions (and between training
@@ -79,9 +80,10 @@ pub(crate) struct TrainOptions {
     #[arg(long, default_value_t = HOP_S, value_name = "S")]
     hop_s: f64,
     /// som: nodes of each map (also --som-nodes). Default: over windows (nakano, both) the
-    /// thesis's 12 for up to its 7 surfaces, two per class beyond; over whole scratches
-    /// (spectral) three per class, at least 12. A node answers one class: training warns when a
-    /// class owns none.
+    /// thesis's 12 for up to its 7 surfaces; beyond, the SOM Toolbox's 5·N^0.54321 for N
+    /// training windows, at least two per class (presentations: 10 000, at least 500 per node);
+    /// over whole scratches (spectral) three per class, at least 12. A node answers one class:
+    /// training warns when a class owns none.
     #[arg(
         long = "nodes",
         visible_alias = "som-nodes",

@@ -68,6 +68,15 @@ impl FeatureSet {
         }
     }
 
+    /// Lengths of the feature sets the vector concatenates, in order.
+    pub fn blocks(self) -> &'static [usize] {
+        match self {
+            Self::Nakano => &[nakano::FEATURES],
+            Self::Spectral => &[FEATURE_LEN],
+            Self::Both => &[nakano::FEATURES, FEATURE_LEN],
+        }
+    }
+
     /// Names of the features, in vector order.
     pub fn feature_names(self) -> Vec<String> {
         let nakano = nakano::FEATURE_NAMES.iter().map(|s| (*s).to_owned());
@@ -146,9 +155,8 @@ pub(crate) fn histogram_names() -> Vec<String> {
         .collect()
 }
 
-/// Sinapov's histogram of a whole capture.
+/// Sinapov's histogram of a whole capture, at the capture's rate.
 pub(crate) fn capture_histogram(
-    plan: &SpectrogramPlan,
     c: &LabelledCapture,
     scale: CellScale,
 ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
@@ -158,7 +166,8 @@ pub(crate) fn capture_histogram(
             .copied()
             .ok_or_else(|| c.not_kept(format!("the histogram of the whole capture ({scale:?} cells)")));
     }
-    plan.capture_features(&c.capture, scale)
+    SpectrogramPlan::at_rate(c.capture.metadata().rate_hz())
+        .and_then(|plan| plan.capture_features(&c.capture, scale))
         .map_err(|source| RecognizeError::Features {
             path: c.reference.path.clone(),
             features: "spectrotemporal",

@@ -2,15 +2,25 @@
 //! accelerometer recording of one scratch:
 //!
 //! 1. magnitude `m_j = ‖a_j‖₂` per sample, so the feature ignores the sensor's orientation;
-//! 2. deviation from a 100-sample moving average (0.25 s at 400 Hz), which removes gravity and
-//!    the slow changes of the contact force and keeps the vibration;
-//! 3. a spectrogram: real DFTs of 256-sample frames, i.e. the paper's 129 frequency bins;
-//! 4. a 5 (time) × 25 (frequency) histogram of the spectrogram, the 125-vector the classifiers
-//!    see.
+//! 2. deviation from a [`MOVING_AVERAGE_S`] moving average, which removes gravity and the slow
+//!    changes of the contact force and keeps the vibration;
+//! 3. a spectrogram: real DFTs of [`FRAME_S`] frames;
+//! 4. a 5 (time) × 25 (frequency) histogram of the spectrogram over 0 … [`BAND_HZ`], the
+//!    125-vector the classifiers see.
 //!
-//! The paper fixes the counts (100, 129, 5, 25) but not the frame hop, the window function, the
-//! moving average's edges or how a histogram cell is scaled; those choices are documented on the
-//! items below.
+//! # In seconds and hertz, not samples
+//! The paper states its counts in samples of its 400 Hz sensor: a 100-sample moving average,
+//! DFTs with 129 bins (256-sample frames, 0 … 200 Hz) split into 25 frequency bins. Taken as
+//! sample counts they would mean something else on every rig: at 2.2 kHz a 256-sample frame is
+//! 0.12 s and its 25 bins are 44 Hz wide, most of them above anything sliding excites. So this
+//! module keeps the paper's *physical* definition — a 0.25 s average, 0.64 s frames, 0 … 200 Hz
+//! in 25 bins of 8 Hz — and derives the sample counts from each capture's rate
+//! ([`SpectrogramPlan::at_rate`]). At 400 Hz that is exactly the paper's (100, 256, 129, 25);
+//! at any other rate a recording has the histogram it would have had at 400 Hz, up to what a
+//! slower sensor cannot see (the band stops at its Nyquist frequency).
+//!
+//! The paper fixes the counts but not the frame hop, the window function, the moving average's
+//! edges or how a histogram cell is scaled; those choices are documented on the items below.
 //!
 //! # Single-axis sensors
 //!
@@ -32,15 +42,14 @@ use realfft::{RealFftPlanner, RealToComplex};
 
 use capture::Capture;
 
-/// Length of the moving average the magnitude is compared with (Sinapov: 100 samples, 0.25 s).
-pub const MOVING_AVERAGE_LEN: usize = 100;
-/// Samples per DFT frame: a 256-point real DFT has the paper's 129 bins (0 … Nyquist).
-pub const FRAME_LEN: usize = 256;
-/// Frequency bins of one frame's spectrum.
-pub const SPECTRUM_BINS: usize = FRAME_LEN / 2 + 1;
-/// Hop between frames: half a frame. With a Hann window this overlap weights every sample
-/// (away from the ends) equally, so no part of the scratch is missed between frames.
-pub const HOP_LEN: usize = FRAME_LEN / 2;
+/// Length of the moving average the magnitude is compared with, s (Sinapov: 100 samples at
+/// 400 Hz).
+pub const MOVING_AVERAGE_S: f64 = 0.25;
+/// Length of a DFT frame, s (Sinapov: 256 samples at 400 Hz, the DFT's 129 bins).
+pub const FRAME_S: f64 = 0.64;
+/// Top of the frequency band the histogram covers, Hz (Sinapov: the Nyquist frequency of the
+/// 400 Hz sensor). DFT bins above it are not part of the feature.
+pub const BAND_HZ: f64 = 200.0;
 /// Time bins of the histogram (the paper's `k_t`).
 pub const TIME_BINS: usize = 5;
 /// Frequency bins of the histogram (the paper's `k_f`).
@@ -49,9 +58,11 @@ pub const FREQUENCY_BINS: usize = 25;
 pub const FEATURE_LEN: usize = TIME_BINS * FREQUENCY_BINS;
 /// The fewest frames a spectrogram needs: one per time bin, so that no histogram row is empty.
 pub const MIN_FRAMES: usize = TIME_BINS;
-/// The fewest samples a recording needs: [`MIN_FRAMES`] frames at [`HOP_LEN`] (768 samples,
-/// 1.92 s at 400 Hz; the paper's shortest behaviour lasts 3.9 s).
-pub const MIN_SAMPLES: usize = FRAME_LEN + (MIN_FRAMES - 1) * HOP_LEN;
+/// The lowest sample rate with at least one DFT bin per frequency bin (`0.32·rate + 1 ≥ 25`),
+/// Hz.
+pub const MIN_RATE_HZ: f64 = 75.0;
+/// The highest sample rate a plan is made for, Hz (a 0.64 s frame of 640 000 samples).
+pub const MAX_RATE_HZ: f64 = 1e6;
 
 /// The accelerometer columns of a scratch capture.
 pub const ACCEL_COLUMNS: [&str; 3] = [
@@ -105,15 +116,16 @@ pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, RecognizeE
         .collect()
 }
 
-/// `m_j − m̄_j`, where `m̄_j` is the mean of the [`MOVING_AVERAGE_LEN`] samples centred on `j`
-/// (indices `j − 50 … j + 49`).
+/// `m_j − m̄_j`, where `m̄_j` is the mean of the `len` samples centred on `j` (indices
+/// `j − len/2 … j + len − len/2 − 1`).
 ///
 /// Edges: near the ends the window is cut to the samples that exist and the mean is taken over
 /// those. Padding with zeros would turn gravity (~9.8 m/s² in the magnitude) into a huge false
-/// step at both ends; a causal window would delay the average by 50 samples and leak every force
-/// change into the deviation. A recording shorter than the window is averaged as a whole.
-pub fn moving_average_deviation(m: &[f64]) -> Vec<f64> {
+/// step at both ends; a causal window would delay the average by half its length and leak every
+/// force change into the deviation. A recording shorter than the window is averaged as a whole.
+pub fn moving_average_deviation(m: &[f64], len: usize) -> Vec<f64> {
     let n = m.len();
+    let len = len.max(1);
     let mut prefix = Vec::with_capacity(n + 1);
     prefix.push(0.0);
     let mut acc = 0.0;
@@ -121,21 +133,22 @@ pub fn moving_average_deviation(m: &[f64]) -> Vec<f64> {
         acc += v;
         prefix.push(acc);
     }
-    let half = MOVING_AVERAGE_LEN / 2;
+    let half = len / 2;
     (0..n)
         .map(|j| {
             let lo = j.saturating_sub(half);
-            let hi = (j + MOVING_AVERAGE_LEN - half).min(n);
+            let hi = (j + len - half).min(n);
             let mean = (prefix[hi] - prefix[lo]) / (hi - lo) as f64;
             m[j] - mean
         })
         .collect()
 }
 
-/// Magnitude spectrogram: `frames × SPECTRUM_BINS` values, frame-major.
+/// Magnitude spectrogram: `frames × bins` values, frame-major, `bins` the DFT's `0 … Nyquist`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spectrogram {
     frames: usize,
+    bins: usize,
     values: Vec<f64>,
 }
 
@@ -145,15 +158,21 @@ impl Spectrogram {
         self.frames
     }
 
-    /// The [`SPECTRUM_BINS`] magnitudes of one frame, or `None` past the end.
+    /// The magnitudes of one frame (DFT bins `0 … Nyquist`), or `None` past the end.
     pub fn frame(&self, index: usize) -> Option<&[f64]> {
-        self.values
-            .get(index * SPECTRUM_BINS..(index + 1) * SPECTRUM_BINS)
+        self.values.get(index * self.bins..(index + 1) * self.bins)
     }
 }
 
-/// Computes spectrograms with a planned 256-point real FFT, reusing its buffers.
+/// The spectrotemporal pipeline at one sample rate: the paper's lengths in samples at that rate
+/// and a planned real FFT of one frame, reused for every frame.
 pub struct SpectrogramPlan {
+    rate_hz: f64,
+    moving_average_len: usize,
+    frame_len: usize,
+    hop_len: usize,
+    /// DFT bins `0 … band_bins − 1` lie in `0 … BAND_HZ` (and below Nyquist).
+    band_bins: usize,
     fft: Arc<dyn RealToComplex<f64>>,
     window: Vec<f64>,
 }
@@ -161,57 +180,115 @@ pub struct SpectrogramPlan {
 impl std::fmt::Debug for SpectrogramPlan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SpectrogramPlan")
-            .field("frame_len", &FRAME_LEN)
-            .field("hop_len", &HOP_LEN)
+            .field("rate_hz", &self.rate_hz)
+            .field("moving_average_len", &self.moving_average_len)
+            .field("frame_len", &self.frame_len)
+            .field("hop_len", &self.hop_len)
+            .field("band_bins", &self.band_bins)
             .finish()
     }
 }
 
-impl Default for SpectrogramPlan {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl SpectrogramPlan {
-    /// Plans the FFT. The window is a periodic Hann window: it keeps a tone's energy within
-    /// ±1 DFT bin (a rectangular window would spread it over the whole spectrum and blur the 25
-    /// frequency bins), and at 50 % overlap its copies sum to a constant.
-    pub fn new() -> Self {
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(FRAME_LEN);
-        let window = (0..FRAME_LEN)
+    /// The pipeline for a recording sampled at `rate_hz`: [`MOVING_AVERAGE_S`] and [`FRAME_S`]
+    /// rounded to whole samples, a hop of half a frame, and the DFT bins up to [`BAND_HZ`] (or
+    /// Nyquist, if lower). A rate below [`MIN_RATE_HZ`] (fewer DFT bins than frequency bins)
+    /// or above [`MAX_RATE_HZ`] is a typed error.
+    ///
+    /// The window is a periodic Hann window: it keeps a tone's energy within ±1 DFT bin (a
+    /// rectangular window would spread it over the whole spectrum and blur the 25 frequency
+    /// bins), and at the 50 % overlap its copies sum to a constant, so every sample (away from
+    /// the ends) weighs the same and no part of the scratch is missed between frames.
+    pub fn at_rate(rate_hz: f64) -> Result<Self, RecognizeError> {
+        if !(rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)) {
+            return Err(RecognizeError::Parameter {
+                of: "setting",
+                name: "rate_hz",
+                value: rate_hz,
+                reason: "75 Hz to 10^6 Hz for the spectrotemporal histogram (at least one DFT bin \
+                         per frequency bin)",
+            });
+        }
+        let frame_len = ((FRAME_S * rate_hz).round() as usize).max(2);
+        let spectrum_bins = frame_len / 2 + 1;
+        // The small slack keeps a band edge that falls exactly on a bin (200 Hz at 400 Hz or
+        // 2.2 kHz) inside the band despite rounding in the division.
+        let in_band = (BAND_HZ * frame_len as f64 / rate_hz + 1e-9).floor() as usize + 1;
+        let band_bins = in_band.min(spectrum_bins);
+        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(frame_len);
+        let window = (0..frame_len)
             .map(|i| {
-                let phase = 2.0 * std::f64::consts::PI * i as f64 / FRAME_LEN as f64;
+                let phase = 2.0 * std::f64::consts::PI * i as f64 / frame_len as f64;
                 0.5 - 0.5 * phase.cos()
             })
             .collect();
-        Self { fft, window }
+        Ok(Self {
+            rate_hz,
+            moving_average_len: ((MOVING_AVERAGE_S * rate_hz).round() as usize).max(1),
+            frame_len,
+            hop_len: frame_len / 2,
+            band_bins,
+            fft,
+            window,
+        })
+    }
+
+    /// The rate the plan was made for, Hz.
+    pub fn rate_hz(&self) -> f64 {
+        self.rate_hz
+    }
+
+    /// Samples per DFT frame.
+    pub fn frame_len(&self) -> usize {
+        self.frame_len
+    }
+
+    /// Samples between frames.
+    pub fn hop_len(&self) -> usize {
+        self.hop_len
+    }
+
+    /// Samples of the moving average.
+    pub fn moving_average_len(&self) -> usize {
+        self.moving_average_len
+    }
+
+    /// DFT bins inside the histogram's band (`0 … BAND_HZ`, or Nyquist if lower).
+    pub fn band_bins(&self) -> usize {
+        self.band_bins
+    }
+
+    /// The fewest samples a recording needs: [`MIN_FRAMES`] frames (1.92 s at any rate).
+    pub fn min_samples(&self) -> usize {
+        self.frame_len + (MIN_FRAMES - 1) * self.hop_len
+    }
+
+    /// Histogram bin of DFT bin `k`, or `None` above the band: the band's DFT bins are split
+    /// into 25 runs of (almost) equal width, `⌊k·25/band_bins⌋` (5 or 6 DFT bins, 7.8–9.4 Hz).
+    pub fn frequency_bin(&self, k: usize) -> Option<usize> {
+        (k < self.band_bins).then(|| k * FREQUENCY_BINS / self.band_bins)
     }
 
     /// Spectrogram of `signal` (normally the moving-average deviation): frames start every
-    /// [`HOP_LEN`] samples, as many as fit entirely (the tail shorter than a hop is dropped).
-    /// Magnitudes are `|X_k|` scaled by `2 / Σ window`, so a tone of amplitude `A` peaks at
-    /// about `A` whatever the frame length.
+    /// [`SpectrogramPlan::hop_len`] samples, as many as fit entirely (the tail shorter than a hop
+    /// is dropped). Magnitudes are `|X_k|` scaled by `2 / Σ window`, so a tone of amplitude `A`
+    /// peaks at about `A` whatever the frame length.
     pub fn spectrogram(&self, signal: &[f64]) -> Result<Spectrogram, RecognizeError> {
-        if signal.len() < MIN_SAMPLES {
-            return Err(RecognizeError::TooShort {
-                samples: signal.len(),
-                needed: MIN_SAMPLES,
-            });
-        }
+        self.check_length(signal.len())?;
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
             return Err(RecognizeError::NonFiniteSample { index });
         }
-        let frames = (signal.len() - FRAME_LEN) / HOP_LEN + 1;
+        let frames = (signal.len() - self.frame_len) / self.hop_len + 1;
+        let bins = self.frame_len / 2 + 1;
         let scale = 2.0 / self.window.iter().sum::<f64>();
         let mut input = self.fft.make_input_vec();
         let mut output = self.fft.make_output_vec();
-        let mut values = Vec::with_capacity(frames * SPECTRUM_BINS);
+        let mut values = Vec::with_capacity(frames * bins);
         for f in 0..frames {
-            let start = f * HOP_LEN;
+            let start = f * self.hop_len;
             for ((dst, &s), &w) in input
                 .iter_mut()
-                .zip(&signal[start..start + FRAME_LEN])
+                .zip(&signal[start..start + self.frame_len])
                 .zip(&self.window)
             {
                 *dst = s * w;
@@ -219,7 +296,7 @@ impl SpectrogramPlan {
             self.fft.process(&mut input, &mut output)?;
             values.extend(output.iter().map(|c| c.norm() * scale));
         }
-        Ok(Spectrogram { frames, values })
+        Ok(Spectrogram { frames, bins, values })
     }
 
     /// The full pipeline on three accelerometer axes: magnitude, moving-average deviation,
@@ -243,7 +320,7 @@ impl SpectrogramPlan {
         signal: &[f64],
         scale: CellScale,
     ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
-        // Checked before the moving average, which would smear one bad sample over 100.
+        // Checked before the moving average, which would smear one bad sample over many.
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
             return Err(RecognizeError::NonFiniteSample { index });
         }
@@ -252,14 +329,17 @@ impl SpectrogramPlan {
 
     /// Steps 2–4 on a finite per-sample signal (the magnitude, or a single axis).
     fn signal_features(&self, m: &[f64], scale: CellScale) -> Result<[f64; FEATURE_LEN], RecognizeError> {
-        if m.len() < MIN_SAMPLES {
-            return Err(RecognizeError::TooShort {
-                samples: m.len(),
-                needed: MIN_SAMPLES,
-            });
+        self.check_length(m.len())?;
+        let d = moving_average_deviation(m, self.moving_average_len);
+        Ok(self.histogram(&self.spectrogram(&d)?, scale))
+    }
+
+    fn check_length(&self, samples: usize) -> Result<(), RecognizeError> {
+        let needed = self.min_samples();
+        if samples < needed {
+            return Err(RecognizeError::TooShort { samples, needed });
         }
-        let d = moving_average_deviation(m);
-        Ok(histogram(&self.spectrogram(&d)?, scale))
+        Ok(())
     }
 
     /// Features of a capture's [`ACCEL_COLUMNS`] when it has all three, else of its
@@ -280,47 +360,42 @@ impl SpectrogramPlan {
         let column = |name| capture.column(name).map_err(RecognizeError::NoAccelerometer);
         self.features(column(x)?, column(y)?, column(z)?, scale)
     }
-}
 
-/// Histogram bin of DFT bin `k`: the 129 bins are split into 25 runs of (almost) equal width
-/// (5 or 6 DFT bins, 7.8–9.4 Hz at 400 Hz), `⌊k·25/129⌋`.
-pub fn frequency_bin(k: usize) -> usize {
-    k * FREQUENCY_BINS / SPECTRUM_BINS
+    /// The 5 × 25 spectrotemporal histogram, time-major (`index = t·25 + f`). Each cell is
+    /// first the mean magnitude of its (frame, DFT bin) pairs, then scaled as `scale` says.
+    pub fn histogram(&self, spec: &Spectrogram, scale: CellScale) -> [f64; FEATURE_LEN] {
+        let mut sum = [0.0; FEATURE_LEN];
+        let mut count = [0usize; FEATURE_LEN];
+        for f in 0..spec.frames {
+            let t = time_bin(f, spec.frames);
+            let row = &spec.values[f * spec.bins..(f + 1) * spec.bins];
+            for (k, &v) in row.iter().enumerate() {
+                let Some(b) = self.frequency_bin(k) else { break };
+                let cell = t * FREQUENCY_BINS + b;
+                sum[cell] += v;
+                count[cell] += 1;
+            }
+        }
+        let mut out = [0.0; FEATURE_LEN];
+        for ((o, s), c) in out.iter_mut().zip(sum).zip(count) {
+            if c > 0 {
+                *o = s / c as f64;
+            }
+        }
+        if scale == CellScale::UnitSum {
+            let total: f64 = out.iter().sum();
+            if total > 0.0 {
+                out.iter_mut().for_each(|v| *v /= total);
+            }
+        }
+        out
+    }
 }
 
 /// Time bin of frame `f` of `frames`: `⌊f·5/frames⌋`, so each bin holds a fifth of the
 /// recording's frames (±1) whatever its length.
 pub fn time_bin(f: usize, frames: usize) -> usize {
     f * TIME_BINS / frames.max(1)
-}
-
-/// The 5 × 25 spectrotemporal histogram, time-major (`index = t·25 + f`). Each cell is first the
-/// mean magnitude of its (frame, DFT bin) pairs, then scaled as `scale` says.
-pub fn histogram(spec: &Spectrogram, scale: CellScale) -> [f64; FEATURE_LEN] {
-    let mut sum = [0.0; FEATURE_LEN];
-    let mut count = [0usize; FEATURE_LEN];
-    for f in 0..spec.frames {
-        let t = time_bin(f, spec.frames);
-        let row = &spec.values[f * SPECTRUM_BINS..(f + 1) * SPECTRUM_BINS];
-        for (k, &v) in row.iter().enumerate() {
-            let cell = t * FREQUENCY_BINS + frequency_bin(k);
-            sum[cell] += v;
-            count[cell] += 1;
-        }
-    }
-    let mut out = [0.0; FEATURE_LEN];
-    for ((o, s), c) in out.iter_mut().zip(sum).zip(count) {
-        if c > 0 {
-            *o = s / c as f64;
-        }
-    }
-    if scale == CellScale::UnitSum {
-        let total: f64 = out.iter().sum();
-        if total > 0.0 {
-            out.iter_mut().for_each(|v| *v /= total);
-        }
-    }
-    out
 }
 
 #[cfg(test)]
@@ -346,18 +421,28 @@ mod tests {
         [vec![0.0; n], vec![0.0; n], z]
     }
 
+    /// The paper's pipeline: 400 Hz, where its sample counts hold.
+    fn plan() -> SpectrogramPlan {
+        SpectrogramPlan::at_rate(RATE_HZ).expect("a valid rate")
+    }
+
     fn cell(h: &[f64; FEATURE_LEN], t: usize, f: usize) -> f64 {
         h[t * FREQUENCY_BINS + f]
     }
 
     #[test]
-    fn bins_cover_the_spectrum_evenly() {
-        assert_eq!(SPECTRUM_BINS, 129);
-        assert_eq!(MIN_SAMPLES, 768);
-        assert_eq!(frequency_bin(0), 0);
-        assert_eq!(frequency_bin(128), 24);
+    fn at_400_hz_the_counts_are_the_papers_and_bins_cover_the_spectrum_evenly() {
+        let plan = plan();
+        assert_eq!(plan.moving_average_len(), 100);
+        assert_eq!(plan.frame_len(), 256);
+        assert_eq!(plan.hop_len(), 128);
+        assert_eq!(plan.band_bins(), 129);
+        assert_eq!(plan.min_samples(), 768);
+        assert_eq!(plan.frequency_bin(0), Some(0));
+        assert_eq!(plan.frequency_bin(128), Some(24));
+        assert_eq!(plan.frequency_bin(129), None);
         for b in 0..FREQUENCY_BINS {
-            let width = (0..SPECTRUM_BINS).filter(|&k| frequency_bin(k) == b).count();
+            let width = (0..129).filter(|&k| plan.frequency_bin(k) == Some(b)).count();
             assert!((5..=6).contains(&width), "bin {b} has {width} DFT bins");
         }
         assert_eq!(time_bin(0, 10), 0);
@@ -367,7 +452,7 @@ mod tests {
     #[test]
     fn moving_average_removes_gravity_and_keeps_vibration() {
         let [x, y, z] = tone(1000, 78.125, 0.5, 0);
-        let d = moving_average_deviation(&magnitude(&x, &y, &z).expect("equal axes"));
+        let d = moving_average_deviation(&magnitude(&x, &y, &z).expect("equal axes"), 100);
         // Constant part gone everywhere, edges included (truncated window, not zero padding).
         let mean = d.iter().sum::<f64>() / d.len() as f64;
         assert!(mean.abs() < 0.01, "mean {mean}");
@@ -380,11 +465,9 @@ mod tests {
     fn pure_tone_lands_in_its_frequency_bin() {
         // 78.125 Hz is DFT bin 50 of 256 at 400 Hz; histogram bin ⌊50·25/129⌋ = 9 holds DFT
         // bins 47…51, so the Hann main lobe (49…51) stays inside.
-        assert_eq!(frequency_bin(50), 9);
+        assert_eq!(plan().frequency_bin(50), Some(9));
         let [x, y, z] = tone(2000, 78.125, 0.5, 0);
-        let h = SpectrogramPlan::new()
-            .features(&x, &y, &z, CellScale::Mean)
-            .expect("long enough");
+        let h = plan().features(&x, &y, &z, CellScale::Mean).expect("long enough");
         for t in 0..TIME_BINS {
             let target = cell(&h, t, 9);
             // Amplitude 0.5 peaks at 0.5 in DFT bin 50, 0.25 in 49 and 51: mean over 5 bins 0.2.
@@ -393,7 +476,7 @@ mod tests {
                 assert!(cell(&h, t, f) < 0.01 * target, "leak into ({t}, {f})");
             }
         }
-        let unit = SpectrogramPlan::new()
+        let unit = plan()
             .features(&x, &y, &z, CellScale::UnitSum)
             .expect("long enough");
         let in_bin: f64 = (0..TIME_BINS).map(|t| cell(&unit, t, 9)).sum();
@@ -405,10 +488,10 @@ mod tests {
     fn late_tone_shows_only_in_late_time_bins() {
         let n = 4000;
         let [x, y, z] = tone(n, 150.0, 1.0, n / 2);
-        let h = SpectrogramPlan::new()
-            .features(&x, &y, &z, CellScale::Mean)
-            .expect("long enough");
-        let f = frequency_bin((150.0 * FRAME_LEN as f64 / RATE_HZ).round() as usize);
+        let h = plan().features(&x, &y, &z, CellScale::Mean).expect("long enough");
+        let f = plan()
+            .frequency_bin((150.0 * 256.0 / RATE_HZ).round() as usize)
+            .expect("in the band");
         let early = cell(&h, 0, f).max(cell(&h, 1, f));
         let late = cell(&h, 3, f).min(cell(&h, 4, f));
         assert!(late > 0.2, "late {late}");
@@ -420,7 +503,7 @@ mod tests {
 
     #[test]
     fn features_do_not_depend_on_length() {
-        let plan = SpectrogramPlan::new();
+        let plan = plan();
         for scale in [CellScale::Mean, CellScale::UnitSum] {
             let [x, y, z] = tone(1560, 61.0, 0.3, 0);
             let short = plan.features(&x, &y, &z, scale).expect("long enough");
@@ -439,8 +522,8 @@ mod tests {
 
     #[test]
     fn bad_input_is_a_typed_error() {
-        let plan = SpectrogramPlan::new();
-        let short = vec![0.0; MIN_SAMPLES - 1];
+        let plan = plan();
+        let short = vec![0.0; 767];
         assert!(matches!(
             plan.features(&short, &short, &short, CellScale::Mean),
             Err(RecognizeError::TooShort {
@@ -448,7 +531,7 @@ mod tests {
                 needed: 768
             })
         ));
-        let ok = vec![0.0; MIN_SAMPLES];
+        let ok = vec![0.0; 768];
         assert!(matches!(
             plan.features(&ok, &short, &ok, CellScale::Mean),
             Err(RecognizeError::AxisLengths {
@@ -473,7 +556,7 @@ mod tests {
     #[test]
     fn capture_without_accelerometer_is_a_typed_error() {
         use capture::{CaptureKind, Metadata};
-        let n = MIN_SAMPLES;
+        let n = 768;
         let capture = Capture::new(
             Metadata::new(CaptureKind::Rubbing, "test", RATE_HZ),
             [
@@ -492,7 +575,7 @@ mod tests {
             ],
         )
         .expect("a valid rubbing capture");
-        let err = SpectrogramPlan::new()
+        let err = plan()
             .capture_features(&capture, CellScale::Mean)
             .expect_err("no y axis");
         assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
@@ -537,7 +620,7 @@ mod tests {
 
     #[test]
     fn a_single_axis_capture_gives_the_spectrum_of_that_axis() {
-        let plan = SpectrogramPlan::new();
+        let plan = plan();
         let [_, _, z] = tone(2000, 78.125, 0.5, 0);
         let capture = accel_capture(vec![(VIBRATION_COLUMN, z.clone())]);
         for scale in [CellScale::Mean, CellScale::UnitSum] {
@@ -550,7 +633,7 @@ mod tests {
         }
         // Length and finiteness are checked as on three axes.
         assert!(matches!(
-            plan.single_axis_features(&z[..MIN_SAMPLES - 1], CellScale::Mean),
+            plan.single_axis_features(&z[..767], CellScale::Mean),
             Err(RecognizeError::TooShort {
                 samples: 767,
                 needed: 768
@@ -566,7 +649,7 @@ mod tests {
 
     #[test]
     fn three_axis_captures_keep_their_features() {
-        let plan = SpectrogramPlan::new();
+        let plan = plan();
         let [x, y, z] = three_axes(3000);
         let axes = accel_capture(vec![
             (ACCEL_COLUMNS[0], x.clone()),
@@ -583,8 +666,10 @@ mod tests {
         for scale in [CellScale::Mean, CellScale::UnitSum] {
             // The three-axis pipeline as it was: magnitude, deviation, spectrogram, histogram.
             let m = magnitude(&x, &y, &z).expect("equal axes");
-            let before = histogram(
-                &plan.spectrogram(&moving_average_deviation(&m)).expect("long"),
+            let before = plan.histogram(
+                &plan
+                    .spectrogram(&moving_average_deviation(&m, 100))
+                    .expect("long"),
                 scale,
             );
             assert_eq!(plan.features(&x, &y, &z, scale).expect("long"), before);
@@ -599,7 +684,7 @@ mod tests {
     /// bit for bit. A signal that crosses zero is rectified by the magnitude, and differs.
     #[test]
     fn one_nonzero_axis_of_one_sign_gives_the_single_axis_histogram() {
-        let plan = SpectrogramPlan::new();
+        let plan = plan();
         let n = 2500;
         let [zero, _, up] = tone(n, 61.0, 0.8, 300);
         let down: Vec<f64> = up.iter().map(|v| -v).collect();
@@ -627,10 +712,74 @@ mod tests {
 
     #[test]
     fn a_capture_with_neither_is_a_typed_error() {
-        let capture = accel_capture(vec![(capture::kind::FRICTION_FORCE_N, vec![0.0; MIN_SAMPLES])]);
-        let err = SpectrogramPlan::new()
+        let capture = accel_capture(vec![(capture::kind::FRICTION_FORCE_N, vec![0.0; 768])]);
+        let err = plan()
             .capture_features(&capture, CellScale::Mean)
             .expect_err("no accelerometer");
         assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
+    }
+
+    /// The same vibration recorded at 400 Hz and at 2.2 kHz: the same histogram, because the
+    /// pipeline is defined in seconds and hertz. A 256-sample frame at 2.2 kHz would have
+    /// put both tones into the first frequency bin.
+    #[test]
+    fn the_histogram_does_not_depend_on_the_sample_rate() {
+        let signal = |rate_hz: f64| -> Vec<f64> {
+            let n = (6.0 * rate_hz) as usize;
+            (0..n)
+                .map(|i| {
+                    let t = i as f64 / rate_hz;
+                    let tau = 2.0 * std::f64::consts::PI;
+                    G + 0.5 * (tau * 37.0 * t).sin() + 0.2 * (tau * 151.0 * t).sin()
+                })
+                .collect()
+        };
+        let slow = plan();
+        let fast = SpectrogramPlan::at_rate(2200.0).expect("a valid rate");
+        assert_eq!(fast.frame_len(), 1408);
+        assert_eq!(fast.band_bins(), 129);
+        let a = slow
+            .single_axis_features(&signal(400.0), CellScale::Mean)
+            .expect("long");
+        let b = fast
+            .single_axis_features(&signal(2200.0), CellScale::Mean)
+            .expect("long");
+        let norm = a.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f64>()
+            .sqrt();
+        assert!(diff < 0.02 * norm, "|Δ| {diff} vs |x| {norm}");
+        for t in 0..TIME_BINS {
+            // 37 Hz is in bin ⌊37/8⌋ = 4, 151 Hz in bin 18, at both rates.
+            let top = |h: &[f64; FEATURE_LEN]| {
+                let mut order: Vec<usize> = (0..FREQUENCY_BINS).collect();
+                order.sort_by(|&i, &j| cell(h, t, j).total_cmp(&cell(h, t, i)));
+                let mut two = [order[0], order[1]];
+                two.sort_unstable();
+                two
+            };
+            assert_eq!(top(&a), [4, 18]);
+            assert_eq!(top(&b), [4, 18]);
+        }
+    }
+
+    #[test]
+    fn a_slow_sensor_covers_up_to_its_nyquist_and_a_too_slow_one_is_refused() {
+        let plan = SpectrogramPlan::at_rate(100.0).expect("a valid rate");
+        assert_eq!(plan.frame_len(), 64);
+        assert_eq!(plan.band_bins(), 33);
+        assert!((0..FREQUENCY_BINS).all(|b| (0..33).any(|k| plan.frequency_bin(k) == Some(b))));
+        for bad in [74.0, 0.0, -400.0, f64::NAN, f64::INFINITY, 2e6] {
+            assert!(
+                matches!(
+                    SpectrogramPlan::at_rate(bad),
+                    Err(RecognizeError::Parameter { name: "rate_hz", .. })
+                ),
+                "{bad}"
+            );
+        }
     }
 }

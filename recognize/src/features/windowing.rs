@@ -404,7 +404,6 @@ pub(crate) fn window_vectors(
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-    plan: &SpectrogramPlan,
 ) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
     if let Some(kept) = c.kept() {
         let vectors = kept
@@ -436,6 +435,7 @@ pub(crate) fn window_vectors(
         let [x, y, z] = ACCEL_COLUMNS;
         Axes::Three(column(x)?, column(y)?, column(z)?)
     };
+    let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
     nakano
         .into_iter()

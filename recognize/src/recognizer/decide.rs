@@ -6,7 +6,7 @@ use super::file::{BehaviourKnn, BehaviourSom, BehaviourSvc, RecognizerBody, Reco
 use super::labelled::check_rate;
 use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
-use crate::features::spectral::{CellScale, SpectrogramPlan};
+use crate::features::spectral::CellScale;
 use crate::features::{
     FeatureSet, NakanoWindowing, WindowScaling, capture_histogram, window_vectors, windows,
 };
@@ -106,7 +106,7 @@ impl RecognizerFile {
                 })
             }
             RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } | RecognizerBody::SomScratches { .. } => {
-                let (_, label, p) = self.scratch_prediction(capture, &SpectrogramPlan::new())?;
+                let (_, label, p) = self.scratch_prediction(capture)?;
                 Ok(vec![whole_capture_decision(capture, label, &p)])
             }
         }
@@ -124,8 +124,7 @@ impl RecognizerFile {
     ) -> Result<Vec<Decision>, RecognizeError> {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
-        let plan = SpectrogramPlan::new();
-        window_vectors(capture, windowing, features, cell_scale, &plan)?
+        window_vectors(capture, windowing, features, cell_scale)?
             .into_iter()
             .map(|(start, v)| {
                 let (label, confidence) = classify(&v)?;
@@ -161,7 +160,6 @@ impl RecognizerFile {
     pub(crate) fn scratch_prediction(
         &self,
         capture: &LabelledCapture,
-        plan: &SpectrogramPlan,
     ) -> Result<(usize, usize, Vec<f64>), RecognizeError> {
         match &self.body {
             RecognizerBody::Som { .. }
@@ -174,15 +172,15 @@ impl RecognizerFile {
             RecognizerBody::SomScratches {
                 cell_scale,
                 behaviours,
-            } => self.scratch_prediction_by(behaviours, capture, plan, *cell_scale),
+            } => self.scratch_prediction_by(behaviours, capture, *cell_scale),
             RecognizerBody::Knn {
                 cell_scale,
                 behaviours,
-            } => self.scratch_prediction_by(behaviours, capture, plan, *cell_scale),
+            } => self.scratch_prediction_by(behaviours, capture, *cell_scale),
             RecognizerBody::Svm {
                 cell_scale,
                 behaviours,
-            } => self.scratch_prediction_by(behaviours, capture, plan, *cell_scale),
+            } => self.scratch_prediction_by(behaviours, capture, *cell_scale),
         }
     }
 
@@ -192,11 +190,10 @@ impl RecognizerFile {
         &self,
         behaviours: &[impl BehaviourClassifier],
         capture: &LabelledCapture,
-        plan: &SpectrogramPlan,
         cell_scale: CellScale,
     ) -> Result<(usize, usize, Vec<f64>), RecognizeError> {
         let b = behaviour_index(behaviours, capture)?;
-        let features = capture_histogram(plan, capture, cell_scale)?;
+        let features = capture_histogram(capture, cell_scale)?;
         let (label, p) = behaviours[b].classify(&features, self.classes.len())?;
         Ok((b, label, p))
     }

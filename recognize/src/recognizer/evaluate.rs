@@ -12,7 +12,6 @@ use super::labelled::{check_rate, class_index};
 use super::{Decision, LabelledCapture};
 use crate::RecognizeError;
 use crate::eval::ConfusionMatrix;
-use crate::features::spectral::SpectrogramPlan;
 use crate::features::{WindowlessCapture, windows};
 #[cfg(doc)]
 use crate::knn::fuse;
@@ -119,7 +118,6 @@ impl RecognizerFile {
         let names = self.behaviour_names();
         let weights = self.fusion_weights();
         let mut alone: Vec<Option<ConfusionMatrix<String>>> = vec![None; names.len()];
-        let plan = SpectrogramPlan::new();
         // (surface, trial) → the group's (behaviour, probabilities); trial-less captures alone.
         let mut trials: std::collections::BTreeMap<(usize, String), TrialScratches> =
             std::collections::BTreeMap::new();
@@ -127,7 +125,7 @@ impl RecognizerFile {
         for c in captures {
             let c = c.borrow();
             let truth = class_index(&self.classes, c)?;
-            let (b, label, p) = self.scratch_prediction(c, &plan)?;
+            let (b, label, p) = self.scratch_prediction(c)?;
             let matrix = match &mut alone[b] {
                 Some(m) => m,
                 slot => slot.insert(ConfusionMatrix::new(self.classes.clone())?),

@@ -21,8 +21,11 @@ use capture::{CaptureRef, sha256_hex};
 
 /// Format name in every recognizer file.
 pub const RECOGNIZER_FORMAT: &str = "palpus-recognizer";
-/// Current recognizer file version.
-pub const RECOGNIZER_VERSION: u32 = 1;
+/// Current recognizer file version. Version 2: the spectrotemporal histogram is defined in
+/// seconds and hertz (see [`crate::spectral`]); a version-1 file's histograms were counted in
+/// samples and mean something else at any rate but 400 Hz, so such a file is refused, not
+/// misread; a version-1 file over Nakano's features alone is read as it was.
+pub const RECOGNIZER_VERSION: u32 = 2;
 
 /// One behaviour's k-NN.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -281,13 +284,25 @@ impl RecognizerFile {
                 format!("`{}` is not `{RECOGNIZER_FORMAT}`", self.format),
             );
         }
-        if self.version != RECOGNIZER_VERSION {
+        // Version 1 differs only in the histogram's definition, so a version-1 recognizer over
+        // Nakano's features alone reads the same under both and stays usable.
+        let same_in_both = self.version == 1 && self.feature_set() == FeatureSet::Nakano;
+        if self.version != RECOGNIZER_VERSION && !same_in_both {
             return bad(
                 "version",
-                format!(
-                    "{} is not supported (this build reads {RECOGNIZER_VERSION})",
-                    self.version
-                ),
+                if self.version == 1 {
+                    format!(
+                        "1 is not supported for {} features (this build reads 2, whose \
+                         spectrotemporal histograms are defined in seconds and hertz): train the \
+                         recognizer again",
+                        self.feature_set()
+                    )
+                } else {
+                    format!(
+                        "{} is not supported (this build reads {RECOGNIZER_VERSION})",
+                        self.version
+                    )
+                },
             );
         }
         if self.classes.is_empty() {

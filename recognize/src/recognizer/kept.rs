@@ -14,7 +14,7 @@ use std::sync::Arc;
 use super::file::{RecognizerBody, RecognizerFile};
 use super::labelled::{KeptFeatures, KeptWindows, LabelledCapture, check_rate};
 use crate::RecognizeError;
-use crate::features::spectral::{CellScale, SpectrogramPlan};
+use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, Travel, capture_histogram, window_vectors};
 use capture::Capture;
 
@@ -119,11 +119,10 @@ impl LabelledCapture {
         for features in feature_sets.chain(histograms) {
             features.check_columns(std::slice::from_ref(&self))?;
         }
-        let plan = SpectrogramPlan::new();
         let mut windows = Vec::with_capacity(needs.windows.len());
         for &(windowing, features, cell_scale) in &needs.windows {
             check_rate(&self, windowing.rate_hz)?;
-            let vectors = window_vectors(&self, &windowing, features, cell_scale, &plan)?;
+            let vectors = window_vectors(&self, &windowing, features, cell_scale)?;
             windows.push(KeptWindows {
                 windowing,
                 features,
@@ -134,7 +133,7 @@ impl LabelledCapture {
         let histograms = needs
             .histograms
             .iter()
-            .map(|&scale| Ok((scale, capture_histogram(&plan, &self, scale)?)))
+            .map(|&scale| Ok((scale, capture_histogram(&self, scale)?)))
             .collect::<Result<_, RecognizeError>>()?;
         let kept = KeptFeatures {
             samples: self.capture.len(),
