@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use recognize::{
-    CategoryTree, LabelledCapture, RecognizeError, RecognizerFile, StopRule, classical_mds,
+    CategoryTree, FeatureNeeds, LabelledCapture, RecognizeError, RecognizerFile, StopRule, classical_mds,
     distances_from_similarity, isomap, recursive_ncut, similarity_from_confusion, surface_confusion,
 };
 
+use super::recognize_cmd::keeping_each;
 use super::train_args::{Method, TrainOptions};
 
 /// Group surfaces into a hierarchy of categories by how often the recognizer confuses them.
@@ -54,17 +55,25 @@ pub(crate) struct CategorizeArgs {
 }
 
 pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
-    let read = |paths: &[PathBuf]| -> anyhow::Result<Vec<LabelledCapture>> {
-        paths
-            .iter()
-            .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
-            .collect()
+    // Each capture is held only as the features training and deciding read.
+    let read = |paths: &[PathBuf], needs: &dyn Fn(f64) -> anyhow::Result<FeatureNeeds>| {
+        keeping_each(
+            paths,
+            |p| {
+                let c =
+                    LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display()))?;
+                Ok(vec![c])
+            },
+            needs,
+        )
     };
     let (method, confusion) = match args.method {
         Some(method) => {
-            let captures = read(&args.inputs)?;
             // One recognizer per surface, each with the given seed.
             let settings = args.training.settings(method);
+            let captures = read(&args.inputs, &|rate_hz| {
+                Ok(FeatureNeeds::training_and_decisions(&settings, rate_hz)?)
+            })?;
             let confusion = surface_confusion(&captures, |train, _| {
                 recognize::train(train, &settings).map_err(Box::new)
             })?;
@@ -81,7 +90,8 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
                 anyhow::bail!("give captures after {} to evaluate it on", model.display());
             }
             let model = RecognizerFile::load(model)?;
-            let e = model.evaluate(&read(captures)?, None)?;
+            let captures = read(captures, &|_| Ok(FeatureNeeds::evaluation(&model, &[])?))?;
+            let e = model.evaluate(&captures, None)?;
             (e.method.to_owned(), e.confusion)
         }
     };

@@ -212,6 +212,20 @@ fn read_keeping(
     default_rate_hz: Option<f64>,
     needs: impl Fn(f64) -> anyhow::Result<FeatureNeeds>,
 ) -> anyhow::Result<Vec<LabelledCapture>> {
+    keeping_each(
+        paths,
+        |path| input.read(std::slice::from_ref(path), default_rate_hz),
+        needs,
+    )
+}
+
+/// Reads `paths` one at a time with `read` and keeps of each capture only the features `needs`
+/// (given the first capture's rate) names, dropping its samples before the next is read.
+pub(crate) fn keeping_each(
+    paths: &[PathBuf],
+    mut read: impl FnMut(&PathBuf) -> anyhow::Result<Vec<LabelledCapture>>,
+    needs: impl Fn(f64) -> anyhow::Result<FeatureNeeds>,
+) -> anyhow::Result<Vec<LabelledCapture>> {
     let bar = ProgressBar::new(paths.len() as u64).with_style(
         ProgressStyle::with_template("reading captures {bar:30} {pos}/{len} {elapsed} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -219,7 +233,7 @@ fn read_keeping(
     let mut needed: Option<FeatureNeeds> = None;
     let mut captures = Vec::with_capacity(paths.len());
     for path in paths {
-        for c in input.read(std::slice::from_ref(path), default_rate_hz)? {
+        for c in read(path)? {
             let needs = match &needed {
                 Some(n) => n,
                 None => needed.insert(needs(c.capture.metadata().rate_hz())?),
@@ -322,15 +336,11 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         anyhow::bail!("--plots draws one evaluation: give a single --window-s with it");
     }
     let rate_hz = model.windowing().map(|w| w.rate_hz);
-    // The plots read each capture's samples again; without them, each capture is held only
-    // as the features the evaluation reads.
-    let captures = if args.plots.is_some() {
-        args.input.read(&args.captures, rate_hz)?
-    } else {
-        read_keeping(&args.input, &args.captures, rate_hz, |_| {
-            Ok(FeatureNeeds::evaluation(&model, &args.window_s)?)
-        })?
-    };
+    // Each capture is held only as the features the evaluation (and the plots, which find
+    // each decision window's node again from the same features) read.
+    let captures = read_keeping(&args.input, &args.captures, rate_hz, |_| {
+        Ok(FeatureNeeds::evaluation(&model, &args.window_s)?)
+    })?;
     if args.window_s.len() > 1 {
         return eval_windows(args, &model, &captures);
     }

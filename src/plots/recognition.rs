@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use recognize::{LabelledCapture, NakanoSignals, RecognizerBody, RecognizerFile};
+use recognize::{LabelledCapture, RecognizerBody, RecognizerFile};
 
 use super::{Area, FAMILY, PlotError, render};
 
@@ -72,7 +72,7 @@ pub fn write_eval_plots(
             None => *windowing,
         };
         // The evaluation reports labels, not nodes: find each decision window's node again
-        // from its features, with the map's own winner rule.
+        // from its features (kept or computed), with the map's own winner rule.
         let mut density = vec![vec![0u64; som.node_labels().len()]; model.classes.len()];
         for c in captures {
             let path = &c.reference.path;
@@ -87,15 +87,10 @@ pub fn write_eval_plots(
                         c.label
                     )
                 })?;
-            let signals = NakanoSignals::from_capture(&c.capture)
-                .with_context(|| format!("reading {}", path.display()))?;
-            for d in model.decisions(c, Some(&windowing))? {
-                let features = signals
-                    .features(d.window_start, windowing.window_samples, &windowing.filters)
-                    .with_context(|| format!("{}: window at sample {}", path.display(), d.window_start))?;
-                let node = som
-                    .winner(&features)
-                    .with_context(|| format!("{}: window at sample {}", path.display(), d.window_start))?;
+            let nodes = model
+                .som_winners(c, Some(&windowing))?
+                .with_context(|| format!("{}: not a map over Nakano's windows", path.display()))?;
+            for node in nodes {
                 if let Some(n) = density[truth].get_mut(node) {
                     *n += 1;
                 }

@@ -47,6 +47,32 @@ pub struct Decision {
 impl RecognizerFile {
     /// The offline pipeline's decisions on one capture (`windowing` overrides the model's, for
     /// a SOM): one per decision window for a SOM, one per capture for a k-NN.
+    /// For a SOM over Nakano's windows: the winning node of each of `capture`'s decision
+    /// windows (`windowing`, else the recognizer's own), in the order of
+    /// [`RecognizerFile::decisions`]; `None` for any other recognizer. Reads a capture whose
+    /// features were kept for those windows as well as a whole one.
+    pub fn som_winners(
+        &self,
+        capture: &LabelledCapture,
+        windowing: Option<&NakanoWindowing>,
+    ) -> Result<Option<Vec<usize>>, RecognizeError> {
+        let RecognizerBody::Som { windowing: own, som } = &self.body else {
+            return Ok(None);
+        };
+        let windowing = windowing.unwrap_or(own);
+        check_rate(capture, windowing.rate_hz)?;
+        let mut scratch = [0.0; FEATURES];
+        windows(capture, windowing)?
+            .into_iter()
+            .map(|(_, features)| {
+                som.decide_into(&features, &mut scratch)
+                    .map(|d| d.node)
+                    .map_err(RecognizeError::som)
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(Some)
+    }
+
     pub fn decisions(
         &self,
         capture: &LabelledCapture,

@@ -675,6 +675,19 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
         );
         assert_eq!(format!("{from_kept:?}"), format!("{full:?}"), "{what}");
         assert!(full.confusion.total() > 0, "{what}");
+        // The plots' nodes per decision window, from kept features as from samples.
+        for (k, whole) in kept.iter().zip(&held_out) {
+            let nodes = model.som_winners(whole, None).expect("winners");
+            assert_eq!(model.som_winners(k, None).expect("winners"), nodes, "{what}");
+            match (&model.body, &nodes) {
+                (RecognizerBody::Som { .. }, Some(nodes)) => {
+                    let decisions = model.decisions(whole, None).expect("decisions");
+                    assert_eq!(nodes.len(), decisions.len(), "{what}");
+                }
+                (RecognizerBody::Som { .. }, None) => panic!("{what}: a SOM without winners"),
+                (_, found) => assert_eq!(found, &None, "{what}"),
+            }
+        }
         assert_eq!(
             format!("{:?}", model.evaluate_fused(&kept).expect("fuses")),
             format!("{:?}", model.evaluate_fused(&held_out).expect("fuses")),
