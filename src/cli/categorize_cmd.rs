@@ -10,7 +10,7 @@ use recognize::{
     distances_from_similarity, isomap, recursive_ncut, similarity_from_confusion, surface_confusion,
 };
 
-use super::recognize_cmd::keeping_each;
+use super::kept_reading::keeping_each;
 use super::train_args::{Method, TrainOptions};
 
 /// Group surfaces into a hierarchy of categories by how often the recognizer confuses them.

@@ -11,6 +11,7 @@ mod devices_cmd;
 mod gen_cmd;
 mod identify_cmd;
 mod import_cmd;
+mod kept_reading;
 mod recognize_cmd;
 mod render_cmd;
 mod run_cmd;

@@ -1,0 +1,34 @@
+//! Reading many captures while keeping of each only the features a command will read, so that
+//! memory follows the feature vectors, not the samples.
+
+use std::path::PathBuf;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use recognize::{FeatureNeeds, LabelledCapture};
+
+/// Reads `paths` one at a time with `read` and keeps of each capture only the features `needs`
+/// (given the first capture's rate) names, dropping its samples before the next is read.
+pub(crate) fn keeping_each(
+    paths: &[PathBuf],
+    mut read: impl FnMut(&PathBuf) -> anyhow::Result<Vec<LabelledCapture>>,
+    needs: impl Fn(f64) -> anyhow::Result<FeatureNeeds>,
+) -> anyhow::Result<Vec<LabelledCapture>> {
+    let bar = ProgressBar::new(paths.len() as u64).with_style(
+        ProgressStyle::with_template("reading captures {bar:30} {pos}/{len} {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut needed: Option<FeatureNeeds> = None;
+    let mut captures = Vec::with_capacity(paths.len());
+    for path in paths {
+        for c in read(path)? {
+            let needs = match &needed {
+                Some(n) => n,
+                None => needed.insert(needs(c.capture.metadata().rate_hz())?),
+            };
+            captures.push(c.keep_features(needs)?);
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(captures)
+}
