@@ -561,27 +561,33 @@ fn hard(
         epsilon,
         kernel: Kernel::Linear,
     }];
-    finish(
-        ModelKind::HardFriction,
+    finish(Fitted {
+        kind: ModelKind::HardFriction,
         train,
         test,
-        vec![Quantity {
+        inputs: vec![Quantity {
             name: kind::NORMAL_FORCE_N.into(),
         }],
-        Quantity {
+        output: Quantity {
             name: kind::FRICTION_FORCE_N.into(),
         },
-        ModelBody::Single(model),
+        body: ModelBody::Single(model),
         hyper,
-        (tr.len(), all.len(), tr.len()),
-        (train_metrics, svr_metrics),
-        (Some(cv), None, net),
-        &[&f],
+        n_train: tr.len(),
+        n_rows: all.len(),
+        n_fit_rows: tr.len(),
+        train_metrics,
+        svr_metrics,
+        coulomb_viscous: Some(cv),
+        coulomb_viscous_stiffness: None,
+        rbf_network: net,
+        fits: &[&f],
         started,
-        range(&all.normal_force_n, 1),
-        (w, Some(b)),
-        Vec::new(),
-    )
+        input_range: range(&all.normal_force_n, 1),
+        w,
+        b: Some(b),
+        stage1: Vec::new(),
+    })
 }
 
 /// The first soft-contact stage: one linear ε-SVR per constant-speed segment.
@@ -751,11 +757,11 @@ fn soft(
     let x_range: Vec<f64> = (0..all.len())
         .flat_map(|i| [all.velocity_mps[i], all.normal_force_n[i]])
         .collect();
-    finish(
-        ModelKind::SoftFriction,
+    finish(Fitted {
+        kind: ModelKind::SoftFriction,
         train,
         test,
-        vec![
+        inputs: vec![
             Quantity {
                 name: kind::TANGENTIAL_VELOCITY_MPS.into(),
             },
@@ -763,20 +769,26 @@ fn soft(
                 name: kind::NORMAL_FORCE_N.into(),
             },
         ],
-        Quantity {
+        output: Quantity {
             name: kind::FRICTION_FORCE_N.into(),
         },
         body,
         hyper,
-        (stage1.len(), all.len(), fit_rows),
-        (train_metrics, svr_metrics),
-        (Some(cv), None, net),
-        &all_fits,
+        n_train: stage1.len(),
+        n_rows: all.len(),
+        n_fit_rows: fit_rows,
+        train_metrics,
+        svr_metrics,
+        coulomb_viscous: Some(cv),
+        coulomb_viscous_stiffness: None,
+        rbf_network: net,
+        fits: &all_fits,
         started,
-        range(&x_range, 2),
-        (None, None),
+        input_range: range(&x_range, 2),
+        w: None,
+        b: None,
         stage1,
-    )
+    })
 }
 
 /// In-tissue samples of an insertion capture: time, [depth, velocity] row-major, force.
@@ -882,11 +894,11 @@ fn needle(
         epsilon,
         kernel: Kernel::Rbf { gamma },
     }];
-    finish(
-        ModelKind::NeedlePuncture,
+    finish(Fitted {
+        kind: ModelKind::NeedlePuncture,
         train,
         test,
-        vec![
+        inputs: vec![
             Quantity {
                 name: kind::DEPTH_M.into(),
             },
@@ -894,40 +906,89 @@ fn needle(
                 name: kind::VELOCITY_MPS.into(),
             },
         ],
-        Quantity {
+        output: Quantity {
             name: kind::AXIAL_FORCE_N.into(),
         },
-        ModelBody::Single(model),
+        body: ModelBody::Single(model),
         hyper,
-        (y.len(), y_all.len(), y.len()),
-        (train_metrics, svr_metrics),
-        (None, Some(law_metrics), net_metrics),
-        &[&f],
+        n_train: y.len(),
+        n_rows: y_all.len(),
+        n_fit_rows: y.len(),
+        train_metrics,
+        svr_metrics,
+        coulomb_viscous: None,
+        coulomb_viscous_stiffness: Some(law_metrics),
+        rbf_network: net_metrics,
+        fits: &[&f],
         started,
-        range(&x, 2),
-        (None, None),
-        Vec::new(),
-    )
+        input_range: range(&x, 2),
+        w: None,
+        b: None,
+        stage1: Vec::new(),
+    })
 }
 
-#[allow(clippy::too_many_arguments)]
-fn finish(
+/// What one identification produced, for [`finish`] to assemble into a model file and its
+/// report.
+struct Fitted<'a> {
     kind: ModelKind,
-    train: &Capture,
-    test: Option<&Capture>,
+    /// The capture it was fitted on.
+    train: &'a Capture,
+    /// The capture it is evaluated on, if not the training one.
+    test: Option<&'a Capture>,
     inputs: Vec<Quantity>,
     output: Quantity,
     body: ModelBody,
     hyper: Vec<SvrHyper>,
-    (n_train, n_rows, n_fit_rows): (usize, usize, usize),
-    (train_metrics, svr_metrics): (Metrics, Metrics),
-    (coulomb_viscous, coulomb_viscous_stiffness, rbf_network): (Option<Metrics>, Option<Metrics>, Metrics),
-    fits: &[&SvrFit],
+    /// Training vectors (rows, or stage-1 points for the soft contact).
+    n_train: usize,
+    /// Rows of the training capture that the model applies to.
+    n_rows: usize,
+    /// Rows the SVR fits trained on, all of them together.
+    n_fit_rows: usize,
+    /// The SVR on the training capture, and on the evaluated one.
+    train_metrics: Metrics,
+    svr_metrics: Metrics,
+    /// The baselines on the evaluated capture (the ones that apply to this model).
+    coulomb_viscous: Option<Metrics>,
+    coulomb_viscous_stiffness: Option<Metrics>,
+    rbf_network: Metrics,
+    /// Every SVR fit behind the model (the soft contact's final two first).
+    fits: &'a [&'a SvrFit],
     started: Instant,
+    /// Per input, the [min, max] the model was fitted over.
     input_range: Vec<[f64; 2]>,
-    (w, b): (Option<f64>, Option<f64>),
+    /// A linear model's slope and intercept.
+    w: Option<f64>,
+    b: Option<f64>,
+    /// The soft contact's stage-1 points (speed, w, m).
     stage1: Vec<[f64; 3]>,
-) -> Result<Identified, IdentifyError> {
+}
+
+fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
+    let Fitted {
+        kind,
+        train,
+        test,
+        inputs,
+        output,
+        body,
+        hyper,
+        n_train,
+        n_rows,
+        n_fit_rows,
+        train_metrics,
+        svr_metrics,
+        coulomb_viscous,
+        coulomb_viscous_stiffness,
+        rbf_network,
+        fits,
+        started,
+        input_range,
+        w,
+        b,
+        stage1,
+    } = fitted;
     let n_sv = match &body {
         ModelBody::Single(m) => m.svr.n_sv(),
         ModelBody::TwoStage { slope, intercept } => slope.svr.n_sv() + intercept.svr.n_sv(),
