@@ -192,4 +192,43 @@ fn identify_search_reports_the_frontier_and_fits_the_best_point() {
         "{}",
         text(&o)
     );
+
+    // --grid gives the grid (and implies --search): 4 log-spaced C × the one ε given.
+    let report = json(&[
+        "identify",
+        hard.to_str().unwrap(),
+        "--model",
+        "hard",
+        "--grid",
+        "c=1e2..1e5:4,epsilon=0.03",
+        "--json",
+    ]);
+    let points = report["search"].as_array().unwrap();
+    let mut cs: Vec<f64> = points.iter().map(|p| p["c"].as_f64().unwrap()).collect();
+    cs.sort_by(f64::total_cmp);
+    for (c, expected) in cs.iter().zip([1e2, 1e3, 1e4, 1e5]) {
+        assert!((c / expected - 1.0).abs() < 1e-12, "{cs:?}");
+    }
+    assert_eq!(cs.len(), 4);
+    assert!(points.iter().all(|p| p["epsilon"] == 0.03));
+    // A bad grid names the item and why; a γ for the linear model is refused.
+    for (spec, says) in [
+        ("c=1e5..1e2:4", "runs from 100000 down to 100"),
+        ("gamma=1", "has no γ"),
+        ("k=3", "unknown name `k`"),
+    ] {
+        let o = palpus(&[
+            "identify",
+            hard.to_str().unwrap(),
+            "--model",
+            "hard",
+            "--grid",
+            spec,
+        ]);
+        assert!(
+            !o.status.success() && text(&o).contains(says),
+            "{spec}: {}",
+            text(&o)
+        );
+    }
 }

@@ -12,6 +12,7 @@
 
 mod baselines;
 mod error;
+mod grid_spec;
 mod identification;
 mod metrics;
 mod model_file;
@@ -20,6 +21,7 @@ mod search;
 
 pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
 pub use error::IdentifyError;
+pub use grid_spec::{GridSpecError, MAX_GRID_VALUES};
 pub use identification::{
     ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits, Identified, IdentifyOptions,
     MAX_SEGMENT_SAMPLES, OutOfDomain, Report, identify, identify_with, model_column, model_rows,

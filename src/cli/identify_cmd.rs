@@ -49,6 +49,12 @@ pub(crate) struct IdentifyArgs {
     /// frontier, and fit with the best point.
     #[arg(long, conflicts_with_all = ["c", "epsilon", "gamma"])]
     search: bool,
+    /// The grid --search explores (implies --search): comma-separated `name=value` or
+    /// `name=lo..hi:count` (count log-spaced values, both ends included) for c, gamma and
+    /// epsilon, e.g. 'c=1e1..1e5:5,gamma=10..1000:5,epsilon=0.005..0.05:3'; a name left out
+    /// keeps the model's own values.
+    #[arg(long, value_name = "SPEC", conflicts_with_all = ["c", "epsilon", "gamma"])]
+    grid: Option<String>,
     /// Regularisation constant C.
     #[arg(long = "c", value_name = "X")]
     c: Option<f64>,
@@ -136,8 +142,11 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         max_samples: args.max_samples,
         max_fit_samples: args.max_fit_samples,
     };
-    let explored = if args.search {
-        let grid = SearchGrid::default_for(kind);
+    let explored = if args.search || args.grid.is_some() {
+        let grid = match &args.grid {
+            Some(spec) => SearchGrid::from_spec(kind, spec).with_context(|| format!("--grid {spec}"))?,
+            None => SearchGrid::default_for(kind),
+        };
         let bar = if args.quiet {
             ProgressBar::hidden()
         } else {
