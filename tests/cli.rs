@@ -232,3 +232,60 @@ fn identify_search_reports_the_frontier_and_fits_the_best_point() {
         );
     }
 }
+
+#[test]
+fn bench_trade_writes_every_point_and_the_front_nothing_beats() {
+    let root = li_bi_dir();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("trade");
+    let o = palpus(&[
+        "bench",
+        "trade",
+        root.join("hard_contact_train.csv").to_str().unwrap(),
+        "--model",
+        "hard",
+        "--test",
+        root.join("hard_contact_test.csv").to_str().unwrap(),
+        "--grid",
+        "c=1e1..1e7:4,epsilon=0.01..0.1:3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("12 points (0 failed)"), "{}", text(&o));
+    let csv = std::fs::read_to_string(out.join("trade.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_owned).collect()).collect();
+    assert_eq!(rows.len(), 12);
+    let value = |r: &Vec<String>, name: &str| r[col(name)].parse::<f64>().unwrap();
+    let on: Vec<&Vec<String>> = rows.iter().filter(|r| r[col("on_front")] == "true").collect();
+    assert!(!on.is_empty());
+    // Held out on the test capture, and no row beats a front row on both time and error.
+    for f in &on {
+        let (t, e) = (value(f, "predict_ns"), value(f, "test_aise"));
+        assert!(t > 0.0 && e > 0.0 && value(f, "test_max_error") > 0.0);
+        assert!(!rows.iter().any(|r| {
+            let (rt, re) = (value(r, "predict_ns"), value(r, "test_aise"));
+            rt <= t && re <= e && (rt < t || re < e)
+        }));
+    }
+    let image = render::Image::load_png(&out.join("trade.png")).expect("a PNG");
+    assert_eq!((image.width, image.height), palpus::plots::TRADE_SIZE);
+    // A bad grid is refused before anything runs.
+    let o = palpus(&[
+        "bench",
+        "trade",
+        root.join("hard_contact_train.csv").to_str().unwrap(),
+        "--model",
+        "hard",
+        "--grid",
+        "c=0",
+    ]);
+    assert!(
+        !o.status.success() && text(&o).contains("out of range"),
+        "{}",
+        text(&o)
+    );
+}

@@ -18,6 +18,7 @@ enum BenchWhat {
     Loop(LoopArgs),
     Svr(super::bench_svr::SvrArgs),
     SvrScale(super::bench_svr::SvrScaleArgs),
+    Trade(super::bench_trade::TradeArgs),
     Render(RenderArgs),
 }
 
@@ -85,6 +86,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         BenchWhat::Loop(args) => run_loop(args),
         BenchWhat::Svr(args) => super::bench_svr::run(args),
         BenchWhat::SvrScale(args) => super::bench_svr::run_scale(args),
+        BenchWhat::Trade(args) => super::bench_trade::run(args),
         BenchWhat::Render(args) => {
             if args.frames == 0 {
                 anyhow::bail!("--frames must be at least 1");

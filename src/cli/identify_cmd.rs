@@ -111,23 +111,34 @@ pub(crate) struct IdentifyArgs {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum ModelArg {
+pub(crate) enum ModelArg {
     Hard,
     Soft,
     Needle,
 }
 
+impl ModelArg {
+    /// The model it names.
+    pub(crate) fn kind(self) -> ModelKind {
+        match self {
+            Self::Hard => ModelKind::HardFriction,
+            Self::Soft => ModelKind::SoftFriction,
+            Self::Needle => ModelKind::NeedlePuncture,
+        }
+    }
+
+    /// The kind of capture the model is identified from.
+    pub(crate) fn capture_kind(self) -> CaptureKind {
+        match self {
+            Self::Needle => CaptureKind::Insertion,
+            Self::Hard | Self::Soft => CaptureKind::Rubbing,
+        }
+    }
+}
+
 pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
-    let kind = match args.model {
-        ModelArg::Hard => ModelKind::HardFriction,
-        ModelArg::Soft => ModelKind::SoftFriction,
-        ModelArg::Needle => ModelKind::NeedlePuncture,
-    };
-    let capture_kind = if kind == ModelKind::NeedlePuncture {
-        CaptureKind::Insertion
-    } else {
-        CaptureKind::Rubbing
-    };
+    let kind = args.model.kind();
+    let capture_kind = args.model.capture_kind();
     let train = Capture::read_file(&args.capture, capture_kind)?;
     let test = args
         .test
@@ -278,7 +289,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
 /// The rows of `capture` the model describes, its inputs as the model reads them, and the
 /// model's output at each: every row for the friction models, the rows in tissue (depth > 0)
 /// for the needle, as `identify` selects them.
-fn fit_set(label: &'static str, capture: &Capture, model: &ModelFile) -> anyhow::Result<FitSet> {
+pub(crate) fn fit_set(label: &'static str, capture: &Capture, model: &ModelFile) -> anyhow::Result<FitSet> {
     let column = |name: &str| -> anyhow::Result<Vec<f64>> { Ok(identify::model_column(capture, name)?) };
     let all_inputs = model
         .inputs

@@ -5,6 +5,7 @@
 
 mod bench_cmd;
 mod bench_svr;
+mod bench_trade;
 mod capture_cmd;
 mod categorize_cmd;
 mod devices_cmd;

@@ -1,5 +1,7 @@
 //! Every figure palpus draws, with plotters on a bitmap: a session's forces ([`session`]), a
-//! recognizer's evaluation ([`recognition`]) and the surfaces' categories ([`categories`]).
+//! recognizer's evaluation ([`recognition`]), the surfaces' categories ([`categories`]), an
+//! identified model against its data ([`fit`]) and the speed/accuracy trade of its fits
+//! ([`trade`]).
 //!
 //! The shared primitives live here: the bundled font ([`font`]), drawing into an RGB buffer
 //! and writing it as PNG ([`render()`], [`write_png_rgb`]), and [`PlotError`].
@@ -8,6 +10,7 @@ pub mod categories;
 pub mod fit;
 pub mod recognition;
 pub mod session;
+pub mod trade;
 
 use std::path::{Path, PathBuf};
 
@@ -25,6 +28,7 @@ pub use recognition::{
     write_som_components, write_som_density, write_som_map,
 };
 pub use session::write_force_plot;
+pub use trade::{TRADE_SIZE, write_trade_plot};
 
 /// A drawing area of the bitmap backend, in pixels.
 pub type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
