@@ -264,10 +264,10 @@ fn bench_trade_writes_every_point_and_the_front_nothing_beats() {
     assert!(!on.is_empty());
     // Held out on the test capture, and no row beats a front row on both time and error.
     for f in &on {
-        let (t, e) = (value(f, "predict_ns"), value(f, "test_aise"));
+        let (t, e) = (value(f, "test_predict_ns"), value(f, "test_aise"));
         assert!(t > 0.0 && e > 0.0 && value(f, "test_max_error") > 0.0);
         assert!(!rows.iter().any(|r| {
-            let (rt, re) = (value(r, "predict_ns"), value(r, "test_aise"));
+            let (rt, re) = (value(r, "test_predict_ns"), value(r, "test_aise"));
             rt <= t && re <= e && (rt < t || re < e)
         }));
     }
