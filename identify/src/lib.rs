@@ -38,4 +38,4 @@ pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,
     detect_punctures, force_noise_n, group_layers,
 };
-pub use search::{SearchGrid, SearchPoint, best, search};
+pub use search::{PREDICT_TIMING_PASSES, SearchGrid, SearchPoint, best, search, timed_predictions};

@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use capture::Capture;
 use clap::Args;
-use identify::{DEFAULT_MAX_FIT_SAMPLES, IdentifyOptions, SearchGrid, SearchPoint, identify, search};
+use identify::{
+    DEFAULT_MAX_FIT_SAMPLES, IdentifyOptions, SearchGrid, SearchPoint, identify, search, timed_predictions,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::identify_cmd::{ModelArg, fit_set};
@@ -19,11 +21,11 @@ use super::identify_cmd::{ModelArg, fit_set};
 /// --search` does, and with --test fits on the whole capture and measures it on the test one.
 /// Each point records its fit time, time per prediction (what one haptic tick pays), support
 /// vectors, cross-validated AISE and, with --test, held-out AISE, largest error, the error in
-/// the peak force and the refitted model's time per prediction (the fastest of 5 passes over
-/// the test capture). The Pareto front over time per prediction and AISE (held-out with --test,
-/// else cross-validated) — the points that no other is both faster and more accurate than — is
-/// printed, and every point is written to OUT/trade.csv with the front drawn in
-/// OUT/trade.png.
+/// the peak force and the refitted model's time per prediction over the test capture. Times per
+/// prediction are the fastest of 5 passes. The Pareto front over time per prediction and AISE
+/// (held-out with --test, else cross-validated) — the points that no other is both faster and
+/// more accurate than — is printed, and every point is written to OUT/trade.csv with the front
+/// drawn in OUT/trade.png.
 #[derive(Debug, Args)]
 pub(crate) struct TradeArgs {
     /// Training capture.
@@ -57,14 +59,10 @@ struct HeldOut {
     aise: f64,
     max_error: f64,
     peak_error: f64,
-    /// Time of one prediction of the refitted model, ns: the fastest of [`TIMING_PASSES`]
-    /// passes over the test capture's rows.
+    /// Time of one prediction of the refitted model, ns: the fastest of
+    /// [`identify::PREDICT_TIMING_PASSES`] passes over the test capture's rows.
     predict_ns: f64,
 }
-
-/// Passes over the test rows when timing predictions: the fastest pass is kept, so that a
-/// context switch or a cold cache during one pass does not decide where a point lies.
-const TIMING_PASSES: usize = 5;
 
 impl TradePoint {
     /// The accuracy the front is drawn over.
@@ -73,7 +71,7 @@ impl TradePoint {
     }
 
     /// The time per prediction the front is drawn over: the refitted model's, timed over the
-    /// test capture, else the cross-validation folds' (each timed once over a fold).
+    /// test capture, else the cross-validation folds' mean.
     fn predict_ns(&self) -> f64 {
         self.held_out
             .as_ref()
@@ -222,14 +220,9 @@ fn held_out(
         .flat_map(|r| set.inputs.iter().map(move |col| col[r]))
         .collect();
     let dim = set.inputs.len().max(1);
-    let mut fastest = f64::INFINITY;
-    for _ in 0..TIMING_PASSES {
-        let started = std::time::Instant::now();
-        let sum: f64 = x.chunks(dim).map(|row| identified.model.predict(row)).sum();
-        let elapsed = started.elapsed().as_secs_f64();
-        std::hint::black_box(sum);
-        fastest = fastest.min(elapsed * 1e9 / rows.max(1) as f64);
-    }
+    let (_, fastest) = timed_predictions(rows, || {
+        x.chunks(dim).map(|row| identified.model.predict(row)).collect()
+    });
     Ok(HeldOut {
         aise: metrics.aise,
         max_error: metrics.error_bound,
