@@ -11,8 +11,7 @@ use crate::features::{
     FeatureSet, NakanoWindowing, WindowScaling, capture_histogram, window_vectors, windows,
 };
 use crate::knn::Knn;
-#[cfg(doc)]
-use crate::som::Som;
+use crate::som::{Som, SomDecision};
 use crate::svc::{CSearch, Svc};
 
 /// A behaviour's reliability weight (cross-validated accuracy), as the training summary shows
@@ -45,8 +44,6 @@ pub struct Decision {
 }
 
 impl RecognizerFile {
-    /// The offline pipeline's decisions on one capture (`windowing` overrides the model's, for
-    /// a SOM): one per decision window for a SOM, one per capture for a k-NN.
     /// For a SOM over Nakano's windows: the winning node of each of `capture`'s decision
     /// windows (`windowing`, else the recognizer's own), in the order of
     /// [`RecognizerFile::decisions`]; `None` for any other recognizer. Reads a capture whose
@@ -59,20 +56,12 @@ impl RecognizerFile {
         let RecognizerBody::Som { windowing: own, som } = &self.body else {
             return Ok(None);
         };
-        let windowing = windowing.unwrap_or(own);
-        check_rate(capture, windowing.rate_hz)?;
-        let mut scratch = [0.0; FEATURES];
-        windows(capture, windowing)?
-            .into_iter()
-            .map(|(_, features)| {
-                som.decide_into(&features, &mut scratch)
-                    .map(|d| d.node)
-                    .map_err(RecognizeError::som)
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .map(Some)
+        let decided = som_windows(capture, windowing.unwrap_or(own), som)?;
+        Ok(Some(decided.into_iter().map(|(_, d)| d.node).collect()))
     }
 
+    /// The offline pipeline's decisions on one capture (`windowing` overrides the model's, for
+    /// a SOM): one per decision window for a SOM, one per capture for a k-NN.
     pub fn decisions(
         &self,
         capture: &LabelledCapture,
@@ -81,22 +70,15 @@ impl RecognizerFile {
         match &self.body {
             RecognizerBody::Som { windowing: own, som } => {
                 let windowing = windowing.unwrap_or(own);
-                check_rate(capture, windowing.rate_hz)?;
-                let mut scratch = [0.0; FEATURES];
-                windows(capture, windowing)?
+                Ok(som_windows(capture, windowing, som)?
                     .into_iter()
-                    .map(|(start, features)| {
-                        let d = som
-                            .decide_into(&features, &mut scratch)
-                            .map_err(RecognizeError::som)?;
-                        Ok(Decision {
-                            window_start: start,
-                            decided_at: windowing.decided_at(start),
-                            label: som.node_labels().get(d.node).copied().unwrap_or(0),
-                            confidence: d.confidence,
-                        })
+                    .map(|(start, d)| Decision {
+                        window_start: start,
+                        decided_at: windowing.decided_at(start),
+                        label: som.node_labels().get(d.node).copied().unwrap_or(0),
+                        confidence: d.confidence,
                     })
-                    .collect()
+                    .collect())
             }
             RecognizerBody::KnnWindows {
                 features,
@@ -402,4 +384,24 @@ fn whole_capture_decision(capture: &LabelledCapture, label: usize, probabilities
         label,
         confidence: probabilities.get(label).copied().unwrap_or(0.0),
     }
+}
+
+/// The map's decision on each of `capture`'s decision windows under `windowing`, with the
+/// window's first sample: what both a SOM's decisions and its winners are read from.
+fn som_windows(
+    capture: &LabelledCapture,
+    windowing: &NakanoWindowing,
+    som: &Som<usize>,
+) -> Result<Vec<(usize, SomDecision)>, RecognizeError> {
+    check_rate(capture, windowing.rate_hz)?;
+    let mut scratch = [0.0; FEATURES];
+    windows(capture, windowing)?
+        .into_iter()
+        .map(|(start, features)| {
+            let d = som
+                .decide_into(&features, &mut scratch)
+                .map_err(RecognizeError::som)?;
+            Ok((start, d))
+        })
+        .collect()
 }
