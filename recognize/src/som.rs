@@ -41,6 +41,7 @@ use capture::rng::SplitMix64;
 use serde::{Deserialize, Serialize};
 
 use crate::RecognizeError;
+use crate::svc::{FitEvent, Progress, no_progress};
 
 /// How features are scaled before the map sees them (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -262,6 +263,17 @@ pub struct Som<L> {
 impl<L: Clone + Ord> Som<L> {
     /// Trains a map on `data` (one feature vector per row) and labels its nodes with `labels`.
     pub fn train(params: SomParams, data: &[Vec<f64>], labels: &[L]) -> Result<Self, RecognizeError> {
+        Self::train_observed(params, data, labels, &no_progress)
+    }
+
+    /// [`Som::train`], telling `progress` of the presentations (one step of at most 100 units):
+    /// a map sized by its data over both feature sets takes seconds.
+    pub fn train_observed(
+        params: SomParams,
+        data: &[Vec<f64>],
+        labels: &[L],
+        progress: Progress<'_>,
+    ) -> Result<Self, RecognizeError> {
         params.check()?;
         if data.is_empty() {
             return Err(RecognizeError::Empty);
@@ -309,7 +321,15 @@ impl<L: Clone + Ord> Som<L> {
         let z = params.iterations as f64;
         let two_sigma2 = 2.0 * params.sigma * params.sigma;
         let mut moved = vec![0.0; dim];
+        let every = params.iterations.div_ceil(100).max(1);
+        progress(FitEvent::Step {
+            what: "training the map",
+            total: params.iterations / every,
+        });
         for i in 1..=params.iterations {
+            if i % every == 0 {
+                progress(FitEvent::Advance);
+            }
             let alpha = params.initial_learning_rate * (1.0 - i as f64 / z);
             let p = &inputs[rng.below(inputs.len())];
             let winner = som.winner_scaled(p);

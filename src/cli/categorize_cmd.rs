@@ -56,7 +56,8 @@ pub(crate) struct CategorizeArgs {
 
 pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
     // Each capture is held only as the features training and deciding read.
-    let read = |paths: &[PathBuf], needs: &dyn Fn(f64) -> anyhow::Result<FeatureNeeds>| {
+    let read = |paths: &[PathBuf],
+                needs: &mut dyn FnMut(&LabelledCapture) -> anyhow::Result<FeatureNeeds>| {
         keeping_each(
             paths,
             |p| {
@@ -70,10 +71,15 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
     let (method, confusion) = match args.method {
         Some(method) => {
             // One recognizer per surface, each with the given seed.
-            let settings = args.training.settings(method);
-            let captures = read(&args.inputs, &|rate_hz| {
-                Ok(FeatureNeeds::training_and_decisions(&settings, rate_hz)?)
+            let mut settings = None;
+            let captures = read(&args.inputs, &mut |first| {
+                let settings = settings.insert(args.training.settings(method, first));
+                Ok(FeatureNeeds::training_and_decisions(
+                    settings,
+                    first.capture.metadata().rate_hz(),
+                )?)
             })?;
+            let settings = settings.context("no captures to train on")?;
             let confusion = surface_confusion(&captures, |train, _| {
                 recognize::train(train, &settings).map_err(Box::new)
             })?;
@@ -90,7 +96,7 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
                 anyhow::bail!("give captures after {} to evaluate it on", model.display());
             }
             let model = RecognizerFile::load(model)?;
-            let captures = read(captures, &|_| Ok(FeatureNeeds::evaluation(&model, &[])?))?;
+            let captures = read(captures, &mut |_| Ok(FeatureNeeds::evaluation(&model, &[])?))?;
             let e = model.evaluate(&captures, None)?;
             (e.method.to_owned(), e.confusion)
         }

@@ -7,11 +7,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 use recognize::{FeatureNeeds, LabelledCapture};
 
 /// Reads `paths` one at a time with `read` and keeps of each capture only the features `needs`
-/// (given the first capture's rate) names, dropping its samples before the next is read.
+/// names, dropping its samples before the next is read. `needs` is asked once, with the first
+/// capture (its rate, its columns), before anything is kept.
 pub(crate) fn keeping_each(
     paths: &[PathBuf],
     mut read: impl FnMut(&PathBuf) -> anyhow::Result<Vec<LabelledCapture>>,
-    needs: impl Fn(f64) -> anyhow::Result<FeatureNeeds>,
+    mut needs: impl FnMut(&LabelledCapture) -> anyhow::Result<FeatureNeeds>,
 ) -> anyhow::Result<Vec<LabelledCapture>> {
     let bar = ProgressBar::new(paths.len() as u64).with_style(
         ProgressStyle::with_template("reading captures {bar:30} {pos}/{len} {elapsed} (eta {eta})")
@@ -21,11 +22,11 @@ pub(crate) fn keeping_each(
     let mut captures = Vec::with_capacity(paths.len());
     for path in paths {
         for c in read(path)? {
-            let needs = match &needed {
+            let wanted = match &needed {
                 Some(n) => n,
-                None => needed.insert(needs(c.capture.metadata().rate_hz())?),
+                None => needed.insert(needs(&c)?),
             };
-            captures.push(c.keep_features(needs)?);
+            captures.push(c.keep_features(wanted)?);
         }
         bar.inc(1);
     }

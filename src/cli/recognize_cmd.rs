@@ -47,7 +47,9 @@ enum RecognizeWhat {
 /// `trial`; at most 5 folds, trial t of every surface held out together) on the training
 /// captures: its reliability weight when `eval` fuses the behaviours of a trial.
 ///
-/// --features crosses methods and features (default: the method's own, as above):
+/// --features crosses methods and features. Default: both when the first capture carries the
+/// columns of both and the windows hold a histogram (1.92 s), else the method's own, as above,
+/// else the set the captures carry; a default other than the method's own is said on stderr.
 /// nakano with knn/svm: windowed like the SOM (--window-s, --hop-s, training windows of the
 /// decision length unless --train-window-s says otherwise), one classifier over all windows,
 /// each feature log-scaled where positive, centred and divided by its pooled within-surface
@@ -164,10 +166,15 @@ pub(crate) fn run(args: &RecognizeArgs) -> anyhow::Result<()> {
 }
 
 fn train(args: &TrainArgs) -> anyhow::Result<()> {
-    let settings = args.training.settings();
-    let captures = read_keeping(&args.input, &args.captures, None, |rate_hz| {
-        Ok(FeatureNeeds::training(&settings, rate_hz)?)
+    let mut settings = None;
+    let captures = read_keeping(&args.input, &args.captures, None, |first| {
+        let settings = settings.insert(args.training.settings(first));
+        Ok(FeatureNeeds::training(
+            settings,
+            first.capture.metadata().rate_hz(),
+        )?)
     })?;
+    let settings = settings.context("no captures to train on")?;
     for warning in settings.data_warnings(&captures)? {
         eprintln!("warning: {warning}");
     }
@@ -202,15 +209,15 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads `paths` one at a time and keeps of each only the features `needs` lists (given the
-/// first capture's rate), dropping its samples before the next is read: memory holds one
+/// Reads `paths` one at a time and keeps of each only the features `needs` lists (asked once,
+/// with the first capture), dropping its samples before the next is read: memory holds one
 /// capture's samples at a time however many captures there are, and the results are those of
 /// the whole captures. A bar on stderr counts the captures read (only on a terminal).
 fn read_keeping(
     input: &super::import_cmd::MappedCaptures,
     paths: &[PathBuf],
     default_rate_hz: Option<f64>,
-    needs: impl Fn(f64) -> anyhow::Result<FeatureNeeds>,
+    needs: impl FnMut(&LabelledCapture) -> anyhow::Result<FeatureNeeds>,
 ) -> anyhow::Result<Vec<LabelledCapture>> {
     keeping_each(
         paths,
@@ -450,10 +457,15 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
             args.seeds
         );
     }
-    let settings = args.training.settings();
-    let captures = read_keeping(&args.input, &args.captures, None, |rate_hz| {
-        Ok(FeatureNeeds::training_and_decisions(&settings, rate_hz)?)
+    let mut settings = None;
+    let captures = read_keeping(&args.input, &args.captures, None, |first| {
+        let settings = settings.insert(args.training.settings(first));
+        Ok(FeatureNeeds::training_and_decisions(
+            settings,
+            first.capture.metadata().rate_hz(),
+        )?)
     })?;
+    let settings = settings.context("no captures to cross-validate on")?;
     let split = match (args.split, args.folds) {
         (SplitArg::KFold, folds) => Split::KFold {
             folds: folds.unwrap_or(SINAPOV_FOLDS),

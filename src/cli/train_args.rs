@@ -20,9 +20,10 @@ pub(crate) struct Training {
 }
 
 impl Training {
-    /// The library's settings for it.
-    pub(crate) fn settings(&self) -> TrainSettings {
-        self.options.settings(self.method)
+    /// The library's settings for it, on captures shaped like `first` (see
+    /// [`TrainOptions::settings`]).
+    pub(crate) fn settings(&self, first: &LabelledCapture) -> TrainSettings {
+        self.options.settings(self.method, first)
     }
 
     /// Trains on `captures` as `settings` say (this training's [`Training::settings`]) with a
@@ -61,7 +62,9 @@ impl Training {
 pub(crate) struct TrainOptions {
     /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
     /// (rubbing windows with accelerometer columns: three axes, or a single-axis
-    /// vibration_mps2). Default: som nakano, knn and svm spectral.
+    /// vibration_mps2). Default: both when the first capture carries the columns of both and
+    /// the windows are long enough for a histogram (1.92 s); else the method's own (som nakano,
+    /// knn and svm spectral), else the set the capture carries.
     #[arg(long, value_enum, value_name = "nakano|spectral|both")]
     features: Option<Features>,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
@@ -182,12 +185,31 @@ impl From<Features> for FeatureSet {
 }
 
 impl TrainOptions {
-    /// The settings of a `method` recognizer: the features asked for, else the method's own.
-    /// Warns on stderr, once, when training and decision windows were set apart.
-    pub(crate) fn settings(&self, method: Method) -> TrainSettings {
+    /// The settings of a `method` recognizer on captures shaped like `first`: the features
+    /// asked for, else those the method reads from such captures
+    /// ([`recognize::Method::features_for`], said on stderr when it is not the method's own).
+    /// Warns on stderr when training and decision windows were set apart.
+    pub(crate) fn settings(&self, method: Method, first: &LabelledCapture) -> TrainSettings {
         let method = recognize::Method::from(method);
+        let features = self.features.map_or_else(
+            || {
+                let shortest_s = self
+                    .train_window_s
+                    .map_or(self.window_s, |t| t.min(self.window_s));
+                let chosen = method.features_for(first, shortest_s);
+                if chosen != method.default_features() {
+                    eprintln!(
+                        "{} over {chosen} features: {} has the columns of both sets (--features picks one)",
+                        method.name(),
+                        first.reference.path.display()
+                    );
+                }
+                chosen
+            },
+            FeatureSet::from,
+        );
         let settings = TrainSettings {
-            features: self.features.map_or(method.default_features(), FeatureSet::from),
+            features,
             window_s: self.window_s,
             train_window_s: self.train_window_s,
             som_nodes: self.som_nodes,

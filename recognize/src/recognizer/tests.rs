@@ -377,6 +377,68 @@ fn train_picks_the_trainer_of_the_method_and_features() {
     assert!(matches!(err, RecognizeError::MissingColumns { .. }), "{err}");
 }
 
+#[test]
+fn captures_that_carry_both_feature_sets_train_on_both_by_default() {
+    let rubbing = three_surfaces(1.0).remove(0);
+    let vibrating = with_vibration(rubbing.clone(), 40.0);
+    // A scratch: position, force and the three accelerometer axes, no friction or height.
+    let scratch = {
+        let n: u32 = 400;
+        let t: Vec<f64> = (0..n).map(|k| f64::from(k) / 400.0).collect();
+        let columns: Vec<String> = [TIME_S, TANGENTIAL_POSITION_M, NORMAL_FORCE_N]
+            .into_iter()
+            .chain(crate::features::spectral::ACCEL_COLUMNS)
+            .map(String::from)
+            .collect();
+        let mut data = vec![t.clone(), t.clone(), vec![1.0; n as usize]];
+        data.extend((0..3).map(|_| t.iter().map(|t| (300.0 * t).sin()).collect()));
+        let meta = Metadata::new(CaptureKind::Rubbing, "test", 400.0).with(LABEL_KEY, "cloth");
+        let capture = Capture::new(meta, columns, data).expect("valid capture");
+        LabelledCapture::new(capture, Path::new("cloth"), "00".into()).expect("labelled")
+    };
+    for method in [Method::Som, Method::Knn, Method::Svm] {
+        assert_eq!(
+            method.features_for(&vibrating, 3.0),
+            FeatureSet::Both,
+            "{method:?}"
+        );
+        // A window must hold a histogram's five frames (1.92 s) for both sets.
+        assert_eq!(
+            method.features_for(&vibrating, 1.92),
+            FeatureSet::Both,
+            "{method:?}"
+        );
+        assert_eq!(
+            method.features_for(&vibrating, 1.9),
+            method.default_features(),
+            "{method:?}"
+        );
+        // One set only: the one the captures carry, the method's own first.
+        assert_eq!(
+            method.features_for(&rubbing, 3.0),
+            FeatureSet::Nakano,
+            "{method:?}"
+        );
+        assert_eq!(
+            method.features_for(&scratch, 3.0),
+            FeatureSet::Spectral,
+            "{method:?}"
+        );
+    }
+    // Neither: the method's own, whose missing columns training then names.
+    let bare = {
+        let meta = Metadata::new(CaptureKind::Rubbing, "test", 400.0).with(LABEL_KEY, "air");
+        let columns = [TIME_S, TANGENTIAL_POSITION_M, NORMAL_FORCE_N]
+            .map(String::from)
+            .to_vec();
+        let data = vec![vec![0.0, 0.01], vec![0.0, 1e-4], vec![1.0, 1.0]];
+        let capture = Capture::new(meta, columns, data).expect("valid");
+        LabelledCapture::new(capture, Path::new("air"), "00".into()).expect("labelled")
+    };
+    assert_eq!(Method::Som.features_for(&bare, 3.0), FeatureSet::Nakano);
+    assert_eq!(Method::Knn.features_for(&bare, 3.0), FeatureSet::Spectral);
+}
+
 /// `c`, read from `path` instead.
 fn from(mut c: LabelledCapture, path: &str) -> LabelledCapture {
     c.reference.path = path.into();

@@ -15,6 +15,7 @@ use crate::knn::{group_folds, held_out_correct};
 use crate::recognizer::labelled::{check_rate, class_index, class_list};
 use crate::recognizer::{BehaviourSom, LabelledCapture, RecognizerBody, RecognizerFile};
 use crate::som::{Normalization, Som, SomParams};
+use crate::svc::{Progress, no_progress};
 
 /// Trains SOM recognizers: over Nakano's windows ([`RecognizerFile::train_som`]), over windows
 /// of both feature sets ([`RecognizerFile::train_som_windows`]), or one map per behaviour over
@@ -33,6 +34,15 @@ impl Trainer for SomTrainer {
         captures: &[LabelledCapture],
         settings: &TrainSettings,
     ) -> Result<RecognizerFile, RecognizeError> {
+        self.train_observed(captures, settings, &no_progress)
+    }
+
+    fn train_observed(
+        &self,
+        captures: &[LabelledCapture],
+        settings: &TrainSettings,
+        progress: Progress<'_>,
+    ) -> Result<RecognizerFile, RecognizeError> {
         let classes = class_list(captures).len();
         let params = |vectors| {
             let nodes = settings.som_nodes.unwrap_or(window_som_nodes(classes, vectors));
@@ -46,13 +56,14 @@ impl Trainer for SomTrainer {
         };
         match settings.features {
             FeatureSet::Nakano => {
-                RecognizerFile::train_som_sized(captures, settings.windowing(captures)?, params)
+                RecognizerFile::train_som_sized(captures, settings.windowing(captures)?, params, progress)
             }
             FeatureSet::Both => RecognizerFile::train_som_windows_sized(
                 captures,
                 settings.windowing(captures)?,
                 params,
                 settings.cell_scale,
+                progress,
             ),
             FeatureSet::Spectral => {
                 let params = SomParams {
@@ -181,15 +192,17 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         params: SomParams,
     ) -> Result<Self, RecognizeError> {
-        Self::train_som_sized(captures, windowing, |_| params)
+        Self::train_som_sized(captures, windowing, |_| params, &no_progress)
     }
 
     /// [`RecognizerFile::train_som`] with the parameters chosen once the number of training
-    /// windows is known (`params(vectors)`), so that a map can be sized by its data.
+    /// windows is known (`params(vectors)`), so that a map can be sized by its data, telling
+    /// `progress` of the map's training ([`Som::train_observed`]).
     pub fn train_som_sized(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         params: impl FnOnce(usize) -> SomParams,
+        progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let (mut data, mut labels) = (Vec::new(), Vec::new());
@@ -206,7 +219,8 @@ impl RecognizerFile {
         if data.is_empty() {
             return Err(RecognizeError::NoTrainingData);
         }
-        let som = Som::train(params(data.len()), &data, &labels).map_err(RecognizeError::som)?;
+        let som =
+            Som::train_observed(params(data.len()), &data, &labels, progress).map_err(RecognizeError::som)?;
         Ok(Self::assemble(
             classes,
             FEATURE_NAMES.iter().map(|s| (*s).to_owned()).collect(),
@@ -225,20 +239,21 @@ impl RecognizerFile {
         params: SomParams,
         cell_scale: CellScale,
     ) -> Result<Self, RecognizeError> {
-        Self::train_som_windows_sized(captures, windowing, |_| params, cell_scale)
+        Self::train_som_windows_sized(captures, windowing, |_| params, cell_scale, &no_progress)
     }
 
     /// [`RecognizerFile::train_som_windows`] with the parameters chosen once the number of
-    /// training windows is known (`params(vectors)`).
+    /// training windows is known (`params(vectors)`), telling `progress` of the map's training.
     pub fn train_som_windows_sized(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         params: impl FnOnce(usize) -> SomParams,
         cell_scale: CellScale,
+        progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
         let classes = class_list(captures);
         let (x, y, _) = training_windows(captures, &classes, &windowing, FeatureSet::Both, cell_scale)?;
-        let som = Som::train(params(x.len()), &x, &y)?;
+        let som = Som::train_observed(params(x.len()), &x, &y, progress)?;
         Ok(Self::assemble(
             classes,
             FeatureSet::Both.feature_names(),
