@@ -12,5 +12,6 @@ pub mod plots;
 pub mod recognizer;
 pub mod scene;
 pub mod session;
+pub mod trade;
 pub mod view;
 pub mod window;

@@ -23,7 +23,8 @@ use capture::{Capture, CaptureKind};
 use identify::{IdentifyOptions, ModelFile, ModelKind, identify};
 use sha2::{Digest, Sha256};
 
-use crate::scene::{ModelRole, ModelSource, Scene};
+use crate::scene::{ModelBudget, ModelRole, ModelSource, Scene};
+use crate::trade::{Budget, TradeTable, sha256_hex};
 
 /// Bumped when identification changes in a way that makes cached models stale.
 const CACHE_VERSION: &str = "palpus-model-cache 1";
@@ -112,6 +113,16 @@ pub enum ModelError {
         /// Why (boxed: the haptics error is large and this one rare).
         source: Box<haptics::HapticsError>,
     },
+    /// The scene's budget cannot pick a point from its trade table.
+    #[error("model `{model}`: budget from {}: {reason}", path.display())]
+    Budget {
+        /// The scene's name for the model.
+        model: String,
+        /// The trade table.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
     /// The cache could not be written.
     #[error("model `{model}`: writing the cache: {source}")]
     Cache {
@@ -149,6 +160,57 @@ pub struct ResolvedModel {
     pub model: ModelFile,
     /// Where it came from.
     pub origin: Origin,
+    /// The point a scene's budget picked, when it gave one.
+    pub budget: Option<BudgetChoice>,
+}
+
+/// The point of a measured trade that a scene's budget picked, as the run report shows it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct BudgetChoice {
+    /// The trade table.
+    pub front: PathBuf,
+    /// The budget's time limit, ns.
+    pub max_predict_ns: Option<f64>,
+    /// The budget's AISE limit, N².
+    pub max_aise: Option<f64>,
+    /// The point's training size, C, ε and γ.
+    pub n: usize,
+    /// C.
+    pub c: f64,
+    /// ε.
+    pub epsilon: f64,
+    /// γ.
+    pub gamma: Option<f64>,
+    /// Its measured time per prediction, ns.
+    pub predict_ns: f64,
+    /// Its measured AISE, N².
+    pub aise: f64,
+    /// Points within the budget.
+    pub within: usize,
+    /// Points measured.
+    pub measured: usize,
+}
+
+impl std::fmt::Display for BudgetChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let budget = Budget {
+            max_predict_ns: self.max_predict_ns,
+            max_aise: self.max_aise,
+        };
+        let gamma = self.gamma.map_or(String::new(), |g| format!(", γ {g:e}"));
+        write!(
+            f,
+            "for {budget}: n {}, C {:e}, ε {:e}{gamma}, measured {:.0} ns per prediction at an AISE of {:.3e} N², the cheapest of {} of {} points in {}",
+            self.n,
+            self.c,
+            self.epsilon,
+            self.predict_ns,
+            self.aise,
+            self.within,
+            self.measured,
+            self.front.display()
+        )
+    }
 }
 
 /// Reads a whole file.
@@ -238,12 +300,13 @@ pub fn resolve(
         let Some(source) = scene.models.get(&name) else {
             continue; // validation guarantees it exists
         };
-        let (model, origin) = resolve_one(scene, &name, source, cache_dir, sources, fitting)?;
+        let (model, origin, budget) = resolve_one(scene, &name, source, cache_dir, sources, fitting)?;
         out.push(ResolvedModel {
             name,
             role,
             model,
             origin,
+            budget,
         });
     }
     Ok(out)
@@ -275,7 +338,7 @@ fn resolve_one(
     cache_dir: &Path,
     sources: &mut Sources<'_>,
     fitting: &mut dyn FnMut(FitEvent<'_>),
-) -> Result<(ModelFile, Origin), ModelError> {
+) -> Result<(ModelFile, Origin, Option<BudgetChoice>), ModelError> {
     let kind = kind_of(&source.kind);
     if let Some(file) = &source.file {
         let path = scene.resolve(file);
@@ -286,7 +349,7 @@ fn resolve_one(
         })?;
         check_kind(name, &path, kind, &model)?;
         check_renderable(name, &path, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
-        return Ok((model, Origin::File(path)));
+        return Ok((model, Origin::File(path), None));
     }
     let Some(capture) = &source.capture else {
         return Err(ModelError::Read {
@@ -297,13 +360,30 @@ fn resolve_one(
     };
     let path = scene.resolve(capture);
     let bytes = sources.read_model_source(name, &path)?;
-    let options = IdentifyOptions {
-        kind,
-        c: source.c,
-        epsilon: source.epsilon,
-        gamma: source.gamma,
-        max_samples: source.max_samples,
-        max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
+    let (options, budget) = match &source.budget {
+        None => (
+            IdentifyOptions {
+                kind,
+                c: source.c,
+                epsilon: source.epsilon,
+                gamma: source.gamma,
+                max_samples: source.max_samples(),
+                max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
+            },
+            None,
+        ),
+        Some(budget) => {
+            let choice = choose_from_front(scene, name, kind, &path, &bytes, budget, sources)?;
+            let options = IdentifyOptions {
+                kind,
+                c: Some(choice.c),
+                epsilon: Some(choice.epsilon),
+                gamma: choice.gamma,
+                max_samples: choice.n,
+                max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
+            };
+            (options, Some(choice))
+        }
     };
     let cached = cache_dir.join(format!(
         "{}-{}.json",
@@ -315,7 +395,7 @@ fn resolve_one(
         && model.kind == kind
     {
         check_renderable(name, &cached, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
-        return Ok((model, Origin::Cached(cached)));
+        return Ok((model, Origin::Cached(cached), budget));
     }
     let capture_kind = if kind == ModelKind::NeedlePuncture {
         CaptureKind::Insertion
@@ -362,7 +442,61 @@ fn resolve_one(
             cached,
             seconds: elapsed.as_secs_f64(),
         },
+        budget,
     ))
+}
+
+/// The point of `budget.front` (a trade table measured on the scene's capture, whose bytes
+/// are `capture_bytes`) that `budget` picks for the model `name` of `kind`.
+fn choose_from_front(
+    scene: &Scene,
+    name: &str,
+    kind: ModelKind,
+    capture_path: &Path,
+    capture_bytes: &[u8],
+    budget: &ModelBudget,
+    sources: &mut Sources<'_>,
+) -> Result<BudgetChoice, ModelError> {
+    let front = scene.resolve(&budget.front);
+    let refuse = |reason: String| ModelError::Budget {
+        model: name.into(),
+        path: front.clone(),
+        reason,
+    };
+    let bytes = sources.read_model_source(name, &front)?;
+    let table = TradeTable::parse(&bytes, &front).map_err(|e| refuse(e.reason_with_place()))?;
+    if table.model != kind {
+        return Err(refuse(format!(
+            "it measured a {} model, the scene's is {kind}",
+            table.model
+        )));
+    }
+    if table.capture_sha256 != sha256_hex(capture_bytes) {
+        return Err(refuse(format!(
+            "it was measured on another capture than {} (their SHA-256 differ): measure it again with `palpus bench trade {} --model {kind} --out DIR`",
+            capture_path.display(),
+            capture_path.display()
+        )));
+    }
+    let limits = Budget {
+        max_predict_ns: budget.max_predict_ns,
+        max_aise: budget.max_aise,
+    };
+    let choice = table.choose(&limits).map_err(refuse)?;
+    let row = choice.row;
+    Ok(BudgetChoice {
+        front: front.clone(),
+        max_predict_ns: limits.max_predict_ns,
+        max_aise: limits.max_aise,
+        n: row.n,
+        c: row.point.c,
+        epsilon: row.point.epsilon,
+        gamma: row.point.gamma,
+        predict_ns: row.time_ns(),
+        aise: row.aise(),
+        within: choice.within,
+        measured: choice.measured,
+    })
 }
 
 fn check_kind(name: &str, path: &Path, expected: ModelKind, model: &ModelFile) -> Result<(), ModelError> {
@@ -482,10 +616,14 @@ mod tests {
         assert_eq!(models.len(), 1);
         assert_eq!(models[0].model.kind, ModelKind::NeedlePuncture);
         assert_eq!(fits, 1);
+        // The needle's capture and the trade its budget picks from, nothing else.
         let opened: Vec<_> = sources.opened().iter().collect();
         assert_eq!(
             opened,
-            [&scene.resolve(Path::new("../assets/captures/li_bi/needle_train.csv"))]
+            [
+                &scene.resolve(Path::new("../assets/captures/li_bi/needle_train.csv")),
+                &scene.resolve(Path::new("../assets/models/needle_liver_trade/trade.csv"))
+            ]
         );
         assert!(
             !sources
@@ -497,7 +635,11 @@ mod tests {
 
     #[test]
     fn the_cache_serves_the_same_bytes_and_hyperparameters_only() {
-        let scene = needle_only_scene();
+        // Hyperparameters given, not picked by a budget.
+        let mut scene = needle_only_scene();
+        if let Some(m) = scene.models.get_mut("needle_liver") {
+            m.budget = None;
+        }
         let cache = tempfile::tempdir().unwrap();
         let capture = scene.resolve(Path::new("../assets/captures/li_bi/needle_train.csv"));
         let bytes = std::fs::read(&capture).unwrap();

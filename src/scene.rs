@@ -225,13 +225,36 @@ pub struct ModelSource {
     pub epsilon: Option<f64>,
     /// RBF γ on the scaled inputs.
     pub gamma: Option<f64>,
-    /// Needle: at most this many training samples.
-    #[serde(default = "default_max_samples")]
-    pub max_samples: usize,
+    /// Needle: at most this many training samples (default [`DEFAULT_MAX_SAMPLES`]).
+    pub max_samples: Option<usize>,
+    /// `[models.NAME.budget]`: pick C, ε, γ and the training size from a measured trade
+    /// instead of giving them.
+    pub budget: Option<ModelBudget>,
 }
 
-fn default_max_samples() -> usize {
-    350
+/// The needle's training samples when a scene gives neither `max_samples` nor a budget.
+pub const DEFAULT_MAX_SAMPLES: usize = 350;
+
+impl ModelSource {
+    /// The needle's training size the scene gives, else [`DEFAULT_MAX_SAMPLES`].
+    pub fn max_samples(&self) -> usize {
+        self.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES)
+    }
+}
+
+/// `[models.NAME.budget]`: what a scene's model may cost and must achieve. Resolving the scene
+/// picks, from `front` (the `trade.csv` that `palpus bench trade` wrote for the same capture),
+/// the point with the least time per prediction among those that meet every limit given.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelBudget {
+    /// The measured trade, relative to the scene file.
+    pub front: PathBuf,
+    /// Longest time per prediction, ns (what one haptic tick pays for the model).
+    pub max_predict_ns: Option<f64>,
+    /// Largest AISE, N² (held out where the trade measured a test capture, else
+    /// cross-validated).
+    pub max_aise: Option<f64>,
 }
 
 /// `[recognizer]`: a recognizer model file or captures to train one from.
@@ -615,8 +638,42 @@ impl Scene {
                     return Err(self.invalid(key(field), format!("{v}: must be a positive number")));
                 }
             }
-            if s.max_samples < 10 {
+            if s.max_samples.is_some_and(|n| n < 10) {
                 return Err(self.invalid(key("max_samples"), "at least 10"));
+            }
+            if let Some(b) = &s.budget {
+                if s.capture.is_none() {
+                    return Err(self.invalid(
+                        key("budget"),
+                        "a budget picks hyperparameters to identify with: it needs `capture`, not `file`",
+                    ));
+                }
+                let given = [
+                    ("c", s.c.is_some()),
+                    ("epsilon", s.epsilon.is_some()),
+                    ("gamma", s.gamma.is_some()),
+                    ("max_samples", s.max_samples.is_some()),
+                ];
+                if let Some((field, _)) = given.iter().find(|(_, g)| *g) {
+                    return Err(self.invalid(
+                        key(field),
+                        "the budget picks it from the measured trade: give one or the other",
+                    ));
+                }
+                let limits = [
+                    ("budget.max_predict_ns", b.max_predict_ns),
+                    ("budget.max_aise", b.max_aise),
+                ];
+                if limits.iter().all(|(_, v)| v.is_none()) {
+                    return Err(self.invalid(key("budget"), "give max_predict_ns, max_aise or both"));
+                }
+                for (field, value) in limits {
+                    if let Some(v) = value
+                        && !(v.is_finite() && v > 0.0)
+                    {
+                        return Err(self.invalid(key(field), format!("{v}: must be a positive number")));
+                    }
+                }
             }
         }
         if let Some(r) = &self.recognizer {

@@ -255,6 +255,15 @@ fn bench_trade_writes_every_point_and_the_front_nothing_beats() {
     assert!(text(&o).contains("12 points (0 failed)"), "{}", text(&o));
     let csv = std::fs::read_to_string(out.join("trade.csv")).unwrap();
     let mut lines = csv.lines();
+    // What was measured: the model and the training capture's bytes.
+    let bytes = std::fs::read(root.join("hard_contact_train.csv")).unwrap();
+    assert_eq!(
+        lines.next().unwrap(),
+        format!(
+            "# palpus-trade format=1 model=hard capture_sha256={}",
+            palpus::trade::sha256_hex(&bytes)
+        )
+    );
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_owned).collect()).collect();

@@ -254,7 +254,7 @@ fn the_peak_check_covers_the_whole_input_range() {
 /// absolute, written to `dir`.
 fn scene_file(dir: &Path, model: &Path) -> PathBuf {
     let text = std::fs::read_to_string(root().join(palpus::scene::DEFAULT_SCENE)).unwrap();
-    let text = text
+    let text = common::without_budgets(&text)
         .replace(
             "capture = \"../assets/captures/li_bi/needle_train.csv\"",
             &format!("file = {:?}", model.to_str().unwrap()),

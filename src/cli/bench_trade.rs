@@ -12,6 +12,7 @@ use identify::{
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::identify_cmd::{ModelArg, fit_set};
+use crate::trade::{HeldOut, TradeRow, TradeTable, pareto_front};
 
 /// Measure the speed/accuracy trade of a model's fit.
 ///
@@ -24,8 +25,9 @@ use super::identify_cmd::{ModelArg, fit_set};
 /// the peak force and the refitted model's time per prediction over the test capture. Times per
 /// prediction are the fastest of 5 passes. The Pareto front over time per prediction and AISE
 /// (held-out with --test, else cross-validated) — the points that no other is both faster and
-/// more accurate than — is printed, and every point is written to OUT/trade.csv with the front
-/// drawn in OUT/trade.png.
+/// more accurate than — is printed, and every point is written to OUT/trade.csv (its first
+/// line names the model and the capture's SHA-256, for a scene's `[models.NAME.budget]` to
+/// pick from) with the front drawn in OUT/trade.png.
 #[derive(Debug, Args)]
 pub(crate) struct TradeArgs {
     /// Training capture.
@@ -47,42 +49,6 @@ pub(crate) struct TradeArgs {
     out: PathBuf,
 }
 
-/// One measured point: a grid point at a training size, and its held-out measures.
-struct TradePoint {
-    n: usize,
-    point: SearchPoint,
-    /// Held-out AISE, largest error and error in the peak force.
-    held_out: Option<HeldOut>,
-}
-
-struct HeldOut {
-    aise: f64,
-    max_error: f64,
-    peak_error: f64,
-    /// Time of one prediction of the refitted model, ns: the fastest of
-    /// [`identify::PREDICT_TIMING_PASSES`] passes over the test capture's rows.
-    predict_ns: f64,
-}
-
-impl TradePoint {
-    /// The accuracy the front is drawn over.
-    fn aise(&self) -> f64 {
-        self.held_out.as_ref().map_or(self.point.cv_aise, |h| h.aise)
-    }
-
-    /// The time per prediction the front is drawn over: the refitted model's, timed over the
-    /// test capture, else the cross-validation folds' mean.
-    fn predict_ns(&self) -> f64 {
-        self.held_out
-            .as_ref()
-            .map_or(self.point.predict_ns, |h| h.predict_ns)
-    }
-
-    fn ok(&self) -> bool {
-        self.point.failed.is_none() && self.aise().is_finite() && self.predict_ns().is_finite()
-    }
-}
-
 pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
     let kind = args.model.kind();
     if args.sizes.is_empty() || args.sizes.contains(&0) {
@@ -94,6 +60,9 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
     };
     let read = |p: &Path| Capture::read_file(p, args.model.capture_kind());
     let train = read(&args.capture)?;
+    let capture_sha256 = crate::trade::sha256_hex(
+        &std::fs::read(&args.capture).with_context(|| format!("reading {}", args.capture.display()))?,
+    );
     let test = args.test.as_deref().map(read).transpose()?;
 
     let gammas = if kind == identify::ModelKind::HardFriction {
@@ -106,7 +75,7 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
         ProgressStyle::with_template("measuring {bar:30} {pos}/{len} points {elapsed} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let mut points = Vec::new();
+    let mut rows = Vec::new();
     for &n in &args.sizes {
         let done_before = bar.position();
         let explored = search(kind, &train, n, &grid, &mut |done, _| {
@@ -118,21 +87,35 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
                 (Some(test), true) => Some(held_out(&train, test, kind, n, &point)?),
                 _ => None,
             };
-            points.push(TradePoint { n, point, held_out });
+            rows.push(TradeRow {
+                n,
+                point,
+                held_out,
+                on_front: false,
+            });
         }
     }
     bar.finish_and_clear();
 
-    let front = pareto_front(&points);
+    let front = pareto_front(&rows);
+    rows.iter_mut().zip(&front).for_each(|(r, &on)| r.on_front = on);
+    let table = TradeTable {
+        model: kind,
+        capture_sha256,
+        rows,
+    };
+    let points = &table.rows;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let csv = args.out.join("trade.csv");
-    write_csv(&csv, &points, &front)?;
+    table
+        .write(&csv)
+        .with_context(|| format!("writing {}", csv.display()))?;
     let png = args.out.join("trade.png");
     let cloud: Vec<(f64, f64, bool)> = points
         .iter()
         .zip(&front)
         .filter(|(p, _)| p.ok())
-        .map(|(p, &on)| (p.predict_ns(), p.aise(), on))
+        .map(|(p, &on)| (p.time_ns(), p.aise(), on))
         .collect();
     let accuracy = if test.is_some() {
         "held-out AISE [N²]"
@@ -157,35 +140,30 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
         "  {:>6} {:>10} {:>10} {:>8} {:>12} {:>7} {:>9} {:>11} {:>12} {:>11} {:>11}",
         "n", "C", "ε", "γ", "CV AISE", "SVs", "fit [ms]", "predict [ns]", "test AISE", "max |e|", "peak |e|"
     );
-    let mut on_front: Vec<&TradePoint> = points
-        .iter()
-        .zip(&front)
-        .filter(|(_, on)| **on)
-        .map(|(p, _)| p)
-        .collect();
-    on_front.sort_by(|a, b| a.predict_ns().total_cmp(&b.predict_ns()));
-    for p in on_front {
-        let q = &p.point;
-        let gamma = q.gamma.map_or("-".to_owned(), |g| format!("{g:.3e}"));
-        let (aise, max_e, peak) = p
+    let mut on_front: Vec<&TradeRow> = points.iter().filter(|p| p.on_front).collect();
+    on_front.sort_by(|a, b| a.time_ns().total_cmp(&b.time_ns()));
+    for r in on_front {
+        let p = &r.point;
+        let gamma = p.gamma.map_or("-".to_owned(), |g| format!("{g:.3e}"));
+        let (aise, max_e, peak) = r
             .held_out
             .as_ref()
             .map_or(("-".into(), "-".into(), "-".into()), |h| {
                 (
                     format!("{:.4e}", h.aise),
-                    format!("{:.3e}", h.max_error),
-                    format!("{:.3e}", h.peak_error),
+                    format!("{:.3e}", h.max_error_n),
+                    format!("{:.3e}", h.peak_error_n),
                 )
             });
         println!(
             "  {:>6} {:>10.3e} {:>10.3e} {gamma:>8} {:>12.4e} {:>7.1} {:>9.2} {:>11.0} {aise:>12} {max_e:>11} {peak:>11}",
-            p.n,
-            q.c,
-            q.epsilon,
-            q.cv_aise,
-            q.n_sv,
-            q.fit_seconds * 1e3,
-            p.predict_ns()
+            r.n,
+            p.c,
+            p.epsilon,
+            p.cv_aise,
+            p.n_sv,
+            p.fit_seconds * 1e3,
+            r.time_ns()
         );
     }
     println!("wrote {} and {}", csv.display(), png.display());
@@ -225,97 +203,8 @@ fn held_out(
     });
     Ok(HeldOut {
         aise: metrics.aise,
-        max_error: metrics.error_bound,
-        peak_error: (peak(&set.predicted) - peak(&set.measured)).abs(),
+        max_error_n: metrics.error_bound,
+        peak_error_n: (peak(&set.predicted) - peak(&set.measured)).abs(),
         predict_ns: fastest,
     })
-}
-
-/// Whether each point is on the Pareto front over (time per prediction, AISE): no other point
-/// is at least as good on both and better on one. Failed points are never on it.
-fn pareto_front(points: &[TradePoint]) -> Vec<bool> {
-    points
-        .iter()
-        .map(|p| {
-            p.ok()
-                && !points.iter().any(|q| {
-                    q.ok()
-                        && q.predict_ns() <= p.predict_ns()
-                        && q.aise() <= p.aise()
-                        && (q.predict_ns() < p.predict_ns() || q.aise() < p.aise())
-                })
-        })
-        .collect()
-}
-
-fn write_csv(path: &Path, points: &[TradePoint], front: &[bool]) -> anyhow::Result<()> {
-    use std::io::Write as _;
-    capture::write_atomically(path, |w| {
-        writeln!(
-            w,
-            "n,c,epsilon,gamma,cv_aise,n_sv,fit_s,predict_ns,test_aise,test_max_error,test_peak_error,test_predict_ns,on_front,failed"
-        )?;
-        let num = |v: f64| if v.is_finite() { format!("{v:e}") } else { String::new() };
-        for (p, &on) in points.iter().zip(front) {
-            let q = &p.point;
-            let (aise, max_e, peak, time) = p.held_out.as_ref().map_or(
-                (String::new(), String::new(), String::new(), String::new()),
-                |h| (num(h.aise), num(h.max_error), num(h.peak_error), num(h.predict_ns)),
-            );
-            let failed = q.failed.as_deref().unwrap_or("").replace(['"', '\n'], " ");
-            writeln!(
-                w,
-                "{},{},{},{},{},{},{},{},{aise},{max_e},{peak},{time},{on},\"{failed}\"",
-                p.n,
-                num(q.c),
-                num(q.epsilon),
-                q.gamma.map_or(String::new(), num),
-                num(q.cv_aise),
-                num(q.n_sv),
-                num(q.fit_seconds),
-                num(q.predict_ns),
-            )?;
-        }
-        Ok::<(), std::io::Error>(())
-    })
-    .with_context(|| format!("writing {}", path.display()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn point(predict_ns: f64, aise: f64, failed: bool) -> TradePoint {
-        TradePoint {
-            n: 10,
-            point: SearchPoint {
-                c: 1.0,
-                epsilon: 0.1,
-                gamma: None,
-                cv_aise: aise,
-                n_sv: 1.0,
-                fit_seconds: 0.0,
-                predict_ns,
-                failed: failed.then(|| "no".to_owned()),
-            },
-            held_out: None,
-        }
-    }
-
-    #[test]
-    fn the_front_holds_exactly_the_points_nothing_beats_on_both() {
-        let points = [
-            point(10.0, 5.0, false), // fastest: on
-            point(20.0, 2.0, false), // on
-            point(30.0, 2.0, false), // as accurate as the one before, slower: off
-            point(40.0, 1.0, false), // most accurate: on
-            point(25.0, 4.0, false), // beaten by (20, 2): off
-            point(5.0, 0.5, true),   // failed: never on, and beats nothing
-            point(10.0, 5.0, false), // a tie with the first: both on
-        ];
-        assert_eq!(
-            pareto_front(&points),
-            [true, true, false, true, false, false, true]
-        );
-    }
 }

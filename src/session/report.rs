@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::analysis::SegmentSummary;
-use crate::models::{Origin, ResolvedModel};
+use crate::models::{BudgetChoice, Origin, ResolvedModel};
 
 /// Why a report could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -53,6 +53,9 @@ pub struct ModelLine {
     pub fit_s: Option<f64>,
     /// Support vectors.
     pub training_samples: usize,
+    /// The point a scene's budget picked from a measured trade.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub budget: Option<BudgetChoice>,
 }
 
 impl ModelLine {
@@ -70,6 +73,7 @@ impl ModelLine {
             path,
             fit_s,
             training_samples: m.model.n_train,
+            budget: m.budget.clone(),
         }
     }
 }
@@ -120,6 +124,9 @@ impl SessionReport {
                 "  model {} ({}): {} training samples, {how}",
                 m.name, m.role, m.training_samples
             );
+            if let Some(b) = &m.budget {
+                let _ = writeln!(t, "    chosen {b}");
+            }
         }
         for s in &self.segments {
             let _ = writeln!(

@@ -123,3 +123,19 @@ pub fn sine_rub(amplitude_m: f64, seconds: f64, trial: u32) -> SineRub {
         .collect();
     SineRub { t, x, z, f }
 }
+
+/// `scene` (a scene file's text) without its `[models.*.budget]` tables, so that a test may
+/// give a model its hyperparameters or a model file instead.
+pub fn without_budgets(scene: &str) -> String {
+    let mut out = Vec::new();
+    let mut in_budget = false;
+    for line in scene.lines() {
+        if line.starts_with('[') {
+            in_budget = line.starts_with("[models.") && line.ends_with(".budget]");
+        }
+        if !in_budget {
+            out.push(line);
+        }
+    }
+    out.join("\n") + "\n"
+}
