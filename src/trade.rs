@@ -15,11 +15,13 @@ use sha2::{Digest, Sha256};
 const MAGIC: &str = "# palpus-trade format=1";
 
 /// The table's columns, in order.
-pub const COLUMNS: [&str; 14] = [
+pub const COLUMNS: [&str; 17] = [
     "n",
     "c",
     "epsilon",
     "gamma",
+    "tol",
+    "max_sv",
     "cv_aise",
     "n_sv",
     "fit_s",
@@ -28,6 +30,7 @@ pub const COLUMNS: [&str; 14] = [
     "test_max_error",
     "test_peak_error",
     "test_predict_ns",
+    "test_predict_f32_ns",
     "on_front",
     "failed",
 ];
@@ -41,8 +44,11 @@ pub struct HeldOut {
     pub max_error_n: f64,
     /// Error in the peak force, N.
     pub peak_error_n: f64,
-    /// Time of one prediction of the model refitted on the whole capture, ns.
+    /// Time of one prediction of the model refitted on the whole capture, ns (the exact f64
+    /// evaluation).
     pub predict_ns: f64,
+    /// The same through the haptic loop's f32 fast path, ns.
+    pub predict_f32_ns: f64,
 }
 
 /// One measured point: a grid point cross-validated at a training size, and what it gave on
@@ -51,6 +57,10 @@ pub struct HeldOut {
 pub struct TradeRow {
     /// Training size (the needle's in-tissue samples; the other models use every row).
     pub n: usize,
+    /// Solver tolerance of every fit (`None`: the library's default).
+    pub tol: Option<f64>,
+    /// Support-vector budget of every fit (`None`: none).
+    pub max_sv: Option<usize>,
     /// The hyperparameters and their cross-validation, as `identify --search` measures them.
     pub point: SearchPoint,
     /// Measures on the held-out capture, when one was given.
@@ -201,11 +211,13 @@ impl TradeTable {
                 let failed = p.failed.as_deref().unwrap_or("").replace(['"', '\n'], " ");
                 writeln!(
                     w,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{},\"{failed}\"",
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{failed}\"",
                     r.n,
                     num(p.c),
                     num(p.epsilon),
                     p.gamma.map_or(String::new(), num),
+                    r.tol.map_or(String::new(), num),
+                    r.max_sv.map_or(String::new(), |k| k.to_string()),
                     num(p.cv_aise),
                     num(p.n_sv),
                     num(p.fit_seconds),
@@ -214,6 +226,7 @@ impl TradeTable {
                     h(|h| h.max_error_n),
                     h(|h| h.peak_error_n),
                     h(|h| h.predict_ns),
+                    h(|h| h.predict_f32_ns),
                     r.on_front,
                 )?;
             }
@@ -302,7 +315,7 @@ impl TradeTable {
                 .trim()
                 .parse::<usize>()
                 .map_err(|_| error(line, Some("n"), format!("`{}` is not a sample count", cell(0))))?;
-            let failed = Some(cell(13).trim()).filter(|f| !f.is_empty()).map(str::to_owned);
+            let failed = Some(cell(16).trim()).filter(|f| !f.is_empty()).map(str::to_owned);
             // A failed point has no measures: every number but its hyperparameters may be empty.
             let measure = |j: usize| -> Result<f64, TradeError> {
                 if failed.is_some() {
@@ -311,23 +324,44 @@ impl TradeTable {
                     required(j)
                 }
             };
-            let held_out = match (number(8)?, number(9)?, number(10)?, number(11)?) {
-                (Some(aise), Some(max_error_n), Some(peak_error_n), Some(predict_ns)) => Some(HeldOut {
+            let held_out = match [10, 11, 12, 13, 14].map(number) {
+                [
+                    Ok(Some(aise)),
+                    Ok(Some(max_error_n)),
+                    Ok(Some(peak_error_n)),
+                    Ok(Some(predict_ns)),
+                    Ok(Some(predict_f32_ns)),
+                ] => Some(HeldOut {
                     aise,
                     max_error_n,
                     peak_error_n,
                     predict_ns,
+                    predict_f32_ns,
                 }),
-                (None, None, None, None) => None,
-                _ => {
+                [Ok(None), Ok(None), Ok(None), Ok(None), Ok(None)] => None,
+                cells => {
+                    if let Some(Err(e)) = cells.into_iter().find(Result::is_err) {
+                        return Err(e);
+                    }
                     return Err(error(
                         line,
                         None,
-                        "the four test_ columns are either all given or all empty".into(),
+                        "the five test_ columns are either all given or all empty".into(),
                     ));
                 }
             };
-            let on_front = match cell(12).trim() {
+            let tol = number(4)?;
+            let max_sv = match cell(5).trim() {
+                "" => None,
+                text => Some(text.parse::<usize>().ok().filter(|k| *k >= 1).ok_or_else(|| {
+                    error(
+                        line,
+                        Some("max_sv"),
+                        format!("`{text}` is not a support-vector count"),
+                    )
+                })?),
+            };
+            let on_front = match cell(15).trim() {
                 "true" => true,
                 "false" => false,
                 other => {
@@ -342,14 +376,16 @@ impl TradeTable {
                 c: required(1)?,
                 epsilon: required(2)?,
                 gamma: number(3)?,
-                cv_aise: measure(4)?,
-                n_sv: measure(5)?,
-                fit_seconds: measure(6)?,
-                predict_ns: measure(7)?,
+                cv_aise: measure(6)?,
+                n_sv: measure(7)?,
+                fit_seconds: measure(8)?,
+                predict_ns: measure(9)?,
                 failed,
             };
             rows.push(TradeRow {
                 n,
+                tol,
+                max_sv,
                 point,
                 held_out,
                 on_front,
@@ -407,6 +443,8 @@ mod tests {
     fn row(n: usize, time_ns: f64, aise: f64) -> TradeRow {
         TradeRow {
             n,
+            tol: None,
+            max_sv: None,
             point: SearchPoint {
                 c: 100.0,
                 epsilon: 0.02,
@@ -462,7 +500,10 @@ mod tests {
             max_error_n: 0.9,
             peak_error_n: 0.2,
             predict_ns: 650.0,
+            predict_f32_ns: 90.0,
         });
+        held.tol = Some(1e-6);
+        held.max_sv = Some(50);
         let t = table(vec![row(350, 500.0, 0.02), held, failed]);
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("trade.csv");
@@ -532,19 +573,27 @@ mod tests {
             ),
             (head.clone(), "line 3: no points"),
             (
-                format!("{head}350,1e2,2e-2,3e1,x,1,1,1,,,,,true,\"\"\n"),
+                format!("{head}350,1e2,2e-2,3e1,,,x,1,1,1,,,,,,true,\"\"\n"),
                 "line 3, column `cv_aise`: `x` is not",
             ),
             (
-                format!("{head}350,1e2,2e-2,3e1,1,1,1,,,,,,true,\"\"\n"),
+                format!("{head}350,1e2,2e-2,3e1,,,1,1,1,,,,,,,true,\"\"\n"),
                 "line 3, column `predict_ns`: empty",
             ),
             (
-                format!("{head}350,1e2,2e-2,3e1,1,1,1,1,1,,,,true,\"\"\n"),
+                format!("{head}350,1e2,2e-2,3e1,,,1,1,1,1,1,,,,,true,\"\"\n"),
                 "all given or all empty",
             ),
             (
-                format!("{head}350,1e2,2e-2,3e1,1,1,1,1,,,,,yes,\"\"\n"),
+                format!("{head}350,1e2,2e-2,3e1,,,1,1,1,1,1,1,1,1,x,true,\"\"\n"),
+                "column `test_predict_f32_ns`",
+            ),
+            (
+                format!("{head}350,1e2,2e-2,3e1,,0,1,1,1,1,,,,,,true,\"\"\n"),
+                "column `max_sv`",
+            ),
+            (
+                format!("{head}350,1e2,2e-2,3e1,,,1,1,1,1,,,,,,yes,\"\"\n"),
                 "column `on_front`",
             ),
         ];

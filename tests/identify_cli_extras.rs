@@ -158,3 +158,55 @@ fn the_needle_table_shows_its_physical_baseline_and_why_coulomb_viscous_is_absen
     assert!(hard["metrics"]["coulomb_viscous_stiffness"].is_null());
     assert!(hard["metrics"]["coulomb_viscous"]["aise"].is_number());
 }
+
+#[test]
+fn a_support_vector_budget_keeps_the_model_within_it_and_says_what_it_cost() {
+    let (train, test) = (li_bi("needle_train"), li_bi("needle_test"));
+    let args = |max_sv: Option<&str>| {
+        let mut a = vec![
+            "identify",
+            train.as_str(),
+            "--model",
+            "needle",
+            "--test",
+            test.as_str(),
+            "--json",
+        ];
+        if let Some(k) = max_sv {
+            a.extend(["--max-sv", k]);
+        }
+        json(&a)
+    };
+    let full = args(None);
+    let full_sv = full["n_sv"].as_u64().unwrap();
+    assert!(full_sv > 100, "{full_sv}");
+    assert!(full.get("reduction").is_none(), "{full}");
+    let aise = |r: &serde_json::Value| r["metrics"]["svr"]["aise"].as_f64().unwrap();
+    let mut last_deviation = 0.0;
+    for k in [100u64, 50, 25] {
+        let r = args(Some(&k.to_string()));
+        assert_eq!(r["n_sv"].as_u64(), Some(k), "{r}");
+        let red = &r["reduction"];
+        assert_eq!(red["from_sv"].as_u64(), Some(full_sv), "{r}");
+        let (max, rms) = (
+            red["max_deviation"].as_f64().unwrap(),
+            red["rms_deviation"].as_f64().unwrap(),
+        );
+        assert!(rms > 0.0 && rms <= max && max.is_finite(), "{red}");
+        // Fewer support vectors stray further from the certified model.
+        assert!(max >= last_deviation, "{k}: {max} < {last_deviation}");
+        last_deviation = max;
+        // The certificate is the solve's, before the reduction.
+        assert_eq!(r["relative_gap"], full["relative_gap"]);
+        if k == 100 {
+            // Half the support vectors cost the held-out AISE under 1 %.
+            assert!(aise(&r) < aise(&full) * 1.01, "{} vs {}", aise(&r), aise(&full));
+        }
+    }
+    // A budget the model already meets changes nothing.
+    let same = args(Some(&full_sv.to_string()));
+    assert!(same.get("reduction").is_none(), "{same}");
+    assert_eq!(aise(&same), aise(&full));
+    let shown = common::fails(&["identify", &train, "--model", "needle", "--max-sv", "0"]);
+    assert!(shown.contains("not a support-vector count"), "{shown}");
+}

@@ -12,8 +12,8 @@ use serde::Serialize;
 
 use crate::error::IdentifyError;
 use crate::identification::{
-    DEFAULT_MAX_FIT_SAMPLES, FrictionData, KGF_N, SvrProblem, friction_data, metrics, needle_data, spread,
-    stage_one, svr,
+    DEFAULT_MAX_FIT_SAMPLES, FitLimits, FrictionData, KGF_N, SvrProblem, friction_data, metrics, needle_data,
+    spread, stage_one, svr_with,
 };
 use crate::model_file::ModelKind;
 use capture::Capture;
@@ -48,7 +48,8 @@ impl SearchGrid {
                 gamma: vec![0.5, 2.0, 5.0, 10.0],
                 folds: 0,
             },
-            ModelKind::NeedlePuncture => Self {
+            // The phase-aware needle is compared with the smooth SVR, whose grid this is.
+            ModelKind::NeedlePuncture | ModelKind::NeedlePhases => Self {
                 c: vec![10.0, 100.0, 1000.0],
                 epsilon: vec![0.01, 0.02, 0.05],
                 gamma: vec![10.0, 30.0, 50.0],
@@ -115,6 +116,19 @@ pub fn search(
     grid: &SearchGrid,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<SearchPoint>, IdentifyError> {
+    search_with(kind, train, max_samples, grid, &FitLimits::default(), progress)
+}
+
+/// [`search`] with every fold's fit under `limits` (a solver tolerance, a support-vector
+/// budget), so that the cross-validated AISE is that of the models those limits give.
+pub fn search_with(
+    kind: ModelKind,
+    train: &Capture,
+    max_samples: usize,
+    grid: &SearchGrid,
+    limits: &FitLimits<'_>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<SearchPoint>, IdentifyError> {
     let gammas: Vec<Option<f64>> = if kind == ModelKind::HardFriction {
         vec![None]
     } else {
@@ -126,7 +140,7 @@ pub fn search(
     for &c in &grid.c {
         for &epsilon in &grid.epsilon {
             for &gamma in &gammas {
-                let point = match data.cross_validate(c, epsilon, gamma, grid.folds) {
+                let point = match data.cross_validate(c, epsilon, gamma, grid.folds, limits) {
                     Ok(folds) => mean_folds(folds, c, epsilon, gamma),
                     Err(e) => SearchPoint {
                         c,
@@ -203,7 +217,7 @@ impl Data {
                     scale: false,
                 }
             }
-            ModelKind::NeedlePuncture => {
+            ModelKind::NeedlePuncture | ModelKind::NeedlePhases => {
                 let (time, x, y) = spread(&needle_data(train)?, max_samples);
                 Self::Regression {
                     x,
@@ -231,6 +245,7 @@ impl Data {
         epsilon: f64,
         gamma: Option<f64>,
         folds: usize,
+        limits: &FitLimits<'_>,
     ) -> Result<Vec<Fold>, IdentifyError> {
         let kernel = gamma.map_or(Kernel::Linear, |gamma| Kernel::Rbf { gamma });
         match self {
@@ -257,7 +272,8 @@ impl Data {
                             InputScaling::identity(dim)
                         };
                         let started = Instant::now();
-                        let f = svr(
+                        let f = svr_with(
+                            limits,
                             "cross-validation fold",
                             SvrProblem {
                                 c,
@@ -308,7 +324,8 @@ impl Data {
                     let started = Instant::now();
                     let fit_column = |name, column: usize| {
                         let targets: Vec<f64> = keep.iter().map(|p| p[column]).collect();
-                        svr(
+                        svr_with(
+                            limits,
                             name,
                             SvrProblem {
                                 c,

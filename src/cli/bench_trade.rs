@@ -7,7 +7,8 @@ use anyhow::Context;
 use capture::Capture;
 use clap::Args;
 use identify::{
-    DEFAULT_MAX_FIT_SAMPLES, IdentifyOptions, SearchGrid, SearchPoint, identify, search, timed_predictions,
+    DEFAULT_MAX_FIT_SAMPLES, FitLimits, IdentifyOptions, SearchGrid, SearchPoint, identify_with, search_with,
+    timed_predictions,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -16,15 +17,17 @@ use crate::trade::{HeldOut, TradeRow, TradeTable, pareto_front};
 
 /// Measure the speed/accuracy trade of a model's fit.
 ///
-/// For every training size (--sizes, the needle's --max-samples) and every point of the grid
+/// For every training size (--sizes, the needle's --max-samples), solver tolerance (--tols),
+/// support-vector budget (--max-svs, beside no budget) and every point of the grid
 /// (--grid, as for `identify`; the model's own grid by default) it cross-validates the fit on
 /// the capture (5 contiguous folds; leave-one-speed-out for the soft contact), as `identify
 /// --search` does, and with --test fits on the whole capture and measures it on the test one.
 /// Each point records its fit time, time per prediction (what one haptic tick pays), support
 /// vectors, cross-validated AISE and, with --test, held-out AISE, largest error, the error in
-/// the peak force and the refitted model's time per prediction over the test capture. Times per
-/// prediction are the fastest of 5 passes. The Pareto front over time per prediction and AISE
-/// (held-out with --test, else cross-validated) — the points that no other is both faster and
+/// the peak force and the refitted model's time per prediction over the test capture, exact
+/// and through the haptic loop's f32 fast path. Times per prediction are the fastest of 5
+/// passes. The Pareto front over the exact time per prediction and AISE (held-out with
+/// --test, else cross-validated) — the points that no other is both faster and
 /// more accurate than — is printed, and every point is written to OUT/trade.csv (its first
 /// line names the model and the capture's SHA-256, for a scene's `[models.NAME.budget]` to
 /// pick from) with the front drawn in OUT/trade.png.
@@ -44,6 +47,13 @@ pub(crate) struct TradeArgs {
     /// Training sizes (the needle's in-tissue samples; the other models use every row).
     #[arg(long, value_delimiter = ',', default_value = "350", value_name = "N,...")]
     sizes: Vec<usize>,
+    /// Solver tolerances to sweep (as `identify --tol`); the library's default when not given.
+    #[arg(long, value_delimiter = ',', value_name = "X,...")]
+    tols: Vec<f64>,
+    /// Support-vector budgets to sweep (as `identify --max-sv`), each a row of its own beside
+    /// the unreduced one.
+    #[arg(long, value_delimiter = ',', value_name = "K,...")]
+    max_svs: Vec<usize>,
     /// Folder for trade.csv and trade.png.
     #[arg(long, default_value = "out/trade", value_name = "DIR")]
     out: PathBuf,
@@ -70,29 +80,59 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
     } else {
         grid.gamma.len()
     };
-    let total = (args.sizes.len() * grid.c.len() * grid.epsilon.len() * gammas) as u64;
+    if let Some(t) = args
+        .tols
+        .iter()
+        .find(|t| !(t.is_finite() && **t > 0.0 && **t < 1.0))
+    {
+        anyhow::bail!("--tols: {t} is not a tolerance in (0, 1)");
+    }
+    if args.max_svs.contains(&0) {
+        anyhow::bail!("--max-svs: give budgets of at least 1 support vector");
+    }
+    let tols: Vec<Option<f64>> = if args.tols.is_empty() {
+        vec![None]
+    } else {
+        args.tols.iter().copied().map(Some).collect()
+    };
+    let budgets: Vec<Option<usize>> = std::iter::once(None)
+        .chain(args.max_svs.iter().copied().map(Some))
+        .collect();
+    let combos = tols.len() * budgets.len();
+    let total = (args.sizes.len() * combos * grid.c.len() * grid.epsilon.len() * gammas) as u64;
     let bar = ProgressBar::new(total).with_style(
         ProgressStyle::with_template("measuring {bar:30} {pos}/{len} points {elapsed} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut rows = Vec::new();
     for &n in &args.sizes {
-        let done_before = bar.position();
-        let explored = search(kind, &train, n, &grid, &mut |done, _| {
-            bar.set_position(done_before + done as u64)
-        })
-        .with_context(|| format!("cross-validating at n = {n}"))?;
-        for point in explored {
-            let held_out = match (&test, point.failed.is_none()) {
-                (Some(test), true) => Some(held_out(&train, test, kind, n, &point)?),
-                _ => None,
-            };
-            rows.push(TradeRow {
-                n,
-                point,
-                held_out,
-                on_front: false,
-            });
+        for &tol in &tols {
+            for &max_sv in &budgets {
+                let limits = FitLimits {
+                    tolerance: tol,
+                    max_sv,
+                    ..FitLimits::default()
+                };
+                let done_before = bar.position();
+                let explored = search_with(kind, &train, n, &grid, &limits, &mut |done, _| {
+                    bar.set_position(done_before + done as u64)
+                })
+                .with_context(|| format!("cross-validating at n = {n}"))?;
+                for point in explored {
+                    let held_out = match (&test, point.failed.is_none()) {
+                        (Some(test), true) => Some(held_out(&train, test, kind, n, &limits, &point)?),
+                        _ => None,
+                    };
+                    rows.push(TradeRow {
+                        n,
+                        tol,
+                        max_sv,
+                        point,
+                        held_out,
+                        on_front: false,
+                    });
+                }
+            }
         }
     }
     bar.finish_and_clear();
@@ -137,26 +177,42 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
         }
     );
     println!(
-        "  {:>6} {:>10} {:>10} {:>8} {:>12} {:>7} {:>9} {:>11} {:>12} {:>11} {:>11}",
-        "n", "C", "ε", "γ", "CV AISE", "SVs", "fit [ms]", "predict [ns]", "test AISE", "max |e|", "peak |e|"
+        "  {:>6} {:>10} {:>10} {:>8} {:>7} {:>6} {:>12} {:>7} {:>9} {:>11} {:>8} {:>12} {:>11} {:>11}",
+        "n",
+        "C",
+        "ε",
+        "γ",
+        "tol",
+        "max SV",
+        "CV AISE",
+        "SVs",
+        "fit [ms]",
+        "predict [ns]",
+        "f32 [ns]",
+        "test AISE",
+        "max |e|",
+        "peak |e|"
     );
     let mut on_front: Vec<&TradeRow> = points.iter().filter(|p| p.on_front).collect();
     on_front.sort_by(|a, b| a.time_ns().total_cmp(&b.time_ns()));
     for r in on_front {
         let p = &r.point;
         let gamma = p.gamma.map_or("-".to_owned(), |g| format!("{g:.3e}"));
-        let (aise, max_e, peak) = r
-            .held_out
-            .as_ref()
-            .map_or(("-".into(), "-".into(), "-".into()), |h| {
-                (
-                    format!("{:.4e}", h.aise),
-                    format!("{:.3e}", h.max_error_n),
-                    format!("{:.3e}", h.peak_error_n),
-                )
-            });
+        let (aise, max_e, peak, f32_ns) =
+            r.held_out
+                .as_ref()
+                .map_or(("-".into(), "-".into(), "-".into(), "-".into()), |h| {
+                    (
+                        format!("{:.4e}", h.aise),
+                        format!("{:.3e}", h.max_error_n),
+                        format!("{:.3e}", h.peak_error_n),
+                        format!("{:.0}", h.predict_f32_ns),
+                    )
+                });
+        let tol = r.tol.map_or("-".to_owned(), |t| format!("{t:.0e}"));
+        let max_sv = r.max_sv.map_or("-".to_owned(), |k| k.to_string());
         println!(
-            "  {:>6} {:>10.3e} {:>10.3e} {gamma:>8} {:>12.4e} {:>7.1} {:>9.2} {:>11.0} {aise:>12} {max_e:>11} {peak:>11}",
+            "  {:>6} {:>10.3e} {:>10.3e} {gamma:>8} {tol:>7} {max_sv:>6} {:>12.4e} {:>7.1} {:>9.2} {:>11.0} {f32_ns:>8} {aise:>12} {max_e:>11} {peak:>11}",
             r.n,
             p.c,
             p.epsilon,
@@ -177,6 +233,7 @@ fn held_out(
     test: &Capture,
     kind: identify::ModelKind,
     n: usize,
+    limits: &FitLimits<'_>,
     point: &SearchPoint,
 ) -> anyhow::Result<HeldOut> {
     let options = IdentifyOptions {
@@ -187,7 +244,7 @@ fn held_out(
         max_samples: n,
         max_fit_samples: DEFAULT_MAX_FIT_SAMPLES,
     };
-    let identified = identify(train, Some(test), &options)
+    let identified = identify_with(train, Some(test), &options, limits)
         .with_context(|| format!("fitting C = {:e}, ε = {:e} at n = {n}", point.c, point.epsilon))?;
     let metrics = &identified.report.metrics.svr;
     let set = fit_set("test", test, &identified.model)?;
@@ -201,10 +258,37 @@ fn held_out(
     let (_, fastest) = timed_predictions(rows, || {
         x.chunks(dim).map(|row| identified.model.predict(row)).collect()
     });
+    let fast = fast_predictor(&identified.model)?;
+    let (_, fastest_f32) = timed_predictions(rows, || x.chunks(dim).map(&fast).collect());
     Ok(HeldOut {
         aise: metrics.aise,
         max_error_n: metrics.error_bound,
         peak_error_n: (peak(&set.predicted) - peak(&set.measured)).abs(),
         predict_ns: fastest,
+        predict_f32_ns: fastest_f32,
+    })
+}
+
+/// The model as the haptic loop evaluates it (f32 fast path, no allocation), taking the
+/// inputs in [`identify::ModelFile::predict`]'s order.
+fn fast_predictor(model: &identify::ModelFile) -> anyhow::Result<Box<dyn Fn(&[f64]) -> f64>> {
+    use haptics::law::ScalarModel as _;
+    use identify::ModelKind;
+    Ok(match model.kind {
+        ModelKind::NeedlePuncture => {
+            let m = haptics::law::needle_model(model)?;
+            Box::new(move |x: &[f64]| m.eval(&[x[0], x[1]]))
+        }
+        ModelKind::HardFriction => {
+            let m = haptics::law::hard_friction_model(model)?;
+            Box::new(move |x: &[f64]| m.eval(&[x[0]]))
+        }
+        ModelKind::SoftFriction => {
+            let (w, m) = haptics::law::soft_friction_models(model)?;
+            Box::new(move |x: &[f64]| w.eval(&[x[0]]) * x[1] + m.eval(&[x[0]]))
+        }
+        ModelKind::NeedlePhases => {
+            anyhow::bail!("the trade is measured over the smooth models' hyperparameters")
+        }
     })
 }

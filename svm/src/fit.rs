@@ -14,6 +14,7 @@ use super::linear_exact;
 use super::model::SvrModel;
 use super::params::{DualSettings, FitProgress, Solver, SvrParams};
 use super::polish::{self, Side};
+use super::reduce::reduce_support;
 use super::smo;
 
 /// Active-set moves allowed to a polish tried during the interior point's run.
@@ -43,6 +44,21 @@ pub struct SvrFit {
     /// The primal objective's resolution in f64 (C times the rounding unit of the residuals
     /// pinned on the tube boundary): `P − P* ≤ relative_gap()·max(1, |P|) + resolution`.
     pub resolution: f64,
+    /// With a support-vector budget the solution exceeded: `model` is the reduced one, and
+    /// this says from how many support vectors and how far it is from the certified solution
+    /// (which the objectives and the gap describe).
+    pub reduction: Option<ReductionReport>,
+}
+
+/// How a model was brought within its support-vector budget ([`crate::reduce_support`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ReductionReport {
+    /// Support vectors of the certified solution.
+    pub from_sv: usize,
+    /// Largest |reduced − certified| over the training inputs.
+    pub max_deviation: f64,
+    /// RMS of reduced − certified over the training inputs.
+    pub rms_deviation: f64,
 }
 
 impl SvrFit {
@@ -135,6 +151,17 @@ pub fn fit_observed(
         solve_dense(&kernel, &data, &settings, observer)?
     };
     let mut fit = certify(&kernel, &data, &settings, solution)?;
+    if let Some(max_sv) = params.max_sv()
+        && fit.model.n_sv() > max_sv
+    {
+        let r = reduce_support(&fit.model, x, dim, max_sv)?;
+        fit.reduction = Some(ReductionReport {
+            from_sv: r.from_sv,
+            max_deviation: r.max_deviation,
+            rms_deviation: r.rms_deviation,
+        });
+        fit.model = r.model;
+    }
     fit.fit_seconds = started.elapsed().as_secs_f64();
     Ok(fit)
 }
@@ -289,6 +316,7 @@ fn certify(
         fit_seconds: 0.0,
         certified_gap: cert.relative_gap,
         resolution: cert.resolution,
+        reduction: None,
     })
 }
 

@@ -27,6 +27,7 @@ mod linear_exact;
 mod model;
 mod params;
 mod polish;
+mod reduce;
 mod sample;
 mod smo;
 mod smo_finish;
@@ -35,10 +36,11 @@ pub use certificate::ACCEPT_GAP;
 pub use error::SvmError;
 pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};
 pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, LANES, fast_exp2};
-pub use fit::{SvrFit, fit, fit_observed, slack};
+pub use fit::{ReductionReport, SvrFit, fit, fit_observed, slack};
 pub use kernel::Kernel;
 pub use model::{InputScaling, SvrModel};
 pub use params::{FitProgress, Solver, SvrParams, SvrParamsBuilder};
+pub use reduce::{Reduction, reduce_support};
 #[doc(hidden)]
 pub use sample::needle_like_model;
 pub use smo::{

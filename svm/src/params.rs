@@ -30,6 +30,7 @@ pub struct SvrParamsBuilder {
     tolerance: f64,
     max_iterations: usize,
     time_budget: Duration,
+    max_sv: Option<usize>,
 }
 
 /// Checked hyperparameters of an ε-SVR.
@@ -42,6 +43,7 @@ pub struct SvrParams {
     tolerance: f64,
     max_iterations: usize,
     time_budget: Duration,
+    max_sv: Option<usize>,
 }
 
 impl Default for SvrParamsBuilder {
@@ -54,6 +56,7 @@ impl Default for SvrParamsBuilder {
             tolerance: 1e-10,
             max_iterations: 0,
             time_budget: Duration::from_secs(60),
+            max_sv: None,
         }
     }
 }
@@ -102,6 +105,14 @@ impl SvrParamsBuilder {
         self
     }
 
+    /// At most this many support vectors in the returned model: a larger solution is reduced
+    /// ([`crate::reduce_support`]) and the fit says how far the reduced model is from the
+    /// certified one ([`crate::SvrFit::reduction`]). None (the default): no budget.
+    pub fn max_sv(mut self, max_sv: Option<usize>) -> Self {
+        self.max_sv = max_sv;
+        self
+    }
+
     /// Validates into [`SvrParams`].
     pub fn build(self) -> Result<SvrParams, SvmError> {
         let bad = SvmError::hyperparameter;
@@ -128,6 +139,9 @@ impl SvrParamsBuilder {
             return Err(bad("tolerance", self.tolerance, "must be in (0, 1)"));
         }
         check_time_budget(self.time_budget)?;
+        if self.max_sv == Some(0) {
+            return Err(bad("max_sv", 0.0, "at least one support vector"));
+        }
         Ok(SvrParams {
             c: self.c,
             epsilon: self.epsilon,
@@ -136,6 +150,7 @@ impl SvrParamsBuilder {
             tolerance: self.tolerance,
             max_iterations: self.max_iterations,
             time_budget: self.time_budget,
+            max_sv: self.max_sv,
         })
     }
 }
@@ -177,6 +192,10 @@ impl SvrParams {
     /// Wall-clock budget.
     pub fn time_budget(&self) -> Duration {
         self.time_budget
+    }
+    /// Support-vector budget of the returned model.
+    pub fn max_sv(&self) -> Option<usize> {
+        self.max_sv
     }
 }
 
@@ -259,6 +278,7 @@ mod tests {
             }),
             SvrParams::builder().tolerance(0.0),
             SvrParams::builder().time_budget(Duration::ZERO),
+            SvrParams::builder().max_sv(Some(0)),
         ];
         for b in cases {
             let err = b.build().unwrap_err();
