@@ -20,7 +20,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use capture::{Capture, CaptureKind};
-use identify::{IdentifyOptions, ModelFile, ModelKind, identify};
+use identify::{FitLimits, IdentifyOptions, ModelFile, ModelKind, identify_with};
 use sha2::{Digest, Sha256};
 
 use crate::scene::{ModelBudget, ModelRole, ModelSource, Scene};
@@ -181,6 +181,10 @@ pub struct BudgetChoice {
     pub epsilon: f64,
     /// γ.
     pub gamma: Option<f64>,
+    /// The solver tolerance it was measured with (`None`: the default).
+    pub tol: Option<f64>,
+    /// Its support-vector budget (`None`: none).
+    pub max_sv: Option<usize>,
     /// Its measured time per prediction, ns.
     pub predict_ns: f64,
     /// Its measured AISE, N².
@@ -198,9 +202,13 @@ impl std::fmt::Display for BudgetChoice {
             max_aise: self.max_aise,
         };
         let gamma = self.gamma.map_or(String::new(), |g| format!(", γ {g:e}"));
+        let tol = self.tol.map_or(String::new(), |t| format!(", tolerance {t:e}"));
+        let max_sv = self
+            .max_sv
+            .map_or(String::new(), |k| format!(", at most {k} support vectors"));
         write!(
             f,
-            "for {budget}: n {}, C {:e}, ε {:e}{gamma}, measured {:.0} ns per prediction at an AISE of {:.3e} N², the cheapest of {} of {} points in {}",
+            "for {budget}: n {}, C {:e}, ε {:e}{gamma}{tol}{max_sv}, measured {:.0} ns per prediction at an AISE of {:.3e} N², the cheapest of {} of {} points in {}",
             self.n,
             self.c,
             self.epsilon,
@@ -278,11 +286,12 @@ pub fn default_cache_dir() -> PathBuf {
     PathBuf::from(".palpus-cache")
 }
 
-/// `needle`/`hard`/`soft` to the model kind (the scene validated the name).
+/// `needle`/`needle_phases`/`hard`/`soft` to the model kind (the scene validated the name).
 pub fn kind_of(name: &str) -> ModelKind {
     match name {
         "hard" => ModelKind::HardFriction,
         "soft" => ModelKind::SoftFriction,
+        "needle_phases" => ModelKind::NeedlePhases,
         _ => ModelKind::NeedlePuncture,
     }
 }
@@ -360,6 +369,7 @@ fn resolve_one(
     };
     let path = scene.resolve(capture);
     let bytes = sources.read_model_source(name, &path)?;
+    let mut knobs = FitKnobs::default();
     let (options, budget) = match &source.budget {
         None => (
             IdentifyOptions {
@@ -382,13 +392,17 @@ fn resolve_one(
                 max_samples: choice.n,
                 max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
             };
+            knobs = FitKnobs {
+                tolerance: choice.tol,
+                max_sv: choice.max_sv,
+            };
             (options, Some(choice))
         }
     };
     let cached = cache_dir.join(format!(
         "{}-{}.json",
         kind.short_name(),
-        cache_key(&bytes, &options)
+        cache_key(&bytes, &options, knobs)
     ));
     if cached.is_file()
         && let Ok(model) = ModelFile::load(&cached)
@@ -397,7 +411,7 @@ fn resolve_one(
         check_renderable(name, &cached, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
         return Ok((model, Origin::Cached(cached), budget));
     }
-    let capture_kind = if kind == ModelKind::NeedlePuncture {
+    let capture_kind = if matches!(kind, ModelKind::NeedlePuncture | ModelKind::NeedlePhases) {
         CaptureKind::Insertion
     } else {
         CaptureKind::Rubbing
@@ -414,7 +428,12 @@ fn resolve_one(
         capture: &path,
     });
     let started = Instant::now();
-    let identified = identify(&train, None, &options).map_err(|e| ModelError::Identify {
+    let limits = FitLimits {
+        tolerance: knobs.tolerance,
+        max_sv: knobs.max_sv,
+        ..FitLimits::default()
+    };
+    let identified = identify_with(&train, None, &options, &limits).map_err(|e| ModelError::Identify {
         model: name.into(),
         path: path.clone(),
         source: Box::new(e),
@@ -492,6 +511,8 @@ fn choose_from_front(
         c: row.point.c,
         epsilon: row.point.epsilon,
         gamma: row.point.gamma,
+        tol: row.tol,
+        max_sv: row.max_sv,
         predict_ns: row.time_ns(),
         aise: row.aise(),
         within: choice.within,
@@ -538,14 +559,27 @@ pub fn check_renderable(name: &str, path: &Path, model: &ModelFile, limit_n: f64
     };
     match model.kind {
         ModelKind::NeedlePuncture => haptics::law::needle_model(model).map(drop),
+        ModelKind::NeedlePhases => {
+            haptics::law::PhasedNeedleLaw::from_file(model, haptics::law::NeedleLawConfig::default())
+                .map(drop)
+        }
         ModelKind::HardFriction => haptics::law::hard_friction_model(model).map(drop),
         ModelKind::SoftFriction => haptics::law::soft_friction_models(model).map(drop),
     }
     .map_err(law)
 }
 
+/// The solver settings a budget's chosen point was measured with, beside its hyperparameters.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FitKnobs {
+    /// Solver tolerance (`None`: the library's default).
+    pub tolerance: Option<f64>,
+    /// Support-vector budget (`None`: none).
+    pub max_sv: Option<usize>,
+}
+
 /// SHA-256 (first 16 hex digits) of what determines an identified model.
-pub fn cache_key(capture_bytes: &[u8], options: &IdentifyOptions) -> String {
+pub fn cache_key(capture_bytes: &[u8], options: &IdentifyOptions, knobs: FitKnobs) -> String {
     let mut h = Sha256::new();
     h.update(CACHE_VERSION.as_bytes());
     h.update(options.kind.short_name().as_bytes());
@@ -557,6 +591,13 @@ pub fn cache_key(capture_bytes: &[u8], options: &IdentifyOptions) -> String {
         options.c, options.epsilon, options.gamma, options.max_samples, options.max_fit_samples
     );
     h.update(hyper.as_bytes());
+    // Only when set, so that the keys of models identified without them stay as they were.
+    if let Some(t) = knobs.tolerance {
+        h.update(format!(";tol={t:?}").as_bytes());
+    }
+    if let Some(k) = knobs.max_sv {
+        h.update(format!(";max_sv={k}").as_bytes());
+    }
     h.finalize().iter().take(8).map(|b| format!("{b:02x}")).collect()
 }
 
@@ -592,10 +633,10 @@ mod tests {
         PathBuf::from(env!("CARGO_MANIFEST_DIR"))
     }
 
-    /// The default scene plus friction models no object references, one of them pointing at
-    /// a capture that does not exist.
+    /// The smooth-needle scene plus friction models no object references, one of them
+    /// pointing at a capture that does not exist.
     fn needle_only_scene() -> Scene {
-        let text = std::fs::read_to_string(root().join(crate::scene::DEFAULT_SCENE)).unwrap().replace(
+        let text = std::fs::read_to_string(root().join("scenes/needle_liver_smooth.toml")).unwrap().replace(
             "[task]",
             "[models.hard]\nkind = \"hard\"\ncapture = \"../assets/captures/li_bi/hard_contact_train.csv\"\n\n\
              [models.soft]\nkind = \"soft\"\ncapture = \"../missing/soft.csv\"\n\n[task]",
@@ -677,7 +718,13 @@ mod tests {
         });
         let reread = resolve(&scene, cache.path(), &mut sources, &mut |_| {}).unwrap();
         assert!(matches!(reread[0].origin, Origin::Identified { .. }));
-        let key = |b: &[u8]| cache_key(b, &IdentifyOptions::new(ModelKind::NeedlePuncture));
+        let key = |b: &[u8]| {
+            cache_key(
+                b,
+                &IdentifyOptions::new(ModelKind::NeedlePuncture),
+                FitKnobs::default(),
+            )
+        };
         assert_ne!(key(&bytes), key(edited.as_bytes()));
     }
 
@@ -689,7 +736,7 @@ mod tests {
             CaptureKind::Rubbing,
         )
         .unwrap();
-        let model = identify(&hard, None, &IdentifyOptions::new(ModelKind::HardFriction))
+        let model = identify::identify(&hard, None, &IdentifyOptions::new(ModelKind::HardFriction))
             .unwrap()
             .model;
         let path = dir.path().join("hard.json");

@@ -582,7 +582,7 @@ impl Scene {
                 ));
             }
             for (field, model, kinds) in [
-                ("puncture", &m.puncture, &["needle"][..]),
+                ("puncture", &m.puncture, &["needle", "needle_phases"][..]),
                 ("friction", &m.friction, &["hard", "soft"][..]),
             ] {
                 let Some(model) = model else { continue };
@@ -614,10 +614,10 @@ impl Scene {
         }
         for (name, s) in &self.models {
             let key = |field: &str| format!("models.{name}.{field}");
-            if !matches!(s.kind.as_str(), "needle" | "hard" | "soft") {
+            if !matches!(s.kind.as_str(), "needle" | "needle_phases" | "hard" | "soft") {
                 return Err(self.invalid(
                     key("kind"),
-                    format!("`{}`: expected needle, hard or soft", s.kind),
+                    format!("`{}`: expected needle, needle_phases, hard or soft", s.kind),
                 ));
             }
             match (&s.file, &s.capture) {
@@ -642,6 +642,13 @@ impl Scene {
                 return Err(self.invalid(key("max_samples"), "at least 10"));
             }
             if let Some(b) = &s.budget {
+                if s.kind == "needle_phases" {
+                    return Err(self.invalid(
+                        key("budget"),
+                        "a budget picks an SVR's hyperparameters from its measured trade; the \
+                         phase-aware needle model has none (use kind = \"needle\")",
+                    ));
+                }
                 if s.capture.is_none() {
                     return Err(self.invalid(
                         key("budget"),
@@ -811,7 +818,12 @@ mod tests {
     #[test]
     fn the_default_scenes_load() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        for name in ["needle_liver", "surfaces_nakano", "friction_hard_soft"] {
+        for name in [
+            "needle_liver",
+            "needle_liver_smooth",
+            "surfaces_nakano",
+            "friction_hard_soft",
+        ] {
             let scene = Scene::load(&root.join("scenes").join(format!("{name}.toml"))).unwrap();
             assert_eq!(scene.name, name);
             assert!(scene.tool().is_some());
@@ -846,7 +858,7 @@ mod tests {
             e.contains("`materials.liver.puncture`") && e.contains("kidney"),
             "{e}"
         );
-        let e = error(&text.replace("kind = \"needle\"", "kind = \"hard\""));
+        let e = error(&text.replace("kind = \"needle_phases\"", "kind = \"hard\""));
         assert!(
             e.contains("materials.liver.puncture") && e.contains("hard model"),
             "{e}"

@@ -168,9 +168,9 @@ fn the_identified_model_loads_and_every_implausible_mutation_is_refused_naming_f
     assert!(load(&null).unwrap_err().contains("needle.json"));
 }
 
-/// The default needle scene with its model read from `file`.
+/// The smooth-needle scene with its model read from `file`.
 fn scene_with_model(file: &Path) -> Scene {
-    let mut scene = Scene::load(&root().join(palpus::scene::DEFAULT_SCENE)).unwrap();
+    let mut scene = Scene::load(&root().join("scenes/needle_liver_smooth.toml")).unwrap();
     if let Some(m) = scene.models.get_mut("needle_liver") {
         m.capture = None;
         m.file = Some(file.to_owned());
@@ -250,10 +250,10 @@ fn the_peak_check_covers_the_whole_input_range() {
     assert!(e.to_string().contains("needle.json"), "{e}");
 }
 
-/// The default scene's text with its model read from `model` and every relative path made
-/// absolute, written to `dir`.
+/// The smooth-needle scene's text with its model read from `model` and every relative path
+/// made absolute, written to `dir`.
 fn scene_file(dir: &Path, model: &Path) -> PathBuf {
-    let text = std::fs::read_to_string(root().join(palpus::scene::DEFAULT_SCENE)).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/needle_liver_smooth.toml")).unwrap();
     let text = common::without_budgets(&text)
         .replace(
             "capture = \"../assets/captures/li_bi/needle_train.csv\"",

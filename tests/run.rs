@@ -120,10 +120,13 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
     let p = &seg["punctures"][0];
     let (depth, truth) = (f(&p["depth_m"]), f(&p["truth_depth_m"]));
     assert!(
-        (depth - truth).abs() < 0.002,
+        (depth - truth).abs() < 0.001,
         "puncture at {depth} m, truth {truth} m"
     );
-    assert!((0.8..1.6).contains(&f(&p["peak_force_n"])), "{p}");
+    assert!(
+        (f(&p["peak_force_n"]) / f(&p["truth_peak_force_n"]) - 1.0).abs() < 0.05,
+        "{p}"
+    );
     // Beside it, the peak the simulated liver gives at that speed.
     let tissue = haptics::sim::world::needle::NeedleTissue::bovine_liver();
     let speed = f(&p["speed_mps"]);
@@ -147,10 +150,10 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
         (f(&capsule["felt_depth_m"]) - f(&capsule["truth_depth_m"])).abs() < 0.003,
         "{capsule}"
     );
-    // Three seconds do not take the needle to the vessel wall's rupture depth: it is listed as
-    // not reached, not silently dropped.
+    // Three seconds take the needle to about the vessel wall: it is listed whatever came of it,
+    // not silently dropped.
     assert!(
-        ["missed", "not reached"].contains(&layers[1]["status"].as_str().unwrap()),
+        ["felt", "missed", "not reached"].contains(&layers[1]["status"].as_str().unwrap()),
         "{}",
         layers[1]
     );
@@ -161,6 +164,35 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
     }
     assert!(out.join("frame.png").is_file() || out.join("frame.txt").is_file());
     assert!(["identified", "cache"].contains(&r["models"][0]["origin"].as_str().unwrap()));
+}
+
+#[test]
+fn the_default_scene_feels_both_layers_where_and_as_hard_as_the_tissue_gives() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let r = run_unpaced(&[], &out, &dir.path().join("cache"));
+    let seg = &r["segments"][0];
+    let punctures = seg["punctures"].as_array().unwrap();
+    assert_eq!(punctures.len(), 2, "{seg}");
+    for p in punctures {
+        assert!((f(&p["depth_m"]) - f(&p["truth_depth_m"])).abs() < 0.001, "{p}");
+        assert!(
+            (f(&p["peak_force_n"]) / f(&p["truth_peak_force_n"]) - 1.0).abs() < 0.05,
+            "{p}"
+        );
+    }
+    for layer in seg["layers"].as_array().unwrap() {
+        assert_eq!(layer["status"], "felt", "{layer}");
+    }
+    // Every tick whose inputs left the trained domain is accounted for by state.
+    let explained: f64 = seg["out_of_domain"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| f(&o["ticks"]))
+        .sum();
+    assert_eq!(explained, f(&seg["model_clamps"]), "{seg}");
 }
 
 #[test]
@@ -176,7 +208,7 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
         "identify",
         session.to_str().unwrap(),
         "--model",
-        "needle",
+        "needle-phases",
         "--out",
         reidentified.to_str().unwrap(),
     ]);
@@ -210,14 +242,16 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
         capture.column("depth_m").unwrap(),
         capture.column("velocity_mps").unwrap(),
     );
-    let range = &original.input_range;
+    // Both run along the recorded trajectory as the haptic thread runs them.
+    let along = |m: &ModelFile| match &m.body {
+        identify::ModelBody::Phases(p) => p.simulate(depth, velocity),
+        _ => panic!("the default scene's model is the phase-aware one"),
+    };
+    let (a, b) = (along(&original), along(&re));
     let (mut sum, mut n) = (0.0, 0usize);
-    for (&d, &v) in depth.iter().zip(velocity).step_by(5) {
-        if (range[0][0]..=range[0][1]).contains(&d) && (range[1][0]..=range[1][1]).contains(&v) {
-            let e = re.predict(&[d, v]) - original.predict(&[d, v]);
-            sum += e * e;
-            n += 1;
-        }
+    for (x, y) in a.iter().zip(&b) {
+        sum += (x.force_n - y.force_n).powi(2);
+        n += 1;
     }
     let rms = (sum / n as f64).sqrt();
     assert!(n > 500 && rms < 0.2, "RMS difference {rms} N over {n} points");

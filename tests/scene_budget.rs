@@ -25,6 +25,8 @@ fn capture() -> PathBuf {
 fn point(n: usize, gamma: f64, epsilon: f64, time_ns: f64, aise: f64) -> TradeRow {
     TradeRow {
         n,
+        tol: None,
+        max_sv: None,
         point: SearchPoint {
             c: 100.0,
             epsilon,
@@ -60,15 +62,16 @@ fn write_table(dir: &Path, model: ModelKind, capture_bytes: &[u8]) -> PathBuf {
     path
 }
 
-/// The default scene with its needle model given `budget` (TOML lines) instead of the
+/// The smooth-needle scene with its needle model given `budget` (TOML lines) instead of the
 /// defaults, written to `dir`.
 fn scene_with_budget(dir: &Path, budget: &str) -> PathBuf {
-    let text =
-        common::without_budgets(&std::fs::read_to_string(root().join(palpus::scene::DEFAULT_SCENE)).unwrap());
+    let text = common::without_budgets(
+        &std::fs::read_to_string(root().join("scenes/needle_liver_smooth.toml")).unwrap(),
+    );
     let capture_line = "capture = \"../assets/captures/li_bi/needle_train.csv\"";
     assert!(
         text.contains(capture_line),
-        "the default scene's needle capture moved"
+        "the smooth scene's needle capture moved"
     );
     let text = text
         .replace(
@@ -131,6 +134,55 @@ fn the_budget_picks_the_cheapest_measured_point_and_the_model_is_fitted_with_it(
         let choice = resolved[0].budget.as_ref().unwrap();
         assert_eq!((choice.gamma, choice.epsilon), (Some(gamma), epsilon), "{budget}");
     }
+}
+
+#[test]
+fn a_point_measured_with_a_support_vector_budget_is_fitted_within_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(capture()).unwrap();
+    let mut budgeted = point(350, 30.0, 0.02, 300.0, 0.012);
+    budgeted.max_sv = Some(40);
+    budgeted.tol = Some(1e-8);
+    let mut rows = vec![point(350, 30.0, 0.02, 900.0, 0.010), budgeted];
+    let front = pareto_front(&rows);
+    rows.iter_mut().zip(front).for_each(|(r, f)| r.on_front = f);
+    let table = dir.path().join("trade.csv");
+    TradeTable {
+        model: ModelKind::NeedlePuncture,
+        capture_sha256: sha256_hex(&bytes),
+        rows,
+    }
+    .write(&table)
+    .unwrap();
+    let scene = scene_with_budget(
+        dir.path(),
+        &format!("front = {:?}\nmax_aise = 0.0125", table.to_str().unwrap()),
+    );
+    let cache = dir.path().join("cache");
+    let resolved = resolve(&scene, &cache).unwrap();
+    let choice = resolved[0].budget.as_ref().unwrap();
+    assert_eq!((choice.max_sv, choice.tol), (Some(40), Some(1e-8)));
+    assert!(
+        choice
+            .to_string()
+            .contains("tolerance 1e-8, at most 40 support vectors"),
+        "{choice}"
+    );
+    let identify::ModelBody::Single(svr) = &resolved[0].model.body else {
+        panic!("a needle model has one SVR");
+    };
+    assert_eq!(svr.svr.n_sv(), 40);
+    // The unbudgeted point is cached apart: a tighter budget picks it and fits it anew.
+    let scene = scene_with_budget(
+        dir.path(),
+        &format!("front = {:?}\nmax_aise = 0.011", table.to_str().unwrap()),
+    );
+    let resolved = resolve(&scene, &cache).unwrap();
+    let identify::ModelBody::Single(svr) = &resolved[0].model.body else {
+        panic!("a needle model has one SVR");
+    };
+    assert!(svr.svr.n_sv() > 40, "{}", svr.svr.n_sv());
+    assert!(matches!(resolved[0].origin, models::Origin::Identified { .. }));
 }
 
 #[test]
@@ -212,10 +264,17 @@ fn bench_trade_writes_the_table_a_scene_budget_picks_from_and_run_reports_it() {
         capture.to_str().unwrap(),
         "--model",
         "needle",
+        "--test",
+        root()
+            .join("assets/captures/li_bi/needle_test.csv")
+            .to_str()
+            .unwrap(),
         "--grid",
         "c=100,gamma=30..100:2,epsilon=0.02",
         "--sizes",
         "120",
+        "--max-svs",
+        "20",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -225,9 +284,25 @@ fn bench_trade_writes_the_table_a_scene_budget_picks_from_and_run_reports_it() {
         parsed.capture_sha256,
         sha256_hex(&std::fs::read(&capture).unwrap())
     );
-    assert_eq!(parsed.rows.len(), 2);
+    // Two grid points, each without a budget and within 20 support vectors.
+    assert_eq!(parsed.rows.len(), 4);
+    for r in &parsed.rows {
+        let h = r.held_out.expect("measured on the test capture");
+        assert!(h.predict_f32_ns > 0.0 && h.predict_ns > 0.0, "{h:?}");
+        if r.max_sv == Some(20) {
+            assert!(r.point.n_sv <= 20.0, "{}", r.point.n_sv);
+        } else {
+            assert_eq!(r.max_sv, None);
+            assert!(r.point.n_sv > 20.0, "{}", r.point.n_sv);
+        }
+    }
     let front = format!("front = {:?}", table.to_str().unwrap());
     let scene = scene_with_budget(dir.path(), &format!("{front}\nmax_aise = 1.0"));
+    let fastest = parsed
+        .rows
+        .iter()
+        .min_by(|a, b| a.time_ns().total_cmp(&b.time_ns()))
+        .unwrap();
     let report = dir.path().join("report");
     let printed = common::text(&common::succeeds(&[
         "run",
@@ -240,9 +315,14 @@ fn bench_trade_writes_the_table_a_scene_budget_picks_from_and_run_reports_it() {
         "--report",
         report.to_str().unwrap(),
     ]));
+    let gamma = fastest.point.gamma.unwrap();
+    let budget = fastest
+        .max_sv
+        .map_or(String::new(), |k| format!(", at most {k} support vectors"));
     assert!(
-        printed.contains("chosen for max_aise = 1e0 N²: n 120, C 1e2, ε 2e-2")
-            && printed.contains("the cheapest of 2 of 2 points"),
+        printed.contains(&format!(
+            "chosen for max_aise = 1e0 N²: n 120, C 1e2, ε 2e-2, γ {gamma:e}{budget}, measured"
+        )) && printed.contains("the cheapest of 4 of 4 points"),
         "{printed}"
     );
 }

@@ -563,7 +563,7 @@ fn argmax(values: &[f64]) -> usize {
 
 /// What to do with a rank-deficient design.
 #[derive(Clone, Copy)]
-enum Rank {
+pub(crate) enum Rank {
     /// The coefficients have a physical meaning: refuse to pick one of many solutions.
     Required(&'static str),
     /// The weights are only means to an interpolant: take the minimum-norm solution.
@@ -572,7 +572,11 @@ enum Rank {
 
 /// `argmin ‖A x − b‖` by SVD of `A` with its columns scaled to unit norm (which makes the rank
 /// decision independent of the regressors' units).
-fn least_squares(mut a: DMatrix<f64>, b: DVector<f64>, rank: Rank) -> Result<DVector<f64>, IdentifyError> {
+pub(crate) fn least_squares(
+    mut a: DMatrix<f64>,
+    b: DVector<f64>,
+    rank: Rank,
+) -> Result<DVector<f64>, IdentifyError> {
     let columns = a.ncols();
     let mut norms = Vec::with_capacity(columns);
     for mut col in a.column_iter_mut() {

@@ -96,6 +96,10 @@ pub struct ComparedMetrics {
     pub coulomb_viscous_stiffness: Option<Metrics>,
     /// RBF network (k-means centres, least-squares weights).
     pub rbf_network: Metrics,
+    /// Li & Bi's smooth ε-SVR over [depth, velocity], when the model is the phase-aware needle
+    /// (whose own figures are then the ones under `svr`: the identified model's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub smooth_svr: Option<Metrics>,
 }
 
 /// What an identification found, for people (a table) and programs (`--json`).
@@ -121,8 +125,13 @@ pub struct Report {
     pub b_kgf: Option<f64>,
     /// Dual objective of the (final-stage) SVR(s), summed.
     pub dual_objective: f64,
-    /// Relative duality gap, worst over the SVRs.
+    /// Relative duality gap, worst over the SVRs (of the certified solutions, before any
+    /// support-vector budget reduced them).
     pub relative_gap: f64,
+    /// With a support-vector budget that reduced a solution: from how many support vectors
+    /// (all SVRs) and how far the reduced model is from the certified one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reduction: Option<svm::ReductionReport>,
     /// Fit time of all SVRs, s.
     pub fit_seconds: f64,
     /// `test` when evaluated on a held-out capture, else `train`.
@@ -170,7 +179,7 @@ pub struct OutOfDomain {
 /// in tissue (depth > 0) for the needle, as identification selects them.
 pub fn model_rows(model_kind: ModelKind, c: &Capture) -> Result<Vec<usize>, IdentifyError> {
     Ok(match model_kind {
-        ModelKind::NeedlePuncture => {
+        ModelKind::NeedlePuncture | ModelKind::NeedlePhases => {
             let depth = c.column(kind::DEPTH_M)?;
             (0..c.len()).filter(|&i| depth[i] > 0.0).collect()
         }
@@ -321,6 +330,9 @@ pub struct FitLimits<'a> {
     /// Wall-clock budget of each fit ([`svm::SvrParamsBuilder::time_budget`]); a fit that
     /// exceeds it is an error naming the gap it had reached.
     pub time_budget: Option<Duration>,
+    /// Support-vector budget of each kernel SVR ([`svm::SvrParamsBuilder::max_sv`]): a larger
+    /// solution is reduced, and the report says how far the reduced model is from it.
+    pub max_sv: Option<usize>,
     /// Called as each fit advances.
     pub observer: &'a dyn Fn(&str, &FitProgress),
 }
@@ -332,6 +344,7 @@ impl Default for FitLimits<'_> {
         Self {
             tolerance: None,
             time_budget: None,
+            max_sv: None,
             observer: &ignore_progress,
         }
     }
@@ -342,6 +355,7 @@ impl std::fmt::Debug for FitLimits<'_> {
         f.debug_struct("FitLimits")
             .field("tolerance", &self.tolerance)
             .field("time_budget", &self.time_budget)
+            .field("max_sv", &self.max_sv)
             .finish_non_exhaustive()
     }
 }
@@ -384,6 +398,7 @@ pub(crate) fn svr_with(
     if let Some(b) = limits.time_budget {
         builder = builder.time_budget(b);
     }
+    builder = builder.max_sv(limits.max_sv);
     let params = builder.build().map_err(|source| IdentifyError::Svr {
         what: what.into(),
         source,
@@ -394,6 +409,27 @@ pub(crate) fn svr_with(
     })
 }
 
+/// How the final SVRs were reduced to their support-vector budget, all together: the
+/// support vectors before (`n_sv` after, those not reduced counted as they are), the largest
+/// deviation and the RMS over the SVRs' own. `None` when none was reduced.
+fn reduction_of(fits: &[&&SvrFit], n_sv: usize) -> Option<svm::ReductionReport> {
+    let reduced: Vec<&svm::ReductionReport> = fits.iter().filter_map(|f| f.reduction.as_ref()).collect();
+    if reduced.is_empty() {
+        return None;
+    }
+    let removed: usize = reduced.iter().map(|r| r.from_sv).sum::<usize>()
+        - fits
+            .iter()
+            .filter(|f| f.reduction.is_some())
+            .map(|f| f.model.n_sv())
+            .sum::<usize>();
+    Some(svm::ReductionReport {
+        from_sv: n_sv + removed,
+        max_deviation: reduced.iter().map(|r| r.max_deviation).fold(0.0, f64::max),
+        rms_deviation: reduced.iter().map(|r| r.rms_deviation).fold(0.0, f64::max),
+    })
+}
+
 /// [`Metrics::compute`], a failure wrapped so that the message says the metrics failed.
 pub(crate) fn metrics(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Result<Metrics, IdentifyError> {
     Metrics::compute(time_s, measured, predicted).map_err(|source| IdentifyError::Metrics {
@@ -401,7 +437,7 @@ pub(crate) fn metrics(time_s: &[f64], measured: &[f64], predicted: &[f64]) -> Re
     })
 }
 
-fn capture_ref(path: &Path) -> CaptureRef {
+pub(crate) fn capture_ref(path: &Path) -> CaptureRef {
     CaptureRef {
         path: path.to_owned(),
         sha256: std::fs::read(path).map(|b| sha256_hex(&b)).unwrap_or_default(),
@@ -426,37 +462,6 @@ fn range(x: &[f64], dim: usize) -> Vec<[f64; 2]> {
             ]
         })
         .collect()
-}
-
-/// Identifies `options.kind` from `train`, evaluating on `test` when given (else on `train`).
-pub fn identify(
-    train: &Capture,
-    test: Option<&Capture>,
-    options: &IdentifyOptions,
-) -> Result<Identified, IdentifyError> {
-    identify_with(train, test, options, &FitLimits::default())
-}
-
-/// [`identify`] with every SVR fit under `limits` (tolerance, time budget, progress).
-pub fn identify_with(
-    train: &Capture,
-    test: Option<&Capture>,
-    options: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
-    let identified = match options.kind {
-        ModelKind::HardFriction => hard(train, test, options, limits),
-        ModelKind::SoftFriction => soft(train, test, options, limits),
-        ModelKind::NeedlePuncture => needle(train, test, options, limits),
-    };
-    // Every SVR trains on the training capture: a failed fit names it.
-    identified.map_err(|e| match e {
-        IdentifyError::Svr { what, source } => IdentifyError::Svr {
-            what: format!("{what} on {}", train.source().display()),
-            source,
-        },
-        other => other,
-    })
 }
 
 /// The RBF-network baseline fitted on (`x_train`, `y_train`) and evaluated at `x_eval`.
@@ -519,7 +524,7 @@ fn friction_baselines(
     ))
 }
 
-fn hard(
+pub(crate) fn hard(
     train: &Capture,
     test: Option<&Capture>,
     o: &IdentifyOptions,
@@ -667,7 +672,7 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
     Ok(out)
 }
 
-fn soft(
+pub(crate) fn soft(
     train: &Capture,
     test: Option<&Capture>,
     o: &IdentifyOptions,
@@ -833,7 +838,7 @@ pub(crate) fn spread((t, x, y): &NeedleSamples, max_samples: usize) -> NeedleSam
     )
 }
 
-fn needle(
+pub(crate) fn needle(
     train: &Capture,
     test: Option<&Capture>,
     o: &IdentifyOptions,
@@ -992,6 +997,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
     let n_sv = match &body {
         ModelBody::Single(m) => m.svr.n_sv(),
         ModelBody::TwoStage { slope, intercept } => slope.svr.n_sv() + intercept.svr.n_sv(),
+        ModelBody::Phases(_) => 0,
     };
     let final_fits: Vec<&&SvrFit> = if kind == ModelKind::SoftFriction {
         fits.iter().take(2).collect()
@@ -1009,6 +1015,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         b_kgf: b.map(|b| b / KGF_N),
         dual_objective: final_fits.iter().map(|f| f.dual_objective).sum(),
         relative_gap: fits.iter().map(|f| f.relative_gap()).fold(0.0, f64::max),
+        reduction: reduction_of(&final_fits, n_sv),
         fit_seconds: started.elapsed().as_secs_f64(),
         evaluated_on: if test.is_some() { "test" } else { "train" }.into(),
         metrics: ComparedMetrics {
@@ -1016,6 +1023,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
             coulomb_viscous,
             coulomb_viscous_stiffness,
             rbf_network,
+            smooth_svr: None,
         },
         stage1,
         hyperparameters: hyper.clone(),
@@ -1052,7 +1060,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
 /// Refuses a fit that would write a non-finite metric (JSON has no infinity, so the file
 /// could not be read back) or a model that [`ModelFile::validate`] would refuse on load,
 /// naming the capture whose data made it so.
-fn check_written(
+pub(crate) fn check_written(
     report: &Report,
     model: &ModelFile,
     train: &Capture,

@@ -4,28 +4,31 @@
 //! It may import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
 //! Top-down: `baselines` and `metrics` (what a model is compared with, and how),
 //! `identification` (Li & Bi's three models), `punctures` (puncture events and layers
-//! read from insertion data), `search` (cross-validated hyperparameters)
+//! read from insertion data), `phases` (the phase-aware needle model built on them), `search` (cross-validated hyperparameters)
 //! and `model_file` (models on disk). Every failure of any of them is one [`IdentifyError`]
 //! (`error`), which wraps `capture`'s and `svm`'s errors. This file is the crate's door:
 //! everything public is re-exported here, so callers write `identify::ModelFile`,
 //! `identify::identify`.
 
 mod baselines;
+mod by_kind;
 mod error;
 mod grid_spec;
 mod identification;
 mod metrics;
 mod model_file;
+mod phase_identification;
+mod phases;
 mod punctures;
 mod search;
 
 pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
+pub use by_kind::{identify, identify_with};
 pub use error::IdentifyError;
 pub use grid_spec::{GridSpecError, MAX_GRID_VALUES};
 pub use identification::{
     ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits, Identified, IdentifyOptions,
-    MAX_SEGMENT_SAMPLES, OutOfDomain, Report, identify, identify_with, model_column, model_rows,
-    out_of_domain,
+    MAX_SEGMENT_SAMPLES, OutOfDomain, Report, model_column, model_rows, out_of_domain,
 };
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
@@ -34,8 +37,14 @@ pub use model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
     ScaledSvr, SvrHyper,
 };
+pub use phase_identification::identify_phases;
+pub use phases::{
+    Domain, LayerModel, Loading, MAX_LAYERS, Phase, PhaseModel, PhaseState, PhaseStep, ShaftLaw, Threshold,
+};
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,
     detect_punctures, force_noise_n, group_layers,
 };
-pub use search::{PREDICT_TIMING_PASSES, SearchGrid, SearchPoint, best, search, timed_predictions};
+pub use search::{
+    PREDICT_TIMING_PASSES, SearchGrid, SearchPoint, best, search, search_with, timed_predictions,
+};

@@ -16,6 +16,7 @@ use capture::{CaptureRef, sha256_hex};
 
 use crate::error::IdentifyError;
 use crate::metrics::Metrics;
+use crate::phases::PhaseModel;
 use svm::{InputScaling, Kernel, SvrModel};
 
 /// Format name in every model file.
@@ -33,6 +34,9 @@ pub enum ModelKind {
     SoftFriction,
     /// Needle axial force from depth and velocity (RBF kernel).
     NeedlePuncture,
+    /// Needle axial force by phases: layers, their loading, puncture thresholds and the force
+    /// after each ([`crate::PhaseModel`]).
+    NeedlePhases,
 }
 
 impl ModelKind {
@@ -42,6 +46,7 @@ impl ModelKind {
             Self::HardFriction => "hard",
             Self::SoftFriction => "soft",
             Self::NeedlePuncture => "needle",
+            Self::NeedlePhases => "needle-phases",
         }
     }
 }
@@ -86,6 +91,8 @@ pub enum ModelBody {
         /// Intercept m(v), N.
         intercept: ScaledSvr,
     },
+    /// The phase-aware needle model: a state machine over [depth, velocity].
+    Phases(Box<PhaseModel>),
 }
 
 /// An input or output of a model.
@@ -171,6 +178,8 @@ impl ModelFile {
             ModelBody::TwoStage { slope, intercept } => {
                 slope.predict(&x[..1]) * x[1] + intercept.predict(&x[..1])
             }
+            // Without a trajectory: a fresh site reached at constant speed.
+            ModelBody::Phases(p) => p.steady(x[0], x[1]),
         }
     }
 
@@ -208,7 +217,7 @@ impl ModelFile {
         }
         let expected_inputs = match self.kind {
             ModelKind::HardFriction => 1,
-            ModelKind::SoftFriction | ModelKind::NeedlePuncture => 2,
+            ModelKind::SoftFriction | ModelKind::NeedlePuncture | ModelKind::NeedlePhases => 2,
         };
         if self.inputs.len() != expected_inputs || self.input_range.len() != expected_inputs {
             return bad(
@@ -261,6 +270,7 @@ impl ModelFile {
                 check_svr("slope", slope, 1, &ranges[..1])?;
                 check_svr("intercept", intercept, 1, &ranges[..1])
             }
+            (ModelBody::Phases(p), ModelKind::NeedlePhases) => p.validate(),
             _ => bad("body", format!("structure does not fit a {} model", self.kind)),
         }
     }

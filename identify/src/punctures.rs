@@ -37,7 +37,7 @@ use serde::Serialize;
 
 use crate::error::{IdentifyError, check_series};
 use crate::identification::model_column;
-use crate::model_file::{ModelFile, ModelKind};
+use crate::model_file::{ModelBody, ModelFile, ModelKind};
 
 /// The detector's parameters (see the module documentation for how they are used).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -356,7 +356,7 @@ pub fn compare_punctures(
     capture: &Capture,
     params: &PunctureParams,
 ) -> Result<Vec<PunctureComparison>, IdentifyError> {
-    if model.kind != ModelKind::NeedlePuncture {
+    if !matches!(model.kind, ModelKind::NeedlePuncture | ModelKind::NeedlePhases) {
         return Err(IdentifyError::Data {
             path: capture.source().to_owned(),
             reason: format!(
@@ -374,10 +374,18 @@ pub fn compare_punctures(
         .map(|q| model_column(capture, &q.name))
         .collect::<Result<_, _>>()?;
     let mut x = vec![0.0; inputs.len()];
+    // A model with memory runs along the trajectory; a smooth one is evaluated per sample.
+    let along = match &model.body {
+        ModelBody::Phases(p) => Some(p.simulate(&depth, &velocity)),
+        _ => None,
+    };
     let predicted: Vec<f64> = (0..capture.len())
         .map(|i| {
             if depth[i] <= 0.0 {
                 return 0.0;
+            }
+            if let Some(steps) = &along {
+                return steps[i].force_n;
             }
             for (slot, column) in x.iter_mut().zip(&inputs) {
                 *slot = column[i];

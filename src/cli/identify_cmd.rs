@@ -101,6 +101,12 @@ pub(crate) struct IdentifyArgs {
     /// error naming the gap it had reached.
     #[arg(long, value_name = "S")]
     max_seconds: Option<f64>,
+    /// At most this many support vectors in each kernel SVR (the haptic tick's time grows with
+    /// them): a larger certified solution is replaced by one over K of its support vectors,
+    /// refitted by least squares to its outputs, and the report gives the largest and RMS
+    /// difference between the two over the training inputs.
+    #[arg(long, value_name = "K", value_parser = parse_max_sv)]
+    max_sv: Option<usize>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -115,6 +121,8 @@ pub(crate) enum ModelArg {
     Hard,
     Soft,
     Needle,
+    /// The phase-aware needle model: layers, puncture thresholds and the force after each.
+    NeedlePhases,
 }
 
 impl ModelArg {
@@ -124,13 +132,14 @@ impl ModelArg {
             Self::Hard => ModelKind::HardFriction,
             Self::Soft => ModelKind::SoftFriction,
             Self::Needle => ModelKind::NeedlePuncture,
+            Self::NeedlePhases => ModelKind::NeedlePhases,
         }
     }
 
     /// The kind of capture the model is identified from.
     pub(crate) fn capture_kind(self) -> CaptureKind {
         match self {
-            Self::Needle => CaptureKind::Insertion,
+            Self::Needle | Self::NeedlePhases => CaptureKind::Insertion,
             Self::Hard | Self::Soft => CaptureKind::Rubbing,
         }
     }
@@ -217,6 +226,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     let limits = FitLimits {
         tolerance: args.tolerance,
         time_budget,
+        max_sv: args.max_sv,
         observer: &observer,
     };
     let identified = identify_with(&train, test.as_ref(), &options, &limits);
@@ -264,6 +274,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
                 write_libsvm(slope, &with_suffix(path, "slope"))?;
                 write_libsvm(intercept, &with_suffix(path, "intercept"))?;
             }
+            ModelBody::Phases(_) => anyhow::bail!("--libsvm: the phase-aware needle model holds no SVR"),
         }
     }
     if !args.quiet {
@@ -281,7 +292,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         if !explored.is_empty() {
             print_frontier(&explored);
         }
-        print_table(&identified.report, args);
+        print_table(&identified.report, &identified.model.body, args);
     }
     Ok(())
 }
@@ -302,12 +313,19 @@ pub(crate) fn fit_set(label: &'static str, capture: &Capture, model: &ModelFile)
         .iter()
         .map(|col| rows.iter().map(|&i| col[i]).collect())
         .collect();
-    let predicted = (0..rows.len())
-        .map(|r| {
-            let x: Vec<f64> = inputs.iter().map(|col| col[r]).collect();
-            model.predict(&x)
-        })
-        .collect();
+    let predicted = match &model.body {
+        // A model with memory is run along the whole trajectory, as the haptic thread runs it.
+        ModelBody::Phases(p) => {
+            let steps = p.simulate(&all_inputs[0], &all_inputs[1]);
+            rows.iter().map(|&i| steps[i].force_n).collect()
+        }
+        _ => (0..rows.len())
+            .map(|r| {
+                let x: Vec<f64> = inputs.iter().map(|col| col[r]).collect();
+                model.predict(&x)
+            })
+            .collect(),
+    };
     Ok(FitSet {
         label,
         inputs,
@@ -389,7 +407,44 @@ fn row(name: &str, m: &Metrics) {
     );
 }
 
-fn print_table(r: &Report, args: &IdentifyArgs) {
+/// The layers of a phase-aware needle model, as a table.
+fn print_phases(p: &identify::PhaseModel) {
+    println!(
+        "  {:>5} {:>11} {:>7} {:>14} {:>17} {:>22} {:>20}",
+        "layer",
+        "contact[mm]",
+        "events",
+        "peak meas.[N]",
+        "a1 [N/m] a2[N/m²]",
+        "gives at u [mm] (v)",
+        "after: F0 [N] k[N/m]"
+    );
+    for (k, l) in p.layers.iter().enumerate() {
+        let t = &l.threshold;
+        println!(
+            "  {:>5} {:>11.2} {:>7} {:>14.3} {:>8.1} {:>8.0} {:>9.2}–{:<5.2} ({:.1}–{:.1} mm/s) {:>8.3} {:>9.1}",
+            k + 1,
+            l.contact_depth_m * 1e3,
+            l.events,
+            l.peak_force_n,
+            l.loading.a1_npm,
+            l.loading.a2_npm2,
+            t.deflection_m(t.speed_mps[0]) * 1e3,
+            t.deflection_m(t.speed_mps[1]) * 1e3,
+            t.speed_mps[0] * 1e3,
+            t.speed_mps[1] * 1e3,
+            l.after.constant_n,
+            l.after.per_depth_npm,
+        );
+    }
+    let w = &p.withdrawal;
+    println!(
+        "  withdrawal: F = {:.3} N + {:.1} N/m·d + {:.1} N·s/m·v + {:.0} N·s/m²·d·v",
+        w.constant_n, w.per_depth_npm, w.per_speed_nspm, w.per_depth_speed_nspm2
+    );
+}
+
+fn print_table(r: &Report, body: &ModelBody, args: &IdentifyArgs) {
     println!(
         "{} model from {} ({} training samples)",
         r.model,
@@ -413,15 +468,34 @@ fn print_table(r: &Report, args: &IdentifyArgs) {
             println!("  {:>28.3} {:>8.4} {:>10.4}", s[0] * 1e3, s[1], s[2]);
         }
     }
-    println!(
-        "  support vectors {} / {}   dual objective {:.6e}   relative gap {:.1e}   fit {:.3} s",
-        r.n_sv, r.n_train, r.dual_objective, r.relative_gap, r.fit_seconds
-    );
+    if let ModelBody::Phases(p) = body {
+        print_phases(p);
+        println!(
+            "  fit {:.3} s (with the smooth SVR it is compared with)",
+            r.fit_seconds
+        );
+    } else {
+        println!(
+            "  support vectors {} / {}   dual objective {:.6e}   relative gap {:.1e}   fit {:.3} s",
+            r.n_sv, r.n_train, r.dual_objective, r.relative_gap, r.fit_seconds
+        );
+    }
+    if let Some(red) = &r.reduction {
+        println!(
+            "  reduced from {} support vectors (--max-sv): differs from the certified model by at most {:.3e} N (RMS {:.3e} N) on the training inputs",
+            red.from_sv, red.max_deviation, red.rms_deviation
+        );
+    }
     println!(
         "on {} data:{:>13} {:>12} {:>12}",
         r.evaluated_on, "AISE [N²]", "max|e| [N]", "RMSE [N]"
     );
-    row("ε-SVR", &r.metrics.svr);
+    if let Some(smooth) = &r.metrics.smooth_svr {
+        row("phases", &r.metrics.svr);
+        row("smooth ε-SVR", smooth);
+    } else {
+        row("ε-SVR", &r.metrics.svr);
+    }
     if let Some(cv) = &r.metrics.coulomb_viscous {
         row("Coulomb+viscous", cv);
     }
@@ -506,5 +580,13 @@ fn sig(x: f64) -> String {
         format!("{rounded}")
     } else {
         format!("{x:.2e}")
+    }
+}
+
+/// `--max-sv`: a positive count.
+fn parse_max_sv(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(k) if k >= 1 => Ok(k),
+        _ => Err(format!("`{text}` is not a support-vector count (at least 1)")),
     }
 }

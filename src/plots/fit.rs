@@ -50,7 +50,7 @@ pub fn write_fit_plot(
     sets: &[FitSet],
 ) -> Result<(), PlotError> {
     render(path, size, |root| match model.kind {
-        ModelKind::NeedlePuncture => needle(root, sets),
+        ModelKind::NeedlePuncture | ModelKind::NeedlePhases => needle(root, sets),
         ModelKind::HardFriction => hard(root, model, sets),
         ModelKind::SoftFriction => soft(root, model, sets),
     })

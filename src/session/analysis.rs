@@ -88,6 +88,10 @@ pub struct SegmentSummary {
     pub safety_events: u64,
     /// Ticks where a model's inputs were clamped to its training box.
     pub model_clamps: u64,
+    /// Where those ticks were (needle): per law state, how many, over which depths and
+    /// velocities. Each was rendered by the law's bounded fallback (inputs held to the trained
+    /// box), so together they explain `model_clamps`.
+    pub out_of_domain: Vec<OutOfDomainTicks>,
     /// Ruptures (needle).
     pub punctures: Vec<Puncture>,
     /// Every membrane of the simulated tissue, felt or missed (needle).
@@ -100,6 +104,52 @@ pub struct SegmentSummary {
     pub mean_friction_ratio: Option<f64>,
     /// How the loop ended.
     pub outcome: String,
+}
+
+/// Ticks of one law state whose inputs left the model's trained domain.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutOfDomainTicks {
+    /// The law state (`approach`, `capsule_loading`, `puncture`, `insertion`, `withdrawal`).
+    pub state: &'static str,
+    /// How many ticks.
+    pub ticks: u64,
+    /// [min, max] depth over them, m.
+    pub depth_m: [f64; 2],
+    /// [min, max] insertion velocity over them, m/s.
+    pub velocity_mps: [f64; 2],
+}
+
+/// The needle's out-of-domain ticks grouped by law state.
+fn out_of_domain(s: &[HapticSample], surface_z_m: f64) -> Vec<OutOfDomainTicks> {
+    use haptics::safety::flag;
+    let states = [
+        (PunctureState::Approach, "approach"),
+        (PunctureState::CapsuleLoading, "capsule_loading"),
+        (PunctureState::Puncture, "puncture"),
+        (PunctureState::Insertion, "insertion"),
+        (PunctureState::Withdrawal, "withdrawal"),
+    ];
+    states
+        .iter()
+        .filter_map(|&(state, name)| {
+            let mut t = OutOfDomainTicks {
+                state: name,
+                ticks: 0,
+                depth_m: [f64::INFINITY, f64::NEG_INFINITY],
+                velocity_mps: [f64::INFINITY, f64::NEG_INFINITY],
+            };
+            for x in s.iter().filter(|x| {
+                x.flags & flag::MODEL_INPUT_CLAMPED != 0 && x.channels[c::ENV_STATE] == state.code()
+            }) {
+                let d = surface_z_m - x.channels[c::VIRTUAL_Z_M];
+                let v = -x.channels[c::VIRTUAL_VZ_MPS];
+                t.ticks += 1;
+                t.depth_m = [t.depth_m[0].min(d), t.depth_m[1].max(d)];
+                t.velocity_mps = [t.velocity_mps[0].min(v), t.velocity_mps[1].max(v)];
+            }
+            (t.ticks > 0).then_some(t)
+        })
+        .collect()
 }
 
 /// Summarises a segment.
@@ -116,6 +166,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         }
     }
     let mut layers = Vec::new();
+    let mut outside = Vec::new();
     let (kind, punctures, max_depth_m, max_model_force_n, ratio) = match &run.segment.kind {
         SegmentKind::Needle { .. } => {
             let surface_z_m = if matches!(run.device.as_str(), d if d.starts_with("replay")) {
@@ -125,6 +176,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
             };
             let punctures = punctures(s);
             layers = layer_fidelity(s, surface_z_m);
+            outside = out_of_domain(s, surface_z_m);
             let depth = s
                 .iter()
                 .map(|x| surface_z_m - x.channels[c::VIRTUAL_Z_M])
@@ -202,6 +254,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         non_finite_commands: non_finite,
         safety_events: st.safety_events,
         model_clamps: st.model_clamps,
+        out_of_domain: outside,
         punctures,
         layers,
         max_depth_m,

@@ -31,8 +31,8 @@ use haptics::device::omega7::Omega7;
 use haptics::device::replay::ReplayDevice;
 use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use haptics::law::{
-    Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig, SoftFriction,
-    hard_friction_model, needle_model, soft_friction_models,
+    Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig,
+    PhasedNeedleLaw, SoftFriction, hard_friction_model, needle_model, soft_friction_models,
 };
 use haptics::live::LiveFeed;
 use haptics::live_recognizer::{LiveRecognizer, Recognizing};
@@ -349,12 +349,21 @@ fn controller(
                 min_peak_n: scene.haptics.rupture_min_peak_n,
                 ..NeedleLawConfig::default()
             };
-            let law = NeedleLaw::new(needle_model(model).map_err(law_error)?, config);
-            renderer(
-                NeedleEnvironment::new(law, surface_z_m, [0.0, 0.0]),
-                scene,
-                direct,
-            )
+            if model.kind == ModelKind::NeedlePhases {
+                let law = PhasedNeedleLaw::from_file(model, config).map_err(law_error)?;
+                renderer(
+                    NeedleEnvironment::new(law, surface_z_m, [0.0, 0.0]),
+                    scene,
+                    direct,
+                )
+            } else {
+                let law = NeedleLaw::new(needle_model(model).map_err(law_error)?, config);
+                renderer(
+                    NeedleEnvironment::new(law, surface_z_m, [0.0, 0.0]),
+                    scene,
+                    direct,
+                )
+            }
         }
         SegmentKind::Friction { model, stiffness_npm } => match model.kind {
             ModelKind::SoftFriction => {

@@ -153,6 +153,18 @@ impl SessionReport {
                 s.model_clamps,
                 s.outcome
             );
+            for o in &s.out_of_domain {
+                let _ = writeln!(
+                    t,
+                    "    outside the model's trained domain: {} ticks while {} at {:.1}–{:.1} mm, {:.1}–{:.1} mm/s (rendered at the nearest trained input)",
+                    o.ticks,
+                    o.state.replace('_', " "),
+                    o.depth_m[0] * 1e3,
+                    o.depth_m[1] * 1e3,
+                    o.velocity_mps[0] * 1e3,
+                    o.velocity_mps[1] * 1e3
+                );
+            }
             for (i, p) in s.punctures.iter().enumerate() {
                 let truth = p
                     .truth_depth_m

@@ -5,8 +5,7 @@
 use glam::DVec3;
 
 use super::friction::FrictionLaw;
-use super::model::ScalarModel;
-use super::needle::{NeedleLaw, PunctureState};
+use super::needle::{AxialLaw, PunctureState};
 
 /// The force a virtual world exerts on the tool.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -41,9 +40,9 @@ impl Environment for FreeSpace {
 /// vertical axis through `entry_xy_m`. Inside the tissue the shaft is held on its axis by a
 /// lateral spring (tissue does not let a needle move sideways freely).
 #[derive(Debug, Clone)]
-pub struct NeedleEnvironment<M> {
+pub struct NeedleEnvironment<L> {
     /// The puncture law.
-    pub law: NeedleLaw<M>,
+    pub law: L,
     /// Height of the tissue surface, m.
     pub surface_z_m: f64,
     /// Entry point (x, y), m.
@@ -52,10 +51,10 @@ pub struct NeedleEnvironment<M> {
     pub lateral_stiffness_npm: f64,
 }
 
-impl<M: ScalarModel<2>> NeedleEnvironment<M> {
+impl<L: AxialLaw> NeedleEnvironment<L> {
     /// Tissue with its surface at `surface_z_m`, entered at `entry_xy_m`, lateral stiffness
     /// 200 N/m.
-    pub fn new(law: NeedleLaw<M>, surface_z_m: f64, entry_xy_m: [f64; 2]) -> Self {
+    pub fn new(law: L, surface_z_m: f64, entry_xy_m: [f64; 2]) -> Self {
         Self {
             law,
             surface_z_m,
@@ -65,7 +64,7 @@ impl<M: ScalarModel<2>> NeedleEnvironment<M> {
     }
 }
 
-impl<M: ScalarModel<2>> Environment for NeedleEnvironment<M> {
+impl<L: AxialLaw> Environment for NeedleEnvironment<L> {
     fn force(&mut self, p: DVec3, v: DVec3) -> EnvironmentForce {
         let depth_m = self.surface_z_m - p.z;
         let out = self.law.step(depth_m, -v.z);
@@ -146,7 +145,7 @@ impl<L: FrictionLaw> Environment for FrictionSurface<L> {
 mod tests {
     use super::*;
     use crate::law::friction::HardFriction;
-    use crate::law::needle::NeedleLawConfig;
+    use crate::law::needle::{NeedleLaw, NeedleLawConfig};
     use crate::law::reference::{NeedleQuasiStatic, hard_contact_model};
     use crate::sim::world::friction::HardContact;
     use crate::sim::world::needle::NeedleTissue;

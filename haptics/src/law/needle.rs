@@ -91,6 +91,20 @@ pub struct NeedleOutput {
     pub flags: u32,
 }
 
+/// A needle law the haptic thread steps: depth and velocity in, axial force and state out.
+/// Allocation-free.
+pub trait AxialLaw: Send {
+    /// Advances the law with the needle at `depth_m` moving at `velocity_mps` (positive
+    /// inserting).
+    fn step(&mut self, depth_m: f64, velocity_mps: f64) -> NeedleOutput;
+}
+
+impl<M: ScalarModel<2> + Send> AxialLaw for NeedleLaw<M> {
+    fn step(&mut self, depth_m: f64, velocity_mps: f64) -> NeedleOutput {
+        NeedleLaw::step(self, depth_m, velocity_mps)
+    }
+}
+
 /// The needle-puncture force law over a model `f(depth_m, velocity_mps)`.
 #[derive(Debug, Clone)]
 pub struct NeedleLaw<M> {

@@ -1,0 +1,480 @@
+//! A phase-aware needle-puncture model: layers found in the data, each with its own loading,
+//! puncture threshold and the force after it, and the state machine that renders them.
+//!
+//! One smooth surface over [depth, velocity] cannot hold a process with thresholds and memory:
+//! the drop at a puncture is spread over the kernel's width, a layer whose drop is small is
+//! smoothed away, and the same (depth, velocity) means "pushing an intact membrane" in one
+//! stroke and "sliding through the hole" in the next. The model here follows the structure of
+//! Okamura, Simone & O'Leary (IEEE TBME 51(10), 2004) — stiffness before a puncture, friction
+//! and cutting after — with every part identified from the capture:
+//!
+//! | phase | force | fitted on |
+//! |---|---|---|
+//! | loading layer k (intact membrane, from its contact depth c_k) | `F_{k−1}(d, v⁺) + f0 + a1·u + a2·u² + b·v⁺`, `u = d − c_k` | advancing samples between the contact and the puncture |
+//! | puncture of layer k | when `u ≥ u_k(v)`, a polynomial in speed through the detected events; the force falls to the next phase's within the tick | the events of the layer |
+//! | cutting after layer k (advancing into uncut tissue) | `F_k(d, v) = g0 + g1·d + g2·v + g3·d·v` | advancing samples past the puncture's drop |
+//! | withdrawal | `W(d, v)`, same form | withdrawing samples in tissue |
+//! | re-insertion along the cut channel | `−W(d, −v)` (friction is odd in velocity) | — |
+//! | held (`|v|` within the hold band) | linear between the two friction laws at the band's edges | — |
+//!
+//! Layers and their events come from [`crate::detect_punctures`] and [`crate::group_layers`]
+//! ([`crate::identify_phases`]);
+//! each contact depth `c_k` is the one, among a grid between the layer before and the layer's
+//! shallowest event, whose split of the advancing samples into "cutting before" and "loading"
+//! fits both laws best (least squares, total squared error). Punctured layers stay punctured
+//! until the tool leaves the tissue (depth ≤ 0): the holes stay where they are.
+//!
+//! **Known domain.** Every phase records the depths and velocities it was fitted on. Outside
+//! them its law is evaluated at the nearest trained velocity (a faster surge feels the
+//! friction of the fastest trained speed, not an extrapolated viscous term) and its depth
+//! terms are extrapolated linearly (friction keeps growing with the inserted length, as a
+//! shaft's does), and the step says it left the domain so that the run can count it. The
+//! threshold likewise uses the nearest trained speed.
+//!
+//! [`PhaseModel::step`] is allocation-free and the same code renders the model on the haptic
+//! thread and evaluates it along a capture here ([`PhaseModel::simulate`]), so the identify
+//! report measures exactly what a trainee will feel.
+
+use serde::{Deserialize, Serialize};
+
+use crate::baselines::{Rank, least_squares};
+use crate::error::IdentifyError;
+use nalgebra::{DMatrix, DVector};
+
+/// Most layers a model holds.
+pub const MAX_LAYERS: usize = 8;
+
+/// How far past a phase's trained range, as a fraction of its width or of its largest
+/// magnitude (whichever is larger: a protocol at one speed has a range of almost no width), an
+/// input still counts as inside it.
+const DOMAIN_MARGIN: f64 = 0.1;
+
+/// Share of the fitted samples' velocities left out at each end of a phase's velocity range:
+/// a stroke's start and end pass through every speed below its own, too briefly to pin a
+/// speed dependence there, so a law fitted at one withdrawal speed would otherwise be trusted
+/// down to rest.
+const VELOCITY_TAIL: f64 = 0.02;
+
+/// Depths and velocities a phase was fitted on: the samples' depth range, and the range of
+/// their velocities less [`VELOCITY_TAIL`] at each end.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Domain {
+    /// [min, max] depth, m.
+    pub depth_m: [f64; 2],
+    /// [min, max] velocity, m/s.
+    pub velocity_mps: [f64; 2],
+}
+
+impl Domain {
+    pub(crate) fn of(d: &[f64], v: &[f64]) -> Self {
+        let span = d.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &a| {
+            [lo.min(a), hi.max(a)]
+        });
+        let mut sorted = v.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let at = |q: f64| {
+            let i = (q * (sorted.len().saturating_sub(1)) as f64).round() as usize;
+            sorted.get(i).copied().unwrap_or(f64::NAN)
+        };
+        Self {
+            depth_m: span,
+            velocity_mps: [at(VELOCITY_TAIL), at(1.0 - VELOCITY_TAIL)],
+        }
+    }
+
+    fn inside(range: [f64; 2], x: f64) -> bool {
+        let m = DOMAIN_MARGIN * (range[1] - range[0]).max(range[0].abs().max(range[1].abs()));
+        x >= range[0] - m && x <= range[1] + m
+    }
+
+    /// Whether (d, v) lies inside, with the margin.
+    pub fn contains(&self, depth_m: f64, velocity_mps: f64) -> bool {
+        Self::inside(self.depth_m, depth_m) && Self::inside(self.velocity_mps, velocity_mps)
+    }
+
+    fn clamp_velocity(&self, v: f64) -> f64 {
+        v.clamp(self.velocity_mps[0], self.velocity_mps[1])
+    }
+}
+
+/// `F(d, v) = constant + per_depth·d + per_speed·v + per_depth_speed·d·v`: friction along the
+/// inserted shaft (∝ d), cutting and Coulomb friction (constant), viscous friction (∝ v, ∝ d·v).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ShaftLaw {
+    /// N.
+    pub constant_n: f64,
+    /// N/m.
+    pub per_depth_npm: f64,
+    /// N·s/m.
+    pub per_speed_nspm: f64,
+    /// N·s/m².
+    pub per_depth_speed_nspm2: f64,
+    /// What it was fitted on.
+    pub domain: Domain,
+}
+
+impl ShaftLaw {
+    fn features(d: f64, v: f64) -> [f64; 4] {
+        [1.0, d, v, d * v]
+    }
+
+    pub(crate) fn eval_raw(&self, d: f64, v: f64) -> f64 {
+        self.constant_n
+            + self.per_depth_npm * d
+            + self.per_speed_nspm * v
+            + self.per_depth_speed_nspm2 * d * v
+    }
+
+    /// The force at (d, v), v held to the trained velocities, and whether (d, v) was inside.
+    pub fn eval(&self, d: f64, v: f64) -> (f64, bool) {
+        (
+            self.eval_raw(d, self.domain.clamp_velocity(v)),
+            self.domain.contains(d, v),
+        )
+    }
+
+    pub(crate) fn fit(d: &[f64], v: &[f64], f: &[f64]) -> Result<(Self, f64), IdentifyError> {
+        let x = fit_linear(d.len(), |i| Self::features(d[i], v[i]).to_vec(), f)?;
+        let law = Self {
+            constant_n: x[0],
+            per_depth_npm: x[1],
+            per_speed_nspm: x[2],
+            per_depth_speed_nspm2: x[3],
+            domain: Domain::of(d, v),
+        };
+        let sse = (0..d.len())
+            .map(|i| (f[i] - law.eval_raw(d[i], v[i])).powi(2))
+            .sum();
+        Ok((law, sse))
+    }
+}
+
+/// The force an intact membrane adds while it deflects by `u = d − contact`:
+/// `offset + a1·u + a2·u² + damping·v` (Okamura's `a1·u + a2·u²` with a viscous part, and an
+/// offset for what changes at contact, e.g. cutting stopping while the membrane is pushed).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Loading {
+    /// N.
+    pub offset_n: f64,
+    /// N/m.
+    pub a1_npm: f64,
+    /// N/m².
+    pub a2_npm2: f64,
+    /// N·s/m.
+    pub damping_nspm: f64,
+    /// What it was fitted on (depth of the tip, not the deflection).
+    pub domain: Domain,
+}
+
+impl Loading {
+    pub(crate) fn features(u: f64, v: f64) -> [f64; 4] {
+        [1.0, u, u * u, v]
+    }
+
+    pub(crate) fn eval_raw(&self, u: f64, v: f64) -> f64 {
+        self.offset_n + self.a1_npm * u + self.a2_npm2 * u * u + self.damping_nspm * v
+    }
+}
+
+/// The deflection at which a membrane gives, as a polynomial in the insertion speed:
+/// `u(v) = Σ coefficients[i]·vⁱ`, at speeds held to the events' range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Threshold {
+    /// Polynomial coefficients, constant first (m, m/(m/s), …); one to three of them.
+    pub coefficients: Vec<f64>,
+    /// [min, max] speed of the events it was fitted on, m/s.
+    pub speed_mps: [f64; 2],
+    /// RMS of the fit over the events, m.
+    pub rms_m: f64,
+}
+
+impl Threshold {
+    /// Deflection at puncture for a tip advancing at `speed_mps`, m (at least 0.1 mm).
+    pub fn deflection_m(&self, speed_mps: f64) -> f64 {
+        let v = speed_mps.clamp(self.speed_mps[0], self.speed_mps[1]);
+        let mut u = 0.0;
+        for &c in self.coefficients.iter().rev() {
+            u = u * v + c;
+        }
+        u.max(1e-4)
+    }
+}
+
+/// One layer: its membrane's contact, loading and threshold, and the cutting after it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LayerModel {
+    /// Depth at which the tip meets the membrane, m.
+    pub contact_depth_m: f64,
+    /// Force the intact membrane adds.
+    pub loading: Loading,
+    /// When it gives.
+    pub threshold: Threshold,
+    /// Advancing into uncut tissue after it.
+    pub after: ShaftLaw,
+    /// Puncture events of the training capture in this layer.
+    pub events: usize,
+    /// Median measured peak of those events, N.
+    pub peak_force_n: f64,
+}
+
+/// The phase-aware model (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PhaseModel {
+    /// Layers, shallowest first.
+    pub layers: Vec<LayerModel>,
+    /// Withdrawal friction.
+    pub withdrawal: ShaftLaw,
+    /// |v| below which the needle counts as held, m/s.
+    pub hold_band_mps: f64,
+}
+
+/// Where a step finds the needle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Phase {
+    /// Not in tissue, or above the first membrane.
+    Air,
+    /// Deflecting layer k's intact membrane.
+    Loading(usize),
+    /// Advancing into uncut tissue below layer k.
+    Cutting(usize),
+    /// Advancing along the channel cut before.
+    Channel,
+    /// Held.
+    Held,
+    /// Withdrawing.
+    Withdrawal,
+}
+
+/// The memory of one insertion site. `Default` is a fresh, intact site.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PhaseState {
+    punctured: usize,
+    deepest_m: f64,
+}
+
+impl PhaseState {
+    /// Layers punctured so far.
+    pub fn punctured(&self) -> usize {
+        self.punctured
+    }
+}
+
+/// What one step gives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseStep {
+    /// Axial force, positive pushing the needle out, N.
+    pub force_n: f64,
+    /// The phase after the step.
+    pub phase: Phase,
+    /// A layer gave way at this step.
+    pub ruptured: bool,
+    /// (d, v) lay outside the trained domain of the phase's law.
+    pub out_of_domain: bool,
+}
+
+impl PhaseModel {
+    /// The force of the phase below `punctured` layers while advancing into uncut tissue
+    /// (0 above the first layer).
+    fn cutting(&self, punctured: usize, d: f64, v: f64) -> (f64, bool) {
+        match punctured.checked_sub(1).and_then(|k| self.layers.get(k)) {
+            Some(layer) => layer.after.eval(d, v),
+            None => (0.0, true),
+        }
+    }
+
+    /// Advances `state` with the tip at `depth_m` moving at `velocity_mps` (positive
+    /// inserting). Allocation-free; non-finite inputs read as a tip at rest outside.
+    pub fn step(&self, state: &mut PhaseState, depth_m: f64, velocity_mps: f64) -> PhaseStep {
+        let d = if depth_m.is_finite() { depth_m } else { 0.0 };
+        let v = if velocity_mps.is_finite() {
+            velocity_mps
+        } else {
+            0.0
+        };
+        let out = |force_n: f64, phase: Phase, ruptured: bool, inside: bool| PhaseStep {
+            force_n: if force_n.is_finite() { force_n } else { 0.0 },
+            phase,
+            ruptured,
+            out_of_domain: !inside,
+        };
+        if d <= 0.0 {
+            *state = PhaseState::default();
+            return out(0.0, Phase::Air, false, true);
+        }
+        let band = self.hold_band_mps;
+        let mut ruptured = false;
+        if let Some(layer) = self.layers.get(state.punctured)
+            && d > layer.contact_depth_m
+        {
+            let u = d - layer.contact_depth_m;
+            if v > band && u >= layer.threshold.deflection_m(v) {
+                state.punctured += 1;
+                ruptured = true;
+            } else {
+                // Backing off an intact membrane unloads it elastically: no friction reversal.
+                let ahead = v.max(0.0);
+                let (base, base_inside) = self.cutting(state.punctured, d, ahead);
+                let l = &layer.loading;
+                let vl = l.domain.clamp_velocity(ahead);
+                let inside = base_inside && (v <= band || l.domain.contains(d, v));
+                return out(
+                    base + l.eval_raw(u, vl),
+                    Phase::Loading(state.punctured),
+                    false,
+                    inside,
+                );
+            }
+        }
+        if state.punctured == 0 {
+            return out(0.0, Phase::Air, false, true);
+        }
+        if v > band {
+            if d > state.deepest_m || ruptured {
+                state.deepest_m = state.deepest_m.max(d);
+                let (f, inside) = self.cutting(state.punctured, d, v);
+                return out(f, Phase::Cutting(state.punctured - 1), ruptured, inside);
+            }
+            let (f, inside) = self.withdrawal.eval(d, -v);
+            return out(-f, Phase::Channel, false, inside);
+        }
+        if v < -band {
+            let (f, inside) = self.withdrawal.eval(d, v);
+            return out(f, Phase::Withdrawal, false, inside);
+        }
+        // Held: between withdrawal friction at −band and channel friction at +band, so the
+        // force is continuous through zero speed and does not chatter. Rest is a state every
+        // capture passes through, handled by this rule, not a velocity outside the domain.
+        let (pull, _) = self.withdrawal.eval(d, -band);
+        let w = if band > 0.0 {
+            (v + band) / (2.0 * band)
+        } else {
+            0.5
+        };
+        let inside = Domain::inside(self.withdrawal.domain.depth_m, d);
+        out((1.0 - w) * pull - w * pull, Phase::Held, false, inside)
+    }
+
+    /// The model run along a recorded trajectory from a fresh site: one step per sample.
+    pub fn simulate(&self, depth_m: &[f64], velocity_mps: &[f64]) -> Vec<PhaseStep> {
+        let mut state = PhaseState::default();
+        depth_m
+            .iter()
+            .zip(velocity_mps)
+            .map(|(&d, &v)| self.step(&mut state, d, v))
+            .collect()
+    }
+
+    /// The force of a fresh site at depth `d` reached at constant speed `v` (v ≤ 0: on the
+    /// way out after an insertion deeper than `d`): the model without a trajectory, for
+    /// plotting and for bounding its output.
+    pub fn steady(&self, depth_m: f64, velocity_mps: f64) -> f64 {
+        let mut state = PhaseState::default();
+        if velocity_mps > self.hold_band_mps {
+            // Walk in at that speed: thresholds pass in order.
+            let step = 1e-5;
+            let mut d = step;
+            while d < depth_m {
+                self.step(&mut state, d, velocity_mps);
+                d += step;
+            }
+            self.step(&mut state, depth_m, velocity_mps).force_n
+        } else {
+            state.punctured = self.layers.len();
+            state.deepest_m = depth_m.max(0.0) + 1.0;
+            self.step(&mut state, depth_m, velocity_mps).force_n
+        }
+    }
+
+    /// Checks what a hand-edited or truncated file could break: `Err((field, reason))`.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let bad = |field: String, reason: &str| Err((field, reason.to_owned()));
+        if self.layers.is_empty() || self.layers.len() > MAX_LAYERS {
+            return bad("body.layers".into(), "must hold 1 to 8 layers");
+        }
+        if !(self.hold_band_mps.is_finite() && self.hold_band_mps >= 0.0) {
+            return bad("body.hold_band_mps".into(), "must be finite and ≥ 0");
+        }
+        let finite = |x: &[f64]| x.iter().all(|a| a.is_finite());
+        let law_ok = |l: &ShaftLaw| {
+            finite(&[
+                l.constant_n,
+                l.per_depth_npm,
+                l.per_speed_nspm,
+                l.per_depth_speed_nspm2,
+            ]) && domain_ok(&l.domain)
+        };
+        if !law_ok(&self.withdrawal) {
+            return bad("body.withdrawal".into(), "coefficients and domain must be finite");
+        }
+        let mut previous = f64::NEG_INFINITY;
+        for (k, layer) in self.layers.iter().enumerate() {
+            let field = |name: &str| format!("body.layers[{k}].{name}");
+            if !(layer.contact_depth_m.is_finite()
+                && layer.contact_depth_m >= 0.0
+                && layer.contact_depth_m > previous)
+            {
+                return bad(
+                    field("contact_depth_m"),
+                    "must be finite, ≥ 0 and deeper than the layer before",
+                );
+            }
+            previous = layer.contact_depth_m;
+            let l = &layer.loading;
+            if !(finite(&[l.offset_n, l.a1_npm, l.a2_npm2, l.damping_nspm]) && domain_ok(&l.domain)) {
+                return bad(field("loading"), "coefficients and domain must be finite");
+            }
+            let t = &layer.threshold;
+            if t.coefficients.is_empty()
+                || t.coefficients.len() > 3
+                || !finite(&t.coefficients)
+                || !finite(&t.speed_mps)
+                || t.speed_mps[0] > t.speed_mps[1]
+            {
+                return bad(
+                    field("threshold"),
+                    "1 to 3 finite coefficients and an ordered speed range",
+                );
+            }
+            if !law_ok(&layer.after) {
+                return bad(field("after"), "coefficients and domain must be finite");
+            }
+        }
+        Ok(())
+    }
+
+    /// Every depth and velocity the model was fitted over, as one [min, max] box.
+    pub fn input_range(&self) -> Vec<[f64; 2]> {
+        let domains = self
+            .layers
+            .iter()
+            .flat_map(|l| [l.loading.domain, l.after.domain])
+            .chain([self.withdrawal.domain]);
+        let mut d = [f64::INFINITY, f64::NEG_INFINITY];
+        let mut v = d;
+        for dom in domains {
+            d = [d[0].min(dom.depth_m[0]), d[1].max(dom.depth_m[1])];
+            v = [v[0].min(dom.velocity_mps[0]), v[1].max(dom.velocity_mps[1])];
+        }
+        vec![d, v]
+    }
+}
+
+fn domain_ok(d: &Domain) -> bool {
+    d.depth_m.iter().chain(&d.velocity_mps).all(|x| x.is_finite())
+        && d.depth_m[0] <= d.depth_m[1]
+        && d.velocity_mps[0] <= d.velocity_mps[1]
+}
+
+/// Least squares over `n` rows of `row(i)` features against `target`; the minimum-norm
+/// solution when a feature does not vary (one speed only: velocity is then a constant).
+pub(crate) fn fit_linear(
+    n: usize,
+    row: impl Fn(usize) -> Vec<f64>,
+    target: &[f64],
+) -> Result<Vec<f64>, IdentifyError> {
+    let rows: Vec<Vec<f64>> = (0..n).map(row).collect();
+    let cols = rows.first().map_or(0, Vec::len);
+    let a = DMatrix::from_fn(n, cols, |i, j| rows[i][j]);
+    let x = least_squares(a, DVector::from_column_slice(target), Rank::MinimumNorm)?;
+    Ok(x.iter().copied().collect())
+}

@@ -1,0 +1,121 @@
+//! The phase-aware needle model: identified from the committed captures, scored along the
+//! held-out capture's strokes against the smooth models, and refused clearly where the data
+//! cannot make it.
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
+use std::path::PathBuf;
+
+use capture::{Capture, CaptureKind};
+use identify::{
+    IdentifyError, IdentifyOptions, ModelBody, ModelFile, ModelKind, PunctureParams, identify,
+    identify_phases,
+};
+
+fn li_bi(name: &str) -> Capture {
+    let path = PathBuf::from(format!(
+        "{}/../assets/captures/li_bi/{name}.csv",
+        env!("CARGO_MANIFEST_DIR")
+    ));
+    Capture::read_file(&path, CaptureKind::Insertion).unwrap()
+}
+
+/// A truth value from the capture's metadata (`truth.vessel_wall.depth_m`, …).
+fn truth(c: &Capture, key: &str) -> f64 {
+    c.metadata().get(key).unwrap().parse().unwrap()
+}
+
+#[test]
+fn both_layers_are_found_and_every_held_out_puncture_is_reproduced() {
+    let (train, test) = (li_bi("needle_train"), li_bi("needle_test"));
+    let r = identify(
+        &train,
+        Some(&test),
+        &IdentifyOptions::new(ModelKind::NeedlePhases),
+    )
+    .unwrap();
+    let ModelBody::Phases(p) = &r.model.body else {
+        panic!("not a phase model")
+    };
+    // Two layers, each meeting its membrane within a millimetre of where the tissue has it.
+    assert_eq!(p.layers.len(), 2, "{p:?}");
+    for (layer, name) in p.layers.iter().zip(["capsule", "vessel_wall"]) {
+        let at = truth(&train, &format!("truth.{name}.depth_m"));
+        assert!((layer.contact_depth_m - at).abs() < 1e-3, "{name}: {layer:?}");
+    }
+    // The phases beat the smooth SVR, the RBF network and F = Fc·sgn(v) + c·v + k·d on the
+    // held-out capture.
+    let m = &r.report.metrics;
+    let phases = m.svr.aise;
+    for (name, other) in [
+        ("smooth SVR", m.smooth_svr.unwrap().aise),
+        ("RBF network", m.rbf_network.aise),
+        ("Fc+c·v+k·d", m.coulomb_viscous_stiffness.unwrap().aise),
+    ] {
+        assert!(phases < other, "phases {phases} vs {name} {other}");
+    }
+    // Every measured puncture of the held-out strokes: rendered within 1 mm and 10 % of its
+    // peak.
+    assert_eq!(r.report.punctures.len(), 8, "{:?}", r.report.punctures);
+    for c in &r.report.punctures {
+        let depth = c.predicted_depth_m.unwrap_or(f64::NAN);
+        let peak = c.predicted_peak_force_n.unwrap_or(f64::NAN);
+        assert!((depth - c.measured_depth_m).abs() < 1e-3, "{c:?}");
+        assert!((peak / c.measured_peak_force_n - 1.0).abs() < 0.10, "{c:?}");
+    }
+    // Written and read back unchanged; a hand-edited threshold is refused with its field.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("phases.json");
+    r.model.save(&path).unwrap();
+    assert_eq!(ModelFile::load(&path).unwrap(), r.model);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let broken = text.replacen("\"coefficients\": [", "\"coefficients\": [1e400, ", 1);
+    let e = ModelFile::from_slice(broken.as_bytes(), &path);
+    assert!(e.is_err(), "a non-finite threshold was accepted");
+    let mut no_layers = r.model.clone();
+    if let ModelBody::Phases(p) = &mut no_layers.body {
+        p.layers.clear();
+    }
+    let (field, _) = no_layers.validate().unwrap_err();
+    assert_eq!(field, "body.layers");
+}
+
+#[test]
+fn a_capture_without_a_puncture_is_refused_with_the_reason() {
+    // A steady insertion into tissue that never gives: friction growing with depth.
+    let n = 3000;
+    let time: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let depth: Vec<f64> = time.iter().map(|t| 0.001 * t - 0.001).collect();
+    let velocity = vec![0.001; n];
+    let force: Vec<f64> = depth.iter().map(|d| 10.0 * d.max(0.0)).collect();
+    let e = identify_phases(
+        std::path::Path::new("steady.csv"),
+        &time,
+        &depth,
+        &velocity,
+        &force,
+        &PunctureParams::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, IdentifyError::Data { reason, .. } if reason.contains("no puncture")),
+        "{e}"
+    );
+    assert!(e.to_string().contains("steady.csv"), "{e}");
+}
+
+#[test]
+fn the_state_machine_is_the_same_along_any_prefix_of_a_trajectory() {
+    // What the haptic thread feels at each tick depends only on the ticks before it.
+    let train = li_bi("needle_train");
+    let r = identify(&train, None, &IdentifyOptions::new(ModelKind::NeedlePhases)).unwrap();
+    let ModelBody::Phases(p) = &r.model.body else {
+        panic!("not a phase model")
+    };
+    let d = train.column("depth_m").unwrap();
+    let v = train.column("velocity_mps").unwrap();
+    let whole = p.simulate(d, v);
+    let half = p.simulate(&d[..d.len() / 2], &v[..v.len() / 2]);
+    assert_eq!(&whole[..half.len()], &half[..]);
+    assert!(whole.iter().all(|s| s.force_n.is_finite()));
+}
