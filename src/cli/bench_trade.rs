@@ -271,7 +271,10 @@ fn held_out(
 
 /// The model as the haptic loop evaluates it (f32 fast path, no allocation), taking the
 /// inputs in [`identify::ModelFile::predict`]'s order.
-fn fast_predictor(model: &identify::ModelFile) -> anyhow::Result<Box<dyn Fn(&[f64]) -> f64>> {
+/// One model evaluation at an input row.
+type Predictor = Box<dyn Fn(&[f64]) -> f64>;
+
+fn fast_predictor(model: &identify::ModelFile) -> anyhow::Result<Predictor> {
     use haptics::law::ScalarModel as _;
     use identify::ModelKind;
     Ok(match model.kind {
