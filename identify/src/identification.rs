@@ -100,6 +100,10 @@ pub struct ComparedMetrics {
     /// (whose own figures are then the ones under `svr`: the identified model's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub smooth_svr: Option<Metrics>,
+    /// Okamura's piecewise model fitted on the same layers ([`crate::PhaseForm::Okamura`]),
+    /// with the phase-aware needle.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub okamura_piecewise: Option<Metrics>,
 }
 
 /// What an identification found, for people (a table) and programs (`--json`).
@@ -1024,6 +1028,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
             coulomb_viscous_stiffness,
             rbf_network,
             smooth_svr: None,
+            okamura_piecewise: None,
         },
         stage1,
         hyperparameters: hyper.clone(),

@@ -37,7 +37,7 @@ pub use model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
     ScaledSvr, SvrHyper,
 };
-pub use phase_identification::identify_phases;
+pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
 pub use phases::{
     Domain, LayerModel, Loading, MAX_LAYERS, Phase, PhaseModel, PhaseState, PhaseStep, ShaftLaw, Threshold,
 };

@@ -20,7 +20,9 @@ use crate::metrics::Metrics;
 use crate::model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity,
 };
-use crate::phases::{Domain, LayerModel, Loading, MAX_LAYERS, PhaseModel, ShaftLaw, Threshold, fit_linear};
+use crate::phases::{
+    Domain, LayerModel, Loading, MAX_LAYERS, PhaseModel, ShaftLaw, Threshold, Varies, fit_linear, fit_terms,
+};
 use crate::punctures::{PunctureParams, compare_punctures, detect_punctures, group_layers};
 
 /// An insertion capture's whole series: time, depth, velocity, axial force.
@@ -79,6 +81,18 @@ pub(crate) fn needle_phases(
         &s.force_n,
         &PunctureParams::default(),
     )?;
+    // Okamura's piecewise model on the same data: the published form of what the phases
+    // generalise.
+    let okamura = identify_phases_as(
+        PhaseForm::Okamura,
+        train.source(),
+        &s.time_s,
+        &s.depth_m,
+        &s.velocity_mps,
+        &s.force_n,
+        &PunctureParams::default(),
+    )?;
+    let okamura_metrics = metrics_along(&okamura, test.unwrap_or(train))?.0;
     let (train_metrics, n_rows) = metrics_along(&phases, train)?;
     let eval_metrics = match test {
         Some(t) => metrics_along(&phases, t)?.0,
@@ -122,6 +136,7 @@ pub(crate) fn needle_phases(
     report.hyperparameters = Vec::new();
     report.metrics.smooth_svr = Some(report.metrics.svr);
     report.metrics.svr = eval_metrics;
+    report.metrics.okamura_piecewise = Some(okamura_metrics);
     report.fit_seconds = started.elapsed().as_secs_f64();
     check_written(&report, &model, train, test)?;
     report.test_out_of_domain = match test {
@@ -148,6 +163,18 @@ struct Buckets {
     withdrawal: Vec<[f64; 3]>,
 }
 
+/// Which terms the phase laws may use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PhaseForm {
+    /// Every term the data determine (the module documentation's table).
+    Full,
+    /// Okamura, Simone & O'Leary's piecewise model as published, the baseline a reviewer asks
+    /// for: stiffness `a1·u + a2·u²` before each puncture, a puncture at a constant deflection,
+    /// after it a constant cutting force plus friction proportional to the inserted length
+    /// (Karnopp friction in motion does not depend on speed); withdrawal friction likewise.
+    Okamura,
+}
+
 /// Identifies a [`PhaseModel`] from an insertion recording (all rows, in time order; depth
 /// ≤ 0 in air). `source` names the capture in errors.
 pub fn identify_phases(
@@ -158,6 +185,29 @@ pub fn identify_phases(
     force_n: &[f64],
     params: &PunctureParams,
 ) -> Result<PhaseModel, IdentifyError> {
+    identify_phases_as(
+        PhaseForm::Full,
+        source,
+        time_s,
+        depth_m,
+        velocity_mps,
+        force_n,
+        params,
+    )
+}
+
+/// [`identify_phases`] with the laws restricted to `form`.
+pub fn identify_phases_as(
+    form: PhaseForm,
+    source: &std::path::Path,
+    time_s: &[f64],
+    depth_m: &[f64],
+    velocity_mps: &[f64],
+    force_n: &[f64],
+    params: &PunctureParams,
+) -> Result<PhaseModel, IdentifyError> {
+    let okamura = form == PhaseForm::Okamura;
+    let shaft = |d: &[f64], v: &[f64], f: &[f64]| ShaftLaw::fit_restricted(d, v, f, !okamura);
     let n = time_s.len();
     check_series("depth_m", depth_m, n)?;
     check_series("velocity_mps", velocity_mps, n)?;
@@ -173,6 +223,38 @@ pub fn identify_phases(
         return Err(data_error(
             "no puncture found (no force drop while advancing): the phase-aware needle model needs \
              at least one; the smooth model (`--model needle`) does not"
+                .into(),
+        ));
+    }
+    // A membrane of the tissue gives in most strokes that reach it; a drop seen in fewer than
+    // half of them is something else (a stroke's own transient, cutting that stops where the
+    // tip meets the next membrane).
+    let mut entry_of = vec![usize::MAX; n];
+    let mut deepest_of_entry: Vec<f64> = Vec::new();
+    let mut inside = false;
+    for i in 0..n {
+        if depth_m[i] > 0.0 {
+            if !inside {
+                deepest_of_entry.push(0.0);
+                inside = true;
+            }
+            let e = deepest_of_entry.len() - 1;
+            entry_of[i] = e;
+            deepest_of_entry[e] = deepest_of_entry[e].max(depth_m[i]);
+        } else {
+            inside = false;
+        }
+    }
+    layers.retain(|l| {
+        let reached = deepest_of_entry.iter().filter(|&&m| m >= l.min_depth_m).count();
+        let felt: std::collections::BTreeSet<usize> =
+            l.events.iter().map(|&e| entry_of[events[e].index]).collect();
+        2 * felt.len() >= reached
+    });
+    if layers.is_empty() {
+        return Err(data_error(
+            "no layer gives in at least half of the strokes that reach it: the phase-aware needle \
+             model needs one; the smooth model (`--model needle`) does not"
                 .into(),
         ));
     }
@@ -286,7 +368,7 @@ pub fn identify_phases(
                         continue;
                     }
                     let col = |q: usize| before.iter().map(|s| s[q]).collect::<Vec<f64>>();
-                    Some(ShaftLaw::fit(&col(0), &col(1), &col(2))?)
+                    Some(shaft(&col(0), &col(1), &col(2))?)
                 };
                 let base = |d: f64, v: f64| cut.as_ref().map_or(0.0, |(l, _)| l.eval_raw(d, v));
                 let sse_before = match &cut {
@@ -294,13 +376,16 @@ pub fn identify_phases(
                     None => before.iter().map(|s| s[2] * s[2]).sum(),
                 };
                 let residual: Vec<f64> = loading.iter().map(|s| s[2] - base(s[0], s[1])).collect();
-                let x = fit_linear(
-                    loading.len(),
-                    |i| Loading::features(loading[i][0] - c, loading[i][1]).to_vec(),
-                    &residual,
-                )?;
                 let dl: Vec<f64> = loading.iter().map(|s| s[0]).collect();
                 let vl: Vec<f64> = loading.iter().map(|s| s[1]).collect();
+                // The stiffness terms always; the viscous one only over several speeds.
+                let keep = [!okamura, true, true, !okamura && Varies::of(&dl, &vl).speed];
+                let x = fit_terms(
+                    loading.len(),
+                    |i| Loading::features(loading[i][0] - c, loading[i][1]),
+                    keep,
+                    &residual,
+                )?;
                 let l = Loading {
                     offset_n: x[0],
                     a1_npm: x[1],
@@ -359,7 +444,7 @@ pub fn identify_phases(
                 .iter()
                 .map(|&e| [events[e].speed_mps, events[e].depth_m - contact])
                 .collect();
-            let threshold = fit_threshold(&points);
+            let threshold = fit_threshold(&points, if okamura { 0 } else { 2 });
             models.push(LayerModel {
                 contact_depth_m: contact,
                 loading,
@@ -391,7 +476,7 @@ pub fn identify_phases(
     }
     let col = |s: &[[f64; 4]], q: usize| s.iter().map(|x| x[q]).collect::<Vec<f64>>();
     if let Some(last) = models.last_mut() {
-        last.after = ShaftLaw::fit(&col(&tail, 0), &col(&tail, 1), &col(&tail, 2))?.0;
+        last.after = shaft(&col(&tail, 0), &col(&tail, 1), &col(&tail, 2))?.0;
     }
     if b.withdrawal.len() < MIN_LAW_SAMPLES {
         return Err(data_error(format!(
@@ -400,7 +485,7 @@ pub fn identify_phases(
         )));
     }
     let w = &b.withdrawal;
-    let withdrawal = ShaftLaw::fit(
+    let withdrawal = shaft(
         &w.iter().map(|x| x[0]).collect::<Vec<_>>(),
         &w.iter().map(|x| x[1]).collect::<Vec<_>>(),
         &w.iter().map(|x| x[2]).collect::<Vec<_>>(),
@@ -417,10 +502,10 @@ pub fn identify_phases(
     Ok(model)
 }
 
-/// Deflection at puncture against speed: a polynomial of degree up to 2, lower when the
-/// events hold fewer distinct speeds (a speed within 10 % of the range of another counts as
-/// the same).
-fn fit_threshold(points: &[[f64; 2]]) -> Threshold {
+/// Deflection at puncture against speed: a polynomial of degree up to `max_degree` (2), lower
+/// when the events hold fewer distinct speeds (a speed within 10 % of the range of another
+/// counts as the same).
+fn fit_threshold(points: &[[f64; 2]], max_degree: usize) -> Threshold {
     let speeds: Vec<f64> = points.iter().map(|p| p[0]).collect();
     let lo = speeds.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -428,7 +513,7 @@ fn fit_threshold(points: &[[f64; 2]]) -> Threshold {
     sorted.sort_by(f64::total_cmp);
     let tol = 0.1 * (hi - lo);
     let distinct = 1 + sorted.windows(2).filter(|w| w[1] - w[0] > tol).count();
-    let degree = distinct.saturating_sub(1).min(2);
+    let degree = distinct.saturating_sub(1).min(max_degree);
     let targets: Vec<f64> = points.iter().map(|p| p[1]).collect();
     let coefficients = fit_linear(
         points.len(),

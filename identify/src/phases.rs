@@ -133,8 +133,19 @@ impl ShaftLaw {
         )
     }
 
-    pub(crate) fn fit(d: &[f64], v: &[f64], f: &[f64]) -> Result<(Self, f64), IdentifyError> {
-        let x = fit_linear(d.len(), |i| Self::features(d[i], v[i]).to_vec(), f)?;
+    /// Least squares over the terms the samples can determine (see [`Varies`]); the others
+    /// are 0.
+    /// Without the speed terms unless `with_speed`.
+    pub(crate) fn fit_restricted(
+        d: &[f64],
+        v: &[f64],
+        f: &[f64],
+        with_speed: bool,
+    ) -> Result<(Self, f64), IdentifyError> {
+        let varies = Varies::of(d, v);
+        let speed = with_speed && varies.speed;
+        let keep = [true, varies.depth, speed, varies.depth && speed];
+        let x = fit_terms(d.len(), |i| Self::features(d[i], v[i]), keep, f)?;
         let law = Self {
             constant_n: x[0],
             per_depth_npm: x[1],
@@ -463,6 +474,71 @@ fn domain_ok(d: &Domain) -> bool {
     d.depth_m.iter().chain(&d.velocity_mps).all(|x| x.is_finite())
         && d.depth_m[0] <= d.depth_m[1]
         && d.velocity_mps[0] <= d.velocity_mps[1]
+}
+
+/// Which inputs vary enough over a phase's samples for a law to be fitted in them. A term in
+/// an input the samples barely move is pinned by noise and transients alone, and extrapolates
+/// wildly (a withdrawal recorded at one speed fitted −26 N of constant against +26 N of
+/// velocity terms): depth terms need [`MIN_DEPTH_SPAN_M`] of depth, speed terms speeds whose
+/// middle 80 % span at least a factor [`MIN_SPEED_RATIO`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Varies {
+    pub(crate) depth: bool,
+    pub(crate) speed: bool,
+}
+
+/// Depth a phase's samples must span for a depth term, m.
+pub(crate) const MIN_DEPTH_SPAN_M: f64 = 3e-3;
+/// Ratio of the 90th to the 10th percentile of |v| a phase's samples must reach for a speed
+/// term.
+pub(crate) const MIN_SPEED_RATIO: f64 = 1.5;
+
+impl Varies {
+    pub(crate) fn of(d: &[f64], v: &[f64]) -> Self {
+        let span = d.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - d.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut speeds: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+        speeds.sort_by(f64::total_cmp);
+        let at = |q: f64| {
+            speeds
+                .get((q * speeds.len().saturating_sub(1) as f64).round() as usize)
+                .copied()
+        };
+        let speed = match (at(0.1), at(0.9)) {
+            (Some(lo), Some(hi)) => hi >= MIN_SPEED_RATIO * lo,
+            _ => false,
+        };
+        Self {
+            depth: span >= MIN_DEPTH_SPAN_M,
+            speed,
+        }
+    }
+}
+
+/// [`fit_linear`] over the `keep` columns of four features; the others get 0.
+pub(crate) fn fit_terms(
+    n: usize,
+    row: impl Fn(usize) -> [f64; 4],
+    keep: [bool; 4],
+    target: &[f64],
+) -> Result<[f64; 4], IdentifyError> {
+    let x = fit_linear(
+        n,
+        |i| {
+            let r = row(i);
+            (0..4).filter(|&j| keep[j]).map(|j| r[j]).collect()
+        },
+        target,
+    )?;
+    let mut out = [0.0; 4];
+    let mut k = 0;
+    for (j, slot) in out.iter_mut().enumerate() {
+        if keep[j] {
+            *slot = x[k];
+            k += 1;
+        }
+    }
+    Ok(out)
 }
 
 /// Least squares over `n` rows of `row(i)` features against `target`; the minimum-norm

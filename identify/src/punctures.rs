@@ -349,7 +349,9 @@ pub struct PunctureComparison {
 /// Every puncture detected in `capture` (an insertion capture), each beside the puncture the
 /// needle `model` renders along the same trajectory: the model is evaluated on the capture's
 /// own depth and velocity (0 N in air, where the model describes nothing) and the same
-/// detector is run on that prediction. A measured puncture is matched with the model's nearest
+/// detector is run on that prediction (a phase-aware model reports its own ruptures instead:
+/// its force is clean, and the detector's drops on a clean force that varies with speed are
+/// not what a trainee feels as a puncture). A measured puncture is matched with the model's nearest
 /// event of the same stroke within `params.layer_gap_m`.
 pub fn compare_punctures(
     model: &ModelFile,
@@ -395,13 +397,17 @@ pub fn compare_punctures(
         .collect();
     let time = capture.time();
     let measured = detect_punctures(time, &depth, &velocity, force, params)?;
-    let rendered = detect_punctures(time, &depth, &velocity, &predicted, params)?;
+    // A model with memory says itself where each layer gave: those are the punctures a
+    // trainee feels. A smooth model's are found in its force by the detector.
+    let rendered = match &along {
+        Some(steps) => ruptures(steps, time, &depth, &velocity, params),
+        None => detect_punctures(time, &depth, &velocity, &predicted, params)?.events,
+    };
     Ok(measured
         .events
         .iter()
         .map(|m| {
             let matched = rendered
-                .events
                 .iter()
                 .filter(|p| p.stroke == m.stroke && (p.depth_m - m.depth_m).abs() <= params.layer_gap_m)
                 .min_by(|a, b| {
@@ -422,6 +428,42 @@ pub fn compare_punctures(
             }
         })
         .collect())
+}
+
+/// The phase model's own ruptures along a trajectory, as events: the peak is the step before
+/// the rupture, the drop the fall to the step of it; strokes are counted as the detector counts
+/// them (a withdrawal after an advance starts the next).
+fn ruptures(
+    steps: &[crate::phases::PhaseStep],
+    time_s: &[f64],
+    depth_m: &[f64],
+    velocity_mps: &[f64],
+    params: &PunctureParams,
+) -> Vec<PunctureEvent> {
+    let mut out = Vec::new();
+    let mut stroke = 0;
+    let mut advanced = false;
+    for i in 0..steps.len() {
+        let v = velocity_mps[i];
+        if v > params.min_speed_mps {
+            advanced = true;
+        } else if v < -params.min_speed_mps && advanced {
+            stroke += 1;
+            advanced = false;
+        }
+        if steps[i].ruptured && i > 0 {
+            out.push(PunctureEvent {
+                index: i - 1,
+                time_s: time_s[i - 1],
+                depth_m: depth_m[i - 1],
+                speed_mps: velocity_mps[i - 1],
+                peak_force_n: steps[i - 1].force_n,
+                drop_n: steps[i - 1].force_n - steps[i].force_n,
+                stroke,
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@ enum BenchWhat {
     Svr(super::bench_svr::SvrArgs),
     SvrScale(super::bench_svr::SvrScaleArgs),
     Trade(super::bench_trade::TradeArgs),
+    NeedleLaw(super::bench_needle::NeedleLawArgs),
     Render(RenderArgs),
 }
 
@@ -87,6 +88,7 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         BenchWhat::Svr(args) => super::bench_svr::run(args),
         BenchWhat::SvrScale(args) => super::bench_svr::run_scale(args),
         BenchWhat::Trade(args) => super::bench_trade::run(args),
+        BenchWhat::NeedleLaw(args) => super::bench_needle::run(args),
         BenchWhat::Render(args) => {
             if args.frames == 0 {
                 anyhow::bail!("--frames must be at least 1");

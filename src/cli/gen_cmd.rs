@@ -43,15 +43,47 @@ pub(crate) struct GenArgs {
     /// With --needle-rate-hz: insert at every speed this many times, each at a fresh site.
     #[arg(long, default_value_t = 1, requires = "needle_rate_hz")]
     needle_rounds: u32,
+    /// Write only needle captures, into this tissue: `liver` (the paper's, capsule and vessel
+    /// wall) or `phantom` (three membranes at other depths, with other parameters: a second
+    /// tissue for held-out tests).
+    #[arg(long, value_enum, value_name = "TISSUE")]
+    needle_tissue: Option<NeedleTissueArg>,
+    /// Write only needle captures, each stroke at `constant` speed (the paper's) or at a
+    /// `varying` one (±60 % around the nominal speed within the stroke).
+    #[arg(long, value_enum, value_name = "PROFILE")]
+    needle_speed: Option<NeedleSpeedArg>,
 }
 
-/// `--needle-rate-hz`: only the needle's training and held-out captures, with that protocol.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum NeedleTissueArg {
+    Liver,
+    Phantom,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum NeedleSpeedArg {
+    Constant,
+    Varying,
+}
+
+/// `--needle-rate-hz`, `--needle-tissue`, `--needle-speed`: only the needle's training and
+/// held-out captures, with that protocol.
 fn needle_only(args: &GenArgs, log_rate_hz: u32) -> anyhow::Result<()> {
     use haptics::sim::protocols::Split;
-    use haptics::sim::protocols::li_bi::{NeedleProtocol, needle_insertion_with};
+    use haptics::sim::protocols::li_bi::{
+        NeedleProtocol, NeedleTissueKind, SpeedProfile, needle_insertion_with,
+    };
     let protocol = NeedleProtocol {
         log_rate_hz,
         rounds: args.needle_rounds,
+        tissue: match args.needle_tissue {
+            Some(NeedleTissueArg::Phantom) => NeedleTissueKind::LayeredPhantom,
+            _ => NeedleTissueKind::BovineLiver,
+        },
+        speed: match args.needle_speed {
+            Some(NeedleSpeedArg::Varying) => SpeedProfile::Varying,
+            _ => SpeedProfile::Constant,
+        },
     };
     let dir = args.out.join("li_bi");
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -69,8 +101,8 @@ fn needle_only(args: &GenArgs, log_rate_hz: u32) -> anyhow::Result<()> {
 }
 
 pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
-    if let Some(rate) = args.needle_rate_hz {
-        return needle_only(args, rate);
+    if args.needle_rate_hz.is_some() || args.needle_tissue.is_some() || args.needle_speed.is_some() {
+        return needle_only(args, args.needle_rate_hz.unwrap_or(100));
     }
     let sets = if args.only.is_empty() {
         CaptureSet::ALL.to_vec()

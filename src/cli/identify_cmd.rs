@@ -402,7 +402,7 @@ fn print_frontier(points: &[SearchPoint]) {
 
 fn row(name: &str, m: &Metrics) {
     println!(
-        "  {name:<16} {:>12.4e} {:>12.4e} {:>12.4e}",
+        "  {name:<18} {:>12.4e} {:>12.4e} {:>12.4e}",
         m.aise, m.error_bound, m.rmse
     );
 }
@@ -487,11 +487,14 @@ fn print_table(r: &Report, body: &ModelBody, args: &IdentifyArgs) {
         );
     }
     println!(
-        "on {} data:{:>13} {:>12} {:>12}",
+        "on {} data:{:>15} {:>12} {:>12}",
         r.evaluated_on, "AISE [N²]", "max|e| [N]", "RMSE [N]"
     );
     if let Some(smooth) = &r.metrics.smooth_svr {
         row("phases", &r.metrics.svr);
+        if let Some(okamura) = &r.metrics.okamura_piecewise {
+            row("Okamura piecewise", okamura);
+        }
         row("smooth ε-SVR", smooth);
     } else {
         row("ε-SVR", &r.metrics.svr);
@@ -518,10 +521,12 @@ fn print_punctures(r: &Report) {
     if r.punctures.is_empty() {
         return;
     }
-    println!(
-        "punctures on {} data (model: the same detector on its force along each stroke):",
-        r.evaluated_on
-    );
+    let how = if r.metrics.smooth_svr.is_some() {
+        "its own ruptures along each stroke"
+    } else {
+        "the same detector on its force along each stroke"
+    };
+    println!("punctures on {} data (model: {how}):", r.evaluated_on);
     println!(
         "  {:>6} {:>8}  {:>21}  {:>27}  {:>17}",
         "stroke", "v [mm/s]", "depth [mm] meas/model", "peak [N] measured/model", "drop [N] meas/model"

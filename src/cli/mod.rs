@@ -4,6 +4,7 @@
 #![allow(clippy::print_stdout)]
 
 mod bench_cmd;
+mod bench_needle;
 mod bench_svr;
 mod bench_trade;
 mod capture_cmd;

@@ -242,21 +242,77 @@ pub fn needle_speeds_mmps(split: Split) -> &'static [f64] {
     }
 }
 
-/// How the needle protocol logs and how often it repeats its insertions.
+/// Which simulated tissue the needle goes into.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NeedleTissueKind {
+    /// [`NeedleTissue::bovine_liver`]: capsule and a vessel wall (the paper's fresh liver).
+    #[default]
+    BovineLiver,
+    /// [`NeedleTissue::layered_phantom`]: three membranes, other parameters.
+    LayeredPhantom,
+}
+
+impl NeedleTissueKind {
+    /// The tissue.
+    pub fn tissue(self) -> NeedleTissue {
+        match self {
+            Self::BovineLiver => NeedleTissue::bovine_liver(),
+            Self::LayeredPhantom => NeedleTissue::layered_phantom(),
+        }
+    }
+
+    /// Its name in capture metadata.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BovineLiver => "bovine_liver",
+            Self::LayeredPhantom => "layered_phantom",
+        }
+    }
+}
+
+/// How the insertion speed behaves within one stroke.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpeedProfile {
+    /// The nominal speed throughout (the paper's protocol).
+    #[default]
+    Constant,
+    /// The nominal speed modulated by ±60 % with a 1.3 s period, as a hand varies it: every
+    /// membrane is loaded and ruptured at a speed of its own.
+    Varying,
+}
+
+impl SpeedProfile {
+    /// Factor on the nominal speed `t_s` into the stroke.
+    fn factor(self, t_s: f64) -> f64 {
+        match self {
+            Self::Constant => 1.0,
+            Self::Varying => 1.0 + 0.6 * (std::f64::consts::TAU * t_s / 1.3).sin(),
+        }
+    }
+}
+
+/// How the needle protocol logs, how often it repeats its insertions, into what and how fast.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct NeedleProtocol {
     /// Logging rate, Hz: a divisor of [`CONTROL_RATE_HZ`] (the paper's rig logs at 100 Hz).
     pub log_rate_hz: u32,
     /// Times the whole set of speeds is inserted, each insertion at a fresh site.
     pub rounds: u32,
+    /// The tissue.
+    pub tissue: NeedleTissueKind,
+    /// The speed within each stroke.
+    pub speed: SpeedProfile,
 }
 
 impl Default for NeedleProtocol {
-    /// The paper's protocol: 100 Hz, one insertion per speed.
+    /// The paper's protocol: 100 Hz, one insertion per speed into the liver, each at
+    /// constant speed.
     fn default() -> Self {
         Self {
             log_rate_hz: 100,
             rounds: 1,
+            tissue: NeedleTissueKind::BovineLiver,
+            speed: SpeedProfile::Constant,
         }
     }
 }
@@ -289,7 +345,7 @@ pub fn needle_insertion_with(
     split: Split,
     protocol: NeedleProtocol,
 ) -> Result<Capture, CaptureError> {
-    let tissue = NeedleTissue::bovine_liver();
+    let tissue = protocol.tissue.tissue();
     let mut rig = Instruments::new(seed, tag::NEEDLE, split);
     let Some(log_every) = protocol.log_every().filter(|_| protocol.rounds > 0) else {
         return Err(CaptureError::without_file(CaptureErrorKind::BadMetadata(
@@ -334,7 +390,9 @@ pub fn needle_insertion_with(
                     phase = Phase::Insert(0.0);
                     continue;
                 }
-                Phase::Insert(t) if depth < target_m => speed * smooth_ramp(t / ramp_s),
+                Phase::Insert(t) if depth < target_m => {
+                    speed * smooth_ramp(t / ramp_s) * protocol.speed.factor(t)
+                }
                 Phase::Insert(_) => {
                     phase = Phase::Hold(0.0);
                     continue;
@@ -372,12 +430,17 @@ pub fn needle_insertion_with(
     }
     let speeds_list: Vec<String> = speeds.iter().map(|s| format!("{}", s * 1e-3)).collect();
     let mut full = base_metadata(CaptureKind::Insertion, CONTROL_RATE_HZ / log_every as f64, "li_bi_needle", split, seed)
-        .with("tissue", "bovine_liver")
+        .with("tissue", protocol.tissue.name())
         .with("insertions", speeds.len() * protocol.rounds as usize)
         .with("speeds_mps", speeds_list.join(";"))
         .with("target_depth_m", target_m)
         .with("withdraw_speed_mps", withdraw_mps)
+
         .with("truth.model", "Okamura-2004:stiffness(a1*u+a2*u^2)+cutting+Karnopp-friction|Mahvash-Dupont-2010:rate-dependent-puncture");
+    // Only a varying profile says so: the paper's protocol keeps its bytes.
+    if protocol.speed == SpeedProfile::Varying {
+        full.insert("speed_profile", "varying(1+0.6*sin(2*pi*t/1.3s))");
+    }
     for (name, value) in tissue.parameters() {
         full.insert(format!("truth.{name}"), value);
     }
@@ -428,6 +491,7 @@ mod needle_protocol_tests {
         let dense = NeedleProtocol {
             log_rate_hz: 500,
             rounds: 2,
+            ..NeedleProtocol::default()
         };
         let big = needle_insertion_with(3, Split::Train, dense).unwrap();
         // 5× the rate, 2× the insertions: every control tick that was logged at 100 Hz and the
@@ -446,10 +510,12 @@ mod needle_protocol_tests {
             NeedleProtocol {
                 log_rate_hz: 300,
                 rounds: 1,
+                ..NeedleProtocol::default()
             },
             NeedleProtocol {
                 log_rate_hz: 100,
                 rounds: 0,
+                ..NeedleProtocol::default()
             },
         ] {
             let e = needle_insertion_with(3, Split::Train, bad).unwrap_err();

@@ -130,6 +130,54 @@ impl NeedleTissue {
         }
     }
 
+    /// A second tissue, for testing on what a model was not identified from: a layered phantom
+    /// with three membranes at other depths, thicknesses and stiffnesses than the liver (a
+    /// stiff skin-like surface that gives after ~5 mm, a fascia 9 mm down, a deep capsule at
+    /// 20 mm), and more cutting and Coulomb friction but less viscous friction along the
+    /// shaft.
+    pub fn layered_phantom() -> Self {
+        Self {
+            membranes: vec![
+                Membrane {
+                    name: "skin",
+                    depth_m: 0.0,
+                    a1_npm: 80.0,
+                    a2_npm2: 60_000.0,
+                    puncture_force_n: 2.2,
+                    rate_softening: 0.3,
+                    rate_scale_mps: 0.004,
+                    damping_nspm: 20.0,
+                },
+                Membrane {
+                    name: "fascia",
+                    depth_m: 0.009,
+                    a1_npm: 120.0,
+                    a2_npm2: 60_000.0,
+                    puncture_force_n: 1.0,
+                    rate_softening: 0.15,
+                    rate_scale_mps: 0.006,
+                    damping_nspm: 8.0,
+                },
+                Membrane {
+                    name: "deep_capsule",
+                    depth_m: 0.020,
+                    a1_npm: 40.0,
+                    a2_npm2: 15_000.0,
+                    puncture_force_n: 0.8,
+                    rate_softening: 0.25,
+                    rate_scale_mps: 0.005,
+                    damping_nspm: 6.0,
+                },
+            ],
+            cutting_force_n: 0.35,
+            cutting_damping_nspm: 15.0,
+            coulomb_npm: 9.0,
+            viscous_nspm2: 500.0,
+            static_band_mps: 1e-4,
+            relaxation_s: 1.0,
+        }
+    }
+
     /// Depth (from the undeformed surface) at which membrane `index` ruptures when the needle
     /// advances at constant `speed_mps`.
     pub fn puncture_depth_m(&self, index: usize, speed_mps: f64) -> Option<f64> {
