@@ -196,3 +196,41 @@ fn fast_insertion(surface_z_m: f64) -> Waypoints {
     let bottom = DVec3::new(0.0, 0.0, surface_z_m - 0.040);
     Waypoints::new(&[(0.0, top), (0.05, top), (0.6, bottom), (0.7, bottom), (1.2, top)])
 }
+
+#[test]
+fn the_phase_aware_needle_law_allocates_nothing_along_a_recording() {
+    use haptics::law::{AxialLaw, PhasedNeedleLaw};
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/captures/li_bi/needle_train.csv");
+    let capture = capture::Capture::read_file(&path, capture::CaptureKind::Insertion).unwrap();
+    let model = identify::identify(
+        &capture,
+        None,
+        &identify::IdentifyOptions::new(identify::ModelKind::NeedlePhases),
+    )
+    .unwrap()
+    .model;
+    let mut law = PhasedNeedleLaw::from_file(&model, NeedleLawConfig::default()).unwrap();
+    let depth = capture.column("depth_m").unwrap().to_vec();
+    let velocity = capture.column("velocity_mps").unwrap().to_vec();
+    let (punctures, allocations) = std::thread::spawn(move || {
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        WATCHED.with(|w| w.set(true));
+        let mut punctures = 0u32;
+        let mut last = haptics::law::PunctureState::Approach;
+        for (&d, &v) in depth.iter().zip(&velocity) {
+            let out = law.step(d, v);
+            if out.state == haptics::law::PunctureState::Puncture && last != out.state {
+                punctures += 1;
+            }
+            last = out.state;
+        }
+        WATCHED.with(|w| w.set(false));
+        (punctures, ALLOCATIONS.load(Ordering::Relaxed) - before)
+    })
+    .join()
+    .unwrap();
+    assert_eq!(allocations, 0, "the phase-aware law allocated");
+    // Five insertions through two layers each.
+    assert_eq!(punctures, 10);
+}
