@@ -149,6 +149,10 @@ pub struct Report {
     /// Inputs of which the test capture leaves the training domain (see [`out_of_domain`]):
     /// empty without a test capture or when it stays inside.
     pub test_out_of_domain: Vec<OutOfDomain>,
+    /// The phase-aware needle: rows of the test capture outside the domain of the phase they
+    /// were in, per phase (empty otherwise, or when every row stays inside).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub test_out_of_phase_domain: Vec<crate::PhaseExit>,
     /// Needle: every puncture detected in the evaluation capture beside the model's along the
     /// same strokes ([`crate::compare_punctures`]); empty for the friction models.
     pub punctures: Vec<crate::PunctureComparison>,
@@ -1033,6 +1037,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         stage1,
         hyperparameters: hyper.clone(),
         test_out_of_domain: Vec::new(),
+        test_out_of_phase_domain: Vec::new(),
         punctures: Vec::new(),
     };
     let mut training = vec![capture_ref(train.source())];

@@ -39,7 +39,8 @@ pub use model_file::{
 };
 pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
 pub use phases::{
-    Domain, LayerModel, Loading, MAX_LAYERS, Phase, PhaseModel, PhaseState, PhaseStep, ShaftLaw, Threshold,
+    Domain, LayerModel, Loading, MAX_LAYERS, Phase, PhaseExit, PhaseModel, PhaseState, PhaseStep, ShaftLaw,
+    Threshold,
 };
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,

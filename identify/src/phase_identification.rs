@@ -143,6 +143,10 @@ pub(crate) fn needle_phases(
         Some(t) => out_of_domain(&model, t)?,
         None => Vec::new(),
     };
+    if let (Some(t), ModelBody::Phases(p)) = (test, &model.body) {
+        let s = series(t)?;
+        report.test_out_of_phase_domain = p.domain_exits(&s.depth_m, &s.velocity_mps);
+    }
     report.punctures = compare_punctures(&model, test.unwrap_or(train), &PunctureParams::default())?;
     Ok(Identified { model, report })
 }

@@ -256,6 +256,36 @@ pub enum Phase {
     Withdrawal,
 }
 
+impl Phase {
+    /// `loading layer 2`, `cutting below layer 1`, `channel`, `held`, `withdrawal`, `air`
+    /// (layers counted from 1).
+    pub fn describe(self) -> String {
+        match self {
+            Self::Air => "air".into(),
+            Self::Loading(k) => format!("loading layer {}", k + 1),
+            Self::Cutting(k) => format!("cutting below layer {}", k + 1),
+            Self::Channel => "channel".into(),
+            Self::Held => "held".into(),
+            Self::Withdrawal => "withdrawal".into(),
+        }
+    }
+}
+
+/// Rows of a trajectory outside the domain of one phase ([`PhaseModel::domain_exits`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PhaseExit {
+    /// Which phase ([`Phase::describe`]).
+    pub phase: String,
+    /// How many rows.
+    pub rows: usize,
+    /// Their share of the trajectory's rows in tissue.
+    pub fraction: f64,
+    /// [min, max] depth over them, m.
+    pub depth_m: [f64; 2],
+    /// [min, max] velocity over them, m/s.
+    pub velocity_mps: [f64; 2],
+}
+
 /// The memory of one insertion site. `Default` is a fresh, intact site.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PhaseState {
@@ -324,10 +354,12 @@ impl PhaseModel {
             } else {
                 // Backing off an intact membrane unloads it elastically: no friction reversal.
                 let ahead = v.max(0.0);
-                let (base, base_inside) = self.cutting(state.punctured, d, ahead);
                 let l = &layer.loading;
                 let vl = l.domain.clamp_velocity(ahead);
-                let inside = base_inside && (v <= band || l.domain.contains(d, v));
+                // The loading was fitted on top of the law before it extended to these depths,
+                // so only the loading's own domain says whether the inputs are known.
+                let (base, _) = self.cutting(state.punctured, d, vl);
+                let inside = v <= band || l.domain.contains(d, v);
                 return out(
                     base + l.eval_raw(u, vl),
                     Phase::Loading(state.punctured),
@@ -394,6 +426,39 @@ impl PhaseModel {
             state.deepest_m = depth_m.max(0.0) + 1.0;
             self.step(&mut state, depth_m, velocity_mps).force_n
         }
+    }
+
+    /// The rows of a trajectory (in tissue) whose depth or velocity left the domain of the
+    /// phase they were in, grouped by phase, in order of first appearance.
+    pub fn domain_exits(&self, depth_m: &[f64], velocity_mps: &[f64]) -> Vec<PhaseExit> {
+        let steps = self.simulate(depth_m, velocity_mps);
+        let inside_rows = depth_m.iter().filter(|&&d| d > 0.0).count();
+        let mut out: Vec<PhaseExit> = Vec::new();
+        for ((s, &d), &v) in steps.iter().zip(depth_m).zip(velocity_mps) {
+            if !s.out_of_domain || d <= 0.0 {
+                continue;
+            }
+            let name = s.phase.describe();
+            let exit = match out.iter_mut().find(|e| e.phase == name) {
+                Some(e) => e,
+                None => {
+                    out.push(PhaseExit {
+                        phase: name,
+                        rows: 0,
+                        fraction: 0.0,
+                        depth_m: [f64::INFINITY, f64::NEG_INFINITY],
+                        velocity_mps: [f64::INFINITY, f64::NEG_INFINITY],
+                    });
+                    let last = out.len() - 1;
+                    &mut out[last]
+                }
+            };
+            exit.rows += 1;
+            exit.fraction = exit.rows as f64 / inside_rows.max(1) as f64;
+            exit.depth_m = [exit.depth_m[0].min(d), exit.depth_m[1].max(d)];
+            exit.velocity_mps = [exit.velocity_mps[0].min(v), exit.velocity_mps[1].max(v)];
+        }
+        out
     }
 
     /// Checks what a hand-edited or truncated file could break: `Err((field, reason))`.

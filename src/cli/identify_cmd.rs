@@ -281,6 +281,20 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         for o in &r.test_out_of_domain {
             eprintln!("warning: {}", out_of_domain_line(o));
         }
+        for e in &r.test_out_of_phase_domain {
+            eprintln!(
+                "warning: {:.1} % of the test capture's rows in tissue ({}) lie outside what the \
+                 phase `{}` was fitted on: {:.1}–{:.1} mm, {:.1}–{:.1} mm/s (rendered at the nearest \
+                 trained velocity)",
+                100.0 * e.fraction,
+                e.rows,
+                e.phase,
+                e.depth_m[0] * 1e3,
+                e.depth_m[1] * 1e3,
+                e.velocity_mps[0] * 1e3,
+                e.velocity_mps[1] * 1e3
+            );
+        }
     }
     if args.json {
         let mut report = serde_json::to_value(&identified.report)?;
