@@ -119,3 +119,37 @@ fn the_state_machine_is_the_same_along_any_prefix_of_a_trajectory() {
     assert_eq!(&whole[..half.len()], &half[..]);
     assert!(whole.iter().all(|s| s.force_n.is_finite()));
 }
+
+#[test]
+fn strokes_faster_than_any_trained_are_reported_per_phase() {
+    let train = li_bi("needle_train");
+    let r = identify(&train, None, &IdentifyOptions::new(ModelKind::NeedlePhases)).unwrap();
+    let ModelBody::Phases(p) = &r.model.body else {
+        panic!("not a phase model")
+    };
+    let d = train.column("depth_m").unwrap();
+    let v = train.column("velocity_mps").unwrap();
+    // Its own strokes: the advancing phases stay inside what they were fitted on.
+    let own = p.domain_exits(d, v);
+    assert!(
+        own.iter()
+            .all(|e| !e.phase.starts_with("cutting") && !e.phase.starts_with("loading")),
+        "{own:?}"
+    );
+    // Three times as fast: every advancing phase is left, and each exit says how fast.
+    let fast: Vec<f64> = v.iter().map(|x| 3.0 * x).collect();
+    let exits = p.domain_exits(d, &fast);
+    for phase in [
+        "loading layer 1",
+        "cutting below layer 1",
+        "loading layer 2",
+        "cutting below layer 2",
+    ] {
+        let e = exits
+            .iter()
+            .find(|e| e.phase == phase)
+            .unwrap_or_else(|| panic!("{phase}: {exits:?}"));
+        assert!(e.rows > 0 && e.fraction > 0.0 && e.fraction <= 1.0, "{e:?}");
+        assert!(e.velocity_mps[1] > 0.011, "{e:?}");
+    }
+}
