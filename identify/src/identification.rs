@@ -121,6 +121,9 @@ pub struct Report {
     pub n_fit_rows: usize,
     /// Support vectors (all SVRs of the model).
     pub n_sv: usize,
+    /// The phase-aware needle: layers found.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_layers: Option<usize>,
     /// Linear model slope (hard contact).
     pub w: Option<f64>,
     /// Linear model intercept, N (hard contact).
@@ -153,6 +156,10 @@ pub struct Report {
     /// were in, per phase (empty otherwise, or when every row stays inside).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub test_out_of_phase_domain: Vec<crate::PhaseExit>,
+    /// The phase-aware needle: each part's parametric law against an ε-SVR on held-out
+    /// strokes, and which one the model renders ([`crate::PartComparison`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<crate::PartComparison>,
     /// Needle: every puncture detected in the evaluation capture beside the model's along the
     /// same strokes ([`crate::compare_punctures`]); empty for the friction models.
     pub punctures: Vec<crate::PunctureComparison>,
@@ -1018,6 +1025,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         n_rows,
         n_fit_rows,
         n_sv,
+        n_layers: None,
         w,
         b,
         b_kgf: b.map(|b| b / KGF_N),
@@ -1038,6 +1046,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         hyperparameters: hyper.clone(),
         test_out_of_domain: Vec::new(),
         test_out_of_phase_domain: Vec::new(),
+        parts: Vec::new(),
         punctures: Vec::new(),
     };
     let mut training = vec![capture_ref(train.source())];

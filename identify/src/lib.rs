@@ -18,6 +18,7 @@ mod identification;
 mod metrics;
 mod model_file;
 mod phase_identification;
+mod phase_parts;
 mod phases;
 mod punctures;
 mod search;
@@ -38,9 +39,10 @@ pub use model_file::{
     ScaledSvr, SvrHyper,
 };
 pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
+pub use phase_parts::PartComparison;
 pub use phases::{
-    Domain, LayerModel, Loading, MAX_LAYERS, Phase, PhaseExit, PhaseModel, PhaseState, PhaseStep, ShaftLaw,
-    Threshold,
+    Domain, LayerModel, Loading, MAX_LAYERS, PartSvr, Phase, PhaseExit, PhaseModel, PhaseState, PhaseStep,
+    ShaftLaw, Threshold,
 };
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,

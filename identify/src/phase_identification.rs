@@ -73,7 +73,7 @@ pub(crate) fn needle_phases(
     // The smooth SVR and its baselines, on the same rows: what the phases must beat.
     let smooth = needle(train, test, o, limits)?;
     let s = series(train)?;
-    let phases = identify_phases(
+    let mut phases = identify_phases(
         train.source(),
         &s.time_s,
         &s.depth_m,
@@ -81,6 +81,7 @@ pub(crate) fn needle_phases(
         &s.force_n,
         &PunctureParams::default(),
     )?;
+    let parts = crate::phase_parts::compare_parts(&mut phases, &s.depth_m, &s.velocity_mps, &s.force_n)?;
     // Okamura's piecewise model on the same data: the published form of what the phases
     // generalise.
     let okamura = identify_phases_as(
@@ -99,6 +100,7 @@ pub(crate) fn needle_phases(
         None => train_metrics,
     };
     let input_range = phases.input_range();
+    let n_layers = phases.layers.len();
     let mut training = vec![capture_ref(train.source())];
     training.retain(|r| !r.path.as_os_str().is_empty());
     let model = ModelFile {
@@ -130,6 +132,8 @@ pub(crate) fn needle_phases(
     report.n_rows = n_rows;
     report.n_fit_rows = n_rows;
     report.n_sv = 0;
+    report.n_layers = Some(n_layers);
+    report.parts = parts;
     report.dual_objective = 0.0;
     report.relative_gap = 0.0;
     report.reduction = None;
@@ -460,6 +464,7 @@ pub fn identify_phases_as(
                     per_speed_nspm: 0.0,
                     per_depth_speed_nspm2: 0.0,
                     domain: loading.domain,
+                    svr: None,
                 },
                 events: layer.events.len(),
                 peak_force_n: layer.peak_force_n,

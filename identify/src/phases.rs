@@ -40,6 +40,7 @@ use serde::{Deserialize, Serialize};
 use crate::baselines::{Rank, least_squares};
 use crate::error::IdentifyError;
 use nalgebra::{DMatrix, DVector};
+use svm::{InputScaling, SvrModel};
 
 /// Most layers a model holds.
 pub const MAX_LAYERS: usize = 8;
@@ -97,9 +98,44 @@ impl Domain {
     }
 }
 
+/// An ε-SVR of [depth, velocity] standing in for a phase's linear law
+/// ([`ShaftLaw::svr`]), inputs scaled as `scaling` says.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PartSvr {
+    /// Input scaling applied before the SVR.
+    pub scaling: InputScaling,
+    /// The SVR.
+    pub svr: SvrModel,
+}
+
+impl PartSvr {
+    /// Allocation-free: the two scaled inputs live on the stack.
+    pub(crate) fn eval(&self, d: f64, v: f64) -> f64 {
+        let mut scaled = [0.0; 2];
+        self.scaling.apply_into(&[d, v], &mut scaled);
+        self.svr.predict(&scaled)
+    }
+
+    fn valid(&self) -> bool {
+        let finite = |x: &[f64]| x.iter().all(|a| a.is_finite());
+        self.svr.dim == 2
+            && self.scaling.offset.len() == 2
+            && self.scaling.scale.len() == 2
+            && self.scaling.scale.iter().all(|s| s.is_finite() && *s > 0.0)
+            && finite(&self.scaling.offset)
+            && finite(&self.svr.coefficients)
+            && finite(&self.svr.support_vectors)
+            && self.svr.support_vectors.len() == 2 * self.svr.coefficients.len()
+            && self.svr.bias.is_finite()
+            && self.svr.weights.is_none()
+    }
+}
+
 /// `F(d, v) = constant + per_depth·d + per_speed·v + per_depth_speed·d·v`: friction along the
 /// inserted shaft (∝ d), cutting and Coulomb friction (constant), viscous friction (∝ v, ∝ d·v).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// Where an ε-SVR of the same samples predicted held-out strokes clearly better, it replaces
+/// these terms (`svr`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ShaftLaw {
     /// N.
     pub constant_n: f64,
@@ -111,6 +147,9 @@ pub struct ShaftLaw {
     pub per_depth_speed_nspm2: f64,
     /// What it was fitted on.
     pub domain: Domain,
+    /// The ε-SVR that replaces the linear terms, when it won ([`crate::PartComparison`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub svr: Option<PartSvr>,
 }
 
 impl ShaftLaw {
@@ -119,6 +158,14 @@ impl ShaftLaw {
     }
 
     pub(crate) fn eval_raw(&self, d: f64, v: f64) -> f64 {
+        if let Some(svr) = &self.svr {
+            return svr.eval(d, v);
+        }
+        self.linear(d, v)
+    }
+
+    /// The linear terms alone.
+    pub(crate) fn linear(&self, d: f64, v: f64) -> f64 {
         self.constant_n
             + self.per_depth_npm * d
             + self.per_speed_nspm * v
@@ -152,6 +199,7 @@ impl ShaftLaw {
             per_speed_nspm: x[2],
             per_depth_speed_nspm2: x[3],
             domain: Domain::of(d, v),
+            svr: None,
         };
         let sse = (0..d.len())
             .map(|i| (f[i] - law.eval_raw(d[i], v[i])).powi(2))
@@ -478,6 +526,7 @@ impl PhaseModel {
                 l.per_speed_nspm,
                 l.per_depth_speed_nspm2,
             ]) && domain_ok(&l.domain)
+                && l.svr.as_ref().is_none_or(PartSvr::valid)
         };
         if !law_ok(&self.withdrawal) {
             return bad("body.withdrawal".into(), "coefficients and domain must be finite");

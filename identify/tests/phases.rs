@@ -153,3 +153,52 @@ fn strokes_faster_than_any_trained_are_reported_per_phase() {
         assert!(e.velocity_mps[1] > 0.011, "{e:?}");
     }
 }
+
+#[test]
+fn every_part_is_scored_against_an_svr_on_held_out_strokes_and_renders_the_winner() {
+    let r = identify(
+        &li_bi("needle_train"),
+        None,
+        &IdentifyOptions::new(ModelKind::NeedlePhases),
+    )
+    .unwrap();
+    let ModelBody::Phases(p) = &r.model.body else {
+        panic!("not a phase model")
+    };
+    let names: Vec<&str> = r.report.parts.iter().map(|c| c.part.as_str()).collect();
+    for part in [
+        "loading layer 1",
+        "cutting below layer 1",
+        "loading layer 2",
+        "cutting below layer 2",
+        "withdrawal",
+    ] {
+        assert!(names.contains(&part), "{part} missing from {names:?}");
+    }
+    for c in &r.report.parts {
+        assert_eq!(c.strokes, 5, "{c:?}");
+        let (law, svr) = (c.parametric_rmse_n.unwrap(), c.svr_rmse_n.unwrap());
+        assert!(law > 0.0 && svr > 0.0, "{c:?}");
+        let rendered = match c.part.as_str() {
+            "cutting below layer 1" => p.layers[0].after.svr.is_some(),
+            "cutting below layer 2" => p.layers[1].after.svr.is_some(),
+            "withdrawal" => p.withdrawal.svr.is_some(),
+            // Loadings stay parametric whatever the score.
+            _ => {
+                assert_eq!(c.uses, "parametric", "{c:?}");
+                continue;
+            }
+        };
+        assert_eq!(rendered, c.uses == "svr", "{c:?}");
+        assert_eq!(c.uses == "svr", svr < 0.9 * law, "{c:?}");
+    }
+    // Part SVRs stay within their support-vector budget.
+    for s in p
+        .layers
+        .iter()
+        .filter_map(|l| l.after.svr.as_ref())
+        .chain(p.withdrawal.svr.as_ref())
+    {
+        assert!(s.svr.n_sv() <= 32, "{}", s.svr.n_sv());
+    }
+}

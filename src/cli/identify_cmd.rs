@@ -450,12 +450,42 @@ fn print_phases(p: &identify::PhaseModel) {
             l.after.constant_n,
             l.after.per_depth_npm,
         );
+        if l.after.svr.is_some() {
+            println!(
+                "        (after layer {}: an ε-SVR of [depth, velocity], it predicted held-out strokes better)",
+                k + 1
+            );
+        }
     }
     let w = &p.withdrawal;
-    println!(
-        "  withdrawal: F = {:.3} N + {:.1} N/m·d + {:.1} N·s/m·v + {:.0} N·s/m²·d·v",
-        w.constant_n, w.per_depth_npm, w.per_speed_nspm, w.per_depth_speed_nspm2
-    );
+    if w.svr.is_some() {
+        println!("  withdrawal: an ε-SVR of [depth, velocity] (it predicted held-out strokes better)");
+    } else {
+        println!(
+            "  withdrawal: F = {:.3} N + {:.1} N/m·d + {:.1} N·s/m·v + {:.0} N·s/m²·d·v",
+            w.constant_n, w.per_depth_npm, w.per_speed_nspm, w.per_depth_speed_nspm2
+        );
+    }
+}
+
+/// The phase model's parts against an ε-SVR on held-out strokes.
+fn print_parts(r: &Report) {
+    if r.parts.is_empty() {
+        return;
+    }
+    println!("  part (leave one stroke out)   samples strokes  law RMS [N]  SVR RMS [N]  renders");
+    let n = |x: Option<f64>| x.map_or("-".to_owned(), |x| format!("{x:.4}"));
+    for p in &r.parts {
+        println!(
+            "  {:<28} {:>8} {:>7} {:>12} {:>12}  {}",
+            p.part,
+            p.samples,
+            p.strokes,
+            n(p.parametric_rmse_n),
+            n(p.svr_rmse_n),
+            p.uses
+        );
+    }
 }
 
 fn print_table(r: &Report, body: &ModelBody, args: &IdentifyArgs) {
@@ -484,6 +514,7 @@ fn print_table(r: &Report, body: &ModelBody, args: &IdentifyArgs) {
     }
     if let ModelBody::Phases(p) = body {
         print_phases(p);
+        print_parts(r);
         println!(
             "  fit {:.3} s (with the smooth SVR it is compared with)",
             r.fit_seconds

@@ -118,6 +118,7 @@ mod tests {
                 depth_m: d,
                 velocity_mps: v,
             },
+            svr: None,
         }
     }
 
@@ -158,6 +159,7 @@ mod tests {
                     depth_m: [0.0, 0.03],
                     velocity_mps: [-0.01, -0.001],
                 },
+                svr: None,
             },
             hold_band_mps: 2e-4,
         }
