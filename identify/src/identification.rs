@@ -160,8 +160,21 @@ pub struct Report {
     /// strokes, and which one the model renders ([`crate::PartComparison`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub parts: Vec<crate::PartComparison>,
+    /// The phase-aware needle: the same puncture table for the baselines that render
+    /// punctures (Okamura's piecewise model, the smooth SVR).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub baseline_punctures: Vec<BaselinePunctures>,
     /// Needle: every puncture detected in the evaluation capture beside the model's along the
     /// same strokes ([`crate::compare_punctures`]); empty for the friction models.
+    pub punctures: Vec<crate::PunctureComparison>,
+}
+
+/// A baseline's punctures beside the measured ones ([`Report::baseline_punctures`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BaselinePunctures {
+    /// `okamura_piecewise` or `smooth_svr`.
+    pub model: String,
+    /// As [`Report::punctures`].
     pub punctures: Vec<crate::PunctureComparison>,
 }
 
@@ -1047,6 +1060,7 @@ fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         test_out_of_domain: Vec::new(),
         test_out_of_phase_domain: Vec::new(),
         parts: Vec::new(),
+        baseline_punctures: Vec::new(),
         punctures: Vec::new(),
     };
     let mut training = vec![capture_ref(train.source())];

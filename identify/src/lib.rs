@@ -28,8 +28,8 @@ pub use by_kind::{identify, identify_with};
 pub use error::IdentifyError;
 pub use grid_spec::{GridSpecError, MAX_GRID_VALUES};
 pub use identification::{
-    ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits, Identified, IdentifyOptions,
-    MAX_SEGMENT_SAMPLES, OutOfDomain, Report, model_column, model_rows, out_of_domain,
+    BaselinePunctures, ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits, Identified,
+    IdentifyOptions, MAX_SEGMENT_SAMPLES, OutOfDomain, Report, model_column, model_rows, out_of_domain,
 };
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,

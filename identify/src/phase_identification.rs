@@ -127,6 +127,7 @@ pub(crate) fn needle_phases(
         input_range,
     };
     let mut report = smooth.report;
+    let smooth_punctures = std::mem::take(&mut report.punctures);
     report.model = ModelKind::NeedlePhases.short_name().into();
     report.n_train = n_rows;
     report.n_rows = n_rows;
@@ -152,6 +153,22 @@ pub(crate) fn needle_phases(
         report.test_out_of_phase_domain = p.domain_exits(&s.depth_m, &s.velocity_mps);
     }
     report.punctures = compare_punctures(&model, test.unwrap_or(train), &PunctureParams::default())?;
+    // The same puncture table for the baselines that have punctures: Okamura's model (its own
+    // ruptures) and the smooth SVR (the detector on its force).
+    let okamura_file = ModelFile {
+        body: ModelBody::Phases(Box::new(okamura)),
+        ..model.clone()
+    };
+    report.baseline_punctures = vec![
+        crate::identification::BaselinePunctures {
+            model: "okamura_piecewise".into(),
+            punctures: compare_punctures(&okamura_file, test.unwrap_or(train), &PunctureParams::default())?,
+        },
+        crate::identification::BaselinePunctures {
+            model: "smooth_svr".into(),
+            punctures: smooth_punctures,
+        },
+    ];
     Ok(Identified { model, report })
 }
 

@@ -63,6 +63,26 @@ fn both_layers_are_found_and_every_held_out_puncture_is_reproduced() {
         assert!((depth - c.measured_depth_m).abs() < 1e-3, "{c:?}");
         assert!((peak / c.measured_peak_force_n - 1.0).abs() < 0.10, "{c:?}");
     }
+    // The baselines' punctures on the same strokes: neither reproduces as many.
+    let within = |list: &[identify::PunctureComparison]| {
+        list.iter()
+            .filter(|c| {
+                c.predicted_depth_m
+                    .is_some_and(|d| (d - c.measured_depth_m).abs() < 1e-3)
+            })
+            .count()
+    };
+    let names: Vec<&str> = r
+        .report
+        .baseline_punctures
+        .iter()
+        .map(|b| b.model.as_str())
+        .collect();
+    assert_eq!(names, ["okamura_piecewise", "smooth_svr"]);
+    for b in &r.report.baseline_punctures {
+        assert_eq!(b.punctures.len(), 8, "{}", b.model);
+        assert!(within(&b.punctures) < within(&r.report.punctures), "{}", b.model);
+    }
     // Written and read back unchanged; a hand-edited threshold is refused with its field.
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("phases.json");

@@ -558,6 +558,35 @@ fn print_table(r: &Report, body: &ModelBody, args: &IdentifyArgs) {
         );
     }
     print_punctures(r);
+    print_baseline_punctures(r);
+}
+
+/// For each baseline that renders punctures: how many of the measured ones it gives within
+/// 1 mm, and its peak errors there.
+fn print_baseline_punctures(r: &Report) {
+    for b in &r.baseline_punctures {
+        let found: Vec<f64> = b
+            .punctures
+            .iter()
+            .filter_map(|p| {
+                let d = p.predicted_depth_m?;
+                ((d - p.measured_depth_m).abs() < 1e-3)
+                    .then_some(p.predicted_peak_force_n? - p.measured_peak_force_n)
+            })
+            .collect();
+        let worst = found.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+        println!(
+            "  {}: {} of {} punctures within 1 mm{}",
+            b.model.replace('_', " "),
+            found.len(),
+            b.punctures.len(),
+            if found.is_empty() {
+                String::new()
+            } else {
+                format!(", peak error up to {worst:.3} N")
+            }
+        );
+    }
 }
 
 /// Needle: each puncture measured in the evaluation capture beside the model's along the same
