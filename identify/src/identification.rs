@@ -866,6 +866,20 @@ pub(crate) fn spread((t, x, y): &NeedleSamples, max_samples: usize) -> NeedleSam
     )
 }
 
+/// A needle model's inputs, in evaluation order: depth and velocity.
+pub(crate) fn needle_inputs() -> Vec<Quantity> {
+    [kind::DEPTH_M, kind::VELOCITY_MPS]
+        .map(|name| Quantity { name: name.into() })
+        .into()
+}
+
+/// A needle model's output: the axial force.
+pub(crate) fn needle_output() -> Quantity {
+    Quantity {
+        name: kind::AXIAL_FORCE_N.into(),
+    }
+}
+
 pub(crate) fn needle(
     train: &Capture,
     test: Option<&Capture>,
@@ -931,17 +945,8 @@ pub(crate) fn needle(
         kind: ModelKind::NeedlePuncture,
         train,
         test,
-        inputs: vec![
-            Quantity {
-                name: kind::DEPTH_M.into(),
-            },
-            Quantity {
-                name: kind::VELOCITY_MPS.into(),
-            },
-        ],
-        output: Quantity {
-            name: kind::AXIAL_FORCE_N.into(),
-        },
+        inputs: needle_inputs(),
+        output: needle_output(),
         body: ModelBody::Single(model),
         hyper,
         n_train: y.len(),

@@ -14,12 +14,10 @@ use crate::error::IdentifyError;
 use crate::error::check_series;
 use crate::identification::{
     FitLimits, Identified, IdentifyOptions, capture_ref, check_written, metrics, model_column, needle,
-    out_of_domain,
+    needle_inputs, needle_output, out_of_domain,
 };
 use crate::metrics::Metrics;
-use crate::model_file::{
-    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity,
-};
+use crate::model_file::{Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind};
 use crate::phases::{
     Domain, LayerModel, Loading, MAX_LAYERS, PhaseModel, ShaftLaw, Threshold, Varies, fit_linear, fit_terms,
 };
@@ -73,26 +71,22 @@ pub(crate) fn needle_phases(
     // The smooth SVR and its baselines, on the same rows: what the phases must beat.
     let smooth = needle(train, test, o, limits)?;
     let s = series(train)?;
-    let mut phases = identify_phases(
-        train.source(),
-        &s.time_s,
-        &s.depth_m,
-        &s.velocity_mps,
-        &s.force_n,
-        &PunctureParams::default(),
-    )?;
+    let fit = |form| {
+        identify_phases_as(
+            form,
+            train.source(),
+            &s.time_s,
+            &s.depth_m,
+            &s.velocity_mps,
+            &s.force_n,
+            &PunctureParams::default(),
+        )
+    };
+    let mut phases = fit(PhaseForm::Full)?;
     let parts = crate::phase_parts::compare_parts(&mut phases, &s.depth_m, &s.velocity_mps, &s.force_n)?;
     // Okamura's piecewise model on the same data: the published form of what the phases
     // generalise.
-    let okamura = identify_phases_as(
-        PhaseForm::Okamura,
-        train.source(),
-        &s.time_s,
-        &s.depth_m,
-        &s.velocity_mps,
-        &s.force_n,
-        &PunctureParams::default(),
-    )?;
+    let okamura = fit(PhaseForm::Okamura)?;
     let okamura_metrics = metrics_along(&okamura, test.unwrap_or(train))?.0;
     let (train_metrics, n_rows) = metrics_along(&phases, train)?;
     let eval_metrics = match test {
@@ -107,17 +101,8 @@ pub(crate) fn needle_phases(
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION,
         kind: ModelKind::NeedlePhases,
-        inputs: vec![
-            Quantity {
-                name: kind::DEPTH_M.into(),
-            },
-            Quantity {
-                name: kind::VELOCITY_MPS.into(),
-            },
-        ],
-        output: Quantity {
-            name: kind::AXIAL_FORCE_N.into(),
-        },
+        inputs: needle_inputs(),
+        output: needle_output(),
         body: ModelBody::Phases(Box::new(phases)),
         hyperparameters: Hyperparameters::new(Vec::new()),
         training,
