@@ -17,6 +17,10 @@
 //! | re-insertion along the cut channel | `−W(d, −v)` (friction is odd in velocity) | — |
 //! | held (`|v|` within the hold band) | linear between the two friction laws at the band's edges | — |
 //!
+//! A term a phase's samples do not determine is left out ([`Varies`]: depth terms need 3 mm of
+//! depth, speed terms several speeds), and a cutting or withdrawal law may be an ε-SVR
+//! ([`PartSvr`]) where one predicted held-out strokes clearly better ([`crate::PartComparison`]).
+//!
 //! Layers and their events come from [`crate::detect_punctures`] and [`crate::group_layers`]
 //! ([`crate::identify_phases`]);
 //! each contact depth `c_k` is the one, among a grid between the layer before and the layer's
