@@ -50,7 +50,8 @@ pub fn write_fit_plot(
     sets: &[FitSet],
 ) -> Result<(), PlotError> {
     render(path, size, |root| match model.kind {
-        ModelKind::NeedlePuncture | ModelKind::NeedlePhases => needle(root, sets),
+        ModelKind::NeedlePuncture => needle(root, sets, "ε-SVR model at each sample"),
+        ModelKind::NeedlePhases => needle(root, sets, "phase model along each stroke"),
         ModelKind::HardFriction => hard(root, model, sets),
         ModelKind::SoftFriction => soft(root, model, sets),
     })
@@ -96,7 +97,7 @@ fn legend<'a, 'b: 'a>(chart: &mut super::Chart<'a, 'b>) -> Result<(), String> {
         .map_err(err)
 }
 
-fn needle(root: &Area<'_>, sets: &[FitSet]) -> Result<(), String> {
+fn needle(root: &Area<'_>, sets: &[FitSet], model_label: &str) -> Result<(), String> {
     let depth_mm = |s: &FitSet| -> Vec<f64> { s.inputs[0].iter().map(|d| d * 1e3).collect() };
     let depth = range(sets.iter().flat_map(|s| &s.inputs[0]));
     let x = depth.start * 1e3..depth.end * 1e3;
@@ -128,7 +129,7 @@ fn needle(root: &Area<'_>, sets: &[FitSet]) -> Result<(), String> {
         // One legend entry for the model, whichever sets it was evaluated on.
         if k == 0 {
             series
-                .label("ε-SVR model at each sample")
+                .label(model_label)
                 .legend(|(x, y)| Circle::new((x + 10, y), 4, MODEL.filled()));
         }
     }
