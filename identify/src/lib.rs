@@ -42,7 +42,7 @@ pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
 pub use phase_parts::PartComparison;
 pub use phases::{
     Domain, LayerModel, Loading, MAX_LAYERS, PartSvr, Phase, PhaseExit, PhaseModel, PhaseState, PhaseStep,
-    ShaftLaw, Threshold,
+    REVERSAL_MPS, ShaftLaw, Threshold,
 };
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,

@@ -15,7 +15,7 @@
 //! | cutting after layer k (advancing into uncut tissue) | `F_k(d, v) = g0 + g1·d + g2·v + g3·d·v` | advancing samples past the puncture's drop |
 //! | withdrawal | `W(d, v)`, same form | withdrawing samples in tissue |
 //! | re-insertion along the cut channel | `−W(d, −v)` (friction is odd in velocity) | — |
-//! | held (`|v|` within the hold band) | linear between the two friction laws at the band's edges | — |
+//! | held, or reversing (from the hold band on the last side moved to, to [`REVERSAL_MPS`] the other way) | linear in v between the two directions' laws at the band's ends | — |
 //!
 //! A term a phase's samples do not determine is left out ([`Varies`]: depth terms need 3 mm of
 //! depth, speed terms several speeds), and a cutting or withdrawal law may be an ε-SVR
@@ -48,6 +48,14 @@ use svm::{InputScaling, SvrModel};
 
 /// Most layers a model holds.
 pub const MAX_LAYERS: usize = 8;
+
+/// Speed the tool must reach the other way for shaft friction to have fully reversed, m/s
+/// (see [`PhaseModel::step`]). 2 mm/s, the speed over which the app regularises Coulomb
+/// friction on surfaces too: a tool held by a hand under admittance control trembles at up to
+/// about 1 mm/s, and a hard reversal inside that band flips ±0.4 N every few milliseconds;
+/// spread over 2 mm/s, the 0.8 N between the two directions is a 400 N·s/m slope, which a
+/// 0.8 kg virtual tool at 1 kHz renders stably.
+pub const REVERSAL_MPS: f64 = 0.002;
 
 /// How far past a phase's trained range, as a fraction of its width or of its largest
 /// magnitude (whichever is larger: a protocol at one speed has a range of almost no width), an
@@ -343,6 +351,8 @@ pub struct PhaseExit {
 pub struct PhaseState {
     punctured: usize,
     deepest_m: f64,
+    /// The last step it moved, it moved out.
+    backward: bool,
 }
 
 impl PhaseState {
@@ -423,30 +433,47 @@ impl PhaseModel {
         if state.punctured == 0 {
             return out(0.0, Phase::Air, false, true);
         }
-        if v > band {
-            if d > state.deepest_m || ruptured {
-                state.deepest_m = state.deepest_m.max(d);
-                let (f, inside) = self.cutting(state.punctured, d, v);
-                return out(f, Phase::Cutting(state.punctured - 1), ruptured, inside);
-            }
-            let (f, inside) = self.withdrawal.eval(d, -v);
-            return out(-f, Phase::Channel, false, inside);
+        // Shaft friction reverses over a band, not at a point: between the hold band on the
+        // side the tool last moved to and [`REVERSAL_MPS`] on the other side, the force runs
+        // linearly from one direction's law to the other's. A held needle keeps most of the
+        // force it had (static friction holds it), a tool trembling at rest does not flip
+        // ±friction every tick (it chattered), and the force's slope in velocity stays one an
+        // admittance loop renders stably.
+        let reversal = REVERSAL_MPS.max(2.0 * band);
+        let (lo, hi) = if state.backward {
+            (-band, reversal)
+        } else {
+            (-reversal, band)
+        };
+        if v > hi || ruptured {
+            state.backward = false;
+            let (f, phase, inside) = self.forward(state, d, v, true);
+            return out(f, phase, ruptured, inside);
         }
-        if v < -band {
+        if v < lo {
+            state.backward = true;
             let (f, inside) = self.withdrawal.eval(d, v);
             return out(f, Phase::Withdrawal, false, inside);
         }
-        // Held: between withdrawal friction at −band and channel friction at +band, so the
-        // force is continuous through zero speed and does not chatter. Rest is a state every
-        // capture passes through, handled by this rule, not a velocity outside the domain.
-        let (pull, _) = self.withdrawal.eval(d, -band);
-        let w = if band > 0.0 {
-            (v + band) / (2.0 * band)
-        } else {
-            0.5
-        };
-        let inside = Domain::inside(self.withdrawal.domain.depth_m, d);
-        out((1.0 - w) * pull - w * pull, Phase::Held, false, inside)
+        let (f_lo, _) = self.withdrawal.eval(d, lo);
+        let (f_hi, _, _) = self.forward(state, d, hi, false);
+        let w = (v - lo) / (hi - lo);
+        out(f_lo + w * (f_hi - f_lo), Phase::Held, false, true)
+    }
+
+    /// Advancing at `v` past `punctured` layers: cutting into tissue deeper than ever before
+    /// (which then counts as cut when `advance`), else friction along the channel (withdrawal
+    /// friction mirrored: friction is odd in velocity).
+    fn forward(&self, state: &mut PhaseState, d: f64, v: f64, advance: bool) -> (f64, Phase, bool) {
+        if d > state.deepest_m {
+            if advance {
+                state.deepest_m = d;
+            }
+            let (f, inside) = self.cutting(state.punctured, d, v);
+            return (f, Phase::Cutting(state.punctured - 1), inside);
+        }
+        let (f, inside) = self.withdrawal.eval(d, -v);
+        (-f, Phase::Channel, inside)
     }
 
     /// The model run along a recorded trajectory from a fresh site: one step per sample.

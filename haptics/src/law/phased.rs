@@ -218,6 +218,41 @@ mod tests {
     }
 
     #[test]
+    fn a_needle_trembling_at_rest_keeps_its_friction_and_a_real_reversal_flips_it() {
+        let mut law = PhasedNeedleLaw::new(model(), NeedleLawConfig::default());
+        let mut d = 0.0;
+        while d < 0.015 {
+            d += 5e-6;
+            law.step(d, 0.005);
+        }
+        let moving = law.step(d, 0.005).axial_force_n;
+        // ±1 mm/s around rest, as a hand under admittance control trembles: the force never
+        // reaches the withdrawal friction a hard reversal would flip to every other tick.
+        let trembling: Vec<f64> = (0..200)
+            .map(|k| law.step(d, if k % 2 == 0 { 0.001 } else { -0.001 }).axial_force_n)
+            .collect();
+        let (lo, hi) = trembling
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &f| {
+                (a.min(f), b.max(f))
+            });
+        let (pulling, _) = law.model().withdrawal.eval(d, -0.001);
+        assert!(pulling < 0.0);
+        assert!(
+            lo > pulling / 2.0 && hi <= moving + 1e-12,
+            "{lo} {hi}: moving {moving}, withdrawal {pulling}"
+        );
+        // At rest the shaft keeps most of the channel's friction (static friction holds it).
+        let (channel, _) = law.model().withdrawal.eval(d, -0.005);
+        let rest = law.step(d, 0.0).axial_force_n;
+        assert!(rest > -0.5 * channel, "{rest} vs {}", -channel);
+        // Pulling out for real: withdrawal friction, which pulls the needle in.
+        let out = law.step(d - 1e-4, -0.005);
+        assert_eq!(out.state, PunctureState::Withdrawal);
+        assert!(out.axial_force_n < 0.0, "{out:?}");
+    }
+
+    #[test]
     fn a_surge_beyond_the_trained_speeds_is_bounded_and_flagged() {
         let mut law = PhasedNeedleLaw::new(model(), NeedleLawConfig::default());
         let mut d = 0.0;
