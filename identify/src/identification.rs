@@ -329,13 +329,20 @@ impl FrictionData {
     }
 }
 
-pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
-    if c.metadata().kind() != CaptureKind::Rubbing {
-        return Err(IdentifyError::Data {
+/// Refuses a capture of another kind than `expected`, saying what needed it.
+pub(crate) fn require_kind(c: &Capture, expected: CaptureKind, reason: &str) -> Result<(), IdentifyError> {
+    if c.metadata().kind() == expected {
+        Ok(())
+    } else {
+        Err(IdentifyError::Data {
             path: c.source().to_owned(),
-            reason: "friction models need a rubbing capture".into(),
-        });
+            reason: reason.into(),
+        })
     }
+}
+
+pub(crate) fn friction_data(c: &Capture) -> Result<FrictionData, IdentifyError> {
+    require_kind(c, CaptureKind::Rubbing, "friction models need a rubbing capture")?;
     Ok(FrictionData {
         time_s: c.time().to_vec(),
         normal_force_n: c.column(kind::NORMAL_FORCE_N)?.to_vec(),
@@ -828,12 +835,11 @@ pub(crate) fn soft(
 pub(crate) type NeedleSamples = (Vec<f64>, Vec<f64>, Vec<f64>);
 
 pub(crate) fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
-    if c.metadata().kind() != CaptureKind::Insertion {
-        return Err(IdentifyError::Data {
-            path: c.source().to_owned(),
-            reason: "the needle model needs an insertion capture".into(),
-        });
-    }
+    require_kind(
+        c,
+        CaptureKind::Insertion,
+        "the needle model needs an insertion capture",
+    )?;
     let depth = c.column(kind::DEPTH_M)?;
     let force = c.column(kind::AXIAL_FORCE_N)?;
     let vel = velocity(c, kind::VELOCITY_MPS, kind::DEPTH_M)?;

@@ -14,7 +14,7 @@ use crate::error::IdentifyError;
 use crate::error::check_series;
 use crate::identification::{
     FitLimits, Identified, IdentifyOptions, capture_ref, check_written, metrics, model_column, needle,
-    needle_inputs, needle_output, out_of_domain,
+    needle_inputs, needle_output, out_of_domain, require_kind,
 };
 use crate::metrics::Metrics;
 use crate::model_file::{Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind};
@@ -32,12 +32,11 @@ struct Series {
 }
 
 fn series(c: &Capture) -> Result<Series, IdentifyError> {
-    if c.metadata().kind() != CaptureKind::Insertion {
-        return Err(IdentifyError::Data {
-            path: c.source().to_owned(),
-            reason: "the needle model needs an insertion capture".into(),
-        });
-    }
+    require_kind(
+        c,
+        CaptureKind::Insertion,
+        "the needle model needs an insertion capture",
+    )?;
     Ok(Series {
         time_s: c.time().to_vec(),
         depth_m: c.column(kind::DEPTH_M)?.to_vec(),
