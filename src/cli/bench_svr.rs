@@ -168,7 +168,7 @@ pub(crate) struct SvrScaleArgs {
     /// ε, N.
     #[arg(long, default_value_t = 0.02)]
     epsilon: f64,
-    /// Solver: auto, smo or ipm.
+    /// Solver: auto, smo, ipm or low-rank.
     #[arg(long, default_value = "auto")]
     solver: String,
     /// Fit time budget, s.
@@ -219,7 +219,8 @@ pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
         "auto" => Solver::Auto,
         "smo" => Solver::Smo,
         "ipm" => Solver::InteriorPoint,
-        other => anyhow::bail!("--solver {other}: expected auto, smo or ipm"),
+        "low-rank" => Solver::LowRank,
+        other => anyhow::bail!("--solver {other}: expected auto, smo, ipm or low-rank"),
     };
     let capture = capture::Capture::read_file(&args.capture, capture::CaptureKind::Insertion)?;
     let params = SvrParams::builder()

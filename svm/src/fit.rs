@@ -3,6 +3,7 @@
 use std::time::Instant;
 
 use faer::Mat;
+use rayon::prelude::*;
 
 use super::certificate::{self, ACCEPT_GAP, Certificate};
 use super::compensated::Accumulator;
@@ -11,11 +12,13 @@ use super::error::SvmError;
 use super::ipm;
 use super::kernel::Kernel;
 use super::linear_exact;
+use super::low_rank;
 use super::model::SvrModel;
 use super::params::{DualSettings, FitProgress, Solver, SvrParams};
 use super::polish::{self, Side};
 use super::reduce::reduce_support;
 use super::smo;
+use super::smo_finish;
 
 /// Active-set moves allowed to a polish tried during the interior point's run.
 const EARLY_POLISH_ROUNDS: usize = 5;
@@ -127,12 +130,39 @@ pub fn fit_observed(
         fit.fit_seconds = started.elapsed().as_secs_f64();
         return Ok(fit);
     }
+    let n = y.len();
+    let low_rank_tried = match params.solver() {
+        Solver::LowRank => true,
+        Solver::Auto => kernel != Kernel::Linear && n >= low_rank::MIN_SAMPLES,
+        Solver::Smo | Solver::InteriorPoint => false,
+    };
+    let low_rank_solution = if low_rank_tried {
+        solve_low_rank(&kernel, &data, &settings, observer)?
+    } else {
+        None
+    };
     let use_smo = match params.solver() {
         Solver::Smo => true,
         Solver::InteriorPoint => false,
-        Solver::Auto => y.len() > SvrParams::DENSE_LIMIT,
+        Solver::LowRank => {
+            if low_rank_solution.is_none() {
+                return Err(SvmError::Numerical {
+                    solver: low_rank::NAME,
+                    reason: format!(
+                        "the kernel matrix is not within {:e} of a rank ≤ {} matrix, or its interior \
+                         point's active set could not be finished exactly; use another solver",
+                        low_rank::TOLERANCE,
+                        low_rank::max_rank(n)
+                    ),
+                });
+            }
+            false
+        }
+        Solver::Auto => n > SvrParams::DENSE_LIMIT,
     };
-    let solution = if use_smo {
+    let solution = if let Some(solution) = low_rank_solution {
+        solution
+    } else if use_smo {
         let sol = smo::solve_svr(&kernel, &data, &settings, smo::CACHE_BYTES)?;
         DualSolution {
             beta: sol.beta,
@@ -247,6 +277,125 @@ fn solve_dense(
             })
         }
     }
+}
+
+/// The interior point on a pivoted incomplete Cholesky factor of K (`crate::low_rank`), its
+/// active set finished exactly on the kernel itself (`smo_finish`). `Ok(None)` when K is not
+/// low-rank enough for the factor to pay, or when no iterate's active set finishes into a small
+/// enough gap: the caller then solves on the exact kernel from scratch.
+fn solve_low_rank(
+    kernel: &Kernel,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+    observer: &dyn Fn(&FitProgress),
+) -> Result<Option<DualSolution>, SvmError> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let n = y.len();
+    let (c, epsilon) = (settings.c, settings.epsilon);
+    let Some(factor) = low_rank::pivoted_cholesky(kernel, x, dim, low_rank::TOLERANCE, low_rank::max_rank(n))
+    else {
+        return Ok(None);
+    };
+    // The exact Kβ of the last rounded iterate tried: the next one differs from it in few
+    // samples, so its Kβ is an update rather than n × (support vectors) kernel values again.
+    let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
+    let mut last_attempt_gap = f64::INFINITY;
+    let mut attempt = |sol: &ipm::IpmSolution, force: bool| -> Option<smo_finish::Finished> {
+        if !force && sol.gap > 0.1 * last_attempt_gap {
+            return None;
+        }
+        last_attempt_gap = sol.gap;
+        let beta = rounded(sol, c);
+        let k_beta = match &last {
+            Some((old_beta, old_k_beta)) => {
+                let delta: Vec<f64> = beta.iter().zip(old_beta).map(|(a, b)| a - b).collect();
+                let k_delta = low_rank::kernel_times(kernel, x, dim, &delta);
+                old_k_beta.iter().zip(&k_delta).map(|(a, b)| a + b).collect()
+            }
+            None => low_rank::kernel_times(kernel, x, dim, &beta),
+        };
+        // On a factor this close to K the iterate itself is often optimal on K to within the
+        // acceptance gap; where it is not, the exact finish on its active set is.
+        let bias = sol.bias;
+        let own_gap = smo_finish::gap(&beta, &k_beta, bias, y, c, epsilon);
+        let done = if own_gap <= smo::TARGET_GAP {
+            Some(smo_finish::Finished {
+                beta: beta.clone(),
+                bias,
+                gap: own_gap,
+            })
+        } else {
+            smo_finish::finish(kernel, data, settings, &beta, &k_beta, smo::TARGET_GAP)
+                .filter(|f| f.gap <= smo::TARGET_GAP)
+        };
+        last = Some((beta, k_beta));
+        done
+    };
+    let mut finished = None;
+    let solved = ipm::solve(
+        &factor,
+        y,
+        settings,
+        &mut |sol| {
+            finished = attempt(sol, false);
+            finished.is_some()
+        },
+        observer,
+    );
+    let sol = match solved {
+        Ok(sol) => sol,
+        Err(e @ SvmError::Budget { .. }) => return Err(e),
+        Err(_) => return Ok(None),
+    };
+    // An iterate that met the interior point's own criterion gets a last try; one left at
+    // the iteration limit has no settled active set, and a finish from it can cost n³.
+    if finished.is_none() && sol.converged {
+        finished = attempt(&sol, true);
+    }
+    Ok(finished.map(|f| DualSolution {
+        beta: f.beta,
+        bias: f.bias,
+        solver: low_rank::NAME,
+        iterations: sol.iterations,
+        polished: true,
+        kernel_matrix: None,
+        weights: None,
+    }))
+}
+
+/// The interior point's iterate with its active set made exact: β = ±C, 0 or free as
+/// [`classify`] reads it (the free ones strictly inside their half of the box).
+fn rounded(sol: &ipm::IpmSolution, c: f64) -> Vec<f64> {
+    let sides = classify(sol);
+    let mut beta: Vec<f64> = sides
+        .iter()
+        .enumerate()
+        .map(|(i, &side)| {
+            let beta = sol.alpha[i] - sol.alpha_star[i];
+            match side {
+                Side::Inside => 0.0,
+                Side::Above => c,
+                Side::Below => -c,
+                Side::UpperFree => beta.clamp(f64::MIN_POSITIVE, c.next_down()),
+                Side::LowerFree => beta.clamp((-c).next_up(), -f64::MIN_POSITIVE),
+            }
+        })
+        .collect();
+    // Rounding moved Σβ off 0; the free coefficients take the difference back, as long as
+    // they stay on their side of the box.
+    let free: Vec<usize> = (0..beta.len())
+        .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
+        .collect();
+    if !free.is_empty() {
+        let shift = -beta.iter().sum::<f64>() / free.len() as f64;
+        for &i in &free {
+            let moved = beta[i] + shift;
+            if moved != 0.0 && moved.signum() == beta[i].signum() && moved.abs() < c {
+                beta[i] = moved;
+            }
+        }
+    }
+    beta
 }
 
 /// Packages a solution as a model with its certificate, or refuses it when the certificate
@@ -402,6 +551,7 @@ fn certificate_of(
     }
     let support: Vec<usize> = (0..n).filter(|&j| beta[j] != 0.0).collect();
     let k_beta: Vec<Accumulator> = (0..n)
+        .into_par_iter()
         .map(|i| {
             let mut acc = Accumulator::new();
             for &j in &support {

@@ -12,8 +12,11 @@
 //! definite system in `Δβ = Δα − Δα*`: with the barrier terms `Dα = sα/α + tα/(C − α)` (and
 //! likewise `Dα*`), adding the two block rows gives `Dα Δα + Dα* Δα* = rα + rα*`, and
 //! substituting back leaves `(K + H) Δβ + 1 Δλ = g` with `H = Dα Dα* / (Dα + Dα*)`, bordered by
-//! the equality `1ᵀΔβ = −Σβ`. One Cholesky of `K + H` per iteration serves both the predictor
-//! and the corrector.
+//! the equality `1ᵀΔβ = −Σβ`. One factorisation of `K + H` per iteration serves both the
+//! predictor and the corrector.
+//!
+//! K enters only through [`NewtonOperator`]: the dense n × n matrix (one Cholesky per iteration,
+//! O(n³)), or a low-rank factor `GGᵀ` (`crate::low_rank`, O(n r²) per iteration).
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
@@ -68,12 +71,59 @@ struct Direction {
     dlambda: f64,
 }
 
-/// Solves the dual to relative gap `tolerance`. `k` is the n × n kernel matrix.
+/// The kernel matrix as the interior point uses it: products with a vector, and the reduced
+/// Newton matrix `K + diag(h)` factorised and solved.
+pub(crate) trait NewtonOperator {
+    /// A factorisation of `K + diag(h)`.
+    type Factor;
+    /// `out = K v`.
+    fn mat_vec(&self, v: &[f64], out: &mut [f64]);
+    /// `out ≥ |K| v` elementwise for `v ≥ 0` (the scale Kβ's rounding error is relative to).
+    fn mat_vec_abs(&self, v: &[f64], out: &mut [f64]);
+    /// `max |Kᵢᵢ|`.
+    fn diag_max(&self) -> f64;
+    /// `K + diag(h)` factorised, `None` where rounding leaves it indefinite.
+    fn factor(&self, h: &[f64]) -> Option<Self::Factor>;
+    /// `(K + diag(h))⁻¹ rhs` with a factor of this operator.
+    fn solve(&self, factor: &Self::Factor, rhs: &[f64]) -> Vec<f64>;
+}
+
+impl NewtonOperator for Mat<f64> {
+    type Factor = faer::linalg::solvers::Llt<f64>;
+
+    fn mat_vec(&self, v: &[f64], out: &mut [f64]) {
+        mat_vec(self, v, out);
+    }
+
+    fn mat_vec_abs(&self, v: &[f64], out: &mut [f64]) {
+        mat_vec_abs(self, v, out);
+    }
+
+    fn diag_max(&self) -> f64 {
+        (0..self.nrows()).fold(0.0f64, |m, i| m.max(self[(i, i)].abs()))
+    }
+
+    fn factor(&self, h: &[f64]) -> Option<Self::Factor> {
+        let mut m = self.clone();
+        for (i, hi) in h.iter().enumerate() {
+            m[(i, i)] += hi;
+        }
+        m.llt(Side::Lower).ok()
+    }
+
+    fn solve(&self, factor: &Self::Factor, rhs: &[f64]) -> Vec<f64> {
+        let b = Mat::<f64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
+        let x = factor.solve(&b);
+        (0..rhs.len()).map(|i| x[(i, 0)]).collect()
+    }
+}
+
+/// Solves the dual to relative gap `tolerance`, with the kernel matrix `k`.
 ///
 /// Once the gap is below [`EARLY_GAP`], `accept` is shown each iterate; when it returns true
 /// (the caller polished that iterate into a certified optimum) the solve stops there.
-pub(crate) fn solve(
-    k: &Mat<f64>,
+pub(crate) fn solve<K: NewtonOperator>(
+    k: &K,
     y: &[f64],
     settings: &DualSettings,
     accept: &mut dyn FnMut(&IpmSolution) -> bool,
@@ -115,7 +165,7 @@ pub(crate) fn solve(
 
     for iteration in 0..max_iterations {
         let beta: Vec<f64> = (0..n).map(|i| h[0].z[i] - h[1].z[i]).collect();
-        mat_vec(k, &beta, &mut kbeta);
+        k.mat_vec(&beta, &mut kbeta);
         // Residuals of the KKT conditions.
         let rd: [Vec<f64>; 2] = [
             (0..n)
@@ -143,7 +193,7 @@ pub(crate) fn solve(
         // Relative to the terms it balances. Kβ can be small while β ~ C = 1e11 (the terms
         // cancel), so its rounding error is ~ε_mach·Σ|Kᵢⱼβⱼ|, not ~ε_mach·|Kβ|.
         let abs_beta: Vec<f64> = beta.iter().map(|b| b.abs()).collect();
-        mat_vec_abs(k, &abs_beta, &mut kbeta_abs);
+        k.mat_vec_abs(&abs_beta, &mut kbeta_abs);
         let term_scale = p_scale
             + kbeta_abs.iter().fold(0.0f64, |m, v| m.max(*v))
             + lambda.abs()
@@ -215,9 +265,8 @@ pub(crate) fn solve(
             ),
         })?;
         // M x = 1 is the same for predictor and corrector.
-        let ones = Mat::<f64>::from_fn(n, 1, |_, _| 1.0);
-        let m_inv_ones = llt.solve(&ones);
-        let ones_m_inv_ones: f64 = (0..n).map(|i| m_inv_ones[(i, 0)]).sum();
+        let m_inv_ones = k.solve(&llt, &vec![1.0; n]);
+        let ones_m_inv_ones: f64 = m_inv_ones.iter().sum();
 
         let solve_direction = |rzs: &[Vec<f64>; 2], rwt: &[Vec<f64>; 2]| -> Direction {
             // r = −r_d + Z⁻¹ r_zs − W⁻¹ (r_wt + T r_u), per half.
@@ -229,13 +278,13 @@ pub(crate) fn solve(
                     .collect()
             });
             let rs: Vec<f64> = (0..n).map(|i| r[0][i] + r[1][i]).collect();
-            let g = Mat::<f64>::from_fn(n, 1, |i, _| r[0][i] - d[0][i] * rs[i] / (d[0][i] + d[1][i]));
-            let m_inv_g = llt.solve(&g);
-            let sum_g: f64 = (0..n).map(|i| m_inv_g[(i, 0)]).sum();
-            let dlambda = (sum_g + re) / ones_m_inv_ones;
-            let dbeta: Vec<f64> = (0..n)
-                .map(|i| m_inv_g[(i, 0)] - dlambda * m_inv_ones[(i, 0)])
+            let g: Vec<f64> = (0..n)
+                .map(|i| r[0][i] - d[0][i] * rs[i] / (d[0][i] + d[1][i]))
                 .collect();
+            let m_inv_g = k.solve(&llt, &g);
+            let sum_g: f64 = m_inv_g.iter().sum();
+            let dlambda = (sum_g + re) / ones_m_inv_ones;
+            let dbeta: Vec<f64> = (0..n).map(|i| m_inv_g[i] - dlambda * m_inv_ones[i]).collect();
             let dz = [
                 (0..n)
                     .map(|i| (rs[i] + d[1][i] * dbeta[i]) / (d[0][i] + d[1][i]))
@@ -321,21 +370,21 @@ pub(crate) fn solve(
     Ok(finish(h, lambda, max_iterations, gap, false))
 }
 
-/// Cholesky of `K + H + δI`. K is only positive semi-definite (a linear kernel in d dimensions
+/// A factorisation of `K + H + δI`. K is only positive semi-definite (a linear kernel in d dimensions
 /// has rank d) and H can be tiny where both bounds are far, so rounding can leave a pivot ≤ 0;
 /// a small diagonal shift (primal regularisation, as in most interior-point codes) restores
 /// definiteness at the cost of a slightly inexact direction, which later iterations correct.
-fn factorize(k: &Mat<f64>, d: &[Vec<f64>; 2]) -> Option<faer::linalg::solvers::Llt<f64>> {
-    let n = k.nrows();
-    let scale = 1.0 + (0..n).fold(0.0f64, |m, i| m.max(k[(i, i)].abs()));
+fn factorize<K: NewtonOperator>(k: &K, d: &[Vec<f64>; 2]) -> Option<K::Factor> {
+    let scale = 1.0 + k.diag_max();
     let mut shift = 1e-14 * scale;
     while shift < 1e-4 * scale {
-        let mut m = k.clone();
-        for i in 0..n {
-            m[(i, i)] += d[0][i] * d[1][i] / (d[0][i] + d[1][i]) + shift;
-        }
-        if let Ok(llt) = m.llt(Side::Lower) {
-            return Some(llt);
+        let h: Vec<f64> = d[0]
+            .iter()
+            .zip(&d[1])
+            .map(|(a, b)| a * b / (a + b) + shift)
+            .collect();
+        if let Some(factor) = k.factor(&h) {
+            return Some(factor);
         }
         shift *= 100.0;
     }

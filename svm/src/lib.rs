@@ -24,6 +24,7 @@ mod fit;
 mod ipm;
 mod kernel;
 mod linear_exact;
+mod low_rank;
 mod model;
 mod params;
 mod polish;

@@ -9,7 +9,10 @@ use super::kernel::Kernel;
 /// Which optimiser solves the dual.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Solver {
-    /// Interior point for up to [`SvrParams::DENSE_LIMIT`] samples, SMO beyond.
+    /// A linear kernel in few dimensions exactly in the primal; other kernels on the low-rank
+    /// interior point from 1,000 samples on where the kernel matrix is
+    /// numerically low-rank; otherwise the dense interior point for up to
+    /// [`SvrParams::DENSE_LIMIT`] samples, SMO beyond.
     #[default]
     Auto,
     /// Dense primal–dual interior point (Mehrotra), then an exact active-set polish: tens of
@@ -18,6 +21,11 @@ pub enum Solver {
     /// Sequential minimal optimisation with second-order working-set selection (libsvm's
     /// algorithm): O(n) per iteration, scales to large n, slow when C is large.
     Smo,
+    /// The interior point on a pivoted incomplete Cholesky factor `GGᵀ` of the kernel matrix,
+    /// its active set then finished exactly on the kernel: O(n r²) per iteration, for smooth
+    /// kernels on few inputs, whose matrices are numerically low-rank. A typed error where the
+    /// matrix is not.
+    LowRank,
 }
 
 /// Unchecked hyperparameters; [`SvrParamsBuilder::build`] validates them.

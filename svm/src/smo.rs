@@ -772,7 +772,7 @@ pub(crate) const LIBSVM_STOP: f64 = 1e-3;
 /// The relative duality gap the ε-SVR's SMO aims for before it hands its answer to the fit's
 /// certificate: a tenth of what the certificate accepts, so that the certificate's own,
 /// independent evaluation (with its rounding bounds) passes.
-const TARGET_GAP: f64 = 0.1 * crate::ACCEPT_GAP;
+pub(crate) const TARGET_GAP: f64 = 0.1 * crate::ACCEPT_GAP;
 
 /// Relative duality gap `|P + D| / max(1, |P|)` of the split dual's α, read off its gradient:
 /// for the first n variables `∇ₜ = ε − yₜ + (Kβ)ₜ`, so no kernel value is needed.
@@ -838,7 +838,7 @@ pub(crate) fn solve_svr(
         }
         let beta: Vec<f64> = (0..n).map(|i| alpha[i] - alpha[i + n]).collect();
         let k_beta: Vec<f64> = (0..n).map(|i| grad[i] - (epsilon - y[i])).collect();
-        if let Some(f) = super::smo_finish::finish(kernel, x, dim, y, c, epsilon, &beta, &k_beta, TARGET_GAP)
+        if let Some(f) = super::smo_finish::finish(kernel, data, settings, &beta, &k_beta, TARGET_GAP)
             && f.gap <= TARGET_GAP
         {
             finished = Some(f);

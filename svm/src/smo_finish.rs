@@ -14,7 +14,9 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
 
+use super::data::SvrData;
 use super::kernel::Kernel;
+use super::params::DualSettings;
 
 /// Free samples above which no finish is tried: the system's matrix takes `m²` doubles
 /// (4000² · 8 B = 128 MB) and its factorisation `m³` flops.
@@ -55,20 +57,18 @@ const MAX_ROUNDS: usize = 20;
 /// The exact optimum reached from the partition SMO's `β` implies, given `k_beta = Kβ` at that
 /// `β`: a primal–dual active-set method (solve the free samples' system, move every sample
 /// whose coefficient left its box or whose residual left its side of the tube, repeat) for at
-/// most [`MAX_ROUNDS`] rounds. `None` when no round gave a dual-feasible point whose gap is at
+/// most [`MAX_ROUNDS`] rounds, within the fit's time budget. `None` when no round gave a dual-feasible point whose gap is at
 /// most `target_gap`, or the free samples grow beyond [`MAX_FREE`].
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn finish(
     kernel: &Kernel,
-    x: &[f64],
-    dim: usize,
-    y: &[f64],
-    c: f64,
-    epsilon: f64,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
     beta: &[f64],
     k_beta: &[f64],
     target_gap: f64,
 ) -> Option<Finished> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let y_scale = 1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let tol_r = 1e-12 * y_scale;
@@ -91,7 +91,11 @@ pub(crate) fn finish(
     let mut beta = beta.to_vec();
     let mut k_beta = k_beta.to_vec();
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
-    for _ in 0..MAX_ROUNDS {
+    for round in 0..MAX_ROUNDS {
+        // A round solves an m × m system (m up to MAX_FREE): the fit's budget bounds them.
+        if round > 0 && settings.over_budget() {
+            return None;
+        }
         let free: Vec<usize> = (0..n)
             .filter(|&i| matches!(sides[i], Side::Upper | Side::Lower))
             .collect();
@@ -110,9 +114,8 @@ pub(crate) fn finish(
             })
             .collect();
         // Bordered system [K_FF 1; 1ᵀ 0] [β_F; b] = [y_F ∓ ε − (Kβ_bounded)_F; −Σβ_bounded].
-        let k_ff = Mat::<f64>::from_fn(m, m, |r, s| kernel.eval(row(free[r]), row(free[s])));
         let a = Mat::<f64>::from_fn(m + 1, m + 1, |r, s| match (r < m, s < m) {
-            (true, true) => k_ff[(r, s)],
+            (true, true) => kernel.eval(row(free[r]), row(free[s])),
             (true, false) | (false, true) => 1.0,
             (false, false) => 0.0,
         });
@@ -126,25 +129,36 @@ pub(crate) fn finish(
             .filter(|&i| matches!(sides[i], Side::Above | Side::Below))
             .map(|i| new_beta[i])
             .sum();
+        // Solved for the change from the current β_F and a bias b₀ rather than for β_F and b
+        // themselves: near the optimum K_FF is nearly singular (close free samples), and a
+        // solve's error along its near-null directions scales with the size of what it
+        // solves for, which the change keeps tiny.
+        let miss: Vec<f64> = free
+            .iter()
+            .map(|&i| {
+                let moved_part: f64 = moved.iter().map(|&(j, d)| d * kernel.eval(row(i), row(j))).sum();
+                let target = if sides[i] == Side::Upper {
+                    y[i] - epsilon
+                } else {
+                    y[i] + epsilon
+                };
+                target - (k_beta[i] + moved_part)
+            })
+            .collect();
+        let bias0 = miss.iter().sum::<f64>() / m as f64;
+        let free_sum: f64 = free.iter().map(|&i| beta[i]).sum();
         let rhs = Mat::<f64>::from_fn(m + 1, 1, |r, _| {
             if r == m {
-                return -bounded_sum;
-            }
-            let i = free[r];
-            let free_part: f64 = (0..m).map(|s| k_ff[(r, s)] * beta[free[s]]).sum();
-            let moved_part: f64 = moved.iter().map(|&(j, d)| d * kernel.eval(row(i), row(j))).sum();
-            let target = if sides[i] == Side::Upper {
-                y[i] - epsilon
+                -(bounded_sum + free_sum)
             } else {
-                y[i] + epsilon
-            };
-            target - (k_beta[i] + moved_part - free_part)
+                miss[r] - bias0
+            }
         });
         let solution = solve_bordered(&a, &rhs)?;
         for (r, &i) in free.iter().enumerate() {
-            new_beta[i] = solution[r];
+            new_beta[i] = beta[i] + solution[r];
         }
-        let bias = solution[m];
+        let bias = bias0 + solution[m];
         // Kβ at the new β: the old plus every change.
         let delta: Vec<(usize, f64)> = (0..n)
             .filter(|&i| new_beta[i] != beta[i])
@@ -221,7 +235,7 @@ pub(crate) fn finish(
 }
 
 /// Relative duality gap `|P + D| / max(1, |P|)` of (β, b) with `k_beta = Kβ`.
-fn gap(beta: &[f64], k_beta: &[f64], bias: f64, y: &[f64], c: f64, epsilon: f64) -> f64 {
+pub(crate) fn gap(beta: &[f64], k_beta: &[f64], bias: f64, y: &[f64], c: f64, epsilon: f64) -> f64 {
     let (mut quad, mut linear, mut loss) = (0.0, 0.0, 0.0);
     for i in 0..y.len() {
         quad += beta[i] * k_beta[i];
