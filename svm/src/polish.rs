@@ -49,7 +49,11 @@ pub(crate) fn polish(
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    for _round in 0..max_rounds.min(2 * n + 20) {
+    for round in 0..max_rounds.min(2 * n + 20) {
+        // Each round is a dense solve; up to 2n + 20 of them must not outlast the fit's budget.
+        if round > 0 && settings.over_budget() {
+            return None;
+        }
         let free: Vec<usize> = (0..n)
             .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
             .collect();
@@ -235,7 +239,10 @@ pub(crate) fn polish_linear(
     let d = dim;
     let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let row = |i: usize| &x[i * d..(i + 1) * d];
-    for _round in 0..max_rounds.min(2 * n + 20) {
+    for round in 0..max_rounds.min(2 * n + 20) {
+        if round > 0 && settings.over_budget() {
+            return None;
+        }
         let free: Vec<usize> = (0..n)
             .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
             .collect();
