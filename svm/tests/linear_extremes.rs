@@ -15,6 +15,9 @@ use std::collections::HashMap;
 use serde_json::Value;
 use svm::{ACCEPT_GAP, Kernel, SvrParams, fit};
 
+mod common;
+use common::floats;
+
 struct Case {
     dataset: String,
     c: f64,
@@ -24,14 +27,6 @@ struct Case {
     b_hi: f64,
     objective: f64,
     highs_w: Option<f64>,
-}
-
-fn floats(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|e| e.as_f64().unwrap())
-        .collect()
 }
 
 /// Each data set's inputs and targets, by name.

@@ -8,6 +8,9 @@ use std::path::Path;
 use serde_json::Value;
 use svm::{Kernel, Solver, SvrParams, fit};
 
+mod common;
+use common::floats;
+
 fn fixtures() -> Vec<Value> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
     let mut out: Vec<Value> = std::fs::read_dir(&dir)
@@ -21,14 +24,6 @@ fn fixtures() -> Vec<Value> {
         .collect();
     out.sort_by_key(|v| v["name"].as_str().unwrap().to_owned());
     out
-}
-
-fn floats(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
 }
 
 /// A fixture's data and hyperparameters, for `solver`.

@@ -13,13 +13,8 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 use svm::{Kernel, SvmError, SvrParams, fit, slack};
 
-fn floats(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
+mod common;
+use common::floats;
 
 /// Sums with a running compensation (Neumaier), as the fixture's `math.fsum` does exactly.
 fn sum(values: impl Iterator<Item = f64>) -> f64 {

@@ -5,13 +5,8 @@
 use serde_json::Value;
 use svm::{ACCEPT_GAP, Kernel, Solver, SvrParams, fit};
 
-fn floats(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
+mod common;
+use common::floats;
 
 #[test]
 fn smo_and_the_interior_point_agree_on_the_needle() {
