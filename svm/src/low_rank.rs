@@ -32,8 +32,8 @@ pub(crate) const NAME: &str = "low-rank interior point + exact finish";
 pub(crate) const MIN_SAMPLES: usize = 1000;
 
 /// Largest residual diagonal entry of the factor, relative to the kernel's diagonal. A residual
-/// E moves the fitted values by at most `√(Eᵢᵢ · tr E) · ‖β‖` (Cauchy–Schwarz on the PSD E):
-/// at 1e-12, with n = 1e5 samples all at |β| = C = 1e3, that is below 1e-6 of a unit target,
+/// E moves the fitted values by at most `√(Eᵢᵢ · tr E) · ‖β‖ ≤ tolerance · n · C` (Cauchy–Schwarz
+/// on the PSD E): at 1e-14, with n = 1e5 samples all at |β| = C = 1e3, that is 1e-6 of a unit target,
 /// so the factor's active set is the exact kernel's except for samples that close to the tube,
 /// which the exact finish sorts out.
 pub(crate) const TOLERANCE: f64 = 1e-14;
