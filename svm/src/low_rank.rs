@@ -134,54 +134,45 @@ pub(crate) struct LowRankFactor {
 }
 
 impl LowRank {
-    /// `Gᵀ v`.
-    fn transpose_times(&self, v: &[f64]) -> Vec<f64> {
+    /// `φ(G)ᵀ v`, with `φ` applied to each entry of G (identity, or `abs` for a bound).
+    fn transpose_times(&self, v: &[f64], phi: impl Fn(f64) -> f64 + Sync) -> Vec<f64> {
         self.columns
             .par_iter()
-            .map(|g| g.iter().zip(v).map(|(a, b)| a * b).sum())
+            .map(|g| g.iter().zip(v).map(|(a, b)| phi(*a) * b).sum())
             .collect()
     }
 
-    /// `out = G t`.
-    fn times(&self, t: &[f64], out: &mut [f64]) {
+    /// `out = φ(G) t`.
+    fn times(&self, t: &[f64], out: &mut [f64], phi: impl Fn(f64) -> f64 + Sync) {
         out.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
             let start = chunk * CHUNK;
             let end = start + out.len();
             out.fill(0.0);
             for (g, &tk) in self.columns.iter().zip(t) {
                 for (o, gi) in out.iter_mut().zip(&g[start..end]) {
-                    *o += gi * tk;
+                    *o += phi(*gi) * tk;
                 }
             }
         });
     }
 }
 
+fn identity(v: f64) -> f64 {
+    v
+}
+
 impl NewtonOperator for LowRank {
     type Factor = LowRankFactor;
 
     fn mat_vec(&self, v: &[f64], out: &mut [f64]) {
-        let t = self.transpose_times(v);
-        self.times(&t, out);
+        let t = self.transpose_times(v, identity);
+        self.times(&t, out, identity);
     }
 
     fn mat_vec_abs(&self, v: &[f64], out: &mut [f64]) {
         // |GGᵀ| ≤ |G||G|ᵀ elementwise.
-        let t: Vec<f64> = self
-            .columns
-            .par_iter()
-            .map(|g| g.iter().zip(v).map(|(a, b)| a.abs() * b).sum())
-            .collect();
-        out.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
-            let start = chunk * CHUNK;
-            let end = start + out.len();
-            out.fill(0.0);
-            for (g, &tk) in self.columns.iter().zip(&t) {
-                for (o, gi) in out.iter_mut().zip(&g[start..end]) {
-                    *o += gi.abs() * tk;
-                }
-            }
-        });
+        let t = self.transpose_times(v, f64::abs);
+        self.times(&t, out, f64::abs);
     }
 
     fn diag_max(&self) -> f64 {
@@ -231,12 +222,12 @@ impl NewtonOperator for LowRank {
 
     fn solve(&self, factor: &LowRankFactor, rhs: &[f64]) -> Vec<f64> {
         let u: Vec<f64> = rhs.iter().zip(&factor.h_inv).map(|(b, d)| b * d).collect();
-        let t = self.transpose_times(&u);
+        let t = self.transpose_times(&u, identity);
         let t = Mat::<f64>::from_fn(t.len(), 1, |k, _| t[k]);
         let s = factor.capacitance.solve(&t);
         let s: Vec<f64> = (0..s.nrows()).map(|k| s[(k, 0)]).collect();
         let mut gs = vec![0.0; self.n];
-        self.times(&s, &mut gs);
+        self.times(&s, &mut gs, identity);
         u.iter()
             .zip(&gs)
             .zip(&factor.h_inv)
