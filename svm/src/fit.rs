@@ -280,9 +280,11 @@ fn solve_dense(
 }
 
 /// The interior point on a pivoted incomplete Cholesky factor of K (`crate::low_rank`), its
-/// active set finished exactly on the kernel itself (`smo_finish`). `Ok(None)` when K is not
-/// low-rank enough for the factor to pay, or when no iterate's active set finishes into a small
-/// enough gap: the caller then solves on the exact kernel from scratch.
+/// active set finished exactly on the kernel itself (`smo_finish`): first on a factor as loose
+/// as the data allow, then, when that one's active set does not finish, on the tightest
+/// ([`low_rank::tolerances`]). `Ok(None)` when K is not low-rank enough for the factor to pay,
+/// or when no iterate's active set finishes into a small enough gap: the caller then solves on
+/// the exact kernel from scratch.
 fn solve_low_rank(
     kernel: &Kernel,
     data: &SvrData<'_>,
@@ -291,11 +293,29 @@ fn solve_low_rank(
 ) -> Result<Option<DualSolution>, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let n = y.len();
+    let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for tolerance in low_rank::tolerances(n, settings.c, y_scale) {
+        let Some(factor) = low_rank::pivoted_cholesky(kernel, x, dim, tolerance, low_rank::max_rank(n))
+        else {
+            return Ok(None);
+        };
+        if let Some(solution) = solve_on_factor(kernel, data, settings, observer, &factor)? {
+            return Ok(Some(solution));
+        }
+    }
+    Ok(None)
+}
+
+/// [`solve_low_rank`] on one factor.
+fn solve_on_factor(
+    kernel: &Kernel,
+    data: &SvrData<'_>,
+    settings: &DualSettings,
+    observer: &dyn Fn(&FitProgress),
+    factor: &low_rank::LowRank,
+) -> Result<Option<DualSolution>, SvmError> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
-    let Some(factor) = low_rank::pivoted_cholesky(kernel, x, dim, low_rank::TOLERANCE, low_rank::max_rank(n))
-    else {
-        return Ok(None);
-    };
     // The exact Kβ of the last rounded iterate tried: the next one differs from it in few
     // samples, so its Kβ is an update rather than n × (support vectors) kernel values again.
     let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
@@ -333,7 +353,7 @@ fn solve_low_rank(
     };
     let mut finished = None;
     let solved = ipm::solve(
-        &factor,
+        factor,
         y,
         settings,
         &mut |sol| {
