@@ -17,6 +17,10 @@ default cache_size, one thread) fits the same dump. The table: n, our seconds, l
 libsvm / ours, our peak resident memory, support vectors (ours, libsvm's), our certified
 relative duality gap, and the largest difference of the two models' predictions on the
 training inputs (libsvm stops at a KKT violation of 1e-3, so a few 1e-3 N is expected).
+
+A fit that takes under a second is timed five times, on both sides, and the fastest is kept (as
+Python's timeit advises): at n = 350 both take milliseconds, and one run's scheduling noise
+moved the ratio between 4.0× and 6.9×.
 """
 import argparse
 import os
@@ -33,7 +37,20 @@ from sklearn.svm import SVR  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 
 
+REPEAT_BELOW_S = 1.0
+REPEATS = 5
+
+
 def ours(palpus, capture, n, dump, budget_s):
+    first = ours_once(palpus, capture, n, dump, budget_s)
+    if "error" in first or first["s"] >= REPEAT_BELOW_S:
+        return first
+    runs = [first] + [ours_once(palpus, capture, n, dump, budget_s) for _ in range(REPEATS - 1)]
+    runs = [r for r in runs if "error" not in r]
+    return min(runs, key=lambda r: r["s"])
+
+
+def ours_once(palpus, capture, n, dump, budget_s):
     run = subprocess.run(
         [palpus, "bench", "svr-scale", "--capture", str(capture), "--sizes", str(n),
          "--dump", str(dump), "--budget-s", str(budget_s)],
@@ -55,6 +72,11 @@ def libsvm(path, c, gamma, eps):
     t = time.perf_counter()
     m.fit(x, y)
     dt = time.perf_counter() - t
+    if dt < REPEAT_BELOW_S:
+        for _ in range(REPEATS - 1):
+            t = time.perf_counter()
+            m.fit(x, y)
+            dt = min(dt, time.perf_counter() - t)
     diff = float(np.abs(m.predict(x) - d[:, 3]).max())
     return {"s": dt, "svs": len(m.support_), "diff": diff}
 
