@@ -19,8 +19,8 @@ relative duality gap, and the largest difference of the two models' predictions 
 training inputs (libsvm stops at a KKT violation of 1e-3, so a few 1e-3 N is expected).
 
 A fit that takes under a second is timed five times, on both sides, and the fastest is kept (as
-Python's timeit advises): at n = 350 both take milliseconds, and one run's scheduling noise
-moved the ratio between 4.0× and 6.9×.
+Python's timeit advises): at n = 350 both take milliseconds, and single-timed runs moved the
+ratio between 4.0× and 7.3× with scheduling noise.
 """
 import argparse
 import os
