@@ -47,3 +47,9 @@ impl<'a> SvrData<'a> {
         Ok(Self { x, dim, y })
     }
 }
+
+/// `1 + max|yᵢ|`: the scale the solvers measure residuals and tolerances on, so that they mean
+/// the same for targets in newtons or in millinewtons.
+pub(crate) fn target_scale(y: &[f64]) -> f64 {
+    1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}

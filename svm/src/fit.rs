@@ -293,7 +293,7 @@ fn solve_low_rank(
 ) -> Result<Option<DualSolution>, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let n = y.len();
-    let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let y_scale = super::data::target_scale(y);
     for tolerance in low_rank::tolerances(n, settings.c, y_scale) {
         let Some(factor) = low_rank::pivoted_cholesky(kernel, x, dim, tolerance, low_rank::max_rank(n))
         else {

@@ -48,7 +48,7 @@ pub(crate) fn polish(
 ) -> Option<Polished> {
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
-    let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let y_scale = super::data::target_scale(y);
     for round in 0..max_rounds.min(2 * n + 20) {
         // Each round is a dense solve; up to 2n + 20 of them must not outlast the fit's budget.
         if round > 0 && settings.over_budget() {
@@ -237,7 +237,7 @@ pub(crate) fn polish_linear(
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let d = dim;
-    let y_scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let y_scale = super::data::target_scale(y);
     let row = |i: usize| &x[i * d..(i + 1) * d];
     for round in 0..max_rounds.min(2 * n + 20) {
         if round > 0 && settings.over_budget() {

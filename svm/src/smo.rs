@@ -808,7 +808,7 @@ pub(crate) fn solve_svr(
     let (x, dim, y) = (data.x, data.dim, data.y);
     let n = y.len();
     let (c, epsilon) = (settings.c, settings.epsilon);
-    let y_scale = 1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let y_scale = super::data::target_scale(y);
     let floor = 1e2 * settings.tolerance * y_scale;
     let smo = SmoSettings::builder()
         .c(c)

@@ -70,7 +70,7 @@ pub(crate) fn finish(
     let (x, dim, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
-    let y_scale = 1.0 + y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let y_scale = super::data::target_scale(y);
     let tol_r = 1e-12 * y_scale;
     let mut sides: Vec<Side> = beta
         .iter()
