@@ -191,10 +191,12 @@ impl NewtonOperator for LowRank {
         self.times(&t, out, identity);
     }
 
-    fn mat_vec_abs(&self, v: &[f64], out: &mut [f64]) {
+    fn mat_vec_with_abs(&self, v: &[f64], out: &mut [f64], out_abs: &mut [f64]) {
+        self.mat_vec(v, out);
         // |GGᵀ| ≤ |G||G|ᵀ elementwise.
-        let t = self.transpose_times(v, f64::abs);
-        self.times(&t, out, f64::abs);
+        let abs_v: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+        let t = self.transpose_times(&abs_v, f64::abs);
+        self.times(&t, out_abs, f64::abs);
     }
 
     fn diag_max(&self) -> f64 {
@@ -203,7 +205,7 @@ impl NewtonOperator for LowRank {
             .fold(0.0, f64::max)
     }
 
-    fn factor(&self, h: &[f64]) -> Option<LowRankFactor> {
+    fn factor(&self, h: &[f64], _spare: Option<LowRankFactor>) -> Option<LowRankFactor> {
         let r = self.rank();
         let h_inv: Vec<f64> = h.iter().map(|v| 1.0 / v).collect();
         if h_inv.iter().any(|v| !v.is_finite() || *v <= 0.0) {
@@ -242,6 +244,16 @@ impl NewtonOperator for LowRank {
         Some(LowRankFactor { h_inv, capacitance })
     }
 
+    fn solve_columns(&self, factor: &LowRankFactor, columns: &mut [f64]) {
+        for column in columns.chunks_mut(self.n.max(1)) {
+            let x = self.solve(factor, column);
+            column.copy_from_slice(&x);
+        }
+    }
+}
+
+impl LowRank {
+    /// `(D + GGᵀ)⁻¹ rhs` by Woodbury, through the capacitance factor.
     fn solve(&self, factor: &LowRankFactor, rhs: &[f64]) -> Vec<f64> {
         let u: Vec<f64> = rhs.iter().zip(&factor.h_inv).map(|(b, d)| b * d).collect();
         let t = self.transpose_times(&u, identity);
@@ -334,7 +346,7 @@ mod tests {
         let n = 300;
         let h: Vec<f64> = (0..n).map(|i| 10f64.powi((i % 9) as i32 - 6)).collect();
         let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let factor = lr.factor(&h).unwrap();
+        let factor = lr.factor(&h, None).unwrap();
         let sol = lr.solve(&factor, &rhs);
         // Residual of (GGᵀ + diag h) sol = rhs, on the factor itself.
         let mut k_sol = vec![0.0; n];

@@ -60,7 +60,19 @@ fn low_rank_and_dense_interior_points_agree() {
         .map(|r| (low.model.predict(r) - dense.model.predict(r)).abs())
         .fold(0.0f64, f64::max);
     assert!(worst < 1e-3, "predictions differ by {worst}");
-    assert_eq!(low.model.n_sv(), dense.model.n_sv());
+    // Both are certified to 1e-6, not to the last bit, so only samples whose residual lies
+    // within the two models' distance of the tube's edge may be a support vector in one and
+    // not the other: strictly inside (β = 0) or outside (|β| = C) both fits alike otherwise.
+    let at_edge = x
+        .chunks_exact(2)
+        .zip(&y)
+        .filter(|(r, yi)| ((*yi - dense.model.predict(r)).abs() - 0.02).abs() <= worst)
+        .count();
+    let differ = low.model.n_sv().abs_diff(dense.model.n_sv());
+    assert!(
+        differ <= at_edge,
+        "{differ} support vectors differ, {at_edge} samples at the edge"
+    );
 }
 
 #[test]
