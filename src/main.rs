@@ -4,8 +4,11 @@ use clap::Parser;
 use palpus::cli::{Cli, describe, run};
 
 fn main() -> ExitCode {
+    // Parsed first: clap ends the process itself on `--help` and on bad arguments, which
+    // would leave the directory behind.
+    let cli = Cli::parse();
     let quiet = QuietRuntimeDir::install();
-    let code = match run(Cli::parse()) {
+    let code = match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {}", describe(&error));
