@@ -31,7 +31,8 @@ fn main() -> ExitCode {
 /// though nothing is wrong. With the variable naming an empty directory the connection attempt
 /// finds no socket and fails silently; the device is chosen as before, and a window falls back
 /// to X11 exactly as it does without the variable (a Wayland socket lives in that directory).
-/// The directory is private (0700), so no one else can put a socket there, and removed at exit.
+/// The directory is private (0700), so no one else can put a socket there, and removed at exit
+/// (or, after a kill, by the next start).
 struct QuietRuntimeDir {
     dir: std::path::PathBuf,
 }
@@ -60,12 +61,42 @@ impl QuietRuntimeDir {
         // SAFETY: the first thing `main` does, before any other thread exists, so nothing can
         // read the environment while it is written.
         unsafe { std::env::set_var(VAR, &dir) };
+        remove_stale(&base);
         Some(Self { dir })
     }
 
     #[cfg(not(unix))]
     fn install() -> Option<Self> {
         None
+    }
+}
+
+/// A process ended by a signal (Ctrl-C, a kill) never reaches [`Drop`], so its directory stays:
+/// each start removes those of processes that no longer exist. Only empty directories go, and
+/// the temporary folder's sticky bit keeps other users' out of reach. Where `/proc` is missing a
+/// live process cannot be told from a dead one, and nothing is removed.
+#[cfg(unix)]
+fn remove_stale(base: &std::path::Path) {
+    let proc = std::path::Path::new("/proc");
+    if !proc.join("self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(base) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix("palpus-runtime-"))
+            .and_then(|rest| rest.split_once('-'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid != std::process::id() && !proc.join(pid.to_string()).exists() {
+            let _ = std::fs::remove_dir(entry.path());
+        }
     }
 }
 

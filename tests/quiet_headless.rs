@@ -51,3 +51,48 @@ fn headless_render_without_a_session_is_quiet() {
         .collect();
     assert!(left.is_empty(), "left in the temporary folder: {left:?}");
 }
+
+#[test]
+fn runtime_directories_are_not_left_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let palpus = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_palpus"))
+            .args(args)
+            .env("TMPDIR", tmp)
+            .env("PALPUS_CACHE_DIR", tmp.join("cache"))
+            .env_remove("XDG_RUNTIME_DIR")
+            .output()
+            .unwrap()
+    };
+    let left = || -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(tmp)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("palpus-runtime-"))
+            .collect();
+        names.sort();
+        names
+    };
+    // clap ends the process itself on --help and on bad arguments.
+    assert!(palpus(&["--help"]).status.success());
+    assert!(!palpus(&["--no-such-option"]).status.success());
+    assert_eq!(left(), Vec::<String>::new());
+
+    // One left by a process that died without cleaning up, one of a live process (this one).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
+        .arg("--version")
+        .spawn()
+        .unwrap();
+    let dead_pid = child.id();
+    child.wait().unwrap();
+    let dead = format!("palpus-runtime-{dead_pid}-0");
+    let live = format!("palpus-runtime-{}-0", std::process::id());
+    std::fs::create_dir(tmp.join(&dead)).unwrap();
+    std::fs::create_dir(tmp.join(&live)).unwrap();
+    let o = palpus(&["identify", "no-such-capture.csv", "--model", "needle"]);
+    assert!(!o.status.success());
+    if std::path::Path::new("/proc/self").exists() {
+        assert_eq!(left(), vec![live]);
+    }
+}
