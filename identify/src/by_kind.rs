@@ -3,9 +3,11 @@
 
 use capture::Capture;
 
+use crate::contact_identification::{hard, soft};
 use crate::error::IdentifyError;
-use crate::identification::{FitLimits, Identified, IdentifyOptions, hard, needle, soft};
+use crate::identification::{FitLimits, Identified, IdentifyOptions};
 use crate::model_file::ModelKind;
+use crate::needle_identification::needle;
 use crate::phase_identification::needle_phases;
 
 /// Identifies `options.kind` from `train`, evaluating on `test` when given (else on `train`).

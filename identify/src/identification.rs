@@ -1,5 +1,8 @@
-//! Li & Bi's three identifications (Sec. II-B, III-B–D), each compared with the baselines on
-//! held-out data.
+//! What Li & Bi's three identifications (Sec. II-B, III-B–D) share: their options and report,
+//! the capture columns they read, the SVR fits with their limits, and the model file and report
+//! each one ends in ([`finish`]). The fits themselves are in `contact_identification` (hard and
+//! soft contact) and `needle_identification` (needle puncture); each is compared with the
+//! baselines on held-out data.
 //!
 //! - **Hard contact**: friction against normal force with a linear kernel; the paper's
 //!   C = 1e11, ε = 0.003 kgf are the defaults, solved in SI as the identical scaled problem
@@ -25,7 +28,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use crate::baselines::{CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
+use crate::baselines::{RbfNetwork, RbfNetworkParams};
 use crate::error::IdentifyError;
 use crate::metrics::Metrics;
 use capture::kind;
@@ -277,7 +280,11 @@ pub fn model_column(c: &Capture, name: &str) -> Result<Vec<f64>, IdentifyError> 
     }
 }
 
-fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result<Vec<f64>, IdentifyError> {
+pub(crate) fn velocity(
+    c: &Capture,
+    velocity_column: &str,
+    position_column: &str,
+) -> Result<Vec<f64>, IdentifyError> {
     if c.has_column(velocity_column) {
         return Ok(c.column(velocity_column)?.to_vec());
     }
@@ -290,7 +297,7 @@ fn velocity(c: &Capture, velocity_column: &str, position_column: &str) -> Result
 }
 
 /// The training capture's friction data, and the test capture's when there is one.
-fn train_and_test_data(
+pub(crate) fn train_and_test_data(
     train: &Capture,
     test: Option<&Capture>,
 ) -> Result<(FrictionData, Option<FrictionData>), IdentifyError> {
@@ -479,7 +486,7 @@ pub(crate) fn capture_ref(path: &Path) -> CaptureRef {
     }
 }
 
-fn scaled(svr: svm::SvrModel, scaling: InputScaling) -> ScaledSvr {
+pub(crate) fn scaled(svr: svm::SvrModel, scaling: InputScaling) -> ScaledSvr {
     ScaledSvr {
         scaling,
         output_scale: 1.0,
@@ -487,7 +494,7 @@ fn scaled(svr: svm::SvrModel, scaling: InputScaling) -> ScaledSvr {
     }
 }
 
-fn range(x: &[f64], dim: usize) -> Vec<[f64; 2]> {
+pub(crate) fn range(x: &[f64], dim: usize) -> Vec<[f64; 2]> {
     (0..dim)
         .map(|k| {
             let col = x.iter().skip(k).step_by(dim);
@@ -500,7 +507,7 @@ fn range(x: &[f64], dim: usize) -> Vec<[f64; 2]> {
 }
 
 /// The RBF-network baseline fitted on (`x_train`, `y_train`) and evaluated at `x_eval`.
-fn rbf_network(
+pub(crate) fn rbf_network(
     x_train: &[f64],
     dim: usize,
     y_train: &[f64],
@@ -521,495 +528,44 @@ fn rbf_network(
     .map_err(baseline)
 }
 
-/// Both baselines for friction data, evaluated on `eval`. The RBF network sees the inputs the
-/// SVR model sees: normal force alone for hard contact (whose law ignores speed, and whose
-/// held-out trajectory runs at other speeds), normal force and speed for soft contact.
-fn friction_baselines(
-    tr: &FrictionData,
-    eval: &FrictionData,
-    with_speed: bool,
-) -> Result<(Metrics, Metrics), IdentifyError> {
-    let cv =
-        CoulombViscous::fit(&tr.normal_force_n, &tr.velocity_mps, &tr.friction_force_n).map_err(|e| {
-            IdentifyError::Baseline {
-                what: "Coulomb+viscous",
-                source: Box::new(e),
-            }
-        })?;
-    let cv_pred: Vec<f64> = (0..eval.time_s.len())
-        .map(|i| cv.predict(eval.normal_force_n[i], eval.velocity_mps[i]))
-        .collect();
-    let inputs = |d: &FrictionData| -> Vec<f64> {
-        (0..d.time_s.len())
-            .flat_map(|i| {
-                if with_speed {
-                    vec![d.normal_force_n[i], d.velocity_mps[i]]
-                } else {
-                    vec![d.normal_force_n[i]]
-                }
-            })
-            .collect()
-    };
-    let (x_tr, x_ev) = (inputs(tr), inputs(eval));
-    let dim = if with_speed { 2 } else { 1 };
-    let net_pred = rbf_network(&x_tr, dim, &tr.friction_force_n, &x_ev)?;
-    Ok((
-        metrics(&eval.time_s, &eval.friction_force_n, &cv_pred)?,
-        metrics(&eval.time_s, &eval.friction_force_n, &net_pred)?,
-    ))
-}
-
-pub(crate) fn hard(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
-    let started = Instant::now();
-    let (all, held_out) = train_and_test_data(train, test)?;
-    let tr = all.thinned(o.max_fit_samples);
-    let ev = held_out.as_ref().unwrap_or(&all);
-    let (c, epsilon) = (o.c.unwrap_or(1e11 / KGF_N), o.epsilon.unwrap_or(0.003 * KGF_N));
-    let f = svr_with(
-        limits,
-        "hard-contact SVR",
-        SvrProblem {
-            c,
-            epsilon,
-            kernel: Kernel::Linear,
-            x: &tr.normal_force_n,
-            dim: 1,
-            y: &tr.friction_force_n,
-        },
-    )?;
-    let w = f.model.linear_weights().map(|w| w[0]);
-    let b = f.model.bias;
-    let model = scaled(f.model.clone(), InputScaling::identity(1));
-    let predict = |d: &FrictionData| -> Result<Metrics, IdentifyError> {
-        let predicted: Vec<f64> = d.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
-        metrics(&d.time_s, &d.friction_force_n, &predicted)
-    };
-    let train_metrics = predict(&all)?;
-    let svr_metrics = match &held_out {
-        Some(t) => predict(t)?,
-        None => train_metrics,
-    };
-    let (cv, net) = friction_baselines(&tr, ev, false)?;
-    let hyper = vec![SvrHyper {
-        label: "svr".into(),
-        c,
-        epsilon,
-        kernel: Kernel::Linear,
-    }];
-    finish(Fitted {
-        kind: ModelKind::HardFriction,
-        train,
-        test,
-        inputs: vec![Quantity {
-            name: kind::NORMAL_FORCE_N.into(),
-        }],
-        output: Quantity {
-            name: kind::FRICTION_FORCE_N.into(),
-        },
-        body: ModelBody::Single(model),
-        hyper,
-        n_train: tr.len(),
-        n_rows: all.len(),
-        n_fit_rows: tr.len(),
-        train_metrics,
-        svr_metrics,
-        coulomb_viscous: Some(cv),
-        coulomb_viscous_stiffness: None,
-        rbf_network: net,
-        fits: &[&f],
-        started,
-        input_range: range(&all.normal_force_n, 1),
-        w,
-        b: Some(b),
-        stage1: Vec::new(),
-    })
-}
-
-/// The first soft-contact stage: one linear ε-SVR per constant-speed segment.
-pub(crate) struct StageOne {
-    /// (mean measured speed m/s, w, m N) per segment.
-    pub(crate) points: Vec<[f64; 3]>,
-    /// The fits behind them.
-    pub(crate) fits: Vec<SvrFit>,
-    /// Sample indices of each segment.
-    pub(crate) segments: Vec<Vec<usize>>,
-    /// Rows the fits trained on, all segments together (at most [`MAX_SEGMENT_SAMPLES`] each).
-    pub(crate) fit_rows: usize,
-}
-
-/// Stage 1 of the soft contact: friction against normal force per constant-speed segment,
-/// with the paper's hard-contact hyperparameters (the same sensor measures both).
-pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, IdentifyError> {
-    let Some(commanded) = &tr.commanded_mps else {
-        return Err(IdentifyError::Data {
-            path: source.to_owned(),
-            reason:
-                "soft-contact identification needs constant-speed segments (column commanded_velocity_mps)"
-                    .into(),
-        });
-    };
-    let mut speeds: Vec<f64> = Vec::new();
-    for &v in commanded {
-        if !speeds.contains(&v) {
-            speeds.push(v);
-        }
-    }
-    let (c1, eps1) = (1e11 / KGF_N, 0.003 * KGF_N);
-    let mut out = StageOne {
-        points: Vec::new(),
-        fits: Vec::new(),
-        segments: Vec::new(),
-        fit_rows: 0,
-    };
-    for &v in &speeds {
-        let idx: Vec<usize> = (0..commanded.len()).filter(|&i| commanded[i] == v).collect();
-        if idx.len() < 3 {
-            continue;
-        }
-        let fit_idx: Vec<usize> = even_indices(idx.len(), MAX_SEGMENT_SAMPLES)
-            .into_iter()
-            .map(|k| idx[k])
-            .collect();
-        let p: Vec<f64> = fit_idx.iter().map(|&i| tr.normal_force_n[i]).collect();
-        let f: Vec<f64> = fit_idx.iter().map(|&i| tr.friction_force_n[i]).collect();
-        let speed = idx.iter().map(|&i| tr.velocity_mps[i]).sum::<f64>() / idx.len() as f64;
-        let fitted = svr(
-            &format!("stage-1 SVR at {v} m/s"),
-            SvrProblem {
-                c: c1,
-                epsilon: eps1,
-                kernel: Kernel::Linear,
-                x: &p,
-                dim: 1,
-                y: &f,
-            },
-        )?;
-        let w = fitted.model.linear_weights().map_or(0.0, |w| w[0]);
-        out.points.push([speed, w, fitted.model.bias]);
-        out.fits.push(fitted);
-        out.fit_rows += fit_idx.len();
-        out.segments.push(idx);
-    }
-    if out.points.len() < 3 {
-        return Err(IdentifyError::Data {
-            path: source.to_owned(),
-            reason: format!(
-                "{} constant-speed segments with ≥ 3 samples; the second stage needs at least 3",
-                out.points.len()
-            ),
-        });
-    }
-    Ok(out)
-}
-
-pub(crate) fn soft(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
-    let started = Instant::now();
-    let (all, held_out) = train_and_test_data(train, test)?;
-    let tr = all.thinned(o.max_fit_samples);
-    let ev = held_out.as_ref().unwrap_or(&all);
-    let StageOne {
-        points: stage1,
-        fits,
-        fit_rows,
-        ..
-    } = stage_one(&tr, train.source())?;
-    // Stage 2: RBF ε-SVRs of speed for w and m, on speeds scaled to [0, 1].
-    let v: Vec<f64> = stage1.iter().map(|s| s[0]).collect();
-    let scaling = InputScaling::min_max(&v, 1);
-    let v_scaled = scaling.apply(&v);
-    let (c2, gamma) = (o.c.unwrap_or(100.0), o.gamma.unwrap_or(2.0));
-    let eps_w = o.epsilon.unwrap_or(0.002);
-    let eps_m = o.epsilon.unwrap_or(0.002);
-    let ws: Vec<f64> = stage1.iter().map(|s| s[1]).collect();
-    let ms: Vec<f64> = stage1.iter().map(|s| s[2]).collect();
-    let fw = svr_with(
-        limits,
-        "slope SVR w(v)",
-        SvrProblem {
-            c: c2,
-            epsilon: eps_w,
-            kernel: Kernel::Rbf { gamma },
-            x: &v_scaled,
-            dim: 1,
-            y: &ws,
-        },
-    )?;
-    let fm = svr_with(
-        limits,
-        "intercept SVR m(v)",
-        SvrProblem {
-            c: c2,
-            epsilon: eps_m,
-            kernel: Kernel::Rbf { gamma },
-            x: &v_scaled,
-            dim: 1,
-            y: &ms,
-        },
-    )?;
-    let body = ModelBody::TwoStage {
-        slope: scaled(fw.model.clone(), scaling.clone()),
-        intercept: scaled(fm.model.clone(), scaling),
-    };
-    let model_eval = |d: &FrictionData| -> Vec<f64> {
-        let mf = ModelFile::predict_body(&body);
-        (0..d.time_s.len())
-            .map(|i| mf(&[d.velocity_mps[i], d.normal_force_n[i]]))
-            .collect()
-    };
-    let train_metrics = metrics(&all.time_s, &all.friction_force_n, &model_eval(&all))?;
-    let svr_metrics = match &held_out {
-        Some(t) => metrics(&t.time_s, &t.friction_force_n, &model_eval(t))?,
-        None => train_metrics,
-    };
-    let (cv, net) = friction_baselines(&tr, ev, true)?;
-    let hyper = vec![
-        SvrHyper {
-            label: "stage1".into(),
-            c: 1e11 / KGF_N,
-            epsilon: 0.003 * KGF_N,
-            kernel: Kernel::Linear,
-        },
-        SvrHyper {
-            label: "slope".into(),
-            c: c2,
-            epsilon: eps_w,
-            kernel: Kernel::Rbf { gamma },
-        },
-        SvrHyper {
-            label: "intercept".into(),
-            c: c2,
-            epsilon: eps_m,
-            kernel: Kernel::Rbf { gamma },
-        },
-    ];
-    let mut all_fits = vec![&fw, &fm];
-    all_fits.extend(fits.iter());
-    let x_range: Vec<f64> = (0..all.len())
-        .flat_map(|i| [all.velocity_mps[i], all.normal_force_n[i]])
-        .collect();
-    finish(Fitted {
-        kind: ModelKind::SoftFriction,
-        train,
-        test,
-        inputs: vec![
-            Quantity {
-                name: kind::TANGENTIAL_VELOCITY_MPS.into(),
-            },
-            Quantity {
-                name: kind::NORMAL_FORCE_N.into(),
-            },
-        ],
-        output: Quantity {
-            name: kind::FRICTION_FORCE_N.into(),
-        },
-        body,
-        hyper,
-        n_train: stage1.len(),
-        n_rows: all.len(),
-        n_fit_rows: fit_rows,
-        train_metrics,
-        svr_metrics,
-        coulomb_viscous: Some(cv),
-        coulomb_viscous_stiffness: None,
-        rbf_network: net,
-        fits: &all_fits,
-        started,
-        input_range: range(&x_range, 2),
-        w: None,
-        b: None,
-        stage1,
-    })
-}
-
-/// In-tissue samples of an insertion capture: time, [depth, velocity] row-major, force.
-pub(crate) type NeedleSamples = (Vec<f64>, Vec<f64>, Vec<f64>);
-
-pub(crate) fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
-    require_kind(
-        c,
-        CaptureKind::Insertion,
-        "the needle model needs an insertion capture",
-    )?;
-    let depth = c.column(kind::DEPTH_M)?;
-    let force = c.column(kind::AXIAL_FORCE_N)?;
-    let vel = velocity(c, kind::VELOCITY_MPS, kind::DEPTH_M)?;
-    let idx: Vec<usize> = (0..c.len()).filter(|&i| depth[i] > 0.0).collect();
-    if idx.len() < 10 {
-        return Err(IdentifyError::Data {
-            path: c.source().to_owned(),
-            reason: format!("only {} samples in tissue", idx.len()),
-        });
-    }
-    Ok((
-        idx.iter().map(|&i| c.time()[i]).collect(),
-        idx.iter().flat_map(|&i| [depth[i], vel[i]]).collect(),
-        idx.iter().map(|&i| force[i]).collect(),
-    ))
-}
-
-/// Up to `max_samples` of the in-tissue samples, spread evenly over them (the paper trains on
-/// 350). Identification and the hyperparameter search train on exactly this set.
-pub(crate) fn spread((t, x, y): &NeedleSamples, max_samples: usize) -> NeedleSamples {
-    let n_all = y.len();
-    let n = max_samples.clamp(2, n_all.max(2));
-    let pick: Vec<usize> = (0..n)
-        .map(|k| ((k as f64) * n_all.saturating_sub(1) as f64 / (n - 1) as f64).round() as usize)
-        .collect();
-    (
-        pick.iter().map(|&i| t[i]).collect(),
-        pick.iter().flat_map(|&i| [x[2 * i], x[2 * i + 1]]).collect(),
-        pick.iter().map(|&i| y[i]).collect(),
-    )
-}
-
-/// A needle model's inputs, in evaluation order: depth and velocity.
-pub(crate) fn needle_inputs() -> Vec<Quantity> {
-    [kind::DEPTH_M, kind::VELOCITY_MPS]
-        .map(|name| Quantity { name: name.into() })
-        .into()
-}
-
-/// A needle model's output: the axial force.
-pub(crate) fn needle_output() -> Quantity {
-    Quantity {
-        name: kind::AXIAL_FORCE_N.into(),
-    }
-}
-
-pub(crate) fn needle(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
-    let started = Instant::now();
-    let all = needle_data(train)?;
-    let (_, x, y) = spread(&all, o.max_samples.min(o.max_fit_samples));
-    let (t_all, x_all, y_all) = all;
-    let scaling = InputScaling::min_max(&x, 2);
-    let xs = scaling.apply(&x);
-    // γ = 30 on inputs scaled to [0, 1]: narrow enough to follow the puncture's fall, which
-    // a wider kernel smears over the neighbouring depths (held-out AISE 1.3e-2 against 3.1e-2
-    // at γ = 10 on the default capture set).
-    let (c, epsilon, gamma) = (
-        o.c.unwrap_or(100.0),
-        o.epsilon.unwrap_or(0.02),
-        o.gamma.unwrap_or(30.0),
-    );
-    let f = svr_with(
-        limits,
-        "needle SVR",
-        SvrProblem {
-            c,
-            epsilon,
-            kernel: Kernel::Rbf { gamma },
-            x: &xs,
-            dim: 2,
-            y: &y,
-        },
-    )?;
-    let model = scaled(f.model.clone(), scaling);
-    let (t_ev, x_ev, y_ev) = match test {
-        Some(t) => needle_data(t)?,
-        None => (t_all.clone(), x_all.clone(), y_all.clone()),
-    };
-    let predict = |xx: &[f64]| -> Vec<f64> { xx.chunks_exact(2).map(|r| model.predict(r)).collect() };
-    let train_metrics = metrics(&t_all, &y_all, &predict(&x_all))?;
-    let svr_metrics = match test {
-        Some(_) => metrics(&t_ev, &y_ev, &predict(&x_ev))?,
-        None => train_metrics,
-    };
-    let net_pred = rbf_network(&x, 2, &y, &x_ev)?;
-    let net_metrics = metrics(&t_ev, &y_ev, &net_pred)?;
-    // The physical baseline trains on the samples the SVR and the network train on.
-    let column = |xx: &[f64], k: usize| -> Vec<f64> { xx.iter().skip(k).step_by(2).copied().collect() };
-    let law = CoulombViscousStiffness::fit(&column(&x, 0), &column(&x, 1), &y).map_err(|e| {
-        IdentifyError::Baseline {
-            what: "Coulomb+viscous+stiffness",
-            source: Box::new(e),
-        }
-    })?;
-    let law_pred: Vec<f64> = x_ev.chunks_exact(2).map(|r| law.predict(r[0], r[1])).collect();
-    let law_metrics = metrics(&t_ev, &y_ev, &law_pred)?;
-    let hyper = vec![SvrHyper {
-        label: "svr".into(),
-        c,
-        epsilon,
-        kernel: Kernel::Rbf { gamma },
-    }];
-    finish(Fitted {
-        kind: ModelKind::NeedlePuncture,
-        train,
-        test,
-        inputs: needle_inputs(),
-        output: needle_output(),
-        body: ModelBody::Single(model),
-        hyper,
-        n_train: y.len(),
-        n_rows: y_all.len(),
-        n_fit_rows: y.len(),
-        train_metrics,
-        svr_metrics,
-        coulomb_viscous: None,
-        coulomb_viscous_stiffness: Some(law_metrics),
-        rbf_network: net_metrics,
-        fits: &[&f],
-        started,
-        input_range: range(&x, 2),
-        w: None,
-        b: None,
-        stage1: Vec::new(),
-    })
-}
-
 /// What one identification produced, for [`finish`] to assemble into a model file and its
 /// report.
-struct Fitted<'a> {
-    kind: ModelKind,
+pub(crate) struct Fitted<'a> {
+    pub(crate) kind: ModelKind,
     /// The capture it was fitted on.
-    train: &'a Capture,
+    pub(crate) train: &'a Capture,
     /// The capture it is evaluated on, if not the training one.
-    test: Option<&'a Capture>,
-    inputs: Vec<Quantity>,
-    output: Quantity,
-    body: ModelBody,
-    hyper: Vec<SvrHyper>,
+    pub(crate) test: Option<&'a Capture>,
+    pub(crate) inputs: Vec<Quantity>,
+    pub(crate) output: Quantity,
+    pub(crate) body: ModelBody,
+    pub(crate) hyper: Vec<SvrHyper>,
     /// Training vectors (rows, or stage-1 points for the soft contact).
-    n_train: usize,
+    pub(crate) n_train: usize,
     /// Rows of the training capture that the model applies to.
-    n_rows: usize,
+    pub(crate) n_rows: usize,
     /// Rows the SVR fits trained on, all of them together.
-    n_fit_rows: usize,
+    pub(crate) n_fit_rows: usize,
     /// The SVR on the training capture, and on the evaluated one.
-    train_metrics: Metrics,
-    svr_metrics: Metrics,
+    pub(crate) train_metrics: Metrics,
+    pub(crate) svr_metrics: Metrics,
     /// The baselines on the evaluated capture (the ones that apply to this model).
-    coulomb_viscous: Option<Metrics>,
-    coulomb_viscous_stiffness: Option<Metrics>,
-    rbf_network: Metrics,
+    pub(crate) coulomb_viscous: Option<Metrics>,
+    pub(crate) coulomb_viscous_stiffness: Option<Metrics>,
+    pub(crate) rbf_network: Metrics,
     /// Every SVR fit behind the model (the soft contact's final two first).
-    fits: &'a [&'a SvrFit],
-    started: Instant,
+    pub(crate) fits: &'a [&'a SvrFit],
+    pub(crate) started: Instant,
     /// Per input, the [min, max] the model was fitted over.
-    input_range: Vec<[f64; 2]>,
+    pub(crate) input_range: Vec<[f64; 2]>,
     /// A linear model's slope and intercept.
-    w: Option<f64>,
-    b: Option<f64>,
+    pub(crate) w: Option<f64>,
+    pub(crate) b: Option<f64>,
     /// The soft contact's stage-1 points (speed, w, m).
-    stage1: Vec<[f64; 3]>,
+    pub(crate) stage1: Vec<[f64; 3]>,
 }
 
-fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
+pub(crate) fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
     let Fitted {
         kind,
         train,

@@ -3,7 +3,8 @@
 //! This crate is pure computation on data: it knows nothing of threads, devices or rendering.
 //! It may import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
 //! Top-down: `baselines` and `metrics` (what a model is compared with, and how),
-//! `identification` (Li & Bi's three models), `punctures` (puncture events and layers
+//! `identification` (what Li & Bi's three models share), `contact_identification` and
+//! `needle_identification` (the models), `punctures` (puncture events and layers
 //! read from insertion data), `phases` (the phase-aware needle model built on them), `search` (cross-validated hyperparameters)
 //! and `model_file` (models on disk). Every failure of any of them is one [`IdentifyError`]
 //! (`error`), which wraps `capture`'s and `svm`'s errors. This file is the crate's door:
@@ -12,11 +13,13 @@
 
 mod baselines;
 mod by_kind;
+mod contact_identification;
 mod error;
 mod grid_spec;
 mod identification;
 mod metrics;
 mod model_file;
+mod needle_identification;
 mod phase_identification;
 mod phase_parts;
 mod phases;

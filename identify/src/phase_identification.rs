@@ -13,11 +13,12 @@ use capture::{Capture, CaptureKind, kind};
 use crate::error::IdentifyError;
 use crate::error::check_series;
 use crate::identification::{
-    FitLimits, Identified, IdentifyOptions, capture_ref, check_written, metrics, model_column, needle,
-    needle_inputs, needle_output, out_of_domain, require_kind,
+    FitLimits, Identified, IdentifyOptions, capture_ref, check_written, metrics, model_column, out_of_domain,
+    require_kind,
 };
 use crate::metrics::Metrics;
 use crate::model_file::{Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind};
+use crate::needle_identification::{needle, needle_inputs, needle_output};
 use crate::phases::{
     Domain, LayerModel, Loading, MAX_LAYERS, PhaseModel, ShaftLaw, Threshold, Varies, fit_linear, fit_terms,
 };

@@ -10,12 +10,13 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::contact_identification::stage_one;
 use crate::error::IdentifyError;
 use crate::identification::{
-    DEFAULT_MAX_FIT_SAMPLES, FitLimits, FrictionData, KGF_N, SvrProblem, friction_data, metrics, needle_data,
-    spread, stage_one, svr_with,
+    DEFAULT_MAX_FIT_SAMPLES, FitLimits, FrictionData, KGF_N, SvrProblem, friction_data, metrics, svr_with,
 };
 use crate::model_file::ModelKind;
+use crate::needle_identification::{needle_data, spread};
 use capture::Capture;
 use svm::{InputScaling, Kernel};
 
