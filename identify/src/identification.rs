@@ -94,7 +94,7 @@ pub struct ComparedMetrics {
     pub svr: Metrics,
     /// Coulomb (∝ normal force) + viscous (∝ velocity) least squares; friction models only.
     pub coulomb_viscous: Option<Metrics>,
-    /// `F = Fc·sgn(v) + c·v + k·depth` least squares ([`CoulombViscousStiffness`]); the
+    /// `F = Fc·sgn(v) + c·v + k·depth` least squares ([`CoulombViscousStiffness`](crate::CoulombViscousStiffness)); the
     /// needle only, whose force no friction law describes.
     pub coulomb_viscous_stiffness: Option<Metrics>,
     /// RBF network (k-means centres, least-squares weights).

@@ -69,7 +69,7 @@ const DOMAIN_MARGIN: f64 = 0.1;
 const VELOCITY_TAIL: f64 = 0.02;
 
 /// Depths and velocities a phase was fitted on: the samples' depth range, and the range of
-/// their velocities less [`VELOCITY_TAIL`] at each end.
+/// their velocities between the 2nd and the 98th percentile.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Domain {
     /// [min, max] depth, m.
