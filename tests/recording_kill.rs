@@ -31,37 +31,18 @@ fn a_killed_capture_keeps_the_old_file_and_leaves_a_readable_partial_one() {
     let old_rows = Capture::read_file(&out, CaptureKind::Insertion).unwrap().len();
 
     // The same capture in real time, killed (SIGKILL) once it has been recording for a while.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
-        .args(capture)
-        .arg("--quiet")
-        .env_remove("PALPUS_DHD_LIBRARY")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    // On a shared machine the haptic thread's watchdog can end a real-time capture on its own
+    // (the loop descheduled several times in a second); that run says nothing about a kill, so
+    // it is tried again, a few times at most.
     let partial = partial_path(&out);
-    let started = Instant::now();
-    let mut rows_seen_at = None;
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            let o = child.wait_with_output().unwrap();
-            panic!("the capture ended ({status}) before it was killed: {}", text(&o));
-        }
-        let rows = read_recording(&partial).map_or(0, |r| r.rows.len());
-        if rows > 0 && rows_seen_at.is_none() {
-            rows_seen_at = Some(Instant::now());
-        }
-        if rows_seen_at.is_some_and(|t| t.elapsed() >= Duration::from_secs(1)) {
-            break;
-        }
+    let mut attempts = 0;
+    while let Err(stalled) = record_then_kill(&capture, &partial) {
+        attempts += 1;
         assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "no rows recorded in 60 s"
+            attempts < 3 && stalled.contains("the haptic thread stalled"),
+            "the capture ended before it was killed: {stalled}"
         );
-        std::thread::sleep(Duration::from_millis(20));
     }
-    child.kill().unwrap();
-    child.wait().unwrap();
 
     assert_eq!(std::fs::read(&out).unwrap(), old, "the old capture changed");
     let bytes = std::fs::read(&partial).unwrap();
@@ -87,4 +68,42 @@ fn a_killed_capture_keeps_the_old_file_and_leaves_a_readable_partial_one() {
         Capture::read_file(&out, CaptureKind::Insertion).unwrap().len(),
         old_rows
     );
+}
+
+/// Runs `capture` in real time and kills it (SIGKILL) once its partial file has held rows for a
+/// second; `Err` with its output when it ended on its own first.
+fn record_then_kill(capture: &[&str], partial: &std::path::Path) -> Result<(), String> {
+    // A stalled attempt's partial file would show rows before this run has recorded any.
+    let _ = std::fs::remove_file(partial);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
+        .args(capture)
+        .arg("--quiet")
+        .env_remove("PALPUS_DHD_LIBRARY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let mut rows_seen_at = None;
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            let o = child.wait_with_output().unwrap();
+            return Err(format!("({status}) {}", text(&o)));
+        }
+        let rows = read_recording(partial).map_or(0, |r| r.rows.len());
+        if rows > 0 && rows_seen_at.is_none() {
+            rows_seen_at = Some(Instant::now());
+        }
+        if rows_seen_at.is_some_and(|t| t.elapsed() >= Duration::from_secs(1)) {
+            break;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "no rows recorded in 60 s"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    Ok(())
 }
