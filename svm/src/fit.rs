@@ -251,11 +251,11 @@ fn solve_dense(
     let (sol, polished) = match run(ipm::Centring::Gondzio) {
         Ok((sol, Some(p))) => (sol, Some(p)),
         Err(e @ SvmError::Budget { .. }) => return Err(e),
-        first => match (run(ipm::Centring::MehrotraOnly), first) {
-            (Ok(second), _) => second,
-            (Err(e @ SvmError::Budget { .. }), _) => return Err(e),
-            (Err(_), Ok(first)) => first,
-            (Err(e), Err(_)) => return Err(e),
+        first => match run(ipm::Centring::MehrotraOnly) {
+            Ok(second) => second,
+            Err(e @ SvmError::Budget { .. }) => return Err(e),
+            // The retry failed outright: the first path's outcome stands, or else this error.
+            Err(e) => first.map_err(|_| e)?,
         },
     };
     let iterations = sol.iterations;

@@ -92,8 +92,6 @@ struct Direction {
 pub(crate) trait NewtonOperator {
     /// A factorisation of `K + diag(h)`.
     type Factor;
-    /// `out = K v`.
-    fn mat_vec(&self, v: &[f64], out: &mut [f64]);
     /// `out = K v` and `out_abs ≥ |K| |v|` elementwise (the scale Kβ's rounding error is
     /// relative to), in one pass where the operator allows.
     fn mat_vec_with_abs(&self, v: &[f64], out: &mut [f64], out_abs: &mut [f64]);
@@ -116,10 +114,6 @@ pub(crate) struct DenseLlt {
 
 impl NewtonOperator for Mat<f64> {
     type Factor = DenseLlt;
-
-    fn mat_vec(&self, v: &[f64], out: &mut [f64]) {
-        mat_vec(self, v, out);
-    }
 
     fn mat_vec_with_abs(&self, v: &[f64], out: &mut [f64], out_abs: &mut [f64]) {
         out.fill(0.0);
@@ -502,9 +496,8 @@ fn factorize<K: NewtonOperator>(k: &K, d: &[Vec<f64>; 2], mut spare: Option<K::F
             .zip(&d[1])
             .map(|(a, b)| a * b / (a + b) + shift)
             .collect();
-        match k.factor(&h, spare.take()) {
-            Some(factor) => return Some(factor),
-            None => spare = None,
+        if let Some(factor) = k.factor(&h, spare.take()) {
+            return Some(factor);
         }
         shift *= 100.0;
     }

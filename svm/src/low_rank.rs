@@ -186,11 +186,6 @@ fn identity(v: f64) -> f64 {
 impl NewtonOperator for LowRank {
     type Factor = LowRankFactor;
 
-    fn mat_vec(&self, v: &[f64], out: &mut [f64]) {
-        let t = self.transpose_times(v, identity);
-        self.times(&t, out, identity);
-    }
-
     fn mat_vec_with_abs(&self, v: &[f64], out: &mut [f64], out_abs: &mut [f64]) {
         self.mat_vec(v, out);
         // |GGᵀ| ≤ |G||G|ᵀ elementwise.
@@ -253,6 +248,12 @@ impl NewtonOperator for LowRank {
 }
 
 impl LowRank {
+    /// `out = GGᵀ v`.
+    fn mat_vec(&self, v: &[f64], out: &mut [f64]) {
+        let t = self.transpose_times(v, identity);
+        self.times(&t, out, identity);
+    }
+
     /// `(D + GGᵀ)⁻¹ rhs` by Woodbury, through the capacitance factor.
     fn solve(&self, factor: &LowRankFactor, rhs: &[f64]) -> Vec<f64> {
         let u: Vec<f64> = rhs.iter().zip(&factor.h_inv).map(|(b, d)| b * d).collect();
