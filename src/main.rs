@@ -51,7 +51,7 @@ impl QuietRuntimeDir {
         // `mkdir` fails on any existing entry, symlinks included, so a name someone else got to
         // first is never used.
         let dir = (0..8).find_map(|n| {
-            let dir = base.join(format!("palpus-runtime-{}-{n}", std::process::id()));
+            let dir = base.join(format!("{RUNTIME_DIR_PREFIX}{}-{n}", std::process::id()));
             std::fs::DirBuilder::new()
                 .mode(0o700)
                 .create(&dir)
@@ -71,6 +71,10 @@ impl QuietRuntimeDir {
     }
 }
 
+/// Each directory is this, the process id, `-` and a number.
+#[cfg(unix)]
+const RUNTIME_DIR_PREFIX: &str = "palpus-runtime-";
+
 /// A process ended by a signal (Ctrl-C, a kill) never reaches [`Drop`], so its directory stays:
 /// each start removes those of processes that no longer exist. Only empty directories go, and
 /// the temporary folder's sticky bit keeps other users' out of reach. Where `/proc` is missing a
@@ -88,7 +92,7 @@ fn remove_stale(base: &std::path::Path) {
         let name = entry.file_name();
         let Some(pid) = name
             .to_str()
-            .and_then(|n| n.strip_prefix("palpus-runtime-"))
+            .and_then(|n| n.strip_prefix(RUNTIME_DIR_PREFIX))
             .and_then(|rest| rest.split_once('-'))
             .and_then(|(pid, _)| pid.parse::<u32>().ok())
         else {
