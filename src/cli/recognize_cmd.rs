@@ -258,6 +258,14 @@ fn print_window_c(model: &RecognizerFile) {
                     search.folds,
                     grid.join(", ")
                 );
+                if let Some(from) = search.separable_from
+                    && search.grid.last().is_some_and(|p| p.c > from)
+                {
+                    println!(
+                        "  from C = {from:e} on no multiplier reached C in any fold: the classes were \
+                         separated, and each larger C has the same machines (not refitted)"
+                    );
+                }
             }
             Some(_) => println!("C = {c:e} (given)"),
             None if c == WINDOW_SVM_FALLBACK_C => {

@@ -137,6 +137,7 @@ fn sinapov_recognizers() -> [RecognizerFile; 2] {
             },
         ],
         chosen_c: 10.0,
+        separable_from: None,
     };
     let svm_body = RecognizerBody::Svm {
         cell_scale: CellScale::Mean,

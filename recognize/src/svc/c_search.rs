@@ -26,6 +26,12 @@ pub struct CSearch {
     pub grid: Vec<CvPoint>,
     /// The most accurate candidate; ties go to the smaller C (the wider margin).
     pub chosen_c: f64,
+    /// The smallest C at which no machine of any fold had a multiplier at its bound: every
+    /// fold's classes were separated, so each larger candidate has the same machines and the
+    /// same accuracy, and was entered in `grid` without being refitted. `None` if no candidate
+    /// separated (or in files written before this was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub separable_from: Option<f64>,
 }
 
 impl CSearch {
@@ -61,6 +67,11 @@ impl CSearch {
         if self.accuracy().is_none() {
             return Err(("chosen_c", format!("{} is not in the grid", self.chosen_c)));
         }
+        if let Some(c) = self.separable_from
+            && !self.grid.iter().any(|p| p.c == c)
+        {
+            return Err(("separable_from", format!("{c} is not in the grid")));
+        }
         Ok(())
     }
 }
@@ -85,7 +96,7 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     };
     let mut correct = 0usize;
     for f in 0..folds {
-        correct += fold_correct(params, features, labels, &fold, f, classes, &|| {})?;
+        correct += fold_correct(params, features, labels, &fold, f, classes, &|| {})?.correct;
     }
     Ok(correct as f64 / features.len() as f64)
 }
@@ -110,6 +121,13 @@ pub fn select_c<V: AsRef<[f64]>>(
 /// about the others. Only when every candidate fails is it an error
 /// ([`RecognizeError::EveryCFailed`], listing them); the result lists the candidates that
 /// could be cross-validated.
+///
+/// Once a candidate's machines have no multiplier at the bound in any fold, the larger
+/// candidates are not refitted: SMO's stopping test (the largest KKT violation) reads C only
+/// through the multipliers that sit on it, so the same multipliers are a solution, to the same
+/// tolerance, for every larger C. Those candidates enter the grid with that accuracy and
+/// [`CSearch::separable_from`] says so. On classes a degree-2 kernel separates this skips the
+/// largest Cs, whose fits are the slowest (and the likeliest not to converge).
 pub fn select_c_observed<V: AsRef<[f64]>>(
     params: SvcParams,
     grid: &[f64],
@@ -155,8 +173,17 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
     };
     let mut points = Vec::with_capacity(order.len());
     let mut failures = Vec::new();
+    let mut separable_from: Option<CvPoint> = None;
     for &c in &order {
+        if let Some(separable) = separable_from {
+            points.push(CvPoint { c, ..separable });
+            for _ in 0..machines {
+                tick();
+            }
+            continue;
+        }
         let mut correct = 0usize;
+        let mut at_bound = false;
         let mut failed = None;
         for f in 0..used {
             match fold_correct(
@@ -168,7 +195,10 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
                 classes,
                 &tick,
             ) {
-                Ok(n) => correct += n,
+                Ok(score) => {
+                    correct += score.correct;
+                    at_bound |= score.at_bound;
+                }
                 Err(RecognizeError::NotConverged {
                     iterations,
                     c: _,
@@ -182,10 +212,16 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
             }
         }
         match failed {
-            None => points.push(CvPoint {
-                c,
-                accuracy: correct as f64 / features.len() as f64,
-            }),
+            None => {
+                let point = CvPoint {
+                    c,
+                    accuracy: correct as f64 / features.len() as f64,
+                };
+                points.push(point);
+                if !at_bound {
+                    separable_from = Some(point);
+                }
+            }
             Some((iterations, first, second)) => {
                 let error = || RecognizeError::NotConverged {
                     iterations,
@@ -210,6 +246,7 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
         folds: used,
         grid: points,
         chosen_c: best.c,
+        separable_from: separable_from.map(|p| p.c),
     })
 }
 
@@ -237,8 +274,15 @@ pub(super) fn cv_folds(
     })
 }
 
-/// Held-out vectors of fold `f` classified correctly by an SVC fitted on the other folds;
-/// `tick` after each of its binary machines.
+/// How an SVC fitted on the other folds did on fold `f`.
+pub(super) struct FoldScore {
+    /// Held-out vectors classified correctly.
+    pub(super) correct: usize,
+    /// Whether a machine has a multiplier at its bound C ([`Svc::any_multiplier_at_bound`]).
+    pub(super) at_bound: bool,
+}
+
+/// [`FoldScore`] of fold `f`; `tick` after each binary machine.
 pub(super) fn fold_correct<V: AsRef<[f64]>>(
     params: SvcParams,
     features: &[V],
@@ -247,7 +291,7 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     f: usize,
     classes: usize,
     tick: &(dyn Fn() + Sync),
-) -> Result<usize, RecognizeError> {
+) -> Result<FoldScore, RecognizeError> {
     let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
         .iter()
         .zip(labels)
@@ -274,7 +318,10 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
         .map(|((x, &y), _)| (x.as_ref(), y));
     if present.len() < 2 {
         let only = present.first().copied();
-        return Ok(held_out.filter(|&(_, y)| Some(y) == only).count());
+        return Ok(FoldScore {
+            correct: held_out.filter(|&(_, y)| Some(y) == only).count(),
+            at_bound: false,
+        });
     }
     let compact: Vec<usize> = train_y
         .iter()
@@ -301,5 +348,8 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     for (x, y) in held_out {
         correct += usize::from(present[svc.predict(x)?] == y);
     }
-    Ok(correct)
+    Ok(FoldScore {
+        correct,
+        at_bound: svc.any_multiplier_at_bound(),
+    })
 }

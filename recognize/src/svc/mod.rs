@@ -395,6 +395,16 @@ impl Svc {
         &self.machines
     }
 
+    /// Whether some machine has a multiplier at its bound C. When none has, the machines are
+    /// also a solution for every larger C: the solver's stopping test reads the bound only
+    /// through the multipliers that sit on it (see [`select_c`]).
+    pub fn any_multiplier_at_bound(&self) -> bool {
+        // The solver clips a multiplier to exactly C, so equality is the test.
+        self.machines
+            .iter()
+            .any(|m| m.support.iter().any(|&(_, coef)| coef.abs() >= self.params.c))
+    }
+
     /// Dimension of the feature vectors.
     pub fn dim(&self) -> usize {
         self.dim
@@ -799,6 +809,11 @@ mod tests {
     }
 
     fn overlapping_blobs(groups: u64, per_group: usize) -> (Vec<[f64; 2]>, Vec<usize>, Vec<u64>) {
+        blobs(groups, per_group, 1.2)
+    }
+
+    /// Three classes around fixed centres, uniform within `spread` of them.
+    fn blobs(groups: u64, per_group: usize, spread: f64) -> (Vec<[f64; 2]>, Vec<usize>, Vec<u64>) {
         let centres = [[0.0, 0.0], [1.0, 0.2], [0.4, 0.9]];
         let mut rng = SplitMix64::new(7);
         let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
@@ -806,7 +821,7 @@ mod tests {
             for (class, centre) in centres.iter().enumerate() {
                 for _ in 0..per_group {
                     let (a, b) = (rng.next_f64() - 0.5, rng.next_f64() - 0.5);
-                    x.push([centre[0] + 1.2 * a, centre[1] + 1.2 * b]);
+                    x.push([centre[0] + spread * a, centre[1] + spread * b]);
                     y.push(class);
                     g.push(group);
                 }
@@ -875,6 +890,57 @@ mod tests {
         let a = cross_validated_accuracy(SvcParams { c: 1.0, ..params }, &data(&x, &lonely, &groups), 4, 4)
             .expect("folds without class 3 still fit");
         assert!(a < brute[2], "{a} vs {}", brute[2]);
+    }
+
+    #[test]
+    fn larger_cs_than_the_first_that_separates_every_fold_are_not_refitted() {
+        let (x, y, groups) = blobs(4, 6, 0.5);
+        let params = blob_params();
+        let grid = [1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, 1e4];
+        let search = select_c(params, &grid, &data(&x, &y, &groups), 3, 4).expect("search");
+        eprintln!("{search:?}");
+        assert_eq!(search.grid.iter().map(|p| p.c).collect::<Vec<_>>(), grid);
+        let from = search.separable_from.expect("these blobs are separable");
+        assert!(from > grid[0] && from < grid[grid.len() - 1], "{search:?}");
+        assert!(search.check().is_ok());
+        // Each fold refitted at every C: below `from` some fold has a multiplier at C; from it
+        // on none has, and every held-out prediction (so the accuracy) is the same.
+        let fits = |c: f64| -> (bool, Vec<usize>) {
+            let (mut at_bound, mut predicted) = (false, Vec::new());
+            for held in 0..4 {
+                let train: Vec<usize> = (0..x.len()).filter(|&i| groups[i] != held).collect();
+                let tx: Vec<[f64; 2]> = train.iter().map(|&i| x[i]).collect();
+                let ty: Vec<usize> = train.iter().map(|&i| y[i]).collect();
+                let svc = Svc::fit(SvcParams { c, ..params }, &tx, &ty, 3).expect("fit");
+                at_bound |= svc.any_multiplier_at_bound();
+                predicted.extend(
+                    (0..x.len())
+                        .filter(|&i| groups[i] == held)
+                        .map(|i| svc.predict(&x[i]).expect("predict")),
+                );
+            }
+            (at_bound, predicted)
+        };
+        let (_, at_from) = fits(from);
+        for p in &search.grid {
+            let (at_bound, predicted) = fits(p.c);
+            if p.c < from {
+                assert!(at_bound, "C = {} has no multiplier at its bound", p.c);
+            } else {
+                assert!(!at_bound, "C = {} has a multiplier at its bound", p.c);
+                assert_eq!(predicted, at_from, "C = {}", p.c);
+                let groups = &groups;
+                let held_out_order: Vec<usize> = (0..4u64)
+                    .flat_map(|g| (0..x.len()).filter(move |&i| groups[i] == g))
+                    .collect();
+                let right = held_out_order
+                    .iter()
+                    .zip(&predicted)
+                    .filter(|&(&i, &p)| y[i] == p)
+                    .count();
+                assert_eq!(p.accuracy, right as f64 / x.len() as f64, "C = {}", p.c);
+            }
+        }
     }
 
     #[test]
