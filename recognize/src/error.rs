@@ -92,6 +92,17 @@ pub enum RecognizeError {
         /// Each of its captures, and why it gave no window.
         captures: Vec<WindowlessCapture>,
     },
+    /// Anytime decisions asked of a recognizer that gives no probability per window.
+    #[error(
+        "anytime decisions need each window's probability of every surface, which a k-NN or SVM over \
+         windows gives; this is a {method} recognizer over {features} features"
+    )]
+    NoWindowProbabilities {
+        /// Its method.
+        method: &'static str,
+        /// Its features.
+        features: &'static str,
+    },
     /// No evaluated capture gave a decision, so there is nothing to score.
     #[error("no decisions to evaluate: {}", if captures.is_empty() { "no captures given".to_owned() } else { windowless_list(captures) })]
     NoDecisions {

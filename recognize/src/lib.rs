@@ -19,6 +19,7 @@ pub mod features;
 pub mod knn;
 pub mod protocol;
 pub mod recognizer;
+pub mod sequential;
 pub mod som;
 pub mod svc;
 mod vectors;
@@ -42,8 +43,10 @@ pub use recognizer::{
     Decision, Evaluation, FEW_TRAINING_VECTORS, FeatureNeeds, FusedEvaluation, KnnTrainer, LABEL_KEY,
     LabelledCapture, Method, RECOGNIZER_FORMAT, RECOGNIZER_VERSION, RecognizerBody, RecognizerFile,
     SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer, SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer,
-    TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, recording_groups, som_nodes, som_params, train,
-    trial_groups, window_som_nodes, window_svc_params,
+    TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, WindowProbabilities, recording_groups,
+    som_nodes, som_params, train, trial_groups, window_som_nodes, window_svc_params,
 };
+pub use recognizer::{Calibration, ReliabilityBin, SequentialEvaluation, SequentialRow};
+pub use sequential::{SequentialParams, SequentialParamsBuilder, SequentialState, SequentialStep};
 pub use som::{Normalization, Som, SomParams};
 pub use svc::{CSearch, Svc, SvcParams};

@@ -7,9 +7,7 @@ use super::labelled::check_rate;
 use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
 use crate::features::spectral::CellScale;
-use crate::features::{
-    FeatureSet, NakanoWindowing, WindowScaling, capture_histogram, window_vectors, windows,
-};
+use crate::features::{FeatureSet, NakanoWindowing, capture_histogram, window_vectors, windows};
 use crate::knn::Knn;
 use crate::som::{Som, SomDecision};
 use crate::svc::{CSearch, Svc};
@@ -41,6 +39,16 @@ pub struct Decision {
     pub label: usize,
     /// Confidence in `[0, 1]` (see [`Som::decide_into`]; k-NN: the vote fraction).
     pub confidence: f64,
+}
+
+/// One window of a k-NN or SVM over windows: its decision and every class's probability
+/// ([`RecognizerFile::window_probabilities`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowProbabilities {
+    /// The window and its decision, as [`RecognizerFile::decisions`] gives it.
+    pub decision: Decision,
+    /// Probability of each class, in [`RecognizerFile::classes`]' order; they sum to 1.
+    pub probabilities: Vec<f64>,
 }
 
 impl RecognizerFile {
@@ -80,27 +88,12 @@ impl RecognizerFile {
                     })
                     .collect())
             }
-            RecognizerBody::KnnWindows {
-                features,
-                windowing: own,
-                cell_scale,
-                scaling,
-                knn,
-            } => {
-                let windowing = windowing.unwrap_or(own);
-                self.scaled_window_decisions(capture, windowing, *features, *cell_scale, scaling, knn)
-            }
-            RecognizerBody::SvmWindows {
-                features,
-                windowing: own,
-                cell_scale,
-                scaling,
-                svc,
-                ..
-            } => {
-                let windowing = windowing.unwrap_or(own);
-                self.scaled_window_decisions(capture, windowing, *features, *cell_scale, scaling, svc)
-            }
+            RecognizerBody::KnnWindows { .. } | RecognizerBody::SvmWindows { .. } => Ok(self
+                .window_probabilities(capture, windowing)?
+                .unwrap_or_default()
+                .into_iter()
+                .map(|w| w.decision)
+                .collect()),
             RecognizerBody::SomWindows {
                 windowing: own,
                 cell_scale,
@@ -118,6 +111,53 @@ impl RecognizerFile {
                 Ok(vec![whole_capture_decision(capture, label, &p)])
             }
         }
+    }
+
+    /// For a k-NN or SVM over rubbing windows: each decision window of `capture` (`windowing`,
+    /// else the recognizer's own) with its every class's probability, in the order of
+    /// [`RecognizerFile::decisions`]; `None` for any other recognizer (a SOM names a node, not
+    /// a distribution over the surfaces; a whole-scratch classifier has no windows).
+    pub fn window_probabilities(
+        &self,
+        capture: &LabelledCapture,
+        windowing: Option<&NakanoWindowing>,
+    ) -> Result<Option<Vec<WindowProbabilities>>, RecognizeError> {
+        let (windowing, features, cell_scale, scaling, classifier): (_, _, _, _, &dyn Classifier) =
+            match &self.body {
+                RecognizerBody::KnnWindows {
+                    features,
+                    windowing: own,
+                    cell_scale,
+                    scaling,
+                    knn,
+                } => (windowing.unwrap_or(own), *features, *cell_scale, scaling, knn),
+                RecognizerBody::SvmWindows {
+                    features,
+                    windowing: own,
+                    cell_scale,
+                    scaling,
+                    svc,
+                    ..
+                } => (windowing.unwrap_or(own), *features, *cell_scale, scaling, svc),
+                _ => return Ok(None),
+            };
+        features.check_columns(std::slice::from_ref(capture))?;
+        check_rate(capture, windowing.rate_hz)?;
+        let mut out = Vec::new();
+        for (start, v) in window_vectors(capture, windowing, features, cell_scale)? {
+            let (label, p) = classifier.classify(&scaling.apply(&v), None)?;
+            let decision = Decision {
+                window_start: start,
+                decided_at: windowing.decided_at(start),
+                label,
+                confidence: p.get(label).copied().unwrap_or(0.0),
+            };
+            out.push(WindowProbabilities {
+                decision,
+                probabilities: p,
+            });
+        }
+        Ok(Some(out))
     }
 
     /// Decisions of a classifier over rubbing windows: `classify` maps a window's raw features
@@ -144,23 +184,6 @@ impl RecognizerFile {
                 })
             })
             .collect()
-    }
-
-    /// Decisions of a k-NN or SVC over rubbing windows scaled by `scaling`, its probability of
-    /// the label as the confidence.
-    fn scaled_window_decisions(
-        &self,
-        capture: &LabelledCapture,
-        windowing: &NakanoWindowing,
-        features: FeatureSet,
-        cell_scale: CellScale,
-        scaling: &WindowScaling,
-        classifier: &impl Classifier,
-    ) -> Result<Vec<Decision>, RecognizeError> {
-        self.window_decisions(capture, windowing, features, cell_scale, |v| {
-            let (label, p) = classifier.classify(&scaling.apply(v), None)?;
-            Ok((label, p.get(label).copied().unwrap_or(0.0)))
-        })
     }
 
     /// For a k-NN or SVM recognizer: the index of the capture's behaviour among

@@ -93,6 +93,27 @@ impl FeatureNeeds {
         })
     }
 
+    /// What [`RecognizerFile::evaluate_sequential`] reads: the windows of
+    /// [`RecognizerFile::sequential_windowing`]; refused for a recognizer without window
+    /// probabilities.
+    pub fn sequential(model: &RecognizerFile) -> Result<Self, RecognizeError> {
+        match (&model.body, model.sequential_windowing()) {
+            (
+                RecognizerBody::KnnWindows {
+                    features, cell_scale, ..
+                }
+                | RecognizerBody::SvmWindows {
+                    features, cell_scale, ..
+                },
+                Some(windowing),
+            ) => Ok(Self::new().with_windows(windowing, *features, *cell_scale)),
+            _ => Err(RecognizeError::NoWindowProbabilities {
+                method: model.method(),
+                features: model.feature_set().name(),
+            }),
+        }
+    }
+
     /// Whether nothing is needed.
     pub fn is_empty(&self) -> bool {
         self.windows.is_empty() && self.histograms.is_empty()

@@ -22,9 +22,10 @@ mod file;
 mod grouping;
 mod kept;
 pub(crate) mod labelled;
+mod sequential_eval;
 mod train;
 
-pub use decide::{BehaviourReliability, Decision};
+pub use decide::{BehaviourReliability, Decision, WindowProbabilities};
 pub use evaluate::{BehaviourScore, Evaluation, FusedEvaluation, SomQuality};
 pub use file::{
     BehaviourKnn, BehaviourSom, BehaviourSvc, RECOGNIZER_FORMAT, RECOGNIZER_VERSION, RecognizerBody,
@@ -33,6 +34,9 @@ pub use file::{
 pub use grouping::{TRIAL_KEY, recording_groups, trial_groups};
 pub use kept::FeatureNeeds;
 pub use labelled::{BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture};
+pub use sequential_eval::{
+    Calibration, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
+};
 pub use train::{
     CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC,
     SvmTrainer, TrainSettings, Trainer, TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes,

@@ -262,6 +262,42 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
         assert_eq!(eval.confusion.accuracy(), Some(1.0), "{}", model.method());
         // The SOM's windows: the same latency.
         assert!((eval.decision_latency_s - 0.77).abs() < 1e-12);
+        // Each window's probabilities back its decision: same window, same label, the label's
+        // probability as the confidence, probabilities summing to 1.
+        for c in &three_surfaces(3.0) {
+            let decisions = back.decisions(c, None).expect("decisions");
+            let probabilities = back
+                .window_probabilities(c, None)
+                .expect("probabilities")
+                .expect("windows");
+            assert_eq!(decisions.len(), probabilities.len());
+            for (d, w) in decisions.iter().zip(&probabilities) {
+                let p = &w.probabilities;
+                assert_eq!(*d, w.decision);
+                assert_eq!(p[d.label], d.confidence);
+                assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{p:?}");
+            }
+        }
+        // Anytime decisions run from contact: windows before the 5 mm start travel count too.
+        let params = back.sequential_params(3.0).expect("window probabilities");
+        let sequential = back
+            .evaluate_sequential(&three_surfaces(3.0), &[0.9], params)
+            .expect("sequential");
+        let from_start: usize = three_surfaces(3.0)
+            .iter()
+            .map(|c| back.decisions(c, None).expect("decisions").len())
+            .sum();
+        assert!(
+            sequential.steps > from_start,
+            "{} vs {from_start}",
+            sequential.steps
+        );
+        assert_eq!(
+            sequential.rows[0].correct, sequential.rows[0].decided,
+            "{sequential:?}"
+        );
+        assert!((sequential.params.weight() - 0.2).abs() < 1e-12);
+        assert_eq!(sequential.params.memory(), 30);
         assert!(
             back.evaluate_fused(&three_surfaces(3.0))
                 .expect("fused")
