@@ -104,9 +104,22 @@ struct EvalArgs {
     #[arg(long, value_name = "S[,S…]", value_delimiter = ',')]
     window_s: Vec<f64>,
     /// Also draw the confusion matrix (and, for a SOM, its topographic map and the
-    /// evaluation windows' density over its nodes) as PNGs into this folder.
+    /// evaluation windows' density over its nodes) as PNGs into this folder; with
+    /// --sequential, the posterior's reliability diagram and the thresholds' trade.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// Anytime decisions (k-NN or SVM over windows): every window's probabilities, from
+    /// contact on, multiplied into a posterior over the surfaces (each window weighing hop /
+    /// window, so overlapping windows count each sample once; probabilities floored at 1e-3);
+    /// a surface is named once its posterior reaches the threshold, and held until it falls
+    /// below half of it. Several thresholds, comma-separated (`0.5,0.9,0.99`), print accuracy
+    /// against how soon a surface is named, and the posterior's calibration.
+    #[arg(long, value_name = "P[,P…]", value_delimiter = ',')]
+    sequential: Vec<f64>,
+    /// With --sequential: seconds of windows whose evidence counts; older ones are forgotten,
+    /// so a new surface under the tool is named within about this time.
+    #[arg(long, value_name = "S", default_value_t = 3.0, requires = "sequential")]
+    memory_s: f64,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
@@ -312,6 +325,9 @@ fn print_reliabilities(model: &RecognizerFile, trained_s: f64) {
 
 fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     let model = RecognizerFile::load(&args.model)?;
+    if !args.sequential.is_empty() {
+        return eval_sequential(args, &model);
+    }
     if !args.window_s.is_empty() && model.windowing().is_none() {
         anyhow::bail!(
             "{}: a {} recognizer over {} features decides on whole captures: --window-s does not apply",
@@ -375,6 +391,85 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     }
     if let Some(f) = &fused {
         print_fused(f);
+    }
+    Ok(())
+}
+
+/// Anytime decisions at each threshold of `--sequential`, and the posterior's calibration.
+fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()> {
+    if !args.window_s.is_empty() {
+        anyhow::bail!("--sequential decides on the recognizer's own windows: leave out --window-s");
+    }
+    let needs = FeatureNeeds::sequential(model).with_context(|| args.model.display().to_string())?;
+    let params = model
+        .sequential_params(args.memory_s)
+        .context("a recognizer with window probabilities")?;
+    let rate_hz = model.windowing().map(|w| w.rate_hz);
+    let captures = read_keeping(&args.input, &args.captures, rate_hz, |_| Ok(needs.clone()))?;
+    let e = model.evaluate_sequential(&captures, &args.sequential, params)?;
+    let plot = match &args.plots {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            let path = dir.join("sequential.png");
+            crate::plots::write_sequential_plot(&path, &e)?;
+            Some(path)
+        }
+        None => None,
+    };
+    if args.json {
+        if let Some(p) = &plot {
+            eprintln!("wrote {}", p.display());
+        }
+        println!("{}", serde_json::to_string_pretty(&e)?);
+        return Ok(());
+    }
+    println!(
+        "{} on {} captures, anytime decisions over {} windows of {:.2} s every {:.2} s from contact \
+         (each weighing {:.3}; evidence of the last {} windows):",
+        model.method(),
+        e.captures,
+        e.steps,
+        e.window_s,
+        e.hop_s,
+        e.params.weight(),
+        e.params.memory()
+    );
+    println!(
+        "{:>9} {:>8} {:>10} {:>12} {:>14} {:>26} {:>10} {:>8}",
+        "threshold",
+        "named",
+        "accuracy",
+        "first named",
+        "stable right",
+        "slowest surface",
+        "not right",
+        "flips/s"
+    );
+    let secs = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |s| format!("{s:.2} s"));
+    for r in &e.rows {
+        let slowest = r
+            .worst_surface
+            .as_ref()
+            .map_or_else(|| "-".to_owned(), |(name, s)| format!("{name} {s:.2} s"));
+        println!(
+            "{:>9} {:>7.1}% {:>10} {:>12} {:>14} {:>26} {:>10} {:>8.3}",
+            r.threshold,
+            100.0 * r.decided as f64 / e.steps as f64,
+            percent(r.accuracy()),
+            secs(r.time_to_first_decision_s),
+            secs(r.time_to_stable_correct_s),
+            slowest,
+            r.not_stable,
+            r.flips_per_s
+        );
+    }
+    println!(
+        "calibration over every window: Brier score {:.4}, expected calibration error {:.2} %",
+        e.calibration.brier,
+        100.0 * e.calibration.ece
+    );
+    if let Some(p) = &plot {
+        println!("wrote {}", p.display());
     }
     Ok(())
 }

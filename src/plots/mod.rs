@@ -1,7 +1,7 @@
 //! Every figure palpus draws, with plotters on a bitmap: a session's forces ([`session`]), a
-//! recognizer's evaluation ([`recognition`]), the surfaces' categories ([`categories`]), an
-//! identified model against its data ([`fit`]) and the speed/accuracy trade of its fits
-//! ([`trade`]).
+//! recognizer's evaluation ([`recognition`]) and its anytime decisions ([`sequential`]), the
+//! surfaces' categories ([`categories`]), an identified model against its data ([`fit`]) and
+//! the speed/accuracy trade of its fits ([`trade`]).
 //!
 //! The shared primitives live here: the bundled font ([`font`]), drawing into an RGB buffer
 //! and writing it as PNG ([`render()`], [`write_png_rgb`]), and [`PlotError`].
@@ -9,6 +9,7 @@
 pub mod categories;
 pub mod fit;
 pub mod recognition;
+pub mod sequential;
 pub mod session;
 pub mod trade;
 
@@ -27,6 +28,7 @@ pub use recognition::{
     confusion_size, som_components_size, som_density_size, som_map_size, write_confusion, write_eval_plots,
     write_som_components, write_som_density, write_som_map,
 };
+pub use sequential::{SEQUENTIAL_SIZE, write_sequential_plot};
 pub use session::write_force_plot;
 pub use trade::{TRADE_SIZE, write_trade_plot};
 
