@@ -239,6 +239,35 @@ fn nakano_runs_follow_the_thesis_commands() {
 }
 
 #[test]
+fn nakano_runs_at_another_speed_cover_the_same_stroke() {
+    let patch = SurfacePatch::new(&nakano_surfaces()[2]);
+    let thesis = nakano::rubbing_run(&patch, 1, 1).unwrap();
+    assert_eq!(
+        nakano::rubbing_run_at(&patch, 1, 1, nakano::SPEED_MPS).unwrap(),
+        thesis
+    );
+    for speed_mps in [0.002, 0.02] {
+        let c = nakano::rubbing_run_at(&patch, 1, 1, speed_mps).unwrap();
+        assert_eq!(
+            c.metadata().get("command.speed_mps"),
+            Some(speed_mps.to_string().as_str())
+        );
+        let (x, t) = (c.column("tangential_position_m").unwrap(), c.time());
+        // Up to speed after the 0.2 s ramp; the stroke's length whatever the speed.
+        let (i, j) = (300, c.len() - 1);
+        let speed = (x[j] - x[i]) / (t[j] - t[i]);
+        assert!((speed / speed_mps - 1.0).abs() < 0.02, "{speed} at {speed_mps}");
+        assert!((x[j] - nakano::STROKE_M).abs() < 1e-4, "{}", x[j]);
+        let expected_s = nakano::STROKE_M / speed_mps + 0.1;
+        assert!((t[j] - expected_s).abs() < 2e-3, "{} vs {expected_s}", t[j]);
+    }
+    for bad in [0.0, -0.005, f64::NAN, f64::INFINITY] {
+        let err = nakano::rubbing_run_at(&patch, 1, 1, bad).unwrap_err();
+        assert!(err.to_string().contains("command.speed_mps"), "{err}");
+    }
+}
+
+#[test]
 fn same_seed_same_bytes_other_seed_other_noise() {
     let a = tempfile::tempdir().unwrap();
     let b = tempfile::tempdir().unwrap();

@@ -52,6 +52,11 @@ pub(crate) struct GenArgs {
     /// `varying` one (±60 % around the nominal speed within the stroke).
     #[arg(long, value_enum, value_name = "PROFILE")]
     needle_speed: Option<NeedleSpeedArg>,
+    /// Write only Nakano's rubbing runs (into nakano/, same names), the tip sliding at this
+    /// speed instead of the thesis's 0.005 m/s: strokes for checking that recognition does not
+    /// depend on how fast the tool moves.
+    #[arg(long, value_name = "M/S")]
+    rub_speed_mps: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -100,9 +105,34 @@ fn needle_only(args: &GenArgs, log_rate_hz: u32) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `--rub-speed-mps`: only Nakano's rubbing runs, at that speed.
+fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
+    use haptics::sim::protocols::nakano::{RUNS, rubbing_run_at};
+    use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+    let dir = args.out.join("nakano");
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    for surface in nakano_surfaces() {
+        let patch = SurfacePatch::new(&surface);
+        for run in 0..RUNS {
+            let path = dir.join(format!("{:02}_{}_run{run}.csv", surface.id, surface.name));
+            let capture = rubbing_run_at(&patch, run, args.seed, speed_mps)?;
+            capture
+                .write_file(&path)
+                .with_context(|| format!("writing {}", path.display()))?;
+            if !args.quiet {
+                println!("wrote {} ({} samples)", path.display(), capture.len());
+            }
+        }
+    }
+    Ok(())
+}
+
 pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
     if args.needle_rate_hz.is_some() || args.needle_tissue.is_some() || args.needle_speed.is_some() {
         return needle_only(args, args.needle_rate_hz.unwrap_or(100));
+    }
+    if let Some(speed_mps) = args.rub_speed_mps {
+        return rubbing_only(args, speed_mps);
     }
     let sets = if args.only.is_empty() {
         CaptureSet::ALL.to_vec()

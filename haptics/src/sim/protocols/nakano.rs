@@ -8,7 +8,7 @@
 //! Logged at 1 kHz (the thesis samples at 0.3 ms; 1 kHz is the Omega.7's usual servo rate).
 
 use capture::kind;
-use capture::{Capture, CaptureError, CaptureKind, Metadata};
+use capture::{Capture, CaptureError, CaptureErrorKind, CaptureKind, Metadata};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -42,8 +42,25 @@ const RAMP_S: f64 = 0.2;
 /// Pseudo-differentiator time constant for the logged velocity, s.
 const VELOCITY_TAU_S: f64 = 0.005;
 
-/// One rubbing run of `patch`. Run 0 is the training run.
+/// One rubbing run of `patch` at the thesis's [`SPEED_MPS`]. Run 0 is the training run.
 pub fn rubbing_run(patch: &SurfacePatch, run: u32, seed: u64) -> Result<Capture, CaptureError> {
+    rubbing_run_at(patch, run, seed, SPEED_MPS)
+}
+
+/// [`rubbing_run`] with the tip commanded along x at `speed_mps` instead (a positive, finite
+/// speed; the same stroke length and ramp time, so a faster run is shorter).
+pub fn rubbing_run_at(
+    patch: &SurfacePatch,
+    run: u32,
+    seed: u64,
+    speed_mps: f64,
+) -> Result<Capture, CaptureError> {
+    if !(speed_mps.is_finite() && speed_mps > 0.0) {
+        return Err(CaptureError::without_file(CaptureErrorKind::Invalid {
+            field: "command.speed_mps".into(),
+            reason: format!("{speed_mps}: the rubbing speed must be positive and finite"),
+        }));
+    }
     let surface = patch.surface();
     let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(
         seed,
@@ -73,11 +90,11 @@ pub fn rubbing_run(patch: &SurfacePatch, run: u32, seed: u64) -> Result<Capture,
         kind::FRICTION_FORCE_N,
     ]);
     // The linear ramp covers half the distance a full-speed start would.
-    let steps = ((STROKE_M / SPEED_MPS + RAMP_S / 2.0) * RATE_HZ).round() as usize;
+    let steps = ((STROKE_M / speed_mps + RAMP_S / 2.0) * RATE_HZ).round() as usize;
     let mut x = 0.0;
     for k in 0..steps {
         let t = k as f64 * dt;
-        let command = SPEED_MPS * (t / RAMP_S).min(1.0);
+        let command = speed_mps * (t / RAMP_S).min(1.0);
         x += command * dt;
         let contact = patch.contact(start_m + x);
         let z = contact.height_m + tilt * x + height_noise.sample(&mut rng);
@@ -101,7 +118,7 @@ pub fn rubbing_run(patch: &SurfacePatch, run: u32, seed: u64) -> Result<Capture,
         .with("surface_id", surface.id)
         .with("run", run)
         .with("role", if run == 0 { "train" } else { "test" })
-        .with("command.speed_mps", SPEED_MPS)
+        .with("command.speed_mps", speed_mps)
         .with("command.normal_force_n", NORMAL_FORCE_N)
         .with("friction_source", "rfob")
         .with("observer.cutoff_radps", OBSERVER_CUTOFF_RADPS)
