@@ -76,7 +76,8 @@ pub struct Calibration {
 /// [`RecognizerFile::evaluate_sequential`]'s result.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SequentialEvaluation {
-    /// The settings other than the threshold (the first row's threshold).
+    /// The settings, with the first row's threshold (each row has its own; the calibration
+    /// does not depend on it).
     pub params: SequentialParams,
     /// Window length and hop, s.
     pub window_s: f64,
@@ -173,7 +174,10 @@ impl RecognizerFile {
                 .collect();
             return Err(RecognizeError::NoDecisions { captures });
         }
-        let base = params.build()?;
+        let base = match thresholds.first() {
+            Some(&t) => params.threshold(t).build()?,
+            None => params.build()?,
+        };
         let mut rows = Vec::with_capacity(thresholds.len());
         for &threshold in thresholds {
             let params = params.threshold(threshold).build()?;
