@@ -94,34 +94,33 @@ fn needle_only(args: &GenArgs, log_rate_hz: u32) -> anyhow::Result<()> {
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     for split in [Split::Train, Split::Test] {
         let path = dir.join(format!("needle_{}.csv", split.as_str()));
-        let capture = needle_insertion_with(args.seed, split, protocol)?;
-        capture
-            .write_file(&path)
-            .with_context(|| format!("writing {}", path.display()))?;
-        if !args.quiet {
-            println!("wrote {} ({} samples)", path.display(), capture.len());
-        }
+        write_capture(args, &path, &needle_insertion_with(args.seed, split, protocol)?)?;
+    }
+    Ok(())
+}
+
+/// Writes one capture of a single-set run and, unless quiet, says so.
+fn write_capture(args: &GenArgs, path: &std::path::Path, capture: &capture::Capture) -> anyhow::Result<()> {
+    capture
+        .write_file(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    if !args.quiet {
+        println!("wrote {} ({} samples)", path.display(), capture.len());
     }
     Ok(())
 }
 
 /// `--rub-speed-mps`: only Nakano's rubbing runs, at that speed.
 fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use haptics::sim::protocols::nakano::{RUNS, rubbing_run_at};
+    use haptics::sim::protocols::nakano::{RUNS, rubbing_run_at, run_file_name};
     use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
     let dir = args.out.join("nakano");
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     for surface in nakano_surfaces() {
         let patch = SurfacePatch::new(&surface);
         for run in 0..RUNS {
-            let path = dir.join(format!("{:02}_{}_run{run}.csv", surface.id, surface.name));
-            let capture = rubbing_run_at(&patch, run, args.seed, speed_mps)?;
-            capture
-                .write_file(&path)
-                .with_context(|| format!("writing {}", path.display()))?;
-            if !args.quiet {
-                println!("wrote {} ({} samples)", path.display(), capture.len());
-            }
+            let path = dir.join(run_file_name(&surface, run));
+            write_capture(args, &path, &rubbing_run_at(&patch, run, args.seed, speed_mps)?)?;
         }
     }
     Ok(())

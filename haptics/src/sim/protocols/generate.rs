@@ -196,7 +196,7 @@ pub fn generate(
                     for run in 0..nakano::RUNS {
                         let role = if run == 0 { "train" } else { "test" };
                         write(
-                            format!("nakano/{:02}_{}_run{run}.csv", surface.id, surface.name).into(),
+                            format!("nakano/{}", nakano::run_file_name(&surface, run)).into(),
                             nakano::rubbing_run(&patch, run, seed),
                             "nakano_rubbing",
                             surface.name.into(),

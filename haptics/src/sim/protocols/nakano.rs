@@ -15,7 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use super::columns::Columns;
 use super::seed::{derive_seed, tag};
 use crate::sim::world::sensor::{Encoder, LowPass, Noise, PseudoDifferentiator, round_to};
-use crate::sim::world::surface::SurfacePatch;
+use crate::sim::world::surface::{RubbingSurface, SurfacePatch};
 
 /// Device name written into these captures.
 pub const DEVICE: &str = "sim-omega7";
@@ -41,6 +41,11 @@ const HEIGHT_NOISE_M: f64 = 1e-6;
 const RAMP_S: f64 = 0.2;
 /// Pseudo-differentiator time constant for the logged velocity, s.
 const VELOCITY_TAU_S: f64 = 0.005;
+
+/// The file a run of `surface` is written to, inside the set's `nakano/` folder.
+pub fn run_file_name(surface: &RubbingSurface, run: u32) -> String {
+    format!("{:02}_{}_run{run}.csv", surface.id, surface.name)
+}
 
 /// One rubbing run of `patch` at the thesis's [`SPEED_MPS`]. Run 0 is the training run.
 pub fn rubbing_run(patch: &SurfacePatch, run: u32, seed: u64) -> Result<Capture, CaptureError> {
