@@ -60,30 +60,8 @@ impl FeatureNeeds {
     /// recognizer's own), [`RecognizerFile::evaluate_fused`] and, for a decision window,
     /// [`RecognizerFile::som_quality`] read with `model`.
     pub fn evaluation(model: &RecognizerFile, window_s: &[f64]) -> Result<Self, RecognizeError> {
-        let (windowing, features, cell_scale) = match &model.body {
-            RecognizerBody::Som { windowing, .. } => (windowing, FeatureSet::Nakano, CellScale::Mean),
-            RecognizerBody::SomWindows {
-                windowing,
-                cell_scale,
-                ..
-            } => (windowing, FeatureSet::Both, *cell_scale),
-            RecognizerBody::KnnWindows {
-                features,
-                windowing,
-                cell_scale,
-                ..
-            }
-            | RecognizerBody::SvmWindows {
-                features,
-                windowing,
-                cell_scale,
-                ..
-            } => (windowing, *features, *cell_scale),
-            RecognizerBody::Knn { cell_scale, .. }
-            | RecognizerBody::Svm { cell_scale, .. }
-            | RecognizerBody::SomScratches { cell_scale, .. } => {
-                return Ok(Self::new().with_histogram(*cell_scale));
-            }
+        let Some((windowing, features, cell_scale)) = window_features(&model.body) else {
+            return Ok(Self::new().with_histogram(scratch_cell_scale(&model.body)));
         };
         if window_s.is_empty() {
             return Ok(Self::new().with_windows(*windowing, features, cell_scale));
@@ -97,16 +75,10 @@ impl FeatureNeeds {
     /// [`RecognizerFile::sequential_windowing`]; refused for a recognizer without window
     /// probabilities.
     pub fn sequential(model: &RecognizerFile) -> Result<Self, RecognizeError> {
-        match (&model.body, model.sequential_windowing()) {
-            (
-                RecognizerBody::KnnWindows {
-                    features, cell_scale, ..
-                }
-                | RecognizerBody::SvmWindows {
-                    features, cell_scale, ..
-                },
-                Some(windowing),
-            ) => Ok(Self::new().with_windows(windowing, *features, *cell_scale)),
+        match (model.sequential_windowing(), window_features(&model.body)) {
+            (Some(windowing), Some((_, features, cell_scale))) => {
+                Ok(Self::new().with_windows(windowing, features, cell_scale))
+            }
             _ => Err(RecognizeError::NoWindowProbabilities {
                 method: model.method(),
                 features: model.feature_set().name(),
@@ -117,6 +89,42 @@ impl FeatureNeeds {
     /// Whether nothing is needed.
     pub fn is_empty(&self) -> bool {
         self.windows.is_empty() && self.histograms.is_empty()
+    }
+}
+
+/// The windowing, features and histogram cell scale of a recognizer over rubbing windows;
+/// `None` for one over whole scratches.
+fn window_features(body: &RecognizerBody) -> Option<(&NakanoWindowing, FeatureSet, CellScale)> {
+    match body {
+        RecognizerBody::Som { windowing, .. } => Some((windowing, FeatureSet::Nakano, CellScale::Mean)),
+        RecognizerBody::SomWindows {
+            windowing,
+            cell_scale,
+            ..
+        } => Some((windowing, FeatureSet::Both, *cell_scale)),
+        RecognizerBody::KnnWindows {
+            features,
+            windowing,
+            cell_scale,
+            ..
+        }
+        | RecognizerBody::SvmWindows {
+            features,
+            windowing,
+            cell_scale,
+            ..
+        } => Some((windowing, *features, *cell_scale)),
+        RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } | RecognizerBody::SomScratches { .. } => None,
+    }
+}
+
+/// The histogram cell scale of a recognizer over whole scratches (the mean for any other).
+fn scratch_cell_scale(body: &RecognizerBody) -> CellScale {
+    match body {
+        RecognizerBody::Knn { cell_scale, .. }
+        | RecognizerBody::Svm { cell_scale, .. }
+        | RecognizerBody::SomScratches { cell_scale, .. } => *cell_scale,
+        _ => CellScale::Mean,
     }
 }
 
