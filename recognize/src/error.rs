@@ -207,6 +207,16 @@ pub enum RecognizeError {
         /// Labels (or groups) given.
         labels: usize,
     },
+    /// A caller's buffer does not fit the classifier it is used with (made for another one).
+    #[error("the {what} buffer holds {got} values, expected {expected}: it was made for another classifier")]
+    Buffer {
+        /// Which buffer.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The classifier's.
+        expected: usize,
+    },
     /// A vector has the wrong dimension.
     #[error("vector {index} has {got} values, expected {expected}")]
     Dimension {

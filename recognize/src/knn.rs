@@ -114,6 +114,13 @@ impl PartialEq for SearchIndex {
     }
 }
 
+/// The buffers one [`Knn`] needs to classify a query without allocating ([`Knn::scratch`]).
+#[derive(Debug)]
+pub struct KnnScratch {
+    query: Vec<f64>,
+    best: Best,
+}
+
 impl Knn {
     /// Stores the training set. Labels are `0..classes`.
     pub fn fit<V: AsRef<[f64]>>(
@@ -204,15 +211,9 @@ impl Knn {
     /// internals. Below [`TREE_MAX_DIM`] dimensions a k-d tree finds them; the answer is the
     /// same as [`Knn::neighbours_exhaustive`]'s, bit for bit.
     pub fn neighbours(&self, query: &[f64]) -> Result<Vec<usize>, RecognizeError> {
-        vectors::check_query(query, self.dim)?;
-        let q: Vec<f64> = vectors::scaled(query, &self.scale).collect();
-        if self.dim >= TREE_MAX_DIM {
-            return Ok(self.scan(&q));
-        }
-        let tree = self.index.0.get_or_init(|| KdTree::new(&self.points, self.dim));
-        let mut best = Best::new(self.k);
-        tree.search(&q, &mut best);
-        Ok(best.into_indices())
+        let mut scratch = self.scratch();
+        self.search_into(query, &mut scratch)?;
+        Ok(scratch.best.into_indices())
     }
 
     /// [`Knn::neighbours`] by comparing the query with every training point: the reference
@@ -220,17 +221,79 @@ impl Knn {
     pub fn neighbours_exhaustive(&self, query: &[f64]) -> Result<Vec<usize>, RecognizeError> {
         vectors::check_query(query, self.dim)?;
         let q: Vec<f64> = vectors::scaled(query, &self.scale).collect();
-        Ok(self.scan(&q))
+        let mut best = Best::new(self.k);
+        self.scan(&q, &mut best);
+        Ok(best.into_indices())
     }
 
-    /// The `k` nearest to the scaled query `q` over all training points, in training order,
-    /// keeping only the best `k` (distance, index) pairs rather than sorting every distance.
-    fn scan(&self, q: &[f64]) -> Vec<usize> {
-        let mut best = Best::new(self.k);
+    /// Buffers for [`Knn::predict_proba_into`]. The search tree is built here if it was not
+    /// yet, so that a query on these buffers allocates nothing.
+    pub fn scratch(&self) -> KnnScratch {
+        if self.dim < TREE_MAX_DIM {
+            self.tree();
+        }
+        KnnScratch {
+            query: vec![0.0; self.dim],
+            best: Best::new(self.k),
+        }
+    }
+
+    fn tree(&self) -> &KdTree {
+        self.index.0.get_or_init(|| KdTree::new(&self.points, self.dim))
+    }
+
+    /// The `k` nearest neighbours of `query` into `scratch.best`.
+    fn search_into(&self, query: &[f64], scratch: &mut KnnScratch) -> Result<(), RecognizeError> {
+        vectors::check_query(query, self.dim)?;
+        if scratch.query.len() != self.dim {
+            return Err(RecognizeError::Buffer {
+                what: "k-NN scratch",
+                got: scratch.query.len(),
+                expected: self.dim,
+            });
+        }
+        for (q, v) in scratch.query.iter_mut().zip(vectors::scaled(query, &self.scale)) {
+            *q = v;
+        }
+        scratch.best.clear();
+        if self.dim >= TREE_MAX_DIM {
+            self.scan(&scratch.query, &mut scratch.best);
+        } else {
+            self.tree().search(&scratch.query, &mut scratch.best);
+        }
+        Ok(())
+    }
+
+    /// Offers every training point to `best` for the scaled query `q`, keeping only the best
+    /// `k` (distance, index) pairs rather than sorting every distance.
+    fn scan(&self, q: &[f64], best: &mut Best) {
         for (i, p) in self.points.chunks_exact(self.dim).enumerate() {
             best.offer(squared_distance(p, q), i);
         }
-        best.into_indices()
+    }
+
+    /// [`Knn::predict_proba`] into `p` (one per class) on `scratch` (from [`Knn::scratch`]),
+    /// allocating nothing: for a thread that must not.
+    pub fn predict_proba_into(
+        &self,
+        query: &[f64],
+        scratch: &mut KnnScratch,
+        p: &mut [f64],
+    ) -> Result<(), RecognizeError> {
+        if p.len() != self.classes {
+            return Err(RecognizeError::Buffer {
+                what: "class probability",
+                got: p.len(),
+                expected: self.classes,
+            });
+        }
+        self.search_into(query, scratch)?;
+        p.fill(0.0);
+        // Summed a vote at a time, as `votes` does, so the two agree to the bit.
+        for i in scratch.best.indices() {
+            p[self.labels[i]] += 1.0 / self.k as f64;
+        }
+        Ok(())
     }
 
     /// Class probabilities: the fraction of the `k` neighbours with each label (the paper's and

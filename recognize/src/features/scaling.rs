@@ -94,17 +94,22 @@ impl WindowScaling {
 
     /// The scaled vector.
     pub fn apply(&self, features: &[f64]) -> Vec<f64> {
-        features
-            .iter()
-            .zip(self.log_floor.iter().zip(self.offset.iter().zip(&self.scale)))
-            .map(|(&x, (floor, (o, s)))| {
-                let x = match floor {
-                    Some(floor) => x.max(*floor).ln(),
-                    None => x,
-                };
-                (x - o) / s
-            })
-            .collect()
+        let mut out = vec![0.0; features.len().min(self.dim())];
+        self.apply_into(features, &mut out);
+        out
+    }
+
+    /// [`WindowScaling::apply`] into `out`, allocating nothing; features past `out`'s length
+    /// (or the scaling's) are left out.
+    pub fn apply_into(&self, features: &[f64], out: &mut [f64]) {
+        let per_feature = self.log_floor.iter().zip(self.offset.iter().zip(&self.scale));
+        for ((y, &x), (floor, (o, s))) in out.iter_mut().zip(features).zip(per_feature) {
+            let x = match floor {
+                Some(floor) => x.max(*floor).ln(),
+                None => x,
+            };
+            *y = (x - o) / s;
+        }
     }
 
     /// Number of features.

@@ -67,6 +67,16 @@ impl Best {
         self.found.truncate(self.k);
     }
 
+    /// Forgets the candidates, keeping the buffer: a new search allocates nothing.
+    pub(super) fn clear(&mut self) {
+        self.found.clear();
+    }
+
+    /// The training indices found, nearest first, without giving up the buffer.
+    pub(super) fn indices(&self) -> impl Iterator<Item = usize> + '_ {
+        self.found.iter().map(|&(_, i)| i)
+    }
+
     /// The training indices found, nearest first.
     pub(super) fn into_indices(self) -> Vec<usize> {
         self.found.into_iter().map(|(_, i)| i).collect()

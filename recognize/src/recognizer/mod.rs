@@ -24,6 +24,7 @@ mod kept;
 pub(crate) mod labelled;
 mod sequential_eval;
 mod train;
+mod window_classifier;
 
 pub use decide::{BehaviourReliability, Decision, WindowProbabilities};
 pub use evaluate::{BehaviourScore, Evaluation, FusedEvaluation, SomQuality};
@@ -42,6 +43,7 @@ pub use train::{
     SvmTrainer, TrainSettings, Trainer, TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes,
     som_params, train, window_som_nodes, window_svc_params,
 };
+pub use window_classifier::WindowClassifier;
 
 #[cfg(test)]
 mod tests;

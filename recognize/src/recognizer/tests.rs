@@ -4,7 +4,7 @@ use super::*;
 use crate::RecognizeError;
 use crate::features::histogram_names;
 use crate::features::spectral::CellScale;
-use crate::features::{FeatureSet, NakanoWindowing};
+use crate::features::{FeatureSet, NakanoWindowing, window_vectors};
 use crate::knn::KnnParams;
 use crate::recognizer::labelled::class_list;
 use crate::recognizer::train::training_windows;
@@ -84,6 +84,15 @@ fn a_som_recognizer_round_trips_and_recognizes_distinct_surfaces() {
     let first = eval.time_to_first_correct_s.expect("correct decisions");
     assert!((first - 1.839).abs() < 1e-9, "{first}");
     assert_eq!(eval.flips_per_s, 0.0);
+    // A map names nodes, not a distribution over the surfaces: no window classifier.
+    let refused = WindowClassifier::new(&back);
+    assert!(
+        matches!(
+            refused,
+            Err(RecognizeError::NoWindowProbabilities { method: "som", .. })
+        ),
+        "{refused:?}"
+    );
 }
 
 /// One classifier per behaviour, `poke` then `rub`: `make` gets the behaviour and whether it
@@ -277,6 +286,32 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
                 assert_eq!(p[d.label], d.confidence);
                 assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{p:?}");
             }
+            // The allocation-free classifier gives the same probabilities, to the bit, on
+            // buffers it keeps from one window to the next.
+            let mut live = WindowClassifier::new(&back).expect("window classifier");
+            let mut p = vec![0.0; live.classes()];
+            let vectors =
+                window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean).expect("windows");
+            assert_eq!(vectors.len(), probabilities.len());
+            for ((_, v), w) in vectors.iter().zip(&probabilities) {
+                live.probabilities_into(v, &mut p).expect("classified");
+                assert_eq!(p, w.probabilities);
+            }
+            let short = live.probabilities_into(&vectors[0].1[..4], &mut p);
+            assert!(
+                matches!(
+                    short,
+                    Err(RecognizeError::Dimension {
+                        got: 4,
+                        expected: 5,
+                        ..
+                    })
+                ),
+                "{short:?}"
+            );
+            let mut wrong = vec![0.0; live.classes() + 1];
+            let wrong = live.probabilities_into(&vectors[0].1, &mut wrong);
+            assert!(matches!(wrong, Err(RecognizeError::Buffer { .. })), "{wrong:?}");
         }
         // Anytime decisions run from contact: windows before the 5 mm start travel count too.
         let params = back.sequential_params(3.0).expect("window probabilities");

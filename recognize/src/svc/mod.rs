@@ -40,6 +40,7 @@ use solver::BinarySolution;
 const CACHE_BYTES: usize = 128 << 20;
 
 pub use c_search::{C_GRID, CSearch, CvPoint, cross_validated_accuracy, select_c, select_c_observed};
+use probability::{CouplingScratch, pairwise_coupling_into};
 pub use probability::{pairwise_coupling, sigmoid_predict, sigmoid_train};
 
 /// Hyperparameters, checked when fitting.
@@ -456,29 +457,52 @@ impl Svc {
         Ok(())
     }
 
-    fn scaled(&self, query: &[f64]) -> Result<Vec<f64>, RecognizeError> {
-        vectors::check_query(query, self.dim)?;
-        Ok(vectors::scaled(query, &self.scale).collect())
-    }
-
     /// Decision values of every pair, in [`Svc::machines`] order (scikit-learn's
     /// `decision_function` with `decision_function_shape='ovo'`).
     pub fn decision_values(&self, query: &[f64]) -> Result<Vec<f64>, RecognizeError> {
-        let q = self.scaled(query)?;
+        let mut scratch = self.scratch();
+        self.decision_values_into(query, &mut scratch)?;
+        Ok(scratch.decision)
+    }
+
+    /// Buffers for [`Svc::predict_proba_into`], made once for this machine.
+    pub fn scratch(&self) -> SvcScratch {
+        SvcScratch {
+            query: vec![0.0; self.dim],
+            decision: vec![0.0; self.machines.len()],
+            pairwise: vec![0.0; self.classes * self.classes],
+            coupling: CouplingScratch::new(self.classes),
+        }
+    }
+
+    /// [`Svc::decision_values`] into `scratch.decision`.
+    fn decision_values_into(&self, query: &[f64], scratch: &mut SvcScratch) -> Result<(), RecognizeError> {
+        vectors::check_query(query, self.dim)?;
+        if scratch.query.len() != self.dim || scratch.decision.len() != self.machines.len() {
+            return Err(RecognizeError::Buffer {
+                what: "SVC scratch",
+                got: scratch.decision.len(),
+                expected: self.machines.len(),
+            });
+        }
+        for (q, v) in scratch.query.iter_mut().zip(vectors::scaled(query, &self.scale)) {
+            *q = v;
+        }
         let dim = self.dim;
-        Ok(self
-            .machines
-            .iter()
-            .map(|m| {
-                m.support
-                    .iter()
-                    .map(|&(t, coef)| {
-                        coef * self.params.kernel.eval(&self.points[t * dim..(t + 1) * dim], &q)
-                    })
-                    .sum::<f64>()
-                    - m.rho
-            })
-            .collect())
+        for (d, m) in scratch.decision.iter_mut().zip(&self.machines) {
+            *d = m
+                .support
+                .iter()
+                .map(|&(t, coef)| {
+                    coef * self
+                        .params
+                        .kernel
+                        .eval(&self.points[t * dim..(t + 1) * dim], &scratch.query)
+                })
+                .sum::<f64>()
+                - m.rho;
+        }
+        Ok(())
     }
 
     /// The class with most pairwise votes; ties to the lowest class (libsvm's rule).
@@ -494,17 +518,62 @@ impl Svc {
 
     /// Class probabilities by pairwise coupling of the pairs' sigmoids.
     pub fn predict_proba(&self, query: &[f64]) -> Result<Vec<f64>, RecognizeError> {
-        let dec = self.decision_values(query)?;
+        let mut scratch = self.scratch();
+        let mut p = vec![0.0; self.classes];
+        self.predict_proba_into(query, &mut scratch, &mut p)?;
+        Ok(p)
+    }
+
+    /// [`Svc::predict_proba`] into `p` (one per class) on `scratch` (from [`Svc::scratch`]),
+    /// allocating nothing: for a thread that must not.
+    pub fn predict_proba_into(
+        &self,
+        query: &[f64],
+        scratch: &mut SvcScratch,
+        p: &mut [f64],
+    ) -> Result<(), RecognizeError> {
+        if p.len() != self.classes {
+            return Err(RecognizeError::Buffer {
+                what: "class probability",
+                got: p.len(),
+                expected: self.classes,
+            });
+        }
+        if scratch.pairwise.len() != self.classes * self.classes {
+            return Err(RecognizeError::Buffer {
+                what: "SVC scratch",
+                got: scratch.pairwise.len(),
+                expected: self.classes * self.classes,
+            });
+        }
+        self.decision_values_into(query, scratch)?;
         let k = self.classes;
-        let mut r = vec![vec![0.0; k]; k];
-        for (m, d) in self.machines.iter().zip(&dec) {
+        let SvcScratch {
+            decision,
+            pairwise: r,
+            coupling,
+            ..
+        } = scratch;
+        r.fill(0.0);
+        for (m, d) in self.machines.iter().zip(decision.iter()) {
             let (a, b) = m.sigmoid.ok_or(RecognizeError::NoProbability)?;
             let p = sigmoid_predict(*d, a, b).clamp(1e-7, 1.0 - 1e-7);
-            r[m.classes.0][m.classes.1] = p;
-            r[m.classes.1][m.classes.0] = 1.0 - p;
+            r[m.classes.0 * k + m.classes.1] = p;
+            r[m.classes.1 * k + m.classes.0] = 1.0 - p;
         }
-        Ok(pairwise_coupling(&r))
+        pairwise_coupling_into(r, coupling, p);
+        Ok(())
     }
+}
+
+/// The buffers one [`Svc`] needs to classify a query without allocating ([`Svc::scratch`]).
+#[derive(Debug, Clone)]
+pub struct SvcScratch {
+    query: Vec<f64>,
+    decision: Vec<f64>,
+    /// The pairs' probabilities, `classes × classes` row-major.
+    pairwise: Vec<f64>,
+    coupling: CouplingScratch,
 }
 
 /// One pair of classes: its training vectors and, with probabilities, their folds' order.

@@ -84,25 +84,56 @@ pub fn sigmoid_predict(dec: f64, a: f64, b: f64) -> f64 {
 /// libsvm's fixed-point iteration, run to a tight tolerance (see the module doc).
 pub fn pairwise_coupling(r: &[Vec<f64>]) -> Vec<f64> {
     let k = r.len();
-    if k == 0 {
-        return Vec::new();
+    let flat: Vec<f64> = r.iter().flat_map(|row| row.iter().copied()).collect();
+    let mut scratch = CouplingScratch::new(k);
+    let mut p = vec![0.0; k];
+    pairwise_coupling_into(&flat, &mut scratch, &mut p);
+    p
+}
+
+/// The buffers of [`pairwise_coupling_into`] for `k` classes.
+#[derive(Debug, Clone)]
+pub struct CouplingScratch {
+    /// The method's `k × k` matrix, row-major.
+    q: Vec<f64>,
+    qp: Vec<f64>,
+}
+
+impl CouplingScratch {
+    /// Buffers for `k` classes.
+    pub fn new(k: usize) -> Self {
+        Self {
+            q: vec![0.0; k * k],
+            qp: vec![0.0; k],
+        }
     }
-    let mut q = vec![vec![0.0; k]; k];
+}
+
+/// [`pairwise_coupling`] on its own buffers, for a thread that must not allocate: `r` is the
+/// `k × k` matrix row-major, `k` is `p.len()`, and `scratch` was made for the same `k`.
+pub fn pairwise_coupling_into(r: &[f64], scratch: &mut CouplingScratch, p: &mut [f64]) {
+    let k = p.len();
+    debug_assert_eq!(r.len(), k * k);
+    debug_assert_eq!(scratch.qp.len(), k);
+    if k == 0 {
+        return;
+    }
+    let CouplingScratch { q, qp } = scratch;
+    q.fill(0.0);
     for t in 0..k {
         for j in 0..k {
             if j != t {
-                q[t][t] += r[j][t] * r[j][t];
-                q[t][j] = -r[j][t] * r[t][j];
+                q[t * k + t] += r[j * k + t] * r[j * k + t];
+                q[t * k + j] = -r[j * k + t] * r[t * k + j];
             }
         }
     }
-    let mut p = vec![1.0 / k as f64; k];
-    let mut qp = vec![0.0; k];
+    p.fill(1.0 / k as f64);
     let eps = 1e-12 / k as f64;
     for _ in 0..(1000 * k).max(1000) {
         let mut pqp = 0.0;
         for t in 0..k {
-            qp[t] = (0..k).map(|j| q[t][j] * p[j]).sum();
+            qp[t] = (0..k).map(|j| q[t * k + j] * p[j]).sum();
             pqp += p[t] * qp[t];
         }
         let max_error = qp.iter().map(|v| (v - pqp).abs()).fold(0.0, f64::max);
@@ -110,17 +141,17 @@ pub fn pairwise_coupling(r: &[Vec<f64>]) -> Vec<f64> {
             break;
         }
         for t in 0..k {
-            if q[t][t] <= 0.0 {
+            let qtt = q[t * k + t];
+            if qtt <= 0.0 {
                 continue;
             }
-            let diff = (-qp[t] + pqp) / q[t][t];
+            let diff = (-qp[t] + pqp) / qtt;
             p[t] += diff;
-            pqp = (pqp + diff * (diff * q[t][t] + 2.0 * qp[t])) / (1.0 + diff) / (1.0 + diff);
+            pqp = (pqp + diff * (diff * qtt + 2.0 * qp[t])) / (1.0 + diff) / (1.0 + diff);
             for j in 0..k {
-                qp[j] = (qp[j] + diff * q[t][j]) / (1.0 + diff);
+                qp[j] = (qp[j] + diff * q[t * k + j]) / (1.0 + diff);
                 p[j] /= 1.0 + diff;
             }
         }
     }
-    p
 }
