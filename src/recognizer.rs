@@ -8,12 +8,14 @@ use anyhow::Context;
 #[cfg(doc)]
 use haptics::live_recognizer::Recognizing;
 use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
+use haptics::rt::HapticSample;
 #[cfg(doc)]
 use recognize::NakanoWindowing;
-use recognize::{FeatureNeeds, LabelledCapture, Method, RecognizerFile, TrainSettings};
+use recognize::sequential::{DEFAULT_MEMORY_S, DEFAULT_THRESHOLD};
+use recognize::{FeatureNeeds, FeatureSet, LabelledCapture, Method, RecognizerFile, TrainSettings};
 
 use crate::scene::Scene;
-use crate::session::report::Recognition;
+use crate::session::report::{Recognition, RecognizerLine, SurfaceTiming};
 use crate::session::{SegmentKind, SegmentRun};
 
 /// A loaded recognizer and its live state.
@@ -28,17 +30,42 @@ impl SceneRecognizer {
         let Some(section) = &scene.recognizer else {
             return Ok(None);
         };
+        let method = match section.method.as_str() {
+            "knn" => Method::Knn,
+            "svm" => Method::Svm,
+            _ => Method::Som,
+        };
         let model = match (&section.file, &section.captures) {
             (Some(file), _) => {
                 let path = scene.resolve(file);
-                RecognizerFile::load(&path)
-                    .with_context(|| format!("loading recognizer {}", path.display()))?
+                let model = RecognizerFile::load(&path)
+                    .with_context(|| format!("loading recognizer {}", path.display()))?;
+                if model.method() != section.method {
+                    anyhow::bail!(
+                        "{}: recognizer.method is {} but {} holds a {} recognizer",
+                        scene.path.display(),
+                        section.method,
+                        path.display(),
+                        model.method()
+                    );
+                }
+                model
             }
-            (None, Some(dir)) => train(&scene.resolve(dir))?,
+            (None, Some(dir)) => train(&scene.resolve(dir), method, section.window_s)?,
             (None, None) => return Ok(None),
         };
-        let live =
-            LiveRecognizer::new(&model, scene.device.rate_hz).context("starting the live recognizer")?;
+        let rate_hz = scene.device.rate_hz;
+        let live = match model.sequential_params(section.memory_s.unwrap_or(DEFAULT_MEMORY_S)) {
+            Some(params) => {
+                let params = params
+                    .threshold(section.threshold.unwrap_or(DEFAULT_THRESHOLD))
+                    .build()
+                    .context("the recognizer's anytime settings")?;
+                LiveRecognizer::with_params(&model, rate_hz, params)
+            }
+            None => LiveRecognizer::new(&model, rate_hz),
+        }
+        .context("starting the live recognizer")?;
         Ok(Some(Self { live }))
     }
 
@@ -48,14 +75,34 @@ impl SceneRecognizer {
         self.live.clone()
     }
 
+    /// How the report names it.
+    pub fn line(&self) -> RecognizerLine {
+        line(&self.live)
+    }
+
     /// The decisions a segment's haptic thread made, in order (none for other segments).
     pub fn recognize(&self, run: &SegmentRun) -> Vec<Recognition> {
         decisions(self.live.classes(), run)
     }
 }
 
+/// How the report names `live` and the settings it decides with.
+pub fn line(live: &LiveRecognizer) -> RecognizerLine {
+    let w = live.windowing();
+    let params = live.sequential_params();
+    let hop_s = w.hop_samples as f64 / w.rate_hz;
+    RecognizerLine {
+        method: live.method().to_owned(),
+        features: "nakano".to_owned(),
+        window_s: w.window_s(),
+        hop_s,
+        threshold: params.map(|p| p.threshold()),
+        memory_s: params.map(|p| p.memory() as f64 * hop_s),
+    }
+}
+
 /// The decisions in a surface segment's samples: one at every sample where the recognizer's
-/// decision count steps.
+/// decision count steps, undecided ones included.
 pub fn decisions(classes: &[String], run: &SegmentRun) -> Vec<Recognition> {
     let SegmentKind::Surface { surface } = &run.segment.kind else {
         return Vec::new();
@@ -68,33 +115,93 @@ pub fn decisions(classes: &[String], run: &SegmentRun) -> Vec<Recognition> {
             continue;
         }
         made = count;
-        if let Some((label, confidence)) = decision_in(&s.channels)
-            && count > 0.0
+        if count > 0.0
+            && let Some(r) = recognition(classes, &run.segment.object, surface, s)
         {
-            out.push(Recognition {
-                object: run.segment.object.clone(),
-                truth: surface.clone(),
-                time_s: s.time_s,
-                label: classes.get(label).cloned().unwrap_or_default(),
-                confidence,
-            });
+            out.push(r);
         }
     }
     out
 }
 
-/// Trains Nakano's SOM on every `*.csv` rubbing capture in `dir`, with the method's defaults
-/// ([`TrainSettings::new`]: the protocol's windows, [`NakanoWindowing::protocol`]). Each
+/// The decision `sample`'s recognizer channels carry, as the report lists it; `None` before
+/// the stroke's first.
+pub fn recognition(
+    classes: &[String],
+    object: &str,
+    truth: &str,
+    sample: &HapticSample,
+) -> Option<Recognition> {
+    let d = decision_in(&sample.channels)?;
+    let name = |i: usize| classes.get(i).cloned();
+    Some(Recognition {
+        object: object.to_owned(),
+        truth: truth.to_owned(),
+        time_s: sample.time_s,
+        label: match d.label {
+            Some(l) => Some(name(l)?),
+            None => None,
+        },
+        best: name(d.best)?,
+        confidence: d.confidence,
+    })
+}
+
+/// How soon each surface segment's surface was named, from the start of its stroke (the first
+/// rubbing tick, where the recognizer starts).
+pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceTiming> {
+    runs.iter()
+        .filter_map(|run| {
+            let SegmentKind::Surface { surface } = &run.segment.kind else {
+                return None;
+            };
+            let rubbing = haptics::control::RubbingPhase::Rub.code();
+            let stroke_s = run
+                .samples
+                .iter()
+                .find(|s| s.channels[haptics::control::rubbing::channel::PHASE] == rubbing)?
+                .time_s;
+            let named: Vec<&Recognition> = recognition
+                .iter()
+                .filter(|r| r.object == run.segment.object && r.label.is_some())
+                .collect();
+            let first_named_after_s = named.first().map(|r| r.time_s - stroke_s);
+            // The named decision that starts the final run of right ones.
+            let right = |r: &&&Recognition| r.label.as_deref() == Some(surface.as_str());
+            let trailing_right = named.iter().rev().take_while(right).count();
+            let stable_right_after_s =
+                (trailing_right > 0).then(|| named[named.len() - trailing_right].time_s - stroke_s);
+            Some(SurfaceTiming {
+                object: run.segment.object.clone(),
+                truth: surface.clone(),
+                stroke_s,
+                first_named_after_s,
+                stable_right_after_s,
+                named: named.len(),
+                right: named.iter().filter(right).count(),
+            })
+        })
+        .collect()
+}
+
+/// Trains a `method` recognizer on Nakano's features of every `*.csv` rubbing capture in
+/// `dir`, with the method's defaults ([`TrainSettings::new`]: the protocol's windows,
+/// [`NakanoWindowing::protocol`]) but for the decision window `window_s` if given. Each
 /// capture is kept only as its training windows once read, so a folder of many long captures
 /// holds one capture's samples at a time.
-fn train(dir: &std::path::Path) -> anyhow::Result<RecognizerFile> {
+fn train(dir: &std::path::Path, method: Method, window_s: Option<f64>) -> anyhow::Result<RecognizerFile> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading recognizer captures in {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|e| e == "csv"))
         .collect();
     paths.sort();
-    let settings = TrainSettings::new(Method::Som);
+    let mut settings = TrainSettings::new(method);
+    // The live stream computes Nakano's features only.
+    settings.features = FeatureSet::Nakano;
+    if let Some(w) = window_s {
+        settings.window_s = w;
+    }
     let mut needs: Option<FeatureNeeds> = None;
     let mut captures = Vec::with_capacity(paths.len());
     for p in &paths {

@@ -261,13 +261,21 @@ pub struct ModelBudget {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RecognizerSection {
-    /// `som` or `knn`.
+    /// `som`, `knn` or `svm`: what a folder of captures trains, and what a file must hold.
     #[serde(default = "default_method")]
     pub method: String,
     /// A recognizer model file.
     pub file: Option<PathBuf>,
     /// A folder of rubbing captures to train from.
     pub captures: Option<PathBuf>,
+    /// With `captures`: the decision window to train, s (the method's default otherwise).
+    pub window_s: Option<f64>,
+    /// A k-NN's or SVM's posterior at which a surface is named (default 0.9); until then the
+    /// recognizer says "undecided". A SOM names a surface every window and takes none.
+    pub threshold: Option<f64>,
+    /// A k-NN's or SVM's span of windows whose evidence counts, s (default 3): a new surface
+    /// under the tool is named within about this time.
+    pub memory_s: Option<f64>,
 }
 
 fn default_method() -> String {
@@ -684,14 +692,45 @@ impl Scene {
             }
         }
         if let Some(r) = &self.recognizer {
-            if !matches!(r.method.as_str(), "som" | "knn") {
+            let key = |field: &str| format!("recognizer.{field}");
+            if !matches!(r.method.as_str(), "som" | "knn" | "svm") {
                 return Err(self.invalid(
                     "recognizer.method",
-                    format!("`{}`: expected som or knn", r.method),
+                    format!("`{}`: expected som, knn or svm", r.method),
                 ));
             }
             if r.file.is_some() == r.captures.is_some() {
                 return Err(self.invalid("recognizer", "give exactly one of `file` and `captures`"));
+            }
+            if r.method == "som" {
+                for (field, v) in [("threshold", r.threshold), ("memory_s", r.memory_s)] {
+                    if v.is_some() {
+                        return Err(self.invalid(
+                            key(field),
+                            "a som names a surface every window and has no posterior: only a knn or svm takes it",
+                        ));
+                    }
+                }
+            }
+            if let Some(p) = r.threshold
+                && !(p > 0.0 && p < 1.0)
+            {
+                return Err(self.invalid("recognizer.threshold", format!("{p}: must be in (0, 1)")));
+            }
+            for (field, v) in [("memory_s", r.memory_s), ("window_s", r.window_s)] {
+                if let Some(v) = v
+                    && !(v.is_finite() && v > 0.0)
+                {
+                    return Err(
+                        self.invalid(key(field), format!("{v}: must be a positive number of seconds"))
+                    );
+                }
+            }
+            if r.window_s.is_some() && r.captures.is_none() {
+                return Err(self.invalid(
+                    "recognizer.window_s",
+                    "sets the window a folder of captures trains; a file has its own",
+                ));
             }
         }
         self.validate_task()
@@ -935,6 +974,53 @@ mod tests {
             let e = error(&text);
             assert!(e.starts_with("scenes/x.toml: `") && e.contains(key), "{key}: {e}");
         }
+    }
+
+    #[test]
+    fn a_recognizer_takes_only_the_settings_its_method_has() {
+        let svm = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/surfaces_nakano.toml"),
+        )
+        .unwrap();
+        assert!(svm.contains("method = \"svm\"") && svm.contains("threshold = 0.9"));
+        let som = svm.replace("method = \"svm\"", "method = \"som\"");
+        for (text, key) in [
+            (som.clone(), "recognizer.threshold`"),
+            (
+                som.replace("threshold = 0.9", "memory_s = 2.0"),
+                "recognizer.memory_s`",
+            ),
+            (
+                svm.replace("threshold = 0.9", "threshold = 1.0"),
+                "recognizer.threshold`",
+            ),
+            (
+                svm.replace("threshold = 0.9", "threshold = nan"),
+                "recognizer.threshold`",
+            ),
+            (
+                svm.replace("threshold = 0.9", "memory_s = 0.0"),
+                "recognizer.memory_s`",
+            ),
+            (
+                svm.replace("threshold = 0.9", "window_s = 0.25"),
+                "recognizer.window_s`",
+            ),
+            (
+                svm.replace("method = \"svm\"", "method = \"tree\""),
+                "recognizer.method`",
+            ),
+        ] {
+            let e = error(&text);
+            assert!(e.starts_with("scenes/x.toml: `") && e.contains(key), "{key}: {e}");
+        }
+        assert!(
+            Scene::parse(
+                &svm.replace("threshold = 0.9", "threshold = 0.5\nmemory_s = 1.5"),
+                Path::new("x.toml")
+            )
+            .is_ok()
+        );
     }
 
     #[test]

@@ -369,8 +369,9 @@ pub fn render_session_frame(
             .iter()
             .rfind(|r| r.object == run.segment.object && r.time_s <= sample.time_s)
             .map(|r| render::Recognition {
-                surface: r.label.clone(),
+                surface: r.label.clone().unwrap_or_else(|| r.best.clone()),
                 confidence: r.confidence as f32,
+                decided: r.label.is_some(),
             });
         frame.overlay = Some(overlay);
         let image = renderer.render(&frame).map_err(|e| e.to_string())?;

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use haptics::live::{self, LiveView, RecentSamples};
-use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
+use haptics::live_recognizer::{LiveRecognizer, channel};
 use haptics::sim::hand::LiveHand;
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
@@ -46,6 +46,8 @@ const RING_S: f64 = 4.0;
 pub struct WindowOutcome {
     /// Every segment run, in order.
     pub runs: Vec<SegmentRun>,
+    /// The surface recognizer of the scene shown last, as the report names it.
+    pub recognizer: Option<session::report::RecognizerLine>,
     /// Recognized-surface decisions.
     pub recognition: Vec<Decision>,
     /// The scene shown last (the overlay can switch).
@@ -70,7 +72,7 @@ struct Session {
     worker: Option<JoinHandle<Result<SegmentRun, SessionError>>>,
     hand_m: DVec3,
     recognizer: Option<LiveRecognizer>,
-    recognized: Option<(String, f32)>,
+    recognized: Option<Recognition>,
     /// The recognizer channel's decision count at the last sample read.
     decisions_seen: f64,
     outcome: WindowOutcome,
@@ -248,17 +250,15 @@ impl WindowApp for Session {
             }
             *decisions_seen = count;
             if count > 0.0
-                && let Some((label, confidence)) = decision_in(&s.channels)
-                && let Some(name) = r.classes().get(label)
+                && let Some(d) =
+                    crate::recognizer::recognition(r.classes(), object.unwrap_or_default(), truth, s)
             {
-                *recognized = Some((name.clone(), confidence as f32));
-                recognition.push(Decision {
-                    object: object.unwrap_or_default().to_owned(),
-                    truth: truth.clone(),
-                    time_s: s.time_s,
-                    label: name.clone(),
-                    confidence,
+                *recognized = Some(Recognition {
+                    surface: d.label.clone().unwrap_or_else(|| d.best.clone()),
+                    confidence: d.confidence as f32,
+                    decided: d.label.is_some(),
                 });
+                recognition.push(d);
             }
         });
         let last = self.live.newest();
@@ -290,10 +290,7 @@ impl WindowApp for Session {
                 ""
             }
         );
-        overlay.recognized = self.recognized.as_ref().map(|(s, c)| Recognition {
-            surface: s.clone(),
-            confidence: *c,
-        });
+        overlay.recognized = self.recognized.clone();
         overlay.scenes = self
             .scenes
             .iter()
@@ -379,5 +376,6 @@ pub fn run(
     }
     let mut outcome = std::mem::take(&mut session.outcome);
     outcome.scene = Some(session.scene.clone());
+    outcome.recognizer = session.recognizer.as_ref().map(crate::recognizer::line);
     Ok(outcome)
 }

@@ -1,16 +1,22 @@
 //! The live recognizer against the offline pipeline on Nakano's simulated rubbing runs: the
-//! same decisions on the same windows, no allocation per sample, and the errors of a recognizer
-//! that cannot run live.
+//! same decisions (a SOM's) and the same posterior (a k-NN's or SVM's anytime decisions) on the
+//! same windows, no allocation per sample, and the errors of a recognizer that cannot run live.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use haptics::HapticsError;
-use haptics::live_recognizer::LiveRecognizer;
+use haptics::live_recognizer::{
+    ChannelDecision, LiveDecision, LiveRecognizer, Recognizing, channel, decision_in,
+};
 use haptics::sim::protocols::nakano::{RUNS, rubbing_run};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use recognize::{CellScale, KnnParams, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
+use recognize::sequential::DEFAULT_MEMORY_S;
+use recognize::{
+    CellScale, FeatureSet, KnnParams, LabelledCapture, NakanoWindowing, RecognizerFile, SequentialParams,
+    SequentialState, SequentialStep, SomParams, SvmC,
+};
 
 /// Counts allocations made by the thread that set [`COUNTING`].
 struct CountingAllocator;
@@ -116,11 +122,15 @@ fn live_decisions_equal_offline_decisions_without_allocating() {
             for ((i, live_d), off) in online.iter().zip(&offline) {
                 assert_eq!(*i, off.decided_at);
                 assert_eq!(live_d.window_start as usize, off.window_start);
-                assert_eq!(live_d.label, off.label, "window at {}", off.window_start);
+                assert_eq!(live_d.label, Some(off.label), "window at {}", off.window_start);
+                assert_eq!(live_d.best, off.label);
                 assert!((live_d.confidence - off.confidence).abs() < 1e-6);
                 assert!((0.0..=1.0).contains(&live_d.confidence));
             }
-            assert_eq!(live.current().map(|d| d.label), offline.last().map(|d| d.label));
+            assert_eq!(
+                live.current().and_then(|d| d.label),
+                offline.last().map(|d| d.label)
+            );
             compared += offline.len();
             correct += offline
                 .iter()
@@ -134,7 +144,7 @@ fn live_decisions_equal_offline_decisions_without_allocating() {
 }
 
 #[test]
-fn only_a_som_at_its_own_rate_runs_live() {
+fn a_recognizer_runs_live_only_at_its_own_rate_and_over_rubbing_windows() {
     let runs = runs();
     let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
     let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
@@ -179,7 +189,7 @@ fn only_a_som_at_its_own_rate_runs_live() {
     live.reset();
     assert_eq!(live.current(), None);
 
-    // A k-NN recognizer needs whole scratches: it cannot run live.
+    // A k-NN over whole scratches decides once a scratch, not on a stream: it cannot run live.
     let scratches: Vec<LabelledCapture> = haptics::sim::world::scratch::household_surfaces()
         .iter()
         .take(2)
@@ -206,93 +216,108 @@ fn only_a_som_at_its_own_rate_runs_live() {
     ));
 }
 
-/// The recognizer inside the haptic tick, on the simulated Omega.7 rubbing a track none of the
-/// committed recognizer's training captures used: the loop allocates nothing, and the
-/// decisions the tick writes into the samples are exactly the offline pipeline's on the capture
-/// recorded from the same samples.
-#[test]
-fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
+/// The simulated Omega.7 rubbing `surface` on a track none of the committed recognizers'
+/// training captures used, `model` inside the haptic tick ([`Recognizing`]), the whole loop on
+/// this thread while a counter watches it allocate (it must not). Returns the capture its
+/// samples make and the decisions the tick wrote into them, by capture row.
+fn tick_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usize, ChannelDecision)>) {
     use capture::{Capture, Metadata};
     use haptics::acquire::{CaptureOptions, Protocol, controller, row, sim_device};
-    use haptics::live_recognizer::{Recognizing, channel, decision_in};
     use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest};
 
-    let model_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/nakano_som.json");
-    let model = RecognizerFile::load(&model_path).expect("committed recognizer");
+    let mut options = CaptureOptions::new(Protocol::Rubbing);
+    options.pacing = Pacing::Unpaced;
+    options.surface = surface.to_owned();
+    options.track_offset_m = 0.25;
+    let mut device = sim_device(&options).expect("sim");
+    // A copy, as a scene hands each haptic thread.
+    let live = LiveRecognizer::new(model, 1000.0)
+        .expect("live recognizer")
+        .clone();
+    let mut c = Recognizing::new(controller(Protocol::Rubbing), live);
+    let config = LoopConfig {
+        pacing: Pacing::Unpaced,
+        rt: RtRequest::NONE,
+        watchdog: None,
+        max_ticks: Some(12_000),
+        ..LoopConfig::default()
+    };
+    let shared = LoopShared::new(config.period().expect("period"));
+    let (producer, mut consumer) = rtrb::RingBuffer::new(12_000);
+    let mut io = LoopIo {
+        samples: Some(producer),
+        live: None,
+    };
+    ALLOCATIONS.store(0, Ordering::Relaxed);
+    THIS_THREAD.with(|t| t.set(true));
+    COUNTING.store(true, Ordering::Relaxed);
+    let run = rt::run(&mut device, &mut c, &mut io, &shared, &config);
+    COUNTING.store(false, Ordering::Relaxed);
+    THIS_THREAD.with(|t| t.set(false));
+    run.expect("loop");
+    assert_eq!(
+        ALLOCATIONS.load(Ordering::Relaxed),
+        0,
+        "{surface}: the haptic loop allocated"
+    );
+    let mut samples = Vec::new();
+    while let Ok(s) = consumer.pop() {
+        samples.push(s);
+    }
+    let (mut data, mut tick_decisions) = (Vec::new(), Vec::new());
+    let mut made = 0.0;
+    for s in &samples {
+        let mut r = Vec::new();
+        if !row(Protocol::Rubbing, s, &mut r) {
+            continue;
+        }
+        data.push(r);
+        let count = s.channels[channel::DECISIONS];
+        if count != made {
+            made = count;
+            tick_decisions.push((data.len() - 1, decision_in(&s.channels).expect("decided")));
+        }
+    }
+    let meta = Metadata::new(capture::CaptureKind::Rubbing, "sim-omega7", 1000.0).with("surface", surface);
+    let columns = Protocol::Rubbing
+        .columns()
+        .iter()
+        .map(|c| (*c).to_owned())
+        .collect();
+    let by_column = (0..data[0].len())
+        .map(|j| data.iter().map(|r| r[j]).collect())
+        .collect();
+    let capture = Capture::new(meta, columns, by_column).expect("capture");
+    (
+        LabelledCapture::new(capture, Path::new(surface), String::new()).expect("labelled"),
+        tick_decisions,
+    )
+}
+
+fn committed(name: &str) -> RecognizerFile {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/models")
+        .join(name);
+    RecognizerFile::load(&path).expect("committed recognizer")
+}
+
+/// The committed SOM inside the haptic tick: the loop allocates nothing, and the decisions the
+/// tick writes into the samples are exactly the offline pipeline's on the capture recorded from
+/// the same samples.
+#[test]
+fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
+    let model = committed("nakano_som.json");
     let (mut compared, mut correct) = (0, 0);
     for surface in ["sandpaper_400", "styrol_smooth"] {
-        let mut options = CaptureOptions::new(Protocol::Rubbing);
-        options.pacing = Pacing::Unpaced;
-        options.surface = surface.to_owned();
-        options.track_offset_m = 0.25;
-        let mut device = sim_device(&options).expect("sim");
-        // A copy, as a scene hands each haptic thread.
-        let live = LiveRecognizer::new(&model, 1000.0).expect("som").clone();
-        let mut c = Recognizing::new(controller(Protocol::Rubbing), live);
-        let config = LoopConfig {
-            pacing: Pacing::Unpaced,
-            rt: RtRequest::NONE,
-            watchdog: None,
-            max_ticks: Some(12_000),
-            ..LoopConfig::default()
-        };
-        let shared = LoopShared::new(config.period().expect("period"));
-        let (producer, mut consumer) = rtrb::RingBuffer::new(12_000);
-        let mut io = LoopIo {
-            samples: Some(producer),
-            live: None,
-        };
-        // The whole loop, recognizer inside every tick, on this thread: nothing may allocate.
-        ALLOCATIONS.store(0, Ordering::Relaxed);
-        THIS_THREAD.with(|t| t.set(true));
-        COUNTING.store(true, Ordering::Relaxed);
-        let run = rt::run(&mut device, &mut c, &mut io, &shared, &config);
-        COUNTING.store(false, Ordering::Relaxed);
-        THIS_THREAD.with(|t| t.set(false));
-        run.expect("loop");
-        assert_eq!(
-            ALLOCATIONS.load(Ordering::Relaxed),
-            0,
-            "{surface}: the haptic loop allocated"
-        );
-        let mut samples = Vec::new();
-        while let Ok(s) = consumer.pop() {
-            samples.push(s);
-        }
-        // The capture those samples make, and the tick's decisions by capture row.
-        let (mut data, mut tick_decisions) = (Vec::new(), Vec::new());
-        let mut made = 0.0;
-        for s in &samples {
-            let mut r = Vec::new();
-            if !row(Protocol::Rubbing, s, &mut r) {
-                continue;
-            }
-            data.push(r);
-            let count = s.channels[channel::DECISIONS];
-            if count != made {
-                made = count;
-                tick_decisions.push((data.len() - 1, decision_in(&s.channels).expect("decided")));
-            }
-        }
-        let meta =
-            Metadata::new(capture::CaptureKind::Rubbing, "sim-omega7", 1000.0).with("surface", surface);
-        let columns = Protocol::Rubbing
-            .columns()
-            .iter()
-            .map(|c| (*c).to_owned())
-            .collect();
-        let by_column = (0..data[0].len())
-            .map(|j| data.iter().map(|r| r[j]).collect())
-            .collect();
-        let capture = Capture::new(meta, columns, by_column).expect("capture");
-        let labelled = LabelledCapture::new(capture, Path::new(surface), String::new()).expect("labelled");
+        let (labelled, tick_decisions) = tick_run(&model, surface);
         let offline = model.decisions(&labelled, None).expect("offline");
         assert!(offline.len() > 10, "{surface}: {}", offline.len());
         assert_eq!(tick_decisions.len(), offline.len(), "{surface}");
-        for ((at, (label, confidence)), off) in tick_decisions.iter().zip(&offline) {
+        for ((at, d), off) in tick_decisions.iter().zip(&offline) {
             assert_eq!(*at, off.decided_at, "{surface}");
-            assert_eq!(*label, off.label, "{surface} at {at}");
-            assert!((confidence - off.confidence).abs() < 1e-6);
+            assert_eq!(d.label, Some(off.label), "{surface} at {at}");
+            assert_eq!(d.best, off.label, "{surface} at {at}");
+            assert!((d.confidence - off.confidence).abs() < 1e-6);
         }
         compared += offline.len();
         correct += offline
@@ -302,4 +327,218 @@ fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
     }
     // The two closest surfaces, on a track the recognizer never saw.
     assert!(correct as f64 / compared as f64 > 0.9, "{correct}/{compared}");
+}
+
+/// One step of the offline anytime decisions: the sample a window is decided at, its class
+/// probabilities, and what a fresh posterior made of the windows up to it.
+type OfflineStep = (usize, Vec<f64>, SequentialStep);
+
+/// The offline pipeline's anytime decisions on `c`: its window probabilities from contact on,
+/// accumulated by a fresh [`SequentialState`] with `params`.
+fn offline_steps(model: &RecognizerFile, c: &LabelledCapture, params: SequentialParams) -> Vec<OfflineStep> {
+    let windowing = model.sequential_windowing().expect("window probabilities");
+    let mut state = SequentialState::new(params, model.classes.len()).expect("state");
+    model
+        .window_probabilities(c, Some(&windowing))
+        .expect("probabilities")
+        .expect("windows")
+        .into_iter()
+        .map(|w| {
+            let step = state.push(&w.probabilities).expect("finite");
+            (w.decision.decided_at, w.probabilities, step)
+        })
+        .collect()
+}
+
+/// Whether a live decision is the offline one: the same window, the same most probable surface
+/// with the same posterior (the streaming features agree with the batch ones to ~1e-9, not to
+/// the bit), and the same surface named, unless the posterior sits within that tolerance of
+/// the threshold or the release level, where either answer is right.
+fn same_step(
+    live: &LiveDecision,
+    at: usize,
+    off: &OfflineStep,
+    params: &SequentialParams,
+) -> Result<(), String> {
+    let (off_at, _, step) = off;
+    let near = |level: f64| (step.probability - level).abs() < 1e-6;
+    let same = at == *off_at
+        && live.best == step.best
+        && (live.confidence - step.probability).abs() < 1e-6
+        && (live.label == step.decided || near(params.threshold()) || near(params.release()));
+    if same {
+        Ok(())
+    } else {
+        Err(format!("live {live:?} at {at}, offline {step:?} at {off_at}"))
+    }
+}
+
+/// A k-NN or SVM over windows runs live as anytime decisions: its posterior follows the
+/// offline pipeline's window by window, without allocating, and the surfaces it names are the
+/// right ones.
+#[test]
+fn anytime_live_decisions_follow_the_offline_posterior_without_allocating() {
+    let runs = runs();
+    let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
+    let windowing = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
+    let svm = RecognizerFile::train_svm_windows(
+        &train,
+        windowing,
+        FeatureSet::Nakano,
+        &SvmC::auto(),
+        CellScale::Mean,
+    )
+    .expect("SVM");
+    let knn = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 5, CellScale::Mean)
+        .expect("k-NN");
+    for model in [svm, knn] {
+        let params = model
+            .sequential_params(DEFAULT_MEMORY_S)
+            .expect("window probabilities")
+            .build()
+            .expect("valid");
+        let mut live = LiveRecognizer::new(&model, 1000.0).expect("live").clone();
+        assert_eq!(live.sequential_params(), Some(&params));
+        let (mut named, mut right) = (0, 0);
+        for surface_runs in &runs {
+            for c in &surface_runs[1..] {
+                let offline = offline_steps(&model, c, params);
+                let x = c.capture.column("tangential_position_m").expect("x");
+                let z = c.capture.column("normal_position_m").expect("z");
+                let f = c.capture.column("friction_force_n").expect("friction");
+                live.reset();
+                assert_eq!(live.posterior().map(<[f64]>::len), Some(model.classes.len()));
+                let mut online = Vec::with_capacity(offline.len());
+                ALLOCATIONS.store(0, Ordering::Relaxed);
+                THIS_THREAD.with(|t| t.set(true));
+                COUNTING.store(true, Ordering::Relaxed);
+                for i in 0..x.len() {
+                    if let Some(d) = live.push(x[i], z[i], f[i]).expect("finite samples")
+                        && online.len() < online.capacity()
+                    {
+                        online.push((i, d));
+                    }
+                }
+                COUNTING.store(false, Ordering::Relaxed);
+                THIS_THREAD.with(|t| t.set(false));
+                assert_eq!(
+                    ALLOCATIONS.load(Ordering::Relaxed),
+                    0,
+                    "{}: allocated",
+                    model.method()
+                );
+                assert_eq!(online.len(), offline.len(), "{}", c.reference.path.display());
+                // Contact to the end of a 6 s stroke, a window every 0.1 s.
+                assert!(offline.len() > 50, "{}", offline.len());
+                for ((at, d), off) in online.iter().zip(&offline) {
+                    same_step(d, *at, off, &params).unwrap_or_else(|e| panic!("{}: {e}", model.method()));
+                }
+                let labels = online.iter().filter_map(|(_, d)| d.label);
+                named += labels.clone().count();
+                right += labels.filter(|&l| model.classes[l] == c.label).count();
+            }
+        }
+        // Named decisions are right (the fixed 0.25 s windows alone are right far less often).
+        assert!(named > 14 * 20, "{}: {named}", model.method());
+        assert!(
+            right as f64 >= 0.95 * named as f64,
+            "{}: {right}/{named}",
+            model.method()
+        );
+    }
+}
+
+/// The anytime settings reach the live recognizer, a SOM refuses them, and a non-finite sample
+/// starts the evidence afresh while the last decision stands.
+#[test]
+fn anytime_settings_and_a_non_finite_sample() {
+    let runs = runs();
+    let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
+    let windowing = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
+    let model = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 5, CellScale::Mean)
+        .expect("k-NN");
+    let som = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("SOM");
+    let builder = model
+        .sequential_params(DEFAULT_MEMORY_S)
+        .expect("window probabilities");
+    assert!(matches!(
+        LiveRecognizer::with_params(&som, 1000.0, builder.build().expect("valid")),
+        Err(HapticsError::LiveThreshold { method: "som" })
+    ));
+    let c = &runs[2][1].capture;
+    let (x, z, f) = (
+        c.column("tangential_position_m").expect("x"),
+        c.column("normal_position_m").expect("z"),
+        c.column("friction_force_n").expect("f"),
+    );
+    // The first window at which a surface is named, at two thresholds: a lower one names it
+    // no later.
+    let first_named = |threshold: f64| {
+        let params = builder.threshold(threshold).build().expect("valid");
+        let mut live = LiveRecognizer::with_params(&model, 1000.0, params).expect("k-NN");
+        assert_eq!(
+            live.sequential_params().map(SequentialParams::threshold),
+            Some(threshold)
+        );
+        (0..x.len()).position(|i| {
+            live.push(x[i], z[i], f[i])
+                .expect("finite")
+                .is_some_and(|d| d.label.is_some())
+        })
+    };
+    let (eager, strict) = (
+        first_named(0.6).expect("named"),
+        first_named(0.99).expect("named"),
+    );
+    assert!(eager < strict, "{eager} vs {strict}");
+
+    let mut live = LiveRecognizer::new(&model, 1000.0).expect("k-NN");
+    for i in 0..x.len() {
+        live.push(x[i], z[i], f[i]).expect("finite");
+    }
+    let before = live.current().expect("decided");
+    assert!(before.label.is_some());
+    let uniform = 1.0 / model.classes.len() as f64;
+    assert!(
+        live.posterior()
+            .expect("posterior")
+            .iter()
+            .any(|&p| p > 2.0 * uniform)
+    );
+    assert!(matches!(
+        live.push(f64::INFINITY, z[0], f[0]),
+        Err(HapticsError::NotFiniteSample { .. })
+    ));
+    assert_eq!(live.current(), Some(before));
+    assert!(live.posterior().expect("posterior").iter().all(|&p| p == uniform));
+}
+
+/// The committed SVM of `surfaces_nakano` inside the haptic tick: the loop allocates nothing,
+/// the tick's posterior is the offline pipeline's on the capture recorded from the same
+/// samples, it says "undecided" before it names a surface, and names the right one.
+#[test]
+fn the_haptic_tick_decides_anytime_as_the_offline_pipeline() {
+    let model = committed("nakano_svm.json");
+    let params = model
+        .sequential_params(DEFAULT_MEMORY_S)
+        .expect("window probabilities")
+        .build()
+        .expect("valid");
+    for surface in ["sandpaper_400", "styrol_smooth"] {
+        let (labelled, tick_decisions) = tick_run(&model, surface);
+        let offline = offline_steps(&model, &labelled, params);
+        assert_eq!(tick_decisions.len(), offline.len(), "{surface}");
+        for ((at, d), off) in tick_decisions.iter().zip(&offline) {
+            let live = LiveDecision {
+                label: d.label,
+                best: d.best,
+                confidence: d.confidence,
+                window_start: 0,
+            };
+            same_step(&live, *at, off, &params).unwrap_or_else(|e| panic!("{surface}: {e}"));
+        }
+        assert_eq!(tick_decisions[0].1.label, None, "{surface}: named on one window");
+        let last = tick_decisions.last().expect("decisions").1;
+        assert_eq!(last.label.map(|l| model.classes[l].as_str()), Some(surface));
+    }
 }

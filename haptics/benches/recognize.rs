@@ -1,7 +1,8 @@
 //! Cost of one sample through the live recognizer (goal ≤ 2 µs): the streaming features on
-//! every sample, a SOM decision every hop (100 samples) on the default 3 s windows, over a whole
-//! simulated rubbing run; and the dearest sample alone, the one that completes a window and asks
-//! the map.
+//! every sample and a decision every hop, over a whole simulated rubbing run; and the dearest
+//! sample alone, the one that completes a window and asks the classifier. Two recognizers: a
+//! SOM on the default 3 s windows every 100 samples, and the committed SVM of `surfaces_nakano`
+//! (0.25 s windows every 20 samples, window probabilities accumulated into a posterior).
 
 // The measured call returns the recognizer's own result type, large by design (see haptics'
 // lib.rs).
@@ -26,42 +27,55 @@ fn bench(c: &mut Criterion) {
         })
         .collect();
     let windowing = NakanoWindowing::protocol(1000.0).expect("valid");
-    let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    let som = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    let svm_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/models/nakano_svm.json");
+    let svm = RecognizerFile::load(&svm_path).expect("committed SVM recognizer");
     let test = rubbing_run(&SurfacePatch::new(&surfaces[2]), 1, 1).expect("run");
-    let x = test.column("tangential_position_m").expect("x").to_vec();
-    let z = test.column("normal_position_m").expect("z").to_vec();
-    let f = test.column("friction_force_n").expect("f").to_vec();
-    let mut live = LiveRecognizer::new(&model, 1000.0).expect("som");
+    let signals = ["tangential_position_m", "normal_position_m", "friction_force_n"]
+        .map(|name| test.column(name).expect("rubbing column").to_vec());
     let mut group = c.benchmark_group("live_recognizer");
+    for (name, model) in [("som", &som), ("svm", &svm)] {
+        bench_model(&mut group, name, model, &signals);
+    }
+    group.finish();
+}
+
+fn bench_model(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    model: &RecognizerFile,
+    [x, z, f]: &[Vec<f64>; 3],
+) {
+    let mut live = LiveRecognizer::new(model, 1000.0).expect("live recognizer");
     group.throughput(Throughput::Elements(x.len() as u64));
-    group.bench_function("rubbing_run_per_sample", |b| {
+    group.bench_function(format!("{name}/rubbing_run_per_sample"), |b| {
         b.iter(|| {
             live.reset();
             let mut last = 0;
             for i in 0..x.len() {
                 if let Ok(Some(d)) = live.push(black_box(x[i]), black_box(z[i]), black_box(f[i])) {
-                    last = d.label;
+                    last = d.best;
                 }
             }
             black_box(last)
         });
     });
-    // The dearest sample: the one that completes a decision window and asks the map, with
-    // every window full. The recognizer is fed up to just before it (untimed), then that sample
-    // alone is timed.
+    // The dearest sample: the one that completes a decision window and asks the classifier,
+    // with every window full. The recognizer is fed up to just before it (untimed), then that
+    // sample alone is timed.
     let decisions: Vec<usize> = {
-        let mut probe = LiveRecognizer::new(&model, 1000.0).expect("som");
+        let mut probe = LiveRecognizer::new(model, 1000.0).expect("live recognizer");
         (0..x.len())
             .filter(|&i| matches!(probe.push(x[i], z[i], f[i]), Ok(Some(_))))
             .collect()
     };
     let at = decisions[decisions.len() / 2];
-    let mut before = LiveRecognizer::new(&model, 1000.0).expect("som");
+    let mut before = LiveRecognizer::new(model, 1000.0).expect("live recognizer");
     for i in 0..at {
         let _ = before.push(x[i], z[i], f[i]);
     }
     group.throughput(Throughput::Elements(1));
-    group.bench_function("deciding_sample", |b| {
+    group.bench_function(format!("{name}/deciding_sample"), |b| {
         b.iter_batched_ref(
             || before.clone(),
             |r| {
@@ -72,7 +86,6 @@ fn bench(c: &mut Criterion) {
             criterion::BatchSize::LargeInput,
         );
     });
-    group.finish();
 }
 
 criterion_group!(benches, bench);

@@ -164,16 +164,25 @@ pub enum HapticsError {
         /// The known names, comma-separated.
         expected: String,
     },
-    /// Only a SOM over Nakano's rubbing features runs live.
+    /// Only a recognizer over Nakano's rubbing features, per window, runs live.
     #[error(
-        "a {method} recognizer over {features} features cannot run live: only a som over nakano \
-         features decides from the rubbing stream"
+        "a {method} recognizer over {features} features cannot run live: only a som, k-NN or svm \
+         over windows of nakano features decides from the rubbing stream"
     )]
     LiveMethod {
         /// The recognizer's method.
         method: &'static str,
         /// Its features (`nakano`, `spectral`, `both`).
         features: &'static str,
+    },
+    /// A decision threshold was given for a recognizer without a posterior to hold it to.
+    #[error(
+        "a {method} recognizer names a surface per window and has no posterior to threshold: a \
+         threshold needs a k-NN or svm over windows"
+    )]
+    LiveThreshold {
+        /// The recognizer's method.
+        method: &'static str,
     },
     /// The loop's rate is not the rate the recognizer's windows are counted at.
     #[error("the loop runs at {loop_hz} Hz but the recognizer's windows are counted at {model_hz} Hz")]

@@ -1,52 +1,131 @@
 //! The live surface recognizer of the haptic thread: Nakano's features updated in O(1) per
-//! sample, a SOM decision every hop, (label, confidence) out.
+//! sample and a decision every hop, (surface, probability) out.
 //!
-//! Everything it needs is allocated in [`LiveRecognizer::new`] (the stream's rings, the map, a
-//! scratch vector); [`LiveRecognizer::push`] does arithmetic on them only — no allocation, no
-//! lock, no I/O — so it can run inside the 1 kHz tick. It decides on exactly the windows the
-//! offline pipeline ([`RecognizerFile::decisions`]) decides on, with the same map arithmetic
-//! ([`Som::decide_into`]); the features come from the streaming sums instead of the batch ones
-//! and agree with them to ~1e-9 relative.
+//! Two kinds of recognizer run live, both over Nakano's rubbing features:
+//! - **A SOM** names the surface of each window on its own, with the map's margin as its
+//!   confidence (Nakano's recognizer; it names nodes, not a distribution over the surfaces).
+//! - **A k-NN or SVM over windows** gives every surface's probability per window; the windows
+//!   are accumulated from the first one on ([`SequentialState`]: a posterior over the surfaces,
+//!   named only once it passes the threshold and held by hysteresis). Until then the answer is
+//!   "undecided", with the most probable surface and its posterior beside it.
+//!
+//! Everything it needs is allocated in [`LiveRecognizer::new`] (the stream's rings, the
+//! classifier's buffers, the posterior's ring); [`LiveRecognizer::push`] does arithmetic on them
+//! only — no allocation, no lock, no I/O — so it can run inside the 1 kHz tick. The per-sample
+//! work is the stream's running sums; the classifier runs once per hop, on the sample that
+//! completes a window. It decides on exactly the windows the offline pipeline decides on
+//! ([`RecognizerFile::decisions`], [`RecognizerFile::evaluate_sequential`]) with the same
+//! classifier arithmetic; the features come from the streaming sums instead of the batch ones
+//! and agree with them to ~1e-9 relative. Kept in the tick (rather than on a thread of its own)
+//! so that a sample carries the decision made on the windows up to it, whatever the scheduler
+//! does: a replay or an unpaced run decides exactly as the offline evaluation.
 
 use crate::acquire;
 use crate::error::HapticsError;
 use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
-use recognize::{FEATURES, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile, Som};
+#[cfg(doc)]
+use recognize::RecognizerFile;
+use recognize::{
+    FEATURES, FeatureSet, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile as Model,
+    SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
+};
 
 /// One live decision.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LiveDecision {
-    /// Index into the recognizer's classes.
-    pub label: usize,
-    /// Confidence in `[0, 1]`: half the SOM's inner-product margin over the best node of
-    /// another surface.
+    /// Index into the recognizer's classes of the surface named; `None` while undecided (a
+    /// posterior below the threshold). A SOM always names one.
+    pub label: Option<usize>,
+    /// The most probable surface (the one named, when one is).
+    pub best: usize,
+    /// Confidence in `[0, 1]` of `best`: its posterior, or for a SOM half the map's
+    /// inner-product margin over the best node of another surface.
     pub confidence: f64,
     /// First sample (counted from 0 since construction, [`LiveRecognizer::reset`] or a
-    /// non-finite sample, each of which starts a stroke) of the
-    /// window decided on.
+    /// non-finite sample, each of which starts a stroke) of the window decided on.
     pub window_start: u64,
 }
 
-/// Nakano's SOM recognizer, fed one sample per haptic tick.
+/// How the windows' features become a decision.
+#[derive(Debug, Clone)]
+enum Decider {
+    /// Nakano's map, one window at a time.
+    Som {
+        som: Box<Som<usize>>,
+        scratch: [f64; FEATURES],
+    },
+    /// Window probabilities accumulated into a posterior.
+    Sequential {
+        classifier: Box<WindowClassifier>,
+        state: SequentialState,
+        probabilities: Vec<f64>,
+    },
+}
+
+/// A recognizer over Nakano's rubbing features, fed one sample per haptic tick.
 #[derive(Debug, Clone)]
 pub struct LiveRecognizer {
-    som: Som<usize>,
+    method: &'static str,
+    decider: Decider,
     windowing: NakanoWindowing,
     classes: Vec<String>,
     stream: NakanoStream,
-    scratch: [f64; FEATURES],
     first_position_m: Option<f64>,
     current: Option<LiveDecision>,
 }
 
 impl LiveRecognizer {
-    /// A recognizer for a loop running at `loop_hz`, from a loaded SOM recognizer file.
-    pub fn new(model: &RecognizerFile, loop_hz: f64) -> Result<Self, HapticsError> {
-        let RecognizerBody::Som { windowing, som } = &model.body else {
-            return Err(HapticsError::LiveMethod {
+    /// A recognizer for a loop running at `loop_hz`, from a loaded recognizer file: a SOM over
+    /// Nakano's features, or a k-NN or SVM over windows of them with the default anytime
+    /// settings ([`Model::sequential_params`] over [`DEFAULT_MEMORY_S`], threshold 0.9).
+    pub fn new(model: &Model, loop_hz: f64) -> Result<Self, HapticsError> {
+        let params = model
+            .sequential_params(DEFAULT_MEMORY_S)
+            .map(|b| b.build())
+            .transpose()?;
+        Self::build(model, loop_hz, params)
+    }
+
+    /// As [`LiveRecognizer::new`], a k-NN or SVM with the anytime settings `params` (its
+    /// threshold, memory and weight); a SOM, which gives no posterior to threshold, is refused.
+    pub fn with_params(model: &Model, loop_hz: f64, params: SequentialParams) -> Result<Self, HapticsError> {
+        if model.sequential_params(DEFAULT_MEMORY_S).is_none() {
+            return Err(HapticsError::LiveThreshold {
                 method: model.method(),
-                features: model.body.feature_set().name(),
             });
+        }
+        Self::build(model, loop_hz, Some(params))
+    }
+
+    fn build(model: &Model, loop_hz: f64, params: Option<SequentialParams>) -> Result<Self, HapticsError> {
+        let refused = || HapticsError::LiveMethod {
+            method: model.method(),
+            features: model.body.feature_set().name(),
+        };
+        let (decider, windowing) = match (&model.body, params) {
+            (RecognizerBody::Som { windowing, som }, _) => (
+                Decider::Som {
+                    som: Box::new(som.clone()),
+                    scratch: [0.0; FEATURES],
+                },
+                *windowing,
+            ),
+            (RecognizerBody::KnnWindows { .. } | RecognizerBody::SvmWindows { .. }, Some(params))
+                if model.body.feature_set() == FeatureSet::Nakano =>
+            {
+                let classifier = WindowClassifier::new(model)?;
+                let windowing = *classifier.windowing();
+                let classes = classifier.classes();
+                (
+                    Decider::Sequential {
+                        classifier: Box::new(classifier),
+                        state: SequentialState::new(params, classes)?,
+                        probabilities: vec![0.0; classes],
+                    },
+                    windowing,
+                )
+            }
+            _ => return Err(refused()),
         };
         // Written so that a NaN rate is refused too.
         let same_rate = (loop_hz - windowing.rate_hz).abs() <= 1e-9 * windowing.rate_hz;
@@ -57,11 +136,11 @@ impl LiveRecognizer {
             });
         }
         Ok(Self {
-            som: som.clone(),
-            windowing: *windowing,
+            method: model.method(),
+            decider,
+            windowing,
             classes: model.classes.clone(),
             stream: NakanoStream::new(windowing.filters, windowing.window_samples)?,
-            scratch: [0.0; FEATURES],
             first_position_m: None,
             current: None,
         })
@@ -74,7 +153,7 @@ impl LiveRecognizer {
     ///
     /// A non-finite sample is an error: it would poison the stream's running sums for good, so
     /// the stroke starts afresh from the next sample (a new window, the start travel counted
-    /// again) while the last decision stands until a new one is made.
+    /// again, the posterior uniform) while the last decision stands until a new one is made.
     pub fn push(
         &mut self,
         position_m: f64,
@@ -82,8 +161,7 @@ impl LiveRecognizer {
         friction_n: f64,
     ) -> Result<Option<LiveDecision>, HapticsError> {
         if !(position_m.is_finite() && height_m.is_finite() && friction_n.is_finite()) {
-            self.stream.reset();
-            self.first_position_m = None;
+            self.restart_stroke();
             return Err(HapticsError::NotFiniteSample {
                 position_m,
                 height_m,
@@ -98,14 +176,43 @@ impl LiveRecognizer {
         if !self.windowing.is_decision_window(window.start, travel_m) {
             return Ok(None);
         }
-        let d = self.som.decide_into(&window.features, &mut self.scratch)?;
-        let decision = LiveDecision {
-            label: self.som.node_labels().get(d.node).copied().unwrap_or(0),
-            confidence: d.confidence,
-            window_start: window.start,
+        let decision = match &mut self.decider {
+            Decider::Som { som, scratch } => {
+                let d = som.decide_into(&window.features, scratch)?;
+                let label = som.node_labels().get(d.node).copied().unwrap_or(0);
+                LiveDecision {
+                    label: Some(label),
+                    best: label,
+                    confidence: d.confidence,
+                    window_start: window.start,
+                }
+            }
+            Decider::Sequential {
+                classifier,
+                state,
+                probabilities,
+            } => {
+                classifier.probabilities_into(&window.features, probabilities)?;
+                let step = state.push(probabilities)?;
+                LiveDecision {
+                    label: step.decided,
+                    best: step.best,
+                    confidence: step.probability,
+                    window_start: window.start,
+                }
+            }
         };
         self.current = Some(decision);
         Ok(Some(decision))
+    }
+
+    /// A new stroke from the next sample, the last decision kept.
+    fn restart_stroke(&mut self) {
+        self.stream.reset();
+        self.first_position_m = None;
+        if let Decider::Sequential { state, .. } = &mut self.decider {
+            state.reset();
+        }
     }
 
     /// The latest decision, if any since the last reset.
@@ -113,11 +220,32 @@ impl LiveRecognizer {
         self.current
     }
 
+    /// The posterior over the surfaces after the stroke's windows so far (uniform before the
+    /// first), for a k-NN or SVM; `None` for a SOM.
+    pub fn posterior(&self) -> Option<&[f64]> {
+        match &self.decider {
+            Decider::Sequential { state, .. } => Some(state.posterior()),
+            Decider::Som { .. } => None,
+        }
+    }
+
+    /// The anytime settings of a k-NN or SVM; `None` for a SOM.
+    pub fn sequential_params(&self) -> Option<&SequentialParams> {
+        match &self.decider {
+            Decider::Sequential { state, .. } => Some(state.params()),
+            Decider::Som { .. } => None,
+        }
+    }
+
     /// Forgets the stroke (tool lifted): the next sample starts a new one. No allocation.
     pub fn reset(&mut self) {
-        self.stream.reset();
-        self.first_position_m = None;
+        self.restart_stroke();
         self.current = None;
+    }
+
+    /// The recognizer's method: `som`, `knn` or `svm`.
+    pub fn method(&self) -> &'static str {
+        self.method
     }
 
     /// Class names; [`LiveDecision::label`] indexes them.
@@ -133,19 +261,39 @@ impl LiveRecognizer {
 
 /// Channels [`Recognizing`] writes into every sample, after the wrapped controller's eight.
 pub mod channel {
-    /// Class index + 1 of the latest decision; 0 before the stroke's first decision.
+    /// Class index + 1 of the surface named; 0 before the stroke's first decision and while
+    /// undecided.
     pub const LABEL: usize = 8;
-    /// Confidence of the latest decision, `[0, 1]` (0 before the first).
+    /// Confidence of the latest decision's most probable surface, `[0, 1]` (0 before the
+    /// first).
     pub const CONFIDENCE: usize = 9;
     /// Decisions made since the stroke began: a sample where it steps carries a new decision.
     pub const DECISIONS: usize = 10;
+    /// Class index + 1 of the most probable surface, named or not; 0 before the first
+    /// decision.
+    pub const BEST: usize = 11;
 }
 
-/// The decision a sample's recognizer channels carry: `(label, confidence)`, or `None` before
-/// the stroke's first decision.
-pub fn decision_in(channels: &[f64; CHANNELS]) -> Option<(usize, f64)> {
-    let label = channels[channel::LABEL];
-    (label >= 1.0 && label.is_finite()).then(|| ((label - 1.0) as usize, channels[channel::CONFIDENCE]))
+/// What a sample's recognizer channels say about the latest decision.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelDecision {
+    /// The surface named; `None` while undecided.
+    pub label: Option<usize>,
+    /// The most probable surface.
+    pub best: usize,
+    /// Its confidence, `[0, 1]`.
+    pub confidence: f64,
+}
+
+/// The decision a sample's recognizer channels carry, or `None` before the stroke's first.
+pub fn decision_in(channels: &[f64; CHANNELS]) -> Option<ChannelDecision> {
+    let index = |v: f64| (v >= 1.0 && v.is_finite()).then_some((v - 1.0) as usize);
+    let best = index(channels[channel::BEST])?;
+    Some(ChannelDecision {
+        label: index(channels[channel::LABEL]),
+        best,
+        confidence: channels[channel::CONFIDENCE],
+    })
 }
 
 /// A rubbing controller with the live recognizer inside its tick: each tick the wrapped
@@ -202,7 +350,8 @@ impl<C: Controller> Controller for Recognizing<C> {
             None => self.rubbing = false,
         }
         let current = self.live.current();
-        out.channels[channel::LABEL] = current.map_or(0.0, |d| d.label as f64 + 1.0);
+        out.channels[channel::LABEL] = current.and_then(|d| d.label).map_or(0.0, |l| l as f64 + 1.0);
+        out.channels[channel::BEST] = current.map_or(0.0, |d| d.best as f64 + 1.0);
         out.channels[channel::CONFIDENCE] = current.map_or(0.0, |d| d.confidence);
         out.channels[channel::DECISIONS] = self.decisions as f64;
     }

@@ -41,6 +41,10 @@ pub struct SequentialParamsBuilder {
 /// Default posterior a surface must reach to be named.
 pub const DEFAULT_THRESHOLD: f64 = 0.9;
 
+/// Default span of windows whose evidence counts, s: a new surface under the tool is named
+/// within about this time.
+pub const DEFAULT_MEMORY_S: f64 = 3.0;
+
 /// Default floor of a window's class probability.
 pub const DEFAULT_FLOOR: f64 = 1e-3;
 

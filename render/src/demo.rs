@@ -174,6 +174,7 @@ pub fn demo_overlay() -> Overlay {
         recognized: Some(Recognition {
             surface: "sandpaper_240".into(),
             confidence: 0.87,
+            decided: true,
         }),
         haptic_rate_hz: Some(999.6),
         period_error_s: Some(12.5e-6),

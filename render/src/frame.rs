@@ -248,8 +248,13 @@ pub struct Overlay {
 /// A surface the recognizer names, with its confidence 0..1.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recognition {
+    /// The surface named, or while undecided the most probable one.
     pub surface: String,
+    /// Its probability (or a SOM's confidence), 0–1.
     pub confidence: f32,
+    /// Whether the recognizer has named it; `false` while its confidence is below the
+    /// threshold, and the overlay says "undecided".
+    pub decided: bool,
 }
 
 /// A user-adjustable named value with its range; the overlay shows a slider.

@@ -441,10 +441,15 @@ fn status(ui: &mut egui::Ui, o: &Overlay) {
         .map_or("—".to_string(), |e| format!("{:.1} µs", e * 1e6));
     ui.label(format!("Period error: {err}"));
     match &o.recognized {
-        Some(r) => {
+        Some(r) if r.decided => {
             ui.label(format!("Surface: {}", r.surface));
             let c = r.confidence.clamp(0.0, 1.0);
             ui.add(egui::ProgressBar::new(c).text(format!("confidence {:.0} %", c * 100.0)));
+        }
+        Some(r) => {
+            ui.label("Surface: undecided");
+            let c = r.confidence.clamp(0.0, 1.0);
+            ui.add(egui::ProgressBar::new(c).text(format!("most likely {}: {:.0} %", r.surface, c * 100.0)));
         }
         None => {
             ui.label("Surface: —");

@@ -118,7 +118,7 @@ struct EvalArgs {
     sequential: Vec<f64>,
     /// With --sequential: seconds of windows whose evidence counts; older ones are forgotten,
     /// so a new surface under the tool is named within about this time.
-    #[arg(long, value_name = "S", default_value_t = 3.0, requires = "sequential")]
+    #[arg(long, value_name = "S", default_value_t = recognize::sequential::DEFAULT_MEMORY_S, requires = "sequential")]
     memory_s: f64,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,

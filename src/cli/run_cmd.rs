@@ -101,7 +101,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             .clone()
             .unwrap_or_else(|| Path::new("out").join("run").join(&scene.name))
     };
-    let (scene, runs, recognition) = if headless {
+    let (scene, runs, recognition, recognizer_line) = if headless {
         println!(
             "running scene {} headless on {} ({} part{}) ...",
             scene.name,
@@ -121,7 +121,8 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             }
             runs.push(run);
         }
-        (scene, runs, recognition)
+        let line = recognizer.as_ref().map(crate::recognizer::SceneRecognizer::line);
+        (scene, runs, recognition, line)
     } else {
         println!(
             "running scene {} in a window on {}: drag or scroll to push the tool, arrows/WASD to move it, F12 for a screenshot",
@@ -138,7 +139,12 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             cache_dir,
             Some(screenshot),
         )?;
-        (outcome.scene.unwrap_or(scene), outcome.runs, outcome.recognition)
+        (
+            outcome.scene.unwrap_or(scene),
+            outcome.runs,
+            outcome.recognition,
+            outcome.recognizer,
+        )
     };
     if runs.is_empty() {
         anyhow::bail!("the session ran no part of the scene");
@@ -168,13 +174,15 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }
-    let accuracy = (!recognition.is_empty()).then(|| {
+    let named = recognition.iter().filter(|r| r.label.is_some()).count();
+    let accuracy = (named > 0).then(|| {
         recognition
             .iter()
-            .filter(|r: &&report::Recognition| r.label == r.truth)
+            .filter(|r: &&report::Recognition| r.label.as_ref() == Some(&r.truth))
             .count() as f64
-            / recognition.len() as f64
+            / named as f64
     });
+    let timing = crate::recognizer::timings(&runs, &recognition);
     let report = SessionReport {
         scene: scene.name.clone(),
         scene_file: scene.path.clone(),
@@ -183,8 +191,10 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             .map_or_else(|| options.device_label(), |r| r.device.clone()),
         models: resolved.iter().map(ModelLine::new).collect(),
         segments: runs.iter().map(analysis::summarize).collect(),
+        recognizer: recognizer_line,
         recognition,
         recognition_accuracy: accuracy,
+        recognition_timing: timing,
         frame,
         recorded: runs.iter().filter_map(|r| r.recorded.clone()).collect(),
         wall_s: started.elapsed().as_secs_f64(),

@@ -32,10 +32,33 @@ pub struct Recognition {
     pub truth: String,
     /// Loop time of the decision within the segment, s.
     pub time_s: f64,
-    /// The recognized surface.
-    pub label: String,
-    /// Confidence 0–1.
+    /// The surface named; `None` while the recognizer is undecided (its posterior below the
+    /// threshold).
+    pub label: Option<String>,
+    /// The most probable surface, named or not.
+    pub best: String,
+    /// Confidence 0–1 of `best` (a k-NN's or SVM's posterior, a SOM's margin).
     pub confidence: f64,
+}
+
+/// How soon one surface segment's surface was named.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SurfaceTiming {
+    /// The object being rubbed.
+    pub object: String,
+    /// The surface it really is.
+    pub truth: String,
+    /// Loop time of the stroke's first tick, s.
+    pub stroke_s: f64,
+    /// From the stroke's start to the first named surface, s.
+    pub first_named_after_s: Option<f64>,
+    /// From the stroke's start to the named decision that starts the final run of right ones,
+    /// s; `None` when the segment does not end named right.
+    pub stable_right_after_s: Option<f64>,
+    /// Decisions that named a surface.
+    pub named: usize,
+    /// Of those, named right.
+    pub right: usize,
 }
 
 /// A model as the report lists it.
@@ -78,6 +101,22 @@ impl ModelLine {
     }
 }
 
+/// A scene's surface recognizer, as the report names it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecognizerLine {
+    /// `som`, `knn` or `svm`.
+    pub method: String,
+    /// The features it decides on.
+    pub features: String,
+    /// Its decision window and hop, s.
+    pub window_s: f64,
+    pub hop_s: f64,
+    /// Posterior at which a k-NN or SVM names a surface (a SOM names one every window).
+    pub threshold: Option<f64>,
+    /// Span of windows whose evidence counts, s.
+    pub memory_s: Option<f64>,
+}
+
 /// The whole report (`report.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct SessionReport {
@@ -91,10 +130,14 @@ pub struct SessionReport {
     pub models: Vec<ModelLine>,
     /// Per segment.
     pub segments: Vec<SegmentSummary>,
-    /// Recognized-surface decisions.
+    /// The surface recognizer and the settings it decided with.
+    pub recognizer: Option<RecognizerLine>,
+    /// Recognized-surface decisions, undecided ones included.
     pub recognition: Vec<Recognition>,
-    /// Fraction of decisions that named the right surface.
+    /// Fraction of the decisions that named a surface that named the right one.
     pub recognition_accuracy: Option<f64>,
+    /// Per surface segment, how soon its surface was named.
+    pub recognition_timing: Vec<SurfaceTiming>,
     /// The rendered frame, or why there is none.
     pub frame: Result<PathBuf, String>,
     /// Captures recorded.
@@ -216,12 +259,38 @@ impl SessionReport {
                 );
             }
         }
-        if let Some(a) = self.recognition_accuracy {
+        if let Some(r) = &self.recognizer {
+            let rule = match (r.threshold, r.memory_s) {
+                (Some(p), Some(m)) => {
+                    format!("names a surface once its posterior reaches {p} (evidence of the last {m} s)")
+                }
+                _ => "names a surface every window".to_owned(),
+            };
             let _ = writeln!(
                 t,
-                "  recognition: {:.1} % of {} decisions right",
+                "  recognizer: {} over {} windows of {} s every {} s; {rule}",
+                r.method, r.features, r.window_s, r.hop_s
+            );
+        }
+        if let Some(a) = self.recognition_accuracy {
+            let named = self.recognition.iter().filter(|r| r.label.is_some()).count();
+            let _ = writeln!(
+                t,
+                "  recognition: {:.1} % of {named} named decisions right ({} undecided)",
                 a * 100.0,
-                self.recognition.len()
+                self.recognition.len() - named
+            );
+        }
+        for s in &self.recognition_timing {
+            let after = |v: Option<f64>| v.map_or("never".to_owned(), |v| format!("{v:.2} s"));
+            let _ = writeln!(
+                t,
+                "    {}: first named {}, named right for good {} after the stroke began ({} of {} named right)",
+                s.object,
+                after(s.first_named_after_s),
+                after(s.stable_right_after_s),
+                s.right,
+                s.named
             );
         }
         for (p, rows) in &self.recorded {
@@ -260,12 +329,19 @@ pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportErr
     if !report.recognition.is_empty() {
         let csv = dir.join("timeline.csv");
         capture::write_atomically(&csv, |w| {
-            writeln!(w, "object,truth,time_s,label,confidence")?;
+            // An undecided row leaves `label` empty; `best` and `confidence` say where the
+            // evidence stands.
+            writeln!(w, "object,truth,time_s,label,best,confidence")?;
             for r in &report.recognition {
                 writeln!(
                     w,
-                    "{},{},{},{},{}",
-                    r.object, r.truth, r.time_s, r.label, r.confidence
+                    "{},{},{},{},{},{}",
+                    r.object,
+                    r.truth,
+                    r.time_s,
+                    r.label.as_deref().unwrap_or(""),
+                    r.best,
+                    r.confidence
                 )?;
             }
             Ok(())

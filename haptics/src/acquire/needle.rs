@@ -205,6 +205,7 @@ impl Controller for InsertionController {
             0.0,
             0.0,
             0.0,
+            0.0,
         ];
     }
 

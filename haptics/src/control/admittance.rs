@@ -176,6 +176,7 @@ impl<E: Environment> Controller for Admittance<E> {
             0.0,
             0.0,
             0.0,
+            0.0,
         ];
     }
 }

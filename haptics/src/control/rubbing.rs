@@ -234,6 +234,7 @@ impl Controller for RubbingController {
             0.0,
             0.0,
             0.0,
+            0.0,
         ];
     }
 

@@ -27,9 +27,9 @@ use crate::error::HapticsError;
 use crate::safety::{self, SafetyFilter};
 
 /// Controller-defined values carried with each sample (estimated forces, model outputs, …):
-/// eight for a controller, three more for a controller that wraps it (the live surface
+/// eight for a controller, four more for a controller that wraps it (the live surface
 /// recognizer's decisions).
-pub const CHANNELS: usize = 11;
+pub const CHANNELS: usize = 12;
 
 /// One tick, as recorded and shown live.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
