@@ -57,10 +57,13 @@ impl SceneRecognizer {
         let rate_hz = scene.device.rate_hz;
         let live = match model.sequential_params(section.memory_s.unwrap_or(DEFAULT_MEMORY_S)) {
             Some(params) => {
-                let params = params
-                    .threshold(section.threshold.unwrap_or(DEFAULT_THRESHOLD))
-                    .build()
-                    .context("the recognizer's anytime settings")?;
+                let params = params.threshold(section.threshold.unwrap_or(DEFAULT_THRESHOLD));
+                let params = match section.change_odds {
+                    Some(0.0) => params.without_change_test(),
+                    Some(odds) => params.change_log_odds(odds.ln()),
+                    None => params,
+                };
+                let params = params.build().context("the recognizer's anytime settings")?;
                 LiveRecognizer::with_params(&model, rate_hz, params)
             }
             None => LiveRecognizer::new(&model, rate_hz),
@@ -98,6 +101,7 @@ pub fn line(live: &LiveRecognizer) -> RecognizerLine {
         hop_s,
         threshold: params.map(|p| p.threshold()),
         memory_s: params.map(|p| p.memory() as f64 * hop_s),
+        change_odds: params.and_then(|p| p.change_log_odds()).map(f64::exp),
     }
 }
 

@@ -276,6 +276,9 @@ pub struct RecognizerSection {
     /// A k-NN's or SVM's span of windows whose evidence counts, s (default 3): a new surface
     /// under the tool is named within about this time.
     pub memory_s: Option<f64>,
+    /// A k-NN's or SVM's change test: the likelihood ratio against the named surface at which
+    /// the evidence before a change is dropped (default 99); 0 for none.
+    pub change_odds: Option<f64>,
 }
 
 fn default_method() -> String {
@@ -703,7 +706,11 @@ impl Scene {
                 return Err(self.invalid("recognizer", "give exactly one of `file` and `captures`"));
             }
             if r.method == "som" {
-                for (field, v) in [("threshold", r.threshold), ("memory_s", r.memory_s)] {
+                for (field, v) in [
+                    ("threshold", r.threshold),
+                    ("memory_s", r.memory_s),
+                    ("change_odds", r.change_odds),
+                ] {
                     if v.is_some() {
                         return Err(self.invalid(
                             key(field),
@@ -725,6 +732,14 @@ impl Scene {
                         self.invalid(key(field), format!("{v}: must be a positive number of seconds"))
                     );
                 }
+            }
+            if let Some(odds) = r.change_odds
+                && !(odds == 0.0 || (odds.is_finite() && odds > 1.0))
+            {
+                return Err(self.invalid(
+                    "recognizer.change_odds",
+                    format!("{odds}: a likelihood ratio above 1, or 0 for no change test"),
+                ));
             }
             if r.window_s.is_some() && r.captures.is_none() {
                 return Err(self.invalid(

@@ -5,7 +5,9 @@
 //! and reach the stable right surface sooner, and the posterior must be calibrated (expected
 //! calibration error ≤ 5 %). Measured (seed 1, 0.25 s windows): at threshold 0.9, 100 % of
 //! named windows right, stable right after 1.39 s on average, ECE 2.2 %; the 3 s window's first
-//! correct decision comes after 4.4 s.
+//! correct decision comes after 4.4 s. On strokes that slide from one surface onto the next
+//! (`gen --two-patch`), the change test names the new surface 1.13 s after the seam on average,
+//! the memory alone after 2.11 s.
 
 mod common;
 
@@ -98,6 +100,52 @@ fn anytime_decisions_are_right_sooner_than_a_fixed_window_and_calibrated() {
     let calibration = &e["calibration"];
     assert!(field(calibration, "ece") <= 0.05, "{calibration}");
     assert!(field(calibration, "brier") < 0.1, "{calibration}");
+
+    // Strokes that slide from each surface onto the next halfway: the change test follows the
+    // new surface sooner than the memory alone forgets the old one, and on the single-surface
+    // runs it changes nothing (same rows as without it).
+    succeeds(&["gen", "--out", &root, "--two-patch", "-q"]);
+    let two_patch: Vec<String> = std::fs::read_dir(dir.path().join("nakano_two_patch"))
+        .expect("two-patch strokes")
+        .map(|e| e.expect("entry").path().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(two_patch.len(), 14);
+    let followed = |extra: &[&str]| {
+        let mut args = vec![
+            "recognize",
+            "eval",
+            short.as_str(),
+            "--sequential",
+            "0.9",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        args.extend(two_patch.iter().map(String::as_str));
+        let e = json(&args);
+        let row = e["rows"][0].clone();
+        assert_eq!(row["changes"], 14, "{row}");
+        assert!(row["changes_not_followed"].as_u64().expect("count") <= 1, "{row}");
+        field(&row, "change_followed_s")
+    };
+    let (with_test, memory_only) = (followed(&[]), followed(&["--change-odds", "0"]));
+    eprintln!("change followed after {with_test} s, {memory_only} s without the change test");
+    assert!(with_test < 0.7 * memory_only, "{with_test} s vs {memory_only} s");
+    let mut args = vec![
+        "recognize",
+        "eval",
+        short.as_str(),
+        "--sequential",
+        "0.5,0.9,0.99",
+        "--json",
+    ];
+    args.extend(["--change-odds", "0"]);
+    args.extend(test.iter().map(String::as_str));
+    let without = json(&args);
+    for (a, b) in rows.iter().zip(without["rows"].as_array().expect("rows")) {
+        for k in ["decided", "correct", "time_to_stable_correct_s", "flips_per_s"] {
+            assert_eq!(a[k], b[k], "{k}: {a} vs {b}");
+        }
+    }
 
     // A SOM names nodes, not probabilities over the surfaces: refused, saying what would do.
     let som = dir.path().join("som.json").to_string_lossy().into_owned();

@@ -267,6 +267,47 @@ fn nakano_runs_at_another_speed_cover_the_same_stroke() {
     }
 }
 
+/// A two-patch stroke: the first surface's friction up to the seam halfway, the second's after
+/// it, and metadata that say which and when, as a recognizer's evaluation reads them.
+#[test]
+fn a_two_patch_stroke_changes_surface_at_the_seam() {
+    let surfaces = nakano_surfaces();
+    // Sandpaper #80 (μ 0.60) onto smooth styrol (μ 0.42).
+    let (first, second) = (SurfacePatch::new(&surfaces[0]), SurfacePatch::new(&surfaces[4]));
+    let c = nakano::two_patch_run(&first, &second, 1, 1, nakano::SPEED_MPS).unwrap();
+    let meta = c.metadata();
+    assert_eq!(meta.get("surface"), Some("sandpaper_80"));
+    assert_eq!(meta.get(recognize::SURFACE_AFTER_KEY), Some("styrol_smooth"));
+    let change_s: f64 = meta
+        .get(recognize::SURFACE_CHANGE_S_KEY)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let (x, t) = (c.column("tangential_position_m").unwrap(), c.time());
+    let at = t.iter().position(|&ti| ti >= change_s).unwrap();
+    // The commanded position crosses 15 mm there (the encoder reads it to 0.01 mm).
+    assert!((x[at] - nakano::TWO_PATCH_CHANGE_M).abs() < 2e-5, "{}", x[at]);
+    assert!((change_s - (nakano::TWO_PATCH_CHANGE_M / nakano::SPEED_MPS + 0.1)).abs() < 2e-3);
+    // Friction per unit normal force, away from the seam (the observer's low-pass settles in
+    // a tenth of a second).
+    let f = c.column("friction_force_n").unwrap();
+    let mean = |r: std::ops::Range<usize>| {
+        f[r.clone()].iter().sum::<f64>() / r.len() as f64 / nakano::NORMAL_FORCE_N
+    };
+    let (before, after) = (mean(at - 2000..at - 200), mean(at + 200..c.len()));
+    assert!(
+        (before - 0.60).abs() < 0.06 && (after - 0.42).abs() < 0.06,
+        "{before} {after}"
+    );
+    // Its own noise: not the single-surface run's.
+    let single = nakano::rubbing_run(&first, 1, 1).unwrap();
+    assert_eq!(single.metadata().get(recognize::SURFACE_AFTER_KEY), None);
+    assert_ne!(
+        c.column("normal_force_n").unwrap()[..100],
+        single.column("normal_force_n").unwrap()[..100]
+    );
+}
+
 #[test]
 fn same_seed_same_bytes_other_seed_other_noise() {
     let a = tempfile::tempdir().unwrap();

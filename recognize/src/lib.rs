@@ -46,7 +46,10 @@ pub use recognizer::{
     TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, WindowProbabilities, recording_groups,
     som_nodes, som_params, train, trial_groups, window_som_nodes, window_svc_params,
 };
-pub use recognizer::{Calibration, ReliabilityBin, SequentialEvaluation, SequentialRow, WindowClassifier};
+pub use recognizer::{
+    Calibration, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,
+    SequentialRow, SurfaceChange, WindowClassifier,
+};
 pub use sequential::{SequentialParams, SequentialParamsBuilder, SequentialState, SequentialStep};
 pub use som::{Normalization, Som, SomParams};
 pub use svc::{CSearch, Svc, SvcParams};

@@ -12,6 +12,17 @@
 //! onto another surface the old evidence is gone within that many windows and the new surface
 //! can be named.
 //!
+//! **A change of surface** is tested for while one is named, so that sliding onto the next
+//! patch does not wait for the memory to forget the last one: for each other surface, a CUSUM
+//! adds up each window's weighted log-likelihood ratio of that surface against the named one
+//! (never below zero). Once one reaches the test's log-odds (default ln 99: the windows since it
+//! last stood at zero favour that surface 99:1), the evidence from before those windows is
+//! dropped, and a surface is named again, or another one, on them alone. A false change names
+//! a wrong surface at once (the windows kept are the ones that favour it), so the default asks
+//! more of a change than the default threshold asks of a name (9:1). One sum per surface rather
+//! than one for whichever is best in each window: the best of several noisy terms is biased
+//! upward and would add up to a change on a stroke that only wavers between look-alikes.
+//!
 //! [`SequentialState::push`] works on the state's own buffers: no allocation per window.
 
 use serde::{Deserialize, Serialize};
@@ -26,6 +37,10 @@ pub struct SequentialParams {
     weight: f64,
     floor: f64,
     memory: usize,
+    /// Log-odds at which the change test drops the evidence before a change; `None` for no
+    /// change test (the memory alone follows a new surface).
+    #[serde(default)]
+    change_log_odds: Option<f64>,
 }
 
 /// Builder of [`SequentialParams`]; every setting has a default.
@@ -36,6 +51,8 @@ pub struct SequentialParamsBuilder {
     weight: f64,
     floor: f64,
     memory: usize,
+    change_test: bool,
+    change_log_odds: Option<f64>,
 }
 
 /// Default posterior a surface must reach to be named.
@@ -45,12 +62,16 @@ pub const DEFAULT_THRESHOLD: f64 = 0.9;
 /// within about this time.
 pub const DEFAULT_MEMORY_S: f64 = 3.0;
 
+/// Default likelihood ratio against the named surface at which the change test fires (see the
+/// module doc for why it is above the default threshold's 9:1).
+pub const DEFAULT_CHANGE_ODDS: f64 = 99.0;
+
 /// Default floor of a window's class probability.
 pub const DEFAULT_FLOOR: f64 = 1e-3;
 
 impl SequentialParams {
     /// A builder with the defaults: threshold 0.9, release at half the threshold, weight 1,
-    /// floor 1e-3, memory of 30 windows.
+    /// floor 1e-3, memory of 30 windows, a change test at [`DEFAULT_CHANGE_ODDS`].
     pub fn builder() -> SequentialParamsBuilder {
         SequentialParamsBuilder {
             threshold: DEFAULT_THRESHOLD,
@@ -58,7 +79,14 @@ impl SequentialParams {
             weight: 1.0,
             floor: DEFAULT_FLOOR,
             memory: 30,
+            change_test: true,
+            change_log_odds: None,
         }
+    }
+
+    /// Log-odds of the change test; `None` without one.
+    pub fn change_log_odds(&self) -> Option<f64> {
+        self.change_log_odds
     }
 
     /// Posterior at which a surface is named.
@@ -120,6 +148,20 @@ impl SequentialParamsBuilder {
         self
     }
 
+    /// Log-odds at which the change test drops the evidence before a change, > 0; default
+    /// `ln` [`DEFAULT_CHANGE_ODDS`].
+    pub fn change_log_odds(mut self, log_odds: f64) -> Self {
+        self.change_test = true;
+        self.change_log_odds = Some(log_odds);
+        self
+    }
+
+    /// No change test: a new surface is followed only as the memory forgets the old one.
+    pub fn without_change_test(mut self) -> Self {
+        self.change_test = false;
+        self
+    }
+
     /// Checks every setting.
     pub fn build(self) -> Result<SequentialParams, RecognizeError> {
         let release = self.release.unwrap_or(0.5 * self.threshold);
@@ -144,12 +186,21 @@ impl SequentialParamsBuilder {
         if self.memory == 0 {
             return Err(bad("memory", 0.0, "must be at least one window"));
         }
+        let change_log_odds = self
+            .change_test
+            .then(|| self.change_log_odds.unwrap_or(DEFAULT_CHANGE_ODDS.ln()));
+        if let Some(h) = change_log_odds
+            && !(h.is_finite() && h > 0.0)
+        {
+            return Err(bad("change_log_odds", h, "must be positive and finite"));
+        }
         Ok(SequentialParams {
             threshold: self.threshold,
             release,
             weight: self.weight,
             floor: self.floor,
             memory: self.memory,
+            change_log_odds,
         })
     }
 }
@@ -163,6 +214,8 @@ pub struct SequentialStep {
     pub probability: f64,
     /// The surface named, if any: `None` is "undecided".
     pub decided: Option<usize>,
+    /// Whether the change test fired at this window (the evidence before the change dropped).
+    pub changed: bool,
 }
 
 /// Evidence of one stroke over `classes` surfaces.
@@ -178,6 +231,10 @@ pub struct SequentialState {
     sum: Vec<f64>,
     posterior: Vec<f64>,
     decided: Option<usize>,
+    /// The change test's sum for each other surface against the named one, and the windows
+    /// since it last stood at zero.
+    cusum: Vec<f64>,
+    since_zero: Vec<usize>,
 }
 
 impl SequentialState {
@@ -207,6 +264,8 @@ impl SequentialState {
             sum: vec![0.0; classes],
             posterior: vec![1.0 / classes as f64; classes],
             decided: None,
+            cusum: vec![0.0; classes],
+            since_zero: vec![0; classes],
         })
     }
 
@@ -224,6 +283,8 @@ impl SequentialState {
         let k = self.posterior.len();
         self.posterior.fill(1.0 / k as f64);
         self.decided = None;
+        self.cusum.fill(0.0);
+        self.since_zero.fill(0);
     }
 
     /// The posterior over the surfaces after the windows pushed so far.
@@ -259,8 +320,16 @@ impl SequentialState {
             *s += evidence - *slot;
             *slot = evidence;
         }
+        let change = self.change_test();
         self.next = (self.next + 1) % self.params.memory;
         self.held = (self.held + 1).min(self.params.memory);
+        if let Some(windows) = change {
+            self.keep_last(windows.min(self.held));
+            self.decided = None;
+            self.cusum.fill(0.0);
+            self.since_zero.fill(0);
+        }
+        let changed = change.is_some();
         // The softmax of the summed evidence, shifted by its largest term so it cannot overflow.
         let top = self.sum.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let mut norm = 0.0;
@@ -290,11 +359,63 @@ impl SequentialState {
             }
             _ => (probability >= self.params.threshold).then_some(best),
         };
+        if self.decided.is_none() {
+            self.cusum.fill(0.0);
+            self.since_zero.fill(0);
+        }
         Ok(SequentialStep {
             best,
             probability,
             decided: self.decided,
+            changed,
         })
+    }
+
+    /// The change test on the window just written at `next`: its evidence for each other
+    /// surface against the named one added to that surface's CUSUM. Once one reaches the test's
+    /// log-odds, the number of windows its excursion spans (the evidence to keep).
+    fn change_test(&mut self) -> Option<usize> {
+        let (Some(d), Some(h)) = (self.decided, self.params.change_log_odds) else {
+            return None;
+        };
+        let k = self.sum.len();
+        let row = &self.ring[self.next * k..(self.next + 1) * k];
+        let mut fired: Option<(f64, usize)> = None;
+        for (c, ((s, n), &e)) in self
+            .cusum
+            .iter_mut()
+            .zip(&mut self.since_zero)
+            .zip(row)
+            .enumerate()
+        {
+            if c == d {
+                continue;
+            }
+            *s = (*s + e - row[d]).max(0.0);
+            *n = if *s > 0.0 { *n + 1 } else { 0 };
+            if *s >= h && fired.is_none_or(|(best, _)| *s > best) {
+                fired = Some((*s, *n));
+            }
+        }
+        fired.map(|(_, windows)| windows)
+    }
+
+    /// Drops every window but the last `keep` from the evidence.
+    fn keep_last(&mut self, keep: usize) {
+        let k = self.sum.len();
+        let memory = self.params.memory;
+        for age in keep..memory {
+            // The window `age + 1` pushes ago sits just before `next`, going back.
+            let slot = (self.next + memory - 1 - age) % memory;
+            self.ring[slot * k..(slot + 1) * k].fill(0.0);
+        }
+        self.held = keep;
+        self.sum.fill(0.0);
+        for row in self.ring.chunks_exact(k) {
+            for (s, e) in self.sum.iter_mut().zip(row) {
+                *s += e;
+            }
+        }
     }
 }
 
@@ -302,10 +423,12 @@ impl SequentialState {
 mod tests {
     use super::*;
 
+    /// Without the change test, which has a test of its own.
     fn params(threshold: f64, memory: usize) -> SequentialParams {
         SequentialParams::builder()
             .threshold(threshold)
             .memory(memory)
+            .without_change_test()
             .build()
             .expect("valid")
     }
@@ -363,6 +486,63 @@ mod tests {
         }
         assert_eq!(last, Some(1));
         assert!((s.posterior()[1] - 0.9f64.powi(4) / (0.9f64.powi(4) + 0.1f64.powi(4))).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_change_of_surface_drops_the_evidence_from_before_it() {
+        let default = SequentialParams::builder().build().expect("valid");
+        assert_eq!(default.change_log_odds(), Some(DEFAULT_CHANGE_ODDS.ln()));
+        let with = SequentialParams::builder()
+            .threshold(0.9)
+            .memory(200)
+            .change_log_odds(9f64.ln())
+            .build()
+            .expect("valid");
+        let without = params(0.9, 200);
+        let run = |p: SequentialParams| {
+            let mut s = SequentialState::new(p, 2).expect("state");
+            // Fifty windows of class 0 at 4:1, then class 1 at 1:4.
+            let first: Vec<SequentialStep> = (0..50).map(|_| s.push(&[0.8, 0.2]).expect("push")).collect();
+            let then: Vec<SequentialStep> = (0..60).map(|_| s.push(&[0.2, 0.8]).expect("push")).collect();
+            (first, then)
+        };
+        let (first, then) = run(with);
+        assert!(first.iter().all(|s| !s.changed));
+        assert_eq!(first.last().map(|s| s.decided), Some(Some(0)));
+        // Each window against class 0 is ln 4 = 1.386: the CUSUM passes ln 9 = 2.197 on the
+        // second, and the evidence from before the two is dropped. Their posterior for class 1
+        // is 16/17 = 0.941, past the threshold: named at once.
+        assert_eq!(then.iter().position(|s| s.changed), Some(1));
+        assert_eq!(then[1].decided, Some(1));
+        assert!((then[1].probability - 16.0 / 17.0).abs() < 1e-12, "{:?}", then[1]);
+        assert_eq!(then.iter().filter(|s| s.changed).count(), 1);
+        // Without the test the fifty old windows must be outweighed first, and then the
+        // posterior raised to 0.9: 52 windows.
+        let (_, slow) = run(without);
+        assert!(slow.iter().all(|s| !s.changed));
+        let named = slow.iter().position(|s| s.decided == Some(1)).expect("named");
+        assert_eq!(named, 51);
+        // Windows that only waver do not fire it: 2:1 against, then 1:2, repeatedly.
+        let mut s = SequentialState::new(with, 2).expect("state");
+        for _ in 0..20 {
+            s.push(&[0.8, 0.2]).expect("push");
+        }
+        for i in 0..200 {
+            let p = if i % 2 == 0 {
+                [1.0 / 3.0, 2.0 / 3.0]
+            } else {
+                [2.0 / 3.0, 1.0 / 3.0]
+            };
+            assert!(!s.push(&p).expect("push").changed, "window {i}");
+        }
+        assert!(SequentialParams::builder().change_log_odds(0.0).build().is_err());
+        assert!(
+            SequentialParams::builder()
+                .change_log_odds(f64::INFINITY)
+                .build()
+                .is_err()
+        );
+        assert_eq!(params(0.9, 3).change_log_odds(), None);
     }
 
     #[test]

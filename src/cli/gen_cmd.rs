@@ -57,6 +57,12 @@ pub(crate) struct GenArgs {
     /// depend on how fast the tool moves.
     #[arg(long, value_name = "M/S")]
     rub_speed_mps: Option<f64>,
+    /// Write only two-patch rubbing strokes (into nakano_two_patch/): each of Nakano's surfaces
+    /// rubbed onto the next one halfway through the stroke, runs 1 and 2, at --rub-speed-mps if
+    /// given; their metadata say when the surface changes, which `recognize eval --sequential`
+    /// times.
+    #[arg(long)]
+    two_patch: bool,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -110,6 +116,29 @@ fn write_capture(args: &GenArgs, path: &std::path::Path, capture: &capture::Capt
     Ok(())
 }
 
+/// `--two-patch`: only strokes from each Nakano surface onto the next, at `speed_mps`.
+fn two_patch_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
+    use haptics::sim::protocols::nakano::{RUNS, two_patch_file_name, two_patch_run};
+    use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+    let dir = args.out.join("nakano_two_patch");
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let surfaces = nakano_surfaces();
+    let patches: Vec<SurfacePatch> = surfaces.iter().map(SurfacePatch::new).collect();
+    for (i, first) in patches.iter().enumerate() {
+        let second = &patches[(i + 1) % patches.len()];
+        // Run 0 is the training run of the single-surface set; these are test strokes.
+        for run in 1..RUNS {
+            let path = dir.join(two_patch_file_name(first.surface(), second.surface(), run));
+            write_capture(
+                args,
+                &path,
+                &two_patch_run(first, second, run, args.seed, speed_mps)?,
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// `--rub-speed-mps`: only Nakano's rubbing runs, at that speed.
 fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
     use haptics::sim::protocols::nakano::{RUNS, rubbing_run_at, run_file_name};
@@ -129,6 +158,12 @@ fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
 pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
     if args.needle_rate_hz.is_some() || args.needle_tissue.is_some() || args.needle_speed.is_some() {
         return needle_only(args, args.needle_rate_hz.unwrap_or(100));
+    }
+    if args.two_patch {
+        let speed_mps = args
+            .rub_speed_mps
+            .unwrap_or(haptics::sim::protocols::nakano::SPEED_MPS);
+        return two_patch_only(args, speed_mps);
     }
     if let Some(speed_mps) = args.rub_speed_mps {
         return rubbing_only(args, speed_mps);

@@ -120,6 +120,11 @@ struct EvalArgs {
     /// so a new surface under the tool is named within about this time.
     #[arg(long, value_name = "S", default_value_t = recognize::sequential::DEFAULT_MEMORY_S, requires = "sequential")]
     memory_s: f64,
+    /// With --sequential: the likelihood ratio against the named surface at which the windows
+    /// since the change test began are taken to be a new surface, and the evidence from before
+    /// them is dropped; 0 for no change test (only the memory then follows a new surface).
+    #[arg(long, value_name = "R", default_value_t = recognize::sequential::DEFAULT_CHANGE_ODDS, requires = "sequential")]
+    change_odds: f64,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
@@ -404,6 +409,11 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     let params = model
         .sequential_params(args.memory_s)
         .context("a recognizer with window probabilities")?;
+    let params = if args.change_odds == 0.0 {
+        params.without_change_test()
+    } else {
+        params.change_log_odds(args.change_odds.ln())
+    };
     let rate_hz = model.windowing().map(|w| w.rate_hz);
     let captures = read_keeping(&args.input, &args.captures, rate_hz, |_| Ok(needs.clone()))?;
     let e = model.evaluate_sequential(&captures, &args.sequential, params)?;
@@ -462,6 +472,26 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
             r.not_stable,
             r.flips_per_s
         );
+    }
+    if e.rows.iter().any(|r| r.changes > 0) {
+        println!(
+            "strokes that slide onto another surface part-way (above: the other strokes' times; \
+             named right = right for the surface under the tool):"
+        );
+        println!(
+            "{:>9} {:>8} {:>16} {:>16} {:>14}",
+            "threshold", "strokes", "change followed", "slowest change", "not followed"
+        );
+        for r in &e.rows {
+            println!(
+                "{:>9} {:>8} {:>16} {:>16} {:>14}",
+                r.threshold,
+                r.changes,
+                secs(r.change_followed_s),
+                secs(r.slowest_change_s),
+                r.changes_not_followed
+            );
+        }
     }
     println!(
         "calibration over every window: Brier score {:.4}, expected calibration error {:.2} %",

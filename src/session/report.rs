@@ -115,6 +115,9 @@ pub struct RecognizerLine {
     pub threshold: Option<f64>,
     /// Span of windows whose evidence counts, s.
     pub memory_s: Option<f64>,
+    /// Likelihood ratio at which the change test drops the evidence before a change; `None`
+    /// without one.
+    pub change_odds: Option<f64>,
 }
 
 /// The whole report (`report.json`).
@@ -262,7 +265,12 @@ impl SessionReport {
         if let Some(r) = &self.recognizer {
             let rule = match (r.threshold, r.memory_s) {
                 (Some(p), Some(m)) => {
-                    format!("names a surface once its posterior reaches {p} (evidence of the last {m} s)")
+                    let change = r.change_odds.map_or("no change test".to_owned(), |o| {
+                        format!("a change of surface at {o:.0}:1")
+                    });
+                    format!(
+                        "names a surface once its posterior reaches {p} (evidence of the last {m} s, {change})"
+                    )
                 }
                 _ => "names a surface every window".to_owned(),
             };

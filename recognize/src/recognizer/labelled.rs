@@ -14,6 +14,21 @@ use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
 pub const LABEL_KEY: &str = "surface";
 /// Metadata key of a scratch's exploratory behaviour.
 pub const BEHAVIOUR_KEY: &str = "behaviour";
+/// Metadata key of the surface a stroke slides onto part-way, when it does (its class after
+/// the change; [`SURFACE_CHANGE_S_KEY`] says when).
+pub const SURFACE_AFTER_KEY: &str = "surface_after";
+/// Metadata key of the time, s from the capture's first sample, at which the tool passes onto
+/// the surface [`SURFACE_AFTER_KEY`] names.
+pub const SURFACE_CHANGE_S_KEY: &str = "surface_change_s";
+
+/// A stroke that slides from its labelled surface onto another part-way.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceChange {
+    /// The class from the change on.
+    pub after: String,
+    /// When the change happens, s from the capture's first sample.
+    pub at_s: f64,
+}
 
 /// A capture with its class, behaviour and hash, as the recognizer sees it.
 ///
@@ -29,6 +44,9 @@ pub struct LabelledCapture {
     pub label: String,
     /// Its exploratory behaviour (metadata `behaviour`), if any.
     pub behaviour: Option<String>,
+    /// Where the stroke slides onto another surface (metadata `surface_after` and
+    /// `surface_change_s`), if it does.
+    pub change: Option<SurfaceChange>,
     /// Where it was read from, and the SHA-256 of its bytes.
     pub reference: CaptureRef,
     /// The features computed before the samples were dropped; `None` while it has them.
@@ -59,10 +77,34 @@ impl LabelledCapture {
             })?
             .to_owned();
         let behaviour = meta.get(BEHAVIOUR_KEY).map(str::to_owned);
+        let unusable = |reason: String| RecognizeError::UnusableCapture {
+            path: path.to_owned(),
+            reason,
+        };
+        let change = match (meta.get(SURFACE_AFTER_KEY), meta.get(SURFACE_CHANGE_S_KEY)) {
+            (None, None) => None,
+            (Some(after), Some(at)) => {
+                let at_s = at.trim().parse::<f64>().ok().filter(|t| t.is_finite() && *t >= 0.0).ok_or_else(|| {
+                    unusable(format!(
+                        "metadata `{SURFACE_CHANGE_S_KEY}` = `{at}`: expected the seconds into the capture at which the surface changes"
+                    ))
+                })?;
+                Some(SurfaceChange {
+                    after: after.to_owned(),
+                    at_s,
+                })
+            }
+            (Some(_), None) | (None, Some(_)) => {
+                return Err(unusable(format!(
+                    "metadata has only one of `{SURFACE_AFTER_KEY}` and `{SURFACE_CHANGE_S_KEY}`: a change of surface needs both"
+                )));
+            }
+        };
         Ok(Self {
             capture,
             label,
             behaviour,
+            change,
             reference: CaptureRef {
                 path: path.to_owned(),
                 sha256,
@@ -148,6 +190,21 @@ pub(crate) fn class_index(classes: &[String], c: &LabelledCapture) -> Result<usi
         .ok_or_else(|| RecognizeError::UnusableCapture {
             path: c.reference.path.clone(),
             reason: format!("surface `{}` is not one the recognizer was trained on", c.label),
+        })
+}
+
+/// The index of `name` among `classes`, for capture `c`'s change of surface.
+pub(crate) fn class_named(
+    classes: &[String],
+    name: &str,
+    c: &LabelledCapture,
+) -> Result<usize, RecognizeError> {
+    classes
+        .iter()
+        .position(|l| l == name)
+        .ok_or_else(|| RecognizeError::UnusableCapture {
+            path: c.reference.path.clone(),
+            reason: format!("`{SURFACE_AFTER_KEY}` `{name}` is not a surface the recognizer was trained on"),
         })
 }
 

@@ -34,7 +34,9 @@ pub use file::{
 };
 pub use grouping::{TRIAL_KEY, recording_groups, trial_groups};
 pub use kept::FeatureNeeds;
-pub use labelled::{BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture};
+pub use labelled::{
+    BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SurfaceChange,
+};
 pub use sequential_eval::{
     Calibration, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
 };

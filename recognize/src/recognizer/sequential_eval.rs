@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::LabelledCapture;
 use super::file::RecognizerFile;
-use super::labelled::class_index;
+use super::labelled::{class_index, class_named};
 use crate::RecognizeError;
 use crate::features::{NakanoWindowing, WindowlessCapture};
 use crate::sequential::{SequentialParams, SequentialParamsBuilder, SequentialState};
@@ -33,8 +33,16 @@ pub struct SequentialRow {
     pub time_to_stable_correct_s: Option<f64>,
     /// The surface with the longest such mean, and that mean, s.
     pub worst_surface: Option<(String, f64)>,
-    /// Captures that do not end named right.
+    /// Captures (of one surface) that do not end named right.
     pub not_stable: usize,
+    /// Of the captures that slide onto another surface part-way: the mean time from the change
+    /// to the named decision that starts the final run of right ones, s (over those that end
+    /// named right), the longest, how many such captures there are, and how many of them do
+    /// not end named right. The single-surface times above leave these captures out.
+    pub change_followed_s: Option<f64>,
+    pub slowest_change_s: Option<f64>,
+    pub changes: usize,
+    pub changes_not_followed: usize,
     /// Changes of named surface (undecided stretches not counted) per second of stroke.
     pub flips_per_s: f64,
 }
@@ -93,8 +101,20 @@ pub struct SequentialEvaluation {
 /// One capture's windows: truth, and each window's time from contact and probabilities.
 struct Stroke {
     truth: usize,
+    /// When the stroke slides onto another surface, and which.
+    change: Option<(f64, usize)>,
     duration_s: f64,
     windows: Vec<(f64, Vec<f64>)>,
+}
+
+impl Stroke {
+    /// The surface under the tool at `t_s`.
+    fn truth_at(&self, t_s: f64) -> usize {
+        match self.change {
+            Some((at_s, after)) if t_s >= at_s => after,
+            _ => self.truth,
+        }
+    }
 }
 
 impl RecognizerFile {
@@ -160,8 +180,13 @@ impl RecognizerFile {
                 .into_iter()
                 .map(|w| (w.decision.decided_at as f64 / rate_hz, w.probabilities))
                 .collect();
+            let change = match &c.change {
+                Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
+                None => None,
+            };
             strokes.push(Stroke {
                 truth: class_index(&self.classes, c)?,
+                change,
                 duration_s: c.samples() as f64 / rate_hz,
                 windows,
             });
@@ -205,6 +230,7 @@ impl RecognizerFile {
         let (mut first, mut stable) = (Vec::new(), Vec::new());
         let mut stable_by_class: Vec<Vec<f64>> = vec![Vec::new(); classes];
         let mut duration_s = 0.0;
+        let (mut followed, mut not_followed) = (Vec::new(), 0);
         for s in strokes {
             state.reset();
             duration_s += s.duration_s;
@@ -215,19 +241,33 @@ impl RecognizerFile {
                 }
             }
             decided += named.len();
-            correct += named.iter().filter(|(_, d)| *d == s.truth).count();
+            correct += named.iter().filter(|(t, d)| *d == s.truth_at(*t)).count();
             flips += named.windows(2).filter(|w| w[0].1 != w[1].1).count();
+            // The named decision that starts the final run of right ones, if the stroke ends
+            // named right.
+            let final_right = |truth: usize| match named.last() {
+                Some(&(_, d)) if d == truth => {
+                    let wrong = named.iter().rposition(|(_, d)| *d != truth);
+                    Some(named[wrong.map_or(0, |w| w + 1)].0)
+                }
+                _ => None,
+            };
+            if let Some((at_s, after)) = s.change {
+                match final_right(after) {
+                    Some(t) if t >= at_s => followed.push(t - at_s),
+                    _ => not_followed += 1,
+                }
+                continue;
+            }
             if let Some(&(t, _)) = named.first() {
                 first.push(t);
             }
-            match named.last() {
-                Some(&(_, d)) if d == s.truth => {
-                    let wrong = named.iter().rposition(|(_, d)| *d != s.truth);
-                    let t = named[wrong.map_or(0, |w| w + 1)].0;
+            match final_right(s.truth) {
+                Some(t) => {
                     stable.push(t);
                     stable_by_class[s.truth].push(t);
                 }
-                _ => not_stable += 1,
+                None => not_stable += 1,
             }
         }
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
@@ -244,6 +284,10 @@ impl RecognizerFile {
             time_to_stable_correct_s: mean(&stable),
             worst_surface,
             not_stable,
+            change_followed_s: mean(&followed),
+            slowest_change_s: followed.iter().copied().reduce(f64::max),
+            changes: followed.len() + not_followed,
+            changes_not_followed: not_followed,
             flips_per_s: if duration_s > 0.0 {
                 flips as f64 / duration_s
             } else {
@@ -264,19 +308,20 @@ fn calibration(
     let (mut brier, mut n) = (0.0, 0usize);
     for s in strokes {
         state.reset();
-        for (_, p) in &s.windows {
+        for (t, p) in &s.windows {
             let step = state.push(p)?;
+            let truth = s.truth_at(*t);
             brier += state
                 .posterior()
                 .iter()
                 .enumerate()
-                .map(|(c, q)| (q - f64::from(u8::from(c == s.truth))).powi(2))
+                .map(|(c, q)| (q - f64::from(u8::from(c == truth))).powi(2))
                 .sum::<f64>();
             n += 1;
             let bin = ((step.probability * RELIABILITY_BINS as f64) as usize).min(RELIABILITY_BINS - 1);
             bins[bin].0 += 1;
             bins[bin].1 += step.probability;
-            bins[bin].2 += usize::from(step.best == s.truth);
+            bins[bin].2 += usize::from(step.best == truth);
         }
     }
     let n = n.max(1);

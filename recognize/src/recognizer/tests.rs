@@ -1000,3 +1000,85 @@ fn version_one_files_are_read_only_where_their_features_did_not_change() {
         "{text}"
     );
 }
+
+#[test]
+fn a_change_of_surface_is_read_from_the_metadata_and_checked() {
+    let c = rubbing("fine", 5e-6, 0.3e-3, 0.10, 1.0);
+    assert_eq!(c.change, None);
+    let relabel = |extra: &[(&str, &str)]| {
+        let mut meta = c.capture.metadata().clone();
+        for (k, v) in extra {
+            meta.insert(*k, v);
+        }
+        let capture =
+            Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec()).expect("valid");
+        LabelledCapture::new(capture, Path::new("two.csv"), "00".into())
+    };
+    let two = relabel(&[(SURFACE_AFTER_KEY, "coarse"), (SURFACE_CHANGE_S_KEY, "0.5")]).expect("labelled");
+    assert_eq!(
+        two.change,
+        Some(SurfaceChange {
+            after: "coarse".into(),
+            at_s: 0.5
+        })
+    );
+    for (extra, says) in [
+        (vec![(SURFACE_AFTER_KEY, "coarse")], "only one of"),
+        (vec![(SURFACE_CHANGE_S_KEY, "0.5")], "only one of"),
+        (
+            vec![(SURFACE_AFTER_KEY, "coarse"), (SURFACE_CHANGE_S_KEY, "soon")],
+            "surface_change_s",
+        ),
+        (
+            vec![(SURFACE_AFTER_KEY, "coarse"), (SURFACE_CHANGE_S_KEY, "-1")],
+            "surface_change_s",
+        ),
+    ] {
+        let e = relabel(&extra).expect_err("refused").to_string();
+        assert!(e.contains("two.csv") && e.contains(says), "{e}");
+    }
+    // A change onto a surface the recognizer does not know is refused by name.
+    let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let knn = RecognizerFile::train_knn_windows(
+        &three_surfaces(4.0),
+        windowing,
+        FeatureSet::Nakano,
+        3,
+        CellScale::Mean,
+    )
+    .expect("k-NN");
+    let params = knn.sequential_params(3.0).expect("window probabilities");
+    let unknown = relabel(&[(SURFACE_AFTER_KEY, "glass"), (SURFACE_CHANGE_S_KEY, "0.5")]).expect("labelled");
+    let e = knn
+        .evaluate_sequential(&[unknown], &[0.9], params)
+        .expect_err("unknown surface")
+        .to_string();
+    assert!(e.contains("two.csv") && e.contains("glass"), "{e}");
+    // A stroke of one surface labelled as changing onto another at 1 s: the decisions after
+    // the change are scored against the new surface, so the names the recognizer keeps giving
+    // the old one count as wrong, and the change is not followed.
+    let stroke = |change: Option<&str>| {
+        let c = rubbing("fine", 5e-6, 0.3e-3, 0.10, 4.0);
+        let mut meta = c.capture.metadata().clone();
+        if let Some(at) = change {
+            meta.insert(SURFACE_AFTER_KEY, "coarse");
+            meta.insert(SURFACE_CHANGE_S_KEY, at);
+        }
+        let capture =
+            Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec()).expect("valid");
+        LabelledCapture::new(capture, Path::new("s.csv"), "00".into()).expect("labelled")
+    };
+    let plain = knn
+        .evaluate_sequential(&[stroke(None)], &[0.9], params)
+        .expect("eval");
+    let changed = knn
+        .evaluate_sequential(&[stroke(Some("1.0"))], &[0.9], params)
+        .expect("eval");
+    let (p, c) = (&plain.rows[0], &changed.rows[0]);
+    assert_eq!((p.changes, c.changes, c.changes_not_followed), (0, 1, 1));
+    assert_eq!(p.correct, p.decided);
+    assert!(c.correct < c.decided, "{c:?}");
+    assert_eq!(c.change_followed_s, None);
+    // The stroke with a change is left out of the single-surface times.
+    assert!(p.time_to_stable_correct_s.is_some() && c.time_to_stable_correct_s.is_none());
+}

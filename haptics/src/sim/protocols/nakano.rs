@@ -60,6 +60,44 @@ pub fn rubbing_run_at(
     seed: u64,
     speed_mps: f64,
 ) -> Result<Capture, CaptureError> {
+    stroke(patch, None, run, seed, speed_mps)
+}
+
+/// Where the stroke of a two-patch run passes from its first patch onto its second: halfway,
+/// so that each patch is rubbed for half the stroke (3 s at 5 mm/s).
+pub const TWO_PATCH_CHANGE_M: f64 = STROKE_M / 2.0;
+
+/// The file a two-patch run is written to, inside the set's `nakano_two_patch/` folder.
+pub fn two_patch_file_name(first: &RubbingSurface, second: &RubbingSurface, run: u32) -> String {
+    format!(
+        "{:02}_{}_to_{:02}_{}_run{run}.csv",
+        first.id, first.name, second.id, second.name
+    )
+}
+
+/// One stroke that starts on `first` and slides onto `second` at [`TWO_PATCH_CHANGE_M`] of
+/// travel, as over two patches laid side by side (the seam is a step in height where the two
+/// surfaces' profiles meet), at `speed_mps`. Its metadata name the second surface
+/// (`surface_after`) and the time the tip crosses the seam (`surface_change_s`), so a
+/// recognizer's evaluation can time how soon it follows the change.
+pub fn two_patch_run(
+    first: &SurfacePatch,
+    second: &SurfacePatch,
+    run: u32,
+    seed: u64,
+    speed_mps: f64,
+) -> Result<Capture, CaptureError> {
+    stroke(first, Some(second), run, seed, speed_mps)
+}
+
+/// A stroke over `patch`, or over `patch` then `then` from [`TWO_PATCH_CHANGE_M`] on.
+fn stroke(
+    patch: &SurfacePatch,
+    then: Option<&SurfacePatch>,
+    run: u32,
+    seed: u64,
+    speed_mps: f64,
+) -> Result<Capture, CaptureError> {
     if !(speed_mps.is_finite() && speed_mps > 0.0) {
         return Err(CaptureError::without_file(CaptureErrorKind::Invalid {
             field: "command.speed_mps".into(),
@@ -67,10 +105,18 @@ pub fn rubbing_run_at(
         }));
     }
     let surface = patch.surface();
-    let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(
-        seed,
-        &[tag::NAKANO, u64::from(surface.id), u64::from(run)],
-    ));
+    let mut rng = ChaCha8Rng::seed_from_u64(match then {
+        None => derive_seed(seed, &[tag::NAKANO, u64::from(surface.id), u64::from(run)]),
+        Some(next) => derive_seed(
+            seed,
+            &[
+                tag::NAKANO,
+                u64::from(surface.id),
+                u64::from(run),
+                u64::from(next.surface().id),
+            ],
+        ),
+    });
     let dt = 1.0 / RATE_HZ;
     let encoder = Encoder {
         quantum_m: Encoder::OMEGA7_QUANTUM_M,
@@ -97,13 +143,21 @@ pub fn rubbing_run_at(
     // The linear ramp covers half the distance a full-speed start would.
     let steps = ((STROKE_M / speed_mps + RAMP_S / 2.0) * RATE_HZ).round() as usize;
     let mut x = 0.0;
+    let mut change_s = None;
     for k in 0..steps {
         let t = k as f64 * dt;
         let command = speed_mps * (t / RAMP_S).min(1.0);
         x += command * dt;
-        let contact = patch.contact(start_m + x);
+        let under = match then {
+            Some(next) if x >= TWO_PATCH_CHANGE_M => {
+                change_s.get_or_insert(t);
+                next
+            }
+            _ => patch,
+        };
+        let contact = under.contact(start_m + x);
         let z = contact.height_m + tilt * x + height_noise.sample(&mut rng);
-        let friction_n = patch.friction_n(start_m + x, NORMAL_FORCE_N);
+        let friction_n = under.friction_n(start_m + x, NORMAL_FORCE_N);
         let x_measured = encoder.read(x);
         cols.push(&[
             k as f64 / RATE_HZ,
@@ -115,7 +169,7 @@ pub fn rubbing_run_at(
             round4(friction_observer.update(friction_n + rfob_noise.sample(&mut rng))),
         ]);
     }
-    let meta = Metadata::new(CaptureKind::Rubbing, DEVICE, RATE_HZ)
+    let mut meta = Metadata::new(CaptureKind::Rubbing, DEVICE, RATE_HZ)
         .with("protocol", "nakano_rubbing")
         .with("source", "Nakano-thesis-ch3-Tables3.1-3.2")
         .with("seed", seed)
@@ -137,6 +191,11 @@ pub fn rubbing_run_at(
         .with("truth.friction_coefficient", surface.friction_coefficient)
         .with("truth.friction_variation", surface.friction_variation)
         .with("truth.friction_law", "F=N*(mu(x)+dh/dx)");
+    if let (Some(next), Some(t)) = (then, change_s) {
+        meta.insert(recognize::SURFACE_AFTER_KEY, next.surface().name);
+        meta.insert(recognize::SURFACE_CHANGE_S_KEY, t);
+        meta.insert("truth.change_m", TWO_PATCH_CHANGE_M);
+    }
     cols.into_capture(meta)
 }
 
