@@ -125,6 +125,10 @@ struct EvalArgs {
     /// them is dropped; 0 for no change test (only the memory then follows a new surface).
     #[arg(long, value_name = "R", default_value_t = recognize::sequential::DEFAULT_CHANGE_ODDS, requires = "sequential")]
     change_odds: f64,
+    /// With --sequential: the exponent each window's probabilities are raised to, in (0, 1];
+    /// by default hop / window, so that overlapping windows count each sample once.
+    #[arg(long, value_name = "W", requires = "sequential")]
+    window_weight: Option<f64>,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
@@ -413,6 +417,10 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         params.without_change_test()
     } else {
         params.change_log_odds(args.change_odds.ln())
+    };
+    let params = match args.window_weight {
+        Some(w) => params.weight(w),
+        None => params,
     };
     let rate_hz = model.windowing().map(|w| w.rate_hz);
     let captures = read_keeping(&args.input, &args.captures, rate_hz, |_| Ok(needs.clone()))?;
