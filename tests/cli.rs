@@ -298,3 +298,30 @@ fn bench_trade_writes_every_point_and_the_front_nothing_beats() {
         text(&o)
     );
 }
+
+/// Output piped into a reader that has gone (`palpus gen … | head`) ends the process as it ends
+/// other tools, by SIGPIPE, without a panic message; the captures it wrote are complete.
+#[cfg(unix)]
+#[test]
+fn a_closed_output_pipe_ends_the_process_without_a_panic() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
+        .args(["gen", "--out"])
+        .arg(dir.path())
+        .args(["--only", "nakano"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes before the summary is written.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(13), "{:?}: {stderr}", out.status);
+    // Every capture was written before the summary, whole.
+    let captures = std::fs::read_dir(dir.path().join("nakano")).unwrap().count();
+    assert_eq!(captures, 21);
+}
