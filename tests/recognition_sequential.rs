@@ -4,10 +4,10 @@
 //! recognizer's default fixed 3 s window: the anytime decisions must be at least as often right
 //! and reach the stable right surface sooner, and the posterior must be calibrated (expected
 //! calibration error ≤ 5 %). Measured (seed 1, 0.25 s windows): at threshold 0.9, 100 % of
-//! named windows right, stable right after 1.39 s on average, ECE 2.2 %; the 3 s window's first
+//! named windows right, stable right after 1.16 s on average, ECE 1.9 %; the 3 s window's first
 //! correct decision comes after 4.4 s. On strokes that slide from one surface onto the next
-//! (`gen --two-patch`), the change test names the new surface 1.13 s after the seam on average,
-//! the memory alone after 2.11 s.
+//! (`gen --two-patch`), the change test names the new surface 1.09 s after the seam on average,
+//! the memory alone after 2.12 s.
 
 mod common;
 

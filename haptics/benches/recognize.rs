@@ -2,7 +2,9 @@
 //! every sample and a decision every hop, over a whole simulated rubbing run; and the dearest
 //! sample alone, the one that completes a window and asks the classifier. Two recognizers: a
 //! SOM on the default 3 s windows every 100 samples, and the committed SVM of `surfaces_nakano`
-//! (0.25 s windows every 20 samples, window probabilities accumulated into a posterior).
+//! (0.25 s windows every 20 samples, window probabilities accumulated into a posterior; its
+//! stroke's start is mirrored, so one sample a stroke also pushes the mirror image through the
+//! filters).
 
 // The measured call returns the recognizer's own result type, large by design (see haptics'
 // lib.rs).
@@ -75,6 +77,22 @@ fn bench_model(
         let _ = before.push(x[i], z[i], f[i]);
     }
     group.throughput(Throughput::Elements(1));
+    // With a mirrored start, the sample that completes the held start pushes the mirror image
+    // and the held samples through the filters at once, once a stroke.
+    if live.windowing().mirrored_start {
+        let held = live.windowing().filters.lookahead_samples();
+        let mut start = LiveRecognizer::new(model, 1000.0).expect("live recognizer");
+        for i in 0..held {
+            let _ = start.push(x[i], z[i], f[i]);
+        }
+        group.bench_function(format!("{name}/mirroring_sample"), |b| {
+            b.iter_batched_ref(
+                || start.clone(),
+                |r| black_box(r.push(black_box(x[held]), black_box(z[held]), black_box(f[held]))),
+                criterion::BatchSize::LargeInput,
+            );
+        });
+    }
     group.bench_function(format!("{name}/deciding_sample"), |b| {
         b.iter_batched_ref(
             || before.clone(),

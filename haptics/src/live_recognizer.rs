@@ -140,7 +140,14 @@ impl LiveRecognizer {
             decider,
             windowing,
             classes: model.classes.clone(),
-            stream: NakanoStream::new(windowing.filters, windowing.window_samples)?,
+            stream: {
+                let stream = NakanoStream::new(windowing.filters, windowing.window_samples)?;
+                if windowing.mirrored_start {
+                    stream.with_mirrored_start()
+                } else {
+                    stream
+                }
+            },
             first_position_m: None,
             current: None,
         })

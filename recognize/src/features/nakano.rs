@@ -585,6 +585,33 @@ impl<T: Copy> Ring<T> {
     }
 }
 
+/// A stroke's signals extended before its first sample by `pad` samples of their mirror image,
+/// so that the zero-phase filters have their margin at the very start: the heights and positions
+/// are reflected through the first sample (`2·v₀ − v_j`, which continues a slope and a tilt
+/// straight on, where an even reflection would fold them into a kink the high-pass would call
+/// roughness), the friction repeated as its mirror (it is never filtered, and no window reaches
+/// before the first sample). The roughness a reflected profile shows has the amplitude and
+/// wavelengths of the real one, so the first windows' features are those of a stroke that had
+/// started earlier, not of a truncated filter. `None` for a stroke of at most `pad` samples.
+pub fn mirror_start(signals: &NakanoSignals<'_>, pad: usize) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    if signals.len() <= pad {
+        return None;
+    }
+    let reflect = |v: &[f64]| -> Vec<f64> {
+        (1..=pad)
+            .rev()
+            .map(|j| 2.0 * v[0] - v[j])
+            .chain(v.iter().copied())
+            .collect()
+    };
+    let f = &signals.friction_n;
+    Some((
+        reflect(signals.position_m),
+        reflect(signals.height_m),
+        (1..=pad).rev().map(|j| f[j]).chain(f.iter().copied()).collect(),
+    ))
+}
+
 /// One window's features from the stream.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StreamWindow {
@@ -624,6 +651,26 @@ pub struct NakanoStream {
     rough_stats: SlidingMoments,
     friction_stats: SlidingMoments,
     crossings: usize,
+    /// With a mirrored start ([`NakanoStream::with_mirrored_start`]): the stroke's first
+    /// `pad + 1` samples, held until the mirror image they define can be pushed before them.
+    mirror: Option<MirrorStart>,
+}
+
+/// The samples a mirrored start holds back, and how many it mirrors.
+#[derive(Debug)]
+struct MirrorStart {
+    pad: usize,
+    first: Vec<(f64, f64, f64)>,
+}
+
+impl Clone for MirrorStart {
+    /// A copy with room for all `pad + 1` samples, as the original was made: a derived clone
+    /// would hold only as many as were in, and grow (allocate) on the haptic thread.
+    fn clone(&self) -> Self {
+        let mut first = Vec::with_capacity(self.pad + 1);
+        first.extend_from_slice(&self.first);
+        Self { pad: self.pad, first }
+    }
 }
 
 /// A height sample in the stream's detrending span.
@@ -709,7 +756,21 @@ impl NakanoStream {
             rough_stats: SlidingMoments::default(),
             friction_stats: SlidingMoments::default(),
             crossings: 0,
+            mirror: None,
         })
+    }
+
+    /// The same stream with the stroke's start mirrored as [`mirror_start`] does: the first
+    /// `lookahead` samples are held, then pushed after their mirror image, so windows start at
+    /// the stroke's first sample; [`StreamWindow::start`] still counts the samples pushed, from
+    /// 0. The holding buffer is allocated here.
+    pub fn with_mirrored_start(mut self) -> Self {
+        let pad = self.config.lookahead_samples();
+        self.mirror = Some(MirrorStart {
+            pad,
+            first: Vec::with_capacity(pad + 1),
+        });
+        self
     }
 
     /// The filters' configuration.
@@ -747,10 +808,49 @@ impl NakanoStream {
         self.rough_stats = SlidingMoments::default();
         self.friction_stats = SlidingMoments::default();
         self.crossings = 0;
+        if let Some(m) = &mut self.mirror {
+            m.first.clear();
+        }
     }
 
     /// Pushes one sample; returns the features of the window that it completes, if any.
     pub fn push(&mut self, position_m: f64, height_m: f64, friction_n: f64) -> Option<StreamWindow> {
+        let Some(m) = &mut self.mirror else {
+            return self.push_sample(position_m, height_m, friction_n);
+        };
+        let pad = m.pad;
+        if m.first.len() > pad {
+            // Counted from the stroke's first sample, not the mirror's.
+            return self.push_sample(position_m, height_m, friction_n).and_then(|w| {
+                Some(StreamWindow {
+                    start: w.start.checked_sub(pad as u64)?,
+                    ..w
+                })
+            });
+        }
+        m.first.push((position_m, height_m, friction_n));
+        if m.first.len() <= pad {
+            return None;
+        }
+        // The first `pad + 1` samples are in: their mirror image, then them. No window of
+        // these completes (a window's first sample needs `pad` samples before it, and its
+        // last the lookahead after it).
+        for j in (1..=pad).rev().chain(0..=pad) {
+            let &(x, z, f) = self.mirror.as_ref().and_then(|m| m.first.get(j))?;
+            let &(x0, z0, _) = self.mirror.as_ref().and_then(|m| m.first.first())?;
+            // The first `pad` pushes are the mirror image, the rest the samples themselves.
+            let mirrored = self.pushed < pad as u64;
+            let _ = if mirrored {
+                self.push_sample(2.0 * x0 - x, 2.0 * z0 - z, f)
+            } else {
+                self.push_sample(x, z, f)
+            };
+        }
+        None
+    }
+
+    /// Pushes one sample into the filters and the window.
+    fn push_sample(&mut self, position_m: f64, height_m: f64, friction_n: f64) -> Option<StreamWindow> {
         self.pushed += 1;
         let (hmax, smax) = self.config.max_half_widths();
         let z = height_m - *self.z_ref.get_or_insert(height_m);
@@ -897,6 +997,65 @@ mod tests {
         assert!(
             (p[3] - 0.15).abs() < 1e-12 && (p[4] - 0.0025).abs() < 1e-12,
             "{p:?}"
+        );
+    }
+
+    #[test]
+    fn a_mirrored_start_streams_as_the_batch_over_the_mirrored_signals() {
+        let (x, z, f) = signals(3000);
+        let config = NakanoConfig::default();
+        let pad = config.lookahead_samples();
+        let sig = NakanoSignals::new(&x, &z, &f).expect("equal lengths");
+        let (ex, ez, ef) = mirror_start(&sig, pad).expect("longer than the margin");
+        assert_eq!(ex.len(), x.len() + pad);
+        // Heights and positions reflected through the first sample; the stroke itself kept.
+        assert_eq!(ez[pad - 1], 2.0 * z[0] - z[1]);
+        assert_eq!(ex[0], 2.0 * x[0] - x[pad]);
+        assert_eq!(ez[pad..], z[..]);
+        let extended = NakanoSignals::new(&ex, &ez, &ef).expect("equal lengths");
+        let len = 250;
+        let mut stream = NakanoStream::new(config, len)
+            .expect("valid")
+            .with_mirrored_start();
+        let mut fresh = stream.clone();
+        let mut starts = Vec::new();
+        for i in 0..x.len() {
+            let Some(w) = stream.push(x[i], z[i], f[i]) else {
+                continue;
+            };
+            // The window completed by sample i ends lookahead samples before it, counted from
+            // the stroke's first sample.
+            assert_eq!(w.start as usize + len - 1 + pad, i);
+            let start = w.start as usize;
+            assert_eq!(w.start_position_m, x[start]);
+            let batch = extended.features(start + pad, len, &config).expect("in range");
+            let floors = [0.0, 1e-12 * 1e-10, 0.0, 0.0, 1e-12 * batch[3].powi(2)];
+            for (k, (a, b)) in w.features.iter().zip(&batch).enumerate() {
+                assert!(
+                    close(*a, *b) || (a - b).abs() <= floors[k],
+                    "start {start} feature {k}: {a} vs {b}"
+                );
+            }
+            starts.push(start);
+        }
+        // The first window starts at the stroke's first sample, not after the margin.
+        assert_eq!(starts.first(), Some(&0));
+        assert_eq!(starts.len(), x.len() - len - pad + 1);
+        // Reset, the stream mirrors the next stroke's start again.
+        stream.reset();
+        let again: Vec<u64> = (0..x.len())
+            .filter_map(|i| stream.push(x[i], z[i], f[i]).map(|w| w.start))
+            .collect();
+        let first: Vec<u64> = (0..x.len())
+            .filter_map(|i| fresh.push(x[i], z[i], f[i]).map(|w| w.start))
+            .collect();
+        assert_eq!(again, first);
+        assert!(
+            mirror_start(
+                &NakanoSignals::new(&x[..pad], &z[..pad], &f[..pad]).expect("equal"),
+                pad
+            )
+            .is_none()
         );
     }
 

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
-use super::nakano::{FEATURES, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
+use super::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use crate::{LabelledCapture, RecognizeError};
 use capture::Capture;
@@ -31,6 +31,11 @@ pub struct NakanoWindowing {
     pub hop_samples: usize,
     /// No decision on a window that starts before this travel from the first sample, m.
     pub start_travel_m: f64,
+    /// Whether the stroke's start is extended by its mirror image ([`nakano::mirror_start`]),
+    /// so that windows start at its first sample instead of waiting for the filters' margin
+    /// before it. Anytime decisions use it; windows that start after some travel do not need it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mirrored_start: bool,
     /// Sample rate the windows are counted at, Hz.
     pub rate_hz: f64,
 }
@@ -65,6 +70,7 @@ impl NakanoWindowing {
             training_window_samples: None,
             hop_samples: samples("hop_s", hop_s, rate_hz)?,
             start_travel_m: 0.005,
+            mirrored_start: false,
             rate_hz,
         };
         windowing.check().map_err(setting_error)?;
@@ -226,10 +232,20 @@ impl NakanoWindowing {
     /// Whether a window starting at sample `start`, `travel_m` from the first sample, is
     /// decided on.
     pub fn is_decision_window(&self, start: u64, travel_m: f64) -> bool {
-        let margin = self.filters.lookahead_samples() as u64;
-        start >= margin
-            && (start - margin).is_multiple_of(self.hop_samples as u64)
+        let first = self.first_start() as u64;
+        start >= first
+            && (start - first).is_multiple_of(self.hop_samples as u64)
             && travel_m >= self.start_travel_m
+    }
+
+    /// The first sample a window can start at: the filters' margin, or with a mirrored start
+    /// the stroke's first sample.
+    pub fn first_start(&self) -> usize {
+        if self.mirrored_start {
+            0
+        } else {
+            self.filters.lookahead_samples()
+        }
     }
 
     /// The sample at which the window starting at `start` is complete.
@@ -385,11 +401,30 @@ pub(crate) fn windows(
     };
     let margin = windowing.filters.lookahead_samples();
     let len = windowing.window_samples;
-    (margin..)
+    // With a mirrored start, window `s` of the capture is window `s + pad` of the extended
+    // signals.
+    let (extended, pad) = if windowing.mirrored_start {
+        (nakano::mirror_start(&signals, margin), margin)
+    } else {
+        (None, 0)
+    };
+    let signals = match &extended {
+        Some((x, z, f)) => NakanoSignals::new(x, z, f).map_err(nakano)?,
+        None if pad > 0 => return Ok(Vec::new()),
+        None => signals,
+    };
+    (windowing.first_start()..)
         .step_by(windowing.hop_samples)
-        .take_while(|s| s + len + margin <= signals.len())
+        .take_while(|s| s + pad + len + margin <= signals.len())
         .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
-        .map(|s| Ok((s, signals.features(s, len, &windowing.filters).map_err(nakano)?)))
+        .map(|s| {
+            Ok((
+                s,
+                signals
+                    .features(s + pad, len, &windowing.filters)
+                    .map_err(nakano)?,
+            ))
+        })
         .collect()
 }
 

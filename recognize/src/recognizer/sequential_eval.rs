@@ -133,11 +133,12 @@ impl RecognizerFile {
     }
 
     /// The windows anytime decisions are made on: a k-NN's or SVM's own, from contact on (the
-    /// start travel set to 0, so a stroke is followed from its first window); `None` for a
-    /// recognizer without window probabilities.
+    /// start travel set to 0, and the stroke's start mirrored so that the first window starts
+    /// at its first sample); `None` for a recognizer without window probabilities.
     pub fn sequential_windowing(&self) -> Option<NakanoWindowing> {
         self.window_probability_windowing().map(|own| NakanoWindowing {
             start_travel_m: 0.0,
+            mirrored_start: true,
             ..*own
         })
     }
