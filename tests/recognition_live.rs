@@ -72,6 +72,40 @@ fn runs() -> Vec<Vec<LabelledCapture>> {
         .collect()
 }
 
+/// Feeds `c`'s samples to `live` one by one while the counter watches this thread (nothing may
+/// allocate), and returns the decisions made with the sample index that made each, room made
+/// beforehand for `expected` of them.
+fn feed_without_allocating(
+    live: &mut LiveRecognizer,
+    c: &LabelledCapture,
+    expected: usize,
+) -> Vec<(usize, LiveDecision)> {
+    let x = c.capture.column("tangential_position_m").expect("x");
+    let z = c.capture.column("normal_position_m").expect("z");
+    let f = c.capture.column("friction_force_n").expect("friction");
+    let mut online = Vec::with_capacity(expected);
+    ALLOCATIONS.store(0, Ordering::Relaxed);
+    THIS_THREAD.with(|t| t.set(true));
+    COUNTING.store(true, Ordering::Relaxed);
+    for i in 0..x.len() {
+        // `online` has room for every decision expected, so pushing onto it never allocates.
+        if let Some(d) = live.push(x[i], z[i], f[i]).expect("finite samples")
+            && online.len() < online.capacity()
+        {
+            online.push((i, d));
+        }
+    }
+    COUNTING.store(false, Ordering::Relaxed);
+    THIS_THREAD.with(|t| t.set(false));
+    assert_eq!(
+        ALLOCATIONS.load(Ordering::Relaxed),
+        0,
+        "{}: allocated while recognizing",
+        c.reference.path.display()
+    );
+    online
+}
+
 #[test]
 fn live_decisions_equal_offline_decisions_without_allocating() {
     let runs = runs();
@@ -94,29 +128,8 @@ fn live_decisions_equal_offline_decisions_without_allocating() {
     for surface_runs in &runs {
         for c in &surface_runs[1..] {
             let offline = model.decisions(c, None).expect("offline decisions");
-            let x = c.capture.column("tangential_position_m").expect("x");
-            let z = c.capture.column("normal_position_m").expect("z");
-            let f = c.capture.column("friction_force_n").expect("friction");
             live.reset();
-            let mut online = Vec::with_capacity(offline.len());
-            ALLOCATIONS.store(0, Ordering::Relaxed);
-            THIS_THREAD.with(|t| t.set(true));
-            COUNTING.store(true, Ordering::Relaxed);
-            for i in 0..x.len() {
-                // `online` has room for every decision, so pushing onto it never allocates.
-                if let Some(d) = live.push(x[i], z[i], f[i]).expect("finite samples")
-                    && online.len() < online.capacity()
-                {
-                    online.push((i, d));
-                }
-            }
-            COUNTING.store(false, Ordering::Relaxed);
-            THIS_THREAD.with(|t| t.set(false));
-            assert_eq!(
-                ALLOCATIONS.load(Ordering::Relaxed),
-                0,
-                "allocated while recognizing"
-            );
+            let online = feed_without_allocating(&mut live, c, offline.len());
             assert_eq!(online.len(), offline.len(), "{}", c.reference.path.display());
             assert!(offline.len() > 15);
             for ((i, live_d), off) in online.iter().zip(&offline) {
@@ -403,30 +416,9 @@ fn anytime_live_decisions_follow_the_offline_posterior_without_allocating() {
         for surface_runs in &runs {
             for c in &surface_runs[1..] {
                 let offline = offline_steps(&model, c, params);
-                let x = c.capture.column("tangential_position_m").expect("x");
-                let z = c.capture.column("normal_position_m").expect("z");
-                let f = c.capture.column("friction_force_n").expect("friction");
                 live.reset();
                 assert_eq!(live.posterior().map(<[f64]>::len), Some(model.classes.len()));
-                let mut online = Vec::with_capacity(offline.len());
-                ALLOCATIONS.store(0, Ordering::Relaxed);
-                THIS_THREAD.with(|t| t.set(true));
-                COUNTING.store(true, Ordering::Relaxed);
-                for i in 0..x.len() {
-                    if let Some(d) = live.push(x[i], z[i], f[i]).expect("finite samples")
-                        && online.len() < online.capacity()
-                    {
-                        online.push((i, d));
-                    }
-                }
-                COUNTING.store(false, Ordering::Relaxed);
-                THIS_THREAD.with(|t| t.set(false));
-                assert_eq!(
-                    ALLOCATIONS.load(Ordering::Relaxed),
-                    0,
-                    "{}: allocated",
-                    model.method()
-                );
+                let online = feed_without_allocating(&mut live, c, offline.len());
                 assert_eq!(online.len(), offline.len(), "{}", c.reference.path.display());
                 // Contact to the end of a 6 s stroke, a window every 0.1 s.
                 assert!(offline.len() > 50, "{}", offline.len());

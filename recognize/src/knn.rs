@@ -245,13 +245,7 @@ impl Knn {
     /// The `k` nearest neighbours of `query` into `scratch.best`.
     fn search_into(&self, query: &[f64], scratch: &mut KnnScratch) -> Result<(), RecognizeError> {
         vectors::check_query(query, self.dim)?;
-        if scratch.query.len() != self.dim {
-            return Err(RecognizeError::Buffer {
-                what: "k-NN scratch",
-                got: scratch.query.len(),
-                expected: self.dim,
-            });
-        }
+        vectors::check_buffer("k-NN scratch", scratch.query.len(), self.dim)?;
         for (q, v) in scratch.query.iter_mut().zip(vectors::scaled(query, &self.scale)) {
             *q = v;
         }
@@ -280,13 +274,7 @@ impl Knn {
         scratch: &mut KnnScratch,
         p: &mut [f64],
     ) -> Result<(), RecognizeError> {
-        if p.len() != self.classes {
-            return Err(RecognizeError::Buffer {
-                what: "class probability",
-                got: p.len(),
-                expected: self.classes,
-            });
-        }
+        vectors::check_buffer("class probability", p.len(), self.classes)?;
         self.search_into(query, scratch)?;
         p.fill(0.0);
         // Summed a vote at a time, as `votes` does, so the two agree to the bit.

@@ -17,6 +17,16 @@ pub enum FeatureScaling {
     MinMax,
 }
 
+/// A caller's buffer of `got` values where the classifier needs `expected` (one per class, one
+/// per feature, …) is refused, naming `what` it holds.
+pub(crate) fn check_buffer(what: &'static str, got: usize, expected: usize) -> Result<(), RecognizeError> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(RecognizeError::Buffer { what, got, expected })
+    }
+}
+
 /// The first fault of the training vectors in order: each must have `dim` finite values and a
 /// label below `classes`.
 pub(crate) fn check_labelled<V: AsRef<[f64]>>(

@@ -478,13 +478,8 @@ impl Svc {
     /// [`Svc::decision_values`] into `scratch.decision`.
     fn decision_values_into(&self, query: &[f64], scratch: &mut SvcScratch) -> Result<(), RecognizeError> {
         vectors::check_query(query, self.dim)?;
-        if scratch.query.len() != self.dim || scratch.decision.len() != self.machines.len() {
-            return Err(RecognizeError::Buffer {
-                what: "SVC scratch",
-                got: scratch.decision.len(),
-                expected: self.machines.len(),
-            });
-        }
+        vectors::check_buffer("SVC scratch", scratch.query.len(), self.dim)?;
+        vectors::check_buffer("SVC scratch", scratch.decision.len(), self.machines.len())?;
         for (q, v) in scratch.query.iter_mut().zip(vectors::scaled(query, &self.scale)) {
             *q = v;
         }
@@ -532,20 +527,8 @@ impl Svc {
         scratch: &mut SvcScratch,
         p: &mut [f64],
     ) -> Result<(), RecognizeError> {
-        if p.len() != self.classes {
-            return Err(RecognizeError::Buffer {
-                what: "class probability",
-                got: p.len(),
-                expected: self.classes,
-            });
-        }
-        if scratch.pairwise.len() != self.classes * self.classes {
-            return Err(RecognizeError::Buffer {
-                what: "SVC scratch",
-                got: scratch.pairwise.len(),
-                expected: self.classes * self.classes,
-            });
-        }
+        vectors::check_buffer("class probability", p.len(), self.classes)?;
+        vectors::check_buffer("SVC scratch", scratch.pairwise.len(), self.classes * self.classes)?;
         self.decision_values_into(query, scratch)?;
         let k = self.classes;
         let SvcScratch {
