@@ -116,3 +116,18 @@ fn surface_tray_with_overlay() {
     assert!(luma(panel) < 60.0, "{panel:?}");
     golden("surface_tray_with_overlay", &image);
 }
+
+/// Before the recognizer's posterior reaches its threshold the overlay says so, and shows the
+/// most likely surface with its probability instead of naming it.
+#[test]
+fn surface_tray_with_an_undecided_recognizer() {
+    let mut frame = tray_scene(&meshes("surface_tray.glb"), None, 3, 0.002);
+    let mut overlay = demo_overlay();
+    overlay.recognized = Some(render::Recognition {
+        surface: "sandpaper_240".into(),
+        confidence: 0.62,
+        decided: false,
+    });
+    frame.overlay = Some(overlay);
+    golden("surface_tray_undecided", &draw(&frame, 640, 400));
+}
