@@ -30,11 +30,8 @@ impl SceneRecognizer {
         let Some(section) = &scene.recognizer else {
             return Ok(None);
         };
-        let method = match section.method.as_str() {
-            "knn" => Method::Knn,
-            "svm" => Method::Svm,
-            _ => Method::Som,
-        };
+        // The scene checked the name when it was read.
+        let method = Method::named(&section.method).unwrap_or(Method::Som);
         let model = match (&section.file, &section.captures) {
             (Some(file), _) => {
                 let path = scene.resolve(file);
@@ -96,7 +93,7 @@ pub fn line(live: &LiveRecognizer) -> RecognizerLine {
     let hop_s = w.hop_samples as f64 / w.rate_hz;
     RecognizerLine {
         method: live.method().to_owned(),
-        features: "nakano".to_owned(),
+        features: FeatureSet::Nakano.name().to_owned(),
         window_s: w.window_s(),
         hop_s,
         threshold: params.map(|p| p.threshold()),

@@ -696,7 +696,7 @@ impl Scene {
         }
         if let Some(r) = &self.recognizer {
             let key = |field: &str| format!("recognizer.{field}");
-            if !matches!(r.method.as_str(), "som" | "knn" | "svm") {
+            if recognize::Method::named(&r.method).is_none() {
                 return Err(self.invalid(
                     "recognizer.method",
                     format!("`{}`: expected som, knn or svm", r.method),

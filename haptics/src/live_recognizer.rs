@@ -89,11 +89,6 @@ impl LiveRecognizer {
     /// As [`LiveRecognizer::new`], a k-NN or SVM with the anytime settings `params` (its
     /// threshold, memory and weight); a SOM, which gives no posterior to threshold, is refused.
     pub fn with_params(model: &Model, loop_hz: f64, params: SequentialParams) -> Result<Self, HapticsError> {
-        if model.sequential_params(DEFAULT_MEMORY_S).is_none() {
-            return Err(HapticsError::LiveThreshold {
-                method: model.method(),
-            });
-        }
         Self::build(model, loop_hz, Some(params))
     }
 
@@ -103,7 +98,12 @@ impl LiveRecognizer {
             features: model.body.feature_set().name(),
         };
         let (decider, windowing) = match (&model.body, params) {
-            (RecognizerBody::Som { windowing, som }, _) => (
+            (RecognizerBody::Som { .. }, Some(_)) => {
+                return Err(HapticsError::LiveThreshold {
+                    method: model.method(),
+                });
+            }
+            (RecognizerBody::Som { windowing, som }, None) => (
                 Decider::Som {
                     som: Box::new(som.clone()),
                     scratch: [0.0; FEATURES],

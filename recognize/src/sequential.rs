@@ -283,8 +283,7 @@ impl SequentialState {
         let k = self.posterior.len();
         self.posterior.fill(1.0 / k as f64);
         self.decided = None;
-        self.cusum.fill(0.0);
-        self.since_zero.fill(0);
+        self.clear_change_test();
     }
 
     /// The posterior over the surfaces after the windows pushed so far.
@@ -326,8 +325,7 @@ impl SequentialState {
         if let Some(windows) = change {
             self.keep_last(windows.min(self.held));
             self.decided = None;
-            self.cusum.fill(0.0);
-            self.since_zero.fill(0);
+            self.clear_change_test();
         }
         let changed = change.is_some();
         // The softmax of the summed evidence, shifted by its largest term so it cannot overflow.
@@ -360,8 +358,7 @@ impl SequentialState {
             _ => (probability >= self.params.threshold).then_some(best),
         };
         if self.decided.is_none() {
-            self.cusum.fill(0.0);
-            self.since_zero.fill(0);
+            self.clear_change_test();
         }
         Ok(SequentialStep {
             best,
@@ -398,6 +395,12 @@ impl SequentialState {
             }
         }
         fired.map(|(_, windows)| windows)
+    }
+
+    /// Starts the change test afresh.
+    fn clear_change_test(&mut self) {
+        self.cusum.fill(0.0);
+        self.since_zero.fill(0);
     }
 
     /// Drops every window but the last `keep` from the evidence.

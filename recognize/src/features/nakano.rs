@@ -835,16 +835,17 @@ impl NakanoStream {
         // The first `pad + 1` samples are in: their mirror image, then them. No window of
         // these completes (a window's first sample needs `pad` samples before it, and its
         // last the lookahead after it).
-        for j in (1..=pad).rev().chain(0..=pad) {
-            let &(x, z, f) = self.mirror.as_ref().and_then(|m| m.first.get(j))?;
-            let &(x0, z0, _) = self.mirror.as_ref().and_then(|m| m.first.first())?;
-            // The first `pad` pushes are the mirror image, the rest the samples themselves.
-            let mirrored = self.pushed < pad as u64;
-            let _ = if mirrored {
-                self.push_sample(2.0 * x0 - x, 2.0 * z0 - z, f)
-            } else {
-                self.push_sample(x, z, f)
-            };
+        let held = std::mem::take(&mut m.first);
+        let (x0, z0, _) = held[0];
+        for &(x, z, f) in held[1..].iter().rev() {
+            let _ = self.push_sample(2.0 * x0 - x, 2.0 * z0 - z, f);
+        }
+        for &(x, z, f) in &held {
+            let _ = self.push_sample(x, z, f);
+        }
+        // The buffer goes back, keeping its room (and the stroke marked as started).
+        if let Some(m) = &mut self.mirror {
+            m.first = held;
         }
         None
     }

@@ -184,13 +184,7 @@ pub(crate) fn class_list(captures: &[LabelledCapture]) -> Vec<String> {
 
 /// Index of the capture's class among `classes`.
 pub(crate) fn class_index(classes: &[String], c: &LabelledCapture) -> Result<usize, RecognizeError> {
-    classes
-        .iter()
-        .position(|l| *l == c.label)
-        .ok_or_else(|| RecognizeError::UnusableCapture {
-            path: c.reference.path.clone(),
-            reason: format!("surface `{}` is not one the recognizer was trained on", c.label),
-        })
+    class_position(classes, &c.label, c, "surface")
 }
 
 /// The index of `name` among `classes`, for capture `c`'s change of surface.
@@ -199,12 +193,22 @@ pub(crate) fn class_named(
     name: &str,
     c: &LabelledCapture,
 ) -> Result<usize, RecognizeError> {
+    class_position(classes, name, c, &format!("`{SURFACE_AFTER_KEY}`"))
+}
+
+/// The index of `name` among `classes`; an error names capture `c` and `what` `name` is.
+fn class_position(
+    classes: &[String],
+    name: &str,
+    c: &LabelledCapture,
+    what: &str,
+) -> Result<usize, RecognizeError> {
     classes
         .iter()
         .position(|l| l == name)
         .ok_or_else(|| RecognizeError::UnusableCapture {
             path: c.reference.path.clone(),
-            reason: format!("`{SURFACE_AFTER_KEY}` `{name}` is not a surface the recognizer was trained on"),
+            reason: format!("{what} `{name}` is not one the recognizer was trained on"),
         })
 }
 

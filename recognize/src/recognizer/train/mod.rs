@@ -48,6 +48,14 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method.
+    pub const ALL: [Method; 3] = [Self::Som, Self::Knn, Self::Svm];
+
+    /// The method spelled `name` ([`Method::name`]), if any.
+    pub fn named(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
     /// `som`, `knn` or `svm`, as recognizer files and `--method` spell it.
     pub fn name(self) -> &'static str {
         match self {
