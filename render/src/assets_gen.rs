@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use crate::error::RenderError;
 use crate::gltf_io::write_glb;
 use crate::mesh::MeshData;
+use crate::ticks;
 
 /// The needle's entry point on the liver and on the tissue block: the origin, surface normal +y.
 pub const ENTRY_POINT_M: [f32; 3] = [0.0, 0.0, 0.0];
@@ -243,36 +244,6 @@ fn normalize(v: [f64; 3]) -> [f64; 3] {
     }
 }
 
-/// Sorted ticks covering [-half, half]: spacing `fine_step` for |t| ≤ `fine_half`, then equal
-/// steps of at most `coarse_step` out to the ends. Symmetric by construction and contains 0.
-fn ticks(half: f64, fine_half: f64, fine_step: f64, coarse_step: f64) -> Vec<f64> {
-    let fine_count = (fine_half / fine_step).floor() as i64;
-    let fine_edge = fine_count as f64 * fine_step;
-    let coarse_count = ((half - fine_edge) / coarse_step).ceil().max(1.0) as i64;
-    let coarse = (half - fine_edge) / coarse_count as f64;
-    let mut positive: Vec<f64> = (1..=fine_count).map(|k| k as f64 * fine_step).collect();
-    positive.extend((1..coarse_count).map(|k| fine_edge + k as f64 * coarse));
-    positive.push(half);
-    let mut out: Vec<f64> = positive.iter().rev().map(|t| -t).collect();
-    out.push(0.0);
-    out.extend(positive);
-    out
-}
-
-/// `count` evenly spaced ticks from `lo` to `hi` inclusive.
-fn even_ticks(lo: f64, hi: f64, count: usize) -> Vec<f64> {
-    let last = count.max(2) - 1;
-    (0..=last)
-        .map(|k| {
-            if k == last {
-                hi
-            } else {
-                lo + (hi - lo) * k as f64 / last as f64
-            }
-        })
-        .collect()
-}
-
 /// Up-facing triangles of a `nx` × `nz` vertex grid (vertex (i, j) at local index j·nx + i, x
 /// growing with i and z with j). Diagonals radiate from the grid's centre so that the grid is
 /// symmetric and no corner triangle has all three vertices on the border.
@@ -492,8 +463,8 @@ fn liver_meshes() -> Vec<MeshData> {
 
 fn liver_mesh() -> MeshData {
     // Square-to-disk grid, fine (≈0.9 mm) where it lands within ~23 mm of the entry point.
-    let us = ticks(1.0, 0.30, 0.9e-3 / LIVER_HALF_X_M, 0.05);
-    let vs = ticks(1.0, 0.47, 0.85e-3 / LIVER_HALF_Z_M, 0.05);
+    let us = ticks::graded(1.0, 0.30, 0.9e-3 / LIVER_HALF_X_M, 0.05);
+    let vs = ticks::graded(1.0, 0.47, 0.85e-3 / LIVER_HALF_Z_M, 0.05);
     let (nu, nv) = (us.len(), vs.len());
     let base = srgb(0.42, 0.12, 0.09);
     let mut positions: Vec<[f64; 3]> = Vec::with_capacity(2 * nu * nv);
@@ -562,7 +533,7 @@ fn vessel_mesh() -> MeshData {
     let half = f64::from(VESSEL_HALF_LENGTH_M);
     let centre_y = -f64::from(VESSEL_CENTRE_DEPTH_M);
     let segments = 24;
-    let rings = even_ticks(-half, half, 45);
+    let rings = ticks::even(-half, half, 45);
     let color = srgb(0.40, 0.12, 0.28);
     let mut b = Builder::default();
     let around = |s: usize| {
@@ -613,8 +584,8 @@ fn tissue_block_meshes() -> Vec<MeshData> {
     let fat_bottom = skin_bottom - f64::from(FAT_THICKNESS_M);
     let block_bottom = -f64::from(BLOCK_DEPTH_M);
     // 1 mm spacing (diagonals 1.41 mm) out to 21 mm, where the renderer dimples the skin.
-    let fine = ticks(half, 0.021, 0.001, 0.005);
-    let coarse = even_ticks(-half, half, 17);
+    let fine = ticks::graded(half, 0.021, 0.001, 0.005);
+    let coarse = ticks::even(-half, half, 17);
     let layer = |name: &str, xs: &[f64], top: f64, bottom: f64, color: [f32; 4], seed: u64| {
         let (nx, nz) = (xs.len(), xs.len());
         let heights = vec![top; nx * nz];
@@ -719,8 +690,8 @@ fn patch_mesh(index: usize, name: &str, bottom_y: f64) -> MeshData {
     let centre = PATCH_CENTRES_M[index];
     let (cx, cz) = (f64::from(centre[0]), f64::from(centre[2]));
     let (hx, hz) = (0.5 * f64::from(PATCH_SIZE_M[0]), 0.5 * f64::from(PATCH_SIZE_M[1]));
-    let xs = even_ticks(cx - hx, cx + hx, PATCH_GRID[0]);
-    let zs = even_ticks(cz - hz, cz + hz, PATCH_GRID[1]);
+    let xs = ticks::even(cx - hx, cx + hx, PATCH_GRID[0]);
+    let zs = ticks::even(cz - hz, cz + hz, PATCH_GRID[1]);
     let (nx, nz) = (xs.len(), zs.len());
     let rq = PATCH_RQ_M[index];
     let cell = BUMP_WAVELENGTH_EXAGGERATION * PATCH_WAVELENGTH_M[index];

@@ -1,7 +1,9 @@
 //! Headless frame-rate benchmark: frames per second at a few sizes, MSAA 1 and 4, overlay off, on
 //! (its data unchanged between frames, as between two refreshes of the window's plots) and live
 //! (new data every frame, so its panel is repainted every frame), with a per-stage time
-//! breakdown so it is clear where a frame's time goes.
+//! breakdown so it is clear where a frame's time goes. One more row draws the tissue block with
+//! uniform fine cells instead of cells graded around the dimple: what the grading saves, and the
+//! reference picture for every row's PSNR.
 
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -34,6 +36,31 @@ impl OverlayMode {
     }
 }
 
+/// Which tissue block a benchmark row draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TissueMesh {
+    /// [`shapes::tissue_block`]: fine cells only where the dimple bends it.
+    Graded,
+    /// [`shapes::uniform_tissue_block`]: fine cells everywhere, the reference picture.
+    Uniform,
+}
+
+impl TissueMesh {
+    fn label(self) -> &'static str {
+        match self {
+            TissueMesh::Graded => "graded",
+            TissueMesh::Uniform => "uniform",
+        }
+    }
+
+    fn meshes(self) -> Vec<crate::mesh::MeshData> {
+        match self {
+            TissueMesh::Graded => shapes::tissue_block(),
+            TissueMesh::Uniform => shapes::uniform_tissue_block(),
+        }
+    }
+}
+
 /// What to measure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchOptions {
@@ -43,6 +70,8 @@ pub struct BenchOptions {
     /// Internal resolution scales below 1 to measure too (overlay on), each with its PSNR
     /// against the full-resolution picture.
     pub scales: Vec<f32>,
+    /// Adds a row with the uniform block (overlay on), the reference for every row's PSNR.
+    pub uniform_row: bool,
     /// Frames timed per configuration (after one warm-up frame).
     pub frames: u32,
     pub gpu: GpuOptions,
@@ -55,6 +84,7 @@ impl Default for BenchOptions {
             msaa: vec![1, 4],
             overlay: vec![OverlayMode::Off, OverlayMode::On, OverlayMode::Live],
             scales: vec![0.75, 0.5],
+            uniform_row: true,
             frames: 30,
             gpu: GpuOptions::default(),
         }
@@ -69,9 +99,11 @@ pub struct BenchRow {
     pub height: u32,
     pub msaa: u32,
     pub overlay: OverlayMode,
+    pub mesh: TissueMesh,
     /// Internal resolution of the scene relative to the image.
     pub scale: f32,
-    /// PSNR of the picture against the same frame at full resolution, dB (`None` at scale 1).
+    /// PSNR of the picture against the same frame with the uniform block at full resolution, dB
+    /// (`None` for that frame itself).
     pub psnr_db: Option<f64>,
     pub fps: f64,
     pub frame_ms: f64,
@@ -95,16 +127,17 @@ impl BenchTable {
     pub fn to_text(&self) -> String {
         let mut s = format!("headless render benchmark on {}\n", self.adapter);
         s.push_str(
-            "   size     msaa overlay scale PSNR dB     fps  frame ms   draw ms resolve ms  ui cpu ms readback ms\n",
+            "   size     msaa overlay    mesh scale PSNR dB     fps  frame ms   draw ms resolve ms  ui cpu ms readback ms\n",
         );
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "{:>5}x{:<5} {:>3} {:>7} {:>5.2} {:>7} {:>7.1} {:>9.2} {:>9.2} {:>10.2} {:>10.2} {:>11.2}",
+                "{:>5}x{:<5} {:>3} {:>7} {:>7} {:>5.2} {:>7} {:>7.1} {:>9.2} {:>9.2} {:>10.2} {:>10.2} {:>11.2}",
                 r.width,
                 r.height,
                 r.msaa,
                 r.overlay.label(),
+                r.mesh.label(),
                 r.scale,
                 r.psnr_db.map_or("-".to_string(), |p| format!("{p:.1}")),
                 r.fps,
@@ -119,9 +152,13 @@ impl BenchTable {
     }
 }
 
-/// The benchmark scene: the tissue block (three layers, ~30 k triangles) with the needle pressing.
+/// The benchmark scene: the tissue block (three layers) with the needle pressing.
 pub fn bench_frame(overlay: bool) -> Frame {
-    let tissue: Vec<_> = shapes::tissue_block().into_iter().map(Arc::new).collect();
+    frame_of(TissueMesh::Graded, overlay)
+}
+
+fn frame_of(mesh: TissueMesh, overlay: bool) -> Frame {
+    let tissue: Vec<_> = mesh.meshes().into_iter().map(Arc::new).collect();
     let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
     let mut frame = tissue_scene(
         &tissue,
@@ -161,21 +198,32 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
         for &msaa in &options.msaa {
             let mut renderer = Renderer::headless_with(width, height, msaa, &options.gpu)?;
             adapter = renderer.adapter_description();
-            let mut configs: Vec<(OverlayMode, f32)> = options.overlay.iter().map(|&o| (o, 1.0)).collect();
-            configs.extend(options.scales.iter().map(|&s| (OverlayMode::On, s)));
-            for (overlay, scale) in configs {
-                renderer.set_scale(scale)?;
-                let base = bench_frame(overlay != OverlayMode::Off);
-                let first = renderer.render(&frame_at(&base, overlay, 0))?;
-                let psnr_db = if scale < 1.0 {
-                    renderer.set_scale(1.0)?;
-                    let full = renderer.render(&frame_at(&base, overlay, 0))?;
-                    renderer.set_scale(scale)?;
-                    renderer.render(&frame_at(&base, overlay, 0))?;
-                    crate::golden::psnr_db(&first, &full)
-                } else {
+            let mut configs: Vec<(OverlayMode, f32, TissueMesh)> = options
+                .overlay
+                .iter()
+                .map(|&o| (o, 1.0, TissueMesh::Graded))
+                .collect();
+            configs.extend(
+                options
+                    .scales
+                    .iter()
+                    .map(|&s| (OverlayMode::On, s, TissueMesh::Graded)),
+            );
+            if options.uniform_row {
+                configs.push((OverlayMode::On, 1.0, TissueMesh::Uniform));
+            }
+            for (overlay, scale, mesh) in configs {
+                let reference = if mesh == TissueMesh::Uniform && scale == 1.0 {
                     None
+                } else {
+                    renderer.set_scale(1.0)?;
+                    let frame = frame_of(TissueMesh::Uniform, overlay != OverlayMode::Off);
+                    Some(renderer.render(&frame_at(&frame, overlay, 0))?)
                 };
+                renderer.set_scale(scale)?;
+                let base = frame_of(mesh, overlay != OverlayMode::Off);
+                let first = renderer.render(&frame_at(&base, overlay, 0))?;
+                let psnr_db = reference.and_then(|r| crate::golden::psnr_db(&first, &r));
                 // Frames are made before timing: only drawing is measured.
                 let timed: Vec<Frame> = (1..=frames).map(|i| frame_at(&base, overlay, i)).collect();
                 let start = Instant::now();
@@ -196,6 +244,7 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
                     height,
                     msaa: renderer.msaa(),
                     overlay,
+                    mesh,
                     scale,
                     psnr_db,
                     fps: 1.0 / frame_s,
@@ -222,6 +271,7 @@ mod tests {
             height: 480,
             msaa: 4,
             overlay: OverlayMode::On,
+            mesh: TissueMesh::Graded,
             scale: 1.0,
             psnr_db: None,
             fps: 50.0,
@@ -237,6 +287,7 @@ mod tests {
                 row.clone(),
                 BenchRow {
                     overlay: OverlayMode::Off,
+                    mesh: TissueMesh::Uniform,
                     ..row.clone()
                 },
                 BenchRow {
@@ -257,6 +308,8 @@ mod tests {
                 && text.contains(" live ")
                 && text.contains("31.2")
                 && text.contains("0.50")
+                && text.contains(" graded ")
+                && text.contains(" uniform ")
         );
     }
 }

@@ -23,6 +23,7 @@ pub mod mesh;
 mod overlay;
 mod renderer;
 pub mod shapes;
+mod ticks;
 pub mod window;
 
 pub use assets_gen::{PATCH_CENTRES_M, PATCH_NAMES, default_assets, patch_centre_m, write_default_assets};
