@@ -154,10 +154,11 @@ impl BenchTable {
 
 /// The benchmark scene: the tissue block (three layers) with the needle pressing.
 pub fn bench_frame(overlay: bool) -> Frame {
-    frame_of(TissueMesh::Graded, overlay)
+    frame_with(TissueMesh::Graded, overlay)
 }
 
-fn frame_of(mesh: TissueMesh, overlay: bool) -> Frame {
+/// The benchmark scene drawn with either tissue block.
+pub fn frame_with(mesh: TissueMesh, overlay: bool) -> Frame {
     let tissue: Vec<_> = mesh.meshes().into_iter().map(Arc::new).collect();
     let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
     let mut frame = tissue_scene(
@@ -217,11 +218,11 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
                     None
                 } else {
                     renderer.set_scale(1.0)?;
-                    let frame = frame_of(TissueMesh::Uniform, overlay != OverlayMode::Off);
+                    let frame = frame_with(TissueMesh::Uniform, overlay != OverlayMode::Off);
                     Some(renderer.render(&frame_at(&frame, overlay, 0))?)
                 };
                 renderer.set_scale(scale)?;
-                let base = frame_of(mesh, overlay != OverlayMode::Off);
+                let base = frame_with(mesh, overlay != OverlayMode::Off);
                 let first = renderer.render(&frame_at(&base, overlay, 0))?;
                 let psnr_db = reference.and_then(|r| crate::golden::psnr_db(&first, &r));
                 // Frames are made before timing: only drawing is measured.

@@ -229,3 +229,30 @@ fn lower_internal_resolution_keeps_the_frame_size_and_costs_measured_quality() {
     let again = r.render(&frame).unwrap();
     assert_eq!(render::golden::psnr_db(&again, &full), Some(f64::INFINITY));
 }
+
+/// The block cut by its dimple draws what the uniformly fine block draws: a handful of pixels
+/// on edges may land differently, nothing more.
+#[test]
+fn the_graded_block_looks_like_the_uniform_one() {
+    use render::bench::{TissueMesh, frame_with};
+    let mut r = Renderer::headless(640, 480, 4).unwrap();
+    let graded = r.render(&frame_with(TissueMesh::Graded, true)).unwrap();
+    let uniform = r.render(&frame_with(TissueMesh::Uniform, true)).unwrap();
+    let cmp = render::golden::compare(&graded, &uniform, 8).unwrap();
+    assert!(
+        cmp.fraction() < 1e-4,
+        "{} of {} pixels differ",
+        cmp.differing_pixels,
+        cmp.total_pixels
+    );
+    let psnr = render::golden::psnr_db(&graded, &uniform).unwrap();
+    assert!(psnr > 50.0, "PSNR {psnr} dB");
+    let triangles = |m: TissueMesh| -> usize {
+        frame_with(m, false)
+            .objects
+            .iter()
+            .map(|o| o.mesh.indices.len() / 3)
+            .sum()
+    };
+    assert!(4 * triangles(TissueMesh::Graded) < triangles(TissueMesh::Uniform));
+}
