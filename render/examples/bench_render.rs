@@ -8,6 +8,8 @@ use std::process::ExitCode;
 use render::bench::{BenchOptions, run};
 
 fn main() -> ExitCode {
+    // SAFETY: first thing in `main`, before any other thread exists.
+    let _quiet = unsafe { render::QuietRuntimeDir::install() };
     let mut options = BenchOptions::default();
     if let Some(frames) = std::env::args().nth(1).and_then(|a| a.parse().ok()) {
         options.frames = frames;

@@ -122,6 +122,8 @@ impl WindowApp for Demo {
 }
 
 fn main() -> ExitCode {
+    // SAFETY: first thing in `main`, before any other thread exists.
+    let _quiet = unsafe { render::QuietRuntimeDir::install() };
     let mut config = WindowConfig {
         title: "palpus window demo".into(),
         ..WindowConfig::default()

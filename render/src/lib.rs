@@ -7,6 +7,7 @@
 //! - Dimples bend objects marked deformable in the vertex shader; after puncture they are drawn
 //!   see-through so the shaft inside shows.
 //! - [`golden`] compares images with a tolerance; [`bench`] measures frames per second.
+//! - [`QuietRuntimeDir`] keeps a headless binary's stderr free of a spurious Wayland error.
 //! - Every fallible call returns [`RenderError`]: GPU and window failures, image and mesh files,
 //!   golden mismatches, each naming the file involved.
 
@@ -21,6 +22,7 @@ pub mod gpu;
 pub mod image;
 pub mod mesh;
 mod overlay;
+mod quiet_runtime;
 mod renderer;
 pub mod shapes;
 mod ticks;
@@ -39,4 +41,5 @@ pub use gpu::{Backend, GpuOptions};
 pub use image::Image;
 pub use mesh::MeshData;
 pub use overlay::PANEL_WIDTH_PT;
+pub use quiet_runtime::QuietRuntimeDir;
 pub use renderer::{HEADLESS_FORMAT, Renderer, StageTimes};
