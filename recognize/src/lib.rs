@@ -16,6 +16,8 @@ pub mod category;
 mod error;
 pub mod eval;
 pub mod features;
+pub mod folds;
+pub mod fusion;
 pub mod knn;
 pub mod protocol;
 pub mod recognizer;
@@ -36,7 +38,8 @@ pub use features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling,
     WindowlessCapture,
 };
-pub use knn::{BehaviourData, FeatureScaling, Knn, KnnParams, ReliabilityFusion, argmax, fuse, fused_label};
+pub use fusion::{BehaviourData, ReliabilityFusion, argmax, fuse, fused_label};
+pub use knn::{FeatureScaling, Knn, KnnParams};
 pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{
     BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,

@@ -14,8 +14,8 @@ use crate::RecognizeError;
 use crate::eval::ConfusionMatrix;
 use crate::features::{WindowlessCapture, windows};
 #[cfg(doc)]
-use crate::knn::fuse;
-use crate::knn::fused_label;
+use crate::fusion::fuse;
+use crate::fusion::fused_label;
 
 /// One behaviour's scratches classified alone, in a [`FusedEvaluation`].
 #[derive(Debug, Clone)]

@@ -16,7 +16,7 @@ pub(crate) fn trial_of(c: &LabelledCapture) -> Option<&str> {
 }
 
 /// Cross-validation group of each capture inside training: its trial, so that the folds of
-/// [`crate::knn::group_folds`] hold out trial `t` of every surface together — a scratch is
+/// [`crate::folds::group_folds`] hold out trial `t` of every surface together — a scratch is
 /// never on both sides of a split, and every fold keeps about the same share of each surface.
 /// Groups are numbered in the trials' numeric order (shorter strings first); captures without
 /// a trial are a group each, after them.

@@ -1,7 +1,7 @@
 //! Choosing C by cross-validation over a grid, with folds that keep a trial's scratches together.
 
 use super::*;
-use crate::knn::BehaviourData;
+use crate::fusion::BehaviourData;
 
 /// The values of C that [`select_c`] tries by default: 1 to 10⁵ in decades.
 pub const C_GRID: [f64; 6] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
@@ -19,7 +19,7 @@ pub struct CvPoint {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CSearch {
     /// Folds of the cross-validation (whole groups per fold, see
-    /// [`crate::knn::group_folds`]).
+    /// [`crate::folds::group_folds`]).
     pub folds: usize,
     /// Every candidate that could be fitted, in the order tried (ascending C); one whose fit
     /// did not converge is left out (see [`select_c_observed`]).
@@ -77,7 +77,7 @@ impl CSearch {
 }
 
 /// Accuracy of an SVC with `params` under cross-validation by group
-/// ([`crate::knn::group_folds`]): all vectors of a group (a trial) are held out together.
+/// ([`crate::folds::group_folds`]): all vectors of a group (a trial) are held out together.
 ///
 /// A training fold that lacks some classes is fitted on the classes it has, and the held-out
 /// vectors of the missing ones count as wrong (the classifier cannot name them); a fold with a
@@ -263,7 +263,7 @@ pub(super) fn cv_folds(
             labels: if labels == features { groups.len() } else { labels },
         });
     }
-    crate::knn::group_folds(groups, folds).map_err(|_| {
+    crate::folds::group_folds(groups, folds).map_err(|_| {
         let mut distinct = groups.to_vec();
         distinct.sort_unstable();
         distinct.dedup();

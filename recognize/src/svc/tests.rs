@@ -3,7 +3,7 @@
 //! converge), and bad input.
 
 use super::*;
-use crate::knn::BehaviourData;
+use crate::fusion::BehaviourData;
 
 /// The triple the cross-validations take, named.
 fn data<'a, V>(x: &'a [V], y: &'a [usize], groups: &'a [u64]) -> BehaviourData<'a, V> {

@@ -9,7 +9,9 @@ use crate::RecognizeError;
 use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
-use crate::knn::{FeatureScaling, KnnParams, cross_validated_accuracy, group_folds};
+use crate::folds::group_folds;
+use crate::fusion::cross_validated_accuracy;
+use crate::knn::{FeatureScaling, KnnParams};
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;

@@ -11,7 +11,7 @@ use crate::RecognizeError;
 use crate::features::nakano::FEATURE_NAMES;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, windows};
-use crate::knn::{group_folds, held_out_correct};
+use crate::folds::{group_folds, held_out_correct};
 use crate::recognizer::labelled::{check_rate, class_index, class_list};
 use crate::recognizer::{BehaviourSom, LabelledCapture, RecognizerBody, RecognizerFile};
 use crate::som::{Normalization, Som, SomParams};

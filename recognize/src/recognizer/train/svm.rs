@@ -12,7 +12,8 @@ use crate::RecognizeError;
 use crate::features::WindowScaling;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
-use crate::knn::{BehaviourData, FeatureScaling};
+use crate::fusion::BehaviourData;
+use crate::knn::FeatureScaling;
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
