@@ -192,6 +192,22 @@ fn frame_at(base: &Frame, mode: OverlayMode, i: u32) -> Frame {
 
 /// Runs every configuration of `options`.
 pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
+    run_reporting(options, |_, _| {})
+}
+
+/// The number of rows [`run`] measures for `options`.
+pub fn row_count(options: &BenchOptions) -> usize {
+    let per_renderer = options.overlay.len() + options.scales.len() + usize::from(options.uniform_row);
+    options.sizes.len() * options.msaa.len() * per_renderer
+}
+
+/// As [`run`], calling `progress(rows done, rows in all)` after each row (a run takes about a
+/// minute on a software rasterizer).
+pub fn run_reporting(
+    options: &BenchOptions,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<BenchTable, RenderError> {
+    let total = row_count(options);
     let frames = options.frames.max(1);
     let mut rows = Vec::new();
     let mut adapter = String::new();
@@ -255,6 +271,7 @@ pub fn run(options: &BenchOptions) -> Result<BenchTable, RenderError> {
                     overlay_cpu_ms: per(stages.overlay_cpu),
                     readback_ms: per(stages.readback),
                 });
+                progress(rows.len(), total);
             }
         }
     }

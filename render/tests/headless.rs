@@ -256,3 +256,31 @@ fn the_graded_block_looks_like_the_uniform_one() {
     };
     assert!(4 * triangles(TissueMesh::Graded) < triangles(TissueMesh::Uniform));
 }
+
+/// The benchmark measures as many rows as it says, reports each, and scores every row but the
+/// uniform reference against that reference.
+#[test]
+fn the_benchmark_reports_each_row_and_scores_against_the_uniform_block() {
+    use render::bench::{BenchOptions, OverlayMode, TissueMesh, row_count, run_reporting};
+    let options = BenchOptions {
+        sizes: vec![[96, 64]],
+        msaa: vec![1],
+        overlay: vec![OverlayMode::Off],
+        scales: vec![0.5],
+        uniform_row: true,
+        frames: 1,
+        ..BenchOptions::default()
+    };
+    let mut seen = Vec::new();
+    let table = run_reporting(&options, |done, total| seen.push((done, total))).unwrap();
+    assert_eq!(row_count(&options), 3);
+    assert_eq!(seen, vec![(1, 3), (2, 3), (3, 3)]);
+    assert_eq!(table.rows.len(), 3);
+    for row in &table.rows {
+        assert!(row.fps.is_finite() && row.fps > 0.0);
+        match row.mesh {
+            TissueMesh::Uniform => assert_eq!(row.psnr_db, None),
+            TissueMesh::Graded => assert!(row.psnr_db.is_some_and(|p| p > 20.0), "{row:?}"),
+        }
+    }
+}

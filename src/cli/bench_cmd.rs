@@ -5,6 +5,7 @@ use std::time::Duration;
 use clap::{Args, Subcommand};
 use haptics::bench::{BenchConfig, loop_bench};
 use haptics::rt::{LoopConfig, Percentiles, RtRequest};
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Measure performance.
 #[derive(Debug, Args)]
@@ -97,7 +98,15 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 frames: args.frames,
                 ..render::bench::BenchOptions::default()
             };
-            print!("{}", render::bench::run(&options)?.to_text());
+            let bar = ProgressBar::new(render::bench::row_count(&options) as u64).with_style(
+                ProgressStyle::with_template(
+                    "drawing {bar:30} {pos}/{len} configurations {elapsed} (eta {eta})",
+                )
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            let table = render::bench::run_reporting(&options, |done, _| bar.set_position(done as u64));
+            bar.finish_and_clear();
+            print!("{}", table?.to_text());
             Ok(())
         }
     }
