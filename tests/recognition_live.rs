@@ -538,3 +538,48 @@ fn the_haptic_tick_decides_anytime_as_the_offline_pipeline() {
         assert_eq!(last.label.map(|l| model.classes[l].as_str()), Some(surface));
     }
 }
+
+/// A model trained with a mirrored end decides each window the moment its last sample arrives,
+/// live exactly as offline (the same edge computation), without allocating, and still names
+/// the right surfaces.
+#[test]
+fn a_mirrored_end_decides_each_window_at_its_last_sample_live_as_offline() {
+    let runs = runs();
+    let train: Vec<LabelledCapture> = runs.iter().map(|r| r[0].clone()).collect();
+    let windowing = NakanoWindowing {
+        mirrored_end: true,
+        ..NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid")
+    };
+    let knn = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 5, CellScale::Mean)
+        .expect("k-NN");
+    let params = knn
+        .sequential_params(DEFAULT_MEMORY_S)
+        .expect("window probabilities")
+        .build()
+        .expect("valid");
+    let mut live = LiveRecognizer::new(&knn, 1000.0).expect("live");
+    let (mut named, mut right) = (0, 0);
+    for surface_runs in &runs {
+        for c in &surface_runs[1..] {
+            let offline = offline_steps(&knn, c, params);
+            // The first window, from contact, is decided at its own last sample.
+            assert_eq!(offline.first().map(|o| o.0), Some(249));
+            live.reset();
+            let online = feed_without_allocating(&mut live, c, offline.len());
+            assert_eq!(online.len(), offline.len(), "{}", c.reference.path.display());
+            for ((at, d), (off_at, _, step)) in online.iter().zip(&offline) {
+                assert_eq!((*at, d.best, d.label), (*off_at, step.best, step.decided));
+                assert_eq!(d.confidence, step.probability);
+                assert_eq!(d.window_start as usize + 249, *at);
+            }
+            let labels = online.iter().filter_map(|(_, d)| d.label);
+            named += labels.clone().count();
+            right += labels.filter(|&l| knn.classes[l] == c.label).count();
+        }
+    }
+    eprintln!("knn with a mirrored end: {right} of {named} named decisions right");
+    assert!(
+        named > 14 * 20 && right as f64 >= 0.9 * named as f64,
+        "{right}/{named}"
+    );
+}

@@ -16,7 +16,11 @@
 //! completes a window. It decides on exactly the windows the offline pipeline decides on
 //! ([`RecognizerFile::decisions`], [`RecognizerFile::evaluate_sequential`]) with the same
 //! classifier arithmetic; the features come from the streaming sums instead of the batch ones
-//! and agree with them to ~1e-9 relative. Kept in the tick (rather than on a thread of its own)
+//! and agree with them to ~1e-9 relative. A model trained with a mirrored end
+//! ([`NakanoWindowing::mirrored_end`]) decides each window at its last sample instead: the
+//! recognizer keeps the stroke's latest samples and computes the window's features with the
+//! batch's own [`EdgeWindow`] once per hop (about 800 samples of arithmetic, in buffers made
+//! here), so those agree with the offline ones exactly. Kept in the tick (rather than on a thread of its own)
 //! so that a sample carries the decision made on the windows up to it, whatever the scheduler
 //! does: a replay or an unpaced run decides exactly as the offline evaluation.
 
@@ -25,6 +29,9 @@ use crate::error::HapticsError;
 use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
 #[cfg(doc)]
 use recognize::RecognizerFile;
+use std::collections::VecDeque;
+
+use recognize::nakano::EdgeWindow;
 use recognize::{
     FEATURES, FeatureSet, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile as Model,
     SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
@@ -70,8 +77,74 @@ pub struct LiveRecognizer {
     windowing: NakanoWindowing,
     classes: Vec<String>,
     stream: NakanoStream,
+    /// With a mirrored end, the stroke's latest samples, which replace the stream.
+    edge: Option<Edge>,
     first_position_m: Option<f64>,
     current: Option<LiveDecision>,
+}
+
+/// A stroke's latest samples, and the window computed at its edge from them.
+#[derive(Debug, Clone)]
+struct Edge {
+    window: EdgeWindow,
+    /// Position, height and friction, oldest first; at most [`EdgeWindow::history_samples`].
+    samples: [VecDeque<f64>; 3],
+    /// Samples pushed since the stroke began.
+    pushed: u64,
+}
+
+impl Edge {
+    fn new(windowing: &NakanoWindowing) -> Result<Self, HapticsError> {
+        let window = EdgeWindow::new(windowing.filters, windowing.window_samples)?;
+        let room = window.history_samples();
+        Ok(Self {
+            window,
+            samples: std::array::from_fn(|_| VecDeque::with_capacity(room)),
+            pushed: 0,
+        })
+    }
+
+    fn clear(&mut self) {
+        self.samples.iter_mut().for_each(VecDeque::clear);
+        self.pushed = 0;
+    }
+
+    /// Adds a sample; returns the start and features of the window it completes when that is
+    /// a decision window (`x0`: the stroke's first position).
+    fn push(
+        &mut self,
+        sample: [f64; 3],
+        x0: f64,
+        windowing: &NakanoWindowing,
+    ) -> Result<Option<(u64, [f64; FEATURES])>, HapticsError> {
+        let room = self.window.history_samples();
+        for (ring, v) in self.samples.iter_mut().zip(sample) {
+            if ring.len() == room {
+                ring.pop_front();
+            }
+            ring.push_back(v);
+        }
+        self.pushed += 1;
+        let len = windowing.window_samples;
+        let Some(start) = self.pushed.checked_sub(len as u64) else {
+            return Ok(None);
+        };
+        let [x, z, f] = &mut self.samples;
+        let travel_m = (x[x.len() - len] - x0).abs();
+        if !windowing.is_decision_window(start, travel_m) {
+            return Ok(None);
+        }
+        // As the offline windows: the whole stroke while the window is within a margin of its
+        // start, else the window and the margin before it, which is what the rings hold.
+        let from_start = start < windowing.filters.lookahead_samples() as u64;
+        let features = self.window.features(
+            x.make_contiguous(),
+            z.make_contiguous(),
+            f.make_contiguous(),
+            from_start,
+        )?;
+        Ok(Some((start, features)))
+    }
 }
 
 impl LiveRecognizer {
@@ -148,6 +221,10 @@ impl LiveRecognizer {
                     stream
                 }
             },
+            edge: windowing
+                .mirrored_end
+                .then(|| Edge::new(&windowing))
+                .transpose()?,
             first_position_m: None,
             current: None,
         })
@@ -176,22 +253,29 @@ impl LiveRecognizer {
             });
         }
         let x0 = *self.first_position_m.get_or_insert(position_m);
-        let Some(window) = self.stream.push(position_m, height_m, friction_n) else {
+        let window = match &mut self.edge {
+            Some(edge) => edge.push([position_m, height_m, friction_n], x0, &self.windowing)?,
+            None => self
+                .stream
+                .push(position_m, height_m, friction_n)
+                .filter(|w| {
+                    let travel_m = (w.start_position_m - x0).abs();
+                    self.windowing.is_decision_window(w.start, travel_m)
+                })
+                .map(|w| (w.start, w.features)),
+        };
+        let Some((window_start, features)) = window else {
             return Ok(None);
         };
-        let travel_m = (window.start_position_m - x0).abs();
-        if !self.windowing.is_decision_window(window.start, travel_m) {
-            return Ok(None);
-        }
         let decision = match &mut self.decider {
             Decider::Som { som, scratch } => {
-                let d = som.decide_into(&window.features, scratch)?;
+                let d = som.decide_into(&features, scratch)?;
                 let label = som.node_labels().get(d.node).copied().unwrap_or(0);
                 LiveDecision {
                     label: Some(label),
                     best: label,
                     confidence: d.confidence,
-                    window_start: window.start,
+                    window_start,
                 }
             }
             Decider::Sequential {
@@ -199,13 +283,13 @@ impl LiveRecognizer {
                 state,
                 probabilities,
             } => {
-                classifier.probabilities_into(&window.features, probabilities)?;
+                classifier.probabilities_into(&features, probabilities)?;
                 let step = state.push(probabilities)?;
                 LiveDecision {
                     label: step.decided,
                     best: step.best,
                     confidence: step.probability,
-                    window_start: window.start,
+                    window_start,
                 }
             }
         };
@@ -216,6 +300,9 @@ impl LiveRecognizer {
     /// A new stroke from the next sample, the last decision kept.
     fn restart_stroke(&mut self) {
         self.stream.reset();
+        if let Some(edge) = &mut self.edge {
+            edge.clear();
+        }
         self.first_position_m = None;
         if let Decider::Sequential { state, .. } = &mut self.decider {
             state.reset();

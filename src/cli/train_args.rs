@@ -82,6 +82,11 @@ pub(crate) struct TrainOptions {
     /// windows), s.
     #[arg(long, default_value_t = HOP_S, value_name = "S")]
     hop_s: f64,
+    /// Windowed features (nakano, both): decide each window the moment its last sample
+    /// arrives, the filters' lookahead past it being its mirror image, instead of 0.27 s later;
+    /// the training windows are computed the same way, so the classifier learns the guess.
+    #[arg(long)]
+    mirrored_end: bool,
     /// som: nodes of each map (also --som-nodes). Default: over windows (nakano, both) the
     /// thesis's 12 for up to its 7 surfaces; beyond, the SOM Toolbox's 5·N^0.54321 for N
     /// training windows, at least two per class (presentations: 10 000, at least 500 per node);
@@ -214,6 +219,7 @@ impl TrainOptions {
             train_window_s: self.train_window_s,
             som_nodes: self.som_nodes,
             hop_s: self.hop_s,
+            mirrored_end: self.mirrored_end,
             seed: self.seed,
             normalization: match self.scaling {
                 ScalingArg::LogWithinClass => Normalization::LogWithinClass,

@@ -411,6 +411,16 @@ impl<'a> NakanoSignals<'a> {
         self.position_m.is_empty()
     }
 
+    /// Height of the tip, m.
+    pub fn height_m(&self) -> &'a [f64] {
+        self.height_m
+    }
+
+    /// Friction along the rubbing direction, N (measured, or the RFOB's estimate).
+    pub fn friction_n(&self) -> &[f64] {
+        &self.friction_n
+    }
+
     /// Position along the rubbing direction, m.
     pub fn position_m(&self) -> &'a [f64] {
         self.position_m
@@ -424,81 +434,268 @@ impl<'a> NakanoSignals<'a> {
         len: usize,
         config: &NakanoConfig,
     ) -> Result<[f64; FEATURES], RecognizeError> {
+        window_features(
+            self.position_m,
+            self.height_m,
+            &self.friction_n,
+            start,
+            len,
+            config,
+            &mut FeatureBuffers::default(),
+        )
+    }
+}
+
+/// Working memory of one window's features, kept between windows so that a live recognizer
+/// computes them without allocating.
+#[derive(Debug, Clone, Default)]
+struct FeatureBuffers {
+    prefix: Vec<f64>,
+    rough: Vec<f64>,
+    smoothing: Vec<usize>,
+    rough_prefix: Vec<f64>,
+}
+
+impl FeatureBuffers {
+    /// Room for a window of `len` samples and a margin of `margin` each side.
+    fn with_capacity(len: usize, margin: usize) -> Self {
+        let span = len + 2 * margin + 1;
+        Self {
+            prefix: Vec::with_capacity(span),
+            rough: Vec::with_capacity(span),
+            smoothing: Vec::with_capacity(span),
+            rough_prefix: Vec::with_capacity(span),
+        }
+    }
+}
+
+/// [`NakanoSignals::features`] on signals given as slices, in `buffers`.
+fn window_features(
+    position_m: &[f64],
+    height_m: &[f64],
+    friction_n: &[f64],
+    start: usize,
+    len: usize,
+    config: &NakanoConfig,
+    buffers: &mut FeatureBuffers,
+) -> Result<[f64; FEATURES], RecognizeError> {
+    if len < 2 {
+        return Err(RecognizeError::WindowTooShort { len });
+    }
+    let margin = config.lookahead_samples();
+    let out_of_range = RecognizeError::WindowOutOfRange {
+        start,
+        len,
+        margin,
+        samples: position_m.len(),
+    };
+    let (Some(first), Some(end)) = (start.checked_sub(margin), start.checked_add(len)) else {
+        return Err(out_of_range);
+    };
+    match end.checked_add(margin) {
+        Some(last) if last <= position_m.len() && last <= height_m.len() && end <= friction_n.len() => {}
+        _ => return Err(out_of_range),
+    }
+    config.check()?;
+    let (hmax, smax) = config.max_half_widths();
+    // Local indices below are into `z` and `x`, which start at sample `first`.
+    let z = &height_m[first..end + margin];
+    let x = &position_m[first..end + margin];
+    let z_ref = z[0];
+    // Prefix sums of the height relative to the first sample used (keeps the sums small).
+    let FeatureBuffers {
+        prefix,
+        rough,
+        smoothing,
+        rough_prefix,
+    } = buffers;
+    prefix_sums_into(z.iter().map(|v| v - z_ref), prefix);
+    // Half-widths at local index j (needs j ± hmax inside `x`).
+    let widths = |j: usize| config.half_widths_at(step_m(x[j - hmax], x[j + hmax], hmax));
+    // Roughness at local index j with half-width h (needs j − h ≥ 0 and j + h < z.len()).
+    let rough_at =
+        |j: usize, h: usize| (z[j] - z_ref) - (prefix[j + h + 1] - prefix[j - h]) / (2 * h + 1) as f64;
+    // Roughness over the window and `smax` samples each side, for the smoothing, with the
+    // smoothing half-width at each of those samples.
+    let offset = margin - smax; // local index of sample start − smax
+    rough.clear();
+    smoothing.clear();
+    for j in offset..offset + len + 2 * smax {
+        let (h, s) = widths(j);
+        rough.push(rough_at(j, h));
+        smoothing.push(s);
+    }
+    let window = &rough[smax..smax + len];
+    let n = len as f64;
+    let mean_abs = window.iter().map(|v| v.abs()).sum::<f64>() / n;
+    let mean = window.iter().sum::<f64>() / n;
+    let var = window.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    // Smoothed roughness at each window sample, then upward crossings between neighbours.
+    prefix_sums_into(rough.iter().copied(), rough_prefix);
+    let smoothed = |i: usize| {
+        let s = smoothing[i];
+        (rough_prefix[i + s + 1] - rough_prefix[i - s]) / (2 * s + 1) as f64
+    };
+    let waves = (smax + 1..smax + len)
+        .filter(|&i| smoothed(i - 1) < -CROSSING_GUARD_M && smoothed(i) >= -CROSSING_GUARD_M)
+        .count();
+    let travel = (position_m[end - 1] - position_m[start]).abs();
+    let wavelength = travel / waves.max(1) as f64;
+    let f = &friction_n[start..end];
+    let f_mean = f.iter().sum::<f64>() / n;
+    let f_var = f.iter().map(|v| (v - f_mean).powi(2)).sum::<f64>() / n;
+    Ok([mean_abs, var, wavelength, f_mean, f_var])
+}
+
+/// Nakano's features of the window that ends at the latest sample, as known at that sample:
+/// the filters' lookahead past it is the signals' mirror image through it, so the window is
+/// decided the moment it is complete instead of a lookahead later.
+///
+/// Heights and positions are reflected through the last sample (`2·v_last − v`, continuing a
+/// slope straight on, as [`mirror_start`] does at a stroke's first sample), the friction as its
+/// plain mirror (it is never filtered). Before the stroke's first sample, when the window starts
+/// within a margin of it, the signals are reflected through that sample in the same way, and a
+/// reflection that falls outside the known samples is reflected again, so a window is decided on
+/// what was measured up to its end and nothing later.
+///
+/// Compared with a window decided a lookahead later, the last quarter-second of roughness is a
+/// guess, so the features are noisier; a classifier trained on windows computed this same way
+/// ([`crate::NakanoWindowing::mirrored_end`]) learns that noise.
+#[derive(Debug, Clone)]
+pub struct EdgeWindow {
+    config: NakanoConfig,
+    len: usize,
+    margin: usize,
+    position_m: Vec<f64>,
+    height_m: Vec<f64>,
+    friction_n: Vec<f64>,
+    buffers: FeatureBuffers,
+}
+
+impl EdgeWindow {
+    /// Windows of `len` samples (at least 2) under `config`'s filters; all memory is taken
+    /// here.
+    pub fn new(config: NakanoConfig, len: usize) -> Result<Self, RecognizeError> {
+        config.check()?;
         if len < 2 {
             return Err(RecognizeError::WindowTooShort { len });
         }
         let margin = config.lookahead_samples();
-        let out_of_range = RecognizeError::WindowOutOfRange {
-            start,
+        let span = len + 2 * margin;
+        Ok(Self {
+            config,
             len,
             margin,
-            samples: self.len(),
-        };
-        let (Some(first), Some(end)) = (start.checked_sub(margin), start.checked_add(len)) else {
-            return Err(out_of_range);
-        };
-        match end.checked_add(margin) {
-            Some(last) if last <= self.len() => {}
-            _ => return Err(out_of_range),
+            position_m: Vec::with_capacity(span),
+            height_m: Vec::with_capacity(span),
+            friction_n: Vec::with_capacity(span),
+            buffers: FeatureBuffers::with_capacity(len, margin),
+        })
+    }
+
+    /// Samples of history a window needs once the stroke is longer than that: the window and
+    /// the filters' margin before it.
+    pub fn history_samples(&self) -> usize {
+        self.len + self.margin
+    }
+
+    /// The features of the window formed by the last `len` samples of `position_m`,
+    /// `height_m` and `friction_n` (equally long). `from_stroke_start` says the slices begin at
+    /// the stroke's first sample; otherwise they must hold [`EdgeWindow::history_samples`]
+    /// samples, and any before those are ignored. Allocates nothing.
+    pub fn features(
+        &mut self,
+        position_m: &[f64],
+        height_m: &[f64],
+        friction_n: &[f64],
+        from_stroke_start: bool,
+    ) -> Result<[f64; FEATURES], RecognizeError> {
+        let n = position_m.len();
+        if height_m.len() != n || friction_n.len() != n {
+            return Err(RecognizeError::SignalLengths {
+                position: n,
+                height: height_m.len(),
+                friction: friction_n.len(),
+            });
         }
-        config.check()?;
-        let (hmax, smax) = config.max_half_widths();
-        // Local indices below are into `z` and `x`, which start at sample `first`.
-        let z = &self.height_m[first..end + margin];
-        let x = &self.position_m[first..end + margin];
-        let z_ref = z[0];
-        // Prefix sums of the height relative to the first sample used (keeps the sums small).
-        let prefix = prefix_sums(z.iter().map(|v| v - z_ref));
-        // Half-widths at local index j (needs j ± hmax inside `x`).
-        let widths = |j: usize| config.half_widths_at(step_m(x[j - hmax], x[j + hmax], hmax));
-        // Roughness at local index j with half-width h (needs j − h ≥ 0 and j + h < z.len()).
-        let rough =
-            |j: usize, h: usize| (z[j] - z_ref) - (prefix[j + h + 1] - prefix[j - h]) / (2 * h + 1) as f64;
-        // Roughness over the window and `smax` samples each side, for the smoothing, with the
-        // smoothing half-width at each of those samples.
-        let offset = margin - smax; // local index of sample start − smax
-        let (r, smooth_widths): (Vec<f64>, Vec<usize>) = (offset..offset + len + 2 * smax)
-            .map(|j| {
-                let (h, s) = widths(j);
-                (rough(j, h), s)
-            })
-            .unzip();
-        let window = &r[smax..smax + len];
-        let n = len as f64;
-        let mean_abs = window.iter().map(|v| v.abs()).sum::<f64>() / n;
-        let mean = window.iter().sum::<f64>() / n;
-        let var = window.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
-        // Smoothed roughness at each window sample, then upward crossings between neighbours.
-        let r_prefix = prefix_sums(r.iter().copied());
-        let smoothed: Vec<f64> = (smax..smax + len)
-            .map(|i| {
-                let s = smooth_widths[i];
-                (r_prefix[i + s + 1] - r_prefix[i - s]) / (2 * s + 1) as f64
-            })
-            .collect();
-        let waves = smoothed
-            .windows(2)
-            .filter(|p| p[0] < -CROSSING_GUARD_M && p[1] >= -CROSSING_GUARD_M)
-            .count();
-        let travel = (self.position_m[end - 1] - self.position_m[start]).abs();
-        let wavelength = travel / waves.max(1) as f64;
-        let f = &self.friction_n[start..end];
-        let f_mean = f.iter().sum::<f64>() / n;
-        let f_var = f.iter().map(|v| (v - f_mean).powi(2)).sum::<f64>() / n;
-        Ok([mean_abs, var, wavelength, f_mean, f_var])
+        let (len, margin) = (self.len, self.margin);
+        let too_short = || RecognizeError::WindowOutOfRange {
+            start: n.saturating_sub(len),
+            len,
+            margin,
+            samples: n,
+        };
+        let known = if from_stroke_start {
+            0..n
+        } else {
+            n.checked_sub(len + margin).ok_or_else(too_short)?..n
+        };
+        if known.len() < len {
+            return Err(too_short());
+        }
+        // Indices relative to the first known sample; the window is the last `len` of them.
+        let e = known.len() as i64;
+        let window_start = e - len as i64;
+        let at = |v: &[f64], odd: bool, i: i64| -> Option<f64> { reflected(&v[known.clone()], odd, i) };
+        for (out, v, odd) in [
+            (&mut self.position_m, position_m, true),
+            (&mut self.height_m, height_m, true),
+            (&mut self.friction_n, friction_n, false),
+        ] {
+            out.clear();
+            for i in window_start - margin as i64..e + margin as i64 {
+                out.push(at(v, odd, i).ok_or_else(too_short)?);
+            }
+        }
+        window_features(
+            &self.position_m,
+            &self.height_m,
+            &self.friction_n,
+            margin,
+            len,
+            &self.config,
+            &mut self.buffers,
+        )
     }
 }
 
-/// Sums of the values before each index: `out[k]` = sum of the first `k` values.
-fn prefix_sums(values: impl Iterator<Item = f64>) -> Vec<f64> {
-    let mut out = Vec::with_capacity(values.size_hint().0 + 1);
+/// The value at index `i` of `v` extended past both ends by its mirror image through the end
+/// sample (odd: `2·v_end − v`, even: `v`), reflecting again while outside; `None` after a few
+/// reflections (a stroke too short for the margin).
+fn reflected(v: &[f64], odd: bool, mut i: i64) -> Option<f64> {
+    let last = v.len() as i64 - 1;
+    if last < 1 {
+        return None;
+    }
+    // value = offset + sign · v[i]
+    let (mut offset, mut sign) = (0.0, 1.0);
+    for _ in 0..8 {
+        let end = if i > last {
+            i = 2 * last - i;
+            v[last as usize]
+        } else if i < 0 {
+            i = -i;
+            v[0]
+        } else {
+            return Some(offset + sign * v[i as usize]);
+        };
+        if odd {
+            offset += sign * 2.0 * end;
+            sign = -sign;
+        }
+    }
+    None
+}
+
+/// Sums of the values before each index into `out`: `out[k]` = sum of the first `k` values.
+fn prefix_sums_into(values: impl Iterator<Item = f64>, out: &mut Vec<f64>) {
+    out.clear();
     let mut acc = 0.0;
     out.push(acc);
     for v in values {
         acc += v;
         out.push(acc);
     }
-    out
 }
 
 /// Travel per sample between two positions `2 · half` samples apart, m (`half` ≥ 1; with 0 the

@@ -36,6 +36,12 @@ pub struct NakanoWindowing {
     /// before it. Anytime decisions use it; windows that start after some travel do not need it.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mirrored_start: bool,
+    /// Whether each window is decided the moment its last sample arrives, the filters'
+    /// lookahead past it being its mirror image ([`nakano::EdgeWindow`]), instead of a
+    /// lookahead later. A classifier is trained on windows computed the same way, so this is
+    /// set when training and kept in the model.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mirrored_end: bool,
     /// Sample rate the windows are counted at, Hz.
     pub rate_hz: f64,
 }
@@ -71,6 +77,7 @@ impl NakanoWindowing {
             hop_samples: samples("hop_s", hop_s, rate_hz)?,
             start_travel_m: 0.005,
             mirrored_start: false,
+            mirrored_end: false,
             rate_hz,
         };
         windowing.check().map_err(setting_error)?;
@@ -226,7 +233,7 @@ impl NakanoWindowing {
     /// From a window's first sample to the sample that completes it (the window plus the
     /// filters' lookahead), s: how old the oldest sample of a decision is.
     pub fn decision_latency_s(&self) -> f64 {
-        (self.window_samples + self.filters.lookahead_samples()) as f64 / self.rate_hz
+        (self.window_samples + self.lookahead_samples()) as f64 / self.rate_hz
     }
 
     /// Whether a window starting at sample `start`, `travel_m` from the first sample, is
@@ -250,7 +257,17 @@ impl NakanoWindowing {
 
     /// The sample at which the window starting at `start` is complete.
     pub fn decided_at(&self, start: usize) -> usize {
-        start + self.window_samples - 1 + self.filters.lookahead_samples()
+        start + self.window_samples - 1 + self.lookahead_samples()
+    }
+
+    /// Samples a decision waits for after its window: the filters' lookahead, or none with a
+    /// mirrored end.
+    pub fn lookahead_samples(&self) -> usize {
+        if self.mirrored_end {
+            0
+        } else {
+            self.filters.lookahead_samples()
+        }
     }
 }
 
@@ -297,7 +314,6 @@ impl WindowlessCapture {
     /// `training`) windows. Only meaningful for a capture that [`windows`] found none in.
     pub(crate) fn of(c: &LabelledCapture, windowing: &NakanoWindowing, kind: &str) -> Self {
         let rate = windowing.rate_hz;
-        let margin = windowing.filters.lookahead_samples();
         let len = windowing.window_samples;
         let samples = c.samples();
         let secs = |n: usize| n as f64 / rate;
@@ -307,12 +323,14 @@ impl WindowlessCapture {
             Some(kept) => kept.travel().clone(),
             None => Travel::of(&c.capture, [start]),
         };
-        let reason = if samples < len + 2 * margin {
+        // The samples before the first window and after it.
+        let needed = windowing.first_start() + len + windowing.lookahead_samples();
+        let reason = if samples < needed {
             format!(
                 "is {:.3} s long; a {kind} window needs {} s, {:.3} s with the filters' margins",
                 secs(samples),
                 secs(len),
-                secs(len + 2 * margin)
+                secs(needed)
             )
         } else {
             match travel.reached(start) {
@@ -401,6 +419,25 @@ pub(crate) fn windows(
     };
     let margin = windowing.filters.lookahead_samples();
     let len = windowing.window_samples;
+    if windowing.mirrored_end {
+        // Each window as known at its last sample; before the stroke's first sample the
+        // edge window mirrors on its own, so a mirrored start needs no extension here.
+        let (z, f) = (signals.height_m(), signals.friction_n());
+        let mut edge = nakano::EdgeWindow::new(windowing.filters, len).map_err(nakano)?;
+        return (windowing.first_start()..)
+            .step_by(windowing.hop_samples)
+            .take_while(|s| s + len <= signals.len())
+            .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
+            .map(|s| {
+                let from_start = s < margin;
+                let known = if from_start { 0 } else { s - margin }..s + len;
+                let features = edge
+                    .features(&x[known.clone()], &z[known.clone()], &f[known], from_start)
+                    .map_err(nakano)?;
+                Ok((s, features))
+            })
+            .collect();
+    }
     // With a mirrored start, window `s` of the capture is window `s + pad` of the extended
     // signals.
     let (extended, pad) = if windowing.mirrored_start {

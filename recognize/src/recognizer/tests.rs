@@ -66,6 +66,39 @@ fn three_surfaces(seconds: f64) -> Vec<LabelledCapture> {
     ]
 }
 
+/// A mirrored end is kept in the model file and decides each window at its last sample: the
+/// same windows as without it, each a lookahead (0.27 s) sooner.
+#[test]
+fn a_mirrored_end_is_kept_and_decides_a_lookahead_sooner() {
+    let train = three_surfaces(4.0);
+    let plain = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
+    let windowing = NakanoWindowing {
+        mirrored_end: true,
+        ..plain
+    };
+    assert_eq!(windowing.decided_at(270), 769);
+    assert_eq!(plain.decided_at(270), 1039);
+    let model = RecognizerFile::train_som(&train, windowing, SomParams::default()).expect("train");
+    let text = serde_json::to_string(&model).expect("serialize");
+    assert!(text.contains("\"mirrored_end\":true"));
+    let back = RecognizerFile::from_json(&text, Path::new("m.json")).expect("valid");
+    assert_eq!(back, model);
+    // A model without it reads as before (the field is left out of its file).
+    let old = RecognizerFile::train_som(&train, plain, SomParams::default()).expect("train");
+    assert!(
+        !serde_json::to_string(&old)
+            .expect("serialize")
+            .contains("mirrored_end")
+    );
+    let eval = back.evaluate(&three_surfaces(3.0), None).expect("evaluate");
+    let before = old.evaluate(&three_surfaces(3.0), None).expect("evaluate");
+    assert!((eval.decision_latency_s - 0.5).abs() < 1e-12);
+    assert!((before.decision_latency_s - 0.77).abs() < 1e-12);
+    assert_eq!(eval.confusion.accuracy(), Some(1.0));
+    let first = eval.time_to_first_correct_s.expect("correct decisions");
+    assert!((first - (1.839 - 0.27)).abs() < 1e-9, "{first}");
+}
+
 #[test]
 fn a_som_recognizer_round_trips_and_recognizes_distinct_surfaces() {
     let train = three_surfaces(4.0);

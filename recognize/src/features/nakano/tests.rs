@@ -306,3 +306,100 @@ fn a_copy_of_an_unfed_stream_has_all_its_storage() {
         assert!(reserved >= capacity, "{reserved} < {capacity}");
     }
 }
+
+/// The signals known at sample `e` (exclusive) continued by definition: past sample `e − 1`
+/// as `g(e − 1 + k) = 2·v(e − 1) − g(e − 1 − k)`, before sample 0 as `g(−k) = 2·v(0) − g(k)`
+/// (plain mirrors for friction), from `before` samples before the start to `pad` after the end.
+fn extended_by_hand(v: &[f64], e: usize, pad: usize, odd: bool, before: usize) -> Vec<f64> {
+    fn g(v: &[f64], e: i64, odd: bool, i: i64) -> f64 {
+        let mirror = |end: f64, inner: f64| if odd { 2.0 * end - inner } else { inner };
+        if i >= e {
+            mirror(v[e as usize - 1], g(v, e, odd, 2 * (e - 1) - i))
+        } else if i < 0 {
+            mirror(v[0], g(v, e, odd, -i))
+        } else {
+            v[i as usize]
+        }
+    }
+    let (e_i, before_i) = (e as i64, before as i64);
+    (-before_i..e_i + pad as i64).map(|i| g(v, e_i, odd, i)).collect()
+}
+
+#[test]
+fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
+    let (x, z, f) = signals(3000);
+    let config = NakanoConfig::default();
+    let pad = config.lookahead_samples();
+    let len = 250;
+    let mut edge = EdgeWindow::new(config, len).expect("valid");
+    assert_eq!(edge.history_samples(), len + pad);
+    // Far from the start: the window and the margin before it are known, the margin after it
+    // is the mirror image, bit for bit the batch features of that construction.
+    for e in [len + pad, 1200, 3000] {
+        let known = e - len - pad..e;
+        let got = edge
+            .features(&x[known.clone()], &z[known.clone()], &f[known], false)
+            .expect("enough history");
+        let (ex, ez, ef) = (
+            extended_by_hand(&x, e, pad, true, 0),
+            extended_by_hand(&z, e, pad, true, 0),
+            extended_by_hand(&f, e, pad, false, 0),
+        );
+        let batch = NakanoSignals::new(&ex, &ez, &ef)
+            .expect("equal lengths")
+            .features(e - len, len, &config)
+            .expect("in range");
+        assert_eq!(got, batch, "window ending at {e}");
+        // Only the lookahead differs from the window decided later, so its friction
+        // statistics are the same.
+        let later = NakanoSignals::new(&x, &z, &f)
+            .expect("equal lengths")
+            .features(e - len, len, &config);
+        if let Ok(later) = later {
+            assert_eq!(got[3..], later[3..]);
+        }
+    }
+    // From the stroke's start, both ends mirrored: the first window, and one whose margin
+    // reaches before the start.
+    for e in [len, len + 100] {
+        let s = e - len;
+        let got = edge
+            .features(&x[..e], &z[..e], &f[..e], true)
+            .expect("whole stroke");
+        let before = pad - s;
+        let (ex, ez, ef) = (
+            extended_by_hand(&x, e, pad, true, before),
+            extended_by_hand(&z, e, pad, true, before),
+            extended_by_hand(&f, e, pad, false, before),
+        );
+        let batch = NakanoSignals::new(&ex, &ez, &ef)
+            .expect("equal lengths")
+            .features(pad, len, &config)
+            .expect("in range");
+        for (k, (a, b)) in got.iter().zip(&batch).enumerate() {
+            assert!(close(*a, *b), "window ending at {e}, feature {k}: {a} vs {b}");
+        }
+    }
+    // Too little history, or signals of different lengths, are errors, not guesses.
+    assert!(matches!(
+        edge.features(
+            &x[..len + pad - 1],
+            &z[..len + pad - 1],
+            &f[..len + pad - 1],
+            false
+        ),
+        Err(RecognizeError::WindowOutOfRange { .. })
+    ));
+    assert!(matches!(
+        edge.features(&x[..len - 1], &z[..len - 1], &f[..len - 1], true),
+        Err(RecognizeError::WindowOutOfRange { .. })
+    ));
+    assert!(matches!(
+        edge.features(&x[..len], &z[..len], &f[..len - 1], true),
+        Err(RecognizeError::SignalLengths { .. })
+    ));
+    assert!(matches!(
+        EdgeWindow::new(config, 1),
+        Err(RecognizeError::WindowTooShort { len: 1 })
+    ));
+}

@@ -130,6 +130,9 @@ pub struct TrainSettings {
     pub train_window_s: Option<f64>,
     /// Windowed features: time between decisions (and between training windows), s.
     pub hop_s: f64,
+    /// Windowed features: decide each window at its last sample
+    /// ([`NakanoWindowing::mirrored_end`]).
+    pub mirrored_end: bool,
     /// SOM: seed of the map's initial vectors and presentation order.
     pub seed: u64,
     /// SOM over windows: how features are scaled before the map (a SOM over whole-scratch
@@ -158,6 +161,7 @@ impl TrainSettings {
             window_s: DECISION_WINDOW_S,
             train_window_s: None,
             hop_s: HOP_S,
+            mirrored_end: false,
             seed: 0,
             normalization: Normalization::LogWithinClass,
             k: PAPER_K,
@@ -190,8 +194,12 @@ impl TrainSettings {
 
     /// The windowing of windowed features at `rate_hz`.
     pub fn windowing_at(&self, rate_hz: f64) -> Result<NakanoWindowing, RecognizeError> {
-        NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?
-            .with_training_window_s(self.training_window_s())
+        let windowing = NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?
+            .with_training_window_s(self.training_window_s())?;
+        Ok(NakanoWindowing {
+            mirrored_end: self.mirrored_end,
+            ..windowing
+        })
     }
 }
 
