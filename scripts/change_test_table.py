@@ -10,6 +10,9 @@ surfaces; on the two-patch strokes, named decisions right (against the surface u
 the mean and slowest time from the seam to the stable new surface, and strokes not followed.
 
     python3 scripts/change_test_table.py [--palpus target/release/palpus] [--odds 0,9,99,999]
+        [--mirrored-end]
+
+With `--mirrored-end` the SVM is trained to decide each window at its last sample.
 """
 
 import argparse
@@ -28,6 +31,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--palpus", default="target/release/palpus")
     parser.add_argument("--odds", default="0,9,99,999")
+    parser.add_argument("--mirrored-end", action="store_true")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
@@ -39,7 +43,7 @@ def main():
         two_patch = [str(p) for p in sorted((root / "nakano_two_patch").glob("*.csv"))]
         model = str(root / "svm.json")
         palpus(args.palpus, "recognize", "train", *train, "--method", "svm", "--features", "nakano",
-               "--window-s", "0.25", "--out", model)
+               "--window-s", "0.25", "--out", model, *(["--mirrored-end"] if args.mirrored_end else []))
 
         def row(odds, captures):
             out = palpus(args.palpus, "recognize", "eval", model, *captures, "--sequential", "0.9",

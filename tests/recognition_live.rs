@@ -557,7 +557,8 @@ fn a_mirrored_end_decides_each_window_at_its_last_sample_live_as_offline() {
         .expect("window probabilities")
         .build()
         .expect("valid");
-    let mut live = LiveRecognizer::new(&knn, 1000.0).expect("live");
+    // A copy, as a scene hands each haptic thread: it must have all its storage too.
+    let mut live = LiveRecognizer::new(&knn, 1000.0).expect("live").clone();
     let (mut named, mut right) = (0, 0);
     for surface_runs in &runs {
         for c in &surface_runs[1..] {

@@ -84,13 +84,26 @@ pub struct LiveRecognizer {
 }
 
 /// A stroke's latest samples, and the window computed at its edge from them.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct Edge {
     window: EdgeWindow,
     /// Position, height and friction, oldest first; at most [`EdgeWindow::history_samples`].
     samples: [VecDeque<f64>; 3],
     /// Samples pushed since the stroke began.
     pushed: u64,
+}
+
+impl Clone for Edge {
+    /// A copy with room for the whole history, as the original was made: a derived clone
+    /// would have room only for the samples in it and allocate on the haptic thread.
+    fn clone(&self) -> Self {
+        let room = self.window.history_samples();
+        Self {
+            window: self.window.clone(),
+            samples: std::array::from_fn(|k| Self::ring_copy(&self.samples[k], room)),
+            pushed: self.pushed,
+        }
+    }
 }
 
 impl Edge {
@@ -102,6 +115,13 @@ impl Edge {
             samples: std::array::from_fn(|_| VecDeque::with_capacity(room)),
             pushed: 0,
         })
+    }
+
+    /// A copy of `samples` with room for the whole history.
+    fn ring_copy(ring: &VecDeque<f64>, room: usize) -> VecDeque<f64> {
+        let mut copy = VecDeque::with_capacity(room);
+        copy.extend(ring.iter().copied());
+        copy
     }
 
     fn clear(&mut self) {

@@ -561,7 +561,7 @@ fn window_features(
 /// Compared with a window decided a lookahead later, the last quarter-second of roughness is a
 /// guess, so the features are noisier; a classifier trained on windows computed this same way
 /// ([`crate::NakanoWindowing::mirrored_end`]) learns that noise.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct EdgeWindow {
     config: NakanoConfig,
     len: usize,
@@ -580,9 +580,14 @@ impl EdgeWindow {
         if len < 2 {
             return Err(RecognizeError::WindowTooShort { len });
         }
+        Ok(Self::with_room(config, len))
+    }
+
+    /// All buffers made for `len` and `config`'s margin (both checked).
+    fn with_room(config: NakanoConfig, len: usize) -> Self {
         let margin = config.lookahead_samples();
         let span = len + 2 * margin;
-        Ok(Self {
+        Self {
             config,
             len,
             margin,
@@ -590,7 +595,7 @@ impl EdgeWindow {
             height_m: Vec::with_capacity(span),
             friction_n: Vec::with_capacity(span),
             buffers: FeatureBuffers::with_capacity(len, margin),
-        })
+        }
     }
 
     /// Samples of history a window needs once the stroke is longer than that: the window and
@@ -636,15 +641,30 @@ impl EdgeWindow {
         // Indices relative to the first known sample; the window is the last `len` of them.
         let e = known.len() as i64;
         let window_start = e - len as i64;
-        let at = |v: &[f64], odd: bool, i: i64| -> Option<f64> { reflected(&v[known.clone()], odd, i) };
+        let (lo, hi) = (window_start - margin as i64, e + margin as i64);
         for (out, v, odd) in [
             (&mut self.position_m, position_m, true),
             (&mut self.height_m, height_m, true),
             (&mut self.friction_n, friction_n, false),
         ] {
+            let v = &v[known.clone()];
             out.clear();
-            for i in window_start - margin as i64..e + margin as i64 {
-                out.push(at(v, odd, i).ok_or_else(too_short)?);
+            // Before the stroke (only from its start), then the known samples as they are, then
+            // the mirror past the last; the general reflection only where one is not enough.
+            for i in lo..0 {
+                out.push(reflected(v, odd, i).ok_or_else(too_short)?);
+            }
+            out.extend_from_slice(&v[lo.max(0) as usize..]);
+            let last = v[v.len() - 1];
+            for i in e..hi {
+                let inner = 2 * (e - 1) - i;
+                let value = if inner >= 0 {
+                    let w = v[inner as usize];
+                    if odd { 2.0 * last - w } else { w }
+                } else {
+                    reflected(v, odd, i).ok_or_else(too_short)?
+                };
+                out.push(value);
             }
         }
         window_features(
@@ -656,6 +676,14 @@ impl EdgeWindow {
             &self.config,
             &mut self.buffers,
         )
+    }
+}
+
+impl Clone for EdgeWindow {
+    /// A copy with all its buffers' room, as the original was made: a derived clone would
+    /// keep only what is in them and grow (allocate) on the haptic thread.
+    fn clone(&self) -> Self {
+        Self::with_room(self.config, self.len)
     }
 }
 
