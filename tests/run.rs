@@ -313,7 +313,7 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
     assert_eq!(timing.len(), 7);
     for t in timing {
         let stable = f(&t["stable_right_after_s"]);
-        assert!(stable >= 0.25 && stable < 2.0, "{t}");
+        assert!((0.25..2.0).contains(&stable), "{t}");
         assert!(t["first_named_after_s"].as_f64().unwrap() <= stable, "{t}");
     }
     // The timeline says "undecided" (an empty label) before each surface is named, with the
