@@ -96,6 +96,7 @@ pub fn line(live: &LiveRecognizer) -> RecognizerLine {
         features: FeatureSet::Nakano.name().to_owned(),
         window_s: w.window_s(),
         hop_s,
+        decided_after_s: w.lookahead_samples() as f64 / w.rate_hz,
         threshold: params.map(|p| p.threshold()),
         memory_s: params.map(|p| p.memory() as f64 * hop_s),
         change_odds: params.and_then(|p| p.change_log_odds()).map(f64::exp),

@@ -306,6 +306,8 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
     // The scene's own choice, reported: an SVM naming a surface at a posterior of 0.9.
     assert_eq!(r["recognizer"]["method"], "svm");
     assert_eq!(f(&r["recognizer"]["threshold"]), 0.9);
+    // Its SVM decides each window at its last sample, and the report says so.
+    assert_eq!(f(&r["recognizer"]["decided_after_s"]), 0.0);
     // Every surface ends named right, well before any decision on a fixed 3 s window could be
     // made (3 s plus the filters' 0.27 s look-ahead), and never before the first 0.25 s window
     // is in: the model decides each window at its last sample.

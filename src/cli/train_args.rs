@@ -68,7 +68,7 @@ pub(crate) struct TrainOptions {
     #[arg(long, value_enum, value_name = "nakano|spectral|both")]
     features: Option<Features>,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
-    /// filters' 0.27 s lookahead).
+    /// filters' 0.27 s lookahead, none with --mirrored-end).
     #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
     window_s: f64,
     /// Windowed features (nakano, both): window of the training vectors, s. Default: the

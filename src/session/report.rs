@@ -111,6 +111,9 @@ pub struct RecognizerLine {
     /// Its decision window and hop, s.
     pub window_s: f64,
     pub hop_s: f64,
+    /// How long after its last sample a window is decided, s (the filters' lookahead, or 0
+    /// with a mirrored end).
+    pub decided_after_s: f64,
     /// Posterior at which a k-NN or SVM names a surface (a SOM names one every window).
     pub threshold: Option<f64>,
     /// Span of windows whose evidence counts, s.
@@ -276,8 +279,12 @@ impl SessionReport {
             };
             let _ = writeln!(
                 t,
-                "  recognizer: {} over {} windows of {} s every {} s; {rule}",
-                r.method, r.features, r.window_s, r.hop_s
+                "  recognizer: {} over {} windows of {} s every {} s, {}; {rule}",
+                r.method,
+                r.features,
+                r.window_s,
+                r.hop_s,
+                decided_after(r.decided_after_s)
             );
         }
         if let Some(a) = self.recognition_accuracy {
@@ -360,3 +367,12 @@ pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportErr
 }
 
 use std::io::Write;
+
+/// When a window is decided, in words.
+pub fn decided_after(seconds: f64) -> String {
+    if seconds > 0.0 {
+        format!("each decided {seconds:.2} s after its last sample")
+    } else {
+        "each decided at its last sample".to_owned()
+    }
+}

@@ -90,6 +90,9 @@ pub struct SequentialEvaluation {
     /// Window length and hop, s.
     pub window_s: f64,
     pub hop_s: f64,
+    /// How long after its last sample a window is decided, s: the filters' lookahead, or 0
+    /// with a mirrored end.
+    pub decided_after_s: f64,
     /// Captures evaluated, and windows over all of them.
     pub captures: usize,
     pub steps: usize,
@@ -213,6 +216,7 @@ impl RecognizerFile {
             params: base,
             window_s: windowing.window_s(),
             hop_s: windowing.hop_samples as f64 / windowing.rate_hz,
+            decided_after_s: windowing.lookahead_samples() as f64 / windowing.rate_hz,
             captures: captures.len(),
             steps,
             rows,
