@@ -154,14 +154,12 @@ impl Edge {
         if !windowing.is_decision_window(start, travel_m) {
             return Ok(None);
         }
-        // As the offline windows: the whole stroke while the window is within a margin of its
-        // start, else the window and the margin before it, which is what the rings hold.
-        let from_start = start < windowing.filters.lookahead_samples() as u64;
+        // The rings hold the stroke from the window's history on, as the offline windows read.
         let features = self.window.features(
+            start as usize,
             x.make_contiguous(),
             z.make_contiguous(),
             f.make_contiguous(),
-            from_start,
         )?;
         Ok(Some((start, features)))
     }

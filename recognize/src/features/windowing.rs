@@ -429,10 +429,9 @@ pub(crate) fn windows(
             .take_while(|s| s + len <= signals.len())
             .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
             .map(|s| {
-                let from_start = s < margin;
-                let known = if from_start { 0 } else { s - margin }..s + len;
+                let known = edge.history_start(s)..s + len;
                 let features = edge
-                    .features(&x[known.clone()], &z[known.clone()], &f[known], from_start)
+                    .features(s, &x[known.clone()], &z[known.clone()], &f[known])
                     .map_err(nakano)?;
                 Ok((s, features))
             })

@@ -338,7 +338,7 @@ fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
     for e in [len + pad, 1200, 3000] {
         let known = e - len - pad..e;
         let got = edge
-            .features(&x[known.clone()], &z[known.clone()], &f[known], false)
+            .features(e - len, &x[known.clone()], &z[known.clone()], &f[known])
             .expect("enough history");
         let (ex, ez, ef) = (
             extended_by_hand(&x, e, pad, true, 0),
@@ -364,7 +364,7 @@ fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
     for e in [len, len + 100] {
         let s = e - len;
         let got = edge
-            .features(&x[..e], &z[..e], &f[..e], true)
+            .features(e - len, &x[..e], &z[..e], &f[..e])
             .expect("whole stroke");
         let before = pad - s;
         let (ex, ez, ef) = (
@@ -383,19 +383,19 @@ fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
     // Too little history, or signals of different lengths, are errors, not guesses.
     assert!(matches!(
         edge.features(
+            1000,
             &x[..len + pad - 1],
             &z[..len + pad - 1],
-            &f[..len + pad - 1],
-            false
+            &f[..len + pad - 1]
         ),
         Err(RecognizeError::WindowOutOfRange { .. })
     ));
     assert!(matches!(
-        edge.features(&x[..len - 1], &z[..len - 1], &f[..len - 1], true),
+        edge.features(0, &x[..len - 1], &z[..len - 1], &f[..len - 1]),
         Err(RecognizeError::WindowOutOfRange { .. })
     ));
     assert!(matches!(
-        edge.features(&x[..len], &z[..len], &f[..len - 1], true),
+        edge.features(0, &x[..len], &z[..len], &f[..len - 1]),
         Err(RecognizeError::SignalLengths { .. })
     ));
     assert!(matches!(
