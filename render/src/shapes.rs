@@ -250,37 +250,42 @@ pub struct LayerTolerance {
 /// bent tops is least at the dimple's centre; each layer takes half of it, less the tolerance
 /// of the layer above, so the two never cross.
 pub fn layer_tolerances() -> Vec<LayerTolerance> {
-    let dimple = crate::frame::Dimple {
-        centre_m: glam::Vec3::ZERO,
-        normal: glam::Vec3::Y,
-        depth_m: DIMPLE_DEPTH_M as f32,
-        radius_m: DIMPLE_RADIUS_M as f32,
-    };
+    let dimple = design_dimple();
     let reach = |top_y: f32| f64::from(-dimple.displacement_m(glam::Vec3::new(0.0, top_y, 0.0)).y);
     let mut out: Vec<LayerTolerance> = Vec::with_capacity(LAYERS.len());
-    for (k, &(_, _, top, _, _)) in LAYERS.iter().enumerate() {
+    for &(_, _, top, _, _) in &LAYERS {
         let dimple_depth_m = reach(top);
-        let t = match k
-            .checked_sub(1)
-            .and_then(|above| out.get(above).map(|t| (above, t)))
-        {
-            None => LayerTolerance {
-                dimple_depth_m,
-                tol_m: SURFACE_TOL_M,
-                gap_m: 0.0,
-            },
-            Some((above, up)) => {
-                let gap_m = f64::from(LAYERS[above].2 - top) - (up.dimple_depth_m - dimple_depth_m);
+        // The layer above is the last one done.
+        let t = match out.last() {
+            Some(up) => {
+                let above_top = LAYERS[out.len() - 1].2;
+                let gap_m = f64::from(above_top - top) - (up.dimple_depth_m - dimple_depth_m);
                 LayerTolerance {
                     dimple_depth_m,
                     tol_m: (gap_m - up.tol_m) / 2.0,
                     gap_m,
                 }
             }
+            None => LayerTolerance {
+                dimple_depth_m,
+                tol_m: SURFACE_TOL_M,
+                gap_m: 0.0,
+            },
         };
         out.push(t);
     }
     out
+}
+
+/// The dimple of [`DIMPLE_DEPTH_M`] and [`DIMPLE_RADIUS_M`] at the entry point, pressed straight
+/// down.
+fn design_dimple() -> crate::frame::Dimple {
+    crate::frame::Dimple {
+        centre_m: glam::Vec3::ZERO,
+        normal: glam::Vec3::Y,
+        depth_m: DIMPLE_DEPTH_M as f32,
+        radius_m: DIMPLE_RADIUS_M as f32,
+    }
 }
 
 /// The dimple [`tissue_block`] is cut for: the demos' needle, 12 mm radius, pressing up to 15 mm
@@ -414,12 +419,7 @@ mod tests {
     /// its centre.
     #[test]
     fn each_layer_top_follows_its_dimple_within_tolerance() {
-        let dimple = crate::frame::Dimple {
-            centre_m: glam::Vec3::ZERO,
-            normal: glam::Vec3::Y,
-            depth_m: DIMPLE_DEPTH_M as f32,
-            radius_m: DIMPLE_RADIUS_M as f32,
-        };
+        let dimple = design_dimple();
         let bent = |p: [f32; 3]| f64::from(dimple.displacement_m(glam::Vec3::from(p)).y);
         let tolerances = layer_tolerances();
         let mut counts = Vec::new();
