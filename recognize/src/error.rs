@@ -347,6 +347,16 @@ pub enum RecognizeError {
     /// The capture lacks a column Nakano's features need.
     #[error("capture lacks a column Nakano's features need")]
     NakanoColumn(#[source] CaptureError),
+    /// A capture's metadata value cannot be used.
+    #[error("metadata `{key}` = {value:?}: {reason}")]
+    Metadata {
+        /// The key.
+        key: &'static str,
+        /// Its value.
+        value: String,
+        /// What it must be.
+        reason: &'static str,
+    },
     /// The signals passed in differ in length.
     #[error("signals differ in length: position {position}, height {height}, friction {friction}")]
     SignalLengths {

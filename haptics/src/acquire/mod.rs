@@ -237,7 +237,7 @@ pub fn metadata(protocol: Protocol, device: &str, rate_hz: f64, options: &Captur
     let mut meta = Metadata::new(protocol.kind(), device, rate_hz)
         .with("protocol", format!("palpus_capture_{}", protocol.name()))
         .with("force_source", "rfob")
-        .with("observer.cutoff_radps", g.g_reac_radps)
+        .with(recognize::nakano::OBSERVER_CUTOFF_KEY, g.g_reac_radps)
         .with("control.kp_per_s2", g.kp_per_s2)
         .with("control.kv_per_s", g.kv_per_s)
         .with("control.kf", g.kf)

@@ -87,6 +87,29 @@ pub const COMMAND_FORCE_COLUMN: &str = capture::kind::TANGENTIAL_COMMAND_FORCE_N
 /// Column of the measured velocity along x (pseudo-differentiated from position when absent).
 pub const VELOCITY_COLUMN: &str = capture::kind::TANGENTIAL_VELOCITY_MPS;
 
+/// Metadata key of the cut-off of the observer that reported a capture's friction, rad/s.
+pub const OBSERVER_CUTOFF_KEY: &str = "observer.cutoff_radps";
+
+/// The cut-off of the observer a capture's friction went through, rad/s: for a friction column,
+/// the metadata's [`OBSERVER_CUTOFF_KEY`] (without it, the friction was measured directly, by a
+/// force sensor: `None`); for friction estimated here, the default [`Rfob`]'s.
+pub fn observer_cutoff_radps(capture: &Capture) -> Result<Option<f64>, RecognizeError> {
+    if !capture.has_column(FRICTION_COLUMN) {
+        return Ok(Some(Rfob::default().cutoff_radps));
+    }
+    let Some(value) = capture.metadata().get(OBSERVER_CUTOFF_KEY) else {
+        return Ok(None);
+    };
+    match value.trim().parse::<f64>() {
+        Ok(g) if g.is_finite() && g > 0.0 => Ok(Some(g)),
+        _ => Err(RecognizeError::Metadata {
+            key: OBSERVER_CUTOFF_KEY,
+            value: value.to_owned(),
+            reason: "a positive, finite cut-off in rad/s",
+        }),
+    }
+}
+
 /// The reaction-force observer (RFOB, thesis Sec. 2.1) that estimates friction for captures
 /// without a `friction_force_n` column, from the commanded force and the velocity along x.
 ///
@@ -399,6 +422,16 @@ impl<'a> NakanoSignals<'a> {
             height_m,
             friction_n: Cow::Borrowed(friction_n),
         })
+    }
+
+    /// The same signals with the friction passed through `filter` from the first sample on
+    /// ([`FrictionOverTravel`]).
+    pub fn with_friction_over_travel(self, filter: &mut TravelFriction) -> Self {
+        let friction_n = filter.apply(self.position_m, &self.friction_n);
+        Self {
+            friction_n: Cow::Owned(friction_n),
+            ..self
+        }
     }
 
     /// Number of samples.
@@ -994,8 +1027,10 @@ impl NakanoStream {
 }
 
 mod edge;
+mod friction;
 
 pub use edge::EdgeWindow;
+pub use friction::{FrictionOverTravel, MAX_GAIN, SPEED_SMOOTHING_S, TravelFriction};
 
 #[cfg(test)]
 mod tests;

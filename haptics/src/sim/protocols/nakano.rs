@@ -180,7 +180,7 @@ fn stroke(
         .with("command.speed_mps", speed_mps)
         .with("command.normal_force_n", NORMAL_FORCE_N)
         .with("friction_source", "rfob")
-        .with("observer.cutoff_radps", OBSERVER_CUTOFF_RADPS)
+        .with(recognize::nakano::OBSERVER_CUTOFF_KEY, OBSERVER_CUTOFF_RADPS)
         .with("sensor.encoder_quantum_m", Encoder::OMEGA7_QUANTUM_M)
         .with("sensor.height_noise_m", HEIGHT_NOISE_M)
         .with("sensor.rfob_noise_n", RFOB_NOISE_N)
