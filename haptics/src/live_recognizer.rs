@@ -31,11 +31,15 @@ use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
 use recognize::RecognizerFile;
 use std::collections::VecDeque;
 
-use recognize::nakano::EdgeWindow;
+use recognize::nakano::{EdgeWindow, TravelFriction};
 use recognize::{
     FEATURES, FeatureSet, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile as Model,
     SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
 };
+
+/// Cut-off of the reaction-force observer whose friction [`Recognizing`] reads
+/// ([`acquire::rubbing_signals`]: the rubbing controller's, Nakano's gains), rad/s.
+pub const RUBBING_OBSERVER_CUTOFF_RADPS: f64 = crate::control::MotionGains::NAKANO.g_reac_radps;
 
 /// One live decision.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,6 +83,9 @@ pub struct LiveRecognizer {
     stream: NakanoStream,
     /// With a mirrored end, the stroke's latest samples, which replace the stream.
     edge: Option<Edge>,
+    /// For a model whose windows read friction over travel, that filter, run from the
+    /// stroke's first sample as the offline windows run it from the capture's.
+    friction: Option<TravelFriction>,
     first_position_m: Option<f64>,
     current: Option<LiveDecision>,
 }
@@ -108,7 +115,7 @@ impl Clone for Edge {
 
 impl Edge {
     fn new(windowing: &NakanoWindowing) -> Result<Self, HapticsError> {
-        let window = EdgeWindow::new(windowing.filters, windowing.window_samples)?;
+        let window = EdgeWindow::new(windowing.filters, windowing.max_window_samples())?;
         let room = window.history_samples();
         Ok(Self {
             window,
@@ -130,13 +137,14 @@ impl Edge {
     }
 
     /// Adds a sample; returns the start and features of the window it completes when that is
-    /// a decision window (`x0`: the stroke's first position).
+    /// a decision window, and its evidence relative to a window of the nominal length
+    /// ([`NakanoWindowing::evidence_scale`]) (`x0`: the stroke's first position).
     fn push(
         &mut self,
         sample: [f64; 3],
         x0: f64,
         windowing: &NakanoWindowing,
-    ) -> Result<Option<(u64, [f64; FEATURES])>, HapticsError> {
+    ) -> Result<Option<(u64, [f64; FEATURES], f64)>, HapticsError> {
         let room = self.window.history_samples();
         for (ring, v) in self.samples.iter_mut().zip(sample) {
             if ring.len() == room {
@@ -155,13 +163,16 @@ impl Edge {
             return Ok(None);
         }
         // The rings hold the stroke from the window's history on, as the offline windows read.
-        let features = self.window.features(
-            start as usize,
-            x.make_contiguous(),
-            z.make_contiguous(),
-            f.make_contiguous(),
-        )?;
-        Ok(Some((start, features)))
+        let (x, z, f) = (
+            &*x.make_contiguous(),
+            &*z.make_contiguous(),
+            &*f.make_contiguous(),
+        );
+        let window = windowing.window_len(x);
+        let features = self
+            .window
+            .features_of((self.pushed - window as u64) as usize, window, x, z, f)?;
+        Ok(Some((start, features, windowing.evidence_scale(window))))
     }
 }
 
@@ -243,6 +254,10 @@ impl LiveRecognizer {
                 .mirrored_end
                 .then(|| Edge::new(&windowing))
                 .transpose()?,
+            friction: windowing
+                .friction_over_travel
+                .map(|travel| travel.filter(Some(RUBBING_OBSERVER_CUTOFF_RADPS), loop_hz))
+                .transpose()?,
             first_position_m: None,
             current: None,
         })
@@ -271,6 +286,10 @@ impl LiveRecognizer {
             });
         }
         let x0 = *self.first_position_m.get_or_insert(position_m);
+        let friction_n = match &mut self.friction {
+            Some(filter) => filter.push(position_m, friction_n),
+            None => friction_n,
+        };
         let window = match &mut self.edge {
             Some(edge) => edge.push([position_m, height_m, friction_n], x0, &self.windowing)?,
             None => self
@@ -280,9 +299,9 @@ impl LiveRecognizer {
                     let travel_m = (w.start_position_m - x0).abs();
                     self.windowing.is_decision_window(w.start, travel_m)
                 })
-                .map(|w| (w.start, w.features)),
+                .map(|w| (w.start, w.features, 1.0)),
         };
-        let Some((window_start, features)) = window else {
+        let Some((window_start, features, evidence_scale)) = window else {
             return Ok(None);
         };
         let decision = match &mut self.decider {
@@ -302,7 +321,7 @@ impl LiveRecognizer {
                 probabilities,
             } => {
                 classifier.probabilities_into(&features, probabilities)?;
-                let step = state.push(probabilities)?;
+                let step = state.push_scaled(probabilities, evidence_scale)?;
                 LiveDecision {
                     label: step.decided,
                     best: step.best,
@@ -320,6 +339,9 @@ impl LiveRecognizer {
         self.stream.reset();
         if let Some(edge) = &mut self.edge {
             edge.clear();
+        }
+        if let Some(filter) = &mut self.friction {
+            filter.reset();
         }
         self.first_position_m = None;
         if let Decider::Sequential { state, .. } = &mut self.decider {
@@ -368,6 +390,17 @@ impl LiveRecognizer {
     /// The windows it decides on.
     pub fn windowing(&self) -> &NakanoWindowing {
         &self.windowing
+    }
+
+    /// The same recognizer reading friction reported through an observer of cut-off
+    /// `cutoff_radps` (`None`: a force sensor) instead of the rubbing controller's
+    /// ([`RUBBING_OBSERVER_CUTOFF_RADPS`]); it matters only to a model whose windows read
+    /// friction over travel ([`NakanoWindowing::friction_over_travel`]).
+    pub fn with_observer_cutoff(mut self, cutoff_radps: Option<f64>) -> Result<Self, HapticsError> {
+        if let Some(travel) = self.windowing.friction_over_travel {
+            self.friction = Some(travel.filter(cutoff_radps, self.windowing.rate_hz)?);
+        }
+        Ok(self)
     }
 }
 

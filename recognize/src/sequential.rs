@@ -294,6 +294,28 @@ impl SequentialState {
     /// Adds one window's class probabilities (one per surface; non-negative, finite). The
     /// window is refused, the state unchanged, if they are not.
     pub fn push(&mut self, probabilities: &[f64]) -> Result<SequentialStep, RecognizeError> {
+        self.push_scaled(probabilities, 1.0)
+    }
+
+    /// [`SequentialState::push`] for a window whose evidence is `scale` times that of the
+    /// windows the settings' weight was set for (positive): its weight is `scale · weight`, at
+    /// most 1. A window longer than those shares more of its samples with the last one, a
+    /// shorter one less (windows over travel,
+    /// [`NakanoWindowing::evidence_scale`](crate::NakanoWindowing::evidence_scale)).
+    pub fn push_scaled(
+        &mut self,
+        probabilities: &[f64],
+        scale: f64,
+    ) -> Result<SequentialStep, RecognizeError> {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(RecognizeError::Parameter {
+                of: "window",
+                name: "evidence scale",
+                value: scale,
+                reason: "must be positive and finite",
+            });
+        }
+        let weight = (self.params.weight * scale).min(1.0);
         let k = self.sum.len();
         if probabilities.len() != k {
             return Err(RecognizeError::Counts {
@@ -310,7 +332,7 @@ impl SequentialState {
             });
         }
         let total: f64 = probabilities.iter().sum();
-        let SequentialParams { weight, floor, .. } = self.params;
+        let floor = self.params.floor;
         let row = &mut self.ring[self.next * k..(self.next + 1) * k];
         for ((slot, s), &p) in row.iter_mut().zip(&mut self.sum).zip(probabilities) {
             // A window whose probabilities all vanish says nothing: it adds the same to all.
@@ -558,6 +580,32 @@ mod tests {
         }
         assert!(s.posterior()[1] > 0.5, "{:?}", s.posterior());
         s.reset();
+        assert_eq!(s.posterior(), [0.5, 0.5]);
+    }
+
+    /// A window's evidence is raised to `scale · weight`, capped at 1: with weight 0.4, a
+    /// window scaled by 0.5 counts as 0.2 and one scaled by 5 as 1.
+    #[test]
+    fn a_scaled_window_weighs_its_share() {
+        let weighted = SequentialParams::builder()
+            .weight(0.4)
+            .without_change_test()
+            .build()
+            .expect("valid");
+        let odds = |scales: &[f64]| {
+            let mut s = SequentialState::new(weighted, 2).expect("state");
+            for &scale in scales {
+                s.push_scaled(&[0.8, 0.2], scale).expect("push");
+            }
+            s.posterior()[0] / s.posterior()[1]
+        };
+        assert!((odds(&[1.0]) - 4f64.powf(0.4)).abs() < 1e-12);
+        assert!((odds(&[0.5, 0.5]) - 4f64.powf(0.4)).abs() < 1e-12);
+        assert!((odds(&[5.0]) - 4.0).abs() < 1e-12);
+        let mut s = SequentialState::new(weighted, 2).expect("state");
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(s.push_scaled(&[0.8, 0.2], bad).is_err(), "{bad}");
+        }
         assert_eq!(s.posterior(), [0.5, 0.5]);
     }
 

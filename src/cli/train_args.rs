@@ -87,6 +87,20 @@ pub(crate) struct TrainOptions {
     /// the training windows are computed the same way, so the classifier learns the guess.
     #[arg(long)]
     mirrored_end: bool,
+    /// Windowed features (nakano, both): filter the friction over travel before the windows
+    /// read it, undoing the time-domain low-pass of the rig's force observer (its cut-off from
+    /// the captures' `observer.cutoff_radps`), so that it reads the same at any rubbing speed.
+    #[arg(long)]
+    friction_over_travel: bool,
+    /// Windowed features (nakano, both): the roughness filters follow the measured speed down
+    /// to this one, m/s, instead of the protocol's 0.005 (a longer lookahead below it).
+    #[arg(long, value_name = "MPS")]
+    slowest_speed_mps: Option<f64>,
+    /// Windowed features (nakano, both), with --mirrored-end: each window spans the travel of
+    /// --window-s at the protocol's 5 mm/s (1.25 mm for 0.25 s) instead of a fixed time, so a
+    /// slower or faster stroke is decided on the same stretch of surface.
+    #[arg(long, requires = "mirrored_end")]
+    windows_over_travel: bool,
     /// som: nodes of each map (also --som-nodes). Default: over windows (nakano, both) the
     /// thesis's 12 for up to its 7 surfaces; beyond, the SOM Toolbox's 5·N^0.54321 for N
     /// training windows, at least two per class (presentations: 10 000, at least 500 per node);
@@ -220,6 +234,9 @@ impl TrainOptions {
             som_nodes: self.som_nodes,
             hop_s: self.hop_s,
             mirrored_end: self.mirrored_end,
+            friction_over_travel: self.friction_over_travel,
+            slowest_speed_mps: self.slowest_speed_mps,
+            windows_over_travel: self.windows_over_travel,
             seed: self.seed,
             normalization: match self.scaling {
                 ScalingArg::LogWithinClass => Normalization::LogWithinClass,

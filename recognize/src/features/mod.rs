@@ -32,7 +32,9 @@ use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLU
 use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION_COLUMN};
 
 pub use scaling::WindowScaling;
-pub use windowing::{DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowlessCapture};
+pub use windowing::{
+    DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TravelWindows, WindowlessCapture,
+};
 pub(crate) use windowing::{Travel, window_vectors, windows};
 
 /// Which features a recognizer computes.

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
-use super::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
+use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use crate::{LabelledCapture, RecognizeError};
 use capture::Capture;
@@ -15,6 +15,19 @@ pub const DECISION_WINDOW_S: f64 = 3.0;
 pub const TRAINING_WINDOW_S: f64 = 1.0;
 /// Default time between a SOM recognizer's decisions, s.
 pub const HOP_S: f64 = 0.1;
+
+/// Windows over travel ([`NakanoWindowing::travel`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TravelWindows {
+    /// Travel a decision window spans, m (path length).
+    pub window_m: f64,
+    /// Travel a training window spans, m, when not [`TravelWindows::window_m`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub training_window_m: Option<f64>,
+    /// Most samples a window takes, however slowly the tip moves: where it spans less travel
+    /// than asked.
+    pub max_samples: usize,
+}
 
 /// How a rubbing stream is cut into the windows the map decides on.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -42,6 +55,19 @@ pub struct NakanoWindowing {
     /// set when training and kept in the model.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mirrored_end: bool,
+    /// When set, the friction is filtered over travel before the windows read it
+    /// ([`FrictionOverTravel`]), so that it reads the same at any rubbing speed. A classifier is
+    /// trained on windows computed the same way, so this is set when training and kept in the
+    /// model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction_over_travel: Option<FrictionOverTravel>,
+    /// When set, a window is the samples that span a length of travel back from its last
+    /// sample instead of [`NakanoWindowing::window_samples`] (which then only times the
+    /// decisions: the window keyed `s` ends where a window of `window_samples` starting at `s`
+    /// would), so that a slower or faster stroke is decided on the same stretch of surface.
+    /// Needs a mirrored end.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub travel: Option<TravelWindows>,
     /// Sample rate the windows are counted at, Hz.
     pub rate_hz: f64,
 }
@@ -78,6 +104,8 @@ impl NakanoWindowing {
             start_travel_m: 0.005,
             mirrored_start: false,
             mirrored_end: false,
+            friction_over_travel: None,
+            travel: None,
             rate_hz,
         };
         windowing.check().map_err(setting_error)?;
@@ -145,8 +173,79 @@ impl NakanoWindowing {
         Self {
             window_samples: self.training_window_samples.unwrap_or(self.window_samples),
             training_window_samples: None,
+            travel: self.travel.map(|t| TravelWindows {
+                window_m: t.training_window_m.unwrap_or(t.window_m),
+                training_window_m: None,
+                max_samples: t.max_samples,
+            }),
             ..*self
         }
+    }
+
+    /// The same windowing over travel: each window spans the travel of its time window at
+    /// the protocol's 5 mm/s (1.25 mm for 0.25 s), and takes at most as many samples as that
+    /// travel at the slowest speed the filters follow (the protocol's 5 mm/s unless
+    /// [`NakanoWindowing::following_speeds_down_to`] says slower). Needs a mirrored end.
+    pub fn over_travel(self) -> Result<Self, RecognizeError> {
+        let step_m = PROTOCOL_SPEED_MPS / self.rate_hz;
+        let slowest_step_m = match &self.filters.follow_speed {
+            Some(f) => {
+                f.reference_step_m * self.filters.highpass_half_width as f64
+                    / f.max_highpass_half_width as f64
+            }
+            None => step_m,
+        };
+        let travel_of = |samples: usize| samples as f64 * step_m;
+        let longest = self.window_samples.max(self.training_window_samples.unwrap_or(0));
+        let windowing = Self {
+            travel: Some(TravelWindows {
+                window_m: travel_of(self.window_samples),
+                training_window_m: self.training_window_samples.map(travel_of),
+                max_samples: (travel_of(longest) / slowest_step_m).ceil().max(longest as f64) as usize,
+            }),
+            ..self
+        };
+        windowing.check().map_err(setting_error)?;
+        Ok(windowing)
+    }
+
+    /// Samples of the window that ends with the last of `position_m` (the stroke's positions
+    /// from its first sample, or at least the window's): [`NakanoWindowing::window_samples`],
+    /// or over travel as many as span [`TravelWindows::window_m`] of path length back from its
+    /// end (a stroke that turns back counts both ways), at least 2 and at most
+    /// [`NakanoWindowing::max_window_samples`] or the samples there are.
+    pub fn window_len(&self, position_m: &[f64]) -> usize {
+        let Some(travel) = &self.travel else {
+            return self.window_samples;
+        };
+        let n = position_m.len();
+        let most = self.max_window_samples().min(n);
+        let mut len = 1;
+        let mut travel_m = 0.0;
+        while len < most && (len < 2 || travel_m < travel.window_m) {
+            travel_m += (position_m[n - len] - position_m[n - len - 1]).abs();
+            len += 1;
+        }
+        len
+    }
+
+    /// How much of an independent window's evidence a window of `len` samples carries
+    /// relative to one of [`NakanoWindowing::window_samples`]: the share of its samples that
+    /// are new since the last decision, `hop / len` (at most 1), over `hop / window_samples`.
+    /// Exactly 1 for windows of fixed length.
+    pub fn evidence_scale(&self, len: usize) -> f64 {
+        if len == self.window_samples {
+            return 1.0;
+        }
+        let new = |n: usize| (self.hop_samples as f64 / n.max(1) as f64).min(1.0);
+        new(len) / new(self.window_samples)
+    }
+
+    /// Samples the longest window takes: [`NakanoWindowing::window_samples`], or over travel
+    /// at most [`TravelWindows::max_samples`].
+    pub fn max_window_samples(&self) -> usize {
+        self.travel
+            .map_or(self.window_samples, |t| t.max_samples.max(self.window_samples))
     }
 
     /// Length of the training windows, s.
@@ -213,6 +312,35 @@ impl NakanoWindowing {
                     "filters.follow_speed.reference_step_m",
                     follow.reference_step_m,
                     "positive and finite, with maximum half-widths at least the nominal ones",
+                ));
+            }
+        }
+        if let Some(travel) = &self.friction_over_travel
+            && travel.check().is_err()
+        {
+            return Err((
+                "friction_over_travel.cutoff_m",
+                travel.cutoff_m,
+                "positive and finite",
+            ));
+        }
+        if let Some(travel) = &self.travel {
+            let usable = |m: f64| m.is_finite() && m > 0.0;
+            if !usable(travel.window_m) || !travel.training_window_m.is_none_or(usable) {
+                return Err(("travel.window_m", travel.window_m, "positive and finite"));
+            }
+            if !(2..=MAX_WINDOW).contains(&travel.max_samples) {
+                return Err((
+                    "travel.max_samples",
+                    travel.max_samples as f64,
+                    "from 2 to 10^7 samples",
+                ));
+            }
+            if !self.mirrored_end {
+                return Err((
+                    "travel.window_m",
+                    travel.window_m,
+                    "windows over travel are decided at their last sample: set mirrored_end",
                 ));
             }
         }
@@ -389,21 +517,23 @@ impl Travel {
     }
 }
 
-/// Start and features of every decision window of a capture.
+/// Every decision window of a capture: the sample it is keyed by (where a window of
+/// [`NakanoWindowing::window_samples`] ending where it ends would start: its first sample but
+/// for windows over travel), its length in samples, and its features.
 pub(crate) fn windows(
     c: &LabelledCapture,
     windowing: &NakanoWindowing,
-) -> Result<Vec<(usize, [f64; FEATURES])>, RecognizeError> {
+) -> Result<Vec<(usize, usize, [f64; FEATURES])>, RecognizeError> {
     if let Some(kept) = c.kept() {
         let vectors = kept
             .windows(windowing, FeatureSet::Nakano, CellScale::Mean)
             .ok_or_else(|| c.not_kept(format!("Nakano's features of {}", describe(windowing))))?;
         return Ok(vectors
             .iter()
-            .map(|(s, v)| {
+            .map(|(s, len, v)| {
                 let mut f = [0.0; FEATURES];
                 f.copy_from_slice(&v[..FEATURES]);
-                (*s, f)
+                (*s, *len, f)
             })
             .collect());
     }
@@ -412,7 +542,12 @@ pub(crate) fn windows(
         features: "Nakano",
         source: Box::new(source),
     };
-    let signals = NakanoSignals::from_capture(&c.capture).map_err(nakano)?;
+    let mut signals = NakanoSignals::from_capture(&c.capture).map_err(nakano)?;
+    if let Some(travel) = &windowing.friction_over_travel {
+        let observer = nakano::observer_cutoff_radps(&c.capture).map_err(nakano)?;
+        let mut filter = travel.filter(observer, windowing.rate_hz).map_err(nakano)?;
+        signals = signals.with_friction_over_travel(&mut filter);
+    }
     let x = signals.position_m();
     let Some(&x0) = x.first() else {
         return Ok(Vec::new());
@@ -423,17 +558,21 @@ pub(crate) fn windows(
         // Each window as known at its last sample; before the stroke's first sample the
         // edge window mirrors on its own, so a mirrored start needs no extension here.
         let (z, f) = (signals.height_m(), signals.friction_n());
-        let mut edge = nakano::EdgeWindow::new(windowing.filters, len).map_err(nakano)?;
+        let mut edge =
+            nakano::EdgeWindow::new(windowing.filters, windowing.max_window_samples()).map_err(nakano)?;
         return (windowing.first_start()..)
             .step_by(windowing.hop_samples)
             .take_while(|s| s + len <= signals.len())
             .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
             .map(|s| {
-                let known = edge.history_start(s)..s + len;
+                let end = s + len;
+                let window = windowing.window_len(&x[..end]);
+                let start = end - window;
+                let known = edge.history_start(start)..end;
                 let features = edge
-                    .features(s, &x[known.clone()], &z[known.clone()], &f[known])
+                    .features_of(start, window, &x[known.clone()], &z[known.clone()], &f[known])
                     .map_err(nakano)?;
-                Ok((s, features))
+                Ok((s, window, features))
             })
             .collect();
     }
@@ -456,6 +595,7 @@ pub(crate) fn windows(
         .map(|s| {
             Ok((
                 s,
+                len,
                 signals
                     .features(s + pad, len, &windowing.filters)
                     .map_err(nakano)?,
@@ -475,19 +615,19 @@ pub(crate) fn window_vectors(
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
+) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
     if let Some(kept) = c.kept() {
         let vectors = kept
             .windows(windowing, features, cell_scale)
             .ok_or_else(|| c.not_kept(format!("{features} features of {}", describe(windowing))))?;
         return Ok(vectors
             .iter()
-            .map(|(s, v)| (*s, v[..features.dim()].to_vec()))
+            .map(|(s, len, v)| (*s, *len, v[..features.dim()].to_vec()))
             .collect());
     }
     let nakano = windows(c, windowing)?;
     if features != FeatureSet::Both {
-        return Ok(nakano.into_iter().map(|(s, f)| (s, f.to_vec())).collect());
+        return Ok(nakano.into_iter().map(|(s, n, f)| (s, n, f.to_vec())).collect());
     }
     let spectral = |source| RecognizeError::Features {
         path: c.reference.path.clone(),
@@ -510,7 +650,7 @@ pub(crate) fn window_vectors(
     let len = windowing.window_samples;
     nakano
         .into_iter()
-        .map(|(s, f)| {
+        .map(|(s, n, f)| {
             let h = match axes {
                 Axes::Three(x, y, z) => {
                     let range = s..(s + len).min(x.len());
@@ -519,7 +659,7 @@ pub(crate) fn window_vectors(
                 Axes::One(v) => plan.single_axis_features(&v[s..(s + len).min(v.len())], cell_scale),
             }
             .map_err(spectral)?;
-            Ok((s, f.iter().copied().chain(h).collect()))
+            Ok((s, n, f.iter().copied().chain(h).collect()))
         })
         .collect()
 }
@@ -541,4 +681,102 @@ fn describe(windowing: &NakanoWindowing) -> String {
         windowing.hop_samples as f64 / windowing.rate_hz,
         windowing.rate_hz
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 0.25 s windows every 0.1 s at 1 kHz, decided at their last sample, the filters following
+    /// the speed down to 2 mm/s, over travel: 1.25 mm, at most 625 samples.
+    fn over_travel() -> NakanoWindowing {
+        NakanoWindowing {
+            mirrored_end: true,
+            ..NakanoWindowing::new(0.25, 0.1, 1000.0)
+                .expect("valid")
+                .following_speeds_down_to(0.002)
+                .expect("valid")
+        }
+        .over_travel()
+        .expect("valid")
+    }
+
+    /// Positions of a tip moving `step_m` per sample, `n` samples.
+    fn steady(step_m: f64, n: usize) -> Vec<f64> {
+        (0..n).map(|k| k as f64 * step_m).collect()
+    }
+
+    #[test]
+    fn a_window_over_travel_spans_its_travel_at_any_speed() {
+        let w = over_travel();
+        let travel = w.travel.expect("over travel");
+        assert!((travel.window_m - 1.25e-3).abs() < 1e-15);
+        assert_eq!(travel.max_samples, 625);
+        // 1.25 mm at 5, 2 and 20 µm per sample (the last step may round past it).
+        for (step_m, len) in [(5e-6, 251), (2e-6, 626), (20e-6, 64)] {
+            let x = steady(step_m, 2000);
+            let got = w.window_len(&x);
+            assert!(got.abs_diff(len) <= 1, "{step_m}: {got}");
+            let span = (x[x.len() - 1] - x[x.len() - got]).abs();
+            assert!(span >= 1.25e-3 - 1e-12 || got == 625, "{step_m}: {span}");
+        }
+        // Slower than 2 mm/s, capped; at the stroke's start, all there is; a stroke that turns
+        // back counts both ways; a still tip takes the longest window.
+        assert_eq!(w.window_len(&steady(1e-6, 2000)), 625);
+        assert_eq!(w.window_len(&steady(5e-6, 100)), 100);
+        let there_and_back: Vec<f64> = (0..400)
+            .map(|k| {
+                if k < 200 {
+                    k as f64 * 5e-6
+                } else {
+                    (400 - k) as f64 * 5e-6
+                }
+            })
+            .collect();
+        assert!(w.window_len(&there_and_back).abs_diff(251) <= 1);
+        assert_eq!(w.window_len(&[0.0; 1000]), 625);
+        assert_eq!(w.window_len(&[0.0]), 1);
+        // Windows of fixed length are what they were.
+        let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
+        assert_eq!(fixed.window_len(&steady(2e-6, 2000)), 250);
+    }
+
+    #[test]
+    fn a_window_weighs_the_share_of_its_samples_that_are_new() {
+        let w = over_travel();
+        assert_eq!(w.evidence_scale(250), 1.0);
+        // 625 samples (2 mm/s): 100 new of 625 against 100 of 250.
+        assert!((w.evidence_scale(625) - 0.4).abs() < 1e-12);
+        // 63 samples (20 mm/s): every sample is new, against 0.4.
+        assert!((w.evidence_scale(63) - 2.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn windows_over_travel_need_a_mirrored_end_and_keep_their_settings() {
+        let plain = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
+        assert!(plain.over_travel().is_err());
+        let w = over_travel();
+        let training = NakanoWindowing {
+            training_window_samples: Some(500),
+            ..w
+        }
+        .over_travel()
+        .expect("valid")
+        .training();
+        let t = training.travel.expect("over travel");
+        assert!((t.window_m - 2.5e-3).abs() < 1e-15);
+        assert_eq!(t.max_samples, 1250);
+        let text = serde_json::to_string(&w).expect("json");
+        assert_eq!(serde_json::from_str::<NakanoWindowing>(&text).expect("back"), w);
+        let old = serde_json::to_string(&plain).expect("json");
+        assert!(!old.contains("\"travel\""), "{old}");
+        let bad = NakanoWindowing {
+            travel: Some(TravelWindows {
+                window_m: f64::NAN,
+                ..w.travel.expect("over travel")
+            }),
+            ..w
+        };
+        assert!(bad.check().is_err());
+    }
 }

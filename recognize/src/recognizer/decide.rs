@@ -49,6 +49,9 @@ pub struct WindowProbabilities {
     pub decision: Decision,
     /// Probability of each class, in [`RecognizerFile::classes`]' order; they sum to 1.
     pub probabilities: Vec<f64>,
+    /// Its evidence relative to a window of the windowing's nominal length
+    /// ([`NakanoWindowing::evidence_scale`]): 1 but for windows over travel.
+    pub evidence_scale: f64,
 }
 
 impl RecognizerFile {
@@ -144,7 +147,7 @@ impl RecognizerFile {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         let mut out = Vec::new();
-        for (start, v) in window_vectors(capture, windowing, features, cell_scale)? {
+        for (start, len, v) in window_vectors(capture, windowing, features, cell_scale)? {
             let (label, p) = classifier.classify(&scaling.apply(&v), None)?;
             let decision = Decision {
                 window_start: start,
@@ -155,6 +158,7 @@ impl RecognizerFile {
             out.push(WindowProbabilities {
                 decision,
                 probabilities: p,
+                evidence_scale: windowing.evidence_scale(len),
             });
         }
         Ok(Some(out))
@@ -174,7 +178,7 @@ impl RecognizerFile {
         check_rate(capture, windowing.rate_hz)?;
         window_vectors(capture, windowing, features, cell_scale)?
             .into_iter()
-            .map(|(start, v)| {
+            .map(|(start, _, v)| {
                 let (label, confidence) = classify(&v)?;
                 Ok(Decision {
                     window_start: start,
@@ -420,7 +424,7 @@ fn som_windows(
     let mut scratch = [0.0; FEATURES];
     windows(capture, windowing)?
         .into_iter()
-        .map(|(start, features)| {
+        .map(|(start, _, features)| {
             let d = som
                 .decide_into(&features, &mut scratch)
                 .map_err(RecognizeError::som)?;

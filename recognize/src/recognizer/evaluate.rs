@@ -280,7 +280,7 @@ impl RecognizerFile {
         for c in captures {
             let c = c.borrow();
             check_rate(c, windowing.rate_hz)?;
-            data.extend(windows(c, &windowing)?.into_iter().map(|(_, f)| f.to_vec()));
+            data.extend(windows(c, &windowing)?.into_iter().map(|(_, _, f)| f.to_vec()));
         }
         if data.is_empty() {
             return Ok(None);

@@ -121,7 +121,7 @@ pub(crate) struct KeptWindows {
     pub(super) features: FeatureSet,
     pub(super) cell_scale: CellScale,
     /// Start and feature vector of each window.
-    pub(super) vectors: Vec<(usize, Vec<f64>)>,
+    pub(super) vectors: Vec<(usize, usize, Vec<f64>)>,
 }
 
 /// The features a capture kept when its samples were dropped.
@@ -154,7 +154,7 @@ impl KeptFeatures {
         windowing: &NakanoWindowing,
         features: FeatureSet,
         cell_scale: CellScale,
-    ) -> Option<&[(usize, Vec<f64>)]> {
+    ) -> Option<&[(usize, usize, Vec<f64>)]> {
         self.windows
             .iter()
             .find(|k| {

@@ -107,7 +107,9 @@ struct Stroke {
     /// When the stroke slides onto another surface, and which.
     change: Option<(f64, usize)>,
     duration_s: f64,
-    windows: Vec<(f64, Vec<f64>)>,
+    /// Each window's time, its evidence scale ([`NakanoWindowing::evidence_scale`]) and
+    /// its probabilities.
+    windows: Vec<(f64, f64, Vec<f64>)>,
 }
 
 impl Stroke {
@@ -182,7 +184,13 @@ impl RecognizerFile {
                 .window_probabilities(c, Some(&windowing))?
                 .unwrap_or_default()
                 .into_iter()
-                .map(|w| (w.decision.decided_at as f64 / rate_hz, w.probabilities))
+                .map(|w| {
+                    (
+                        w.decision.decided_at as f64 / rate_hz,
+                        w.evidence_scale,
+                        w.probabilities,
+                    )
+                })
                 .collect();
             let change = match &c.change {
                 Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
@@ -240,8 +248,8 @@ impl RecognizerFile {
             state.reset();
             duration_s += s.duration_s;
             let mut named: Vec<(f64, usize)> = Vec::new();
-            for (t, p) in &s.windows {
-                if let Some(d) = state.push(p)?.decided {
+            for (t, scale, p) in &s.windows {
+                if let Some(d) = state.push_scaled(p, *scale)?.decided {
                     named.push((*t, d));
                 }
             }
@@ -313,8 +321,8 @@ fn calibration(
     let (mut brier, mut n) = (0.0, 0usize);
     for s in strokes {
         state.reset();
-        for (t, p) in &s.windows {
-            let step = state.push(p)?;
+        for (t, scale, p) in &s.windows {
+            let step = state.push_scaled(p, *scale)?;
             let truth = s.truth_at(*t);
             brier += state
                 .posterior()

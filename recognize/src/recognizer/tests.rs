@@ -326,11 +326,11 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
             let vectors =
                 window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean).expect("windows");
             assert_eq!(vectors.len(), probabilities.len());
-            for ((_, v), w) in vectors.iter().zip(&probabilities) {
+            for ((_, _, v), w) in vectors.iter().zip(&probabilities) {
                 live.probabilities_into(v, &mut p).expect("classified");
                 assert_eq!(p, w.probabilities);
             }
-            let short = live.probabilities_into(&vectors[0].1[..4], &mut p);
+            let short = live.probabilities_into(&vectors[0].2[..4], &mut p);
             assert!(
                 matches!(
                     short,
@@ -343,7 +343,7 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
                 "{short:?}"
             );
             let mut wrong = vec![0.0; live.classes() + 1];
-            let wrong = live.probabilities_into(&vectors[0].1, &mut wrong);
+            let wrong = live.probabilities_into(&vectors[0].2, &mut wrong);
             assert!(matches!(wrong, Err(RecognizeError::Buffer { .. })), "{wrong:?}");
         }
         // Anytime decisions run from contact: windows before the 5 mm start travel count too.

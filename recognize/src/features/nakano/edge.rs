@@ -79,6 +79,27 @@ impl EdgeWindow {
         height_m: &[f64],
         friction_n: &[f64],
     ) -> Result<[f64; FEATURES], RecognizeError> {
+        self.features_of(window_start, self.len, position_m, height_m, friction_n)
+    }
+
+    /// The longest window it computes, samples.
+    pub fn max_len(&self) -> usize {
+        self.len
+    }
+
+    /// [`EdgeWindow::features`] of a window of `len` samples (at least 2, at most
+    /// [`EdgeWindow::max_len`]) starting at the stroke's sample `window_start`.
+    pub fn features_of(
+        &mut self,
+        window_start: usize,
+        len: usize,
+        position_m: &[f64],
+        height_m: &[f64],
+        friction_n: &[f64],
+    ) -> Result<[f64; FEATURES], RecognizeError> {
+        if len < 2 {
+            return Err(RecognizeError::WindowTooShort { len });
+        }
         let n = position_m.len();
         if height_m.len() != n || friction_n.len() != n {
             return Err(RecognizeError::SignalLengths {
@@ -87,7 +108,7 @@ impl EdgeWindow {
                 friction: friction_n.len(),
             });
         }
-        let (len, margin) = (self.len, self.margin);
+        let margin = self.margin;
         let too_short = || RecognizeError::WindowOutOfRange {
             start: window_start,
             len,
@@ -97,7 +118,7 @@ impl EdgeWindow {
         // The samples from the history's start to the window's end are known; before the
         // stroke's first sample nothing is.
         let needed = window_start + len - self.history_start(window_start);
-        if n < needed || (window_start < margin && n != needed) {
+        if len > self.len || n < needed || (window_start < margin && n != needed) {
             return Err(too_short());
         }
         let known = n - needed..n;

@@ -25,6 +25,7 @@ use super::kept::FeatureNeeds;
 use super::labelled::{check_rate, class_index, class_list};
 use super::{LabelledCapture, RecognizerBody, RecognizerFile, recording_groups, trial_groups};
 use crate::RecognizeError;
+use crate::features::nakano::FrictionOverTravel;
 use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
 use crate::features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, WindowScaling, WindowlessCapture,
@@ -133,6 +134,16 @@ pub struct TrainSettings {
     /// Windowed features: decide each window at its last sample
     /// ([`NakanoWindowing::mirrored_end`]).
     pub mirrored_end: bool,
+    /// Windowed features: filter the friction over travel
+    /// ([`NakanoWindowing::friction_over_travel`], at [`FrictionOverTravel::protocol`]'s
+    /// wavelength), so that it reads the same at any rubbing speed.
+    pub friction_over_travel: bool,
+    /// Windowed features: let the roughness filters follow the speed down to this one, m/s,
+    /// instead of the protocol's 5 mm/s ([`NakanoWindowing::following_speeds_down_to`]).
+    pub slowest_speed_mps: Option<f64>,
+    /// Windowed features: windows over travel ([`NakanoWindowing::over_travel`]); needs
+    /// [`TrainSettings::mirrored_end`].
+    pub windows_over_travel: bool,
     /// SOM: seed of the map's initial vectors and presentation order.
     pub seed: u64,
     /// SOM over windows: how features are scaled before the map (a SOM over whole-scratch
@@ -162,6 +173,9 @@ impl TrainSettings {
             train_window_s: None,
             hop_s: HOP_S,
             mirrored_end: false,
+            friction_over_travel: false,
+            slowest_speed_mps: None,
+            windows_over_travel: false,
             seed: 0,
             normalization: Normalization::LogWithinClass,
             k: PAPER_K,
@@ -196,10 +210,20 @@ impl TrainSettings {
     pub fn windowing_at(&self, rate_hz: f64) -> Result<NakanoWindowing, RecognizeError> {
         let windowing = NakanoWindowing::new(self.window_s, self.hop_s, rate_hz)?
             .with_training_window_s(self.training_window_s())?;
-        Ok(NakanoWindowing {
+        let windowing = match self.slowest_speed_mps {
+            Some(slowest) => windowing.following_speeds_down_to(slowest)?,
+            None => windowing,
+        };
+        let windowing = NakanoWindowing {
             mirrored_end: self.mirrored_end,
+            friction_over_travel: self.friction_over_travel.then(FrictionOverTravel::protocol),
             ..windowing
-        })
+        };
+        if self.windows_over_travel {
+            windowing.over_travel()
+        } else {
+            Ok(windowing)
+        }
     }
 }
 
@@ -379,7 +403,7 @@ pub(crate) fn training_windows(
     for (c, &group) in captures.iter().zip(&groups) {
         check_rate(c, windowing.rate_hz)?;
         let label = class_index(classes, c)?;
-        for (_, v) in window_vectors(c, &training, features, cell_scale)? {
+        for (_, _, v) in window_vectors(c, &training, features, cell_scale)? {
             x.push(v);
             y.push(label);
             g.push(group);

@@ -210,7 +210,7 @@ impl RecognizerFile {
         for c in captures {
             check_rate(c, windowing.rate_hz)?;
             let label = class_index(&classes, c)?;
-            for (_, features) in windows(c, &training)? {
+            for (_, _, features) in windows(c, &training)? {
                 data.push(features.to_vec());
                 labels.push(label);
             }
