@@ -1,0 +1,77 @@
+#!/usr/bin/env python3
+"""README's table of anytime recognition at other rubbing speeds, from one run.
+
+Generates Nakano's surfaces rubbed at 2, 5 and 20 mm/s (`palpus gen --only nakano`,
+`--rub-speed-mps`) and the two-patch strokes at each speed (`--two-patch`), trains two SVMs over
+0.25 s windows decided at their last sample on run 0 at 5 mm/s: one over windows of fixed time,
+one with the friction filtered over travel, the roughness filters following the speed down to
+2 mm/s and windows over travel. Evaluates both at threshold 0.9 on runs 1-2 and on the two-patch
+strokes at each speed. Prints one Markdown row per speed and SVM: named decisions right, the
+calibration error, the mean time to the stable right surface and the slowest surface's mean,
+strokes not ending named right, and on the two-patch strokes the mean and slowest time from the
+seam to the stable new surface and the strokes not followed.
+
+    python3 scripts/speed_table.py [--palpus target/release/palpus] [--speeds 0.002,0.005,0.02]
+"""
+
+import argparse
+import json
+import subprocess
+import tempfile
+from pathlib import Path
+
+OVER_TRAVEL = ["--friction-over-travel", "--slowest-speed-mps", "0.002", "--windows-over-travel"]
+
+
+def palpus(binary, *args):
+    out = subprocess.run([binary, *args], check=True, capture_output=True, text=True)
+    return out.stdout
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--palpus", default="target/release/palpus")
+    parser.add_argument("--speeds", default="0.002,0.005,0.02")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        palpus(args.palpus, "gen", "--out", str(root / "protocol"), "--only", "nakano", "-q")
+        train = [str(p) for p in sorted((root / "protocol" / "nakano").glob("*run0.csv"))]
+        models = {}
+        for name, extra in [("time", []), ("travel", OVER_TRAVEL)]:
+            models[name] = str(root / f"{name}.json")
+            palpus(args.palpus, "recognize", "train", *train, "--method", "svm", "--features", "nakano",
+                   "--window-s", "0.25", "--mirrored-end", *extra, "--out", models[name])
+
+        def row(model, captures):
+            out = palpus(args.palpus, "recognize", "eval", model, *captures, "--sequential", "0.9", "--json")
+            e = json.loads(out)
+            return e["rows"][0], e["calibration"]["ece"]
+
+        def secs(v):
+            return "-" if v is None else f"{v:.2f} s"
+
+        print("| speed | windows | named right | calibration error | stable right (mean) | slowest surface "
+              "| strokes not ending right | two-patch: new surface after the seam (mean) | slowest | not followed |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+        for speed in args.speeds.split(","):
+            out = root / speed
+            palpus(args.palpus, "gen", "--out", str(out), "--rub-speed-mps", speed, "-q")
+            palpus(args.palpus, "gen", "--out", str(out), "--two-patch", "--rub-speed-mps", speed, "-q")
+            test = [str(p) for p in sorted((out / "nakano").glob("*.csv")) if not p.stem.endswith("run0")]
+            two_patch = [str(p) for p in sorted((out / "nakano_two_patch").glob("*.csv"))
+                         if not p.stem.endswith("run0")]
+            for name, label in [("time", "fixed time"), ("travel", "over travel")]:
+                (s, ece), (t, _) = row(models[name], test), row(models[name], two_patch)
+                worst = s["worst_surface"]
+                print(f"| {1e3 * float(speed):g} mm/s | {label} "
+                      f"| {100 * s['correct'] / s['decided']:.1f} % | {100 * ece:.1f} % "
+                      f"| {secs(s['time_to_stable_correct_s'])} "
+                      f"| {secs(worst[1] if worst else None)} ({worst[0] if worst else '-'}) "
+                      f"| {s['not_stable']} of {len(test)} "
+                      f"| {secs(t['change_followed_s'])} | {secs(t['slowest_change_s'])} "
+                      f"| {t['changes_not_followed']} of {t['changes']} |")
+
+
+if __name__ == "__main__":
+    main()
