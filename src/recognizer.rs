@@ -96,6 +96,8 @@ pub fn line(live: &LiveRecognizer) -> RecognizerLine {
         features: FeatureSet::Nakano.name().to_owned(),
         window_s: w.window_s(),
         hop_s,
+        window_m: w.travel.map(|t| t.window_m),
+        friction_cutoff_m: w.friction_over_travel.map(|f| f.cutoff_m),
         decided_after_s: w.lookahead_samples() as f64 / w.rate_hz,
         threshold: params.map(|p| p.threshold()),
         memory_s: params.map(|p| p.memory() as f64 * hop_s),

@@ -292,7 +292,14 @@ fn tick_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usi
             tick_decisions.push((data.len() - 1, decision_in(&s.channels).expect("decided")));
         }
     }
-    let meta = Metadata::new(capture::CaptureKind::Rubbing, "sim-omega7", 1000.0).with("surface", surface);
+    // As a rubbing capture records it: the friction came through the rubbing controller's
+    // observer.
+    let meta = Metadata::new(capture::CaptureKind::Rubbing, "sim-omega7", 1000.0)
+        .with("surface", surface)
+        .with(
+            recognize::nakano::OBSERVER_CUTOFF_KEY,
+            haptics::live_recognizer::RUBBING_OBSERVER_CUTOFF_RADPS,
+        );
     let columns = Protocol::Rubbing
         .columns()
         .iter()

@@ -442,12 +442,12 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         return Ok(());
     }
     println!(
-        "{} on {} captures, anytime decisions over {} windows of {:.2} s every {:.2} s from contact, \
+        "{} on {} captures, anytime decisions over {} {} every {:.2} s from contact, \
          {} (each weighing {:.3}; evidence of the last {} windows):",
         model.method(),
         e.captures,
         e.steps,
-        e.window_s,
+        crate::session::report::windows_in_words(e.window_s, e.window_m, e.friction_cutoff_m),
         e.hop_s,
         crate::session::report::decided_after(e.decided_after_s),
         e.params.weight(),

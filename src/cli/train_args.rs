@@ -253,6 +253,20 @@ impl TrainOptions {
         if let Some(warning) = window_warning(&settings) {
             eprintln!("{warning}");
         }
+        if settings.friction_over_travel
+            && first.capture.has_column(recognize::nakano::FRICTION_COLUMN)
+            && first
+                .capture
+                .metadata()
+                .get(recognize::nakano::OBSERVER_CUTOFF_KEY)
+                .is_none()
+        {
+            eprintln!(
+                "warning: {} has no `{}`: its friction is taken as measured by a force sensor and only low-passed over travel (add the key if an observer estimated it)",
+                first.reference.path.display(),
+                recognize::nakano::OBSERVER_CUTOFF_KEY
+            );
+        }
         settings
     }
 }

@@ -111,6 +111,12 @@ pub struct RecognizerLine {
     /// Its decision window and hop, s.
     pub window_s: f64,
     pub hop_s: f64,
+    /// For windows over travel, the travel a window spans, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_m: Option<f64>,
+    /// For friction filtered over travel, the filter's cut-off wavelength, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_cutoff_m: Option<f64>,
     /// How long after its last sample a window is decided, s (the filters' lookahead, or 0
     /// with a mirrored end).
     pub decided_after_s: f64,
@@ -279,10 +285,10 @@ impl SessionReport {
             };
             let _ = writeln!(
                 t,
-                "  recognizer: {} over {} windows of {} s every {} s, {}; {rule}",
+                "  recognizer: {} over {} {} every {} s, {}; {rule}",
                 r.method,
                 r.features,
-                r.window_s,
+                windows_in_words(r.window_s, r.window_m, r.friction_cutoff_m),
                 r.hop_s,
                 decided_after(r.decided_after_s)
             );
@@ -367,6 +373,19 @@ pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportErr
 }
 
 use std::io::Write;
+
+/// What a window spans, in words: `window_s`, or `window_m` of travel, and the friction's
+/// filter over travel if any.
+pub fn windows_in_words(window_s: f64, window_m: Option<f64>, friction_cutoff_m: Option<f64>) -> String {
+    let windows = match window_m {
+        Some(m) => format!("windows of {:.2} mm of travel", m * 1e3),
+        None => format!("windows of {window_s} s"),
+    };
+    match friction_cutoff_m {
+        Some(m) => format!("{windows} (friction filtered over {:.2} mm of travel)", m * 1e3),
+        None => windows,
+    }
+}
 
 /// When a window is decided, in words.
 pub fn decided_after(seconds: f64) -> String {

@@ -90,6 +90,12 @@ pub struct SequentialEvaluation {
     /// Window length and hop, s.
     pub window_s: f64,
     pub hop_s: f64,
+    /// For windows over travel, the travel a window spans, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_m: Option<f64>,
+    /// For friction filtered over travel, the filter's cut-off wavelength, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_cutoff_m: Option<f64>,
     /// How long after its last sample a window is decided, s: the filters' lookahead, or 0
     /// with a mirrored end.
     pub decided_after_s: f64,
@@ -224,6 +230,8 @@ impl RecognizerFile {
             params: base,
             window_s: windowing.window_s(),
             hop_s: windowing.hop_samples as f64 / windowing.rate_hz,
+            window_m: windowing.travel.map(|t| t.window_m),
+            friction_cutoff_m: windowing.friction_over_travel.map(|f| f.cutoff_m),
             decided_after_s: windowing.lookahead_samples() as f64 / windowing.rate_hz,
             captures: captures.len(),
             steps,
