@@ -467,7 +467,16 @@ impl Svc {
 
     /// Buffers for [`Svc::predict_proba_into`], made once for this machine.
     pub fn scratch(&self) -> SvcScratch {
+        let mut support: Vec<usize> = self
+            .machines
+            .iter()
+            .flat_map(|m| m.support.iter().map(|&(t, _)| t))
+            .collect();
+        support.sort_unstable();
+        support.dedup();
         SvcScratch {
+            kernel: vec![0.0; self.points.len() / self.dim.max(1)],
+            support,
             query: vec![0.0; self.dim],
             decision: vec![0.0; self.machines.len()],
             pairwise: vec![0.0; self.classes * self.classes],
@@ -484,16 +493,24 @@ impl Svc {
             *q = v;
         }
         let dim = self.dim;
+        vectors::check_buffer(
+            "SVC scratch",
+            scratch.kernel.len(),
+            self.points.len() / dim.max(1),
+        )?;
+        // A point supports up to `classes − 1` pairs: its kernel value is computed once and
+        // read by each of them (the same value, so the sums are those of one pass per pair).
+        for &t in &scratch.support {
+            scratch.kernel[t] = self
+                .params
+                .kernel
+                .eval(&self.points[t * dim..(t + 1) * dim], &scratch.query);
+        }
         for (d, m) in scratch.decision.iter_mut().zip(&self.machines) {
             *d = m
                 .support
                 .iter()
-                .map(|&(t, coef)| {
-                    coef * self
-                        .params
-                        .kernel
-                        .eval(&self.points[t * dim..(t + 1) * dim], &scratch.query)
-                })
+                .map(|&(t, coef)| coef * scratch.kernel[t])
                 .sum::<f64>()
                 - m.rho;
         }
@@ -552,6 +569,10 @@ impl Svc {
 /// The buffers one [`Svc`] needs to classify a query without allocating ([`Svc::scratch`]).
 #[derive(Debug, Clone)]
 pub struct SvcScratch {
+    /// Every point that supports a pair, once, and its kernel value against the query (by
+    /// point index).
+    support: Vec<usize>,
+    kernel: Vec<f64>,
     query: Vec<f64>,
     decision: Vec<f64>,
     /// The pairs' probabilities, `classes × classes` row-major.
