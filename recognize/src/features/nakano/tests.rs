@@ -279,53 +279,6 @@ fn a_flat_surface_counts_no_waves() {
 }
 
 #[test]
-fn a_copy_of_an_unfed_stream_has_all_its_storage() {
-    let stream = NakanoStream::new(NakanoConfig::default(), 3000)
-        .expect("valid")
-        .clone();
-    let rings = [
-        (stream.heights.buf.capacity(), stream.heights.capacity),
-        (stream.roughs.buf.capacity(), stream.roughs.capacity),
-        (stream.window_rough.buf.capacity(), stream.window_rough.capacity),
-        (
-            stream.window_position.buf.capacity(),
-            stream.window_position.capacity,
-        ),
-        (
-            stream.window_friction.buf.capacity(),
-            stream.window_friction.capacity,
-        ),
-        (
-            stream.window_crossing.buf.capacity(),
-            stream.window_crossing.capacity,
-        ),
-        (stream.delayed.buf.capacity(), stream.delayed.capacity),
-    ];
-    for (reserved, capacity) in rings {
-        assert!(capacity > 0);
-        assert!(reserved >= capacity, "{reserved} < {capacity}");
-    }
-}
-
-/// The signals known at sample `e` (exclusive) continued by definition: past sample `e − 1`
-/// as `g(e − 1 + k) = 2·v(e − 1) − g(e − 1 − k)`, before sample 0 as `g(−k) = 2·v(0) − g(k)`
-/// (plain mirrors for friction), from `before` samples before the start to `pad` after the end.
-fn extended_by_hand(v: &[f64], e: usize, pad: usize, odd: bool, before: usize) -> Vec<f64> {
-    fn g(v: &[f64], e: i64, odd: bool, i: i64) -> f64 {
-        let mirror = |end: f64, inner: f64| if odd { 2.0 * end - inner } else { inner };
-        if i >= e {
-            mirror(v[e as usize - 1], g(v, e, odd, 2 * (e - 1) - i))
-        } else if i < 0 {
-            mirror(v[0], g(v, e, odd, -i))
-        } else {
-            v[i as usize]
-        }
-    }
-    let (e_i, before_i) = (e as i64, before as i64);
-    (-before_i..e_i + pad as i64).map(|i| g(v, e_i, odd, i)).collect()
-}
-
-#[test]
 fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
     let (x, z, f) = signals(3000);
     let config = NakanoConfig::default();
@@ -402,4 +355,22 @@ fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
         EdgeWindow::new(config, 1),
         Err(RecognizeError::WindowTooShort { len: 1 })
     ));
+}
+
+/// The signals known at sample `e` (exclusive) continued by definition: past sample `e − 1`
+/// as `g(e − 1 + k) = 2·v(e − 1) − g(e − 1 − k)`, before sample 0 as `g(−k) = 2·v(0) − g(k)`
+/// (plain mirrors for friction), from `before` samples before the start to `pad` after the end.
+fn extended_by_hand(v: &[f64], e: usize, pad: usize, odd: bool, before: usize) -> Vec<f64> {
+    fn g(v: &[f64], e: i64, odd: bool, i: i64) -> f64 {
+        let mirror = |end: f64, inner: f64| if odd { 2.0 * end - inner } else { inner };
+        if i >= e {
+            mirror(v[e as usize - 1], g(v, e, odd, 2 * (e - 1) - i))
+        } else if i < 0 {
+            mirror(v[0], g(v, e, odd, -i))
+        } else {
+            v[i as usize]
+        }
+    }
+    let (e_i, before_i) = (e as i64, before as i64);
+    (-before_i..e_i + pad as i64).map(|i| g(v, e_i, odd, i)).collect()
 }
