@@ -15,21 +15,15 @@ the mean and slowest time from the seam to the stable new surface, and strokes n
 With `--mirrored-end` the SVM is trained to decide each window at its last sample.
 """
 
-import argparse
 import json
-import subprocess
 import tempfile
 from pathlib import Path
 
-
-def palpus(binary, *args):
-    out = subprocess.run([binary, *args], check=True, capture_output=True, text=True)
-    return out.stdout
+from palpus_cli import palpus, parser as cli_parser
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--palpus", default="target/release/palpus")
+    parser = cli_parser(__doc__)
     parser.add_argument("--odds", default="0,9,99,999")
     parser.add_argument("--mirrored-end", action="store_true")
     args = parser.parse_args()

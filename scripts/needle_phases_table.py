@@ -11,12 +11,12 @@ peak; and how many drops the detector took for punctures where the tissue had no
     python3 scripts/needle_phases_table.py [--palpus target/release/palpus]
 """
 
-import argparse
 import json
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from palpus_cli import palpus, parser as cli_parser
 
 
 def truth_ruptures(capture):
@@ -30,14 +30,8 @@ def truth_ruptures(capture):
     return out
 
 
-def palpus(binary, *args):
-    out = subprocess.run([binary, *args], check=True, capture_output=True, text=True)
-    return out.stdout
-
-
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--palpus", default="target/release/palpus")
+    parser = cli_parser(__doc__)
     args = parser.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="needle-phases-"))
 

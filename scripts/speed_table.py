@@ -14,23 +14,17 @@ seam to the stable new surface and the strokes not followed.
     python3 scripts/speed_table.py [--palpus target/release/palpus] [--speeds 0.002,0.005,0.02]
 """
 
-import argparse
 import json
-import subprocess
 import tempfile
 from pathlib import Path
+
+from palpus_cli import palpus, parser as cli_parser
 
 OVER_TRAVEL = ["--friction-over-travel", "--slowest-speed-mps", "0.002", "--windows-over-travel"]
 
 
-def palpus(binary, *args):
-    out = subprocess.run([binary, *args], check=True, capture_output=True, text=True)
-    return out.stdout
-
-
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--palpus", default="target/release/palpus")
+    parser = cli_parser(__doc__)
     parser.add_argument("--speeds", default="0.002,0.005,0.02")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:

@@ -11,7 +11,7 @@
 
 mod common;
 
-use common::{fails, json, nakano_captures, succeeds};
+use common::{fails, json, nakano_captures, succeeds, train_nakano_svm};
 
 #[test]
 fn anytime_decisions_are_right_sooner_than_a_fixed_window_and_calibrated() {
@@ -28,23 +28,7 @@ fn anytime_decisions_are_right_sooner_than_a_fixed_window_and_calibrated() {
     };
     let (train, test) = (paths("run0"), [paths("run1"), paths("run2")].concat());
     assert_eq!((train.len(), test.len()), (7, 14));
-    let model = |name: &str, extra: &[&str]| -> String {
-        let out = dir.path().join(name).to_string_lossy().into_owned();
-        let mut args = vec![
-            "recognize",
-            "train",
-            "--method",
-            "svm",
-            "--features",
-            "nakano",
-            "--out",
-            &out,
-        ];
-        args.extend_from_slice(extra);
-        args.extend(train.iter().map(String::as_str));
-        succeeds(&args);
-        out
-    };
+    let model = |name: &str, extra: &[&str]| train_nakano_svm(dir.path(), name, &train, extra);
     let fixed = model("fixed.json", &[]);
     let short = model("short.json", &["--window-s", "0.25"]);
 

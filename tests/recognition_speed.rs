@@ -11,7 +11,7 @@
 
 mod common;
 
-use common::{json, nakano_captures, succeeds};
+use common::{json, nakano_captures, succeeds, train_nakano_svm};
 
 #[test]
 fn windows_over_travel_recognize_at_two_five_and_twenty_mm_per_s() {
@@ -40,25 +40,9 @@ fn windows_over_travel_recognize_at_two_five_and_twenty_mm_per_s() {
     };
     let train = runs(&protocol, &["run0"]);
     assert_eq!(train.len(), 7);
-    let model = |name: &str, extra: &[&str]| -> String {
-        let out = dir.path().join(name).to_string_lossy().into_owned();
-        let mut args = vec![
-            "recognize",
-            "train",
-            "--method",
-            "svm",
-            "--features",
-            "nakano",
-            "--window-s",
-            "0.25",
-            "--mirrored-end",
-            "--out",
-            &out,
-        ];
-        args.extend_from_slice(extra);
-        args.extend(train.iter().map(String::as_str));
-        succeeds(&args);
-        out
+    let model = |name: &str, extra: &[&str]| {
+        let options = [&["--window-s", "0.25", "--mirrored-end"], extra].concat();
+        train_nakano_svm(dir.path(), name, &train, &options)
     };
     let over_time = model("time.json", &[]);
     let over_travel = model(

@@ -59,6 +59,26 @@ pub fn nakano_captures(dir: &Path) -> Vec<PathBuf> {
     paths
 }
 
+/// Trains an SVM over Nakano's windows on `train` with `extra` options into `dir/name`
+/// (`palpus recognize train … --method svm --features nakano`), and returns the model's path.
+pub fn train_nakano_svm(dir: &Path, name: &str, train: &[String], extra: &[&str]) -> String {
+    let out = dir.join(name).to_string_lossy().into_owned();
+    let mut args = vec![
+        "recognize",
+        "train",
+        "--method",
+        "svm",
+        "--features",
+        "nakano",
+        "--out",
+        &out,
+    ];
+    args.extend_from_slice(extra);
+    args.extend(train.iter().map(String::as_str));
+    succeeds(&args);
+    out
+}
+
 /// One trial of the logs that `palpus gen --only multistream` writes under `dir`: its surface
 /// (`mat07`), trial number (from 1) and its four files, in the order force, position,
 /// velocity, vibration.
