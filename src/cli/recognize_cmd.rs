@@ -441,9 +441,15 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         println!("{}", serde_json::to_string_pretty(&e)?);
         return Ok(());
     }
+    // Over travel a window's weight is scaled by the share of its samples that are new.
+    let scaled = if e.window_m.is_some() {
+        ", scaled by the share of its samples that are new"
+    } else {
+        ""
+    };
     println!(
         "{} on {} captures, anytime decisions over {} {} every {:.2} s from contact, \
-         {} (each weighing {:.3}; evidence of the last {} windows):",
+         {} (each weighing {:.3}{scaled}; evidence of the last {} windows):",
         model.method(),
         e.captures,
         e.steps,
