@@ -391,17 +391,6 @@ impl LiveRecognizer {
     pub fn windowing(&self) -> &NakanoWindowing {
         &self.windowing
     }
-
-    /// The same recognizer reading friction reported through an observer of cut-off
-    /// `cutoff_radps` (`None`: a force sensor) instead of the rubbing controller's
-    /// ([`RUBBING_OBSERVER_CUTOFF_RADPS`]); it matters only to a model whose windows read
-    /// friction over travel ([`NakanoWindowing::friction_over_travel`]).
-    pub fn with_observer_cutoff(mut self, cutoff_radps: Option<f64>) -> Result<Self, HapticsError> {
-        if let Some(travel) = self.windowing.friction_over_travel {
-            self.friction = Some(travel.filter(cutoff_radps, self.windowing.rate_hz)?);
-        }
-        Ok(self)
-    }
 }
 
 /// Channels [`Recognizing`] writes into every sample, after the wrapped controller's eight.

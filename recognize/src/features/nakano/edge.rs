@@ -82,13 +82,8 @@ impl EdgeWindow {
         self.features_of(window_start, self.len, position_m, height_m, friction_n)
     }
 
-    /// The longest window it computes, samples.
-    pub fn max_len(&self) -> usize {
-        self.len
-    }
-
     /// [`EdgeWindow::features`] of a window of `len` samples (at least 2, at most
-    /// [`EdgeWindow::max_len`]) starting at the stroke's sample `window_start`.
+    /// the length it was made for) starting at the stroke's sample `window_start`.
     pub fn features_of(
         &mut self,
         window_start: usize,
