@@ -6,7 +6,7 @@ const MAX_DIMPLES: u32 = 4u;
 struct Globals {
     view_proj: mat4x4<f32>,
     eye_m: vec4<f32>,
-    // xyz: direction towards the key light; w: ambient strength.
+    // xyz: unit direction towards the key light; w: ambient strength.
     key_dir: vec4<f32>,
     // xyz centre (m), w radius (m).
     dimple_centre: array<vec4<f32>, 4>,
@@ -49,24 +49,26 @@ fn vs_main(v: VertexIn) -> VertexOut {
     let rest = (object.model * vec4<f32>(v.position, 1.0)).xyz;
     var world = rest;
     var n = normalize((object.normal_model * vec4<f32>(v.normal, 0.0)).xyz);
-    if object.flags.x > 0.5 {
-        let count = min(globals.counts.x, MAX_DIMPLES);
-        var tilt = vec3<f32>(0.0);
-        for (var i = 0u; i < count; i = i + 1u) {
-            let c = globals.dimple_centre[i];
-            let a = globals.dimple_normal[i];
-            let radius = max(c.w, 1e-6);
-            let rel = rest - c.xyz;
-            let along = dot(rel, a.xyz);
-            let perp = rel - along * a.xyz;
-            let f = a.w * exp(-dot(perp, perp) / (radius * radius)) * exp(-max(-along, 0.0) / (2.0 * radius));
-            world = world - a.xyz * f;
-            // Gradient of the displacement: walls of the dimple lean towards its centre. Only
-            // faces turned towards the indenter tilt; side walls keep their normals.
-            tilt = tilt - 2.0 * f * perp / (radius * radius) * max(dot(n, a.xyz), 0.0);
-        }
-        n = normalize(n + tilt);
+    // Every dimple slot is evaluated and the unused or undeformable ones weigh 0: a branch or a
+    // loop bound on a uniform makes lavapipe compile a new shader whenever that uniform changes,
+    // which is every draw.
+    let deformable = select(0.0, 1.0, object.flags.x > 0.5);
+    var tilt = vec3<f32>(0.0);
+    for (var i = 0u; i < MAX_DIMPLES; i = i + 1u) {
+        let c = globals.dimple_centre[i];
+        let a = globals.dimple_normal[i];
+        let weight = select(0.0, deformable, i < globals.counts.x);
+        let radius = max(c.w, 1e-6);
+        let rel = rest - c.xyz;
+        let along = dot(rel, a.xyz);
+        let perp = rel - along * a.xyz;
+        let f = weight * a.w * exp(-dot(perp, perp) / (radius * radius)) * exp(-max(-along, 0.0) / (2.0 * radius));
+        world = world - a.xyz * f;
+        // Gradient of the displacement: walls of the dimple lean towards its centre. Only
+        // faces turned towards the indenter tilt; side walls keep their normals.
+        tilt = tilt - 2.0 * f * perp / (radius * radius) * max(dot(n, a.xyz), 0.0);
     }
+    n = select(n, normalize(n + tilt), deformable > 0.0);
     var out: VertexOut;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world_m = world;
@@ -119,20 +121,19 @@ fn shade(in: VertexOut, front: bool) -> vec4<f32> {
     if !front {
         n = -n;
     }
-    var base = in.color.rgb;
-    let roughness = object.surface.x;
-    if roughness > 0.0 {
-        let p = in.rest_m / max(object.surface.y, 1e-5);
-        let noise = noise3_grad(p);
-        let h = noise.x;
-        let grad = noise.yzw;
-        // Bump: remove the normal's own component so only the tangential slope tilts it.
-        let slope = grad - dot(grad, n) * n;
-        n = normalize(n - roughness * 0.8 * slope);
-        base = base * (1.0 - roughness * 0.35 * (h - 0.5) * 2.0);
-    }
+    // Smooth surfaces (roughness 0) evaluate the detail too and weigh it 0, for the reason
+    // given in the vertex shader.
+    let roughness = max(object.surface.x, 0.0);
+    let p = in.rest_m / max(object.surface.y, 1e-5);
+    let noise = noise3_grad(p);
+    let h = noise.x;
+    let grad = noise.yzw;
+    // Bump: remove the normal's own component so only the tangential slope tilts it.
+    let slope = grad - dot(grad, n) * n;
+    n = normalize(n - roughness * 0.8 * slope);
+    let base = in.color.rgb * (1.0 - roughness * 0.35 * (h - 0.5) * 2.0);
     let view = normalize(globals.eye_m.xyz - in.world_m);
-    let key = normalize(globals.key_dir.xyz);
+    let key = globals.key_dir.xyz;
     let fill = normalize(vec3<f32>(-0.5, 0.4, -0.6));
     let diffuse = max(dot(n, key), 0.0) * 0.85 + max(dot(n, fill), 0.0) * 0.25;
     // Hemisphere ambient: brighter from above.
