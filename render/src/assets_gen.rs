@@ -215,6 +215,7 @@ impl Builder {
             normals: self.normals.iter().map(cast).collect(),
             colors: self.colors,
             indices: self.indices,
+            interior_from: None,
         }
     }
 }
@@ -572,7 +573,8 @@ fn vessel_mesh() -> MeshData {
             b.tri_facing(centre, ring[s], ring[(s + 1) % segments], normal);
         }
     }
-    b.finish("vessel")
+    // Inside the liver: seen only once the tissue turns see-through.
+    b.finish("vessel").with_interior(|_| true)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -599,7 +601,10 @@ fn tissue_block_meshes() -> Vec<MeshData> {
             .collect();
         heightfield_prism(name, xs, xs, &heights, &colors, bottom, scale_rgb(color, 0.9))
     };
-    vec![
+    // Where two layers meet the faces are interior: seen only through see-through tissue.
+    let interfaces = [skin_bottom as f32, fat_bottom as f32];
+    let on_interface = |c: [[f32; 3]; 3]| interfaces.iter().any(|&y| c.iter().all(|p| p[1] == y));
+    [
         layer("skin", &fine, 0.0, skin_bottom, srgb(0.88, 0.66, 0.58), 21),
         layer(
             "fat",
@@ -618,6 +623,9 @@ fn tissue_block_meshes() -> Vec<MeshData> {
             23,
         ),
     ]
+    .into_iter()
+    .map(|m| m.with_interior(on_interface))
+    .collect()
 }
 
 // ---------------------------------------------------------------------------------------------

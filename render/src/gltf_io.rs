@@ -216,6 +216,7 @@ fn read_mesh(
         normals: Vec::new(),
         colors: Vec::new(),
         indices: Vec::new(),
+        interior_from: None,
     };
     let bad = |attribute| RenderError::BadAccessor {
         path: path.to_path_buf(),
@@ -293,24 +294,54 @@ fn read_mesh(
                 vertex_count: n,
             });
         }
-        parts.push((positions, normals, colors, indices));
+        // Primitives that name the same vertex accessors (normals included) share vertices.
+        let shared = normals.is_some().then(|| {
+            [
+                gltf::Semantic::Positions,
+                gltf::Semantic::Normals,
+                gltf::Semantic::Colors(0),
+            ]
+            .map(|s| primitive.get(&s).map(|a| a.index()))
+        });
+        let interior = primitive
+            .extras()
+            .as_ref()
+            .and_then(|raw| serde_json::from_str::<Value>(raw.get()).ok())
+            .is_some_and(|extras| extras[INTERIOR_EXTRA] == Value::Bool(true));
+        parts.push((shared, positions, normals, colors, indices, interior));
     }
-    for (positions, normals, colors, indices) in parts {
-        let offset = u32::try_from(data.positions.len()).map_err(|_| RenderError::TooLarge {
-            path: path.to_path_buf(),
-        })?;
-        // Per primitive, so that computed smoothing never blends across primitive borders.
-        let normals = normals.unwrap_or_else(|| compute_normals(&positions, &indices));
-        data.positions.extend_from_slice(&positions);
-        data.normals.extend_from_slice(&normals);
-        data.colors.extend_from_slice(&colors);
+    let mut offsets: Vec<([Option<usize>; 3], u32)> = Vec::new();
+    let (mut outside, mut inside) = (Vec::new(), Vec::new());
+    for (shared, positions, normals, colors, indices, interior) in parts {
+        let known = shared.and_then(|key| offsets.iter().find(|(k, _)| *k == key).map(|(_, o)| *o));
+        let offset = match known {
+            Some(offset) => offset,
+            None => {
+                let offset = u32::try_from(data.positions.len()).map_err(|_| RenderError::TooLarge {
+                    path: path.to_path_buf(),
+                })?;
+                // Per primitive, so that computed smoothing never blends across primitive borders.
+                let normals = normals.unwrap_or_else(|| compute_normals(&positions, &indices));
+                data.positions.extend_from_slice(&positions);
+                data.normals.extend_from_slice(&normals);
+                data.colors.extend_from_slice(&colors);
+                if let Some(key) = shared {
+                    offsets.push((key, offset));
+                }
+                offset
+            }
+        };
+        let target = if interior { &mut inside } else { &mut outside };
         for i in indices {
             let shifted = i.checked_add(offset).ok_or_else(|| RenderError::TooLarge {
                 path: path.to_path_buf(),
             })?;
-            data.indices.push(shifted);
+            target.push(shifted);
         }
     }
+    data.interior_from = (!inside.is_empty()).then_some(outside.len());
+    data.indices = outside;
+    data.indices.extend(inside);
     Ok(data)
 }
 
@@ -344,6 +375,8 @@ const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const COMPONENT_FLOAT: u32 = 5126;
 const COMPONENT_UNSIGNED_INT: u32 = 5125;
 const MODE_TRIANGLES: u32 = 4;
+/// The key in a primitive's `extras` that marks its triangles interior.
+const INTERIOR_EXTRA: &str = "interior";
 
 /// Builds the whole `.glb` in memory.
 ///
@@ -395,18 +428,31 @@ fn encode_glb(path: &Path, meshes: &[MeshData]) -> Result<Vec<u8>, RenderError> 
         accessors.push(json!({
             "bufferView": col_view, "componentType": COMPONENT_FLOAT, "count": n, "type": "VEC4",
         }));
-        accessors.push(json!({
-            "bufferView": idx_view, "componentType": COMPONENT_UNSIGNED_INT,
-            "count": mesh.indices.len(), "type": "SCALAR",
-        }));
-        json_meshes.push(json!({
-            "name": mesh.name,
-            "primitives": [{
+        // Interior triangles (see `MeshData::interior_from`) go in a second primitive over the
+        // same vertices, marked in its extras; other viewers simply draw it.
+        let outside = mesh.exterior_indices().len();
+        let mut primitives = Vec::new();
+        for (start, count, interior) in [(0, outside, false), (outside, mesh.indices.len() - outside, true)] {
+            if count == 0 {
+                continue;
+            }
+            let mut accessor = json!({
+                "bufferView": idx_view, "componentType": COMPONENT_UNSIGNED_INT,
+                "count": count, "type": "SCALAR",
+            });
+            let mut primitive = json!({
                 "attributes": { "POSITION": base, "NORMAL": base + 1, "COLOR_0": base + 2 },
-                "indices": base + 3,
+                "indices": accessors.len(),
                 "mode": MODE_TRIANGLES,
-            }],
-        }));
+            });
+            if interior {
+                accessor["byteOffset"] = json!(4 * start);
+                primitive["extras"] = json!({ INTERIOR_EXTRA: true });
+            }
+            accessors.push(accessor);
+            primitives.push(primitive);
+        }
+        json_meshes.push(json!({ "name": mesh.name, "primitives": primitives }));
         nodes.push(json!({ "name": mesh.name, "mesh": json_meshes.len() - 1 }));
     }
 

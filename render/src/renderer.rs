@@ -73,7 +73,11 @@ struct GpuMesh {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
+    /// The first indices, those of the triangles outside ([`MeshData::interior_from`]).
+    exterior_count: u32,
     centre_m: Vec3,
+    /// Corners of the model-space bounding box, m.
+    bounds_m: [Vec3; 2],
 }
 
 struct Attachments {
@@ -655,23 +659,27 @@ impl Renderer {
             .collect();
         // Out-of-range indices would be a validation error on the GPU; such triangles are dropped.
         let count = vertices.len() as u32;
-        let indices: Vec<u32> = mesh
-            .indices
-            .chunks_exact(3)
-            .filter(|t| t.iter().all(|&i| i < count))
-            .flatten()
-            .copied()
-            .collect();
+        let valid = |indices: &[u32]| -> Vec<u32> {
+            indices
+                .chunks_exact(3)
+                .filter(|t| t.iter().all(|&i| i < count))
+                .flatten()
+                .copied()
+                .collect()
+        };
+        let mut indices = valid(mesh.exterior_indices());
+        let exterior_count = indices.len() as u32;
+        indices.extend(valid(mesh.interior_indices()));
         let (lo, hi) = mesh
             .positions
             .iter()
             .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
                 (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p)))
             });
-        let centre_m = if mesh.positions.is_empty() {
-            Vec3::ZERO
+        let (centre_m, bounds_m) = if mesh.positions.is_empty() {
+            (Vec3::ZERO, [Vec3::ZERO; 2])
         } else {
-            (lo + hi) * 0.5
+            ((lo + hi) * 0.5, [lo, hi])
         };
         let device = &self.gpu.device;
         // Zero-sized buffers are not allowed; an empty mesh still gets a tiny one and draws nothing.
@@ -698,7 +706,9 @@ impl Renderer {
                 usage: wgpu::BufferUsages::INDEX,
             }),
             index_count: indices.len() as u32,
+            exterior_count,
             centre_m,
+            bounds_m,
         };
         self.meshes.insert(key, gpu_mesh);
         key
@@ -727,6 +737,8 @@ impl Renderer {
             translucent: bool,
             tool: bool,
             distance_m: f32,
+            /// World-space bounding box, m.
+            bounds_m: [Vec3; 2],
         }
         let punctured = frame.tissue.punctured;
         let see_through = frame.tissue.punctured_opacity.clamp(0.0, 1.0);
@@ -762,13 +774,28 @@ impl Renderer {
                 ],
                 flags: [if object.deformable { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
             });
-            let centre = self.meshes.get(&key).map_or(Vec3::ZERO, |g| g.centre_m);
+            let (centre, [lo, hi]) = self
+                .meshes
+                .get(&key)
+                .map_or((Vec3::ZERO, [Vec3::ZERO; 2]), |g| (g.centre_m, g.bounds_m));
             let distance_m = model.transform_point3(centre).distance(frame.camera.eye_m);
+            let corners = (0..8).map(|k| {
+                let pick = |bit: u32, l: f32, h: f32| if k & bit == 0 { l } else { h };
+                model.transform_point3(Vec3::new(
+                    pick(1, lo.x, hi.x),
+                    pick(2, lo.y, hi.y),
+                    pick(4, lo.z, hi.z),
+                ))
+            });
+            let bounds_m = corners.fold([Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)], |[l, h], c| {
+                [l.min(c), h.max(c)]
+            });
             items.push(Item {
                 mesh: key,
                 translucent: color[3] < 0.999,
                 tool,
                 distance_m,
+                bounds_m,
             });
         }
         // With the overlay on, the scene is framed in the part of the image the panel leaves free.
@@ -787,10 +814,22 @@ impl Renderer {
                 .filter(|&i| !items[i].translucent)
                 .map(|i| (i, Pass::Opaque))
                 .collect();
-            let mut clear: Vec<usize> = (0..items.len()).filter(|&i| items[i].translucent).collect();
-            // Back to front, so nearer see-through layers blend over farther ones.
-            clear.sort_by(|&a, &b| items[b].distance_m.total_cmp(&items[a].distance_m));
-            order.extend(clear.into_iter().map(|i| (i, Pass::Translucent)));
+            let clear: Vec<usize> = (0..items.len()).filter(|&i| items[i].translucent).collect();
+            // See-through objects write depth (the x-ray pass needs it), so one inside another (a
+            // vessel in its organ) goes first, or the organ's nearer surface would hide it.
+            // Otherwise back to front, so nearer see-through layers blend over farther ones.
+            let inside = |a: usize, b: usize| {
+                let ([la, ha], [lb, hb]) = (items[a].bounds_m, items[b].bounds_m);
+                a != b && lb.cmple(la).all() && ha.cmple(hb).all()
+            };
+            let nesting = |a: usize| clear.iter().filter(|&&b| inside(a, b)).count();
+            let mut clear: Vec<(usize, usize)> = clear.iter().map(|&i| (nesting(i), i)).collect();
+            clear.sort_by(|&(na, a), &(nb, b)| {
+                nb.cmp(&na)
+                    .then(items[b].distance_m.total_cmp(&items[a].distance_m))
+            });
+            let clear = clear.into_iter().map(|(_, i)| i);
+            order.extend(clear.map(|i| (i, Pass::Translucent)));
             if punctured {
                 order.extend(
                     (0..items.len())
@@ -800,6 +839,8 @@ impl Renderer {
             }
             order
         };
+        // Interior faces can only be seen through something see-through.
+        let see_through_anything = items.iter().any(|i| i.translucent);
 
         let device = &self.gpu.device;
         let queue = &self.gpu.queue;
@@ -857,7 +898,12 @@ impl Renderer {
                 let Some(mesh) = self.meshes.get(&item.mesh) else {
                     continue;
                 };
-                if mesh.index_count == 0 {
+                let index_count = if see_through_anything {
+                    mesh.index_count
+                } else {
+                    mesh.exterior_count
+                };
+                if index_count == 0 {
                     continue;
                 }
                 pass.set_pipeline(match kind {
@@ -868,7 +914,7 @@ impl Renderer {
                 pass.set_bind_group(1, &self.objects_group, &[(i as u64 * OBJECT_SLOT_BYTES) as u32]);
                 pass.set_vertex_buffer(0, mesh.vertices.slice(..));
                 pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+                pass.draw_indexed(0..index_count, 0, 0..1);
             }
         }
         queue.submit([encoder.finish()]);

@@ -18,6 +18,7 @@ impl Builder {
                 normals: Vec::new(),
                 colors: Vec::new(),
                 indices: Vec::new(),
+                interior_from: None,
             },
         }
     }
@@ -218,15 +219,18 @@ const LAYERS: [(&str, f32, f32, u32, [f32; 4]); 3] = [
     ("muscle", -0.030, -0.010, 32, [0.55, 0.12, 0.10, 1.0]),
 ];
 
-/// The block's layers, each with its top cut at `cuts(layer index, uniform cells)`.
+/// The block's layers, each with its top cut at `cuts(layer index, uniform cells)`. The faces
+/// where two layers meet are interior: seen only through see-through tissue.
 fn tissue_layers(cuts: impl Fn(usize, u32) -> Vec<f32>) -> Vec<MeshData> {
     let h = BLOCK_HALF_M;
+    let interfaces: Vec<f32> = LAYERS[1..].iter().map(|l| l.2).collect();
     LAYERS
         .iter()
         .enumerate()
         .map(|(layer, &(name, bottom, top, cells, color))| {
             let cuts = cuts(layer, cells);
             graded_box(name, [-h, bottom, -h], [h, top, h], &cuts, &cuts, color)
+                .with_interior(|c| interfaces.iter().any(|&y| c.iter().all(|p| p[1] == y)))
         })
         .collect()
 }

@@ -171,6 +171,7 @@ fn write_then_load_is_bit_exact() {
             [0.0, 0.5, 0.25, 0.125],
         ],
         indices: vec![0, 1, 2, 2, 1, 0],
+        interior_from: None,
     };
     let mut cases: Vec<Vec<MeshData>> = default_assets().into_iter().map(|(_, m)| m).collect();
     cases.push(vec![odd]);
@@ -655,6 +656,7 @@ fn writer_rejects_inconsistent_meshes() {
         normals: vec![[0.0, 1.0, 0.0]; 3],
         colors: vec![[1.0; 4]; 3],
         indices: vec![0, 2, 1],
+        interior_from: None,
     };
     let mut out_of_range = good.clone();
     out_of_range.indices[2] = 3;

@@ -116,6 +116,7 @@ fn empty_and_broken_meshes_do_not_fail() {
         normals: vec![],
         colors: vec![],
         indices: vec![],
+        interior_from: None,
     };
     let broken = render::MeshData {
         name: "broken".into(),
