@@ -152,6 +152,36 @@ impl BenchTable {
     }
 }
 
+impl BenchTable {
+    /// The same table in Markdown, as README shows it.
+    pub fn to_markdown(&self) -> String {
+        let mut s = String::from(
+            "| size | MSAA | overlay | mesh | scale | PSNR dB | fps | frame ms | draw ms | resolve ms | overlay CPU ms | readback ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        );
+        let dash_if_zero = |v: f64| if v > 0.0 { format!("{v:.2}") } else { "—".into() };
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "| {}×{} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {} | {} | {:.2} |",
+                r.width,
+                r.height,
+                r.msaa,
+                r.overlay.label(),
+                r.mesh.label(),
+                r.scale,
+                r.psnr_db.map_or("—".to_string(), |p| format!("{p:.1}")),
+                r.fps,
+                r.frame_ms,
+                r.draw_ms,
+                dash_if_zero(r.resolve_ms),
+                dash_if_zero(r.overlay_cpu_ms),
+                r.readback_ms
+            );
+        }
+        s
+    }
+}
+
 /// The benchmark scene: the tissue block (three layers) with the needle pressing.
 pub fn bench_frame(overlay: bool) -> Frame {
     frame_with(TissueMesh::Graded, overlay)
@@ -316,6 +346,13 @@ mod tests {
                 },
             ],
         };
+        let markdown = table.to_markdown();
+        assert_eq!(markdown.lines().count(), 5);
+        assert!(
+            markdown
+                .contains("| 640×480 | 4 | on | graded | 1 | — | 50.0 | 20.0 | 12.0 | 3.00 | 1.00 | 4.00 |")
+        );
+        assert!(markdown.contains("| live | graded | 0.5 | 31.2 |"));
         let text = table.to_text();
         assert_eq!(text.lines().count(), 5);
         assert!(

@@ -37,6 +37,9 @@ struct RenderArgs {
     /// Frames timed per configuration.
     #[arg(long, default_value_t = 30)]
     frames: u32,
+    /// Print the table as Markdown (README's table).
+    #[arg(long)]
+    markdown: bool,
 }
 
 /// Run the haptic loop at 1 kHz and report its timing.
@@ -106,7 +109,12 @@ pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
             );
             let table = render::bench::run_reporting(&options, |done, _| bar.set_position(done as u64));
             bar.finish_and_clear();
-            print!("{}", table?.to_text());
+            let table = table?;
+            if args.markdown {
+                print!("{}", table.to_markdown());
+            } else {
+                print!("{}", table.to_text());
+            }
             Ok(())
         }
     }
