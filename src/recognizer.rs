@@ -1,12 +1,13 @@
 //! The scene's surface recognizer: a recognizer file (or one trained from a folder of rubbing
-//! captures), run by the haptic thread inside each rubbing tick ([`Recognizing`]); its
-//! decisions are read back from the samples' recognizer channels.
+//! captures), run over each rubbing segment's samples on the recorder thread, off the haptic
+//! thread ([`SampleRecognizer`]); its decisions are read back from the samples' recognizer
+//! channels.
 
 use std::path::PathBuf;
 
 use anyhow::Context;
 #[cfg(doc)]
-use haptics::live_recognizer::Recognizing;
+use haptics::live_recognizer::SampleRecognizer;
 use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
 use haptics::rt::HapticSample;
 #[cfg(doc)]

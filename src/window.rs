@@ -227,8 +227,8 @@ impl WindowApp for Session {
         let segment = self.segments.get(self.current);
         let kind = segment.map(|s| &s.kind);
         let object = segment.map(|s| s.object.as_str());
-        // The haptic thread decides inside its tick; each sample where its decision count steps
-        // carries a new decision.
+        // The recorder thread decides on the samples before handing them on; each sample where
+        // the decision count steps carries a new decision.
         let surface = match (&self.recognizer, kind) {
             (Some(r), Some(SegmentKind::Surface { surface })) => Some((r, surface)),
             _ => None,

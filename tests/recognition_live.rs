@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use haptics::HapticsError;
 use haptics::live_recognizer::{
-    ChannelDecision, LiveDecision, LiveRecognizer, Recognizing, channel, decision_in,
+    ChannelDecision, LiveDecision, LiveRecognizer, SampleRecognizer, channel, decision_in,
 };
 use haptics::sim::protocols::nakano::{RUNS, rubbing_run, rubbing_run_at};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
@@ -231,10 +231,11 @@ fn a_recognizer_runs_live_only_at_its_own_rate_and_over_rubbing_windows() {
 }
 
 /// The simulated Omega.7 rubbing `surface` on a track none of the committed recognizers'
-/// training captures used, `model` inside the haptic tick ([`Recognizing`]), the whole loop on
-/// this thread while a counter watches it allocate (it must not). Returns the capture its
-/// samples make and the decisions the tick wrote into them, by capture row.
-fn tick_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usize, ChannelDecision)>) {
+/// training captures used, the whole loop on this thread while a counter watches it allocate
+/// (it must not), then `model` over its samples in order, as the recorder thread runs it
+/// ([`SampleRecognizer`]). Returns the capture its samples make and the decisions written into
+/// them, by capture row.
+fn loop_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usize, ChannelDecision)>) {
     use capture::{Capture, Metadata};
     use haptics::acquire::{CaptureOptions, Protocol, controller, row, sim_device};
     use haptics::rt::{self, LoopConfig, LoopIo, LoopShared, Pacing, RtRequest};
@@ -248,7 +249,8 @@ fn tick_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usi
     let live = LiveRecognizer::new(model, 1000.0)
         .expect("live recognizer")
         .clone();
-    let mut c = Recognizing::new(controller(Protocol::Rubbing), live);
+    let mut c = controller(Protocol::Rubbing);
+    let mut recognizer = SampleRecognizer::new(live);
     let config = LoopConfig {
         pacing: Pacing::Unpaced,
         rt: RtRequest::NONE,
@@ -275,7 +277,8 @@ fn tick_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usi
         "{surface}: the haptic loop allocated"
     );
     let mut samples = Vec::new();
-    while let Ok(s) = consumer.pop() {
+    while let Ok(mut s) = consumer.pop() {
+        recognizer.annotate(&mut s);
         samples.push(s);
     }
     let (mut data, mut tick_decisions) = (Vec::new(), Vec::new());
@@ -322,15 +325,15 @@ fn committed(name: &str) -> RecognizerFile {
     RecognizerFile::load(&path).expect("committed recognizer")
 }
 
-/// The committed SOM inside the haptic tick: the loop allocates nothing, and the decisions the
-/// tick writes into the samples are exactly the offline pipeline's on the capture recorded from
+/// The committed SOM over a loop's samples: the loop allocates nothing, and the decisions
+/// written into the samples are exactly the offline pipeline's on the capture recorded from
 /// the same samples.
 #[test]
-fn the_haptic_tick_decides_as_the_offline_pipeline_on_its_own_recording() {
+fn the_loops_samples_are_decided_as_the_offline_pipeline_decides_their_recording() {
     let model = committed("nakano_som.json");
     let (mut compared, mut correct) = (0, 0);
     for surface in ["sandpaper_400", "styrol_smooth"] {
-        let (labelled, tick_decisions) = tick_run(&model, surface);
+        let (labelled, tick_decisions) = loop_run(&model, surface);
         let offline = model.decisions(&labelled, None).expect("offline");
         assert!(offline.len() > 10, "{surface}: {}", offline.len());
         assert_eq!(tick_decisions.len(), offline.len(), "{surface}");
@@ -519,11 +522,12 @@ fn anytime_settings_and_a_non_finite_sample() {
     assert!(live.posterior().expect("posterior").iter().all(|&p| p == uniform));
 }
 
-/// The committed SVM of `surfaces_nakano` inside the haptic tick: the loop allocates nothing,
-/// the tick's posterior is the offline pipeline's on the capture recorded from the same
-/// samples, it says "undecided" before it names a surface, and names the right one.
+/// The committed SVM of `surfaces_nakano` over a loop's samples: the loop allocates nothing,
+/// the posterior written into the samples is the offline pipeline's on the capture recorded
+/// from the same samples, it says "undecided" before it names a surface, and names the right
+/// one.
 #[test]
-fn the_haptic_tick_decides_anytime_as_the_offline_pipeline() {
+fn the_loops_samples_are_decided_anytime_as_the_offline_pipeline() {
     let model = committed("nakano_svm.json");
     let params = model
         .sequential_params(DEFAULT_MEMORY_S)
@@ -531,7 +535,7 @@ fn the_haptic_tick_decides_anytime_as_the_offline_pipeline() {
         .build()
         .expect("valid");
     for surface in ["sandpaper_400", "styrol_smooth"] {
-        let (labelled, tick_decisions) = tick_run(&model, surface);
+        let (labelled, tick_decisions) = loop_run(&model, surface);
         let offline = offline_steps(&model, &labelled, params);
         assert_eq!(tick_decisions.len(), offline.len(), "{surface}");
         for ((at, d), off) in tick_decisions.iter().zip(&offline) {

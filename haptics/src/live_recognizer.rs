@@ -11,22 +11,23 @@
 //!
 //! Everything it needs is allocated in [`LiveRecognizer::new`] (the stream's rings, the
 //! classifier's buffers, the posterior's ring); [`LiveRecognizer::push`] does arithmetic on them
-//! only — no allocation, no lock, no I/O — so it can run inside the 1 kHz tick. The per-sample
-//! work is the stream's running sums; the classifier runs once per hop, on the sample that
-//! completes a window. It decides on exactly the windows the offline pipeline decides on
-//! ([`RecognizerFile::decisions`], [`RecognizerFile::evaluate_sequential`]) with the same
-//! classifier arithmetic; the features come from the streaming sums instead of the batch ones
-//! and agree with them to ~1e-9 relative. A model trained with a mirrored end
-//! ([`NakanoWindowing::mirrored_end`]) decides each window at its last sample instead: the
-//! recognizer keeps the stroke's latest samples and computes the window's features with the
-//! batch's own [`EdgeWindow`] once per hop (about 800 samples of arithmetic, in buffers made
-//! here), so those agree with the offline ones exactly. Kept in the tick (rather than on a thread of its own)
-//! so that a sample carries the decision made on the windows up to it, whatever the scheduler
-//! does: a replay or an unpaced run decides exactly as the offline evaluation.
+//! only — no allocation, no lock, no I/O. The per-sample work is the stream's running sums; the
+//! classifier runs once per hop, on the sample that completes a window. It decides on exactly
+//! the windows the offline pipeline decides on ([`RecognizerFile::decisions`],
+//! [`RecognizerFile::evaluate_sequential`]) with the same classifier arithmetic; the features
+//! come from the streaming sums instead of the batch ones and agree with them to ~1e-9 relative.
+//! A model trained with a mirrored end ([`NakanoWindowing::mirrored_end`]) decides each window
+//! at its last sample instead: the recognizer keeps the stroke's latest samples and computes the
+//! window's features with the batch's own [`EdgeWindow`] once per hop (about 800 samples of
+//! arithmetic, in buffers made here), so those agree with the offline ones exactly.
+//!
+//! A running session feeds it from the recorder thread ([`SampleRecognizer`]), which sees every
+//! sample of the loop in order: the decisions are those the tick would make, while the haptic
+//! thread spends nothing on them (a decision costs about 50 µs, a twentieth of a tick).
 
 use crate::acquire;
 use crate::error::HapticsError;
-use crate::rt::{CHANNELS, Controller, TickInput, TickOutput};
+use crate::rt::{CHANNELS, HapticSample};
 #[cfg(doc)]
 use recognize::RecognizerFile;
 use std::collections::VecDeque;
@@ -37,7 +38,7 @@ use recognize::{
     SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
 };
 
-/// Cut-off of the reaction-force observer whose friction [`Recognizing`] reads
+/// Cut-off of the reaction-force observer whose friction [`SampleRecognizer`] reads
 /// ([`acquire::rubbing_signals`]: the rubbing controller's, Nakano's gains), rad/s.
 pub const RUBBING_OBSERVER_CUTOFF_RADPS: f64 = crate::control::MotionGains::NAKANO.g_reac_radps;
 
@@ -73,7 +74,7 @@ enum Decider {
     },
 }
 
-/// A recognizer over Nakano's rubbing features, fed one sample per haptic tick.
+/// A recognizer over Nakano's rubbing features, fed one sample at a time.
 #[derive(Debug, Clone)]
 pub struct LiveRecognizer {
     method: &'static str,
@@ -393,7 +394,7 @@ impl LiveRecognizer {
     }
 }
 
-/// Channels [`Recognizing`] writes into every sample, after the wrapped controller's eight.
+/// Channels [`SampleRecognizer`] writes into every sample, after the controller's eight.
 pub mod channel {
     /// Class index + 1 of the surface named; 0 before the stroke's first decision and while
     /// undecided.
@@ -430,29 +431,30 @@ pub fn decision_in(channels: &[f64; CHANNELS]) -> Option<ChannelDecision> {
     })
 }
 
-/// A rubbing controller with the live recognizer inside its tick: each tick the wrapped
-/// controller runs, then the sample it produced (position, height and the RFOB's friction, as a
-/// capture records them: [`acquire::rubbing_signals`]) is pushed into the recognizer, and the
-/// latest decision is written into [`channel`]s of the same sample, so it reaches the recorder
-/// and the UI with the force it was decided beside. A stroke (a run of rubbing-phase ticks)
-/// starts the recognizer afresh, as a capture starts its windows afresh.
+/// The live recognizer over a loop's samples, run where the samples arrive off the haptic
+/// thread (the recorder's [`crate::recorder::annotate_then`]), so a decision never costs the
+/// 1 kHz tick anything. Each rubbing sample (position, height and the RFOB's friction, as a
+/// capture records them: [`acquire::rubbing_signals`]) is pushed into the recognizer in loop
+/// order, and the latest decision is written into [`channel`]s of the same sample, so it
+/// reaches the capture, the report and the UI beside the force it was decided with. A stroke
+/// (a run of rubbing-phase samples) starts the recognizer afresh, as a capture starts its
+/// windows afresh. The samples are the loop's, in order, so the decisions are the same as if
+/// they had been made in the tick; only when they show on a screen is later, by the ring's
+/// delay (a few milliseconds).
 ///
-/// Nothing here allocates, locks, logs or does I/O. A non-finite sample sets
-/// [`crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE`] on its tick and restarts the
-/// recognizer's stroke from the next sample; the last decision stands until a new one.
-#[derive(Debug)]
-pub struct Recognizing<C> {
-    inner: C,
+/// Nothing here allocates, locks, logs or does I/O. A non-finite sample gets
+/// [`crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE`] and restarts the recognizer's stroke
+/// from the next sample; the last decision stands until a new one.
+#[derive(Debug, Clone)]
+pub struct SampleRecognizer {
     live: LiveRecognizer,
     rubbing: bool,
     decisions: u64,
 }
 
-impl<C: Controller> Recognizing<C> {
-    /// Wraps `inner` (a rubbing controller) with `live`.
-    pub fn new(inner: C, live: LiveRecognizer) -> Self {
+impl SampleRecognizer {
+    pub fn new(live: LiveRecognizer) -> Self {
         Self {
-            inner,
             live,
             rubbing: false,
             decisions: 0,
@@ -463,12 +465,11 @@ impl<C: Controller> Recognizing<C> {
     pub fn recognizer(&self) -> &LiveRecognizer {
         &self.live
     }
-}
 
-impl<C: Controller> Controller for Recognizing<C> {
-    fn tick(&mut self, input: &TickInput<'_>, out: &mut TickOutput) {
-        self.inner.tick(input, out);
-        match acquire::rubbing_signals(input.state, &out.channels) {
+    /// Pushes `sample` (the next of the loop's, in order) and writes the latest decision into
+    /// its channels.
+    pub fn annotate(&mut self, sample: &mut HapticSample) {
+        match acquire::rubbing_signals(&sample.state, &sample.channels) {
             Some([x, z, f]) => {
                 if !self.rubbing {
                     self.live.reset();
@@ -478,19 +479,16 @@ impl<C: Controller> Controller for Recognizing<C> {
                 match self.live.push(x, z, f) {
                     Ok(Some(_)) => self.decisions += 1,
                     Ok(None) => {}
-                    Err(_) => out.flags |= crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE,
+                    Err(_) => sample.flags |= crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE,
                 }
             }
             None => self.rubbing = false,
         }
         let current = self.live.current();
-        out.channels[channel::LABEL] = current.and_then(|d| d.label).map_or(0.0, |l| l as f64 + 1.0);
-        out.channels[channel::BEST] = current.map_or(0.0, |d| d.best as f64 + 1.0);
-        out.channels[channel::CONFIDENCE] = current.map_or(0.0, |d| d.confidence);
-        out.channels[channel::DECISIONS] = self.decisions as f64;
-    }
-
-    fn finished(&self) -> bool {
-        self.inner.finished()
+        let out = &mut sample.channels;
+        out[channel::LABEL] = current.and_then(|d| d.label).map_or(0.0, |l| l as f64 + 1.0);
+        out[channel::BEST] = current.map_or(0.0, |d| d.best as f64 + 1.0);
+        out[channel::CONFIDENCE] = current.map_or(0.0, |d| d.confidence);
+        out[channel::DECISIONS] = self.decisions as f64;
     }
 }

@@ -87,9 +87,48 @@ impl RecorderStats {
 }
 
 /// Turns a sample into a capture row (`row` is cleared before the call); returns false to skip
-/// the sample (e.g. outside the protocol's recording phase).
-pub trait RowMap: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static {}
-impl<F: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static> RowMap for F {}
+/// the sample (e.g. outside the protocol's recording phase). Any `FnMut(&HapticSample, &mut
+/// Vec<f64>) -> bool` is one; [`annotate_then`] also lets work that must stay off the haptic
+/// thread write into the sample first.
+pub trait RowMap: Send + 'static {
+    /// Fills `row` from `sample`, which it may annotate (the recorder keeps the sample as this
+    /// leaves it).
+    fn map(&mut self, sample: &mut HapticSample, row: &mut Vec<f64>) -> bool;
+}
+
+impl<F: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static> RowMap for F {
+    fn map(&mut self, sample: &mut HapticSample, row: &mut Vec<f64>) -> bool {
+        self(sample, row)
+    }
+}
+
+/// A [`RowMap`] that first lets `annotate` write into each sample (e.g. the live recognizer's
+/// decision, computed on the recorder thread instead of in the tick), then maps it with `map`.
+pub fn annotate_then<A, M>(annotate: A, map: M) -> AnnotateThen<A, M>
+where
+    A: FnMut(&mut HapticSample) + Send + 'static,
+    M: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static,
+{
+    AnnotateThen { annotate, map }
+}
+
+/// See [`annotate_then`].
+#[derive(Debug)]
+pub struct AnnotateThen<A, M> {
+    annotate: A,
+    map: M,
+}
+
+impl<A, M> RowMap for AnnotateThen<A, M>
+where
+    A: FnMut(&mut HapticSample) + Send + 'static,
+    M: FnMut(&HapticSample, &mut Vec<f64>) -> bool + Send + 'static,
+{
+    fn map(&mut self, sample: &mut HapticSample, row: &mut Vec<f64>) -> bool {
+        (self.annotate)(sample);
+        (self.map)(sample, row)
+    }
+}
 
 /// What the recorder did.
 #[derive(Debug)]
@@ -228,13 +267,14 @@ impl<W: Write + Send + 'static> Recorder<W> {
                     let mut last_flush = Instant::now();
                     loop {
                         let mut drained = 0;
-                        while let Ok(sample) = consumer.pop() {
+                        while let Ok(mut sample) = consumer.pop() {
                             drained += 1;
+                            row.clear();
+                            let mapped = map.map(&mut sample, &mut row);
                             if keep {
                                 kept.push(sample);
                             }
-                            row.clear();
-                            if !map(&sample, &mut row) {
+                            if !mapped {
                                 continue;
                             }
                             match writer.write_row(&row) {

@@ -35,7 +35,7 @@ use haptics::law::{
     PhasedNeedleLaw, SoftFriction, hard_friction_model, needle_model, soft_friction_models,
 };
 use haptics::live::LiveFeed;
-use haptics::live_recognizer::{LiveRecognizer, Recognizing};
+use haptics::live_recognizer::{LiveRecognizer, SampleRecognizer};
 use haptics::recorder::{Recorder, RecorderConfig};
 use haptics::rt::{self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, WatchdogConfig};
 use haptics::sim::hand::{HandImpedance, HandScript, LiveHand};
@@ -463,8 +463,8 @@ pub fn record_path(record: &Path, object: &str, segments: usize) -> PathBuf {
 }
 
 /// Runs one segment to its end (the task's, `duration_s`, or the UI's stop). A surface
-/// segment given a `recognizer` runs it inside the haptic tick
-/// ([`haptics::live_recognizer::Recognizing`]): its decisions ride in every sample's
+/// segment given a `recognizer` runs it over the loop's samples on the recorder thread, off the
+/// haptic thread ([`SampleRecognizer`]): its decisions ride in every sample's
 /// [`haptics::live_recognizer::channel`]s.
 ///
 /// The segment's samples are kept by the recorder thread, off the haptic thread; a window
@@ -540,9 +540,9 @@ pub fn run_segment(
     let device_name = device.name().to_owned();
     let max_force_n = DeviceSpecs::OMEGA7.max_force_n;
     let controller = controller(scene, segment, direct, surface_z_m)?;
-    let controller: Box<dyn Controller> = match (recognizer, &segment.kind) {
-        (Some(r), SegmentKind::Surface { .. }) => Box::new(Recognizing::new(controller, r)),
-        _ => controller,
+    let mut recognizer = match (recognizer, &segment.kind) {
+        (Some(r), SegmentKind::Surface { .. }) => Some(SampleRecognizer::new(r)),
+        _ => None,
     };
 
     let (stop, newest, mut recent, mut live_stats) = match live {
@@ -577,15 +577,21 @@ pub fn run_segment(
     };
     meta.insert("scene", &scene.name);
     meta.insert("object", &segment.object);
-    // The recorder thread sees every sample: it hands them on to the window's ring (never
-    // waiting: a window that falls behind misses samples for its plots, not the report) and
-    // keeps them for the report.
+    // The recorder thread sees every sample, in order: the recognizer decides on them there,
+    // then it hands them on to the window's ring (never waiting: a window that falls behind
+    // misses samples for its plots, not the report) and keeps them for the report.
+    let annotate = move |s: &mut HapticSample| {
+        if let Some(r) = recognizer.as_mut() {
+            r.annotate(s);
+        }
+    };
     let map = move |s: &HapticSample, r: &mut Vec<f64>| {
         if let Some(recent) = recent.as_mut() {
             recent.push(s);
         }
         row(&kind, surface_z_m, s, r)
     };
+    let map = haptics::recorder::annotate_then(annotate, map);
     let ring = RecorderConfig {
         capacity: 1 << 16,
         keep_samples: true,
