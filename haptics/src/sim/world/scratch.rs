@@ -14,7 +14,7 @@
 //!
 //! # The model, from surface to bits
 //! 1. **Surface** ([`ScratchSurface`]): a fixed object whose height field is a sum of
-//!    straight-crested random waves ("layers"), each a band-limited [`Profile`] along its
+//!    straight-crested random waves ("layers"), each a band-limited [`Profile`](super::profile::Profile) along its
 //!    own wave direction. Directional textures (corduroy ribs, wood grain, mat grids, bubble
 //!    lattices) are one layer per direction; isotropic roughness is three layers 60° apart,
 //!    the turning-bands construction (Matheron 1973; Mantoglou & Wilson 1982) that makes a
