@@ -122,61 +122,66 @@ pub struct BenchTable {
     pub rows: Vec<BenchRow>,
 }
 
-impl BenchTable {
-    /// A fixed-width text table.
-    pub fn to_text(&self) -> String {
-        let mut s = format!("headless render benchmark on {}\n", self.adapter);
-        s.push_str(
-            "   size     msaa overlay    mesh scale PSNR dB     fps  frame ms   draw ms resolve ms  ui cpu ms readback ms\n",
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "{:>5}x{:<5} {:>3} {:>7} {:>7} {:>5.2} {:>7} {:>7.1} {:>9.2} {:>9.2} {:>10.2} {:>10.2} {:>11.2}",
-                r.width,
-                r.height,
-                r.msaa,
-                r.overlay.label(),
-                r.mesh.label(),
-                r.scale,
-                r.psnr_db.map_or("-".to_string(), |p| format!("{p:.1}")),
-                r.fps,
-                r.frame_ms,
-                r.draw_ms,
-                r.resolve_ms,
-                r.overlay_cpu_ms,
-                r.readback_ms
-            );
-        }
-        s
-    }
+/// Column names and the text table's widths.
+const COLUMNS: [(&str, usize); 12] = [
+    ("size", 9),
+    ("MSAA", 4),
+    ("overlay", 7),
+    ("mesh", 7),
+    ("scale", 5),
+    ("PSNR dB", 7),
+    ("fps", 6),
+    ("frame ms", 8),
+    ("draw ms", 7),
+    ("resolve ms", 10),
+    ("overlay CPU ms", 14),
+    ("readback ms", 11),
+];
+
+/// One row's cells, as both tables print them ("—" where a stage does not apply).
+fn cells(r: &BenchRow) -> [String; 12] {
+    let stage = |v: f64| if v > 0.0 { format!("{v:.2}") } else { "—".into() };
+    [
+        format!("{}×{}", r.width, r.height),
+        r.msaa.to_string(),
+        r.overlay.label().into(),
+        r.mesh.label().into(),
+        r.scale.to_string(),
+        r.psnr_db.map_or("—".to_string(), |p| format!("{p:.1}")),
+        format!("{:.1}", r.fps),
+        format!("{:.1}", r.frame_ms),
+        format!("{:.1}", r.draw_ms),
+        stage(r.resolve_ms),
+        stage(r.overlay_cpu_ms),
+        format!("{:.2}", r.readback_ms),
+    ]
 }
 
 impl BenchTable {
+    /// A fixed-width text table.
+    pub fn to_text(&self) -> String {
+        let line = |cells: &mut dyn Iterator<Item = String>| -> String {
+            let padded: Vec<String> = cells.zip(COLUMNS).map(|(c, (_, w))| format!("{c:>w$}")).collect();
+            padded.join(" ")
+        };
+        let mut s = format!("headless render benchmark on {}\n", self.adapter);
+        let _ = writeln!(
+            s,
+            "{}",
+            line(&mut COLUMNS.iter().map(|(name, _)| name.to_string()))
+        );
+        for r in &self.rows {
+            let _ = writeln!(s, "{}", line(&mut cells(r).into_iter()));
+        }
+        s
+    }
+
     /// The same table in Markdown, as README shows it.
     pub fn to_markdown(&self) -> String {
-        let mut s = String::from(
-            "| size | MSAA | overlay | mesh | scale | PSNR dB | fps | frame ms | draw ms | resolve ms | overlay CPU ms | readback ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-        );
-        let dash_if_zero = |v: f64| if v > 0.0 { format!("{v:.2}") } else { "—".into() };
+        let names: Vec<&str> = COLUMNS.iter().map(|(name, _)| *name).collect();
+        let mut s = format!("| {} |\n|{}\n", names.join(" | "), "---|".repeat(COLUMNS.len()));
         for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "| {}×{} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {} | {} | {:.2} |",
-                r.width,
-                r.height,
-                r.msaa,
-                r.overlay.label(),
-                r.mesh.label(),
-                r.scale,
-                r.psnr_db.map_or("—".to_string(), |p| format!("{p:.1}")),
-                r.fps,
-                r.frame_ms,
-                r.draw_ms,
-                dash_if_zero(r.resolve_ms),
-                dash_if_zero(r.overlay_cpu_ms),
-                r.readback_ms
-            );
+            let _ = writeln!(s, "| {} |", cells(r).join(" | "));
         }
         s
     }
@@ -356,13 +361,13 @@ mod tests {
         let text = table.to_text();
         assert_eq!(text.lines().count(), 5);
         assert!(
-            text.contains("640x480")
+            text.contains("640×480")
                 && text.contains("50.0")
                 && text.contains(" on ")
                 && text.contains(" off ")
                 && text.contains(" live ")
                 && text.contains("31.2")
-                && text.contains("0.50")
+                && text.contains(" 0.5 ")
                 && text.contains(" graded ")
                 && text.contains(" uniform ")
         );
