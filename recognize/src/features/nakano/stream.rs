@@ -70,6 +70,23 @@ impl<T: Copy> Ring<T> {
     }
 }
 
+/// A ring value that carries the running sum of the values pushed before it.
+trait SumBefore: Copy {
+    fn sum_before(&self) -> f64;
+}
+
+impl<T: SumBefore> Ring<T> {
+    /// The sum of everything pushed before the `k`-th oldest value, for `k` up to the capacity
+    /// (`k` = capacity: before a value not pushed yet, i.e. the running `total`).
+    fn sum_before(&self, k: usize, total: f64) -> Option<f64> {
+        if k == self.capacity {
+            Some(total)
+        } else {
+            self.get(k).map(|v| v.sum_before())
+        }
+    }
+}
+
 /// One window's features from the stream.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StreamWindow {
@@ -142,6 +159,12 @@ struct HeightSample {
     x: f64,
 }
 
+impl SumBefore for HeightSample {
+    fn sum_before(&self) -> f64 {
+        self.before
+    }
+}
+
 /// A roughness sample in the stream's smoothing span.
 #[derive(Debug, Clone, Copy)]
 struct RoughSample {
@@ -150,6 +173,12 @@ struct RoughSample {
     before: f64,
     /// Smoothing half-width at this sample.
     smoothing: usize,
+}
+
+impl SumBefore for RoughSample {
+    fn sum_before(&self) -> f64 {
+        self.before
+    }
 }
 
 /// Mean and sum of squared deviations over a sliding window, updated in O(1) per sample with
@@ -325,13 +354,7 @@ impl NakanoStream {
         }
         // The centre of the detrending span is `hmax` samples back; the sum of the heights
         // from `k` samples after the oldest on is the total minus what came before it.
-        let before = |k: usize| {
-            if k == 2 * hmax + 1 {
-                Some(self.height_sum)
-            } else {
-                self.heights.get(k).map(|p| p.before)
-            }
-        };
+        let before = |k: usize| self.heights.sum_before(k, self.height_sum);
         let step = step_m(self.heights.get(0)?.x, self.heights.get(2 * hmax)?.x, hmax);
         let (h, s) = self.config.half_widths_at(step);
         let centre = self.heights.get(hmax)?.z;
@@ -345,13 +368,7 @@ impl NakanoStream {
         if !self.roughs.is_full() {
             return None;
         }
-        let rough_before = |k: usize| {
-            if k == 2 * smax + 1 {
-                Some(self.rough_sum)
-            } else {
-                self.roughs.get(k).map(|p| p.before)
-            }
-        };
+        let rough_before = |k: usize| self.roughs.sum_before(k, self.rough_sum);
         let RoughSample { r, smoothing: s, .. } = self.roughs.get(smax)?;
         let smoothed = (rough_before(smax + s + 1)? - rough_before(smax - s)?) / (2 * s + 1) as f64;
         let previous = self.previous_smoothed.replace(smoothed);
