@@ -26,6 +26,7 @@ mod quiet_runtime;
 mod renderer;
 pub mod shapes;
 mod ticks;
+mod upscale;
 pub mod window;
 
 pub use assets_gen::{PATCH_CENTRES_M, PATCH_NAMES, default_assets, patch_centre_m, write_default_assets};

@@ -17,6 +17,7 @@ use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions};
 use crate::image::Image;
 use crate::mesh::MeshData;
 use crate::overlay::{OverlayLayer, PanelTarget};
+use crate::upscale::Upscaler;
 
 /// Offscreen images: 8-bit sRGB so lighting computed in linear space is encoded on store.
 pub const HEADLESS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -26,9 +27,6 @@ const OBJECT_SLOT_BYTES: u64 = 256;
 const MAX_SIDE_PX: u32 = 8192;
 /// Smallest internal resolution scale accepted: below it the picture is a blur.
 const MIN_SCALE: f32 = 0.25;
-
-/// Stretches the scene drawn at a lower internal resolution over its part of the frame.
-const UPSCALE_WGSL: &str = include_str!("upscale.wgsl");
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -75,8 +73,7 @@ struct GpuMesh {
     index_count: u32,
     /// The first indices, those of the triangles outside ([`MeshData::interior_from`]).
     exterior_count: u32,
-    centre_m: Vec3,
-    /// Corners of the model-space bounding box, m.
+    /// Corners of the model-space bounding box, m (zero for an empty mesh).
     bounds_m: [Vec3; 2],
 }
 
@@ -86,13 +83,6 @@ struct Attachments {
     depth_view: wgpu::TextureView,
     /// The scene at the internal resolution, when it is lower than the frame's.
     low: Option<(wgpu::TextureView, wgpu::BindGroup)>,
-}
-
-/// What drawing at a lower internal resolution needs.
-struct Upscaler {
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
-    sampler: wgpu::Sampler,
 }
 
 struct Offscreen {
@@ -373,76 +363,8 @@ impl Renderer {
     }
 
     fn ensure_upscaler(&mut self) {
-        let device = &self.gpu.device;
-        let format = self.format;
-        self.upscaler.get_or_insert_with(|| {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("upscale"),
-                source: wgpu::ShaderSource::Wgsl(UPSCALE_WGSL.into()),
-            });
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("upscale"),
-                entries: &[
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 0,
-                        visibility: wgpu::ShaderStages::FRAGMENT,
-                        ty: wgpu::BindingType::Texture {
-                            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                            view_dimension: wgpu::TextureViewDimension::D2,
-                            multisampled: false,
-                        },
-                        count: None,
-                    },
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 1,
-                        visibility: wgpu::ShaderStages::FRAGMENT,
-                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                        count: None,
-                    },
-                ],
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("upscale"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("upscale"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("upscale"),
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..Default::default()
-            });
-            Upscaler {
-                pipeline,
-                layout,
-                sampler,
-            }
-        });
+        let (device, format) = (&self.gpu.device, self.format);
+        self.upscaler.get_or_insert_with(|| Upscaler::new(device, format));
     }
 
     /// The MSAA sample count in use (1 or 4).
@@ -576,38 +498,11 @@ impl Renderer {
         if self.scale < 1.0 {
             self.ensure_upscaler();
         }
-        let low = self.upscaler.as_ref().filter(|_| self.scale < 1.0).map(|up| {
-            let texture = self.gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("scene at internal resolution"),
-                size: wgpu::Extent3d {
-                    width: low_size[0],
-                    height: low_size[1],
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: self.format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            });
-            let view = texture.create_view(&Default::default());
-            let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("upscale"),
-                layout: &up.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::Sampler(&up.sampler),
-                    },
-                ],
-            });
-            (view, group)
-        });
+        let low = self
+            .upscaler
+            .as_ref()
+            .filter(|_| self.scale < 1.0)
+            .map(|up| up.target(&self.gpu.device, self.format, low_size));
         let device = &self.gpu.device;
         let extent = wgpu::Extent3d {
             width: low_size[0],
@@ -676,10 +571,10 @@ impl Renderer {
             .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| {
                 (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p)))
             });
-        let (centre_m, bounds_m) = if mesh.positions.is_empty() {
-            (Vec3::ZERO, [Vec3::ZERO; 2])
+        let bounds_m = if mesh.positions.is_empty() {
+            [Vec3::ZERO; 2]
         } else {
-            ((lo + hi) * 0.5, [lo, hi])
+            [lo, hi]
         };
         let device = &self.gpu.device;
         // Zero-sized buffers are not allowed; an empty mesh still gets a tiny one and draws nothing.
@@ -707,7 +602,6 @@ impl Renderer {
             }),
             index_count: indices.len() as u32,
             exterior_count,
-            centre_m,
             bounds_m,
         };
         self.meshes.insert(key, gpu_mesh);
@@ -774,11 +668,10 @@ impl Renderer {
                 ],
                 flags: [if object.deformable { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
             });
-            let (centre, [lo, hi]) = self
-                .meshes
-                .get(&key)
-                .map_or((Vec3::ZERO, [Vec3::ZERO; 2]), |g| (g.centre_m, g.bounds_m));
-            let distance_m = model.transform_point3(centre).distance(frame.camera.eye_m);
+            let [lo, hi] = self.meshes.get(&key).map_or([Vec3::ZERO; 2], |g| g.bounds_m);
+            let distance_m = model
+                .transform_point3((lo + hi) * 0.5)
+                .distance(frame.camera.eye_m);
             let corners = (0..8).map(|k| {
                 let pick = |bit: u32, l: f32, h: f32| if k & bit == 0 { l } else { h };
                 model.transform_point3(Vec3::new(
@@ -828,8 +721,7 @@ impl Renderer {
                 nb.cmp(&na)
                     .then(items[b].distance_m.total_cmp(&items[a].distance_m))
             });
-            let clear = clear.into_iter().map(|(_, i)| i);
-            order.extend(clear.map(|i| (i, Pass::Translucent)));
+            order.extend(clear.into_iter().map(|(_, i)| (i, Pass::Translucent)));
             if punctured {
                 order.extend(
                     (0..items.len())
@@ -952,31 +844,7 @@ impl Renderer {
 
         if let (Some((_, group)), Some(up)) = (&att.low, &self.upscaler) {
             let start = Instant::now();
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("upscale"),
-            });
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("upscale"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&up.pipeline);
-                pass.set_bind_group(0, group, &[]);
-                pass.draw(0..3, 0..1);
-            }
-            queue.submit([encoder.finish()]);
+            up.draw(device, queue, view, group);
             if let Some(t) = timer.as_deref_mut() {
                 wait(device)?;
                 t.draw += start.elapsed();
