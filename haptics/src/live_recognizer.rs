@@ -461,11 +461,6 @@ impl SampleRecognizer {
         }
     }
 
-    /// The recognizer (its classes name the labels).
-    pub fn recognizer(&self) -> &LiveRecognizer {
-        &self.live
-    }
-
     /// Pushes `sample` (the next of the loop's, in order) and writes the latest decision into
     /// its channels.
     pub fn annotate(&mut self, sample: &mut HapticSample) {
