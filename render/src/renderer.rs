@@ -78,11 +78,16 @@ struct GpuMesh {
 }
 
 struct Attachments {
+    /// The frame's size and the width of the scene's part of it, px.
     size: [u32; 2],
+    scene_width: u32,
     msaa_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
     /// The scene at the internal resolution, when it is lower than the frame's.
     low: Option<(wgpu::TextureView, wgpu::BindGroup)>,
+    /// With MSAA beside the overlay's panel, the scene's strip resolved, then copied into the
+    /// frame: multisampled attachments only as wide as the scene.
+    strip: Option<(wgpu::Texture, wgpu::TextureView)>,
 }
 
 struct Offscreen {
@@ -97,7 +102,8 @@ struct Offscreen {
 pub struct StageTimes {
     /// Uploading uniforms, encoding and executing the scene pass (and the overlay pass).
     pub draw: Duration,
-    /// Resolving the multisampled image into the single-sample target.
+    /// Resolving the multisampled image into the single-sample target (and copying the scene's
+    /// strip into the frame beside the overlay).
     pub resolve: Duration,
     /// Building the overlay's UI and tessellating it (CPU).
     pub overlay_cpu: Duration,
@@ -489,9 +495,18 @@ impl Renderer {
         });
     }
 
-    /// Attachments for a scene of `size` px drawn at `scale` (into a texture of its own below 1).
-    fn ensure_attachments(&mut self, size: [u32; 2]) {
-        if self.attachments.as_ref().is_some_and(|a| a.size == size) {
+    /// Attachments for a frame of `size` px whose scene fills its left `scene_width` px, drawn
+    /// at `scale` (into a texture of its own below 1). `strip` sizes the multisampled attachments
+    /// to the scene alone when its resolved image can be copied into the frame: lavapipe clears
+    /// and resolves every sample of them each frame, the part the overlay's panel then covers
+    /// too.
+    fn ensure_attachments(&mut self, size: [u32; 2], scene_width: u32, strip: bool) {
+        let strip = strip && self.msaa > 1 && self.scale >= 1.0 && scene_width < size[0];
+        if self
+            .attachments
+            .as_ref()
+            .is_some_and(|a| a.size == size && a.scene_width == scene_width && a.strip.is_some() == strip)
+        {
             return;
         }
         let low_size = self.internal_size(size);
@@ -505,31 +520,44 @@ impl Renderer {
             .map(|up| up.target(&self.gpu.device, self.format, low_size));
         let device = &self.gpu.device;
         let extent = wgpu::Extent3d {
-            width: low_size[0],
+            width: if strip { scene_width } else { low_size[0] },
             height: low_size[1],
             depth_or_array_layers: 1,
         };
-        let make = |label, format, samples| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: extent,
-                    mip_level_count: 1,
-                    sample_count: samples,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default())
+        let make = |label, format, samples, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
         };
-        let msaa_view = (self.msaa > 1).then(|| make("msaa colour", self.format, self.msaa));
-        let depth_view = make("depth", DEPTH_FORMAT, self.msaa);
+        let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let view = |t: wgpu::Texture| t.create_view(&Default::default());
+        let msaa_view =
+            (self.msaa > 1).then(|| view(make("msaa colour", self.format, self.msaa, attachment)));
+        let depth_view = view(make("depth", DEPTH_FORMAT, self.msaa, attachment));
+        let strip = strip.then(|| {
+            let texture = make(
+                "scene strip",
+                self.format,
+                1,
+                attachment | wgpu::TextureUsages::COPY_SRC,
+            );
+            let view = texture.create_view(&Default::default());
+            (texture, view)
+        });
         self.attachments = Some(Attachments {
             size,
+            scene_width,
             msaa_view,
             depth_view,
             low,
+            strip,
         });
     }
 
@@ -622,7 +650,19 @@ impl Renderer {
             format: Some(self.format),
             ..Default::default()
         });
-        self.ensure_attachments(size);
+        // With the overlay on, the scene is framed in the part of the image the panel leaves free.
+        let scene_width = match &frame.overlay {
+            Some(_) => {
+                let ppp = overlay_input.pixels_per_point();
+                let panel_px = (crate::overlay::PANEL_WIDTH_PT * ppp).round() as u32;
+                size[0].saturating_sub(panel_px).max(size[0] / 3).max(1)
+            }
+            None => size[0],
+        };
+        // The strip is copied into the frame, as the overlay's panel is.
+        let copyable = target.usage().contains(wgpu::TextureUsages::COPY_DST)
+            && target.format().remove_srgb_suffix() == self.format.remove_srgb_suffix();
+        self.ensure_attachments(size, scene_width, copyable);
         // Forget meshes the app no longer holds.
         self.meshes.retain(|_, m| m.source.strong_count() > 0);
 
@@ -691,15 +731,6 @@ impl Renderer {
                 bounds_m,
             });
         }
-        // With the overlay on, the scene is framed in the part of the image the panel leaves free.
-        let scene_width = match &frame.overlay {
-            Some(_) => {
-                let ppp = overlay_input.pixels_per_point();
-                let panel_px = (crate::overlay::PANEL_WIDTH_PT * ppp).round() as u32;
-                size[0].saturating_sub(panel_px).max(size[0] / 3).max(1)
-            }
-            None => size[0],
-        };
         self.write_uniforms(frame, [scene_width, size[1]], &uniforms);
 
         let order: Vec<(usize, Pass)> = {
@@ -741,6 +772,13 @@ impl Renderer {
         };
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let split_resolve = timer.is_some() && att.msaa_view.is_some();
+        // Below full resolution the scene goes to its own texture, stretched over the frame
+        // afterwards; beside the panel with MSAA, to its strip, copied into the frame.
+        let scene_view = match (&att.low, &att.strip) {
+            (Some((low, _)), _) => low,
+            (None, Some((_, strip))) => strip,
+            (None, None) => view,
+        };
         let mut encoder =
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("scene") });
         {
@@ -751,9 +789,6 @@ impl Renderer {
                 b: f64::from(b),
                 a: 1.0,
             };
-            // Below full resolution the scene goes to its own texture, stretched over the frame
-            // afterwards.
-            let scene_view = att.low.as_ref().map_or(view, |(low, _)| low);
             let (color_view, resolve_target) = match &att.msaa_view {
                 Some(msaa) => (msaa, if split_resolve { None } else { Some(scene_view) }),
                 None => (scene_view, None),
@@ -824,7 +859,7 @@ impl Renderer {
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: msaa,
                     depth_slice: None,
-                    resolve_target: Some(att.low.as_ref().map_or(view, |(low, _)| low)),
+                    resolve_target: Some(scene_view),
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Load,
                         store: wgpu::StoreOp::Discard,
@@ -838,6 +873,19 @@ impl Renderer {
             queue.submit([encoder.finish()]);
             wait(device)?;
             if let Some(t) = timer.as_deref_mut() {
+                t.resolve += start.elapsed();
+            }
+        }
+
+        if let Some((strip, _)) = &att.strip {
+            let start = Instant::now();
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("scene strip copy"),
+            });
+            encoder.copy_texture_to_texture(strip.as_image_copy(), target.as_image_copy(), strip.size());
+            queue.submit([encoder.finish()]);
+            if let Some(t) = timer.as_deref_mut() {
+                wait(device)?;
                 t.resolve += start.elapsed();
             }
         }
