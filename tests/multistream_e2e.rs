@@ -18,7 +18,7 @@ mod common;
 use std::path::Path;
 use std::time::Instant;
 
-use common::{MultistreamTrial, json, multistream_trials, succeeds, text};
+use common::{MultistreamTrial, json, multistream_trials, parallel_map, succeeds, text};
 use haptics::sim::protocols::multistream::{IMPORT_MAP, IMPORT_RATE_HZ, IMPORT_UNROLL};
 
 /// Trials 1..=TRAIN_TRIALS of every surface train, the rest test.
@@ -75,14 +75,15 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
 
     let captures = dir.path().join("captures");
     std::fs::create_dir_all(&captures).expect("captures folder");
-    let (mut train, mut test) = (Vec::new(), Vec::new());
-    let mut merged_somewhere = false;
-    for trial in &trials {
+    let imports = parallel_map(&trials, |trial| {
         let out = captures.join(format!("{}_trial{:02}.csv", trial.surface, trial.trial));
         let args = import_args(trial, &out);
         let printed = text(&succeeds(&args.iter().map(String::as_str).collect::<Vec<_>>()));
-        merged_somewhere |= printed.contains("merged");
-        let out = out.to_string_lossy().into_owned();
+        (out.to_string_lossy().into_owned(), printed.contains("merged"))
+    });
+    let merged_somewhere = imports.iter().any(|(_, merged)| *merged);
+    let (mut train, mut test) = (Vec::new(), Vec::new());
+    for (trial, (out, _)) in trials.iter().zip(imports) {
         if trial.trial <= TRAIN_TRIALS {
             train.push(out);
         } else {
@@ -162,8 +163,8 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
             min_accuracy: 0.92,
         },
     ];
-    let mut table = Vec::new();
-    for case in &cases {
+    // The longest case (the SOM over both sets) is first, so the others share the other cores.
+    let reports = parallel_map(&cases, |case| {
         let model = dir
             .path()
             .join(format!(
@@ -185,7 +186,10 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
         args.extend(test.iter().map(String::as_str));
         let t0 = Instant::now();
         let report = json(&args);
-        let eval_s = t0.elapsed().as_secs_f64();
+        (report, train_s, t0.elapsed().as_secs_f64())
+    });
+    let mut table = Vec::new();
+    for (case, (report, train_s, eval_s)) in cases.iter().zip(reports) {
         let accuracy = report["accuracy"].as_f64().expect("accuracy");
         assert_eq!(
             report["features"], case.trained_over,
