@@ -147,6 +147,14 @@ impl Gpu {
             1
         }
     }
+
+    /// Whether a texture can be viewed both with and without its sRGB format.
+    pub(crate) fn srgb_views(&self) -> bool {
+        self.adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::VIEW_FORMATS)
+    }
 }
 
 pub(crate) fn no_adapter(tried: &[&str], details: &[String]) -> RenderError {

@@ -82,6 +82,8 @@ struct Attachments {
     size: [u32; 2],
     scene_width: u32,
     msaa_view: Option<wgpu::TextureView>,
+    /// The same samples viewed without sRGB, for the opaque pass when it encodes them itself.
+    encoded_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
     /// The scene at the internal resolution, when it is lower than the frame's.
     low: Option<(wgpu::TextureView, wgpu::BindGroup)>,
@@ -145,6 +147,12 @@ pub struct Renderer {
     gpu: Gpu,
     format: wgpu::TextureFormat,
     msaa: u32,
+    /// Opaque surfaces are drawn in a pass of their own into the multisampled target viewed
+    /// without sRGB, their colour encoded by the fragment shader: lavapipe encodes to sRGB in
+    /// software on every store, so with 4 samples it encoded each pixel four times. See-through
+    /// layers, which must blend in linear light, follow in a pass with the sRGB view, and the
+    /// resolve averages the samples decoded, as before; the picture is the same.
+    encoded_opaque: bool,
     opaque: wgpu::RenderPipeline,
     translucent: wgpu::RenderPipeline,
     xray: wgpu::RenderPipeline,
@@ -210,10 +218,22 @@ impl Renderer {
     }
 
     pub(crate) fn new(gpu: Gpu, format: wgpu::TextureFormat, msaa: u32) -> Result<Self, RenderError> {
+        Self::with_encoding(gpu, format, msaa, true)
+    }
+
+    /// [`Renderer::new`], the opaque pass encoding its own sRGB only if `allow_encoded` (and
+    /// the adapter can; see `encoded_opaque`).
+    fn with_encoding(
+        gpu: Gpu,
+        format: wgpu::TextureFormat,
+        msaa: u32,
+        allow_encoded: bool,
+    ) -> Result<Self, RenderError> {
         if msaa != 1 && msaa != 4 {
             return Err(RenderError::BadMsaa(msaa));
         }
         let msaa = gpu.supported_msaa(format, msaa);
+        let encoded_opaque = allow_encoded && msaa > 1 && format.is_srgb() && gpu.srgb_views();
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -245,6 +265,7 @@ impl Renderer {
         });
         let pipeline = |kind: Pass| {
             let translucent = kind != Pass::Opaque;
+            let encoded = encoded_opaque && kind == Pass::Opaque;
             let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(match kind {
@@ -290,10 +311,18 @@ impl Renderer {
                 },
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
-                    entry_point: Some(if kind == Pass::Xray { "fs_xray" } else { "fs_main" }),
+                    entry_point: Some(match kind {
+                        Pass::Xray => "fs_xray",
+                        _ if encoded => "fs_encoded",
+                        _ => "fs_main",
+                    }),
                     compilation_options: Default::default(),
                     targets: &[Some(wgpu::ColorTargetState {
-                        format,
+                        format: if encoded {
+                            format.remove_srgb_suffix()
+                        } else {
+                            format
+                        },
                         blend: Some(if translucent {
                             wgpu::BlendState::ALPHA_BLENDING
                         } else {
@@ -333,6 +362,7 @@ impl Renderer {
             gpu,
             format,
             msaa,
+            encoded_opaque,
             opaque,
             translucent,
             xray,
@@ -524,7 +554,8 @@ impl Renderer {
             height: low_size[1],
             depth_or_array_layers: 1,
         };
-        let make = |label, format, samples, usage| {
+        let encoded = [self.format.remove_srgb_suffix()];
+        let make = |label, format, samples, usage, view_formats| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: extent,
@@ -533,20 +564,29 @@ impl Renderer {
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage,
-                view_formats: &[],
+                view_formats,
             })
         };
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let view = |t: wgpu::Texture| t.create_view(&Default::default());
-        let msaa_view =
-            (self.msaa > 1).then(|| view(make("msaa colour", self.format, self.msaa, attachment)));
-        let depth_view = view(make("depth", DEPTH_FORMAT, self.msaa, attachment));
+        let samples_views: &[wgpu::TextureFormat] = if self.encoded_opaque { &encoded } else { &[] };
+        let samples =
+            (self.msaa > 1).then(|| make("msaa colour", self.format, self.msaa, attachment, samples_views));
+        let encoded_view = samples.as_ref().filter(|_| self.encoded_opaque).map(|t| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(encoded[0]),
+                ..Default::default()
+            })
+        });
+        let msaa_view = samples.map(view);
+        let depth_view = view(make("depth", DEPTH_FORMAT, self.msaa, attachment, &[]));
         let strip = strip.then(|| {
             let texture = make(
                 "scene strip",
                 self.format,
                 1,
                 attachment | wgpu::TextureUsages::COPY_SRC,
+                &[],
             );
             let view = texture.create_view(&Default::default());
             (texture, view)
@@ -555,6 +595,7 @@ impl Renderer {
             size,
             scene_width,
             msaa_view,
+            encoded_view,
             depth_view,
             low,
             strip,
@@ -781,34 +822,62 @@ impl Renderer {
         };
         let mut encoder =
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("scene") });
-        {
-            let [r, g, b] = frame.clear_color;
-            let clear = wgpu::Color {
-                r: f64::from(r),
-                g: f64::from(g),
-                b: f64::from(b),
-                a: 1.0,
-            };
-            let (color_view, resolve_target) = match &att.msaa_view {
-                Some(msaa) => (msaa, if split_resolve { None } else { Some(scene_view) }),
-                None => (scene_view, None),
+        let [r, g, b] = frame.clear_color;
+        let clear = wgpu::Color {
+            r: f64::from(r),
+            g: f64::from(g),
+            b: f64::from(b),
+            a: 1.0,
+        };
+        // The opaque pass encodes its own colour into the samples viewed without sRGB; the
+        // see-through pass, which blends, and the resolve use the sRGB view (`encoded_opaque`).
+        let first_see_through = order
+            .iter()
+            .position(|&(_, kind)| kind != Pass::Opaque)
+            .unwrap_or(order.len());
+        let passes: Vec<(&wgpu::TextureView, &[(usize, Pass)])> = match (&att.encoded_view, &att.msaa_view) {
+            (Some(encoded), Some(msaa)) => vec![
+                (encoded, &order[..first_see_through]),
+                (msaa, &order[first_see_through..]),
+            ],
+            (None, Some(msaa)) => vec![(msaa, &order[..])],
+            (_, None) => vec![(scene_view, &order[..])],
+        };
+        let [low_w, low_h] = self.internal_size(size);
+        let scene_w = scene_width as f32 * low_w as f32 / size[0] as f32;
+        let last = passes.len() - 1;
+        for (p, (color_view, pass_items)) in passes.into_iter().enumerate() {
+            // The view without sRGB stores the clear colour as given.
+            let encoding = p == 0 && att.encoded_view.is_some();
+            let resolve_target =
+                (p == last && att.msaa_view.is_some() && !split_resolve).then_some(scene_view);
+            // The see-through pass goes on from the opaque pass's samples and depth.
+            let (color_load, depth_load) = if p == 0 {
+                let clear = if encoding { srgb_encoded(clear) } else { clear };
+                (wgpu::LoadOp::Clear(clear), wgpu::LoadOp::Clear(1.0))
+            } else {
+                (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("scene"),
+                label: Some(if p == 0 { "scene" } else { "scene see-through" }),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: color_view,
                     depth_slice: None,
                     resolve_target,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(clear),
+                        load: color_load,
                         store: wgpu::StoreOp::Store,
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &att.depth_view,
                     depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
+                        load: depth_load,
+                        store: if p == last {
+                            wgpu::StoreOp::Discard
+                        } else {
+                            wgpu::StoreOp::Store
+                        },
                     }),
                     stencil_ops: None,
                 }),
@@ -816,11 +885,9 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let [low_w, low_h] = self.internal_size(size);
-            let scene_w = scene_width as f32 * low_w as f32 / size[0] as f32;
             pass.set_viewport(0.0, 0.0, scene_w, low_h as f32, 0.0, 1.0);
             pass.set_bind_group(0, &self.globals_group, &[]);
-            for (i, kind) in order {
+            for &(i, kind) in pass_items {
                 let item = &items[i];
                 let Some(mesh) = self.meshes.get(&item.mesh) else {
                     continue;
@@ -1081,9 +1148,73 @@ fn make_object_buffer(
     (buffer, group)
 }
 
+/// `colour`'s linear RGB through the sRGB transfer function (as `encode_srgb` in scene.wgsl).
+fn srgb_encoded(colour: wgpu::Color) -> wgpu::Color {
+    let encode = |c: f64| {
+        let c = c.clamp(0.0, 1.0);
+        if c <= 0.0031308 {
+            12.92 * c
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        }
+    };
+    wgpu::Color {
+        r: encode(colour.r),
+        g: encode(colour.g),
+        b: encode(colour.b),
+        a: colour.a,
+    }
+}
+
 fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
     device
         .poll(wgpu::PollType::wait_indefinitely())
         .map(|_| ())
         .map_err(|e| RenderError::Gpu(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::{NeedleState, tissue_scene};
+    use crate::shapes;
+
+    /// The opaque pass that encodes its own sRGB draws the picture the sRGB target draws, up to
+    /// rounding, with and without see-through layers after it.
+    #[test]
+    fn encoded_opaque_pass_draws_the_same_picture() {
+        let tissue: Vec<_> = shapes::tissue_block().into_iter().map(Arc::new).collect();
+        let needle: Vec<_> = shapes::needle().into_iter().map(Arc::new).collect();
+        let renderer = |allow_encoded| {
+            let gpu = Gpu::headless(&GpuOptions::default()).unwrap();
+            let mut r = Renderer::with_encoding(gpu, HEADLESS_FORMAT, 4, allow_encoded).unwrap();
+            r.ensure_offscreen([320, 240]);
+            r
+        };
+        let (mut encoded, mut plain) = (renderer(true), renderer(false));
+        assert!(encoded.encoded_opaque && !plain.encoded_opaque);
+        let states = [
+            NeedleState::Pressing {
+                depth_m: 0.008,
+                radius_m: 0.012,
+            },
+            NeedleState::Inserted { depth_m: 0.03 },
+        ];
+        for state in states {
+            let frame = tissue_scene(&tissue, &needle, state);
+            let a = encoded.render(&frame).unwrap();
+            let b = plain.render(&frame).unwrap();
+            let c = crate::golden::compare(&a, &b, 1).unwrap();
+            assert_eq!(
+                c.differing_pixels, 0,
+                "{state:?}: {} pixels differ by more than 1",
+                c.differing_pixels
+            );
+            // Not vacuous: the tissue covers much of the picture in both.
+            let lit = (0..240)
+                .filter(|&y| a.pixel(160, y).is_some_and(|p| p[0] > 60))
+                .count();
+            assert!(lit > 60, "{state:?}: {lit} rows lit");
+        }
+    }
 }

@@ -1,5 +1,5 @@
 // Scene shader: Gaussian dimples bend deformable objects in the vertex stage; lighting is done in
-// linear space and the sRGB render target encodes it on store.
+// linear space and the sRGB render target encodes it on store (or `fs_encoded` does).
 
 const MAX_DIMPLES: u32 = 4u;
 
@@ -155,4 +155,18 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 fn fs_xray(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let lit = shade(in, front);
     return vec4<f32>(mix(lit.rgb, vec3<f32>(0.55, 0.8, 1.0), 0.35), 0.7);
+}
+
+// The sRGB transfer function (IEC 61966-2-1), for opaque surfaces drawn into a multisampled
+// target viewed without its sRGB format: encoded once per pixel here instead of once per sample
+// on store, which lavapipe does in software (see `Renderer::encoded_opaque`).
+fn encode_srgb(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, 12.92 * x, x <= vec3<f32>(0.0031308));
+}
+
+@fragment
+fn fs_encoded(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let c = shade(in, front);
+    return vec4<f32>(encode_srgb(c.rgb), c.a);
 }
