@@ -526,10 +526,10 @@ impl Renderer {
     }
 
     /// Attachments for a frame of `size` px whose scene fills its left `scene_width` px, drawn
-    /// at `scale` (into a texture of its own below 1). `strip` sizes the multisampled attachments
-    /// to the scene alone when its resolved image can be copied into the frame: lavapipe clears
-    /// and resolves every sample of them each frame, the part the overlay's panel then covers
-    /// too.
+    /// at `scale` (into a texture of its own below 1, as wide as the scene alone). `strip` sizes
+    /// the multisampled attachments to the scene alone when its resolved image can be copied
+    /// into the frame: lavapipe clears and resolves every sample of them each frame, the part
+    /// the overlay's panel then covers too.
     fn ensure_attachments(&mut self, size: [u32; 2], scene_width: u32, strip: bool) {
         let strip = strip && self.msaa > 1 && self.scale >= 1.0 && scene_width < size[0];
         if self
@@ -539,7 +539,7 @@ impl Renderer {
         {
             return;
         }
-        let low_size = self.internal_size(size);
+        let low_size = self.internal_size([scene_width, size[1]]);
         if self.scale < 1.0 {
             self.ensure_upscaler();
         }
@@ -550,7 +550,11 @@ impl Renderer {
             .map(|up| up.target(&self.gpu.device, self.format, low_size));
         let device = &self.gpu.device;
         let extent = wgpu::Extent3d {
-            width: if strip { scene_width } else { low_size[0] },
+            width: if strip || self.scale < 1.0 {
+                low_size[0]
+            } else {
+                size[0]
+            },
             height: low_size[1],
             depth_or_array_layers: 1,
         };
@@ -843,8 +847,8 @@ impl Renderer {
             (None, Some(msaa)) => vec![(msaa, &order[..])],
             (_, None) => vec![(scene_view, &order[..])],
         };
-        let [low_w, low_h] = self.internal_size(size);
-        let scene_w = scene_width as f32 * low_w as f32 / size[0] as f32;
+        // The scene's part of the frame, or the whole of its own texture below full resolution.
+        let [scene_w, scene_h] = self.internal_size([scene_width, size[1]]);
         let last = passes.len() - 1;
         for (p, (color_view, pass_items)) in passes.into_iter().enumerate() {
             // The view without sRGB stores the clear colour as given.
@@ -885,7 +889,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_viewport(0.0, 0.0, scene_w, low_h as f32, 0.0, 1.0);
+            pass.set_viewport(0.0, 0.0, scene_w as f32, scene_h as f32, 0.0, 1.0);
             pass.set_bind_group(0, &self.globals_group, &[]);
             for &(i, kind) in pass_items {
                 let item = &items[i];
@@ -959,7 +963,7 @@ impl Renderer {
 
         if let (Some((_, group)), Some(up)) = (&att.low, &self.upscaler) {
             let start = Instant::now();
-            up.draw(device, queue, view, group);
+            up.draw(device, queue, view, group, [scene_width, size[1]]);
             if let Some(t) = timer.as_deref_mut() {
                 wait(device)?;
                 t.draw += start.elapsed();

@@ -119,13 +119,15 @@ impl Upscaler {
         (view, group)
     }
 
-    /// Stretches the scene texture `group` samples over `view`.
+    /// Stretches the scene texture `group` samples over the left `scene_px` of `view` (the
+    /// overlay's panel, if any, covers the rest).
     pub(crate) fn draw(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         view: &wgpu::TextureView,
         group: &wgpu::BindGroup,
+        scene_px: [u32; 2],
     ) {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("upscale"),
@@ -147,6 +149,7 @@ impl Upscaler {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            pass.set_viewport(0.0, 0.0, scene_px[0] as f32, scene_px[1] as f32, 0.0, 1.0);
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, group, &[]);
             pass.draw(0..3, 0..1);

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use render::demo::{NeedleState, demo_overlay, tissue_scene};
 use render::egui;
-use render::{Camera, Frame, Material, Object, RenderError, Renderer, UiAction, shapes};
+use render::{Camera, Frame, Image, Material, Object, RenderError, Renderer, UiAction, shapes};
 
 fn plane_frame(color: [f32; 4]) -> Frame {
     let plane = Arc::new(shapes::tissue_box(
@@ -229,6 +229,37 @@ fn lower_internal_resolution_keeps_the_frame_size_and_costs_measured_quality() {
     r.set_scale(1.0).unwrap();
     let again = r.render(&frame).unwrap();
     assert_eq!(render::golden::psnr_db(&again, &full), Some(f64::INFINITY));
+}
+
+/// Beside the overlay's panel the lowered scene is drawn only as wide as its own part of the
+/// frame and stretched over that part alone: the panel is the full-resolution frame's, pixel for
+/// pixel, and the scene stands where it stands at full resolution.
+#[test]
+fn lower_internal_resolution_beside_the_panel_keeps_both_in_place() {
+    use render::bench::{TissueMesh, frame_with};
+    let (width, height) = (640, 480);
+    let frame = frame_with(TissueMesh::Graded, true);
+    let scene_px = width - render::PANEL_WIDTH_PT as u32;
+    let crop = |image: &Image, x0: u32, x1: u32| {
+        let rgba = (0..height)
+            .flat_map(|y| (x0..x1).flat_map(move |x| image.pixel(x, y).unwrap()))
+            .collect();
+        Image::from_rgba(x1 - x0, height, rgba).unwrap()
+    };
+    for msaa in [1, 4] {
+        let mut r = Renderer::headless(width, height, msaa).unwrap();
+        let full = r.render(&frame).unwrap();
+        r.set_scale(0.5).unwrap();
+        let half = r.render(&frame).unwrap();
+        assert_eq!(
+            crop(&half, scene_px, width).rgba,
+            crop(&full, scene_px, width).rgba,
+            "MSAA {msaa}: the panel changed"
+        );
+        let psnr = render::golden::psnr_db(&crop(&half, 0, scene_px), &crop(&full, 0, scene_px)).unwrap();
+        // 33 dB here; stretched over the whole frame's width it was 25 dB.
+        assert!(psnr > 30.0, "MSAA {msaa}: scene PSNR {psnr} dB");
+    }
 }
 
 /// The block cut by its dimple draws what the uniformly fine block draws: a handful of pixels
