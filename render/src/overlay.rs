@@ -283,13 +283,7 @@ impl OverlayLayer {
                 })
                 .collect();
             if let Some(panel) = self.panel.take() {
-                let [r, g, b] = target.clear;
-                let clear = wgpu::Color {
-                    r: f64::from(r),
-                    g: f64::from(g),
-                    b: f64::from(b),
-                    a: 1.0,
-                };
+                let clear = crate::renderer::opaque_colour(target.clear);
                 self.repaints += 1;
                 self.paint_primitives(
                     device,

@@ -826,13 +826,7 @@ impl Renderer {
         };
         let mut encoder =
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("scene") });
-        let [r, g, b] = frame.clear_color;
-        let clear = wgpu::Color {
-            r: f64::from(r),
-            g: f64::from(g),
-            b: f64::from(b),
-            a: 1.0,
-        };
+        let clear = opaque_colour(frame.clear_color);
         // The opaque pass encodes its own colour into the samples viewed without sRGB; the
         // see-through pass, which blends, and the resolve use the sRGB view (`encoded_opaque`).
         let first_see_through = order
@@ -1150,6 +1144,16 @@ fn make_object_buffer(
         }],
     });
     (buffer, group)
+}
+
+/// A clear colour from linear RGB, opaque.
+pub(crate) fn opaque_colour([r, g, b]: [f32; 3]) -> wgpu::Color {
+    wgpu::Color {
+        r: f64::from(r),
+        g: f64::from(g),
+        b: f64::from(b),
+        a: 1.0,
+    }
 }
 
 /// `colour`'s linear RGB through the sRGB transfer function (as `encode_srgb` in scene.wgsl).
