@@ -148,6 +148,11 @@ impl Gpu {
         }
     }
 
+    /// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe).
+    pub(crate) fn is_software(&self) -> bool {
+        self.adapter.get_info().device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Whether a texture can be viewed both with and without its sRGB format.
     pub(crate) fn srgb_views(&self) -> bool {
         self.adapter

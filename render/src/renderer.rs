@@ -147,9 +147,10 @@ pub struct Renderer {
     gpu: Gpu,
     format: wgpu::TextureFormat,
     msaa: u32,
-    /// Opaque surfaces are drawn in a pass of their own into the multisampled target viewed
-    /// without sRGB, their colour encoded by the fragment shader: lavapipe encodes to sRGB in
-    /// software on every store, so with 4 samples it encoded each pixel four times. See-through
+    /// On a software rasterizer, opaque surfaces are drawn in a pass of their own into the
+    /// multisampled target viewed without sRGB, their colour encoded by the fragment shader:
+    /// lavapipe encodes to sRGB in software on every store, so with 4 samples it encoded each
+    /// pixel four times. See-through
     /// layers, which must blend in linear light, follow in a pass with the sRGB view, and the
     /// resolve averages the samples decoded, as before; the picture is the same.
     encoded_opaque: bool,
@@ -218,7 +219,10 @@ impl Renderer {
     }
 
     pub(crate) fn new(gpu: Gpu, format: wgpu::TextureFormat, msaa: u32) -> Result<Self, RenderError> {
-        Self::with_encoding(gpu, format, msaa, true)
+        // A GPU encodes sRGB on store in hardware, for free: there the second pass would only
+        // cost.
+        let software = gpu.is_software();
+        Self::with_encoding(gpu, format, msaa, software)
     }
 
     /// [`Renderer::new`], the opaque pass encoding its own sRGB only if `allow_encoded` (and
