@@ -162,6 +162,16 @@ impl Gpu {
     }
 }
 
+/// A clear colour from linear RGB, opaque.
+pub(crate) fn opaque_colour([r, g, b]: [f32; 3]) -> wgpu::Color {
+    wgpu::Color {
+        r: f64::from(r),
+        g: f64::from(g),
+        b: f64::from(b),
+        a: 1.0,
+    }
+}
+
 pub(crate) fn no_adapter(tried: &[&str], details: &[String]) -> RenderError {
     let tried = if tried.is_empty() {
         "no backends".to_string()

@@ -283,7 +283,7 @@ impl OverlayLayer {
                 })
                 .collect();
             if let Some(panel) = self.panel.take() {
-                let clear = crate::renderer::opaque_colour(target.clear);
+                let clear = crate::gpu::opaque_colour(target.clear);
                 self.repaints += 1;
                 self.paint_primitives(
                     device,

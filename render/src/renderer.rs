@@ -13,7 +13,7 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::{Frame, MAX_DIMPLES, Object, UiAction};
-use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions};
+use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions, opaque_colour};
 use crate::image::Image;
 use crate::mesh::MeshData;
 use crate::overlay::{OverlayLayer, PanelTarget};
@@ -1148,16 +1148,6 @@ fn make_object_buffer(
         }],
     });
     (buffer, group)
-}
-
-/// A clear colour from linear RGB, opaque.
-pub(crate) fn opaque_colour([r, g, b]: [f32; 3]) -> wgpu::Color {
-    wgpu::Color {
-        r: f64::from(r),
-        g: f64::from(g),
-        b: f64::from(b),
-        a: 1.0,
-    }
 }
 
 /// `colour`'s linear RGB through the sRGB transfer function (as `encode_srgb` in scene.wgsl).
