@@ -150,9 +150,9 @@ pub struct Renderer {
     /// On a software rasterizer, opaque surfaces are drawn in a pass of their own into the
     /// multisampled target viewed without sRGB, their colour encoded by the fragment shader:
     /// lavapipe encodes to sRGB in software on every store, so with 4 samples it encoded each
-    /// pixel four times. See-through
-    /// layers, which must blend in linear light, follow in a pass with the sRGB view, and the
-    /// resolve averages the samples decoded, as before; the picture is the same.
+    /// pixel four times. See-through layers, which must blend in linear light, follow in a pass
+    /// with the sRGB view, and the resolve averages the samples decoded, as before; the picture
+    /// is the same.
     encoded_opaque: bool,
     opaque: wgpu::RenderPipeline,
     translucent: wgpu::RenderPipeline,
@@ -849,13 +849,16 @@ impl Renderer {
         let [scene_w, scene_h] = self.internal_size([scene_width, size[1]]);
         let last = passes.len() - 1;
         for (p, (color_view, pass_items)) in passes.into_iter().enumerate() {
-            // The view without sRGB stores the clear colour as given.
-            let encoding = p == 0 && att.encoded_view.is_some();
             let resolve_target =
                 (p == last && att.msaa_view.is_some() && !split_resolve).then_some(scene_view);
             // The see-through pass goes on from the opaque pass's samples and depth.
             let (color_load, depth_load) = if p == 0 {
-                let clear = if encoding { srgb_encoded(clear) } else { clear };
+                // The view without sRGB stores the clear colour as given.
+                let clear = if att.encoded_view.is_some() {
+                    srgb_encoded(clear)
+                } else {
+                    clear
+                };
                 (wgpu::LoadOp::Clear(clear), wgpu::LoadOp::Clear(1.0))
             } else {
                 (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
