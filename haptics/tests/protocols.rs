@@ -308,6 +308,32 @@ fn a_two_patch_stroke_changes_surface_at_the_seam() {
     );
 }
 
+/// A faster two-patch stroke rubs its second patch as long as one at the thesis's speed does,
+/// so that the time to follow the change is measured over the same span at every speed; a
+/// slower one keeps the half stroke.
+#[test]
+fn a_two_patch_stroke_rubs_its_second_patch_long_enough_at_any_speed() {
+    let surfaces = nakano_surfaces();
+    let (first, second) = (SurfacePatch::new(&surfaces[1]), SurfacePatch::new(&surfaces[6]));
+    for speed_mps in [0.002, nakano::SPEED_MPS, 0.02] {
+        let c = nakano::two_patch_run(&first, &second, 2, 1, speed_mps).unwrap();
+        let change_s: f64 = c
+            .metadata()
+            .get(recognize::SURFACE_CHANGE_S_KEY)
+            .unwrap()
+            .parse()
+            .unwrap();
+        let after_s = c.time().last().unwrap() - change_s;
+        let half_stroke_s = (nakano::STROKE_M - nakano::TWO_PATCH_CHANGE_M) / speed_mps;
+        let expected_s = half_stroke_s.max(nakano::TWO_PATCH_AFTER_S);
+        assert!(
+            (after_s - expected_s).abs() < 5e-3,
+            "{speed_mps} m/s: {after_s} s after the seam"
+        );
+        assert!(after_s >= 3.0 - 5e-3, "{speed_mps} m/s: {after_s} s");
+    }
+}
+
 #[test]
 fn same_seed_same_bytes_other_seed_other_noise() {
     let a = tempfile::tempdir().unwrap();

@@ -59,8 +59,8 @@ pub(crate) struct GenArgs {
     rub_speed_mps: Option<f64>,
     /// Write only two-patch rubbing strokes (into nakano_two_patch/): each of Nakano's surfaces
     /// rubbed onto the next one halfway through the stroke, runs 1 and 2, at --rub-speed-mps if
-    /// given; their metadata say when the surface changes, which `recognize eval --sequential`
-    /// times.
+    /// given (a faster stroke rubs the second surface for 3 s, as one at 5 mm/s does); their
+    /// metadata say when the surface changes, which `recognize eval --sequential` times.
     #[arg(long)]
     two_patch: bool,
 }

@@ -67,6 +67,12 @@ pub fn rubbing_run_at(
 /// so that each patch is rubbed for half the stroke (3 s at 5 mm/s).
 pub const TWO_PATCH_CHANGE_M: f64 = STROKE_M / 2.0;
 
+/// The least time a two-patch stroke rubs its second patch, s: what the half stroke lasts at
+/// [`SPEED_MPS`]. A faster stroke goes on past the half stroke's end for that long, so that
+/// how soon a recognizer follows the change is measured over the same time at every speed
+/// (at 20 mm/s the half stroke alone would end 0.75 s after the seam).
+pub const TWO_PATCH_AFTER_S: f64 = (STROKE_M - TWO_PATCH_CHANGE_M) / SPEED_MPS;
+
 /// The file a two-patch run is written to, inside the set's `nakano_two_patch/` folder.
 pub fn two_patch_file_name(first: &RubbingSurface, second: &RubbingSurface, run: u32) -> String {
     format!(
@@ -77,7 +83,8 @@ pub fn two_patch_file_name(first: &RubbingSurface, second: &RubbingSurface, run:
 
 /// One stroke that starts on `first` and slides onto `second` at [`TWO_PATCH_CHANGE_M`] of
 /// travel, as over two patches laid side by side (the seam is a step in height where the two
-/// surfaces' profiles meet), at `speed_mps`. Its metadata name the second surface
+/// surfaces' profiles meet), at `speed_mps`, rubbing the second for the rest of the stroke or
+/// [`TWO_PATCH_AFTER_S`], whichever is longer. Its metadata name the second surface
 /// (`surface_after`) and the time the tip crosses the seam (`surface_change_s`), so a
 /// recognizer's evaluation can time how soon it follows the change.
 pub fn two_patch_run(
@@ -140,8 +147,12 @@ fn stroke(
         kind::NORMAL_FORCE_N,
         kind::FRICTION_FORCE_N,
     ]);
+    let stroke_m = match then {
+        None => STROKE_M,
+        Some(_) => STROKE_M.max(TWO_PATCH_CHANGE_M + speed_mps * TWO_PATCH_AFTER_S),
+    };
     // The linear ramp covers half the distance a full-speed start would.
-    let steps = ((STROKE_M / speed_mps + RAMP_S / 2.0) * RATE_HZ).round() as usize;
+    let steps = ((stroke_m / speed_mps + RAMP_S / 2.0) * RATE_HZ).round() as usize;
     let mut x = 0.0;
     let mut change_s = None;
     for k in 0..steps {
