@@ -60,12 +60,14 @@ impl Training {
 /// alike).
 #[derive(Debug, Args)]
 pub(crate) struct TrainOptions {
-    /// Which features: nakano (rubbing windows), spectral (one histogram per scratch) or both
+    /// Which features: nakano (rubbing windows), spectral (one histogram per scratch), both
     /// (rubbing windows with accelerometer columns: three axes, or a single-axis
-    /// vibration_mps2). Default: both when the first capture carries the columns of both and
-    /// the windows are long enough for a histogram (1.92 s); else the method's own (som nakano,
-    /// knn and svm spectral), else the set the capture carries.
-    #[arg(long, value_enum, value_name = "nakano|spectral|both")]
+    /// vibration_mps2) or vibration (knn, svm: each such window's vibration spectrum alone, 25
+    /// bands of 8 Hz, windows of at least 0.125 s, to fuse with a nakano classifier in `eval
+    /// --sequential --fuse`). Default: both when the first capture carries the columns of both
+    /// and the windows are long enough for a histogram (1.92 s); else the method's own (som
+    /// nakano, knn and svm spectral), else the set the capture carries.
+    #[arg(long, value_enum, value_name = "nakano|spectral|both|vibration")]
     features: Option<Features>,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
     /// filters' 0.27 s lookahead, none with --mirrored-end).
@@ -191,6 +193,7 @@ enum Features {
     Nakano,
     Spectral,
     Both,
+    Vibration,
 }
 
 impl From<Features> for FeatureSet {
@@ -199,6 +202,7 @@ impl From<Features> for FeatureSet {
             Features::Nakano => Self::Nakano,
             Features::Spectral => Self::Spectral,
             Features::Both => Self::Both,
+            Features::Vibration => Self::Vibration,
         }
     }
 }

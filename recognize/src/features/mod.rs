@@ -19,10 +19,15 @@
 //!   window of a rubbing capture that also has accelerometer columns (three axes, or the
 //!   single-axis `vibration_mps2`) gets Nakano's five features followed by the 125 cells of the
 //!   spectrotemporal histogram of the same window's samples.
+//! - **`vibration`** (k-NN, SVM: the window variants): each such window's vibration spectrum
+//!   alone ([`window_spectrum`]), short enough for anytime decisions; its classifier's evidence
+//!   is fused with a Nakano classifier's over time, each weighed by its measured reliability
+//!   (`recognize eval --sequential --fuse`).
 
 pub mod nakano;
 mod scaling;
 pub mod spectral;
+pub mod window_spectrum;
 mod windowing;
 
 use serde::{Deserialize, Serialize};
@@ -30,6 +35,7 @@ use serde::{Deserialize, Serialize};
 use crate::{LabelledCapture, RecognizeError};
 use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLUMN};
 use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION_COLUMN};
+use window_spectrum::SPECTRUM_LEN;
 
 pub use scaling::WindowScaling;
 pub use windowing::{
@@ -49,6 +55,11 @@ pub enum FeatureSet {
     /// vibration axis): the five Nakano features followed by the histogram of the window's
     /// acceleration (130 features).
     Both,
+    /// Per window of a rubbing capture with accelerometer columns: the vibration spectrum of
+    /// the window alone ([`window_spectrum`], 25 bands), for a classifier whose evidence is
+    /// fused with a Nakano classifier's (`recognize eval --sequential --fuse`). The windows are
+    /// placed as Nakano's are, so the capture needs their columns too.
+    Vibration,
 }
 
 impl FeatureSet {
@@ -58,6 +69,7 @@ impl FeatureSet {
             Self::Nakano => "nakano",
             Self::Spectral => "spectral",
             Self::Both => "both",
+            Self::Vibration => "vibration",
         }
     }
 
@@ -67,6 +79,7 @@ impl FeatureSet {
             Self::Nakano => nakano::FEATURES,
             Self::Spectral => FEATURE_LEN,
             Self::Both => nakano::FEATURES + FEATURE_LEN,
+            Self::Vibration => SPECTRUM_LEN,
         }
     }
 
@@ -76,6 +89,7 @@ impl FeatureSet {
             Self::Nakano => &[nakano::FEATURES],
             Self::Spectral => &[FEATURE_LEN],
             Self::Both => &[nakano::FEATURES, FEATURE_LEN],
+            Self::Vibration => &[SPECTRUM_LEN],
         }
     }
 
@@ -86,6 +100,7 @@ impl FeatureSet {
             Self::Nakano => nakano.collect(),
             Self::Spectral => histogram_names(),
             Self::Both => nakano.chain(histogram_names()).collect(),
+            Self::Vibration => (0..SPECTRUM_LEN).map(|b| format!("spectrum_f{b}")).collect(),
         }
     }
 
@@ -96,7 +111,7 @@ impl FeatureSet {
     pub fn missing_columns(self, capture: &LabelledCapture) -> Vec<String> {
         let has = |name: &str| capture.capture.columns().iter().any(|c| c == name);
         let mut missing = Vec::new();
-        if matches!(self, Self::Nakano | Self::Both) {
+        if matches!(self, Self::Nakano | Self::Both | Self::Vibration) {
             for name in [POSITION_COLUMN, HEIGHT_COLUMN] {
                 if !has(name) {
                     missing.push(name.to_owned());
@@ -106,7 +121,7 @@ impl FeatureSet {
                 missing.push(format!("{FRICTION_COLUMN} (or {COMMAND_FORCE_COLUMN})"));
             }
         }
-        if matches!(self, Self::Spectral | Self::Both) {
+        if matches!(self, Self::Spectral | Self::Both | Self::Vibration) {
             let before = missing.len();
             missing.extend(ACCEL_COLUMNS.iter().filter(|c| !has(c)).map(|c| (*c).to_owned()));
             // The histogram (of a whole scratch, or of each window for `both`) also works

@@ -210,11 +210,7 @@ impl SpectrogramPlan {
             });
         }
         let frame_len = ((FRAME_S * rate_hz).round() as usize).max(2);
-        let spectrum_bins = frame_len / 2 + 1;
-        // The small slack keeps a band edge that falls exactly on a bin (200 Hz at 400 Hz or
-        // 2.2 kHz) inside the band despite rounding in the division.
-        let in_band = (BAND_HZ * frame_len as f64 / rate_hz + 1e-9).floor() as usize + 1;
-        let band_bins = in_band.min(spectrum_bins);
+        let band_bins = band_bins(rate_hz, frame_len);
         let fft = RealFftPlanner::<f64>::new().plan_fft_forward(frame_len);
         let window = (0..frame_len)
             .map(|i| {
@@ -266,7 +262,7 @@ impl SpectrogramPlan {
     /// Histogram bin of DFT bin `k`, or `None` above the band: the band's DFT bins are split
     /// into 25 runs of (almost) equal width, `⌊k·25/band_bins⌋` (5 or 6 DFT bins, 7.8–9.4 Hz).
     pub fn frequency_bin(&self, k: usize) -> Option<usize> {
-        (k < self.band_bins).then(|| k * FREQUENCY_BINS / self.band_bins)
+        frequency_bin(k, self.band_bins)
     }
 
     /// Spectrogram of `signal` (normally the moving-average deviation): frames start every
@@ -376,20 +372,42 @@ impl SpectrogramPlan {
                 count[cell] += 1;
             }
         }
-        let mut out = [0.0; FEATURE_LEN];
-        for ((o, s), c) in out.iter_mut().zip(sum).zip(count) {
-            if c > 0 {
-                *o = s / c as f64;
-            }
-        }
-        if scale == CellScale::UnitSum {
-            let total: f64 = out.iter().sum();
-            if total > 0.0 {
-                out.iter_mut().for_each(|v| *v /= total);
-            }
-        }
-        out
+        cell_means(sum, count, scale)
     }
+}
+
+/// DFT bins of a `frame_len`-sample frame at `rate_hz` inside the band `0 … BAND_HZ` (or up to
+/// Nyquist, if lower).
+pub(crate) fn band_bins(rate_hz: f64, frame_len: usize) -> usize {
+    let spectrum_bins = frame_len / 2 + 1;
+    // The small slack keeps a band edge that falls exactly on a bin (200 Hz at 400 Hz or
+    // 2.2 kHz) inside the band despite rounding in the division.
+    let in_band = (BAND_HZ * frame_len as f64 / rate_hz + 1e-9).floor() as usize + 1;
+    in_band.min(spectrum_bins)
+}
+
+/// Frequency bin of DFT bin `k` of a band of `band_bins` DFT bins, or `None` above it:
+/// `⌊k·25/band_bins⌋`.
+pub(crate) fn frequency_bin(k: usize, band_bins: usize) -> Option<usize> {
+    (k < band_bins).then(|| k * FREQUENCY_BINS / band_bins)
+}
+
+/// Each cell's mean magnitude (`sum / count`; an empty cell is 0), then scaled as `scale`
+/// says.
+pub(crate) fn cell_means<const N: usize>(sum: [f64; N], count: [usize; N], scale: CellScale) -> [f64; N] {
+    let mut out = [0.0; N];
+    for ((o, s), c) in out.iter_mut().zip(sum).zip(count) {
+        if c > 0 {
+            *o = s / c as f64;
+        }
+    }
+    if scale == CellScale::UnitSum {
+        let total: f64 = out.iter().sum();
+        if total > 0.0 {
+            out.iter_mut().for_each(|v| *v /= total);
+        }
+    }
+    out
 }
 
 /// Time bin of frame `f` of `frames`: `⌊f·5/frames⌋`, so each bin holds a fifth of the

@@ -5,7 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
 use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
-use super::spectral::{ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
+use super::spectral::{self, ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
+use super::window_spectrum::WindowSpectrumPlan;
 use crate::{LabelledCapture, RecognizeError};
 use capture::Capture;
 
@@ -626,7 +627,7 @@ pub(crate) fn window_vectors(
             .collect());
     }
     let nakano = windows(c, windowing)?;
-    if features != FeatureSet::Both {
+    if features == FeatureSet::Nakano {
         return Ok(nakano.into_iter().map(|(s, n, f)| (s, n, f.to_vec())).collect());
     }
     let spectral = |source| RecognizeError::Features {
@@ -646,6 +647,9 @@ pub(crate) fn window_vectors(
         let [x, y, z] = ACCEL_COLUMNS;
         Axes::Three(column(x)?, column(y)?, column(z)?)
     };
+    if features == FeatureSet::Vibration {
+        return vibration_vectors(nakano, windowing, axes, cell_scale).map_err(spectral);
+    }
     let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
     nakano
@@ -660,6 +664,38 @@ pub(crate) fn window_vectors(
             }
             .map_err(spectral)?;
             Ok((s, n, f.iter().copied().chain(h).collect()))
+        })
+        .collect()
+}
+
+/// [`FeatureSet::Vibration`]'s vectors of Nakano's windows: each window's own samples (the
+/// `len` that end where the window ends, so that a window over travel reads the same stretch
+/// as its Nakano features), all before its decision.
+fn vibration_vectors(
+    nakano: Vec<(usize, usize, [f64; FEATURES])>,
+    windowing: &NakanoWindowing,
+    axes: Axes<'_>,
+    cell_scale: CellScale,
+) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
+    let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
+    nakano
+        .into_iter()
+        .map(|(s, n, _)| {
+            let end = s + windowing.window_samples;
+            let range = end.saturating_sub(n)..end;
+            let spectrum = match axes {
+                Axes::Three(x, y, z) => {
+                    let r = range.start.min(x.len())..range.end.min(x.len());
+                    plan.features(
+                        &spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r])?,
+                        cell_scale,
+                    )?
+                }
+                Axes::One(v) => {
+                    plan.features(&v[range.start.min(v.len())..range.end.min(v.len())], cell_scale)?
+                }
+            };
+            Ok((s, n, spectrum.to_vec()))
         })
         .collect()
 }

@@ -512,7 +512,7 @@ fn check_window_body(
     if features == FeatureSet::Spectral {
         return Err((
             "body.features".into(),
-            "windows carry `nakano` or `both` features".into(),
+            "windows carry `nakano`, `both` or `vibration` features".into(),
         ));
     }
     scaling

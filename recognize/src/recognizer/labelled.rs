@@ -160,7 +160,7 @@ impl KeptFeatures {
             .find(|k| {
                 k.windowing == *windowing
                     && match features {
-                        FeatureSet::Nakano => true,
+                        FeatureSet::Nakano => matches!(k.features, FeatureSet::Nakano | FeatureSet::Both),
                         _ => k.features == features && k.cell_scale == cell_scale,
                     }
             })

@@ -95,7 +95,7 @@ impl Method {
         let own = self.default_features();
         let other = match own {
             FeatureSet::Nakano => FeatureSet::Spectral,
-            FeatureSet::Spectral | FeatureSet::Both => FeatureSet::Nakano,
+            FeatureSet::Spectral | FeatureSet::Both | FeatureSet::Vibration => FeatureSet::Nakano,
         };
         let rate_hz = capture.capture.metadata().rate_hz();
         let holds_a_histogram = SpectrogramPlan::at_rate(rate_hz)
@@ -132,7 +132,7 @@ pub struct TrainSettings {
     /// Windowed features: time between decisions (and between training windows), s.
     pub hop_s: f64,
     /// Windowed features: decide each window at its last sample
-    /// ([`NakanoWindowing::mirrored_end`]).
+    /// ([`NakanoWindowing::mirrored_end`]); always so for `vibration`.
     pub mirrored_end: bool,
     /// Windowed features: filter the friction over travel
     /// ([`NakanoWindowing::friction_over_travel`], at [`FrictionOverTravel::protocol`]'s
@@ -215,7 +215,9 @@ impl TrainSettings {
             None => windowing,
         };
         let windowing = NakanoWindowing {
-            mirrored_end: self.mirrored_end,
+            // Nothing of a window's vibration spectrum waits for a filter's lookahead, so its
+            // windows are decided at their last sample.
+            mirrored_end: self.mirrored_end || self.features == FeatureSet::Vibration,
             friction_over_travel: self.friction_over_travel.then(FrictionOverTravel::protocol),
             ..windowing
         };

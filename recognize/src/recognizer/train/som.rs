@@ -73,6 +73,12 @@ impl Trainer for SomTrainer {
                 };
                 RecognizerFile::train_som_scratches(captures, params, settings.cell_scale)
             }
+            FeatureSet::Vibration => Err(RecognizeError::Config {
+                of: "training",
+                reason: "`--features vibration` trains a k-NN or an SVM (whose window \
+                         probabilities are fused with a Nakano classifier's); a SOM names a node, \
+                         not a distribution over the surfaces",
+            }),
         }
     }
 }
