@@ -323,6 +323,30 @@ pub enum RecognizeError {
         /// Classes of this one.
         got: usize,
     },
+    /// Recognizers fused over time name different surfaces, or the same in another order.
+    #[error("recognizer {index} names the surfaces {}, the first {}: fused recognizers must be trained on the same surfaces", got.join(", "), expected.join(", "))]
+    FusionSurfaces {
+        /// Index of the recognizer among those fused.
+        index: usize,
+        /// The first recognizer's surfaces.
+        expected: Vec<String>,
+        /// This one's.
+        got: Vec<String>,
+    },
+    /// A recognizer fused over time carries no measured reliability to weigh its evidence by.
+    #[error(
+        "recognizer {index} ({method} over {features} windows) has no cross-validated accuracy to weigh \
+         its evidence by: train an SVM on captures of at least two runs or trials (its windows are \
+         cross-validated with whole runs or trials held out)"
+    )]
+    NoReliability {
+        /// Index of the recognizer among those fused.
+        index: usize,
+        /// Its method.
+        method: &'static str,
+        /// Its features.
+        features: &'static str,
+    },
     /// A weight is negative or not finite.
     #[error("weight {index} is {weight}; weights must be finite and non-negative")]
     BadWeight {

@@ -50,7 +50,7 @@ pub use recognizer::{
     som_nodes, som_params, train, trial_groups, window_som_nodes, window_svc_params,
 };
 pub use recognizer::{
-    Calibration, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,
+    Calibration, FusionMember, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,
     SequentialRow, SurfaceChange, WindowClassifier,
 };
 pub use sequential::{SequentialParams, SequentialParamsBuilder, SequentialState, SequentialStep};

@@ -127,8 +127,15 @@ struct EvalArgs {
     change_odds: f64,
     /// With --sequential: the exponent each window's probabilities are raised to, in (0, 1];
     /// by default hop / window, so that overlapping windows count each sample once.
-    #[arg(long, value_name = "W", requires = "sequential")]
+    #[arg(long, value_name = "W", requires = "sequential", conflicts_with = "fuse")]
     window_weight: Option<f64>,
+    /// With --sequential: fuse this recognizer's evidence into the posterior too (repeatable):
+    /// an SVM over windows of the same surfaces, trained on at least two runs or trials (so
+    /// that its accuracy was cross-validated), such as one over `--features vibration`. Every recognizer's windows count in the order they are
+    /// decided, each weighing hop / window times its cross-validated accuracy above chance
+    /// relative to the most reliable recognizer's.
+    #[arg(long, value_name = "MODEL.json", requires = "sequential")]
+    fuse: Vec<PathBuf>,
     #[command(flatten)]
     input: super::import_cmd::MappedCaptures,
 }
@@ -409,10 +416,29 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     if !args.window_s.is_empty() {
         anyhow::bail!("--sequential decides on the recognizer's own windows: leave out --window-s");
     }
-    let needs = FeatureNeeds::sequential(model).with_context(|| args.model.display().to_string())?;
-    let params = model
-        .sequential_params(args.memory_s)
-        .context("a recognizer with window probabilities")?;
+    let others = args
+        .fuse
+        .iter()
+        .map(|path| RecognizerFile::load(path).with_context(|| path.display().to_string()))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let others: Vec<&RecognizerFile> = others.iter().collect();
+    let named = || {
+        std::iter::once(&args.model)
+            .chain(&args.fuse)
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let needs = FeatureNeeds::sequential_fused(model, &others).with_context(named)?;
+    let params = if others.is_empty() {
+        model
+            .sequential_params(args.memory_s)
+            .context("a recognizer with window probabilities")?
+    } else {
+        model
+            .fused_sequential_params(&others, args.memory_s)
+            .with_context(named)?
+    };
     let params = if args.change_odds == 0.0 {
         params.without_change_test()
     } else {
@@ -424,7 +450,7 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     };
     let rate_hz = model.windowing().map(|w| w.rate_hz);
     let captures = read_keeping(&args.input, &args.captures, rate_hz, |_| Ok(needs.clone()))?;
-    let e = model.evaluate_sequential(&captures, &args.sequential, params)?;
+    let e = model.evaluate_sequential_fused(&others, &captures, &args.sequential, params)?;
     let plot = match &args.plots {
         Some(dir) => {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -459,6 +485,25 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         e.params.weight(),
         e.params.memory()
     );
+    if !e.fused.is_empty() {
+        println!(
+            "fused with the evidence of (each window's weight: hop / window × reliability over the most reliable's):"
+        );
+        for (path, m) in std::iter::once(&args.model).chain(&args.fuse).zip(&e.fused) {
+            println!(
+                "  {}: {} over {} windows of {} s every {:.2} s, cross-validated accuracy {:.1} %, \
+                 reliability {:.3}, weight {:.3}",
+                path.display(),
+                m.method,
+                m.features,
+                m.window_s,
+                m.hop_s,
+                100.0 * m.accuracy,
+                m.reliability,
+                m.weight
+            );
+        }
+    }
     println!(
         "{:>9} {:>8} {:>10} {:>12} {:>14} {:>26} {:>10} {:>8}",
         "threshold",

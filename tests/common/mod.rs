@@ -96,6 +96,18 @@ pub fn nakano_captures(dir: &Path) -> Vec<PathBuf> {
 /// Trains an SVM over Nakano's windows on `train` with `extra` options into `dir/name`
 /// (`palpus recognize train … --method svm --features nakano`), and returns the model's path.
 pub fn train_nakano_svm(dir: &Path, name: &str, train: &[String], extra: &[&str]) -> String {
+    train_svm(dir, name, "nakano", train, extra)
+}
+
+/// Trains an SVM over windows of `features` on `train` with `extra` options into `dir/name`
+/// (`palpus recognize train … --method svm --features F`), and returns the model's path.
+pub fn train_svm<S: AsRef<str>>(
+    dir: &Path,
+    name: &str,
+    features: &str,
+    train: &[S],
+    extra: &[&str],
+) -> String {
     let out = dir.join(name).to_string_lossy().into_owned();
     let mut args = vec![
         "recognize",
@@ -103,12 +115,12 @@ pub fn train_nakano_svm(dir: &Path, name: &str, train: &[String], extra: &[&str]
         "--method",
         "svm",
         "--features",
-        "nakano",
+        features,
         "--out",
         &out,
     ];
     args.extend_from_slice(extra);
-    args.extend(train.iter().map(String::as_str));
+    args.extend(train.iter().map(AsRef::as_ref));
     succeeds(&args);
     out
 }

@@ -86,6 +86,20 @@ impl FeatureNeeds {
         }
     }
 
+    /// What [`RecognizerFile::evaluate_sequential_fused`] reads: every recognizer's
+    /// [`FeatureNeeds::sequential`].
+    pub fn sequential_fused(
+        model: &RecognizerFile,
+        others: &[&RecognizerFile],
+    ) -> Result<Self, RecognizeError> {
+        others.iter().try_fold(Self::sequential(model)?, |needs, other| {
+            Ok(Self::sequential(other)?
+                .windows
+                .into_iter()
+                .fold(needs, |needs, (w, f, s)| needs.with_windows(w, f, s)))
+        })
+    }
+
     /// Whether nothing is needed.
     pub fn is_empty(&self) -> bool {
         self.windows.is_empty() && self.histograms.is_empty()

@@ -38,7 +38,7 @@ pub use labelled::{
     BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SurfaceChange,
 };
 pub use sequential_eval::{
-    Calibration, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
+    Calibration, FusionMember, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
 };
 pub use train::{
     CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC,

@@ -1,6 +1,20 @@
 //! Anytime decisions on labelled captures: a k-NN's or SVM's window probabilities accumulated
 //! from contact on ([`crate::sequential`]), scored for each threshold by how often a named
 //! surface is right, how soon one is named, and how well the posterior is calibrated.
+//!
+//! **Fusing what the tool feels.** Several recognizers over the same surfaces (one over
+//! Nakano's friction and roughness, one over the vibration spectrum) can feed one posterior:
+//! every recognizer's windows are taken in the order they are decided, each raised to its own
+//! weight, so a sense that speaks sooner is heard sooner. A recognizer's weight is its own
+//! `hop / window` (each sample counted once) times its measured reliability relative to the
+//! most reliable one's, after Sinapov et al.'s reliability-weighted fusion (IEEE T-RO 2011,
+//! Sec. IV-C): the reliability is its cross-validated accuracy per window (recorded when it was
+//! trained, whole runs or trials held out) less chance, `(a − 1/K) / (1 − 1/K)` for `K` surfaces, so a
+//! recognizer no better than a guess adds nothing. The most reliable recognizer weighs as it
+//! would alone; a less reliable one less, so that where the two disagree the more reliable
+//! wins. Multiplying the two is right only as far as they err independently (friction and
+//! vibration are different sensors, but the same surface drives both), so the calibration of
+//! the fused posterior is reported beside its accuracy.
 
 use std::borrow::Borrow;
 
@@ -105,6 +119,29 @@ pub struct SequentialEvaluation {
     /// One per threshold, in the order given.
     pub rows: Vec<SequentialRow>,
     pub calibration: Calibration,
+    /// For a fused evaluation, each recognizer fused (the first is the one the window
+    /// settings above describe) and the weight of its evidence; empty for one recognizer.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fused: Vec<FusionMember>,
+}
+
+/// One recognizer of a fused anytime evaluation
+/// ([`RecognizerFile::evaluate_sequential_fused`]) and the weight of its evidence.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FusionMember {
+    /// Its method and features.
+    pub method: &'static str,
+    pub features: &'static str,
+    /// Its windows' length and hop, s.
+    pub window_s: f64,
+    pub hop_s: f64,
+    /// Its accuracy per window under cross-validation when it was trained.
+    pub accuracy: f64,
+    /// That accuracy's share above chance, `(a − 1/K) / (1 − 1/K)`.
+    pub reliability: f64,
+    /// The exponent its windows' probabilities are raised to: `hop / window` times its
+    /// reliability over the most reliable recognizer's.
+    pub weight: f64,
 }
 
 /// One capture's windows: truth, and each window's time from contact and probabilities.
@@ -154,6 +191,18 @@ impl RecognizerFile {
         })
     }
 
+    /// An SVM over windows' accuracy per window under the cross-validation recorded when it
+    /// was trained (at its C); `None` for any other recognizer, or one trained on captures that
+    /// could not be cross-validated (a single run or trial).
+    fn cross_validated_window_accuracy(&self) -> Option<f64> {
+        match &self.body {
+            super::RecognizerBody::SvmWindows { c_search, .. } => {
+                c_search.as_ref().and_then(|s| s.accuracy())
+            }
+            _ => None,
+        }
+    }
+
     /// The windowing of a k-NN or SVM over windows.
     fn window_probability_windowing(&self) -> Option<&NakanoWindowing> {
         match &self.body {
@@ -175,29 +224,131 @@ impl RecognizerFile {
         thresholds: &[f64],
         params: SequentialParamsBuilder,
     ) -> Result<SequentialEvaluation, RecognizeError> {
+        self.evaluate_sequential_fused(&[], captures, thresholds, params)
+    }
+
+    /// The recognizers fused with `others` over time and their weights (see the
+    /// [module documentation](self)): each must give window probabilities over the same
+    /// surfaces, in the same order, and carry its cross-validated accuracy.
+    pub fn fusion_members(&self, others: &[&RecognizerFile]) -> Result<Vec<FusionMember>, RecognizeError> {
+        let k = self.classes.len() as f64;
+        let mut members = Vec::with_capacity(others.len() + 1);
+        for (index, model) in std::iter::once(self).chain(others.iter().copied()).enumerate() {
+            let no_probabilities = || RecognizeError::NoWindowProbabilities {
+                method: model.method(),
+                features: model.feature_set().name(),
+            };
+            let windowing = model.sequential_windowing().ok_or_else(no_probabilities)?;
+            if model.classes != self.classes {
+                return Err(RecognizeError::FusionSurfaces {
+                    index,
+                    expected: self.classes.clone(),
+                    got: model.classes.clone(),
+                });
+            }
+            let accuracy = model
+                .cross_validated_window_accuracy()
+                .ok_or(RecognizeError::NoReliability {
+                    index,
+                    method: model.method(),
+                    features: model.feature_set().name(),
+                })?;
+            let hop_s = windowing.hop_samples as f64 / windowing.rate_hz;
+            members.push(FusionMember {
+                method: model.method(),
+                features: model.feature_set().name(),
+                window_s: windowing.window_s(),
+                hop_s,
+                accuracy,
+                reliability: ((accuracy - 1.0 / k) / (1.0 - 1.0 / k)).max(0.0),
+                weight: (hop_s / windowing.window_s()).min(1.0),
+            });
+        }
+        let most = members.iter().map(|m| m.reliability).fold(0.0, f64::max);
+        if most <= 0.0 {
+            return Err(RecognizeError::ZeroTotalWeight);
+        }
+        for m in &mut members {
+            m.weight *= m.reliability / most;
+        }
+        Ok(members)
+    }
+
+    /// [`RecognizerFile::sequential_params`] for this recognizer fused with `others`: the
+    /// first recognizer's weight ([`FusionMember::weight`]), and the memory holding the last
+    /// `memory_s` of every recognizer's windows.
+    pub fn fused_sequential_params(
+        &self,
+        others: &[&RecognizerFile],
+        memory_s: f64,
+    ) -> Result<SequentialParamsBuilder, RecognizeError> {
+        let members = self.fusion_members(others)?;
+        let memory = members
+            .iter()
+            .map(|m| (memory_s / m.hop_s).round().max(1.0) as usize)
+            .sum();
+        Ok(SequentialParams::builder()
+            .weight(members[0].weight)
+            .memory(memory))
+    }
+
+    /// [`RecognizerFile::evaluate_sequential`] with the evidence of `others` fused in (see the
+    /// [module documentation](self)): every recognizer's windows, in the order they are
+    /// decided, each window's weight scaled from `params`' (the first recognizer's, as
+    /// [`RecognizerFile::fused_sequential_params`] sets it) to its recognizer's. With no
+    /// others it is [`RecognizerFile::evaluate_sequential`], bit for bit.
+    pub fn evaluate_sequential_fused<C: Borrow<LabelledCapture>>(
+        &self,
+        others: &[&RecognizerFile],
+        captures: &[C],
+        thresholds: &[f64],
+        params: SequentialParamsBuilder,
+    ) -> Result<SequentialEvaluation, RecognizeError> {
         let Some(windowing) = self.sequential_windowing() else {
             return Err(RecognizeError::NoWindowProbabilities {
                 method: self.method(),
                 features: self.feature_set().name(),
             });
         };
+        let fused = if others.is_empty() {
+            Vec::new()
+        } else {
+            self.fusion_members(others)?
+        };
+        // Each recognizer's windowing and the factor from the first one's weight to its own.
+        let mut sources = vec![(self, windowing, 1.0)];
+        for (model, member) in others.iter().zip(fused.iter().skip(1)) {
+            let own = model
+                .sequential_windowing()
+                .ok_or(RecognizeError::NoWindowProbabilities {
+                    method: model.method(),
+                    features: model.feature_set().name(),
+                })?;
+            sources.push((model, own, member.weight / fused[0].weight));
+        }
         let classes = self.classes.len();
         let mut strokes = Vec::with_capacity(captures.len());
         for c in captures {
             let c = c.borrow();
             let rate_hz = c.capture.metadata().rate_hz();
-            let windows = self
-                .window_probabilities(c, Some(&windowing))?
-                .unwrap_or_default()
-                .into_iter()
-                .map(|w| {
-                    (
-                        w.decision.decided_at as f64 / rate_hz,
-                        w.evidence_scale,
-                        w.probabilities,
-                    )
-                })
-                .collect();
+            let mut windows = Vec::new();
+            for (model, windowing, factor) in &sources {
+                windows.extend(
+                    model
+                        .window_probabilities(c, Some(windowing))?
+                        .unwrap_or_default()
+                        .into_iter()
+                        .map(|w| {
+                            (
+                                w.decision.decided_at as f64 / rate_hz,
+                                w.evidence_scale * factor,
+                                w.probabilities,
+                            )
+                        }),
+                );
+            }
+            // Stable: windows decided at the same sample keep the recognizers' order.
+            windows.sort_by(|a, b| a.0.total_cmp(&b.0));
             let change = match &c.change {
                 Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
                 None => None,
@@ -237,6 +388,7 @@ impl RecognizerFile {
             steps,
             rows,
             calibration: calibration(&strokes, base, classes)?,
+            fused,
         })
     }
 

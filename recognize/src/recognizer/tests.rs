@@ -803,6 +803,7 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
         windowed(Method::Som, FeatureSet::Both),
         windowed(Method::Knn, FeatureSet::Nakano),
         windowed(Method::Svm, FeatureSet::Both),
+        windowed(Method::Knn, FeatureSet::Vibration),
         windowed(Method::Som, FeatureSet::Spectral),
         windowed(Method::Knn, FeatureSet::Spectral),
         windowed(Method::Svm, FeatureSet::Spectral),
@@ -886,6 +887,137 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
     let kept = train_set[0].clone().keep_features(&needs).expect("keeps");
     let err = kept.keep_features(&needs).expect_err("no samples left");
     assert!(matches!(err, RecognizeError::FeaturesNotKept { .. }), "{err}");
+}
+
+/// Anytime decisions fused over two senses: each recognizer's windows in the order they are
+/// decided, each weighing its `hop / window` times its cross-validated accuracy above chance
+/// relative to the most reliable one's.
+#[test]
+fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
+    // The vibration cannot tell `fine` from `coarse` (the same tone), the friction can.
+    let with_tones = |trials: std::ops::Range<u32>, seconds: f64| -> Vec<LabelledCapture> {
+        trials
+            .flat_map(|t| {
+                three_surfaces(seconds)
+                    .into_iter()
+                    .zip([60.0, 60.0, 150.0])
+                    .map(move |(c, tone)| {
+                        let mut c = with_vibration(c, tone);
+                        let meta = c.capture.metadata().clone().with(TRIAL_KEY, t);
+                        c.capture =
+                            Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec())
+                                .expect("valid");
+                        c.reference.path = format!("{}_{t}.csv", c.label).into();
+                        c
+                    })
+            })
+            .collect()
+    };
+    let train_set = with_tones(0..2, 4.0);
+    let settings = |features| TrainSettings {
+        features,
+        window_s: 0.25,
+        train_window_s: Some(0.25),
+        hop_s: 0.1,
+        ..TrainSettings::new(Method::Svm)
+    };
+    let nakano = train(&train_set, &settings(FeatureSet::Nakano)).expect("nakano");
+    let vibration = train(&train_set, &settings(FeatureSet::Vibration)).expect("vibration");
+    // The vibration's windows are decided at their last sample: nothing waits for a filter.
+    assert!(vibration.windowing().expect("windows").mirrored_end);
+    assert_eq!(vibration.feature_set().dim(), 25);
+
+    let members = nakano.fusion_members(&[&vibration]).expect("members");
+    assert_eq!(members.len(), 2);
+    let accuracy = |m: &RecognizerFile| match &m.body {
+        RecognizerBody::SvmWindows { c_search, .. } => c_search
+            .as_ref()
+            .and_then(CSearch::accuracy)
+            .expect("cross-validated"),
+        _ => panic!("an SVM over windows"),
+    };
+    let r = [nakano.clone(), vibration.clone()].map(|m| (accuracy(&m) - 1.0 / 3.0) / (1.0 - 1.0 / 3.0));
+    assert!(r[0] > 0.95 && r[1] < 0.8, "{r:?}");
+    let most = r[0].max(r[1]);
+    for (m, r) in members.iter().zip(r) {
+        assert_eq!(m.reliability, r);
+        assert!((m.weight - 0.4 * r / most).abs() < 1e-15, "{m:?}");
+    }
+    let params = nakano
+        .fused_sequential_params(&[&vibration], 3.0)
+        .expect("params");
+    assert_eq!(params.build().expect("valid").memory(), 60);
+
+    let test_set = with_tones(2..3, 3.0);
+    let alone = |m: &RecognizerFile| {
+        m.evaluate_sequential(&test_set, &[0.9], m.sequential_params(3.0).expect("params"))
+            .expect("alone")
+    };
+    let fused = nakano
+        .evaluate_sequential_fused(&[&vibration], &test_set, &[0.9], params)
+        .expect("fused");
+    assert_eq!(fused.fused, members);
+    assert_eq!(fused.steps, alone(&nakano).steps + alone(&vibration).steps);
+    // The friction names every surface; the vibration, weighing less, does not overrule it.
+    assert_eq!(fused.rows[0].correct, fused.rows[0].decided, "{fused:?}");
+    assert_eq!(fused.rows[0].not_stable, 0, "{fused:?}");
+    // Alone, the same as without fusion, to the bit.
+    let none = nakano
+        .evaluate_sequential_fused(
+            &[],
+            &test_set,
+            &[0.9],
+            nakano.sequential_params(3.0).expect("params"),
+        )
+        .expect("none fused");
+    assert_eq!(format!("{none:?}"), format!("{:?}", alone(&nakano)));
+    assert!(none.fused.is_empty());
+
+    // Refused, saying why: other surfaces, no measured reliability, no window probabilities.
+    let two: Vec<LabelledCapture> = train_set
+        .iter()
+        .filter(|c| c.label != "smooth")
+        .cloned()
+        .collect();
+    let other_surfaces = train(&two, &settings(FeatureSet::Vibration)).expect("two surfaces");
+    let err = nakano
+        .fusion_members(&[&other_surfaces])
+        .expect_err("other surfaces");
+    assert!(
+        matches!(err, RecognizeError::FusionSurfaces { index: 1, .. }),
+        "{err}"
+    );
+    let one_trial: Vec<LabelledCapture> = train_set[..3].to_vec();
+    let uncrossed = train(&one_trial, &settings(FeatureSet::Vibration)).expect("one trial");
+    let err = nakano.fusion_members(&[&uncrossed]).expect_err("no reliability");
+    assert!(
+        matches!(err, RecognizeError::NoReliability { index: 1, .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("cross-validated accuracy"), "{err}");
+    let som = train(
+        &train_set,
+        &TrainSettings {
+            window_s: 0.5,
+            ..TrainSettings::new(Method::Som)
+        },
+    )
+    .expect("SOM");
+    let err = nakano.fusion_members(&[&som]).expect_err("a SOM");
+    assert!(
+        matches!(err, RecognizeError::NoWindowProbabilities { .. }),
+        "{err}"
+    );
+    // A SOM names a node, not a distribution: it does not train on the vibration alone.
+    let err = train(
+        &train_set,
+        &TrainSettings {
+            features: FeatureSet::Vibration,
+            ..TrainSettings::new(Method::Som)
+        },
+    )
+    .expect_err("SOM over vibration");
+    assert!(err.to_string().contains("k-NN or an SVM"), "{err}");
 }
 
 #[test]
