@@ -347,6 +347,14 @@ pub enum RecognizeError {
         /// Its features.
         features: &'static str,
     },
+    /// A recognizer fused over time was no better than chance under cross-validation.
+    #[error("recognizer {index} named {:.1} % of its held-out windows right, no better than chance: its evidence would weigh nothing", 100.0 * accuracy)]
+    Unreliable {
+        /// Index of the recognizer among those fused.
+        index: usize,
+        /// Its cross-validated accuracy per window.
+        accuracy: f64,
+    },
     /// A weight is negative or not finite.
     #[error("weight {index} is {weight}; weights must be finite and non-negative")]
     BadWeight {

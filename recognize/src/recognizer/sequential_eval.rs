@@ -9,10 +9,10 @@
 //! `hop / window` (each sample counted once) times its measured reliability relative to the
 //! most reliable one's, after Sinapov et al.'s reliability-weighted fusion (IEEE T-RO 2011,
 //! Sec. IV-C): the reliability is its cross-validated accuracy per window (recorded when it was
-//! trained, whole runs or trials held out) less chance, `(a − 1/K) / (1 − 1/K)` for `K` surfaces, so a
-//! recognizer no better than a guess adds nothing. The most reliable recognizer weighs as it
-//! would alone; a less reliable one less, so that where the two disagree the more reliable
-//! wins. Multiplying the two is right only as far as they err independently (friction and
+//! trained, whole runs or trials held out) less chance, `(a − 1/K) / (1 − 1/K)` for `K`
+//! surfaces; a recognizer no better than a guess is refused, as it would add nothing. The most
+//! reliable recognizer weighs as it would alone; a less reliable one less, so that where the
+//! two disagree the more reliable wins. Multiplying the two is right only as far as they err independently (friction and
 //! vibration are different sensors, but the same surface drives both), so the calibration of
 //! the fused posterior is reported beside its accuracy.
 
@@ -229,7 +229,7 @@ impl RecognizerFile {
 
     /// The recognizers fused with `others` over time and their weights (see the
     /// [module documentation](self)): each must give window probabilities over the same
-    /// surfaces, in the same order, and carry its cross-validated accuracy.
+    /// surfaces, in the same order, and carry a cross-validated accuracy above chance.
     pub fn fusion_members(&self, others: &[&RecognizerFile]) -> Result<Vec<FusionMember>, RecognizeError> {
         let k = self.classes.len() as f64;
         let mut members = Vec::with_capacity(others.len() + 1);
@@ -253,6 +253,10 @@ impl RecognizerFile {
                     method: model.method(),
                     features: model.feature_set().name(),
                 })?;
+            let reliability = (accuracy - 1.0 / k) / (1.0 - 1.0 / k);
+            if reliability.is_nan() || reliability <= 0.0 {
+                return Err(RecognizeError::Unreliable { index, accuracy });
+            }
             let hop_s = windowing.hop_samples as f64 / windowing.rate_hz;
             members.push(FusionMember {
                 method: model.method(),
@@ -260,14 +264,11 @@ impl RecognizerFile {
                 window_s: windowing.window_s(),
                 hop_s,
                 accuracy,
-                reliability: ((accuracy - 1.0 / k) / (1.0 - 1.0 / k)).max(0.0),
+                reliability,
                 weight: (hop_s / windowing.window_s()).min(1.0),
             });
         }
         let most = members.iter().map(|m| m.reliability).fold(0.0, f64::max);
-        if most <= 0.0 {
-            return Err(RecognizeError::ZeroTotalWeight);
-        }
         for m in &mut members {
             m.weight *= m.reliability / most;
         }

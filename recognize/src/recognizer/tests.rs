@@ -1008,6 +1008,20 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
         matches!(err, RecognizeError::NoWindowProbabilities { .. }),
         "{err}"
     );
+    let mut guess = vibration.clone();
+    if let RecognizerBody::SvmWindows {
+        c_search: Some(search),
+        ..
+    } = &mut guess.body
+    {
+        search.grid.iter_mut().for_each(|p| p.accuracy = 1.0 / 3.0);
+    }
+    let err = guess.fusion_members(&[&nakano]).expect_err("a guess");
+    assert!(
+        matches!(err, RecognizeError::Unreliable { index: 0, .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("33.3 %"), "{err}");
     // A SOM names a node, not a distribution: it does not train on the vibration alone.
     let err = train(
         &train_set,
