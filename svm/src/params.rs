@@ -250,6 +250,11 @@ impl DualSettings {
     pub fn over_budget(&self) -> bool {
         self.started.elapsed().as_secs_f64() > self.budget_s()
     }
+
+    /// Seconds left of the time budget (negative once it has run out).
+    pub fn left_s(&self) -> f64 {
+        self.budget_s() - self.started.elapsed().as_secs_f64()
+    }
 }
 
 impl SvrParams {
