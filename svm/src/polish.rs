@@ -49,14 +49,15 @@ pub(crate) fn polish(
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let y_scale = super::data::target_scale(y);
-    for round in 0..max_rounds.min(2 * n + 20) {
-        // Each round is a dense solve; up to 2n + 20 of them must not outlast the fit's budget.
-        if round > 0 && settings.over_budget() {
-            return None;
-        }
+    for _ in 0..max_rounds.min(2 * n + 20) {
         let free: Vec<usize> = (0..n)
             .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
             .collect();
+        // Each round is a dense solve that cannot be interrupted; up to 2n + 20 of them must
+        // not outlast the fit's budget, so one that would not end within it is not begun.
+        if !settings.has_time_to_factor(free.len() + 1) {
+            return None;
+        }
         let mut beta = vec![0.0; n];
         for i in 0..n {
             beta[i] = match sides[i] {

@@ -22,12 +22,6 @@ use super::params::DualSettings;
 /// (4000² · 8 B = 128 MB) and its factorisation `m³` flops.
 pub(crate) const MAX_FREE: usize = 4000;
 
-/// Seconds per `m³` of a round's factorisation, measured: LU with full pivoting of the 3,001 ×
-/// 3,001 bordered system took 113.6 s in the test profile on the 2-core machine (4.2e-9 s per
-/// `m³`), the thin SVD that follows when it leaves a residual 17.8 s more. Release builds are
-/// faster, so this overestimates there: a round it skips would only have sped the fit up.
-const SECONDS_PER_FREE_CUBED: f64 = 5e-9;
-
 /// Samples per parallel task when updating `Kβ`.
 const CHUNK: usize = 1024;
 
@@ -108,7 +102,7 @@ pub(crate) fn finish(
         }
         // A round factorises an (m + 1)² system, which cannot be interrupted: one that would
         // not end within the fit's budget is not begun (at m = 3,000 it takes minutes).
-        if SECONDS_PER_FREE_CUBED * (m as f64).powi(3) > settings.left_s() {
+        if !settings.has_time_to_factor(m + 1) {
             return None;
         }
         let mut new_beta: Vec<f64> = sides
