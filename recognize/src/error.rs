@@ -347,6 +347,21 @@ pub enum RecognizeError {
         /// Its features.
         features: &'static str,
     },
+    /// Two recognizers fused over time read the same evidence.
+    #[error(
+        "recognizers {first} and {second} read the same evidence ({} and {} features): fused, it would \
+         count twice; fuse recognizers over different senses, such as nakano and vibration",
+        features[0],
+        features[1]
+    )]
+    FusionOverlap {
+        /// Index of the first of the two among the recognizers fused.
+        first: usize,
+        /// Index of the second.
+        second: usize,
+        /// Their feature sets.
+        features: [&'static str; 2],
+    },
     /// A recognizer fused over time was no better than chance under cross-validation.
     #[error("recognizer {index} named {:.1} % of its held-out windows right, no better than chance: its evidence would weigh nothing", 100.0 * accuracy)]
     Unreliable {

@@ -131,9 +131,10 @@ struct EvalArgs {
     window_weight: Option<f64>,
     /// With --sequential: fuse this recognizer's evidence into the posterior too (repeatable):
     /// an SVM over windows of the same surfaces, trained on at least two runs or trials (so
-    /// that its accuracy was cross-validated), such as one over `--features vibration`. Every recognizer's windows count in the order they are
-    /// decided, each weighing hop / window times its cross-validated accuracy above chance
-    /// relative to the most reliable recognizer's.
+    /// that its accuracy was cross-validated), over other features than the others (such as
+    /// `--features vibration` beside `nakano`). Every recognizer's windows count in the order
+    /// they are decided, each weighing hop / window times its cross-validated accuracy above
+    /// chance relative to the most reliable recognizer's.
     #[arg(long, value_name = "MODEL.json", requires = "sequential")]
     fuse: Vec<PathBuf>,
     #[command(flatten)]

@@ -12,9 +12,11 @@
 //! trained, whole runs or trials held out) less chance, `(a − 1/K) / (1 − 1/K)` for `K`
 //! surfaces; a recognizer no better than a guess is refused, as it would add nothing. The most
 //! reliable recognizer weighs as it would alone; a less reliable one less, so that where the
-//! two disagree the more reliable wins. Multiplying the two is right only as far as they err independently (friction and
-//! vibration are different sensors, but the same surface drives both), so the calibration of
-//! the fused posterior is reported beside its accuracy.
+//! two disagree the more reliable wins. Multiplying the two is right only as far as they err
+//! independently (friction and vibration are different sensors, but the same surface drives
+//! both), so the calibration of the fused posterior is reported beside its accuracy; two
+//! recognizers over the same features would count one piece of evidence twice, and are
+//! refused.
 
 use std::borrow::Borrow;
 
@@ -24,7 +26,7 @@ use super::LabelledCapture;
 use super::file::RecognizerFile;
 use super::labelled::{class_index, class_named};
 use crate::RecognizeError;
-use crate::features::{NakanoWindowing, WindowlessCapture};
+use crate::features::{FeatureSet, NakanoWindowing, WindowlessCapture};
 use crate::sequential::{SequentialParams, SequentialParamsBuilder, SequentialState};
 
 /// Bins of the reliability diagram.
@@ -267,6 +269,24 @@ impl RecognizerFile {
                 reliability,
                 weight: (hop_s / windowing.window_s()).min(1.0),
             });
+        }
+        // The product assumes each recognizer brings its own evidence: two over the same
+        // features (or `both` beside either of its parts) would count it twice.
+        let sets: Vec<FeatureSet> = std::iter::once(self)
+            .chain(others.iter().copied())
+            .map(RecognizerFile::feature_set)
+            .collect();
+        for (j, &b) in sets.iter().enumerate() {
+            if let Some(i) = sets[..j]
+                .iter()
+                .position(|&a| a == b || a == FeatureSet::Both || b == FeatureSet::Both)
+            {
+                return Err(RecognizeError::FusionOverlap {
+                    first: i,
+                    second: j,
+                    features: [sets[i].name(), b.name()],
+                });
+            }
         }
         let most = members.iter().map(|m| m.reliability).fold(0.0, f64::max);
         for m in &mut members {

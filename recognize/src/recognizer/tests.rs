@@ -1008,6 +1008,19 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
         matches!(err, RecognizeError::NoWindowProbabilities { .. }),
         "{err}"
     );
+    // The same evidence twice would be counted twice.
+    let err = nakano.fusion_members(&[&nakano]).expect_err("the same features");
+    assert!(
+        matches!(
+            err,
+            RecognizeError::FusionOverlap {
+                first: 0,
+                second: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
     let mut guess = vibration.clone();
     if let RecognizerBody::SvmWindows {
         c_search: Some(search),
