@@ -30,7 +30,6 @@ pub const MIN_WINDOW_S: f64 = FREQUENCY_BINS as f64 / BAND_HZ;
 
 /// The DFT of windows of up to a given length at one rate, and its buffers.
 pub struct WindowSpectrumPlan {
-    rate_hz: f64,
     fft_len: usize,
     fft: Arc<dyn RealToComplex<f64>>,
     /// DFT bins inside the band (`0 … BAND_HZ`, or Nyquist if lower).
@@ -40,7 +39,6 @@ pub struct WindowSpectrumPlan {
 impl std::fmt::Debug for WindowSpectrumPlan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("WindowSpectrumPlan")
-            .field("rate_hz", &self.rate_hz)
             .field("fft_len", &self.fft_len)
             .field("band_bins", &self.band_bins)
             .finish()
@@ -72,7 +70,6 @@ impl WindowSpectrumPlan {
         }
         let fft = RealFftPlanner::<f64>::new().plan_fft_forward(fft_len);
         Ok(Self {
-            rate_hz,
             fft_len,
             fft,
             band_bins,

@@ -678,22 +678,21 @@ fn vibration_vectors(
     cell_scale: CellScale,
 ) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
+    let samples = match axes {
+        Axes::Three(x, ..) => x.len(),
+        Axes::One(v) => v.len(),
+    };
     nakano
         .into_iter()
         .map(|(s, n, _)| {
-            let end = s + windowing.window_samples;
-            let range = end.saturating_sub(n)..end;
+            let end = (s + windowing.window_samples).min(samples);
+            let r = end.saturating_sub(n)..end;
             let spectrum = match axes {
-                Axes::Three(x, y, z) => {
-                    let r = range.start.min(x.len())..range.end.min(x.len());
-                    plan.features(
-                        &spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r])?,
-                        cell_scale,
-                    )?
-                }
-                Axes::One(v) => {
-                    plan.features(&v[range.start.min(v.len())..range.end.min(v.len())], cell_scale)?
-                }
+                Axes::Three(x, y, z) => plan.features(
+                    &spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r])?,
+                    cell_scale,
+                )?,
+                Axes::One(v) => plan.features(&v[r], cell_scale)?,
             };
             Ok((s, n, spectrum.to_vec()))
         })

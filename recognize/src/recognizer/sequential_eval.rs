@@ -193,6 +193,16 @@ impl RecognizerFile {
         })
     }
 
+    /// [`RecognizerFile::sequential_windowing`], or the error saying this recognizer gives no
+    /// window probabilities.
+    fn windowing_with_probabilities(&self) -> Result<NakanoWindowing, RecognizeError> {
+        self.sequential_windowing()
+            .ok_or(RecognizeError::NoWindowProbabilities {
+                method: self.method(),
+                features: self.feature_set().name(),
+            })
+    }
+
     /// An SVM over windows' accuracy per window under the cross-validation recorded when it
     /// was trained (at its C); `None` for any other recognizer, or one trained on captures that
     /// could not be cross-validated (a single run or trial).
@@ -236,11 +246,7 @@ impl RecognizerFile {
         let k = self.classes.len() as f64;
         let mut members = Vec::with_capacity(others.len() + 1);
         for (index, model) in std::iter::once(self).chain(others.iter().copied()).enumerate() {
-            let no_probabilities = || RecognizeError::NoWindowProbabilities {
-                method: model.method(),
-                features: model.feature_set().name(),
-            };
-            let windowing = model.sequential_windowing().ok_or_else(no_probabilities)?;
+            let windowing = model.windowing_with_probabilities()?;
             if model.classes != self.classes {
                 return Err(RecognizeError::FusionSurfaces {
                     index,
@@ -325,12 +331,7 @@ impl RecognizerFile {
         thresholds: &[f64],
         params: SequentialParamsBuilder,
     ) -> Result<SequentialEvaluation, RecognizeError> {
-        let Some(windowing) = self.sequential_windowing() else {
-            return Err(RecognizeError::NoWindowProbabilities {
-                method: self.method(),
-                features: self.feature_set().name(),
-            });
-        };
+        let windowing = self.windowing_with_probabilities()?;
         let fused = if others.is_empty() {
             Vec::new()
         } else {
@@ -339,12 +340,7 @@ impl RecognizerFile {
         // Each recognizer's windowing and the factor from the first one's weight to its own.
         let mut sources = vec![(self, windowing, 1.0)];
         for (model, member) in others.iter().zip(fused.iter().skip(1)) {
-            let own = model
-                .sequential_windowing()
-                .ok_or(RecognizeError::NoWindowProbabilities {
-                    method: model.method(),
-                    features: model.feature_set().name(),
-                })?;
+            let own = model.windowing_with_probabilities()?;
             sources.push((model, own, member.weight / fused[0].weight));
         }
         let classes = self.classes.len();
