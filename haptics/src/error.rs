@@ -156,6 +156,16 @@ pub enum HapticsError {
         #[source]
         source: Box<CaptureError>,
     },
+    /// A setting of a simulated protocol is out of its range.
+    #[error("{name} = {value}: must be {reason}")]
+    Setting {
+        /// The setting.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        reason: &'static str,
+    },
     /// No simulated surface has this name.
     #[error("unknown surface `{name}` (expected one of: {expected})")]
     UnknownSurface {

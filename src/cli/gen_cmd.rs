@@ -63,6 +63,12 @@ pub(crate) struct GenArgs {
     /// metadata say when the surface changes, which `recognize eval --sequential` times.
     #[arg(long)]
     two_patch: bool,
+    /// Write only the multi-stream sliding study (into multistream/, same names and README),
+    /// the arm sliding at about this speed instead of 0.025 m/s: trials for checking that
+    /// recognition does not depend on how fast the rig slides. Each trial draws what it does at
+    /// 0.025 m/s (strip, load, placement, noise), only faster or slower.
+    #[arg(long, value_name = "M/S", conflicts_with_all = ["rub_speed_mps", "two_patch"])]
+    slide_speed_mps: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -155,6 +161,22 @@ fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `--slide-speed-mps`: only the multi-stream sliding study, at that speed.
+fn sliding_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
+    use haptics::sim::protocols::multistream::{SlidingStudy, write_logs};
+    let study = SlidingStudy::default().at_speed(speed_mps)?;
+    write_logs(&args.out, args.seed, study, &mut |file| {
+        if !args.quiet {
+            println!(
+                "wrote {} ({} rows)",
+                args.out.join(&file.path).display(),
+                file.rows
+            );
+        }
+    })
+    .with_context(|| format!("writing the sliding study into {}", args.out.display()))
+}
+
 pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
     if args.needle_rate_hz.is_some() || args.needle_tissue.is_some() || args.needle_speed.is_some() {
         return needle_only(args, args.needle_rate_hz.unwrap_or(100));
@@ -167,6 +189,9 @@ pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
     }
     if let Some(speed_mps) = args.rub_speed_mps {
         return rubbing_only(args, speed_mps);
+    }
+    if let Some(speed_mps) = args.slide_speed_mps {
+        return sliding_only(args, speed_mps);
     }
     let sets = if args.only.is_empty() {
         CaptureSet::ALL.to_vec()

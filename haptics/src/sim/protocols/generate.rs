@@ -226,7 +226,7 @@ pub fn generate(
         }
     }
     if logs {
-        multistream::write_logs(out, seed, multistream::TRIALS, &mut |file| {
+        multistream::write_logs(out, seed, multistream::SlidingStudy::default(), &mut |file| {
             let generated = Generated {
                 path: file.path,
                 protocol: multistream::PROTOCOL,

@@ -294,13 +294,16 @@ struct Trace {
     vibration_mps2: Vec<f64>,
 }
 
-/// Simulates and logs trial `trial` of `surface`: deterministic in `(surface, trial, seed)`.
-pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64) -> TrialLogs {
+/// Simulates and logs trial `trial` of `surface`, the arm sliding at about `speed_mps`
+/// ([`SPEED_MPS`] in the study): deterministic in `(surface, trial, seed, speed_mps)`. The
+/// speed changes nothing else a trial draws (its strip, load, placement, noise), so a trial
+/// slid at two speeds crosses the same stretch of the same surface.
+pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, speed_mps: f64) -> TrialLogs {
     let id = u64::from(surface.surface.id);
     let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, &[tag::MULTISTREAM, id, u64::from(trial)]));
     let contact = &surface.contact;
     let unit = Noise::new(1.0);
-    let speed_mps = SPEED_MPS * (1.0 + rng.random_range(-SPEED_SPREAD..=SPEED_SPREAD));
+    let speed_mps = speed_mps * (1.0 + rng.random_range(-SPEED_SPREAD..=SPEED_SPREAD));
     let force_n = NORMAL_FORCE_N * (1.0 + rng.random_range(-FORCE_SPREAD..=FORCE_SPREAD));
     let track_start_m = rng.random_range(0.0..surface.patch.track_length_m());
     let lie = (contact.placement_variation.max(0.0) * unit.sample(&mut rng)).exp();
@@ -520,15 +523,54 @@ fn speed_at(t_s: f64, speed_mps: f64) -> f64 {
     }
 }
 
+/// How many trials of each surface the study slides, and how fast.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlidingStudy {
+    /// Trials per surface.
+    pub trials: u32,
+    /// Nominal sliding speed, m/s (each trial within ±10 % of it).
+    pub speed_mps: f64,
+}
+
+impl Default for SlidingStudy {
+    /// [`TRIALS`] trials at [`SPEED_MPS`].
+    fn default() -> Self {
+        Self {
+            trials: TRIALS,
+            speed_mps: SPEED_MPS,
+        }
+    }
+}
+
+impl SlidingStudy {
+    /// The fastest nominal speed simulated, m/s: past it the vibration sensor's 1 kHz
+    /// bandwidth cuts off the coarsest textures' fundamentals.
+    pub const MAX_SPEED_MPS: f64 = 0.5;
+
+    /// The same study at `speed_mps`: positive and at most [`SlidingStudy::MAX_SPEED_MPS`], or
+    /// a typed error.
+    pub fn at_speed(self, speed_mps: f64) -> Result<Self, HapticsError> {
+        if !(speed_mps.is_finite() && speed_mps > 0.0 && speed_mps <= Self::MAX_SPEED_MPS) {
+            return Err(HapticsError::Setting {
+                name: "slide_speed_mps",
+                value: speed_mps,
+                reason: "positive and at most 0.5 m/s",
+            });
+        }
+        Ok(Self { speed_mps, ..self })
+    }
+}
+
 /// Writes every trial of every surface under `out/multistream/`, with a `materials.csv` (surface
 /// number, name, ground truth), a `trials.csv` (what each trial drew) and a `README.md` that says
 /// how to import the logs. `written` is called after each log file.
 pub fn write_logs(
     out: &Path,
     seed: u64,
-    trials: u32,
+    study: SlidingStudy,
     written: &mut dyn FnMut(LogFile),
 ) -> Result<(), HapticsError> {
+    let SlidingStudy { trials, speed_mps } = study.at_speed(study.speed_mps)?;
     let folder = out.join(FOLDER);
     fs::create_dir_all(&folder).map_err(|source| HapticsError::Io {
         action: "create",
@@ -548,7 +590,7 @@ pub fn write_logs(
             s.id, s.name, c.friction, c.roughness.rms_m, c.roughness.wavelength_m, c.normal_mode_hz
         );
         for trial in 0..trials {
-            let logs = trial_logs(&surface, trial, seed);
+            let logs = trial_logs(&surface, trial, seed, speed_mps);
             let stem = trial_stem(s.id, trial);
             let t = logs.truth;
             let _ = writeln!(
@@ -576,7 +618,11 @@ pub fn write_logs(
     }
     write_text(out, &PathBuf::from(FOLDER).join("materials.csv"), &materials)?;
     write_text(out, &PathBuf::from(FOLDER).join("trials.csv"), &trial_table)?;
-    write_text(out, &PathBuf::from(FOLDER).join("README.md"), &readme(trials))?;
+    write_text(
+        out,
+        &PathBuf::from(FOLDER).join("README.md"),
+        &readme(trials, speed_mps),
+    )?;
     Ok(())
 }
 
@@ -620,12 +666,14 @@ pub const IMPORT_UNROLL: &str = "acc=acc_0..acc_21";
 pub const IMPORT_RATE_HZ: f64 = VIBRATION_RATE_HZ;
 
 /// How to read the set: layout, units, and the import of every trial.
-fn readme(trials: u32) -> String {
+fn readme(trials: u32, speed_mps: f64) -> String {
+    // To a tenth of a millimetre per second, so that 0.035 reads 35, not 35.00000000000001.
+    let speed_mm_s = (speed_mps * 1e4).round() / 10.0;
     format!(
         "# Sliding study: 20 surfaces x {trials} trials, one CSV per stream\n\
          \n\
          Simulated by `palpus gen --only multistream` (see haptics::sim::protocols::multistream).\n\
-         A robot arm slides a tactile fingertip left to right at about 25 mm/s under about 1.5 N.\n\
+         A robot arm slides a tactile fingertip left to right at about {speed_mm_s} mm/s under about 1.5 N.\n\
          Surface numbers and names: materials.csv; what each trial drew: trials.csv.\n\
          \n\
          Per trial `matNN_trialTT_*.csv`:\n\
@@ -674,7 +722,7 @@ mod tests {
             .iter()
             .find(|s| s.surface.name == "corduroy")
             .expect("corduroy");
-        let logs = trial_logs(corduroy, 0, 1);
+        let logs = trial_logs(corduroy, 0, 1, SPEED_MPS);
         let names: Vec<&str> = logs.files.iter().map(|f| f.0).collect();
         assert_eq!(names, STREAMS);
         let mut starts = Vec::new();
@@ -718,7 +766,7 @@ mod tests {
         let surfaces = sliding_surfaces();
         for name in ["table", "thin_floor_mat_back"] {
             let s = surfaces.iter().find(|s| s.surface.name == name).expect("surface");
-            let logs = trial_logs(s, 2, 9);
+            let logs = trial_logs(s, 2, 9, SPEED_MPS);
             let mu = s.surface.contact.as_ref().expect("contact").friction;
             let force = rows(&logs.files[0].1);
             let velocity = rows(&logs.files[2].1);
@@ -753,9 +801,9 @@ mod tests {
     #[test]
     fn same_seed_same_bytes_other_trial_other_bytes() {
         let surfaces = sliding_surfaces();
-        let a = trial_logs(&surfaces[4], 1, 3);
-        let b = trial_logs(&surfaces[4], 1, 3);
-        let c = trial_logs(&surfaces[4], 2, 3);
+        let a = trial_logs(&surfaces[4], 1, 3, SPEED_MPS);
+        let b = trial_logs(&surfaces[4], 1, 3, SPEED_MPS);
+        let c = trial_logs(&surfaces[4], 2, 3, SPEED_MPS);
         for i in 0..STREAMS.len() {
             assert_eq!(a.files[i].1, b.files[i].1);
             assert_ne!(a.files[i].1, c.files[i].1);
@@ -763,11 +811,32 @@ mod tests {
     }
 
     #[test]
+    fn a_trial_slid_faster_crosses_the_same_strip_faster() {
+        let surfaces = sliding_surfaces();
+        let slow = trial_logs(&surfaces[4], 1, 3, SPEED_MPS).truth;
+        let fast = trial_logs(&surfaces[4], 1, 3, 2.0 * SPEED_MPS).truth;
+        assert!((fast.speed_mps - 2.0 * slow.speed_mps).abs() < 1e-15);
+        assert_eq!(
+            (fast.track_start_m, fast.normal_force_n, fast.normal_mode_hz),
+            (slow.track_start_m, slow.normal_force_n, slow.normal_mode_hz)
+        );
+        let study = SlidingStudy::default();
+        assert_eq!(study.at_speed(0.05).expect("valid").speed_mps, 0.05);
+        for bad in [0.0, -0.025, f64::NAN, 0.6] {
+            assert!(
+                matches!(study.at_speed(bad), Err(HapticsError::Setting { .. })),
+                "{bad}"
+            );
+        }
+        assert!(readme(10, 0.05).contains("at about 50 mm/s"));
+    }
+
+    #[test]
     fn rougher_surfaces_vibrate_more() {
         let surfaces = sliding_surfaces();
         let rms = |name: &str| {
             let s = surfaces.iter().find(|s| s.surface.name == name).expect("surface");
-            let r = rows(&trial_logs(s, 0, 5).files[3].1);
+            let r = rows(&trial_logs(s, 0, 5, SPEED_MPS).files[3].1);
             let v: Vec<f64> = r.iter().flat_map(|row| row[1..].to_vec()).collect();
             let mean = v.iter().sum::<f64>() / v.len() as f64;
             (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
