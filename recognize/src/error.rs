@@ -429,6 +429,18 @@ pub enum RecognizeError {
         /// Samples available.
         samples: usize,
     },
+    /// A window over travel slid so fast that its vibration bands pass the Nyquist frequency.
+    #[error(
+        "a window slid at {speed_mps:.4} m/s: its vibration bands over travel pass the Nyquist frequency of {rate_hz} Hz above {max_speed_mps:.4} m/s (train with a higher --travel-speed-mps, or record at a higher rate)"
+    )]
+    TooFastForBands {
+        /// The window's speed, m/s.
+        speed_mps: f64,
+        /// The fastest window the bands can be read at, at this rate, m/s.
+        max_speed_mps: f64,
+        /// The capture's rate, Hz.
+        rate_hz: f64,
+    },
     /// A window needs at least two samples (a variance and a travel).
     #[error("window of {len} samples: at least 2 needed")]
     WindowTooShort {

@@ -6,7 +6,8 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use recognize::svc::FitEvent;
 use recognize::{
-    DECISION_WINDOW_S, FeatureSet, HOP_S, LabelledCapture, Normalization, RecognizerFile, SvmC, TrainSettings,
+    CellScale, DECISION_WINDOW_S, FeatureSet, HOP_S, LabelledCapture, Normalization, RecognizerFile, SvmC,
+    TrainSettings,
 };
 
 /// A recognizer to train: its method and how (`train` and `cv`).
@@ -64,7 +65,8 @@ pub(crate) struct TrainOptions {
     /// (rubbing windows with accelerometer columns: three axes, or a single-axis
     /// vibration_mps2) or vibration (knn, svm: each such window's vibration spectrum alone, 25
     /// bands of 8 Hz, windows of at least 0.125 s, to fuse with a nakano classifier in `eval
-    /// --sequential --fuse`). Default: both when the first capture carries the columns of both
+    /// --sequential --fuse`; with --windows-over-travel the bands are over travel too, see
+    /// --travel-speed-mps). Default: both when the first capture carries the columns of both
     /// and the windows are long enough for a histogram (1.92 s); else the method's own (som
     /// nakano, knn and svm spectral), else the set the capture carries.
     #[arg(long, value_enum, value_name = "nakano|spectral|both|vibration")]
@@ -103,6 +105,18 @@ pub(crate) struct TrainOptions {
     /// slower or faster stroke is decided on the same stretch of surface.
     #[arg(long, requires = "mirrored_end")]
     windows_over_travel: bool,
+    /// With --windows-over-travel: the speed at which a window spans --window-s, m/s, instead
+    /// of the protocol's 0.005: a rig's own sliding speed. With --features vibration it also
+    /// sets the bands over travel: 25 bands over 0–200 Hz at this speed, in cycles per metre,
+    /// so a texture lands in the same band however fast it is slid.
+    #[arg(long, requires = "windows_over_travel", value_name = "MPS")]
+    travel_speed_mps: Option<f64>,
+    /// The vibration features' scaling (--features spectral|both|vibration): mean (each
+    /// cell's or band's mean magnitude, the default) or unit-sum (divided by their total: the
+    /// spectrum's shape alone, whatever the vibration's level, e.g. a sensor's gain or the
+    /// sliding speed).
+    #[arg(long, value_enum, default_value = "mean", value_name = "mean|unit-sum")]
+    cells: CellsArg,
     /// som: nodes of each map (also --som-nodes). Default: over windows (nakano, both) the
     /// thesis's 12 for up to its 7 surfaces; beyond, the SOM Toolbox's 5·N^0.54321 for N
     /// training windows, at least two per class (presentations: 10 000, at least 500 per node);
@@ -134,6 +148,12 @@ pub(crate) struct TrainOptions {
     /// cross-validation by run, or 10 when a surface has a single run.
     #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
     c: CArg,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum CellsArg {
+    Mean,
+    UnitSum,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -241,6 +261,11 @@ impl TrainOptions {
             friction_over_travel: self.friction_over_travel,
             slowest_speed_mps: self.slowest_speed_mps,
             windows_over_travel: self.windows_over_travel,
+            travel_speed_mps: self.travel_speed_mps,
+            cell_scale: match self.cells {
+                CellsArg::Mean => CellScale::Mean,
+                CellsArg::UnitSum => CellScale::UnitSum,
+            },
             seed: self.seed,
             normalization: match self.scaling {
                 ScalingArg::LogWithinClass => Normalization::LogWithinClass,

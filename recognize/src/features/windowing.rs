@@ -1,6 +1,8 @@
 //! How a rubbing capture is cut into windows: the [`NakanoWindowing`] a SOM (or a classifier over
 //! windows) trains and decides on, the windows it picks, and each window's feature vector.
 
+use std::borrow::Cow;
+
 use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
@@ -188,7 +190,23 @@ impl NakanoWindowing {
     /// travel at the slowest speed the filters follow (the protocol's 5 mm/s unless
     /// [`NakanoWindowing::following_speeds_down_to`] says slower). Needs a mirrored end.
     pub fn over_travel(self) -> Result<Self, RecognizeError> {
-        let step_m = PROTOCOL_SPEED_MPS / self.rate_hz;
+        self.over_travel_at(PROTOCOL_SPEED_MPS)
+    }
+
+    /// As [`NakanoWindowing::over_travel`], each window spanning the travel of its time window
+    /// at `reference_speed_mps` instead of the protocol's 5 mm/s: a rig that slides at another
+    /// speed keeps its windows as long, in time, at its own speed. This speed also sets the
+    /// vibration bands over travel ([`NakanoWindowing::travel_reference_speed_mps`]).
+    pub fn over_travel_at(self, reference_speed_mps: f64) -> Result<Self, RecognizeError> {
+        if !(reference_speed_mps.is_finite() && reference_speed_mps > 0.0 && reference_speed_mps <= 10.0) {
+            return Err(RecognizeError::Parameter {
+                of: "setting",
+                name: "travel_speed_mps",
+                value: reference_speed_mps,
+                reason: "positive and at most 10 m/s",
+            });
+        }
+        let step_m = reference_speed_mps / self.rate_hz;
         let slowest_step_m = match &self.filters.follow_speed {
             Some(f) => {
                 f.reference_step_m * self.filters.highpass_half_width as f64
@@ -352,6 +370,14 @@ impl NakanoWindowing {
             return Err(("rate_hz", self.rate_hz, "positive and at most 10^6 Hz"));
         }
         Ok(())
+    }
+
+    /// With windows over travel, the speed at which a window spans as much time as one of
+    /// [`NakanoWindowing::window_samples`], m/s: the reference speed the windows were made at
+    /// ([`NakanoWindowing::over_travel_at`]). `None` for windows of fixed length.
+    pub fn travel_reference_speed_mps(&self) -> Option<f64> {
+        self.travel
+            .map(|t| t.window_m * self.rate_hz / self.window_samples as f64)
     }
 
     /// Window length, s.
@@ -648,7 +674,11 @@ pub(crate) fn window_vectors(
         Axes::Three(column(x)?, column(y)?, column(z)?)
     };
     if features == FeatureSet::Vibration {
-        return vibration_vectors(nakano, windowing, axes, cell_scale).map_err(spectral);
+        let position_m = c
+            .capture
+            .column(nakano::POSITION_COLUMN)
+            .map_err(|e| spectral(RecognizeError::NakanoColumn(e)))?;
+        return vibration_vectors(nakano, windowing, axes, position_m, cell_scale).map_err(spectral);
     }
     let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
@@ -670,14 +700,18 @@ pub(crate) fn window_vectors(
 
 /// [`FeatureSet::Vibration`]'s vectors of Nakano's windows: each window's own samples (the
 /// `len` that end where the window ends, so that a window over travel reads the same stretch
-/// as its Nakano features), all before its decision.
+/// as its Nakano features), all before its decision. Over travel, the bands are too
+/// ([`WindowSpectrumPlan::features_over_travel`]), at the window's path length over its
+/// duration.
 fn vibration_vectors(
     nakano: Vec<(usize, usize, [f64; FEATURES])>,
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
+    position_m: &[f64],
     cell_scale: CellScale,
 ) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
+    let reference_speed_mps = windowing.travel_reference_speed_mps();
     let samples = match axes {
         Axes::Three(x, ..) => x.len(),
         Axes::One(v) => v.len(),
@@ -687,16 +721,32 @@ fn vibration_vectors(
         .map(|(s, n, _)| {
             let end = (s + windowing.window_samples).min(samples);
             let r = end.saturating_sub(n)..end;
-            let spectrum = match axes {
-                Axes::Three(x, y, z) => plan.features(
-                    &spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r])?,
-                    cell_scale,
-                )?,
-                Axes::One(v) => plan.features(&v[r], cell_scale)?,
+            let signal = match axes {
+                Axes::Three(x, y, z) => {
+                    Cow::Owned(spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r.clone()])?)
+                }
+                Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
+            };
+            let spectrum = match reference_speed_mps {
+                Some(reference) => {
+                    let speed_mps = path_speed_mps(&position_m[r], windowing.rate_hz);
+                    plan.features_over_travel(&signal, speed_mps, reference, cell_scale)?
+                }
+                None => plan.features(&signal, cell_scale)?,
             };
             Ok((s, n, spectrum.to_vec()))
         })
         .collect()
+}
+
+/// Path length of `position_m` over its duration at `rate_hz`, m/s (a stroke that turns back
+/// counts both ways, as [`NakanoWindowing::window_len`] does); 0 for fewer than two samples.
+fn path_speed_mps(position_m: &[f64], rate_hz: f64) -> f64 {
+    if position_m.len() < 2 {
+        return 0.0;
+    }
+    let path_m: f64 = position_m.windows(2).map(|p| (p[1] - p[0]).abs()).sum();
+    path_m * rate_hz / (position_m.len() - 1) as f64
 }
 
 /// The accelerometer columns a window's histogram is computed from.
@@ -774,6 +824,41 @@ mod tests {
         // Windows of fixed length are what they were.
         let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
         assert_eq!(fixed.window_len(&steady(2e-6, 2000)), 250);
+    }
+
+    #[test]
+    fn windows_over_travel_at_a_rigs_own_speed() {
+        // 0.25 s at 2.2 kHz over travel at 25 mm/s: 6.25 mm, up to 1.25 s (the filters follow
+        // down to the protocol's 5 mm/s).
+        let w = NakanoWindowing {
+            mirrored_end: true,
+            ..NakanoWindowing::new(0.25, 0.1, 2200.0).expect("valid")
+        };
+        let at = w.over_travel_at(0.025).expect("valid");
+        let travel = at.travel.expect("over travel");
+        assert!((travel.window_m - 6.25e-3).abs() < 1e-15);
+        assert_eq!(travel.max_samples, 2750);
+        assert!((at.travel_reference_speed_mps().expect("over travel") - 0.025).abs() < 1e-15);
+        let protocol = w.over_travel().expect("valid");
+        assert!((protocol.travel_reference_speed_mps().expect("over travel") - 0.005).abs() < 1e-15);
+        assert_eq!(protocol, w.over_travel_at(0.005).expect("valid"));
+        assert_eq!(w.travel_reference_speed_mps(), None);
+        for bad in [0.0, -0.01, f64::NAN, f64::INFINITY, 11.0] {
+            assert!(
+                matches!(
+                    w.over_travel_at(bad),
+                    Err(RecognizeError::Parameter {
+                        name: "travel_speed_mps",
+                        ..
+                    })
+                ),
+                "{bad}"
+            );
+        }
+        // The path speed of a window: its length over its duration, turns counted both ways.
+        assert!((path_speed_mps(&steady(25e-6 / 2.2, 551), 2200.0) - 0.025).abs() < 1e-12);
+        assert_eq!(path_speed_mps(&[0.0], 2200.0), 0.0);
+        assert!((path_speed_mps(&[0.0, 1e-5, 0.0], 1000.0) - 0.01).abs() < 1e-15);
     }
 
     #[test]

@@ -144,6 +144,9 @@ pub struct TrainSettings {
     /// Windowed features: windows over travel ([`NakanoWindowing::over_travel`]); needs
     /// [`TrainSettings::mirrored_end`].
     pub windows_over_travel: bool,
+    /// Windows over travel: the speed at which a window spans `window_s`, m/s; `None` for
+    /// the protocol's 5 mm/s ([`NakanoWindowing::over_travel_at`]).
+    pub travel_speed_mps: Option<f64>,
     /// SOM: seed of the map's initial vectors and presentation order.
     pub seed: u64,
     /// SOM over windows: how features are scaled before the map (a SOM over whole-scratch
@@ -176,6 +179,7 @@ impl TrainSettings {
             friction_over_travel: false,
             slowest_speed_mps: None,
             windows_over_travel: false,
+            travel_speed_mps: None,
             seed: 0,
             normalization: Normalization::LogWithinClass,
             k: PAPER_K,
@@ -221,10 +225,10 @@ impl TrainSettings {
             friction_over_travel: self.friction_over_travel.then(FrictionOverTravel::protocol),
             ..windowing
         };
-        if self.windows_over_travel {
-            windowing.over_travel()
-        } else {
-            Ok(windowing)
+        match (self.windows_over_travel, self.travel_speed_mps) {
+            (true, Some(speed_mps)) => windowing.over_travel_at(speed_mps),
+            (true, None) => windowing.over_travel(),
+            (false, _) => Ok(windowing),
         }
     }
 }
