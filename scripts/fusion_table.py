@@ -15,25 +15,12 @@ the posterior's calibration error.
 """
 
 import json
-import re
 import tempfile
 from pathlib import Path
 
-from palpus_cli import palpus, parser as cli_parser
+from palpus_cli import import_sliding_study, palpus, parser as cli_parser
 
 TRAIN_TRIALS = 5
-
-
-def import_options(readme):
-    """The import options the generated set's README gives, so that this stays in step with it."""
-    def one(pattern):
-        found = re.search(pattern, readme)
-        if not found:
-            raise SystemExit(f"the set's README.md has no {pattern}")
-        return found.group(1)
-
-    return ["--kind", "rubbing", "--rate-hz", one(r"--rate-hz (\d+)"), "--repeated-time", "mean",
-            "--unroll", one(r"--unroll '([^']+)'"), "--map", one(r"--map '([^']+)'")]
 
 
 def main():
@@ -43,18 +30,9 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         palpus(args.palpus, "gen", "--out", str(root / "logs"), "--only", "multistream", "-q")
-        logs = root / "logs" / "multistream"
-        options = import_options((logs / "README.md").read_text())
         train, test = [], []
-        for force in sorted(logs.glob("*_force.csv")):
-            stem = force.name[: -len("_force.csv")]
-            surface, trial = re.fullmatch(r"(mat\d+)_trial(\d+)", stem).groups()
-            out = root / "captures" / f"{stem}.csv"
-            out.parent.mkdir(exist_ok=True)
-            streams = [str(logs / f"{stem}_{s}.csv") for s in ("force", "position", "velocity", "vibration")]
-            palpus(args.palpus, "import", *streams, *options, "--meta", f"surface={surface}",
-                   "--meta", f"trial={int(trial)}", "--out", str(out))
-            (train if int(trial) <= TRAIN_TRIALS else test).append(str(out))
+        for trial, capture in import_sliding_study(args.palpus, root / "logs" / "multistream", root / "captures"):
+            (train if trial <= TRAIN_TRIALS else test).append(capture)
         models = {}
         for features in ("nakano", "vibration"):
             models[features] = str(root / f"{features}.json")
