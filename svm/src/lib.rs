@@ -14,6 +14,7 @@
 //! Imports no other palpus crate: identification (`identify`) and surface recognition
 //! (`recognize`) both build on it.
 
+mod bordered;
 mod certificate;
 mod compensated;
 mod data;

@@ -11,6 +11,7 @@
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
+use super::bordered::{Singular, solve_bordered, svd_solve};
 use super::data::SvrData;
 use super::params::DualSettings;
 
@@ -135,7 +136,9 @@ pub(crate) fn polish(
                     -bounded_sum
                 }
             });
-            let x = solve_bordered(&a, &rhs)?;
+            // Singular (more free samples than the kernel's rank plus one, as with a linear
+            // kernel): the minimum-norm least squares, judged by the KKT check below.
+            let x = solve_bordered(&a, &rhs, 1e-10, Singular::LeastSquares)?;
             for (r, &i) in free.iter().enumerate() {
                 beta[i] = x[r];
             }
@@ -452,45 +455,6 @@ fn pivot<'a>(
         }
     }
     Some(())
-}
-
-/// Solves the bordered system; when it is singular (more free samples than the kernel's rank
-/// plus one, as with a linear kernel), takes the minimum-norm least-squares solution and lets
-/// the KKT check judge it.
-fn solve_bordered(a: &Mat<f64>, rhs: &Mat<f64>) -> Option<Vec<f64>> {
-    let m = a.nrows();
-    let x = a.full_piv_lu().solve(rhs);
-    let scale = 1.0 + (0..m).fold(0.0f64, |acc, r| acc.max(rhs[(r, 0)].abs()));
-    let residual = (0..m).fold(0.0f64, |acc, r| {
-        let ax: f64 = (0..m).map(|col| a[(r, col)] * x[(col, 0)]).sum();
-        acc.max((ax - rhs[(r, 0)]).abs())
-    });
-    if (0..m).all(|r| x[(r, 0)].is_finite()) && residual <= 1e-10 * scale {
-        return Some((0..m).map(|r| x[(r, 0)]).collect());
-    }
-    let b: Vec<f64> = (0..m).map(|r| rhs[(r, 0)]).collect();
-    let x = svd_solve(a, &b)?;
-    x.iter().all(|v| v.is_finite()).then_some(x)
-}
-
-/// Minimum-norm least-squares solution of `a x = b` by the thin SVD, singular values up to
-/// `1e-12 ×` the largest counted as zero.
-fn svd_solve(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
-    let svd = a.thin_svd().ok()?;
-    let (u, v) = (svd.U(), svd.V());
-    let s = svd.S().column_vector();
-    let largest = (0..s.nrows()).fold(0.0f64, |m, i| m.max(s[i]));
-    let cutoff = 1e-12 * largest;
-    let mut x = vec![0.0; a.ncols()];
-    for i in 0..s.nrows() {
-        if s[i] > cutoff {
-            let coefficient = (0..a.nrows()).map(|r| u[(r, i)] * b[r]).sum::<f64>() / s[i];
-            for (col, xc) in x.iter_mut().enumerate() {
-                *xc += v[(col, i)] * coefficient;
-            }
-        }
-    }
-    Some(x)
 }
 
 /// How far a bounded sample's residual sits on the wrong side of its tube boundary.

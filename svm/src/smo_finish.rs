@@ -11,9 +11,9 @@
 //! otherwise lets SMO go on (the partition was not yet right).
 
 use faer::Mat;
-use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
 
+use super::bordered::{Singular, solve_bordered};
 use super::data::SvrData;
 use super::kernel::Kernel;
 use super::params::DualSettings;
@@ -156,7 +156,8 @@ pub(crate) fn finish(
                 miss[r] - bias0
             }
         });
-        let solution = solve_bordered(&a, &rhs)?;
+        // The finish certifies by the residual: a least squares that does not solve is no use.
+        let solution = solve_bordered(&a, &rhs, 1e-9, Singular::MustSolve)?;
         for (r, &i) in free.iter().enumerate() {
             new_beta[i] = beta[i] + solution[r];
         }
@@ -248,39 +249,4 @@ pub(crate) fn gap(beta: &[f64], k_beta: &[f64], bias: f64, y: &[f64], c: f64, ep
     let dual = 0.5 * quad + linear;
     let gap = (primal + dual).abs() / primal.abs().max(1.0);
     if gap.is_finite() { gap } else { f64::INFINITY }
-}
-
-/// Solves the bordered system `a x = rhs`: by LU with full pivoting, or, when that leaves a
-/// residual (a singular `K_FF`, as repeated input rows make it), by the minimum-norm least
-/// squares of the thin SVD. `None` unless the result solves the system to 1e-9 of its scale.
-fn solve_bordered(a: &Mat<f64>, rhs: &Mat<f64>) -> Option<Vec<f64>> {
-    let m = a.nrows();
-    let b: Vec<f64> = (0..m).map(|r| rhs[(r, 0)]).collect();
-    let scale = 1.0 + b.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
-    let solves = |x: &[f64]| {
-        x.iter().all(|v| v.is_finite())
-            && (0..m).all(|r| {
-                let ax: f64 = (0..m).map(|s| a[(r, s)] * x[s]).sum();
-                (ax - b[r]).abs() <= 1e-9 * scale
-            })
-    };
-    let lu = a.full_piv_lu().solve(rhs);
-    let x: Vec<f64> = (0..m).map(|r| lu[(r, 0)]).collect();
-    if solves(&x) {
-        return Some(x);
-    }
-    let svd = a.thin_svd().ok()?;
-    let (u, v) = (svd.U(), svd.V());
-    let sigma = svd.S().column_vector();
-    let largest = (0..sigma.nrows()).fold(0.0f64, |acc, i| acc.max(sigma[i]));
-    let mut x = vec![0.0; m];
-    for i in 0..sigma.nrows() {
-        if sigma[i] > 1e-12 * largest {
-            let coefficient = (0..m).map(|r| u[(r, i)] * b[r]).sum::<f64>() / sigma[i];
-            for (s, xs) in x.iter_mut().enumerate() {
-                *xs += v[(s, i)] * coefficient;
-            }
-        }
-    }
-    solves(&x).then_some(x)
 }

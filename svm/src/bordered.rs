@@ -1,0 +1,109 @@
+//! Dense solves of the bordered KKT system `[K_FF 1; 1ᵀ 0] [β_F; b] = rhs` over the free
+//! samples, which both exact finishes (the dense polish and the low-rank interior point's
+//! finish) factorise: LU with full pivoting, and the thin SVD's minimum-norm least squares
+//! when the system is singular (more free samples than the kernel's rank plus one, as with a
+//! linear kernel or repeated input rows).
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+
+/// What to do with a singular system's least-squares solution.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Singular {
+    /// Take it, and let the caller's KKT check judge it (the polish).
+    LeastSquares,
+    /// Take it only if it solves the system to the tolerance (the finish, which certifies
+    /// its result by the system's residual).
+    MustSolve,
+}
+
+/// Solves `a x = rhs` (`rhs` one column): by LU with full pivoting when that solves it to
+/// `tolerance × (1 + max |rhs|)` in every row, else by [`svd_solve`], as `singular` says.
+/// `None` when neither gives a finite (and, for [`Singular::MustSolve`], solving) `x`.
+pub(crate) fn solve_bordered(
+    a: &Mat<f64>,
+    rhs: &Mat<f64>,
+    tolerance: f64,
+    singular: Singular,
+) -> Option<Vec<f64>> {
+    let m = a.nrows();
+    let b: Vec<f64> = (0..m).map(|r| rhs[(r, 0)]).collect();
+    let scale = 1.0 + b.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
+    let solves = |x: &[f64]| {
+        x.iter().all(|v| v.is_finite())
+            && (0..m).all(|r| {
+                let ax: f64 = (0..m).map(|s| a[(r, s)] * x[s]).sum();
+                (ax - b[r]).abs() <= tolerance * scale
+            })
+    };
+    let lu = a.full_piv_lu().solve(rhs);
+    let x: Vec<f64> = (0..m).map(|r| lu[(r, 0)]).collect();
+    if solves(&x) {
+        return Some(x);
+    }
+    let x = svd_solve(a, &b)?;
+    match singular {
+        Singular::LeastSquares => x.iter().all(|v| v.is_finite()).then_some(x),
+        Singular::MustSolve => solves(&x).then_some(x),
+    }
+}
+
+/// Minimum-norm least-squares solution of `a x = b` by the thin SVD, singular values up to
+/// `1e-12 ×` the largest counted as zero.
+pub(crate) fn svd_solve(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let svd = a.thin_svd().ok()?;
+    let (u, v) = (svd.U(), svd.V());
+    let s = svd.S().column_vector();
+    let largest = (0..s.nrows()).fold(0.0f64, |m, i| m.max(s[i]));
+    let cutoff = 1e-12 * largest;
+    let mut x = vec![0.0; a.ncols()];
+    for i in 0..s.nrows() {
+        if s[i] > cutoff {
+            let coefficient = (0..a.nrows()).map(|r| u[(r, i)] * b[r]).sum::<f64>() / s[i];
+            for (col, xc) in x.iter_mut().enumerate() {
+                *xc += v[(col, i)] * coefficient;
+            }
+        }
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bordered system of a 1-D linear kernel over `xs`: rank 2 however many samples.
+    fn linear_bordered(xs: &[f64]) -> Mat<f64> {
+        let m = xs.len() + 1;
+        Mat::from_fn(m, m, |r, c| match (r < xs.len(), c < xs.len()) {
+            (true, true) => xs[r] * xs[c],
+            (false, false) => 0.0,
+            _ => 1.0,
+        })
+    }
+
+    #[test]
+    fn a_regular_system_is_solved_exactly_and_a_singular_one_as_asked() {
+        // Two samples: regular, solved by the LU to rounding.
+        let a = linear_bordered(&[1.0, 2.0]);
+        let rhs = Mat::from_fn(3, 1, |r, _| [1.0, 3.0, 0.0][r]);
+        for singular in [Singular::LeastSquares, Singular::MustSolve] {
+            let x = solve_bordered(&a, &rhs, 1e-10, singular).expect("regular");
+            for r in 0..3 {
+                let ax: f64 = (0..3).map(|c| a[(r, c)] * x[c]).sum();
+                assert!((ax - rhs[(r, 0)]).abs() < 1e-12, "{x:?}");
+            }
+        }
+        // Three samples of a linear kernel: singular. Consistent right-hand side (in the
+        // range): both take the minimum-norm solution, which solves it.
+        let a = linear_bordered(&[1.0, 2.0, 3.0]);
+        let consistent = Mat::from_fn(4, 1, |r, _| [1.0 + 0.5, 2.0 + 0.5, 3.0 + 0.5, 0.0][r]);
+        let x = solve_bordered(&a, &consistent, 1e-9, Singular::MustSolve).expect("consistent");
+        assert!(x.iter().all(|v| v.is_finite()));
+        // Inconsistent (not in the range): the least squares is kept only when asked.
+        let inconsistent = Mat::from_fn(4, 1, |r, _| [1.0, 0.0, 1.0, 0.0][r]);
+        assert!(solve_bordered(&a, &inconsistent, 1e-9, Singular::MustSolve).is_none());
+        let ls = solve_bordered(&a, &inconsistent, 1e-10, Singular::LeastSquares).expect("least squares");
+        assert_eq!(ls, svd_solve(&a, &[1.0, 0.0, 1.0, 0.0]).expect("svd"));
+    }
+}
