@@ -204,7 +204,8 @@ const PROBABILITY_FOLDS: usize = 5;
 pub struct BinarySvc {
     /// The pair `(i, j)`, `i < j`; positive decisions vote for `i`.
     pub classes: (usize, usize),
-    /// Support vectors: (training point index, `y_t α_t`).
+    /// Support vectors: (index into the classifier's points, `y_t α_t`: positive for class
+    /// `i`, negative for `j`).
     pub support: Vec<(usize, f64)>,
     /// Bias ρ.
     pub rho: f64,
@@ -220,7 +221,8 @@ pub struct Svc {
     dim: usize,
     /// Per feature `(offset, factor)`: scaled = (x − offset)·factor.
     scale: Vec<(f64, f64)>,
-    /// Scaled training points, row-major.
+    /// Scaled support vectors (the training points some machine uses; files written before
+    /// only these were kept hold every training point), row-major.
     points: Vec<f64>,
     /// The `k(k − 1)/2` binary machines in libsvm's order: (0,1), (0,2), …, (1,2), …
     machines: Vec<BinarySvc>,
@@ -371,6 +373,7 @@ impl Svc {
                 machine.sigmoid = Some(sigmoid_train(dec, &pair.y));
             }
         }
+        let points = keep_support(&points, dim, &mut machines);
         Ok(Self {
             params,
             classes,
@@ -711,6 +714,35 @@ fn solve(
         settings.iteration_budget(subset.len()),
         CACHE_BYTES,
     )
+}
+
+/// The training points some machine uses, in training order, with every machine's support
+/// indices renumbered to them: a point no machine uses adds nothing to any decision, so a
+/// file need not carry it. The decisions are those over all the points, to the bit: each
+/// machine sums the same terms in the same order.
+fn keep_support(points: &[f64], dim: usize, machines: &mut [BinarySvc]) -> Vec<f64> {
+    let n = points.len() / dim.max(1);
+    let mut kept_as = vec![usize::MAX; n];
+    for m in machines.iter() {
+        for &(t, _) in &m.support {
+            kept_as[t] = 0;
+        }
+    }
+    let mut kept = Vec::new();
+    let mut next = 0;
+    for (t, k) in kept_as.iter_mut().enumerate() {
+        if *k == 0 {
+            *k = next;
+            next += 1;
+            kept.extend_from_slice(&points[t * dim..(t + 1) * dim]);
+        }
+    }
+    for m in machines.iter_mut() {
+        for (t, _) in &mut m.support {
+            *t = kept_as[*t];
+        }
+    }
+    kept
 }
 
 #[cfg(test)]

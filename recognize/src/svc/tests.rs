@@ -68,20 +68,35 @@ fn decision_values_and_predictions_match_scikit_learn() {
     // values carry errors of ~1e-7 relative per kernel entry; ours are in double.
     assert!(worst < 1e-5, "largest decision difference {worst}");
     // Support vectors per class, counted as libsvm does (a point is one if any pair uses it).
-    let mut is_sv = vec![false; f.x_train.len()];
+    // The classifier keeps only those points; each one's class is the side of a pair it
+    // supports (`y α` positive for the pair's first class).
+    let kept = svc.points.len() / svc.dim;
+    let mut class_of = vec![None; kept];
     for m in svc.machines() {
-        for &(t, _) in &m.support {
-            is_sv[t] = true;
+        for &(t, coef) in &m.support {
+            let class = if coef > 0.0 { m.classes.0 } else { m.classes.1 };
+            assert!(class_of[t].is_none_or(|c| c == class), "point {t} on two sides");
+            class_of[t] = Some(class);
         }
     }
+    assert!(
+        class_of.iter().all(Option::is_some),
+        "a kept point no machine uses"
+    );
     let per_class: Vec<usize> = (0..f.classes)
-        .map(|c| {
-            (0..is_sv.len())
-                .filter(|&t| is_sv[t] && f.y_train[t] == c)
-                .count()
-        })
+        .map(|c| class_of.iter().filter(|&&k| k == Some(c)).count())
         .collect();
     assert_eq!(per_class, f.n_support);
+    assert!(kept < f.x_train.len(), "{kept} of {} kept", f.x_train.len());
+    // Every kept point is a training point, in training order.
+    let mut from = 0;
+    for t in 0..kept {
+        let row = &svc.points[t * svc.dim..(t + 1) * svc.dim];
+        let found = (from..f.x_train.len())
+            .find(|&u| f.x_train[u] == row)
+            .expect("a training point");
+        from = found + 1;
+    }
 }
 
 #[test]
