@@ -186,6 +186,14 @@ pub(crate) fn no_adapter(tried: &[&str], details: &[String]) -> RenderError {
     RenderError::NoAdapter { tried, details }
 }
 
+/// Waits until the GPU has finished all submitted work.
+pub(crate) fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map(|_| ())
+        .map_err(|e| RenderError::Gpu(e.to_string()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

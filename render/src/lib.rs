@@ -21,6 +21,7 @@ pub mod golden;
 pub mod gpu;
 pub mod image;
 pub mod mesh;
+mod offscreen;
 mod overlay;
 mod quiet_runtime;
 mod renderer;

@@ -13,9 +13,10 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::frame::{Frame, MAX_DIMPLES, Object, UiAction};
-use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions, opaque_colour};
+use crate::gpu::{DEPTH_FORMAT, Gpu, GpuOptions, opaque_colour, wait};
 use crate::image::Image;
 use crate::mesh::MeshData;
+use crate::offscreen::Offscreen;
 use crate::overlay::{OverlayLayer, PanelTarget};
 use crate::upscale::Upscaler;
 
@@ -90,13 +91,6 @@ struct Attachments {
     /// With MSAA beside the overlay's panel, the scene's strip resolved, then copied into the
     /// frame: multisampled attachments only as wide as the scene.
     strip: Option<(wgpu::Texture, wgpu::TextureView)>,
-}
-
-struct Offscreen {
-    size: [u32; 2],
-    texture: wgpu::Texture,
-    readback: wgpu::Buffer,
-    padded_row_bytes: u32,
 }
 
 /// Wall-clock time per stage of one frame, measured by waiting for the GPU after each stage.
@@ -496,37 +490,7 @@ impl Renderer {
         if self.offscreen.as_ref().is_some_and(|o| o.size == size) {
             return;
         }
-        let device = &self.gpu.device;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("offscreen colour"),
-            size: wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: self.format,
-            // COPY_DST: the overlay's panel is copied in.
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        let padded_row_bytes = (size[0] * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: u64::from(padded_row_bytes) * u64::from(size[1]),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        self.offscreen = Some(Offscreen {
-            size,
-            texture,
-            readback,
-            padded_row_bytes,
-        });
+        self.offscreen = Some(Offscreen::new(&self.gpu.device, self.format, size));
     }
 
     /// Attachments for a frame of `size` px whose scene fills its left `scene_width` px, drawn
@@ -1047,72 +1011,11 @@ impl Renderer {
         let Some(off) = self.offscreen.as_ref() else {
             return Err(RenderError::Readback("no offscreen target".into()));
         };
-        let device = &self.gpu.device;
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("readback"),
-        });
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &off.texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &off.readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(off.padded_row_bytes),
-                    rows_per_image: Some(off.size[1]),
-                },
-            },
-            wgpu::Extent3d {
-                width: off.size[0],
-                height: off.size[1],
-                depth_or_array_layers: 1,
-            },
-        );
-        self.gpu.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        let slice = off.readback.slice(..);
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        wait(device)?;
-        rx.recv()
-            .map_err(|e| RenderError::Readback(e.to_string()))?
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        let row_bytes = off.size[0] as usize * 4;
-        let mut rgba = Vec::with_capacity(row_bytes * off.size[1] as usize);
-        {
-            let mapped = slice
-                .get_mapped_range()
-                .map_err(|e| RenderError::Readback(e.to_string()))?;
-            if off.padded_row_bytes as usize == row_bytes {
-                // Rows need no unpadding (widths that are multiples of 64 px): one copy.
-                rgba.extend_from_slice(&mapped[..row_bytes * off.size[1] as usize]);
-            } else {
-                for row in mapped
-                    .chunks(off.padded_row_bytes as usize)
-                    .take(off.size[1] as usize)
-                {
-                    rgba.extend_from_slice(&row[..row_bytes]);
-                }
-            }
-        }
-        off.readback.unmap();
-        if matches!(
-            self.format,
-            wgpu::TextureFormat::Bgra8UnormSrgb | wgpu::TextureFormat::Bgra8Unorm
-        ) {
-            for px in rgba.chunks_exact_mut(4) {
-                px.swap(0, 2);
-            }
-        }
+        let image = off.read(&self.gpu.device, &self.gpu.queue)?;
         if let Some(t) = timer {
             t.readback += start.elapsed();
         }
-        Image::from_rgba(off.size[0], off.size[1], rgba)
+        Ok(image)
     }
 
     /// Draws `frame` offscreen at `size` with the overlay shapes of the window's last frame
@@ -1169,13 +1072,6 @@ fn srgb_encoded(colour: wgpu::Color) -> wgpu::Color {
         b: encode(colour.b),
         a: colour.a,
     }
-}
-
-fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map(|_| ())
-        .map_err(|e| RenderError::Gpu(e.to_string()))
 }
 
 #[cfg(test)]
