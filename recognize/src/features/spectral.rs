@@ -379,10 +379,16 @@ impl SpectrogramPlan {
 /// DFT bins of a `frame_len`-sample frame at `rate_hz` inside the band `0 … BAND_HZ` (or up to
 /// Nyquist, if lower).
 pub(crate) fn band_bins(rate_hz: f64, frame_len: usize) -> usize {
+    band_bins_to(BAND_HZ, rate_hz, frame_len)
+}
+
+/// As [`band_bins`], for a band over 0 … `top_hz` instead of 0 … [`BAND_HZ`] (a window's
+/// bands over travel, stretched by its speed).
+pub(crate) fn band_bins_to(top_hz: f64, rate_hz: f64, frame_len: usize) -> usize {
     let spectrum_bins = frame_len / 2 + 1;
     // The small slack keeps a band edge that falls exactly on a bin (200 Hz at 400 Hz or
     // 2.2 kHz) inside the band despite rounding in the division.
-    let in_band = (BAND_HZ * frame_len as f64 / rate_hz + 1e-9).floor() as usize + 1;
+    let in_band = (top_hz * frame_len as f64 / rate_hz + 1e-9).floor() as usize + 1;
     in_band.min(spectrum_bins)
 }
 

@@ -21,7 +21,9 @@ use std::sync::Arc;
 
 use realfft::{RealFftPlanner, RealToComplex};
 
-use super::spectral::{BAND_HZ, CellScale, FREQUENCY_BINS, band_bins, cell_means, frequency_bin};
+use super::spectral::{
+    BAND_HZ, CellScale, FREQUENCY_BINS, band_bins, band_bins_to, cell_means, frequency_bin,
+};
 use crate::RecognizeError;
 
 /// Length of the feature vector: one value per band.
@@ -134,8 +136,7 @@ impl WindowSpectrumPlan {
                 rate_hz: self.rate_hz,
             });
         }
-        let band_bins = (band_hz * self.fft_len as f64 / self.rate_hz + 1e-9).floor() as usize + 1;
-        self.spectrum(signal, band_bins.min(self.fft_len / 2 + 1), scale)
+        self.spectrum(signal, band_bins_to(band_hz, self.rate_hz, self.fft_len), scale)
     }
 
     /// The bands' mean magnitudes, the DFT bins `0 .. band_bins` split evenly among them.

@@ -550,14 +550,22 @@ impl SlidingStudy {
     /// The same study at `speed_mps`: positive and at most [`SlidingStudy::MAX_SPEED_MPS`], or
     /// a typed error.
     pub fn at_speed(self, speed_mps: f64) -> Result<Self, HapticsError> {
-        if !(speed_mps.is_finite() && speed_mps > 0.0 && speed_mps <= Self::MAX_SPEED_MPS) {
+        let study = Self { speed_mps, ..self };
+        study.check()?;
+        Ok(study)
+    }
+
+    /// Its speed out of range, as a typed error.
+    pub fn check(&self) -> Result<(), HapticsError> {
+        let v = self.speed_mps;
+        if !(v.is_finite() && v > 0.0 && v <= Self::MAX_SPEED_MPS) {
             return Err(HapticsError::Setting {
                 name: "slide_speed_mps",
-                value: speed_mps,
+                value: v,
                 reason: "positive and at most 0.5 m/s",
             });
         }
-        Ok(Self { speed_mps, ..self })
+        Ok(())
     }
 }
 
@@ -570,7 +578,8 @@ pub fn write_logs(
     study: SlidingStudy,
     written: &mut dyn FnMut(LogFile),
 ) -> Result<(), HapticsError> {
-    let SlidingStudy { trials, speed_mps } = study.at_speed(study.speed_mps)?;
+    study.check()?;
+    let SlidingStudy { trials, speed_mps } = study;
     let folder = out.join(FOLDER);
     fs::create_dir_all(&folder).map_err(|source| HapticsError::Io {
         action: "create",
