@@ -336,8 +336,8 @@ pub enum RecognizeError {
     /// A recognizer fused over time carries no measured reliability to weigh its evidence by.
     #[error(
         "recognizer {index} ({method} over {features} windows) has no cross-validated accuracy to weigh \
-         its evidence by: train an SVM on captures of at least two runs or trials (its windows are \
-         cross-validated with whole runs or trials held out)"
+         its evidence by: train it (a k-NN or SVM over windows) on captures of at least two runs or trials \
+         of every surface (its windows are then cross-validated with whole runs or trials held out)"
     )]
     NoReliability {
         /// Index of the recognizer among those fused.

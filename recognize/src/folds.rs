@@ -33,10 +33,30 @@ pub(crate) fn held_out_correct<V, M, E>(
     labels: &[usize],
     fold: &[usize],
     folds: usize,
-    mut fit: impl FnMut(&[&V], &[usize]) -> Result<M, E>,
+    fit: impl FnMut(&[&V], &[usize]) -> Result<M, E>,
     predict: impl Fn(&M, &V) -> Result<usize, E>,
 ) -> Result<usize, E> {
-    let mut correct = 0usize;
+    let predicted = held_out(features, labels, fold, folds, fit, predict)?;
+    Ok(predicted
+        .iter()
+        .zip(labels)
+        .filter(|&(p, y)| *p == Some(*y))
+        .count())
+}
+
+/// What `predict` says of each sample when its fold is held out, in the samples' order: each
+/// fold (`fold` of each sample, `folds` of them) is held out once, and its samples are
+/// predicted by a model fitted (`fit`) on the other folds' samples. A sample whose fold is not
+/// below `folds` is never held out: `None`.
+pub(crate) fn held_out<V, M, E, T>(
+    features: &[V],
+    labels: &[usize],
+    fold: &[usize],
+    folds: usize,
+    mut fit: impl FnMut(&[&V], &[usize]) -> Result<M, E>,
+    predict: impl Fn(&M, &V) -> Result<T, E>,
+) -> Result<Vec<Option<T>>, E> {
+    let mut out: Vec<Option<T>> = std::iter::repeat_with(|| None).take(features.len()).collect();
     for f in 0..folds {
         let (train_x, train_y): (Vec<&V>, Vec<usize>) = features
             .iter()
@@ -46,11 +66,11 @@ pub(crate) fn held_out_correct<V, M, E>(
             .map(|((x, &y), _)| (x, y))
             .unzip();
         let model = fit(&train_x, &train_y)?;
-        for ((x, &y), _) in features.iter().zip(labels).zip(fold).filter(|&(_, &g)| g == f) {
-            correct += usize::from(predict(&model, x)? == y);
+        for ((x, slot), _) in features.iter().zip(&mut out).zip(fold).filter(|&(_, &g)| g == f) {
+            *slot = Some(predict(&model, x)?);
         }
     }
-    Ok(correct)
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -6,8 +6,9 @@
 //! `Σ_b w_b · Pr_b(s | X_b)`, so that an unreliable behaviour cannot outvote reliable ones.
 
 use crate::RecognizeError;
-use crate::folds::{group_folds, held_out_correct};
-use crate::knn::{Knn, KnnParams};
+#[cfg(doc)]
+use crate::folds::group_folds;
+use crate::knn::{Knn, KnnParams, held_out_votes};
 
 /// The index of the largest probability; ties go to the lowest class index. `None` for an
 /// empty slice.
@@ -31,27 +32,8 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     classes: usize,
     folds: usize,
 ) -> Result<f64, RecognizeError> {
-    if groups.len() != features.len() {
-        return Err(RecognizeError::Counts {
-            features: features.len(),
-            labels: groups.len(),
-        });
-    }
-    if labels.len() != features.len() {
-        return Err(RecognizeError::Counts {
-            features: features.len(),
-            labels: labels.len(),
-        });
-    }
-    let (fold, folds) = group_folds(groups, folds)?;
-    let correct = held_out_correct(
-        features,
-        labels,
-        &fold,
-        folds,
-        |x, y| Knn::fit(params, x, y, classes),
-        |model, x| model.predict(x.as_ref()),
-    )?;
+    let (votes, _) = held_out_votes(params, features, labels, groups, classes, folds)?;
+    let correct = votes.iter().zip(labels).filter(|((l, _), y)| l == *y).count();
     Ok(correct as f64 / features.len() as f64)
 }
 

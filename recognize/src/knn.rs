@@ -10,10 +10,14 @@
 use std::sync::OnceLock;
 
 use crate::RecognizeError;
+use crate::folds::{group_folds, held_out};
 
 use crate::vectors;
 
+mod calibration;
 mod tree;
+
+pub use calibration::{VoteCalibration, fit_votes_weight, mean_log_loss};
 
 use tree::{Best, KdTree, squared_distance};
 
@@ -319,6 +323,42 @@ impl Knn {
     pub fn predict(&self, query: &[f64]) -> Result<usize, RecognizeError> {
         Ok(self.votes(&self.neighbours(query)?).0)
     }
+}
+
+/// A k-NN's label for one query and every class's vote fraction.
+pub type Votes = (usize, Vec<f64>);
+
+/// Each sample's k-NN label and vote fractions when its fold is held out, under
+/// cross-validation by group ([`group_folds`], at most `folds` folds): a k-NN with `params`
+/// fitted on the other folds' samples. Returns them in the samples' order, and the folds used.
+pub fn held_out_votes<V: AsRef<[f64]>>(
+    params: KnnParams,
+    features: &[V],
+    labels: &[usize],
+    groups: &[u64],
+    classes: usize,
+    folds: usize,
+) -> Result<(Vec<Votes>, usize), RecognizeError> {
+    for n in [labels.len(), groups.len()] {
+        if n != features.len() {
+            return Err(RecognizeError::Counts {
+                features: features.len(),
+                labels: n,
+            });
+        }
+    }
+    let (fold, folds) = group_folds(groups, folds)?;
+    let votes = held_out(
+        features,
+        labels,
+        &fold,
+        folds,
+        |x, y| Knn::fit(params, x, y, classes),
+        |model, x| model.predict_with_proba(x.as_ref()),
+    )?;
+    // `group_folds` puts every sample in a fold below `folds`: each was held out once.
+    let votes: Vec<_> = votes.into_iter().flatten().collect();
+    Ok((votes, folds))
 }
 
 #[cfg(test)]

@@ -2,9 +2,10 @@
 //! on, a surface is named only once its posterior passes a threshold, and is held until its
 //! posterior falls below a lower release level (hysteresis).
 //!
-//! Each window's class probabilities (a k-NN's votes, an SVC's coupled probabilities) are one
-//! piece of evidence: the posterior after windows 1..k is the normalized product of their
-//! probabilities, each raised to a weight. Overlapping windows share samples, so a window
+//! Each window's class probabilities (a k-NN's votes, calibrated on held-out windows when it
+//! was trained on several runs; an SVC's coupled probabilities) are one piece of evidence: the
+//! posterior after windows 1..k is the normalized product of their probabilities, each raised
+//! to a weight. Overlapping windows share samples, so a window
 //! carries about `hop / window` of an independent window's evidence; that is the default
 //! weight, which counts every sample once. A probability is floored before its logarithm: one
 //! confidently wrong window then lowers a class by a bounded amount instead of excluding it

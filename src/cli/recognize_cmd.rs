@@ -130,8 +130,9 @@ struct EvalArgs {
     #[arg(long, value_name = "W", requires = "sequential", conflicts_with = "fuse")]
     window_weight: Option<f64>,
     /// With --sequential: fuse this recognizer's evidence into the posterior too (repeatable):
-    /// an SVM over windows of the same surfaces, trained on at least two runs or trials (so
-    /// that its accuracy was cross-validated), over other features than the others (such as
+    /// a k-NN or SVM over windows of the same surfaces, trained on at least two runs or trials
+    /// of each (so that its accuracy was cross-validated, and a k-NN's votes calibrated on
+    /// held-out windows), over other features than the others (such as
     /// `--features vibration` beside `nakano`). Every recognizer's windows count in the order
     /// they are decided, each weighing hop / window times its cross-validated accuracy above
     /// chance relative to the most reliable recognizer's.
@@ -235,6 +236,7 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     }
     print_reliabilities(&model, trained_s);
     print_window_c(&model);
+    print_vote_calibration(&model);
     warn_unmapped(&model);
     Ok(())
 }
@@ -302,6 +304,30 @@ fn print_window_c(model: &RecognizerFile) {
                 println!("C = {c:e} (not cross-validated: a surface has captures of a single run or trial)")
             }
             None => println!("C = {c:e} (given; not cross-validated)"),
+        }
+    }
+}
+
+/// How a k-NN over windows' votes became probabilities.
+fn print_vote_calibration(model: &RecognizerFile) {
+    if let RecognizerBody::KnnWindows { calibration, .. } = &model.body {
+        match calibration {
+            Some(c) => println!(
+                "window probabilities: {:.3} × the vote fractions + {:.3} spread over the surfaces, fitted on {} windows \
+                 held out in {}-fold cross-validation by run (accuracy {:.1} %, log-loss {:.3} nats; {:.1} % of them \
+                 got no vote for their surface)",
+                c.votes_weight,
+                1.0 - c.votes_weight,
+                c.windows,
+                c.folds,
+                100.0 * c.accuracy,
+                c.log_loss,
+                100.0 * c.unvoted
+            ),
+            None => println!(
+                "window probabilities: the raw vote fractions (not calibrated: a surface has captures of a single \
+                 run or trial), so this k-NN cannot be fused"
+            ),
         }
     }
 }
@@ -555,7 +581,8 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         }
     }
     println!(
-        "calibration over every window: Brier score {:.4}, expected calibration error {:.2} %",
+        "calibration over every window (at threshold {}): Brier score {:.4}, expected calibration error {:.2} %",
+        e.params.threshold(),
         e.calibration.brier,
         100.0 * e.calibration.ece
     );

@@ -37,7 +37,8 @@ pub struct Decision {
     pub decided_at: usize,
     /// Index into [`RecognizerFile::classes`].
     pub label: usize,
-    /// Confidence in `[0, 1]` (see [`Som::decide_into`]; k-NN: the vote fraction).
+    /// Confidence in `[0, 1]` (see [`Som::decide_into`]; k-NN: the vote fraction, calibrated
+    /// when the k-NN over windows carries a [`crate::knn::VoteCalibration`]).
     pub confidence: f64,
 }
 
@@ -125,30 +126,54 @@ impl RecognizerFile {
         capture: &LabelledCapture,
         windowing: Option<&NakanoWindowing>,
     ) -> Result<Option<Vec<WindowProbabilities>>, RecognizeError> {
-        let (windowing, features, cell_scale, scaling, classifier): (_, _, _, _, &dyn Classifier) =
-            match &self.body {
-                RecognizerBody::KnnWindows {
-                    features,
-                    windowing: own,
-                    cell_scale,
-                    scaling,
-                    knn,
-                } => (windowing.unwrap_or(own), *features, *cell_scale, scaling, knn),
-                RecognizerBody::SvmWindows {
-                    features,
-                    windowing: own,
-                    cell_scale,
-                    scaling,
-                    svc,
-                    ..
-                } => (windowing.unwrap_or(own), *features, *cell_scale, scaling, svc),
-                _ => return Ok(None),
-            };
+        let (windowing, features, cell_scale, scaling, classifier, calibration): (
+            _,
+            _,
+            _,
+            _,
+            &dyn Classifier,
+            _,
+        ) = match &self.body {
+            RecognizerBody::KnnWindows {
+                features,
+                windowing: own,
+                cell_scale,
+                scaling,
+                knn,
+                calibration,
+            } => (
+                windowing.unwrap_or(own),
+                *features,
+                *cell_scale,
+                scaling,
+                knn,
+                *calibration,
+            ),
+            RecognizerBody::SvmWindows {
+                features,
+                windowing: own,
+                cell_scale,
+                scaling,
+                svc,
+                ..
+            } => (
+                windowing.unwrap_or(own),
+                *features,
+                *cell_scale,
+                scaling,
+                svc,
+                None,
+            ),
+            _ => return Ok(None),
+        };
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         let mut out = Vec::new();
         for (start, len, v) in window_vectors(capture, windowing, features, cell_scale)? {
-            let (label, p) = classifier.classify(&scaling.apply(&v), None)?;
+            let (label, mut p) = classifier.classify(&scaling.apply(&v), None)?;
+            if let Some(c) = calibration {
+                c.apply(&mut p);
+            }
             let decision = Decision {
                 window_start: start,
                 decided_at: windowing.decided_at(start),

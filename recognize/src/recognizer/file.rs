@@ -13,7 +13,7 @@ use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
 use crate::features::spectral::{CellScale, FEATURE_LEN};
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
-use crate::knn::Knn;
+use crate::knn::{Knn, VoteCalibration};
 use crate::som::Som;
 use crate::svc::{CSearch, Svc};
 use capture::json_file;
@@ -121,6 +121,11 @@ pub enum RecognizerBody {
         scaling: WindowScaling,
         /// The classifier over scaled windows.
         knn: Knn,
+        /// How its votes become window probabilities, fitted under cross-validation by run or
+        /// trial; `None` (raw vote fractions, and no reliability to be fused by) when the
+        /// training captures could not be cross-validated, or the file predates it.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        calibration: Option<VoteCalibration>,
     },
     /// C-SVC (degree-2 polynomial kernel) over rubbing windows (`--features nakano|both`).
     SvmWindows {
@@ -397,10 +402,23 @@ impl RecognizerFile {
                 windowing,
                 scaling,
                 knn,
+                calibration,
                 ..
             } => {
                 check_window_body(*features, windowing, scaling)?;
                 knn.check_shape().map_err(|(f, r)| (format!("body.knn.{f}"), r))?;
+                if let Some(c) = calibration {
+                    let in_unit = |v: f64| (0.0..=1.0).contains(&v);
+                    if !(in_unit(c.votes_weight) && in_unit(c.accuracy) && in_unit(c.unvoted)) {
+                        return bad(
+                            "body.calibration",
+                            format!(
+                                "votes weight {}, accuracy {} and unvoted share {} must each lie in [0, 1]",
+                                c.votes_weight, c.accuracy, c.unvoted
+                            ),
+                        );
+                    }
+                }
                 if knn.classes() != self.classes.len() || knn.dim() != features.dim() {
                     return bad(
                         "body.knn",

@@ -100,8 +100,9 @@ pub struct Calibration {
 /// [`RecognizerFile::evaluate_sequential`]'s result.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SequentialEvaluation {
-    /// The settings, with the first row's threshold (each row has its own; the calibration
-    /// does not depend on it).
+    /// The settings, with the first row's threshold (each row has its own). The calibration is
+    /// the posterior's at that threshold: the change test runs only while a surface is named,
+    /// so the posterior, and its calibration, depend on the threshold a little.
     pub params: SequentialParams,
     /// Window length and hop, s.
     pub window_s: f64,
@@ -203,14 +204,16 @@ impl RecognizerFile {
             })
     }
 
-    /// An SVM over windows' accuracy per window under the cross-validation recorded when it
-    /// was trained (at its C); `None` for any other recognizer, or one trained on captures that
-    /// could not be cross-validated (a single run or trial).
+    /// A k-NN's or SVM's accuracy per window under the cross-validation by run or trial
+    /// recorded when it was trained (an SVM's at its C; a k-NN's with its vote calibration);
+    /// `None` for any other recognizer, or one trained on captures that could not be
+    /// cross-validated (a single run or trial).
     fn cross_validated_window_accuracy(&self) -> Option<f64> {
         match &self.body {
             super::RecognizerBody::SvmWindows { c_search, .. } => {
                 c_search.as_ref().and_then(|s| s.accuracy())
             }
+            super::RecognizerBody::KnnWindows { calibration, .. } => calibration.map(|c| c.accuracy),
             _ => None,
         }
     }
@@ -487,7 +490,8 @@ impl RecognizerFile {
     }
 }
 
-/// The posterior's calibration over every window of `strokes` (the threshold plays no part).
+/// The posterior's calibration over every window of `strokes`, with `params`' threshold (which
+/// decides when the change test runs).
 fn calibration(
     strokes: &[Stroke],
     params: SequentialParams,

@@ -889,38 +889,44 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
     assert!(matches!(err, RecognizeError::FeaturesNotKept { .. }), "{err}");
 }
 
+/// [`three_surfaces`] as trials `trials`, each with a vibration tone: `fine` and `coarse` share
+/// theirs (60 Hz), so the vibration cannot tell them apart; the friction can.
+fn with_tones(trials: std::ops::Range<u32>, seconds: f64) -> Vec<LabelledCapture> {
+    trials
+        .flat_map(|t| {
+            three_surfaces(seconds)
+                .into_iter()
+                .zip([60.0, 60.0, 150.0])
+                .map(move |(c, tone)| {
+                    let mut c = with_vibration(c, tone);
+                    let meta = c.capture.metadata().clone().with(TRIAL_KEY, t);
+                    c.capture = Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec())
+                        .expect("valid");
+                    c.reference.path = format!("{}_{t}.csv", c.label).into();
+                    c
+                })
+        })
+        .collect()
+}
+
+/// `method` over `features` in 0.25 s windows every 0.1 s, trained on windows of that length.
+fn short_windows(method: Method, features: FeatureSet) -> TrainSettings {
+    TrainSettings {
+        features,
+        window_s: 0.25,
+        train_window_s: Some(0.25),
+        hop_s: 0.1,
+        ..TrainSettings::new(method)
+    }
+}
+
 /// Anytime decisions fused over two senses: each recognizer's windows in the order they are
 /// decided, each weighing its `hop / window` times its cross-validated accuracy above chance
 /// relative to the most reliable one's.
 #[test]
 fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
-    // The vibration cannot tell `fine` from `coarse` (the same tone), the friction can.
-    let with_tones = |trials: std::ops::Range<u32>, seconds: f64| -> Vec<LabelledCapture> {
-        trials
-            .flat_map(|t| {
-                three_surfaces(seconds)
-                    .into_iter()
-                    .zip([60.0, 60.0, 150.0])
-                    .map(move |(c, tone)| {
-                        let mut c = with_vibration(c, tone);
-                        let meta = c.capture.metadata().clone().with(TRIAL_KEY, t);
-                        c.capture =
-                            Capture::new(meta, c.capture.columns().to_vec(), c.capture.data().to_vec())
-                                .expect("valid");
-                        c.reference.path = format!("{}_{t}.csv", c.label).into();
-                        c
-                    })
-            })
-            .collect()
-    };
     let train_set = with_tones(0..2, 4.0);
-    let settings = |features| TrainSettings {
-        features,
-        window_s: 0.25,
-        train_window_s: Some(0.25),
-        hop_s: 0.1,
-        ..TrainSettings::new(Method::Svm)
-    };
+    let settings = |features| short_windows(Method::Svm, features);
     let nakano = train(&train_set, &settings(FeatureSet::Nakano)).expect("nakano");
     let vibration = train(&train_set, &settings(FeatureSet::Vibration)).expect("vibration");
     // The vibration's windows are decided at their last sample: nothing waits for a filter.
@@ -1273,4 +1279,117 @@ fn a_change_of_surface_is_read_from_the_metadata_and_checked() {
     assert_eq!(c.change_followed_s, None);
     // The stroke with a change is left out of the single-surface times.
     assert!(p.time_to_stable_correct_s.is_some() && c.time_to_stable_correct_s.is_none());
+}
+
+/// A k-NN over windows trained on two trials calibrates its votes on windows held out by
+/// trial, which also measures the reliability it is fused by; one trained on a single trial
+/// keeps its raw votes and cannot be fused.
+#[test]
+fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
+    use crate::fusion::cross_validated_accuracy;
+    use crate::knn::{FeatureScaling, VoteCalibration};
+    use crate::recognizer::train::{CV_FOLDS, scaled_training_windows};
+
+    let train_set = with_tones(0..2, 4.0);
+    let settings = |features| short_windows(Method::Knn, features);
+    // One neighbour: every held-out window's vote is all or nothing.
+    let one_nn = TrainSettings {
+        k: 1,
+        ..settings(FeatureSet::Vibration)
+    };
+    let vibration = train(&train_set, &one_nn).expect("vibration");
+    let calibration = |m: &RecognizerFile| match &m.body {
+        RecognizerBody::KnnWindows { calibration, .. } => *calibration,
+        _ => panic!("a k-NN over windows"),
+    };
+    let c = calibration(&vibration).expect("two trials: calibrated");
+    // `fine` and `coarse` ring alike: many held-out windows name the other one.
+    assert_eq!(c.folds, 2);
+    assert!(
+        c.unvoted > 0.0 && c.votes_weight > 0.0 && c.votes_weight < 1.0,
+        "{c:?}"
+    );
+    // Its accuracy is the k-NN's under the same folds, counted by the fusion's own function.
+    let windowing = *vibration.windowing().expect("windows");
+    let w = scaled_training_windows(&train_set, &windowing, FeatureSet::Vibration, CellScale::Mean)
+        .expect("windows");
+    let params = KnnParams::default().k(1).scaling(FeatureScaling::None);
+    let accuracy = cross_validated_accuracy(params, &w.x, &w.y, &w.groups, 3, CV_FOLDS).expect("cv");
+    assert_eq!(c.accuracy, accuracy);
+    assert!(accuracy > 0.5 && accuracy < 0.9, "{accuracy}");
+    assert_eq!(c.windows, w.x.len());
+
+    // Each window's probabilities are the raw votes blended, and the live classifier's are
+    // the same to the bit.
+    let mut raw = vibration.clone();
+    if let RecognizerBody::KnnWindows { calibration, .. } = &mut raw.body {
+        *calibration = None;
+    }
+    let test_set = with_tones(2..3, 3.0);
+    let mut live = WindowClassifier::new(&vibration).expect("window classifier");
+    let sequential = vibration.sequential_windowing().expect("windows");
+    let mut p = vec![0.0; 3];
+    for capture in &test_set {
+        let blended = vibration
+            .window_probabilities(capture, None)
+            .expect("probabilities")
+            .expect("windows");
+        let votes = raw
+            .window_probabilities(capture, None)
+            .expect("probabilities")
+            .expect("windows");
+        for (b, v) in blended.iter().zip(&votes) {
+            let mut expected = v.probabilities.clone();
+            c.apply(&mut expected);
+            assert_eq!(b.probabilities, expected);
+            assert_eq!(b.decision.label, v.decision.label);
+            assert_eq!(b.decision.confidence, expected[b.decision.label]);
+            assert!(v.probabilities.iter().all(|&q| q == 0.0 || q == 1.0));
+        }
+        let vectors =
+            window_vectors(capture, &sequential, FeatureSet::Vibration, CellScale::Mean).expect("windows");
+        let offline = vibration
+            .window_probabilities(capture, Some(&sequential))
+            .expect("probabilities")
+            .expect("windows");
+        for ((_, _, v), w) in vectors.iter().zip(&offline) {
+            live.probabilities_into(v, &mut p).expect("classified");
+            assert_eq!(p, w.probabilities);
+        }
+    }
+
+    // Kept in the file; a calibration out of its bounds is refused when read.
+    let json = serde_json::to_value(&vibration).expect("serialize");
+    assert_eq!(json["body"]["calibration"]["votes_weight"], c.votes_weight);
+    let back = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("valid");
+    assert_eq!(back, vibration);
+    let mut bad = json.clone();
+    bad["body"]["calibration"]["votes_weight"] = serde_json::json!(1.5);
+    let err = RecognizerFile::from_json(&bad.to_string(), Path::new("m.json")).expect_err("out of bounds");
+    assert!(err.to_string().contains("calibration"), "{err}");
+
+    // Fused with a k-NN over friction, weighed by its measured reliability, the two name every
+    // surface of the held-out trial.
+    let nakano = train(&train_set, &settings(FeatureSet::Nakano)).expect("nakano");
+    let members = nakano.fusion_members(&[&vibration]).expect("members");
+    assert_eq!(members[1].accuracy, c.accuracy);
+    assert!(members[1].weight < members[0].weight, "{members:?}");
+    let params = nakano
+        .fused_sequential_params(&[&vibration], 3.0)
+        .expect("params");
+    let fused = nakano
+        .evaluate_sequential_fused(&[&vibration], &test_set, &[0.9], params)
+        .expect("fused");
+    assert_eq!(fused.rows[0].correct, fused.rows[0].decided, "{fused:?}");
+    assert!(fused.rows[0].decided > 0, "{fused:?}");
+
+    // One trial: nothing to hold out, raw votes, and no reliability to be fused by.
+    let one_trial: Vec<LabelledCapture> = train_set[..3].to_vec();
+    let uncrossed = train(&one_trial, &one_nn).expect("one trial");
+    assert_eq!(calibration(&uncrossed), None::<VoteCalibration>);
+    let err = nakano.fusion_members(&[&uncrossed]).expect_err("no reliability");
+    assert!(
+        matches!(err, RecognizeError::NoReliability { index: 1, .. }),
+        "{err}"
+    );
 }

@@ -7,13 +7,13 @@
 use super::file::{RecognizerBody, RecognizerFile};
 use crate::RecognizeError;
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
-use crate::knn::{Knn, KnnScratch};
+use crate::knn::{Knn, KnnScratch, VoteCalibration};
 use crate::svc::{Svc, SvcScratch};
 
 /// A classifier and the buffers it works on.
 #[derive(Debug)]
 enum Scratched {
-    Knn(Box<Knn>, KnnScratch),
+    Knn(Box<Knn>, KnnScratch, Option<VoteCalibration>),
     Svc(Box<Svc>, SvcScratch),
 }
 
@@ -33,10 +33,10 @@ impl Clone for WindowClassifier {
     /// A copy with its own buffers (the search tree of a k-NN built for it too).
     fn clone(&self) -> Self {
         let classifier = match &self.classifier {
-            Scratched::Knn(knn, _) => {
+            Scratched::Knn(knn, _, calibration) => {
                 let knn = knn.clone();
                 let scratch = knn.scratch();
-                Scratched::Knn(knn, scratch)
+                Scratched::Knn(knn, scratch, *calibration)
             }
             Scratched::Svc(svc, _) => {
                 let svc = svc.clone();
@@ -64,12 +64,18 @@ impl WindowClassifier {
                 knn,
                 scaling,
                 features,
+                calibration,
                 ..
             } => {
                 let knn = Box::new(knn.clone());
                 let scratch = knn.scratch();
                 let dim = knn.dim();
-                (Scratched::Knn(knn, scratch), scaling, *features, dim)
+                (
+                    Scratched::Knn(knn, scratch, *calibration),
+                    scaling,
+                    *features,
+                    dim,
+                )
             }
             RecognizerBody::SvmWindows {
                 svc,
@@ -132,7 +138,13 @@ impl WindowClassifier {
         }
         self.scaling.apply_into(features, &mut self.scaled);
         match &mut self.classifier {
-            Scratched::Knn(knn, scratch) => knn.predict_proba_into(&self.scaled, scratch, p),
+            Scratched::Knn(knn, scratch, calibration) => {
+                knn.predict_proba_into(&self.scaled, scratch, p)?;
+                if let Some(c) = calibration {
+                    c.apply(p);
+                }
+                Ok(())
+            }
             Scratched::Svc(svc, scratch) => svc.predict_proba_into(&self.scaled, scratch, p),
         }
     }

@@ -2,7 +2,8 @@
 //! one over rubbing windows.
 
 use super::{
-    CV_FOLDS, Method, ScaledWindows, TrainSettings, Trainer, histograms_by_behaviour, scaled_training_windows,
+    CV_FOLDS, Method, ScaledWindows, TrainSettings, Trainer, every_class_in_two_groups,
+    histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizeError;
 #[cfg(doc)]
@@ -11,7 +12,7 @@ use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::folds::group_folds;
 use crate::fusion::cross_validated_accuracy;
-use crate::knn::{FeatureScaling, KnnParams};
+use crate::knn::{FeatureScaling, KnnParams, VoteCalibration};
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
@@ -89,7 +90,9 @@ impl RecognizerFile {
 
     /// k-NN over rubbing windows (`features` [`FeatureSet::Nakano`] or [`FeatureSet::Both`]):
     /// windowed like the SOM, one classifier over every training window, scaled by
-    /// [`WindowScaling`].
+    /// [`WindowScaling`]. When every surface has captures of two runs or trials, its votes are
+    /// calibrated on windows held out by run or trial ([`VoteCalibration`]), which also
+    /// measures the reliability it is fused by.
     pub fn train_knn_windows(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
@@ -102,13 +105,15 @@ impl RecognizerFile {
             scaling,
             x,
             y,
-            ..
+            groups,
         } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
-        let knn = KnnParams::default()
-            .k(k)
-            .scaling(FeatureScaling::None)
+        let params = KnnParams::default().k(k).scaling(FeatureScaling::None);
+        let knn = params
             .fit(&x, &y, classes.len())
             .map_err(RecognizeError::knn(None))?;
+        let calibration = every_class_in_two_groups(&y, &groups)
+            .then(|| VoteCalibration::cross_validate(params, &x, &y, &groups, classes.len(), CV_FOLDS))
+            .transpose()?;
         Ok(Self::assemble(
             classes,
             features.feature_names(),
@@ -118,6 +123,7 @@ impl RecognizerFile {
                 cell_scale,
                 scaling,
                 knn,
+                calibration,
             },
             captures,
             x.len(),
