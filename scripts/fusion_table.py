@@ -11,7 +11,12 @@ Markdown row per senses and threshold: windows named, named decisions right, the
 the stable right surface and the slowest surface's mean, trials not ending named right, and
 the posterior's calibration error.
 
+Then the same for k-NNs over the same windows (at `--knn-thresholds`): each k-NN's raw vote
+fractions (its file without the calibration, as files were written before it), its calibrated
+probabilities, and each fused with the other sense's SVM and k-NN.
+
     python3 scripts/fusion_table.py [--palpus target/release/palpus] [--thresholds 0.5,0.9,0.95]
+        [--knn-thresholds 0.9]
 """
 
 import json
@@ -26,6 +31,7 @@ TRAIN_TRIALS = 5
 def main():
     parser = cli_parser(__doc__)
     parser.add_argument("--thresholds", default="0.5,0.9,0.95")
+    parser.add_argument("--knn-thresholds", default="0.9")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
@@ -34,36 +40,61 @@ def main():
         for trial, capture in import_sliding_study(args.palpus, root / "logs" / "multistream", root / "captures"):
             (train if trial <= TRAIN_TRIALS else test).append(capture)
         models = {}
-        for features in ("nakano", "vibration"):
-            models[features] = str(root / f"{features}.json")
-            palpus(args.palpus, "recognize", "train", *train, "--method", "svm", "--features", features,
-                   "--window-s", "0.25", "--mirrored-end", "--out", models[features])
+        for method in ("svm", "knn"):
+            for features in ("nakano", "vibration"):
+                models[method, features] = str(root / f"{method}_{features}.json")
+                trained = palpus(args.palpus, "recognize", "train", *train, "--method", method, "--features",
+                                 features, "--window-s", "0.25", "--mirrored-end", "--out", models[method, features])
+                if method == "knn":
+                    calibration = next(line for line in trained.splitlines() if line.startswith("window probabilities"))
+                    print(f"- k-NN over {features}: {calibration[len('window probabilities: '):]}")
+                    raw = json.loads(Path(models[method, features]).read_text())
+                    raw["body"].pop("calibration")
+                    models["raw", features] = str(root / f"raw_{features}.json")
+                    Path(models["raw", features]).write_text(json.dumps(raw))
 
-        def evaluate(model, fuse=()):
+        def evaluate(model, fuse=(), thresholds=args.thresholds):
             extra = [a for other in fuse for a in ("--fuse", other)]
             return json.loads(palpus(args.palpus, "recognize", "eval", model, *test, "--sequential",
-                                     args.thresholds, *extra, "--json"))
+                                     thresholds, *extra, "--json"))
 
-        runs = [("Nakano's features", evaluate(models["nakano"])),
-                ("vibration spectrum", evaluate(models["vibration"])),
-                ("both, fused", evaluate(models["nakano"], [models["vibration"]]))]
+        runs = [("Nakano's features", evaluate(models["svm", "nakano"])),
+                ("vibration spectrum", evaluate(models["svm", "vibration"])),
+                ("both, fused", evaluate(models["svm", "nakano"], [models["svm", "vibration"]]))]
+        knn = lambda model, fuse=(): evaluate(model, fuse, args.knn_thresholds)
+        knn_runs = [("k-NN, Nakano's features, raw votes", knn(models["raw", "nakano"])),
+                    ("k-NN, Nakano's features, calibrated", knn(models["knn", "nakano"])),
+                    ("k-NN, vibration spectrum, raw votes", knn(models["raw", "vibration"])),
+                    ("k-NN, vibration spectrum, calibrated", knn(models["knn", "vibration"])),
+                    ("k-NN friction + SVM vibration, fused",
+                     knn(models["knn", "nakano"], [models["svm", "vibration"]])),
+                    ("SVM friction + k-NN vibration, fused",
+                     knn(models["svm", "nakano"], [models["knn", "vibration"]])),
+                    ("k-NN friction + k-NN vibration, fused",
+                     knn(models["knn", "nakano"], [models["knn", "vibration"]]))]
+        print()
         for m in runs[-1][1]["fused"]:
             print(f"- {m['features']}: cross-validated accuracy {100 * m['accuracy']:.1f} %, "
                   f"reliability {m['reliability']:.3f}, weight {m['weight']:.3f}")
-        print()
-        print("| senses | threshold | windows named | named right | stable right (mean) | slowest surface "
-              "| trials not ending right | calibration error |")
-        print("|---|---|---|---|---|---|---|---|")
-        for name, e in runs:
-            for r in e["rows"]:
-                worst = r["worst_surface"]
-                stable = r["time_to_stable_correct_s"]
-                print(f"| {name} | {r['threshold']:g} | {100 * r['decided'] / e['steps']:.1f} % "
-                      f"| {100 * r['correct'] / max(r['decided'], 1):.1f} % "
-                      f"| {'-' if stable is None else f'{stable:.2f} s'} "
-                      f"| {f'{worst[1]:.2f} s ({worst[0]})' if worst else '-'} "
-                      f"| {r['not_stable']} of {e['captures']} | {100 * e['calibration']['ece']:.1f} % |")
+        table(runs, "senses")
+        table(knn_runs, "recognizers")
 
+
+def table(runs, first):
+    """One Markdown row per run and threshold."""
+    print()
+    print(f"| {first} | threshold | windows named | named right | stable right (mean) | slowest surface "
+          "| trials not ending right | calibration error |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, e in runs:
+        for r in e["rows"]:
+            worst = r["worst_surface"]
+            stable = r["time_to_stable_correct_s"]
+            print(f"| {name} | {r['threshold']:g} | {100 * r['decided'] / e['steps']:.1f} % "
+                  f"| {100 * r['correct'] / max(r['decided'], 1):.1f} % "
+                  f"| {'-' if stable is None else f'{stable:.2f} s'} "
+                  f"| {f'{worst[1]:.2f} s ({worst[0]})' if worst else '-'} "
+                  f"| {r['not_stable']} of {e['captures']} | {100 * e['calibration']['ece']:.1f} % |")
 
 if __name__ == "__main__":
     main()
