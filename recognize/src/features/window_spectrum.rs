@@ -19,6 +19,7 @@
 
 use std::sync::Arc;
 
+use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 
 use super::spectral::{
@@ -39,6 +40,23 @@ pub struct WindowSpectrumPlan {
     fft: Arc<dyn RealToComplex<f64>>,
     /// DFT bins inside the band (`0 … BAND_HZ`, or Nyquist if lower).
     band_bins: usize,
+}
+
+/// The buffers one window's DFT works in ([`WindowSpectrumPlan::scratch`]): a recognizer that
+/// must not allocate per window keeps one.
+#[derive(Clone)]
+pub struct SpectrumScratch {
+    input: Vec<f64>,
+    output: Vec<Complex<f64>>,
+    fft: Vec<Complex<f64>>,
+}
+
+impl std::fmt::Debug for SpectrumScratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SpectrumScratch")
+            .field("input", &self.input.len())
+            .finish_non_exhaustive()
+    }
 }
 
 impl std::fmt::Debug for WindowSpectrumPlan {
@@ -88,11 +106,31 @@ impl WindowSpectrumPlan {
         self.fft_len
     }
 
+    /// Buffers for [`WindowSpectrumPlan::features_with`] and
+    /// [`WindowSpectrumPlan::features_over_travel_with`].
+    pub fn scratch(&self) -> SpectrumScratch {
+        SpectrumScratch {
+            input: self.fft.make_input_vec(),
+            output: self.fft.make_output_vec(),
+            fft: self.fft.make_scratch_vec(),
+        }
+    }
+
     /// The spectrum of one window of a single signal (a single axis, or the three axes'
     /// magnitude): at least 2 and at most [`WindowSpectrumPlan::max_samples`] samples, all
     /// finite.
     pub fn features(&self, signal: &[f64], scale: CellScale) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
-        self.spectrum(signal, self.band_bins, scale)
+        self.features_with(signal, scale, &mut self.scratch())
+    }
+
+    /// [`WindowSpectrumPlan::features`] in `scratch` (from this plan): no allocation.
+    pub fn features_with(
+        &self,
+        signal: &[f64],
+        scale: CellScale,
+        scratch: &mut SpectrumScratch,
+    ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
+        self.spectrum(signal, self.band_bins, scale, scratch)
     }
 
     /// The spectrum of one window over travel, its bands in cycles per metre: 0 …
@@ -115,6 +153,19 @@ impl WindowSpectrumPlan {
         reference_speed_mps: f64,
         scale: CellScale,
     ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
+        self.features_over_travel_with(signal, speed_mps, reference_speed_mps, scale, &mut self.scratch())
+    }
+
+    /// [`WindowSpectrumPlan::features_over_travel`] in `scratch` (from this plan): no
+    /// allocation.
+    pub fn features_over_travel_with(
+        &self,
+        signal: &[f64],
+        speed_mps: f64,
+        reference_speed_mps: f64,
+        scale: CellScale,
+        scratch: &mut SpectrumScratch,
+    ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
         let bad = |name, value| RecognizeError::Parameter {
             of: "vibration spectrum",
             name,
@@ -136,7 +187,12 @@ impl WindowSpectrumPlan {
                 rate_hz: self.rate_hz,
             });
         }
-        self.spectrum(signal, band_bins_to(band_hz, self.rate_hz, self.fft_len), scale)
+        self.spectrum(
+            signal,
+            band_bins_to(band_hz, self.rate_hz, self.fft_len),
+            scale,
+            scratch,
+        )
     }
 
     /// The bands' mean magnitudes, the DFT bins `0 .. band_bins` split evenly among them.
@@ -145,6 +201,7 @@ impl WindowSpectrumPlan {
         signal: &[f64],
         band_bins: usize,
         scale: CellScale,
+        scratch: &mut SpectrumScratch,
     ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
         let n = signal.len();
         if n < 2 {
@@ -161,16 +218,24 @@ impl WindowSpectrumPlan {
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
             return Err(RecognizeError::NonFiniteSample { index });
         }
+        let SpectrumScratch { input, output, fft } = scratch;
+        if input.len() != self.fft_len || output.len() != self.fft_len / 2 + 1 {
+            return Err(RecognizeError::Buffer {
+                what: "vibration spectrum scratch",
+                got: input.len(),
+                expected: self.fft_len,
+            });
+        }
         let mean = signal.iter().sum::<f64>() / n as f64;
-        let mut input = self.fft.make_input_vec();
-        let mut output = self.fft.make_output_vec();
         let mut window_sum = 0.0;
         for (i, (dst, &s)) in input.iter_mut().zip(signal).enumerate() {
             let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos();
             window_sum += w;
             *dst = (s - mean) * w;
         }
-        self.fft.process(&mut input, &mut output)?;
+        // The DFT leaves the input as scratch: the zero padding is written anew every time.
+        input[n..].fill(0.0);
+        self.fft.process_with_scratch(input, output, fft)?;
         let to_amplitude = 2.0 / window_sum;
         let (mut sum, mut count) = ([0.0; SPECTRUM_LEN], [0usize; SPECTRUM_LEN]);
         for (k, c) in output.iter().enumerate() {
@@ -222,6 +287,31 @@ mod tests {
             .unwrap();
         assert!((unit.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         assert!((unit[6] - s[6] / s.iter().sum::<f64>()).abs() < 1e-12);
+    }
+
+    /// Buffers kept from window to window give what fresh ones give, to the bit, a shorter
+    /// window after a longer one included (its zero padding is written anew).
+    #[test]
+    fn kept_buffers_read_as_fresh_ones() {
+        let plan = WindowSpectrumPlan::new(RATE_HZ, 400).unwrap();
+        let mut scratch = plan.scratch();
+        for (n, freq_hz) in [(400, 101.0), (200, 37.0), (333, 64.0), (150, 150.0)] {
+            let signal = tone(n, freq_hz, 0.2, 1.0);
+            let kept = plan
+                .features_with(&signal, CellScale::Mean, &mut scratch)
+                .unwrap();
+            assert_eq!(kept, plan.features(&signal, CellScale::Mean).unwrap(), "{n}");
+            let over = plan
+                .features_over_travel_with(&signal, 0.004, 0.005, CellScale::Mean, &mut scratch)
+                .unwrap();
+            let fresh = plan
+                .features_over_travel(&signal, 0.004, 0.005, CellScale::Mean)
+                .unwrap();
+            assert_eq!(over, fresh, "{n}");
+        }
+        let other = WindowSpectrumPlan::new(RATE_HZ, 300).unwrap().scratch();
+        let wrong = plan.features_with(&tone(200, 50.0, 0.2, 0.0), CellScale::Mean, &mut other.clone());
+        assert!(matches!(wrong, Err(RecognizeError::Buffer { .. })), "{wrong:?}");
     }
 
     #[test]

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::FeatureSet;
 use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::spectral::{self, ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
-use super::window_spectrum::WindowSpectrumPlan;
+use super::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 use crate::{LabelledCapture, RecognizeError};
 use capture::Capture;
 
@@ -711,7 +711,7 @@ fn vibration_vectors(
     cell_scale: CellScale,
 ) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
-    let reference_speed_mps = windowing.travel_reference_speed_mps();
+    let mut scratch = plan.scratch();
     let samples = match axes {
         Axes::Three(x, ..) => x.len(),
         Axes::One(v) => v.len(),
@@ -727,16 +727,36 @@ fn vibration_vectors(
                 }
                 Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
             };
-            let spectrum = match reference_speed_mps {
-                Some(reference) => {
-                    let speed_mps = path_speed_mps(&position_m[r], windowing.rate_hz);
-                    plan.features_over_travel(&signal, speed_mps, reference, cell_scale)?
-                }
-                None => plan.features(&signal, cell_scale)?,
-            };
+            let spectrum =
+                windowing.vibration_features(&plan, &signal, &position_m[r], cell_scale, &mut scratch)?;
             Ok((s, n, spectrum.to_vec()))
         })
         .collect()
+}
+
+impl NakanoWindowing {
+    /// [`FeatureSet::Vibration`]'s features of one window: the spectrum of `signal` (the
+    /// window's vibration samples, a single axis or the axes' magnitude), over travel when the
+    /// windows are ([`NakanoWindowing::travel_reference_speed_mps`], at the path speed of
+    /// `position_m`, the same samples' positions), by `plan` (made for
+    /// [`NakanoWindowing::max_window_samples`] at this rate) in `scratch`. The offline vectors
+    /// and the live recognizer both read windows through it, so the two agree to the bit.
+    pub fn vibration_features(
+        &self,
+        plan: &WindowSpectrumPlan,
+        signal: &[f64],
+        position_m: &[f64],
+        cell_scale: CellScale,
+        scratch: &mut SpectrumScratch,
+    ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
+        match self.travel_reference_speed_mps() {
+            Some(reference) => {
+                let speed_mps = path_speed_mps(position_m, self.rate_hz);
+                plan.features_over_travel_with(signal, speed_mps, reference, cell_scale, scratch)
+            }
+            None => plan.features_with(signal, cell_scale, scratch),
+        }
+    }
 }
 
 /// Path length of `position_m` over its duration at `rate_hz`, m/s (a stroke that turns back

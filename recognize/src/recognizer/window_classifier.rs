@@ -6,6 +6,7 @@
 
 use super::file::{RecognizerBody, RecognizerFile};
 use crate::RecognizeError;
+use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
 use crate::knn::{Knn, KnnScratch, VoteCalibration};
 use crate::svc::{Svc, SvcScratch};
@@ -27,6 +28,7 @@ pub struct WindowClassifier {
     windowing: NakanoWindowing,
     scaled: Vec<f64>,
     classes: usize,
+    cell_scale: CellScale,
 }
 
 impl Clone for WindowClassifier {
@@ -51,6 +53,7 @@ impl Clone for WindowClassifier {
             windowing: self.windowing,
             scaled: vec![0.0; self.scaled.len()],
             classes: self.classes,
+            cell_scale: self.cell_scale,
         }
     }
 }
@@ -59,12 +62,13 @@ impl WindowClassifier {
     /// The classifier of `model`, which must be a k-NN or SVM over windows (any other gives no
     /// per-window probabilities, and is refused saying so).
     pub fn new(model: &RecognizerFile) -> Result<Self, RecognizeError> {
-        let (classifier, scaling, features, dim) = match &model.body {
+        let (classifier, scaling, features, dim, cell_scale) = match &model.body {
             RecognizerBody::KnnWindows {
                 knn,
                 scaling,
                 features,
                 calibration,
+                cell_scale,
                 ..
             } => {
                 let knn = Box::new(knn.clone());
@@ -75,18 +79,20 @@ impl WindowClassifier {
                     scaling,
                     *features,
                     dim,
+                    *cell_scale,
                 )
             }
             RecognizerBody::SvmWindows {
                 svc,
                 scaling,
                 features,
+                cell_scale,
                 ..
             } => {
                 let svc = Box::new(svc.clone());
                 let scratch = svc.scratch();
                 let dim = svc.dim();
-                (Scratched::Svc(svc, scratch), scaling, *features, dim)
+                (Scratched::Svc(svc, scratch), scaling, *features, dim, *cell_scale)
             }
             body => {
                 return Err(RecognizeError::NoWindowProbabilities {
@@ -108,12 +114,18 @@ impl WindowClassifier {
             windowing,
             scaled: vec![0.0; dim],
             classes: model.classes.len(),
+            cell_scale,
         })
     }
 
     /// The features it takes.
     pub fn features(&self) -> FeatureSet {
         self.features
+    }
+
+    /// How its windows' histogram or spectrum cells are scaled.
+    pub fn cell_scale(&self) -> CellScale {
+        self.cell_scale
     }
 
     /// The windows it classifies, from contact on
