@@ -20,7 +20,9 @@
 //! calibration error 12.2 %; vibration alone 94.3 %, 1.14 s, 7, 5.8 %; fused 97.1 %, 0.86 s,
 //! 2, 4.1 %. A k-NN over Nakano's features, its votes calibrated on held-out trials, is fused
 //! with the vibration SVM the same way: alone 85.6 %, 1.64 s, 11, 13.3 % (its raw votes 83.2 %,
-//! 1.88 s, 21, 17.3 %); fused 95.9 %, 1.02 s, 7, 5.1 %.
+//! 1.88 s, 21, 17.3 %); fused 95.9 %, 1.02 s, 7, 5.1 %. Fed live, sample by sample
+//! (`LiveRecognizer::fused`), the two SVMs decide on trial 6 exactly as offline (1,000
+//! decisions).
 //!
 //! The vibration spectrum over travel is checked at half the sliding speed it was trained at
 //! (`gen --slide-speed-mps 0.0125`), against the spectrum in hertz.
@@ -30,8 +32,14 @@ mod common;
 use std::path::Path;
 use std::time::Instant;
 
-use common::{MultistreamTrial, fails, json, multistream_trials, parallel_map, succeeds, text, train_svm};
+use common::{
+    MultistreamTrial, fails, json, last_per_sample, multistream_trials, offline_fused_steps, parallel_map,
+    succeeds, text, train_svm,
+};
+use haptics::live_recognizer::{LiveDecision, LiveRecognizer};
 use haptics::sim::protocols::multistream::{IMPORT_MAP, IMPORT_RATE_HZ, IMPORT_UNROLL};
+use recognize::sequential::DEFAULT_MEMORY_S;
+use recognize::{LabelledCapture, RecognizerFile};
 
 /// Trials 1..=TRAIN_TRIALS of every surface train, the rest test.
 const TRAIN_TRIALS: u32 = 5;
@@ -372,6 +380,61 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
         assert!(stable_s(&knn_fused) < stable_s(e), "{}", summary.join("; "));
         assert!(not_stable(&knn_fused) <= not_stable(e), "{}", summary.join("; "));
     }
+
+    // Live, the nakano SVM with the vibration SVM fused decides on the study's own 2.2 kHz
+    // samples exactly as the offline fusion: every window of both, the same posterior to the bit.
+    let load = |path: &str| RecognizerFile::load(Path::new(path)).expect("model");
+    let models = [load(nakano), load(vibration)];
+    let members = models[0].fusion_members(&[&models[1]]).expect("fusable");
+    let factors = [1.0, members[1].weight / members[0].weight];
+    let params = models[0]
+        .fused_sequential_params(&[&models[1]], DEFAULT_MEMORY_S)
+        .expect("params")
+        .threshold(0.9)
+        .build()
+        .expect("valid");
+    let mut live =
+        LiveRecognizer::fused(&models[0], &[&models[1]], IMPORT_RATE_HZ, params).expect("fused live");
+    let (mut decisions, mut right) = (0, 0);
+    for path in test.iter().filter(|p| p.ends_with("_trial06.csv")) {
+        let c = LabelledCapture::read(Path::new(path)).expect("capture");
+        let offline = last_per_sample(offline_fused_steps(
+            &[&models[0], &models[1]],
+            &factors,
+            &c,
+            params,
+        ));
+        let [x, z, f, v] = [
+            "tangential_position_m",
+            "normal_position_m",
+            "friction_force_n",
+            "vibration_mps2",
+        ]
+        .map(|name| c.capture.column(name).expect("column"));
+        live.reset();
+        let online: Vec<(usize, LiveDecision)> = (0..x.len())
+            .filter_map(|i| {
+                let d = live.push_with_vibration(x[i], z[i], f[i], v[i]).expect("finite");
+                d.map(|d| (i, d))
+            })
+            .collect();
+        assert_eq!(online.len(), offline.len(), "{path}");
+        for ((at, d), (off_at, step)) in online.iter().zip(&offline) {
+            assert_eq!(
+                (*at, d.best, d.label),
+                (*off_at, step.best, step.decided),
+                "{path}"
+            );
+            assert_eq!(d.confidence, step.probability, "{path}");
+        }
+        decisions += online.len();
+        right += online
+            .iter()
+            .filter(|(_, d)| d.label.is_some_and(|l| models[0].classes[l] == c.label))
+            .count();
+    }
+    eprintln!("fused live on trial 6: {decisions} decisions as offline, {right} naming the right surface");
+    assert!(decisions >= 20 * 40, "{decisions}");
 
     // Slid at half the speed (`gen --slide-speed-mps 0.0125`: the same strips of the same
     // surfaces), the textures vibrate at half the frequencies. The spectrum in hertz trained at

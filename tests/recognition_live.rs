@@ -2,6 +2,8 @@
 //! same decisions (a SOM's) and the same posterior (a k-NN's or SVM's anytime decisions) on the
 //! same windows, no allocation per sample, and the errors of a recognizer that cannot run live.
 
+mod common;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -84,13 +86,19 @@ fn feed_without_allocating(
     let x = c.capture.column("tangential_position_m").expect("x");
     let z = c.capture.column("normal_position_m").expect("z");
     let f = c.capture.column("friction_force_n").expect("friction");
+    // A recognizer with vibration fused reads the capture's vibration too.
+    let v = (live.vibration_senses() > 0).then(|| c.capture.column("vibration_mps2").expect("vibration"));
     let mut online = Vec::with_capacity(expected);
     ALLOCATIONS.store(0, Ordering::Relaxed);
     THIS_THREAD.with(|t| t.set(true));
     COUNTING.store(true, Ordering::Relaxed);
     for i in 0..x.len() {
         // `online` has room for every decision expected, so pushing onto it never allocates.
-        if let Some(d) = live.push(x[i], z[i], f[i]).expect("finite samples")
+        let decided = match v {
+            Some(v) => live.push_with_vibration(x[i], z[i], f[i], v[i]),
+            None => live.push(x[i], z[i], f[i]),
+        };
+        if let Some(d) = decided.expect("finite samples")
             && online.len() < online.capacity()
         {
             online.push((i, d));
@@ -647,4 +655,161 @@ fn mirrored_end_live_as_offline(
         }
     }
     (named, right)
+}
+
+/// `c` with a `vibration_mps2` column: a tone at `tone_hz` over a deterministic jitter.
+fn with_vibration(c: &LabelledCapture, tone_hz: f64) -> LabelledCapture {
+    use capture::Capture;
+    let n = c.capture.len();
+    let rate_hz = c.capture.metadata().rate_hz();
+    let vibration: Vec<f64> = (0..n)
+        .map(|k| {
+            let t = k as f64 / rate_hz;
+            0.5 * (std::f64::consts::TAU * tone_hz * t).sin() + 0.1 * (((k * 7919) % 13) as f64 / 13.0 - 0.5)
+        })
+        .collect();
+    let mut columns = c.capture.columns().to_vec();
+    columns.push("vibration_mps2".to_owned());
+    let mut data = c.capture.data().to_vec();
+    data.push(vibration);
+    let capture = Capture::new(c.capture.metadata().clone(), columns, data).expect("capture");
+    LabelledCapture::new(capture, &c.reference.path, String::new()).expect("labelled")
+}
+
+/// Runs 0 and 1 of every surface with a tone each (two surfaces share each tone, so the
+/// vibration alone confuses them; the friction does not).
+fn runs_with_tones() -> Vec<Vec<LabelledCapture>> {
+    let tones = [40.0, 40.0, 72.0, 104.0, 104.0, 136.0, 168.0];
+    runs()
+        .iter()
+        .zip(tones)
+        .map(|(r, tone)| r.iter().map(|c| with_vibration(c, tone)).collect())
+        .collect()
+}
+
+/// Trains k-NNs over Nakano's features and over the vibration spectrum under `windowing` on
+/// runs 0 and 1 (two runs: cross-validated, so each has a reliability), feeds run 2 to a live
+/// copy of the two fused and checks every decision against the offline fusion, bit for bit,
+/// with nothing allocated. Returns the live recognizer, its models and parameters, and the
+/// named decisions, how many were right and the vibration windows among the steps.
+fn fused_live_as_offline(
+    runs: &[Vec<LabelledCapture>],
+    windowing: NakanoWindowing,
+) -> (LiveRecognizer, [RecognizerFile; 2], SequentialParams, [usize; 3]) {
+    let train: Vec<LabelledCapture> = runs.iter().flat_map(|r| r[..2].iter().cloned()).collect();
+    let train_knn = |features| {
+        RecognizerFile::train_knn_windows(&train, windowing, features, 5, CellScale::Mean).expect("k-NN")
+    };
+    let nakano = train_knn(FeatureSet::Nakano);
+    let vibration = train_knn(FeatureSet::Vibration);
+    let members = nakano.fusion_members(&[&vibration]).expect("fusable");
+    let factors = [1.0, members[1].weight / members[0].weight];
+    let params = nakano
+        .fused_sequential_params(&[&vibration], DEFAULT_MEMORY_S)
+        .expect("params")
+        .build()
+        .expect("valid");
+    // A copy, as a scene hands each haptic thread: it must have all its storage too.
+    let mut live = LiveRecognizer::fused(&nakano, &[&vibration], 1000.0, params)
+        .expect("fused")
+        .clone();
+    assert_eq!(live.vibration_senses(), 1);
+    let (mut named, mut right, mut vibration_windows) = (0, 0, 0);
+    for surface_runs in runs {
+        let c = &surface_runs[2];
+        let steps = common::offline_fused_steps(&[&nakano, &vibration], &factors, c, params);
+        let alone = nakano
+            .window_probabilities(c, nakano.sequential_windowing().as_ref())
+            .expect("probabilities")
+            .expect("windows")
+            .len();
+        vibration_windows += steps.len() - alone;
+        let offline = common::last_per_sample(steps);
+        live.reset();
+        let online = feed_without_allocating(&mut live, c, offline.len());
+        assert_eq!(online.len(), offline.len(), "{}", c.reference.path.display());
+        for ((at, d), (off_at, step)) in online.iter().zip(&offline) {
+            assert_eq!((*at, d.best, d.label), (*off_at, step.best, step.decided));
+            assert_eq!(d.confidence, step.probability);
+        }
+        let labels = online.iter().filter_map(|(_, d)| d.label);
+        named += labels.clone().count();
+        right += labels.filter(|&l| nakano.classes[l] == c.label).count();
+    }
+    (
+        live,
+        [nakano, vibration],
+        params,
+        [named, right, vibration_windows],
+    )
+}
+
+/// A k-NN over Nakano's windows with a k-NN over the vibration spectrum fused into its
+/// posterior runs live exactly as the offline fusion, over windows of fixed time and over
+/// travel: every window of both, in the same order, the same posterior to the bit, with
+/// nothing allocated; and the fusion's refusals.
+#[test]
+fn vibration_fused_live_as_offline() {
+    let runs = runs_with_tones();
+    let fixed = NakanoWindowing {
+        mirrored_end: true,
+        ..NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid")
+    };
+    let over_travel = NakanoWindowing {
+        friction_over_travel: Some(FrictionOverTravel::protocol()),
+        ..fixed.following_speeds_down_to(0.002).expect("valid")
+    }
+    .over_travel()
+    .expect("valid");
+    for (name, windowing) in [("fixed", fixed), ("over travel", over_travel)] {
+        let (_, _, _, [named, right, vibration_windows]) = fused_live_as_offline(&runs, windowing);
+        eprintln!(
+            "fused live, {name}: {right} of {named} named decisions right, {vibration_windows} vibration windows"
+        );
+        assert!(vibration_windows > 7 * 50, "{name}: {vibration_windows}");
+        assert!(
+            named > 7 * 40 && right as f64 >= 0.9 * named as f64,
+            "{name}: {right}/{named}"
+        );
+    }
+    let (mut live, [nakano, vibration], params, _) = fused_live_as_offline(&runs, fixed);
+
+    // Every sample needs the vibration; a non-finite one starts the stroke afresh.
+    let err = live.push(0.0, 0.0, 0.1).expect_err("no vibration");
+    assert!(
+        matches!(err, HapticsError::VibrationNeeded { senses: 1 }),
+        "{err}"
+    );
+    let err = live
+        .push_with_vibration(0.0, 0.0, 0.1, f64::NAN)
+        .expect_err("non-finite vibration");
+    assert!(matches!(err, HapticsError::NotFiniteVibration { .. }), "{err}");
+    assert!(
+        live.posterior()
+            .expect("posterior")
+            .iter()
+            .all(|&p| p == 1.0 / 7.0)
+    );
+
+    // Refused: the same evidence twice, vibration windows decided after a lookahead, and
+    // another rate.
+    let err = LiveRecognizer::fused(&nakano, &[&nakano], 1000.0, params).expect_err("overlap");
+    assert!(err.to_string().contains("count twice"), "{err}");
+    let train: Vec<LabelledCapture> = runs.iter().flat_map(|r| r[..2].iter().cloned()).collect();
+    let lookahead = RecognizerFile::train_knn_windows(
+        &train,
+        NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid"),
+        FeatureSet::Vibration,
+        5,
+        CellScale::Mean,
+    )
+    .expect("k-NN");
+    let err = LiveRecognizer::fused(&nakano, &[&lookahead], 1000.0, params).expect_err("lookahead");
+    assert!(
+        matches!(err, HapticsError::LiveFusion { index: 1, .. })
+            && err.to_string().contains("--mirrored-end"),
+        "{err}"
+    );
+    let err = LiveRecognizer::fused(&nakano, &[&vibration], 2000.0, params).expect_err("rate");
+    assert!(matches!(err, HapticsError::LiveRate { .. }), "{err}");
 }

@@ -7,6 +7,12 @@
 //! from the stroke's latest samples, with the filters' lookahead mirrored, instead of reading
 //! them from the streaming sums). A recognizer that streams with a mirrored start has one more
 //! dear sample a stroke, the one that pushes the mirror image through the filters.
+//!
+//! Fusion: a k-NN over 0.25 s windows of Nakano's features decided at their last sample,
+//! alone and with a k-NN over each window's vibration spectrum fused into its posterior
+//! (`LiveRecognizer::fused`), on runs whose vibration is a tone per surface (the simulated
+//! Omega.7 has no accelerometer): what the vibration sense adds per sample, and its dearest
+//! sample, which completes windows of both.
 
 // The measured call returns the recognizer's own result type, large by design (see haptics'
 // lib.rs).
@@ -15,11 +21,13 @@
 use std::hint::black_box;
 use std::path::Path;
 
+use capture::Capture;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use haptics::live_recognizer::LiveRecognizer;
 use haptics::sim::protocols::nakano::rubbing_run;
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
-use recognize::{LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
+use recognize::sequential::DEFAULT_MEMORY_S;
+use recognize::{CellScale, FeatureSet, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
 
 fn bench(c: &mut Criterion) {
     let surfaces = nakano_surfaces();
@@ -41,7 +49,112 @@ fn bench(c: &mut Criterion) {
     for (name, model) in [("som", &som), ("svm", &svm)] {
         bench_model(&mut group, name, model, &signals);
     }
+    bench_fusion(&mut group, &surfaces);
     group.finish();
+}
+
+/// A capture with a `vibration_mps2` column: a tone at `tone_hz` with a deterministic jitter.
+fn with_tone(capture: &Capture, tone_hz: f64) -> Capture {
+    let rate_hz = capture.metadata().rate_hz();
+    let tone = (0..capture.len()).map(|k| {
+        let jitter = ((k * 7919) % 13) as f64 / 13.0 - 0.5;
+        0.5 * (std::f64::consts::TAU * tone_hz * k as f64 / rate_hz).sin() + 0.1 * jitter
+    });
+    let mut columns = capture.columns().to_vec();
+    columns.push("vibration_mps2".to_owned());
+    let mut data = capture.data().to_vec();
+    data.push(tone.collect());
+    Capture::new(capture.metadata().clone(), columns, data).expect("capture")
+}
+
+fn bench_fusion(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    surfaces: &[haptics::sim::world::surface::RubbingSurface],
+) {
+    let tone_hz = |i: usize| 40.0 + 32.0 * (i / 2) as f64;
+    let train: Vec<LabelledCapture> = surfaces
+        .iter()
+        .enumerate()
+        .flat_map(|(i, s)| {
+            (0..2).map(move |run| {
+                let capture = rubbing_run(&SurfacePatch::new(s), run, 1).expect("run");
+                LabelledCapture::new(with_tone(&capture, tone_hz(i)), Path::new(s.name), String::new())
+                    .expect("labelled")
+            })
+        })
+        .collect();
+    let windowing = NakanoWindowing {
+        mirrored_end: true,
+        ..NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid")
+    };
+    let knn = |features| {
+        RecognizerFile::train_knn_windows(&train, windowing, features, 5, CellScale::Mean).expect("k-NN")
+    };
+    let (nakano, vibration) = (knn(FeatureSet::Nakano), knn(FeatureSet::Vibration));
+    let params = nakano
+        .fused_sequential_params(&[&vibration], DEFAULT_MEMORY_S)
+        .expect("fusable")
+        .build()
+        .expect("valid");
+    let test = with_tone(
+        &rubbing_run(&SurfacePatch::new(&surfaces[2]), 2, 1).expect("run"),
+        tone_hz(2),
+    );
+    let [x, z, f, v] = [
+        "tangential_position_m",
+        "normal_position_m",
+        "friction_force_n",
+        "vibration_mps2",
+    ]
+    .map(|name| test.column(name).expect("rubbing column").to_vec());
+    let alone = LiveRecognizer::new(&nakano, 1000.0).expect("live recognizer");
+    let fused = LiveRecognizer::fused(&nakano, &[&vibration], 1000.0, params).expect("fused");
+    group.throughput(Throughput::Elements(x.len() as u64));
+    for (name, mut live) in [("knn", alone), ("knn_vibration_fused", fused)] {
+        group.bench_function(format!("{name}/rubbing_run_per_sample"), |b| {
+            b.iter(|| {
+                live.reset();
+                let mut last = 0;
+                for i in 0..x.len() {
+                    let pushed = live.push_with_vibration(
+                        black_box(x[i]),
+                        black_box(z[i]),
+                        black_box(f[i]),
+                        black_box(v[i]),
+                    );
+                    if let Ok(Some(d)) = pushed {
+                        last = d.best;
+                    }
+                }
+                black_box(last)
+            });
+        });
+    }
+    // The dearest sample: one that completes windows of both senses, in the middle of the run.
+    let mut probe = LiveRecognizer::fused(&nakano, &[&vibration], 1000.0, params).expect("fused");
+    let decisions: Vec<usize> = (0..x.len())
+        .filter(|&i| matches!(probe.push_with_vibration(x[i], z[i], f[i], v[i]), Ok(Some(_))))
+        .collect();
+    let at = decisions[decisions.len() / 2];
+    let mut before = LiveRecognizer::fused(&nakano, &[&vibration], 1000.0, params).expect("fused");
+    for i in 0..at {
+        let _ = before.push_with_vibration(x[i], z[i], f[i], v[i]);
+    }
+    group.throughput(Throughput::Elements(1));
+    group.bench_function("knn_vibration_fused/deciding_sample", |b| {
+        b.iter_batched_ref(
+            || before.clone(),
+            |r| {
+                black_box(r.push_with_vibration(
+                    black_box(x[at]),
+                    black_box(z[at]),
+                    black_box(f[at]),
+                    black_box(v[at]),
+                ))
+            },
+            criterion::BatchSize::LargeInput,
+        );
+    });
 }
 
 fn bench_model(

@@ -202,6 +202,32 @@ pub enum HapticsError {
         /// The recognizer's rate, Hz.
         model_hz: f64,
     },
+    /// A recognizer cannot be fused into a live Nakano recognizer.
+    #[error("recognizer {index} ({method} over {features} windows) cannot be fused live: {reason}")]
+    LiveFusion {
+        /// Its index among those fused (0: the Nakano recognizer).
+        index: usize,
+        /// Its method.
+        method: &'static str,
+        /// Its features.
+        features: &'static str,
+        /// Why.
+        reason: &'static str,
+    },
+    /// A recognizer that fuses a vibration sense was fed a sample without one.
+    #[error(
+        "this live recognizer fuses {senses} vibration recognizer(s): every sample needs the tool's vibration"
+    )]
+    VibrationNeeded {
+        /// Vibration recognizers fused.
+        senses: usize,
+    },
+    /// A live vibration sample was NaN or infinite; the stroke starts afresh from the next one.
+    #[error("non-finite vibration sample ({vibration_mps2} m/s²)")]
+    NotFiniteVibration {
+        /// The sample, m/s².
+        vibration_mps2: f64,
+    },
     /// A live sample was NaN or infinite; the stroke starts afresh from the next one.
     #[error("non-finite sample (position {position_m} m, height {height_m} m, friction {friction_n} N)")]
     NotFiniteSample {

@@ -21,6 +21,13 @@
 //! window's features with the batch's own [`EdgeWindow`] once per hop (about 800 samples of
 //! arithmetic, in buffers made here), so those agree with the offline ones exactly.
 //!
+//! **Fused senses** ([`LiveRecognizer::fused`], fed by [`LiveRecognizer::push_with_vibration`]):
+//! a k-NN or SVM over the vibration spectrum of its own windows, each decided at its last
+//! sample, adds its windows' evidence to the same posterior, weighted by its reliability as
+//! `recognize eval --sequential --fuse` weighs it offline, and in the same order (at a sample
+//! that completes windows of both, the Nakano recognizer's first). The vibration is the rig's:
+//! no supported device has an accelerometer, so `palpus run` fuses nothing.
+//!
 //! A running session feeds it from the recorder thread ([`SampleRecognizer`]), which sees every
 //! sample of the loop in order: the decisions are those the tick would make, while the haptic
 //! thread spends nothing on them (a decision costs about 50 µs, a twentieth of a tick).
@@ -33,6 +40,9 @@ use recognize::RecognizerFile;
 use std::collections::VecDeque;
 
 use recognize::nakano::{EdgeWindow, TravelFriction};
+use vibration::VibrationSense;
+
+mod vibration;
 use recognize::{
     FEATURES, FeatureSet, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile as Model,
     SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
@@ -87,6 +97,8 @@ pub struct LiveRecognizer {
     /// For a model whose windows read friction over travel, that filter, run from the
     /// stroke's first sample as the offline windows run it from the capture's.
     friction: Option<TravelFriction>,
+    /// Vibration recognizers fused into the posterior ([`LiveRecognizer::fused`]).
+    senses: Vec<VibrationSense>,
     first_position_m: Option<f64>,
     current: Option<LiveDecision>,
 }
@@ -259,9 +271,34 @@ impl LiveRecognizer {
                 .friction_over_travel
                 .map(|travel| travel.filter(Some(RUBBING_OBSERVER_CUTOFF_RADPS), loop_hz))
                 .transpose()?,
+            senses: Vec::new(),
             first_position_m: None,
             current: None,
         })
+    }
+
+    /// A k-NN or SVM over Nakano's windows (`model`) with the evidence of vibration
+    /// recognizers (`others`: k-NNs or SVMs over `--features vibration` windows, each decided
+    /// at its last sample) fused into its posterior, as `recognize eval --sequential --fuse`
+    /// fuses them offline: every recognizer's windows in the order they are decided (the
+    /// Nakano recognizer's first at the same sample), each weighing its share of the fusion
+    /// ([`Model::fusion_members`]). `params` are the fusion's
+    /// ([`Model::fused_sequential_params`], with a threshold). Fed by
+    /// [`LiveRecognizer::push_with_vibration`].
+    pub fn fused(
+        model: &Model,
+        others: &[&Model],
+        loop_hz: f64,
+        params: SequentialParams,
+    ) -> Result<Self, HapticsError> {
+        let members = model.fusion_members(others)?;
+        let mut live = Self::build(model, loop_hz, Some(params))?;
+        for (index, (other, member)) in others.iter().zip(&members[1..]).enumerate() {
+            let factor = member.weight / members[0].weight;
+            live.senses
+                .push(VibrationSense::new(other, index + 1, loop_hz, factor)?);
+        }
+        Ok(live)
     }
 
     /// Feeds one tick: the tip's position along the rubbing direction and its height, m, and
@@ -277,6 +314,41 @@ impl LiveRecognizer {
         position_m: f64,
         height_m: f64,
         friction_n: f64,
+    ) -> Result<Option<LiveDecision>, HapticsError> {
+        if !self.senses.is_empty() {
+            return Err(HapticsError::VibrationNeeded {
+                senses: self.senses.len(),
+            });
+        }
+        self.push_sample(position_m, height_m, friction_n, None)
+    }
+
+    /// [`LiveRecognizer::push`] for a recognizer with vibration senses fused
+    /// ([`LiveRecognizer::fused`]): the same sample's vibration too, m/s² (the accelerometer's
+    /// magnitude or its single axis, as the vibration recognizers were trained on). Without
+    /// senses the vibration is not used. A non-finite vibration starts the stroke afresh, as a
+    /// non-finite position does.
+    pub fn push_with_vibration(
+        &mut self,
+        position_m: f64,
+        height_m: f64,
+        friction_n: f64,
+        vibration_mps2: f64,
+    ) -> Result<Option<LiveDecision>, HapticsError> {
+        if !vibration_mps2.is_finite() {
+            self.restart_stroke();
+            return Err(HapticsError::NotFiniteVibration { vibration_mps2 });
+        }
+        self.push_sample(position_m, height_m, friction_n, Some(vibration_mps2))
+    }
+
+    /// The Nakano recognizer's window, then each sense's, that this sample completes.
+    fn push_sample(
+        &mut self,
+        position_m: f64,
+        height_m: f64,
+        friction_n: f64,
+        vibration_mps2: Option<f64>,
     ) -> Result<Option<LiveDecision>, HapticsError> {
         if !(position_m.is_finite() && height_m.is_finite() && friction_n.is_finite()) {
             self.restart_stroke();
@@ -302,12 +374,41 @@ impl LiveRecognizer {
                 })
                 .map(|w| (w.start, w.features, 1.0)),
         };
-        let Some((window_start, features, evidence_scale)) = window else {
-            return Ok(None);
+        let mut decided = match window {
+            Some((window_start, features, evidence_scale)) => {
+                Some(self.decide(window_start, &features, evidence_scale)?)
+            }
+            None => None,
         };
+        if let (Some(v), Decider::Sequential { state, .. }) = (vibration_mps2, &mut self.decider) {
+            for sense in &mut self.senses {
+                if let Some(w) = sense.push(position_m, v, x0)? {
+                    let step = state.push_scaled(w.probabilities, w.scale)?;
+                    decided = Some(LiveDecision {
+                        label: step.decided,
+                        best: step.best,
+                        confidence: step.probability,
+                        window_start: w.start,
+                    });
+                }
+            }
+        }
+        if decided.is_some() {
+            self.current = decided;
+        }
+        Ok(decided)
+    }
+
+    /// The decision on one window of Nakano's features.
+    fn decide(
+        &mut self,
+        window_start: u64,
+        features: &[f64; FEATURES],
+        evidence_scale: f64,
+    ) -> Result<LiveDecision, HapticsError> {
         let decision = match &mut self.decider {
             Decider::Som { som, scratch } => {
-                let d = som.decide_into(&features, scratch)?;
+                let d = som.decide_into(features, scratch)?;
                 let label = som.node_labels().get(d.node).copied().unwrap_or(0);
                 LiveDecision {
                     label: Some(label),
@@ -321,7 +422,7 @@ impl LiveRecognizer {
                 state,
                 probabilities,
             } => {
-                classifier.probabilities_into(&features, probabilities)?;
+                classifier.probabilities_into(features, probabilities)?;
                 let step = state.push_scaled(probabilities, evidence_scale)?;
                 LiveDecision {
                     label: step.decided,
@@ -331,8 +432,7 @@ impl LiveRecognizer {
                 }
             }
         };
-        self.current = Some(decision);
-        Ok(Some(decision))
+        Ok(decision)
     }
 
     /// A new stroke from the next sample, the last decision kept.
@@ -344,10 +444,16 @@ impl LiveRecognizer {
         if let Some(filter) = &mut self.friction {
             filter.reset();
         }
+        self.senses.iter_mut().for_each(VibrationSense::clear);
         self.first_position_m = None;
         if let Decider::Sequential { state, .. } = &mut self.decider {
             state.reset();
         }
+    }
+
+    /// Vibration recognizers fused into the posterior.
+    pub fn vibration_senses(&self) -> usize {
+        self.senses.len()
     }
 
     /// The latest decision, if any since the last reset.

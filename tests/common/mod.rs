@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use recognize::{LabelledCapture, RecognizerFile, SequentialParams, SequentialState, SequentialStep};
+
 /// Runs `palpus ARGS` without a vendor library configured in the environment.
 pub fn palpus(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_palpus"))
@@ -204,4 +206,45 @@ pub fn without_budgets(scene: &str) -> String {
         }
     }
     out.join("\n") + "\n"
+}
+
+/// The offline fused anytime decisions on `c` (as `recognize eval --sequential --fuse` makes
+/// them): every recognizer's windows in the order they are decided, the first recognizer's
+/// first at the same sample, each weighing `factors` of the first's, into a fresh posterior.
+pub fn offline_fused_steps(
+    models: &[&RecognizerFile],
+    factors: &[f64],
+    c: &LabelledCapture,
+    params: SequentialParams,
+) -> Vec<(usize, SequentialStep)> {
+    let mut windows = Vec::new();
+    for (model, factor) in models.iter().zip(factors) {
+        let windowing = model.sequential_windowing().expect("window probabilities");
+        for w in model
+            .window_probabilities(c, Some(&windowing))
+            .expect("probabilities")
+            .expect("windows")
+        {
+            windows.push((w.decision.decided_at, w.evidence_scale * factor, w.probabilities));
+        }
+    }
+    windows.sort_by_key(|w| w.0);
+    let mut state = SequentialState::new(params, models[0].classes.len()).expect("state");
+    windows
+        .into_iter()
+        .map(|(at, scale, p)| (at, state.push_scaled(&p, scale).expect("finite")))
+        .collect()
+}
+
+/// `steps` as a live recognizer answers them: at a sample that completes several windows, the
+/// posterior after the last.
+pub fn last_per_sample(steps: Vec<(usize, SequentialStep)>) -> Vec<(usize, SequentialStep)> {
+    let mut last: Vec<(usize, SequentialStep)> = Vec::with_capacity(steps.len());
+    for (at, step) in steps {
+        match last.last_mut() {
+            Some(l) if l.0 == at => l.1 = step,
+            _ => last.push((at, step)),
+        }
+    }
+    last
 }
