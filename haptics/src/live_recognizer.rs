@@ -32,6 +32,8 @@
 //! sample of the loop in order: the decisions are those the tick would make, while the haptic
 //! thread spends nothing on them (a decision costs about 50 µs, a twentieth of a tick).
 
+mod vibration;
+
 use crate::acquire;
 use crate::error::HapticsError;
 use crate::rt::{CHANNELS, HapticSample};
@@ -40,13 +42,11 @@ use recognize::RecognizerFile;
 use std::collections::VecDeque;
 
 use recognize::nakano::{EdgeWindow, TravelFriction};
-use vibration::VibrationSense;
-
-mod vibration;
 use recognize::{
     FEATURES, FeatureSet, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile as Model,
     SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
 };
+use vibration::VibrationSense;
 
 /// Cut-off of the reaction-force observer whose friction [`SampleRecognizer`] reads
 /// ([`acquire::rubbing_signals`]: the rubbing controller's, Nakano's gains), rad/s.
@@ -374,12 +374,11 @@ impl LiveRecognizer {
                 })
                 .map(|w| (w.start, w.features, 1.0)),
         };
-        let mut decided = match window {
-            Some((window_start, features, evidence_scale)) => {
-                Some(self.decide(window_start, &features, evidence_scale)?)
-            }
-            None => None,
-        };
+        let mut decided = None;
+        if let Some((window_start, features, evidence_scale)) = window {
+            decided = Some(self.decide(window_start, &features, evidence_scale)?);
+            self.current = decided;
+        }
         if let (Some(v), Decider::Sequential { state, .. }) = (vibration_mps2, &mut self.decider) {
             for sense in &mut self.senses {
                 if let Some(w) = sense.push(position_m, v, x0)? {
@@ -390,11 +389,9 @@ impl LiveRecognizer {
                         confidence: step.probability,
                         window_start: w.start,
                     });
+                    self.current = decided;
                 }
             }
-        }
-        if decided.is_some() {
-            self.current = decided;
         }
         Ok(decided)
     }

@@ -126,14 +126,7 @@ impl RecognizerFile {
         capture: &LabelledCapture,
         windowing: Option<&NakanoWindowing>,
     ) -> Result<Option<Vec<WindowProbabilities>>, RecognizeError> {
-        let (windowing, features, cell_scale, scaling, classifier, calibration): (
-            _,
-            _,
-            _,
-            _,
-            &dyn Classifier,
-            _,
-        ) = match &self.body {
+        let (windowing, features, cell_scale, scaling, classifier, calibration) = match &self.body {
             RecognizerBody::KnnWindows {
                 features,
                 windowing: own,
@@ -141,14 +134,17 @@ impl RecognizerFile {
                 scaling,
                 knn,
                 calibration,
-            } => (
-                windowing.unwrap_or(own),
-                *features,
-                *cell_scale,
-                scaling,
-                knn,
-                *calibration,
-            ),
+            } => {
+                let knn: &dyn Classifier = knn;
+                (
+                    windowing.unwrap_or(own),
+                    *features,
+                    *cell_scale,
+                    scaling,
+                    knn,
+                    *calibration,
+                )
+            }
             RecognizerBody::SvmWindows {
                 features,
                 windowing: own,
@@ -156,14 +152,17 @@ impl RecognizerFile {
                 scaling,
                 svc,
                 ..
-            } => (
-                windowing.unwrap_or(own),
-                *features,
-                *cell_scale,
-                scaling,
-                svc,
-                None,
-            ),
+            } => {
+                let svc: &dyn Classifier = svc;
+                (
+                    windowing.unwrap_or(own),
+                    *features,
+                    *cell_scale,
+                    scaling,
+                    svc,
+                    None,
+                )
+            }
             _ => return Ok(None),
         };
         features.check_columns(std::slice::from_ref(capture))?;
