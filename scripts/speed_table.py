@@ -40,7 +40,7 @@ def main():
         def row(model, captures):
             out = palpus(args.palpus, "recognize", "eval", model, *captures, "--sequential", "0.9", "--json")
             e = json.loads(out)
-            return e["rows"][0], e["calibration"]["ece"]
+            return e["rows"][0], e["rows"][0]["calibration"]["ece"]
 
         def secs(v):
             return "-" if v is None else f"{v:.2f} s"

@@ -82,7 +82,7 @@ def main():
                       f"| {100 * r['correct'] / max(r['decided'], 1):.1f} % "
                       f"| {'-' if stable is None else f'{stable:.2f} s'} "
                       f"| {f'{worst[1]:.2f} s ({worst[0]})' if worst else '-'} "
-                      f"| {r['not_stable']} of {e['captures']} | {100 * e['calibration']['ece']:.1f} % |",
+                      f"| {r['not_stable']} of {e['captures']} | {100 * r['calibration']['ece']:.1f} % |",
                       flush=True)
 
 

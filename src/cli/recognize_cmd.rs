@@ -532,7 +532,7 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         }
     }
     println!(
-        "{:>9} {:>8} {:>10} {:>12} {:>14} {:>26} {:>10} {:>8}",
+        "{:>9} {:>8} {:>10} {:>12} {:>14} {:>26} {:>10} {:>8} {:>7} {:>7}",
         "threshold",
         "named",
         "accuracy",
@@ -540,7 +540,9 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         "stable right",
         "slowest surface",
         "not right",
-        "flips/s"
+        "flips/s",
+        "Brier",
+        "ECE"
     );
     let secs = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |s| format!("{s:.2} s"));
     for r in &e.rows {
@@ -549,7 +551,7 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
             .as_ref()
             .map_or_else(|| "-".to_owned(), |(name, s)| format!("{name} {s:.2} s"));
         println!(
-            "{:>9} {:>7.1}% {:>10} {:>12} {:>14} {:>26} {:>10} {:>8.3}",
+            "{:>9} {:>7.1}% {:>10} {:>12} {:>14} {:>26} {:>10} {:>8.3} {:>7.4} {:>6.2}%",
             r.threshold,
             100.0 * r.decided as f64 / e.steps as f64,
             percent(r.accuracy()),
@@ -557,7 +559,9 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
             secs(r.time_to_stable_correct_s),
             slowest,
             r.not_stable,
-            r.flips_per_s
+            r.flips_per_s,
+            r.calibration.brier,
+            100.0 * r.calibration.ece
         );
     }
     if e.rows.iter().any(|r| r.changes > 0) {
@@ -580,14 +584,12 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
             );
         }
     }
-    println!(
-        "calibration over every window (at threshold {}): Brier score {:.4}, expected calibration error {:.2} %",
-        e.params.threshold(),
-        e.calibration.brier,
-        100.0 * e.calibration.ece
-    );
     if let Some(p) = &plot {
-        println!("wrote {}", p.display());
+        println!(
+            "wrote {} (the reliability diagram at threshold {})",
+            p.display(),
+            e.params.threshold()
+        );
     }
     Ok(())
 }

@@ -26,7 +26,8 @@ pub fn write_sequential_plot(path: &Path, e: &SequentialEvaluation) -> Result<()
     render(path, SEQUENTIAL_SIZE, |root| {
         let (left, right) = root.split_horizontally(SEQUENTIAL_SIZE.0 / 2);
         let title = format!(
-            "reliability (Brier {:.3}, ECE {:.1} %)",
+            "reliability at {} (Brier {:.3}, ECE {:.1} %)",
+            e.params.threshold(),
             e.calibration.brier,
             100.0 * e.calibration.ece
         );

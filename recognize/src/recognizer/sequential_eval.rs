@@ -61,6 +61,9 @@ pub struct SequentialRow {
     pub changes_not_followed: usize,
     /// Changes of named surface (undecided stretches not counted) per second of stroke.
     pub flips_per_s: f64,
+    /// The posterior's calibration over every window at this threshold (the change test runs
+    /// only while a surface is named, so the posterior depends on the threshold a little).
+    pub calibration: Calibration,
 }
 
 impl SequentialRow {
@@ -85,7 +88,7 @@ pub struct ReliabilityBin {
 }
 
 /// How well the posterior's top probability matches how often its surface is the true one,
-/// over every window of every capture (independent of the threshold).
+/// over every window of every capture.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Calibration {
     /// Mean over windows of Σ_c (posterior_c − [c is true])².
@@ -100,9 +103,7 @@ pub struct Calibration {
 /// [`RecognizerFile::evaluate_sequential`]'s result.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SequentialEvaluation {
-    /// The settings, with the first row's threshold (each row has its own). The calibration is
-    /// the posterior's at that threshold: the change test runs only while a surface is named,
-    /// so the posterior, and its calibration, depend on the threshold a little.
+    /// The settings, with the first row's threshold (each row has its own).
     pub params: SequentialParams,
     /// Window length and hop, s.
     pub window_s: f64,
@@ -121,6 +122,7 @@ pub struct SequentialEvaluation {
     pub steps: usize,
     /// One per threshold, in the order given.
     pub rows: Vec<SequentialRow>,
+    /// The first row's calibration (with no thresholds, at the default one).
     pub calibration: Calibration,
     /// For a fused evaluation, each recognizer fused (the first is the one the window
     /// settings above describe) and the weight of its evidence; empty for one recognizer.
@@ -346,7 +348,6 @@ impl RecognizerFile {
             let own = model.windowing_with_probabilities()?;
             sources.push((model, own, member.weight / fused[0].weight));
         }
-        let classes = self.classes.len();
         let mut strokes = Vec::with_capacity(captures.len());
         for c in captures {
             let c = c.borrow();
@@ -397,6 +398,10 @@ impl RecognizerFile {
             let params = params.threshold(threshold).build()?;
             rows.push(self.sequential_row(&strokes, params)?);
         }
+        let calibration = match rows.first() {
+            Some(row) => row.calibration.clone(),
+            None => self.sequential_row(&strokes, base)?.calibration,
+        };
         Ok(SequentialEvaluation {
             params: base,
             window_s: windowing.window_s(),
@@ -407,7 +412,7 @@ impl RecognizerFile {
             captures: captures.len(),
             steps,
             rows,
-            calibration: calibration(&strokes, base, classes)?,
+            calibration,
             fused,
         })
     }
@@ -424,12 +429,15 @@ impl RecognizerFile {
         let mut stable_by_class: Vec<Vec<f64>> = vec![Vec::new(); classes];
         let mut duration_s = 0.0;
         let (mut followed, mut not_followed) = (Vec::new(), 0);
+        let mut tally = CalibrationTally::default();
         for s in strokes {
             state.reset();
             duration_s += s.duration_s;
             let mut named: Vec<(f64, usize)> = Vec::new();
             for (t, scale, p) in &s.windows {
-                if let Some(d) = state.push_scaled(p, *scale)?.decided {
+                let step = state.push_scaled(p, *scale)?;
+                tally.add(state.posterior(), step.best, step.probability, s.truth_at(*t));
+                if let Some(d) = step.decided {
                     named.push((*t, d));
                 }
             }
@@ -486,58 +494,61 @@ impl RecognizerFile {
             } else {
                 0.0
             },
+            calibration: tally.calibration(),
         })
     }
 }
 
-/// The posterior's calibration over every window of `strokes`, with `params`' threshold (which
-/// decides when the change test runs).
-fn calibration(
-    strokes: &[Stroke],
-    params: SequentialParams,
-    classes: usize,
-) -> Result<Calibration, RecognizeError> {
-    let mut state = SequentialState::new(params, classes)?;
-    let mut bins = [(0usize, 0.0f64, 0usize); RELIABILITY_BINS];
-    let (mut brier, mut n) = (0.0, 0usize);
-    for s in strokes {
-        state.reset();
-        for (t, scale, p) in &s.windows {
-            let step = state.push_scaled(p, *scale)?;
-            let truth = s.truth_at(*t);
-            brier += state
-                .posterior()
-                .iter()
-                .enumerate()
-                .map(|(c, q)| (q - f64::from(u8::from(c == truth))).powi(2))
-                .sum::<f64>();
-            n += 1;
-            let bin = ((step.probability * RELIABILITY_BINS as f64) as usize).min(RELIABILITY_BINS - 1);
-            bins[bin].0 += 1;
-            bins[bin].1 += step.probability;
-            bins[bin].2 += usize::from(step.best == truth);
+/// The posterior's calibration, a window at a time.
+#[derive(Default)]
+struct CalibrationTally {
+    /// Per bin of the top posterior: windows, their summed top posterior, and how many of them
+    /// had the true surface on top.
+    bins: [(usize, f64, usize); RELIABILITY_BINS],
+    brier: f64,
+    windows: usize,
+}
+
+impl CalibrationTally {
+    /// One window's `posterior`, its most probable surface `best` and that surface's
+    /// `probability`, when the surface under the tool is `truth`.
+    fn add(&mut self, posterior: &[f64], best: usize, probability: f64, truth: usize) {
+        self.brier += posterior
+            .iter()
+            .enumerate()
+            .map(|(c, q)| (q - f64::from(u8::from(c == truth))).powi(2))
+            .sum::<f64>();
+        self.windows += 1;
+        let bin = ((probability * RELIABILITY_BINS as f64) as usize).min(RELIABILITY_BINS - 1);
+        let b = &mut self.bins[bin];
+        b.0 += 1;
+        b.1 += probability;
+        b.2 += usize::from(best == truth);
+    }
+
+    fn calibration(&self) -> Calibration {
+        let n = self.windows.max(1);
+        let bins: Vec<ReliabilityBin> = self
+            .bins
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.0 > 0)
+            .map(|(i, &(count, sum, right))| ReliabilityBin {
+                lower: i as f64 / RELIABILITY_BINS as f64,
+                upper: (i + 1) as f64 / RELIABILITY_BINS as f64,
+                count,
+                mean_probability: sum / count as f64,
+                accuracy: right as f64 / count as f64,
+            })
+            .collect();
+        let ece = bins
+            .iter()
+            .map(|b| b.count as f64 / n as f64 * (b.accuracy - b.mean_probability).abs())
+            .sum();
+        Calibration {
+            brier: self.brier / n as f64,
+            ece,
+            bins,
         }
     }
-    let n = n.max(1);
-    let bins: Vec<ReliabilityBin> = bins
-        .iter()
-        .enumerate()
-        .filter(|(_, b)| b.0 > 0)
-        .map(|(i, &(count, sum, right))| ReliabilityBin {
-            lower: i as f64 / RELIABILITY_BINS as f64,
-            upper: (i + 1) as f64 / RELIABILITY_BINS as f64,
-            count,
-            mean_probability: sum / count as f64,
-            accuracy: right as f64 / count as f64,
-        })
-        .collect();
-    let ece = bins
-        .iter()
-        .map(|b| b.count as f64 / n as f64 * (b.accuracy - b.mean_probability).abs())
-        .sum();
-    Ok(Calibration {
-        brier: brier / n as f64,
-        ece,
-        bins,
-    })
 }

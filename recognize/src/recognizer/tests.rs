@@ -1393,3 +1393,38 @@ fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
         "{err}"
     );
 }
+
+/// Each threshold's row carries the posterior's calibration at that threshold, the same as an
+/// evaluation at that threshold alone; the evaluation's own is its first row's.
+#[test]
+fn each_threshold_has_its_own_calibration() {
+    let nakano = train(
+        &with_tones(0..2, 4.0),
+        &short_windows(Method::Svm, FeatureSet::Nakano),
+    )
+    .expect("nakano");
+    let test_set = with_tones(2..3, 3.0);
+    let params = nakano.sequential_params(3.0).expect("params");
+    let thresholds = [0.5, 0.99];
+    let both = nakano
+        .evaluate_sequential(&test_set, &thresholds, params)
+        .expect("evaluated");
+    assert_eq!(both.calibration, both.rows[0].calibration);
+    for (row, t) in both.rows.iter().zip(thresholds) {
+        let alone = nakano
+            .evaluate_sequential(&test_set, &[t], params)
+            .expect("evaluated");
+        assert_eq!(*row, alone.rows[0]);
+        assert_eq!(alone.calibration, alone.rows[0].calibration);
+        let windows: usize = row.calibration.bins.iter().map(|b| b.count).sum();
+        assert_eq!(windows, both.steps);
+    }
+    // Without thresholds, at the default one.
+    let none = nakano
+        .evaluate_sequential(&test_set, &[], params)
+        .expect("evaluated");
+    let default = nakano
+        .evaluate_sequential(&test_set, &[crate::sequential::DEFAULT_THRESHOLD], params)
+        .expect("evaluated");
+    assert_eq!(none.calibration, default.calibration);
+}
