@@ -139,7 +139,10 @@ pub(crate) struct TrainOptions {
     #[arg(long, value_enum, default_value = "log-within-class")]
     scaling: ScalingArg,
 
-    /// knn: neighbours.
+    /// knn: neighbours. Over windows, when every surface has captures of two runs or trials,
+    /// the neighbours' votes are calibrated on windows held out by run (blended with the
+    /// uniform distribution by the weight that fits them best), which also gives the
+    /// reliability `eval --sequential --fuse` weighs the k-NN by.
     #[arg(long, default_value_t = 3)]
     k: usize,
     /// svm: the box constraint C, or `auto`: per behaviour, the most accurate of 1, 10, …, 10⁵
