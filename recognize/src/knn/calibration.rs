@@ -16,7 +16,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{KnnParams, held_out_votes};
+use super::Votes;
+#[cfg(doc)]
+use super::held_out_votes;
 use crate::RecognizeError;
 
 /// How a k-NN over windows' votes become probabilities, and the cross-validation that chose it.
@@ -39,20 +41,23 @@ pub struct VoteCalibration {
 }
 
 impl VoteCalibration {
-    /// Cross-validates a k-NN with `params` on `features` (labels `labels`, `classes` of them)
-    /// by `groups` ([`held_out_votes`], at most `folds` folds), and fits the blend on the
-    /// held-out windows.
-    pub fn cross_validate<V: AsRef<[f64]>>(
-        params: KnnParams,
-        features: &[V],
+    /// Fits the blend on held-out windows: `votes`, each window's k-NN label and vote
+    /// fractions when its run was held out ([`held_out_votes`], over `folds` folds), and
+    /// `labels`, their true classes (of `classes`).
+    pub fn fit(
+        votes: &[Votes],
         labels: &[usize],
-        groups: &[u64],
         classes: usize,
         folds: usize,
     ) -> Result<Self, RecognizeError> {
-        let (votes, folds) = held_out_votes(params, features, labels, groups, classes, folds)?;
+        if votes.len() != labels.len() {
+            return Err(RecognizeError::Counts {
+                features: votes.len(),
+                labels: labels.len(),
+            });
+        }
         let (mut correct, mut true_votes) = (0, Vec::with_capacity(votes.len()));
-        for (&y, (label, p)) in labels.iter().zip(&votes) {
+        for (&y, (label, p)) in labels.iter().zip(votes) {
             correct += usize::from(*label == y);
             true_votes.push(p.get(y).copied().unwrap_or(0.0));
         }

@@ -12,7 +12,7 @@ use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::folds::group_folds;
 use crate::fusion::cross_validated_accuracy;
-use crate::knn::{FeatureScaling, KnnParams, VoteCalibration};
+use crate::knn::{FeatureScaling, KnnParams, VoteCalibration, held_out_votes};
 use crate::recognizer::labelled::class_list;
 #[cfg(doc)]
 use crate::recognizer::trial_groups;
@@ -112,7 +112,10 @@ impl RecognizerFile {
             .fit(&x, &y, classes.len())
             .map_err(RecognizeError::knn(None))?;
         let calibration = every_class_in_two_groups(&y, &groups)
-            .then(|| VoteCalibration::cross_validate(params, &x, &y, &groups, classes.len(), CV_FOLDS))
+            .then(|| {
+                let (votes, folds) = held_out_votes(params, &x, &y, &groups, classes.len(), CV_FOLDS)?;
+                VoteCalibration::fit(&votes, &y, classes.len(), folds)
+            })
             .transpose()?;
         Ok(Self::assemble(
             classes,
