@@ -89,6 +89,7 @@ pub(super) struct SenseWindow<'a> {
 pub(super) struct VibrationSense {
     classifier: Box<WindowClassifier>,
     windowing: NakanoWindowing,
+    /// Shared by copies: the DFT's plan is read-only, and copying it would plan it again.
     plan: Arc<WindowSpectrumPlan>,
     scratch: SpectrumScratch,
     rings: Rings,
