@@ -326,7 +326,7 @@ fn print_vote_calibration(model: &RecognizerFile) {
             ),
             None => println!(
                 "window probabilities: the raw vote fractions (not calibrated: a surface has captures of a single \
-                 run or trial), so this k-NN cannot be fused"
+                 run or trial, or holding one out leaves fewer windows than k), so this k-NN cannot be fused"
             ),
         }
     }

@@ -1387,6 +1387,18 @@ fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
     let one_trial: Vec<LabelledCapture> = train_set[..3].to_vec();
     let uncrossed = train(&one_trial, &one_nn).expect("one trial");
     assert_eq!(calibration(&uncrossed), None::<VoteCalibration>);
+    // More neighbours than one trial's windows, fewer than both trials': trained, with its
+    // votes raw.
+    let k = w.x.len() * 2 / 3;
+    let wide = train(
+        &train_set,
+        &TrainSettings {
+            k,
+            ..settings(FeatureSet::Vibration)
+        },
+    )
+    .expect("k within the training windows");
+    assert_eq!(calibration(&wide), None::<VoteCalibration>);
     let err = nakano.fusion_members(&[&uncrossed]).expect_err("no reliability");
     assert!(
         matches!(err, RecognizeError::NoReliability { index: 1, .. }),

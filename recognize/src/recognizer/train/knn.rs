@@ -111,12 +111,15 @@ impl RecognizerFile {
         let knn = params
             .fit(&x, &y, classes.len())
             .map_err(RecognizeError::knn(None))?;
-        let calibration = every_class_in_two_groups(&y, &groups)
-            .then(|| {
-                let (votes, folds) = held_out_votes(params, &x, &y, &groups, classes.len(), CV_FOLDS)?;
-                VoteCalibration::fit(&votes, &y, classes.len(), folds)
-            })
-            .transpose()?;
+        // A fold's training windows can be fewer than k where all of them are not: then
+        // nothing can be held out, as with a single run, and the votes stay raw.
+        let calibration = match every_class_in_two_groups(&y, &groups)
+            .then(|| held_out_votes(params, &x, &y, &groups, classes.len(), CV_FOLDS))
+        {
+            Some(Ok((votes, folds))) => Some(VoteCalibration::fit(&votes, &y, classes.len(), folds)?),
+            None | Some(Err(RecognizeError::TooFewPoints { .. })) => None,
+            Some(Err(e)) => return Err(e),
+        };
         Ok(Self::assemble(
             classes,
             features.feature_names(),
