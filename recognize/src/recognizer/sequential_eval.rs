@@ -244,9 +244,9 @@ impl RecognizerFile {
         self.evaluate_sequential_fused(&[], captures, thresholds, params)
     }
 
-    /// The recognizers fused with `others` over time and their weights (see the
-    /// [module documentation](self)): each must give window probabilities over the same
-    /// surfaces, in the same order, and carry a cross-validated accuracy above chance.
+    /// The recognizers fused with `others` over time and their weights
+    /// ([`FusionMember::weight`]): each must give window probabilities over the same surfaces,
+    /// in the same order, and carry a cross-validated accuracy above chance.
     pub fn fusion_members(&self, others: &[&RecognizerFile]) -> Result<Vec<FusionMember>, RecognizeError> {
         let k = self.classes.len() as f64;
         let mut members = Vec::with_capacity(others.len() + 1);
@@ -324,8 +324,8 @@ impl RecognizerFile {
             .memory(memory))
     }
 
-    /// [`RecognizerFile::evaluate_sequential`] with the evidence of `others` fused in (see the
-    /// [module documentation](self)): every recognizer's windows, in the order they are
+    /// [`RecognizerFile::evaluate_sequential`] with the evidence of `others` fused in
+    /// ([`RecognizerFile::fusion_members`]): every recognizer's windows, in the order they are
     /// decided, each window's weight scaled from `params`' (the first recognizer's, as
     /// [`RecognizerFile::fused_sequential_params`] sets it) to its recognizer's. With no
     /// others it is [`RecognizerFile::evaluate_sequential`], bit for bit.
