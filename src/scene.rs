@@ -274,7 +274,8 @@ pub struct RecognizerSection {
     /// recognizer says "undecided". A SOM names a surface every window and takes none.
     pub threshold: Option<f64>,
     /// A k-NN's or SVM's span of windows whose evidence counts, s (default 3): a new surface
-    /// under the tool is named within about this time.
+    /// under the tool is named within about this time. Over travel it is the travel of that
+    /// span at the speed the windows were made for, at any speed.
     pub memory_s: Option<f64>,
     /// A k-NN's or SVM's change test: the likelihood ratio against the named surface at which
     /// the evidence before a change is dropped (default 99); 0 for none.

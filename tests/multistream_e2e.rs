@@ -440,7 +440,7 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
     // surfaces), the textures vibrate at half the frequencies. The spectrum in hertz trained at
     // 25 mm/s then names the wrong surfaces; over travel (bands in cycles per metre, 0–200 Hz
     // at 25 mm/s) and by its shape alone, it still names them. Measured: 7.9 % of named
-    // windows right and 92 of 100 trials not ending right in hertz, 96.3 % and 18 over travel.
+    // windows right and 92 of 100 trials not ending right in hertz, 95.6 % and 18 over travel.
     let slow_logs = dir.path().join("slow_logs");
     let refused = fails(&[
         "gen",

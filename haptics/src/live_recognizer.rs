@@ -79,7 +79,7 @@ enum Decider {
     /// Window probabilities accumulated into a posterior.
     Sequential {
         classifier: Box<WindowClassifier>,
-        state: SequentialState,
+        state: Box<SequentialState>,
         probabilities: Vec<f64>,
     },
 }
@@ -234,7 +234,7 @@ impl LiveRecognizer {
                 (
                     Decider::Sequential {
                         classifier: Box::new(classifier),
-                        state: SequentialState::new(params, classes)?,
+                        state: Box::new(SequentialState::new(params, classes)?),
                         probabilities: vec![0.0; classes],
                     },
                     windowing,
@@ -382,7 +382,7 @@ impl LiveRecognizer {
         if let (Some(v), Decider::Sequential { state, .. }) = (vibration_mps2, &mut self.decider) {
             for sense in &mut self.senses {
                 if let Some(w) = sense.push(position_m, v, x0)? {
-                    let step = state.push_scaled(w.probabilities, w.scale)?;
+                    let step = state.push_window(w.probabilities, w.scale, w.share)?;
                     decided = Some(LiveDecision {
                         label: step.decided,
                         best: step.best,

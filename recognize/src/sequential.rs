@@ -9,9 +9,13 @@
 //! carries about `hop / window` of an independent window's evidence; that is the default
 //! weight, which counts every sample once. A probability is floored before its logarithm: one
 //! confidently wrong window then lowers a class by a bounded amount instead of excluding it
-//! for the rest of the stroke. Only the last `memory` windows count, so after the tool slides
-//! onto another surface the old evidence is gone within that many windows and the new surface
-//! can be named.
+//! for the rest of the stroke. Only the last `memory` windows' worth of evidence counts, so
+//! after the tool slides onto another surface the old evidence is gone within that many windows
+//! and the new surface can be named. A window takes its share of the memory: 1 for a window of
+//! the length the settings were made for, and over travel its evidence scale
+//! ([`NakanoWindowing::evidence_scale`](crate::NakanoWindowing::evidence_scale)), so that the
+//! memory holds the same travel at any speed (15 mm of 1.25 mm windows at 5 mm/s is 3 s, and
+//! 7.5 s at 2 mm/s), as each window's weight already counts the same travel once.
 //!
 //! **A change of surface** is tested for while one is named, so that sliding onto the next
 //! patch does not wait for the memory to forget the last one: for each other surface, a CUSUM
@@ -38,6 +42,10 @@ pub struct SequentialParams {
     weight: f64,
     floor: f64,
     memory: usize,
+    /// The least share of the memory a window takes: the ring holds `memory / smallest_share`
+    /// windows.
+    #[serde(default = "one")]
+    smallest_share: f64,
     /// Log-odds at which the change test drops the evidence before a change; `None` for no
     /// change test (the memory alone follows a new surface).
     #[serde(default)]
@@ -52,6 +60,7 @@ pub struct SequentialParamsBuilder {
     weight: f64,
     floor: f64,
     memory: usize,
+    smallest_share: f64,
     change_test: bool,
     change_log_odds: Option<f64>,
 }
@@ -70,6 +79,14 @@ pub const DEFAULT_CHANGE_ODDS: f64 = 99.0;
 /// Default floor of a window's class probability.
 pub const DEFAULT_FLOOR: f64 = 1e-3;
 
+/// The most windows a memory may hold, so that a hand-edited setting cannot size the ring past
+/// memory.
+const MAX_WINDOWS: f64 = 1e7;
+
+fn one() -> f64 {
+    1.0
+}
+
 impl SequentialParams {
     /// A builder with the defaults: threshold 0.9, release at half the threshold, weight 1,
     /// floor 1e-3, memory of 30 windows, a change test at [`DEFAULT_CHANGE_ODDS`].
@@ -80,6 +97,7 @@ impl SequentialParams {
             weight: 1.0,
             floor: DEFAULT_FLOOR,
             memory: 30,
+            smallest_share: 1.0,
             change_test: true,
             change_log_odds: None,
         }
@@ -110,9 +128,19 @@ impl SequentialParams {
         self.floor
     }
 
-    /// Windows whose evidence counts.
+    /// Windows' worth of evidence that counts (windows of share 1).
     pub fn memory(&self) -> usize {
         self.memory
+    }
+
+    /// The least share of the memory a window takes.
+    pub fn smallest_share(&self) -> f64 {
+        self.smallest_share
+    }
+
+    /// Windows the memory can hold: `memory / smallest_share`, rounded up.
+    pub fn capacity(&self) -> usize {
+        (self.memory as f64 / self.smallest_share).ceil() as usize
     }
 }
 
@@ -143,9 +171,18 @@ impl SequentialParamsBuilder {
         self
     }
 
-    /// Windows whose evidence counts, at least 1.
+    /// Windows' worth of evidence that counts, at least 1.
     pub fn memory(mut self, memory: usize) -> Self {
         self.memory = memory;
+        self
+    }
+
+    /// The least share of the memory a window takes, in (0, 1] (default 1): windows over
+    /// travel take their evidence scale, which is least for the longest window. The memory
+    /// holds at most `memory / smallest_share` windows; a window of a smaller share makes room
+    /// by pushing the oldest out.
+    pub fn smallest_share(mut self, share: f64) -> Self {
+        self.smallest_share = share;
         self
     }
 
@@ -187,6 +224,16 @@ impl SequentialParamsBuilder {
         if self.memory == 0 {
             return Err(bad("memory", 0.0, "must be at least one window"));
         }
+        if !(self.smallest_share > 0.0 && self.smallest_share <= 1.0) {
+            return Err(bad("smallest_share", self.smallest_share, "must be in (0, 1]"));
+        }
+        if self.memory as f64 / self.smallest_share > MAX_WINDOWS {
+            return Err(bad(
+                "memory",
+                self.memory as f64,
+                "holds more than 10^7 windows at the smallest share",
+            ));
+        }
         let change_log_odds = self
             .change_test
             .then(|| self.change_log_odds.unwrap_or(DEFAULT_CHANGE_ODDS.ln()));
@@ -201,6 +248,7 @@ impl SequentialParamsBuilder {
             weight: self.weight,
             floor: self.floor,
             memory: self.memory,
+            smallest_share: self.smallest_share,
             change_log_odds,
         })
     }
@@ -223,9 +271,13 @@ pub struct SequentialStep {
 #[derive(Debug, Clone)]
 pub struct SequentialState {
     params: SequentialParams,
-    /// Weighted log-probabilities of the last `memory` windows, window-major, as a ring.
+    /// Weighted log-probabilities of the windows held, window-major, as a ring of
+    /// [`SequentialParams::capacity`] windows.
     ring: Vec<f64>,
-    /// Windows in the ring (at most `memory`), and the slot the next one goes to.
+    /// Each slot's share of the memory, and the sum over the windows held.
+    shares: Vec<f64>,
+    held_share: f64,
+    /// Windows in the ring, and the slot the next one goes to.
     held: usize,
     next: usize,
     /// Sum of the ring's rows.
@@ -257,9 +309,24 @@ impl SequentialState {
                 reason: "must be below 1 / classes, or every class is floored alike",
             });
         }
+        // Settings read back from a file did not pass the builder's checks.
+        if !(params.smallest_share > 0.0
+            && params.smallest_share <= 1.0
+            && params.memory >= 1
+            && params.memory as f64 / params.smallest_share <= MAX_WINDOWS)
+        {
+            return Err(RecognizeError::Parameter {
+                of: "sequential decision parameter",
+                name: "smallest_share",
+                value: params.smallest_share,
+                reason: "must be in (0, 1], the memory holding at most 10^7 windows",
+            });
+        }
         Ok(Self {
             params,
-            ring: vec![0.0; params.memory * classes],
+            ring: vec![0.0; params.capacity() * classes],
+            shares: vec![0.0; params.capacity()],
+            held_share: 0.0,
             held: 0,
             next: 0,
             sum: vec![0.0; classes],
@@ -278,6 +345,8 @@ impl SequentialState {
     /// Forgets the stroke (contact lost): nothing is decided and the posterior is uniform.
     pub fn reset(&mut self) {
         self.ring.fill(0.0);
+        self.shares.fill(0.0);
+        self.held_share = 0.0;
         self.sum.fill(0.0);
         self.held = 0;
         self.next = 0;
@@ -300,21 +369,35 @@ impl SequentialState {
 
     /// [`SequentialState::push`] for a window whose evidence is `scale` times that of the
     /// windows the settings' weight was set for (positive): its weight is `scale · weight`, at
-    /// most 1. A window longer than those shares more of its samples with the last one, a
-    /// shorter one less (windows over travel,
+    /// most 1, and it takes `scale` of the memory. A window longer than those shares more of
+    /// its samples with the last one, a shorter one less (windows over travel,
     /// [`NakanoWindowing::evidence_scale`](crate::NakanoWindowing::evidence_scale)).
     pub fn push_scaled(
         &mut self,
         probabilities: &[f64],
         scale: f64,
     ) -> Result<SequentialStep, RecognizeError> {
-        if !(scale.is_finite() && scale > 0.0) {
-            return Err(RecognizeError::Parameter {
-                of: "window",
-                name: "evidence scale",
-                value: scale,
-                reason: "must be positive and finite",
-            });
+        self.push_window(probabilities, scale, scale)
+    }
+
+    /// [`SequentialState::push_scaled`] for a window whose share of the memory is not its
+    /// evidence scale: a fused recognizer's window weighs its recognizer's reliability too,
+    /// but takes only its own length's share of the memory (positive).
+    pub fn push_window(
+        &mut self,
+        probabilities: &[f64],
+        scale: f64,
+        share: f64,
+    ) -> Result<SequentialStep, RecognizeError> {
+        for (name, value) in [("evidence scale", scale), ("memory share", share)] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(RecognizeError::Parameter {
+                    of: "window",
+                    name,
+                    value,
+                    reason: "must be positive and finite",
+                });
+            }
         }
         let weight = (self.params.weight * scale).min(1.0);
         let k = self.sum.len();
@@ -332,6 +415,7 @@ impl SequentialState {
                 reason: "must be finite and non-negative",
             });
         }
+        self.make_room(share);
         let total: f64 = probabilities.iter().sum();
         let floor = self.params.floor;
         let row = &mut self.ring[self.next * k..(self.next + 1) * k];
@@ -342,9 +426,11 @@ impl SequentialState {
             *s += evidence - *slot;
             *slot = evidence;
         }
+        self.shares[self.next] = share;
+        self.held_share += share;
         let change = self.change_test();
-        self.next = (self.next + 1) % self.params.memory;
-        self.held = (self.held + 1).min(self.params.memory);
+        self.next = (self.next + 1) % self.shares.len();
+        self.held += 1;
         if let Some(windows) = change {
             self.keep_last(windows.min(self.held));
             self.decided = None;
@@ -420,6 +506,37 @@ impl SequentialState {
         fired.map(|(_, windows)| windows)
     }
 
+    /// Pushes the oldest windows out until one of `share` fits in the memory beside those left
+    /// (and in the ring). The slot at `next` is left to be overwritten, as it is when the ring
+    /// is full and the shares are all 1, so that a memory of windows of one length sums its
+    /// evidence exactly as a plain ring of `memory` windows does.
+    fn make_room(&mut self, share: f64) {
+        let capacity = self.shares.len();
+        let k = self.sum.len();
+        if self.held == capacity {
+            self.held -= 1;
+            self.held_share -= self.shares[self.next];
+            self.shares[self.next] = 0.0;
+        }
+        // Shares that fill the memory in exact arithmetic (fifteen of 0.4 in six) fit in it.
+        let limit = self.params.memory as f64 * (1.0 + 1e-9);
+        while self.held > 0 && self.held_share + share > limit {
+            let oldest = (self.next + capacity - self.held) % capacity;
+            let row = &mut self.ring[oldest * k..(oldest + 1) * k];
+            for (s, e) in self.sum.iter_mut().zip(row.iter_mut()) {
+                *s -= *e;
+                *e = 0.0;
+            }
+            self.held -= 1;
+            self.held_share -= self.shares[oldest];
+            self.shares[oldest] = 0.0;
+        }
+        if self.held == 0 {
+            // Nothing held: no rounding left over from the shares pushed out.
+            self.held_share = 0.0;
+        }
+    }
+
     /// Starts the change test afresh.
     fn clear_change_test(&mut self) {
         self.cusum.fill(0.0);
@@ -429,13 +546,15 @@ impl SequentialState {
     /// Drops every window but the last `keep` from the evidence.
     fn keep_last(&mut self, keep: usize) {
         let k = self.sum.len();
-        let memory = self.params.memory;
-        for age in keep..memory {
+        let capacity = self.shares.len();
+        for age in keep..capacity {
             // The window `age + 1` pushes ago sits just before `next`, going back.
-            let slot = (self.next + memory - 1 - age) % memory;
+            let slot = (self.next + capacity - 1 - age) % capacity;
             self.ring[slot * k..(slot + 1) * k].fill(0.0);
+            self.shares[slot] = 0.0;
         }
         self.held = keep;
+        self.held_share = self.shares.iter().sum();
         self.sum.fill(0.0);
         for row in self.ring.chunks_exact(k) {
             for (s, e) in self.sum.iter_mut().zip(row) {
@@ -610,9 +729,124 @@ mod tests {
         assert_eq!(s.posterior(), [0.5, 0.5]);
     }
 
+    /// Probabilities of window `i` of a stream that favours one class, then the other, with
+    /// every window different, so that a window held or dropped shows in the posterior.
+    fn varied(i: usize) -> [f64; 3] {
+        let x = (i as f64 * 0.37).sin().abs();
+        if i < 40 {
+            [0.5 + 0.3 * x, 0.3 - 0.2 * x, 0.2 - 0.1 * x]
+        } else {
+            [0.1 + 0.1 * x, 0.3 - 0.2 * x, 0.6 + 0.1 * x]
+        }
+    }
+
+    /// A memory of `memory` windows' worth holds `memory / share` windows of that share: the
+    /// posterior is the one of a memory of that many whole windows, window by window.
+    #[test]
+    fn a_window_takes_its_share_of_the_memory() {
+        let shared = |share: f64, smallest: f64| {
+            let p = SequentialParams::builder()
+                .memory(6)
+                .smallest_share(smallest)
+                .without_change_test()
+                .build()
+                .expect("valid");
+            let mut s = SequentialState::new(p, 3).expect("state");
+            (0..80)
+                .map(|i| {
+                    s.push_window(&varied(i), 1.0, share).expect("push");
+                    s.posterior().to_vec()
+                })
+                .collect::<Vec<_>>()
+        };
+        let whole = |memory: usize| {
+            let mut s = SequentialState::new(params(0.9, memory), 3).expect("state");
+            (0..80)
+                .map(|i| {
+                    s.push(&varied(i)).expect("push");
+                    s.posterior().to_vec()
+                })
+                .collect::<Vec<_>>()
+        };
+        let close = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+            a.iter()
+                .flatten()
+                .zip(b.iter().flatten())
+                .all(|(x, y)| (x - y).abs() < 1e-12)
+        };
+        // Windows over travel at 2.5 times slower than trained (share 0.4): 15 windows held.
+        assert!(close(&shared(0.4, 0.4), &whole(15)));
+        // Half a window each: 12; two windows each (faster): 3.
+        assert!(close(&shared(0.5, 0.25), &whole(12)));
+        assert!(close(&shared(2.0, 1.0), &whole(3)));
+        // A window below the smallest share finds the ring full: it holds 6 / 0.5 = 12.
+        assert!(close(&shared(0.25, 0.5), &whole(12)));
+        assert!(!close(&shared(0.5, 0.5), &whole(11)));
+        // One window of more than the whole memory is held alone.
+        assert!(close(&shared(7.0, 1.0), &whole(1)));
+    }
+
+    /// The change test keeps the windows since the change, whatever their shares, and the
+    /// memory goes on from those.
+    #[test]
+    fn a_change_keeps_the_shares_of_the_windows_since_it() {
+        let p = SequentialParams::builder()
+            .memory(6)
+            .smallest_share(0.5)
+            .build()
+            .expect("valid");
+        let mut s = SequentialState::new(p, 3).expect("state");
+        let mut changed_at = None;
+        for i in 0..80 {
+            if s.push_window(&varied(i), 1.0, 0.5).expect("push").changed {
+                changed_at.get_or_insert(i);
+            }
+        }
+        let at = changed_at.expect("the stream changes class at window 40");
+        assert!((40..52).contains(&at), "{at}");
+        // Long after the change the ring holds twelve windows of half a share, as without one.
+        let mut plain = SequentialState::new(params(0.9, 12), 3).expect("state");
+        for i in 0..80 {
+            plain.push(&varied(i)).expect("push");
+        }
+        for (a, b) in s.posterior().iter().zip(plain.posterior()) {
+            assert!(
+                (a - b).abs() < 1e-12,
+                "{:?} vs {:?}",
+                s.posterior(),
+                plain.posterior()
+            );
+        }
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(s.push_window(&[0.3, 0.3, 0.4], 1.0, bad).is_err(), "{bad}");
+        }
+    }
+
     #[test]
     fn bad_settings_and_windows_are_refused() {
         assert!(SequentialParams::builder().threshold(1.0).build().is_err());
+        for share in [0.0, -0.5, 1.5, f64::NAN] {
+            assert!(
+                SequentialParams::builder().smallest_share(share).build().is_err(),
+                "{share}"
+            );
+        }
+        // Settings read back from a file are checked again before a ring is sized from them.
+        let text = serde_json::to_string(&params(0.9, 30)).expect("json");
+        for (share, memory) in [("0.0", "30"), ("1e-9", "30"), ("0.5", "0")] {
+            let edited = text
+                .replace("\"smallest_share\":1.0", &format!("\"smallest_share\":{share}"))
+                .replace("\"memory\":30", &format!("\"memory\":{memory}"));
+            let read: SequentialParams = serde_json::from_str(&edited).expect("parses");
+            assert!(SequentialState::new(read, 2).is_err(), "{edited}");
+        }
+        assert!(
+            SequentialParams::builder()
+                .memory(10_000)
+                .smallest_share(1e-4)
+                .build()
+                .is_err()
+        );
         assert!(
             SequentialParams::builder()
                 .threshold(0.8)

@@ -117,7 +117,8 @@ struct EvalArgs {
     #[arg(long, value_name = "P[,P…]", value_delimiter = ',')]
     sequential: Vec<f64>,
     /// With --sequential: seconds of windows whose evidence counts; older ones are forgotten,
-    /// so a new surface under the tool is named within about this time.
+    /// so a new surface under the tool is named within about this time. Over travel it is the
+    /// travel of those seconds at the speed the windows were made for, at any speed.
     #[arg(long, value_name = "S", default_value_t = recognize::sequential::DEFAULT_MEMORY_S, requires = "sequential")]
     memory_s: f64,
     /// With --sequential: the likelihood ratio against the named surface at which the windows
@@ -502,7 +503,7 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     };
     println!(
         "{} on {} captures, anytime decisions over {} {} every {:.2} s from contact, \
-         {} (each weighing {:.3}{scaled}; evidence of the last {} windows):",
+         {} (each weighing {:.3}{scaled}; evidence of the last {}):",
         model.method(),
         e.captures,
         e.steps,
@@ -510,7 +511,7 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         e.hop_s,
         crate::session::report::decided_after(e.decided_after_s),
         e.params.weight(),
-        e.params.memory()
+        crate::session::report::memory_in_words(args.memory_s, e.window_s, e.window_m)
     );
     if !e.fused.is_empty() {
         println!(

@@ -278,7 +278,8 @@ impl SessionReport {
                         format!("a change of surface at {o:.0}:1")
                     });
                     format!(
-                        "names a surface once its posterior reaches {p} (evidence of the last {m} s, {change})"
+                        "names a surface once its posterior reaches {p} (evidence of the last {}, {change})",
+                        memory_in_words(m, r.window_s, r.window_m)
                     )
                 }
                 _ => "names a surface every window".to_owned(),
@@ -384,6 +385,19 @@ pub fn windows_in_words(window_s: f64, window_m: Option<f64>, friction_cutoff_m:
     match friction_cutoff_m {
         Some(m) => format!("{windows} (friction filtered over {:.2} mm of travel)", m * 1e3),
         None => windows,
+    }
+}
+
+/// The span of evidence the posterior keeps, in words: `memory_s` of windows of `window_s`,
+/// which over travel (windows of `window_m`) is a span of travel at any speed.
+pub fn memory_in_words(memory_s: f64, window_s: f64, window_m: Option<f64>) -> String {
+    match window_m {
+        Some(m) => format!(
+            "{:.1} mm of travel, {memory_s} s at {:.1} mm/s",
+            memory_s * m / window_s * 1e3,
+            m / window_s * 1e3
+        ),
+        None => format!("{memory_s} s"),
     }
 }
 

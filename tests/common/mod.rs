@@ -210,7 +210,8 @@ pub fn without_budgets(scene: &str) -> String {
 
 /// The offline fused anytime decisions on `c` (as `recognize eval --sequential --fuse` makes
 /// them): every recognizer's windows in the order they are decided, the first recognizer's
-/// first at the same sample, each weighing `factors` of the first's, into a fresh posterior.
+/// first at the same sample, each weighing `factors` of the first's and taking its own
+/// evidence scale's share of the memory, into a fresh posterior.
 pub fn offline_fused_steps(
     models: &[&RecognizerFile],
     factors: &[f64],
@@ -225,14 +226,19 @@ pub fn offline_fused_steps(
             .expect("probabilities")
             .expect("windows")
         {
-            windows.push((w.decision.decided_at, w.evidence_scale * factor, w.probabilities));
+            windows.push((
+                w.decision.decided_at,
+                w.evidence_scale * factor,
+                w.evidence_scale,
+                w.probabilities,
+            ));
         }
     }
     windows.sort_by_key(|w| w.0);
     let mut state = SequentialState::new(params, models[0].classes.len()).expect("state");
     windows
         .into_iter()
-        .map(|(at, scale, p)| (at, state.push_scaled(&p, scale).expect("finite")))
+        .map(|(at, scale, share, p)| (at, state.push_window(&p, scale, share).expect("finite")))
         .collect()
 }
 

@@ -82,6 +82,8 @@ pub(super) struct SenseWindow<'a> {
     pub probabilities: &'a [f64],
     /// Its evidence scale, relative to the Nakano recognizer's windows.
     pub scale: f64,
+    /// Its share of the posterior's memory: its own evidence scale.
+    pub share: f64,
 }
 
 /// A recognizer over the vibration spectrum of its own windows, and everything it works in.
@@ -183,6 +185,7 @@ impl VibrationSense {
             start,
             probabilities: &self.probabilities,
             scale: self.windowing.evidence_scale(n) * self.factor,
+            share: self.windowing.evidence_scale(n),
         }))
     }
 

@@ -155,9 +155,19 @@ struct Stroke {
     /// When the stroke slides onto another surface, and which.
     change: Option<(f64, usize)>,
     duration_s: f64,
-    /// Each window's time, its evidence scale ([`NakanoWindowing::evidence_scale`]) and
-    /// its probabilities.
-    windows: Vec<(f64, f64, Vec<f64>)>,
+    /// Its windows of every recognizer, in the order they are decided.
+    windows: Vec<StrokeWindow>,
+}
+
+/// One window of a stroke, as the posterior takes it.
+struct StrokeWindow {
+    at_s: f64,
+    /// Its evidence scale ([`NakanoWindowing::evidence_scale`]) times its recognizer's weight
+    /// relative to the first recognizer's.
+    scale: f64,
+    /// Its share of the memory: its evidence scale alone.
+    share: f64,
+    probabilities: Vec<f64>,
 }
 
 impl Stroke {
@@ -168,6 +178,12 @@ impl Stroke {
             _ => self.truth,
         }
     }
+}
+
+/// The least share of the posterior's memory a window of `windowing` takes: its longest
+/// window's evidence scale (1 for windows of fixed length).
+fn smallest_share(windowing: &NakanoWindowing) -> f64 {
+    windowing.evidence_scale(windowing.max_window_samples()).min(1.0)
 }
 
 impl RecognizerFile {
@@ -181,7 +197,8 @@ impl RecognizerFile {
         Some(
             SequentialParams::builder()
                 .weight((hop_s / w.window_s()).min(1.0))
-                .memory(memory),
+                .memory(memory)
+                .smallest_share(smallest_share(w)),
         )
     }
 
@@ -319,9 +336,14 @@ impl RecognizerFile {
             .iter()
             .map(|m| (memory_s / m.hop_s).round().max(1.0) as usize)
             .sum();
+        let mut smallest = 1.0f64;
+        for model in std::iter::once(self).chain(others.iter().copied()) {
+            smallest = smallest.min(smallest_share(&model.windowing_with_probabilities()?));
+        }
         Ok(SequentialParams::builder()
             .weight(members[0].weight)
-            .memory(memory))
+            .memory(memory)
+            .smallest_share(smallest))
     }
 
     /// [`RecognizerFile::evaluate_sequential`] with the evidence of `others` fused in
@@ -359,17 +381,16 @@ impl RecognizerFile {
                         .window_probabilities(c, Some(windowing))?
                         .unwrap_or_default()
                         .into_iter()
-                        .map(|w| {
-                            (
-                                w.decision.decided_at as f64 / rate_hz,
-                                w.evidence_scale * factor,
-                                w.probabilities,
-                            )
+                        .map(|w| StrokeWindow {
+                            at_s: w.decision.decided_at as f64 / rate_hz,
+                            scale: w.evidence_scale * factor,
+                            share: w.evidence_scale,
+                            probabilities: w.probabilities,
                         }),
                 );
             }
             // Stable: windows decided at the same sample keep the recognizers' order.
-            windows.sort_by(|a, b| a.0.total_cmp(&b.0));
+            windows.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
             let change = match &c.change {
                 Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
                 None => None,
@@ -434,11 +455,11 @@ impl RecognizerFile {
             state.reset();
             duration_s += s.duration_s;
             let mut named: Vec<(f64, usize)> = Vec::new();
-            for (t, scale, p) in &s.windows {
-                let step = state.push_scaled(p, *scale)?;
-                tally.add(state.posterior(), step.best, step.probability, s.truth_at(*t));
+            for w in &s.windows {
+                let step = state.push_window(&w.probabilities, w.scale, w.share)?;
+                tally.add(state.posterior(), step.best, step.probability, s.truth_at(w.at_s));
                 if let Some(d) = step.decided {
-                    named.push((*t, d));
+                    named.push((w.at_s, d));
                 }
             }
             decided += named.len();
