@@ -151,7 +151,7 @@ impl Edge {
 
     /// Adds a sample; returns the start and features of the window it completes when that is
     /// a decision window, and its evidence relative to a window of the nominal length
-    /// ([`NakanoWindowing::evidence_scale`]) (`x0`: the stroke's first position).
+    /// ([`NakanoWindowing::evidence`]) (`x0`: the stroke's first position).
     fn push(
         &mut self,
         sample: [f64; 3],
@@ -181,11 +181,11 @@ impl Edge {
             &*z.make_contiguous(),
             &*f.make_contiguous(),
         );
-        let window = windowing.window_len(x);
-        let features = self
-            .window
-            .features_of((self.pushed - window as u64) as usize, window, x, z, f)?;
-        Ok(Some((start, features, windowing.evidence_scale(window))))
+        let span = windowing.window_span(x);
+        let features =
+            self.window
+                .features_of((self.pushed - span.len as u64) as usize, span.len, x, z, f)?;
+        Ok(Some((start, features, windowing.evidence(span))))
     }
 }
 

@@ -382,7 +382,9 @@ impl SequentialState {
 
     /// [`SequentialState::push_scaled`] for a window whose share of the memory is not its
     /// evidence scale: a fused recognizer's window weighs its recognizer's reliability too,
-    /// but takes only its own length's share of the memory (positive).
+    /// but takes only its own length's share of the memory. A window of no evidence (scale 0:
+    /// rubbed by a tool at rest) changes nothing and takes no room; the step says where the
+    /// posterior stands.
     pub fn push_window(
         &mut self,
         probabilities: &[f64],
@@ -390,14 +392,23 @@ impl SequentialState {
         share: f64,
     ) -> Result<SequentialStep, RecognizeError> {
         for (name, value) in [("evidence scale", scale), ("memory share", share)] {
-            if !(value.is_finite() && value > 0.0) {
+            if !(value.is_finite() && value >= 0.0) {
                 return Err(RecognizeError::Parameter {
                     of: "window",
                     name,
                     value,
-                    reason: "must be positive and finite",
+                    reason: "must be finite and not negative",
                 });
             }
+        }
+        if scale == 0.0 {
+            let (best, probability) = self.best();
+            return Ok(SequentialStep {
+                best,
+                probability,
+                decided: self.decided,
+                changed: false,
+            });
         }
         let weight = (self.params.weight * scale).min(1.0);
         let k = self.sum.len();
@@ -447,15 +458,7 @@ impl SequentialState {
         for q in &mut self.posterior {
             *q /= norm;
         }
-        let (best, probability) =
-            self.posterior
-                .iter()
-                .copied()
-                .enumerate()
-                .fold(
-                    (0, f64::NEG_INFINITY),
-                    |b, (i, q)| if q > b.1 { (i, q) } else { b },
-                );
+        let (best, probability) = self.best();
         self.decided = match self.decided {
             // Held while it keeps enough support, unless another surface passes the threshold.
             Some(d)
@@ -504,6 +507,18 @@ impl SequentialState {
             }
         }
         fired.map(|(_, windows)| windows)
+    }
+
+    /// The most probable surface and its posterior.
+    fn best(&self) -> (usize, f64) {
+        self.posterior
+            .iter()
+            .copied()
+            .enumerate()
+            .fold(
+                (0, f64::NEG_INFINITY),
+                |b, (i, q)| if q > b.1 { (i, q) } else { b },
+            )
     }
 
     /// Pushes the oldest windows out until one of `share` fits in the memory beside those left
@@ -723,10 +738,33 @@ mod tests {
         assert!((odds(&[0.5, 0.5]) - 4f64.powf(0.4)).abs() < 1e-12);
         assert!((odds(&[5.0]) - 4.0).abs() < 1e-12);
         let mut s = SequentialState::new(weighted, 2).expect("state");
-        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
             assert!(s.push_scaled(&[0.8, 0.2], bad).is_err(), "{bad}");
         }
         assert_eq!(s.posterior(), [0.5, 0.5]);
+    }
+
+    /// A window of no evidence (a tool at rest) leaves the posterior, the decision and the
+    /// memory as they were: the stream goes on exactly as without it.
+    #[test]
+    fn a_window_of_no_evidence_changes_nothing() {
+        let p = SequentialParams::builder().memory(6).build().expect("valid");
+        let mut with = SequentialState::new(p, 3).expect("state");
+        let mut without = SequentialState::new(p, 3).expect("state");
+        for i in 0..80 {
+            let a = with.push(&varied(i)).expect("push");
+            let b = without.push(&varied(i)).expect("push");
+            assert_eq!(a, b);
+            let before = with.posterior().to_vec();
+            let still = with.push_window(&[0.0, 0.0, 1.0], 0.0, 0.0).expect("still");
+            assert_eq!(with.posterior(), before.as_slice());
+            assert_eq!(
+                (still.best, still.probability, still.decided),
+                (a.best, a.probability, a.decided)
+            );
+            assert!(!still.changed);
+        }
+        assert!(with.push_scaled(&[0.2, 0.3, 0.5], 0.0).is_ok());
     }
 
     /// Probabilities of window `i` of a stream that favours one class, then the other, with
@@ -817,7 +855,7 @@ mod tests {
                 plain.posterior()
             );
         }
-        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
             assert!(s.push_window(&[0.3, 0.3, 0.4], 1.0, bad).is_err(), "{bad}");
         }
     }

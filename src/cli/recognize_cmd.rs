@@ -585,6 +585,17 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
             );
         }
     }
+    if e.short_of_travel > 0 {
+        let slowest = model
+            .sequential_windowing()
+            .and_then(|w| w.slowest_speed_mps())
+            .map_or_else(String::new, |v| format!(" ({:.1} mm/s)", v * 1e3));
+        println!(
+            "{} of {} windows were rubbed slower than the slowest speed the windows read{slowest}: \
+             each counted for the share of its travel it covered, a tool at rest for nothing",
+            e.short_of_travel, e.steps
+        );
+    }
     if let Some(p) = &plot {
         println!(
             "wrote {} (the reliability diagram at threshold {})",

@@ -170,8 +170,8 @@ impl VibrationSense {
         let held = self
             .rings
             .copy_into(&mut self.window_position_m, &mut self.window_vibration_mps2);
-        let n = self.windowing.window_len(&self.window_position_m[..held]);
-        let r = held - n..held;
+        let span = self.windowing.window_span(&self.window_position_m[..held]);
+        let r = held - span.len..held;
         let features = self.windowing.vibration_features(
             &self.plan,
             &self.window_vibration_mps2[r.clone()],
@@ -184,8 +184,8 @@ impl VibrationSense {
         Ok(Some(SenseWindow {
             start,
             probabilities: &self.probabilities,
-            scale: self.windowing.evidence_scale(n) * self.factor,
-            share: self.windowing.evidence_scale(n),
+            scale: self.windowing.evidence(span) * self.factor,
+            share: self.windowing.evidence(span),
         }))
     }
 

@@ -39,7 +39,8 @@ use window_spectrum::SPECTRUM_LEN;
 
 pub use scaling::WindowScaling;
 pub use windowing::{
-    DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TravelWindows, WindowlessCapture,
+    DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TravelWindows, WindowSpan,
+    WindowlessCapture,
 };
 pub(crate) use windowing::{Travel, window_vectors, windows};
 

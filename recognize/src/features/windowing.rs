@@ -234,18 +234,58 @@ impl NakanoWindowing {
     /// end (a stroke that turns back counts both ways), at least 2 and at most
     /// [`NakanoWindowing::max_window_samples`] or the samples there are.
     pub fn window_len(&self, position_m: &[f64]) -> usize {
-        let Some(travel) = &self.travel else {
-            return self.window_samples;
-        };
+        self.window_span(position_m).len
+    }
+
+    /// [`NakanoWindowing::window_len`] and the path length the window spans. A window of
+    /// fixed length spans the travel of its last [`NakanoWindowing::window_samples`] (or of
+    /// the samples there are).
+    pub fn window_span(&self, position_m: &[f64]) -> WindowSpan {
         let n = position_m.len();
-        let most = self.max_window_samples().min(n);
+        let (most, window_m) = match &self.travel {
+            Some(travel) => (self.max_window_samples().min(n), travel.window_m),
+            None => (self.window_samples.min(n), f64::INFINITY),
+        };
         let mut len = 1;
         let mut travel_m = 0.0;
-        while len < most && (len < 2 || travel_m < travel.window_m) {
+        while len < most && (len < 2 || travel_m < window_m) {
             travel_m += (position_m[n - len] - position_m[n - len - 1]).abs();
             len += 1;
         }
-        len
+        if self.travel.is_none() {
+            len = self.window_samples;
+        }
+        WindowSpan { len, travel_m }
+    }
+
+    /// The evidence a window of `span` carries, relative to a window of the nominal length:
+    /// [`NakanoWindowing::evidence_scale`] of its length, and over travel, for a window that
+    /// takes the most samples a window takes and still spans less than its travel, the share
+    /// of its travel it spans. Such a window was rubbed slower than the slowest speed the
+    /// windows read: the features of a tool at rest read one spot of a surface, not its
+    /// texture, and none of it counts; a tool crawling below that speed counts for the travel
+    /// it covered.
+    pub fn evidence(&self, span: WindowSpan) -> f64 {
+        let scale = self.evidence_scale(span.len);
+        match &self.travel {
+            Some(t) if self.short_of_travel(span) => scale * span.travel_m / t.window_m,
+            _ => scale,
+        }
+    }
+
+    /// Whether a window of `span` is over travel, takes the most samples a window takes, and
+    /// still spans less than its travel: rubbed slower than
+    /// [`NakanoWindowing::slowest_speed_mps`].
+    pub fn short_of_travel(&self, span: WindowSpan) -> bool {
+        self.travel
+            .is_some_and(|t| span.len >= self.max_window_samples() && span.travel_m < t.window_m)
+    }
+
+    /// Over travel, the slowest speed at which a window spans its travel within the most
+    /// samples a window takes, m/s; `None` for windows of fixed length.
+    pub fn slowest_speed_mps(&self) -> Option<f64> {
+        self.travel
+            .map(|t| t.window_m * self.rate_hz / self.max_window_samples() as f64)
     }
 
     /// How much of an independent window's evidence a window of `len` samples carries
@@ -544,23 +584,32 @@ impl Travel {
     }
 }
 
+/// How many samples a window takes and the path length they span, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowSpan {
+    /// Samples.
+    pub len: usize,
+    /// Path length over them, m.
+    pub travel_m: f64,
+}
+
 /// Every decision window of a capture: the sample it is keyed by (where a window of
 /// [`NakanoWindowing::window_samples`] ending where it ends would start: its first sample but
-/// for windows over travel), its length in samples, and its features.
+/// for windows over travel), its span (length in samples and travel), and its features.
 pub(crate) fn windows(
     c: &LabelledCapture,
     windowing: &NakanoWindowing,
-) -> Result<Vec<(usize, usize, [f64; FEATURES])>, RecognizeError> {
+) -> Result<Vec<(usize, WindowSpan, [f64; FEATURES])>, RecognizeError> {
     if let Some(kept) = c.kept() {
         let vectors = kept
             .windows(windowing, FeatureSet::Nakano, CellScale::Mean)
             .ok_or_else(|| c.not_kept(format!("Nakano's features of {}", describe(windowing))))?;
         return Ok(vectors
             .iter()
-            .map(|(s, len, v)| {
+            .map(|(s, span, v)| {
                 let mut f = [0.0; FEATURES];
                 f.copy_from_slice(&v[..FEATURES]);
-                (*s, *len, f)
+                (*s, *span, f)
             })
             .collect());
     }
@@ -593,13 +642,13 @@ pub(crate) fn windows(
             .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
             .map(|s| {
                 let end = s + len;
-                let window = windowing.window_len(&x[..end]);
-                let start = end - window;
+                let span = windowing.window_span(&x[..end]);
+                let start = end - span.len;
                 let known = edge.history_start(start)..end;
                 let features = edge
-                    .features_of(start, window, &x[known.clone()], &z[known.clone()], &f[known])
+                    .features_of(start, span.len, &x[known.clone()], &z[known.clone()], &f[known])
                     .map_err(nakano)?;
-                Ok((s, window, features))
+                Ok((s, span, features))
             })
             .collect();
     }
@@ -622,7 +671,7 @@ pub(crate) fn windows(
         .map(|s| {
             Ok((
                 s,
-                len,
+                windowing.window_span(&x[..s + len]),
                 signals
                     .features(s + pad, len, &windowing.filters)
                     .map_err(nakano)?,
@@ -642,14 +691,14 @@ pub(crate) fn window_vectors(
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
+) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
     if let Some(kept) = c.kept() {
         let vectors = kept
             .windows(windowing, features, cell_scale)
             .ok_or_else(|| c.not_kept(format!("{features} features of {}", describe(windowing))))?;
         return Ok(vectors
             .iter()
-            .map(|(s, len, v)| (*s, *len, v[..features.dim()].to_vec()))
+            .map(|(s, span, v)| (*s, *span, v[..features.dim()].to_vec()))
             .collect());
     }
     let nakano = windows(c, windowing)?;
@@ -684,7 +733,7 @@ pub(crate) fn window_vectors(
     let len = windowing.window_samples;
     nakano
         .into_iter()
-        .map(|(s, n, f)| {
+        .map(|(s, span, f)| {
             let h = match axes {
                 Axes::Three(x, y, z) => {
                     let range = s..(s + len).min(x.len());
@@ -693,7 +742,7 @@ pub(crate) fn window_vectors(
                 Axes::One(v) => plan.single_axis_features(&v[s..(s + len).min(v.len())], cell_scale),
             }
             .map_err(spectral)?;
-            Ok((s, n, f.iter().copied().chain(h).collect()))
+            Ok((s, span, f.iter().copied().chain(h).collect()))
         })
         .collect()
 }
@@ -704,12 +753,12 @@ pub(crate) fn window_vectors(
 /// ([`WindowSpectrumPlan::features_over_travel`]), at the window's path length over its
 /// duration.
 fn vibration_vectors(
-    nakano: Vec<(usize, usize, [f64; FEATURES])>,
+    nakano: Vec<(usize, WindowSpan, [f64; FEATURES])>,
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
     position_m: &[f64],
     cell_scale: CellScale,
-) -> Result<Vec<(usize, usize, Vec<f64>)>, RecognizeError> {
+) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
     let mut scratch = plan.scratch();
     let samples = match axes {
@@ -718,9 +767,9 @@ fn vibration_vectors(
     };
     nakano
         .into_iter()
-        .map(|(s, n, _)| {
+        .map(|(s, span, _)| {
             let end = (s + windowing.window_samples).min(samples);
-            let r = end.saturating_sub(n)..end;
+            let r = end.saturating_sub(span.len)..end;
             let signal = match axes {
                 Axes::Three(x, y, z) => {
                     Cow::Owned(spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r.clone()])?)
@@ -729,7 +778,7 @@ fn vibration_vectors(
             };
             let spectrum =
                 windowing.vibration_features(&plan, &signal, &position_m[r], cell_scale, &mut scratch)?;
-            Ok((s, n, spectrum.to_vec()))
+            Ok((s, span, spectrum.to_vec()))
         })
         .collect()
 }
@@ -844,6 +893,45 @@ mod tests {
         // Windows of fixed length are what they were.
         let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
         assert_eq!(fixed.window_len(&steady(2e-6, 2000)), 250);
+    }
+
+    /// Down to the slowest speed a window's evidence is its length's; below it, at the most
+    /// samples, the share of its travel it covers; at rest, none. Fixed windows count whole.
+    #[test]
+    fn a_window_short_of_its_travel_counts_for_the_travel_it_covers() {
+        let w = over_travel();
+        let evidence = |step_m: f64| w.evidence(w.window_span(&steady(step_m, 2000)));
+        for step_m in [5e-6, 2.5e-6, 20e-6] {
+            let span = w.window_span(&steady(step_m, 2000));
+            assert!(span.travel_m >= 1.25e-3 - 1e-12, "{step_m}: {span:?}");
+            assert_eq!(evidence(step_m), w.evidence_scale(span.len));
+        }
+        // 1 mm/s: 625 samples over 0.624 mm, about half the travel, of the 2 mm/s floor 0.4.
+        let span = w.window_span(&steady(1e-6, 2000));
+        assert_eq!(span.len, 625);
+        assert!((span.travel_m - 0.624e-3).abs() < 1e-12, "{span:?}");
+        assert!(
+            (evidence(1e-6) - 0.4 * 0.624 / 1.25).abs() < 1e-9,
+            "{}",
+            evidence(1e-6)
+        );
+        assert_eq!(w.evidence(w.window_span(&[0.0; 1000])), 0.0);
+        assert!(w.short_of_travel(span) && !w.short_of_travel(w.window_span(&steady(2.5e-6, 2000))));
+        assert!((w.slowest_speed_mps().expect("over travel") - 0.002).abs() < 1e-12);
+        // At the stroke's start a window short of its travel but not of samples counts whole.
+        let start = w.window_span(&steady(5e-6, 100));
+        assert_eq!(w.evidence(start), w.evidence_scale(100));
+        assert!(!w.short_of_travel(start));
+        let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
+        assert_eq!(fixed.evidence(fixed.window_span(&[0.0; 1000])), 1.0);
+        assert!(!fixed.short_of_travel(fixed.window_span(&[0.0; 1000])));
+        assert_eq!(fixed.slowest_speed_mps(), None);
+        let fixed_span = fixed.window_span(&steady(2e-6, 2000));
+        assert_eq!(fixed_span.len, 250);
+        assert!(
+            (fixed_span.travel_m - 249.0 * 2e-6).abs() < 1e-12,
+            "{fixed_span:?}"
+        );
     }
 
     #[test]

@@ -51,8 +51,12 @@ pub struct WindowProbabilities {
     /// Probability of each class, in [`RecognizerFile::classes`]' order; they sum to 1.
     pub probabilities: Vec<f64>,
     /// Its evidence relative to a window of the windowing's nominal length
-    /// ([`NakanoWindowing::evidence_scale`]): 1 but for windows over travel.
+    /// ([`NakanoWindowing::evidence`]): 1 but for windows over travel, 0 for one rubbed by a
+    /// tool at rest.
     pub evidence_scale: f64,
+    /// Whether it was rubbed slower than the slowest speed its windows read
+    /// ([`NakanoWindowing::short_of_travel`]).
+    pub short_of_travel: bool,
 }
 
 impl RecognizerFile {
@@ -168,7 +172,7 @@ impl RecognizerFile {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         let mut out = Vec::new();
-        for (start, len, v) in window_vectors(capture, windowing, features, cell_scale)? {
+        for (start, span, v) in window_vectors(capture, windowing, features, cell_scale)? {
             let (label, mut p) = classifier.classify(&scaling.apply(&v), None)?;
             if let Some(c) = calibration {
                 c.apply(&mut p);
@@ -182,7 +186,8 @@ impl RecognizerFile {
             out.push(WindowProbabilities {
                 decision,
                 probabilities: p,
-                evidence_scale: windowing.evidence_scale(len),
+                evidence_scale: windowing.evidence(span),
+                short_of_travel: windowing.short_of_travel(span),
             });
         }
         Ok(Some(out))

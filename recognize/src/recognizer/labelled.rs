@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use crate::RecognizeError;
 use crate::features::spectral::{CellScale, FEATURE_LEN};
-use crate::features::{FeatureSet, NakanoWindowing, Travel};
+use crate::features::{FeatureSet, NakanoWindowing, Travel, WindowSpan};
 use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
 
 /// Metadata key of a capture's class.
@@ -120,8 +120,8 @@ pub(crate) struct KeptWindows {
     pub(super) windowing: NakanoWindowing,
     pub(super) features: FeatureSet,
     pub(super) cell_scale: CellScale,
-    /// Start and feature vector of each window.
-    pub(super) vectors: Vec<(usize, usize, Vec<f64>)>,
+    /// Start, span and feature vector of each window.
+    pub(super) vectors: Vec<(usize, WindowSpan, Vec<f64>)>,
 }
 
 /// The features a capture kept when its samples were dropped.
@@ -154,7 +154,7 @@ impl KeptFeatures {
         windowing: &NakanoWindowing,
         features: FeatureSet,
         cell_scale: CellScale,
-    ) -> Option<&[(usize, usize, Vec<f64>)]> {
+    ) -> Option<&[(usize, WindowSpan, Vec<f64>)]> {
         self.windows
             .iter()
             .find(|k| {

@@ -120,6 +120,10 @@ pub struct SequentialEvaluation {
     /// Captures evaluated, and windows over all of them.
     pub captures: usize,
     pub steps: usize,
+    /// Windows rubbed slower than the slowest speed their windows read
+    /// ([`NakanoWindowing::short_of_travel`]): they count for the travel they covered, and
+    /// not at all at rest.
+    pub short_of_travel: usize,
     /// One per threshold, in the order given.
     pub rows: Vec<SequentialRow>,
     /// The first row's calibration (with no thresholds, at the default one).
@@ -371,6 +375,7 @@ impl RecognizerFile {
             sources.push((model, own, member.weight / fused[0].weight));
         }
         let mut strokes = Vec::with_capacity(captures.len());
+        let mut short_of_travel = 0;
         for c in captures {
             let c = c.borrow();
             let rate_hz = c.capture.metadata().rate_hz();
@@ -381,6 +386,7 @@ impl RecognizerFile {
                         .window_probabilities(c, Some(windowing))?
                         .unwrap_or_default()
                         .into_iter()
+                        .inspect(|w| short_of_travel += usize::from(w.short_of_travel))
                         .map(|w| StrokeWindow {
                             at_s: w.decision.decided_at as f64 / rate_hz,
                             scale: w.evidence_scale * factor,
@@ -432,6 +438,7 @@ impl RecognizerFile {
             decided_after_s: windowing.lookahead_samples() as f64 / windowing.rate_hz,
             captures: captures.len(),
             steps,
+            short_of_travel,
             rows,
             calibration,
             fused,
