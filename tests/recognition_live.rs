@@ -17,8 +17,8 @@ use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
 use recognize::nakano::FrictionOverTravel;
 use recognize::sequential::DEFAULT_MEMORY_S;
 use recognize::{
-    CellScale, FeatureSet, KnnParams, LabelledCapture, NakanoWindowing, RecognizerFile, SequentialParams,
-    SequentialState, SequentialStep, SomParams, SvmC,
+    CellScale, FeatureSet, KnnParams, LabelledCapture, Method, NakanoWindowing, RecognizerFile,
+    SequentialParams, SequentialState, SequentialStep, SomParams, SvmC, TrainSettings, TrainingWarning,
 };
 
 /// Counts allocations made by the thread that set [`COUNTING`].
@@ -716,6 +716,51 @@ fn a_tool_at_rest_mid_stroke_leaves_the_posterior_as_it_was_live_as_offline() {
     let stopped = short(paused.iter().flat_map(|r| &r[1..]).collect());
     eprintln!("windows short of their travel: {stopped} paused, {rubbed} as rubbed");
     assert!(stopped >= at_rest && rubbed < at_rest / 10, "{stopped}, {rubbed}");
+}
+
+/// Training over travel leaves out the windows that cover less than half their travel (mostly
+/// the tool at rest), and says how many.
+#[test]
+fn training_leaves_out_windows_of_a_tool_at_rest_and_says_so() {
+    let rubbed: Vec<LabelledCapture> = runs().iter().map(|r| r[0].clone()).collect();
+    let paused: Vec<LabelledCapture> = rubbed.iter().map(|c| with_pause(c, 3.0, 2.0)).collect();
+    let settings = TrainSettings {
+        features: FeatureSet::Nakano,
+        window_s: 0.25,
+        mirrored_end: true,
+        windows_over_travel: true,
+        slowest_speed_mps: Some(0.002),
+        ..TrainSettings::new(Method::Knn)
+    };
+    let short = |captures: &[LabelledCapture]| -> Vec<TrainingWarning> {
+        let warnings = settings.data_warnings(captures).expect("warnings");
+        warnings
+            .into_iter()
+            .filter(|w| matches!(w, TrainingWarning::ShortOfTravel { .. }))
+            .collect()
+    };
+    assert_eq!(short(&rubbed), []);
+    let found = short(&paused);
+    let [
+        TrainingWarning::ShortOfTravel {
+            left_out,
+            of,
+            slowest_speed_mps,
+        },
+    ] = found.as_slice()
+    else {
+        panic!("{found:?}");
+    };
+    // Windows of 625 samples at most, every 0.1 s: from 0.5 s into the pause, where less than
+    // half a window's 1.25 mm is left in it, to 0.125 s after, about 16 a stroke.
+    eprintln!("{}", found[0]);
+    assert!((7 * 12..=7 * 20).contains(left_out), "{left_out}");
+    assert!((slowest_speed_mps - 0.002).abs() < 1e-9);
+    assert!(
+        found[0]
+            .to_string()
+            .starts_with(&format!("{left_out} of {of} training windows"))
+    );
 }
 
 /// A 5-NN over Nakano's features under `windowing`, trained on run 0 of `train`, and its default

@@ -266,19 +266,24 @@ impl NakanoWindowing {
     /// texture, and none of it counts; a tool crawling below that speed counts for the travel
     /// it covered.
     pub fn evidence(&self, span: WindowSpan) -> f64 {
-        let scale = self.evidence_scale(span.len);
+        self.evidence_scale(span.len) * self.travel_share(span)
+    }
+
+    /// The share of its travel a window of `span` covers: below 1 only over travel, for a
+    /// window that takes the most samples a window takes and still spans less than its travel
+    /// (rubbed slower than [`NakanoWindowing::slowest_speed_mps`]); 0 for a tool at rest.
+    pub fn travel_share(&self, span: WindowSpan) -> f64 {
         match &self.travel {
-            Some(t) if self.short_of_travel(span) => scale * span.travel_m / t.window_m,
-            _ => scale,
+            Some(t) if span.len >= self.max_window_samples() && span.travel_m < t.window_m => {
+                span.travel_m / t.window_m
+            }
+            _ => 1.0,
         }
     }
 
-    /// Whether a window of `span` is over travel, takes the most samples a window takes, and
-    /// still spans less than its travel: rubbed slower than
-    /// [`NakanoWindowing::slowest_speed_mps`].
+    /// Whether a window of `span` covers less than its travel ([`NakanoWindowing::travel_share`]).
     pub fn short_of_travel(&self, span: WindowSpan) -> bool {
-        self.travel
-            .is_some_and(|t| span.len >= self.max_window_samples() && span.travel_m < t.window_m)
+        self.travel_share(span) < 1.0
     }
 
     /// Over travel, the slowest speed at which a window spans its travel within the most

@@ -41,9 +41,10 @@ pub use sequential_eval::{
     Calibration, FusionMember, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
 };
 pub use train::{
-    CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, Method, SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC,
-    SvmTrainer, TrainSettings, Trainer, TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes,
-    som_params, train, window_som_nodes, window_svc_params,
+    CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, LEAST_TRAINING_TRAVEL_SHARE, Method,
+    SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainSettings, Trainer, TrainingWarning,
+    UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_som_nodes,
+    window_svc_params,
 };
 pub use window_classifier::WindowClassifier;
 

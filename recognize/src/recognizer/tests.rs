@@ -1160,7 +1160,7 @@ fn data_warnings_name_classes_with_few_vectors_and_constant_features() {
             vectors,
             ..
         } => Some((features.len(), *of, *vectors)),
-        TrainingWarning::FewVectors { .. } => None,
+        TrainingWarning::FewVectors { .. } | TrainingWarning::ShortOfTravel { .. } => None,
     });
     assert_eq!(constant, Some((125, 125, 6)), "{warnings:?}");
 }

@@ -402,14 +402,37 @@ pub(crate) fn training_windows(
     features: FeatureSet,
     cell_scale: CellScale,
 ) -> Result<WindowData, RecognizeError> {
+    training_windows_left_out(captures, classes, windowing, features, cell_scale).map(|(data, ..)| data)
+}
+
+/// A training window over travel that covers less than this share of its travel is left out:
+/// it holds mostly a tool at rest, one spot of the surface rather than its texture. One that
+/// covers more reads the texture, if less of it than the others.
+pub const LEAST_TRAINING_TRAVEL_SHARE: f64 = 0.5;
+
+/// [`training_windows`], and how many windows were left out for covering less than
+/// [`LEAST_TRAINING_TRAVEL_SHARE`] of their travel, of how many.
+pub(crate) fn training_windows_left_out(
+    captures: &[LabelledCapture],
+    classes: &[String],
+    windowing: &NakanoWindowing,
+    features: FeatureSet,
+    cell_scale: CellScale,
+) -> Result<(WindowData, usize, usize), RecognizeError> {
     features.check_columns(captures)?;
     let groups = recording_groups(captures);
     let training = windowing.training();
     let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut left_out, mut of) = (0, 0);
     for (c, &group) in captures.iter().zip(&groups) {
         check_rate(c, windowing.rate_hz)?;
         let label = class_index(classes, c)?;
-        for (_, _, v) in window_vectors(c, &training, features, cell_scale)? {
+        for (_, span, v) in window_vectors(c, &training, features, cell_scale)? {
+            of += 1;
+            if training.travel_share(span) < LEAST_TRAINING_TRAVEL_SHARE {
+                left_out += 1;
+                continue;
+            }
             x.push(v);
             y.push(label);
             g.push(group);
@@ -419,7 +442,7 @@ pub(crate) fn training_windows(
     if x.is_empty() {
         return Err(RecognizeError::NoTrainingData);
     }
-    Ok((x, y, g))
+    Ok(((x, y, g), left_out, of))
 }
 
 /// Refuses training when a class of `classes` has no vector among `labels` (the class index of
