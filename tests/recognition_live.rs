@@ -599,15 +599,9 @@ fn windows_over_travel_decide_live_as_offline_at_another_speed() {
         })
         .collect();
     let windowing = NakanoWindowing {
-        mirrored_end: true,
         friction_over_travel: Some(FrictionOverTravel::protocol()),
-        ..NakanoWindowing::new(0.25, 0.1, 1000.0)
-            .expect("valid")
-            .following_speeds_down_to(0.002)
-            .expect("valid")
-    }
-    .over_travel()
-    .expect("valid");
+        ..over_travel_to_2mmps()
+    };
     let (named, right) = mirrored_end_live_as_offline(&train, &fast, windowing);
     // Measured: 139 of 156 (89.1 %); the SVM of `tests/recognition_speed.rs` names 98.1 % right.
     eprintln!("knn over travel, at 20 mm/s: {right} of {named} named decisions right");
@@ -615,6 +609,20 @@ fn windows_over_travel_decide_live_as_offline_at_another_speed() {
         named > 14 * 5 && right as f64 >= 0.85 * named as f64,
         "{right}/{named}"
     );
+}
+
+/// 0.25 s windows every 0.1 s over travel, each decided at its last sample, the filters
+/// following the speed down to 2 mm/s.
+fn over_travel_to_2mmps() -> NakanoWindowing {
+    NakanoWindowing {
+        mirrored_end: true,
+        ..NakanoWindowing::new(0.25, 0.1, 1000.0)
+            .expect("valid")
+            .following_speeds_down_to(0.002)
+            .expect("valid")
+    }
+    .over_travel()
+    .expect("valid")
 }
 
 /// `c` with the tool at rest for `pause_s` from `at_s` on: the sample at `at_s` repeated, its
@@ -656,15 +664,7 @@ fn a_tool_at_rest_mid_stroke_leaves_the_posterior_as_it_was_live_as_offline() {
         .iter()
         .map(|r| r.iter().map(|c| with_pause(c, 3.0, 2.0)).collect())
         .collect();
-    let windowing = NakanoWindowing {
-        mirrored_end: true,
-        ..NakanoWindowing::new(0.25, 0.1, 1000.0)
-            .expect("valid")
-            .following_speeds_down_to(0.002)
-            .expect("valid")
-    }
-    .over_travel()
-    .expect("valid");
+    let windowing = over_travel_to_2mmps();
     let (named, right) = mirrored_end_live_as_offline(&train, &paused, windowing);
     let (named_rubbed, right_rubbed) = mirrored_end_live_as_offline(&train, &train, windowing);
     // Measured: 914 of 1,045 paused (87.5 %), 708 of 770 as rubbed (91.9 %): the windows that
