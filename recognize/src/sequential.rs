@@ -274,9 +274,8 @@ pub struct SequentialState {
     /// Weighted log-probabilities of the windows held, window-major, as a ring of
     /// [`SequentialParams::capacity`] windows.
     ring: Vec<f64>,
-    /// Each slot's share of the memory, and the sum over the windows held.
+    /// Each slot's share of the memory (0 for a free slot).
     shares: Vec<f64>,
-    held_share: f64,
     /// Windows in the ring, and the slot the next one goes to.
     held: usize,
     next: usize,
@@ -326,7 +325,6 @@ impl SequentialState {
             params,
             ring: vec![0.0; params.capacity() * classes],
             shares: vec![0.0; params.capacity()],
-            held_share: 0.0,
             held: 0,
             next: 0,
             sum: vec![0.0; classes],
@@ -346,7 +344,6 @@ impl SequentialState {
     pub fn reset(&mut self) {
         self.ring.fill(0.0);
         self.shares.fill(0.0);
-        self.held_share = 0.0;
         self.sum.fill(0.0);
         self.held = 0;
         self.next = 0;
@@ -438,7 +435,6 @@ impl SequentialState {
             *slot = evidence;
         }
         self.shares[self.next] = share;
-        self.held_share += share;
         let change = self.change_test();
         self.next = (self.next + 1) % self.shares.len();
         self.held += 1;
@@ -530,12 +526,12 @@ impl SequentialState {
         let k = self.sum.len();
         if self.held == capacity {
             self.held -= 1;
-            self.held_share -= self.shares[self.next];
             self.shares[self.next] = 0.0;
         }
         // Shares that fill the memory in exact arithmetic (fifteen of 0.4 in six) fit in it.
         let limit = self.params.memory as f64 * (1.0 + 1e-9);
-        while self.held > 0 && self.held_share + share > limit {
+        let mut held_share: f64 = self.shares.iter().sum();
+        while self.held > 0 && held_share + share > limit {
             let oldest = (self.next + capacity - self.held) % capacity;
             let row = &mut self.ring[oldest * k..(oldest + 1) * k];
             for (s, e) in self.sum.iter_mut().zip(row.iter_mut()) {
@@ -543,12 +539,8 @@ impl SequentialState {
                 *e = 0.0;
             }
             self.held -= 1;
-            self.held_share -= self.shares[oldest];
+            held_share -= self.shares[oldest];
             self.shares[oldest] = 0.0;
-        }
-        if self.held == 0 {
-            // Nothing held: no rounding left over from the shares pushed out.
-            self.held_share = 0.0;
         }
     }
 
@@ -569,7 +561,6 @@ impl SequentialState {
             self.shares[slot] = 0.0;
         }
         self.held = keep;
-        self.held_share = self.shares.iter().sum();
         self.sum.fill(0.0);
         for row in self.ring.chunks_exact(k) {
             for (s, e) in self.sum.iter_mut().zip(row) {

@@ -228,18 +228,12 @@ impl NakanoWindowing {
         Ok(windowing)
     }
 
-    /// Samples of the window that ends with the last of `position_m` (the stroke's positions
-    /// from its first sample, or at least the window's): [`NakanoWindowing::window_samples`],
+    /// The window that ends with the last of `position_m` (the stroke's positions from its
+    /// first sample, or at least the window's): its samples, [`NakanoWindowing::window_samples`],
     /// or over travel as many as span [`TravelWindows::window_m`] of path length back from its
     /// end (a stroke that turns back counts both ways), at least 2 and at most
-    /// [`NakanoWindowing::max_window_samples`] or the samples there are.
-    pub fn window_len(&self, position_m: &[f64]) -> usize {
-        self.window_span(position_m).len
-    }
-
-    /// [`NakanoWindowing::window_len`] and the path length the window spans. A window of
-    /// fixed length spans the travel of its last [`NakanoWindowing::window_samples`] (or of
-    /// the samples there are).
+    /// [`NakanoWindowing::max_window_samples`] or the samples there are; and the path length
+    /// they span (for a window of fixed length, over its last samples or those there are).
     pub fn window_span(&self, position_m: &[f64]) -> WindowSpan {
         let n = position_m.len();
         let (most, window_m) = match &self.travel {
@@ -814,7 +808,7 @@ impl NakanoWindowing {
 }
 
 /// Path length of `position_m` over its duration at `rate_hz`, m/s (a stroke that turns back
-/// counts both ways, as [`NakanoWindowing::window_len`] does); 0 for fewer than two samples.
+/// counts both ways, as [`NakanoWindowing::window_span`] does); 0 for fewer than two samples.
 fn path_speed_mps(position_m: &[f64], rate_hz: f64) -> f64 {
     if position_m.len() < 2 {
         return 0.0;
@@ -874,15 +868,15 @@ mod tests {
         // 1.25 mm at 5, 2 and 20 µm per sample (the last step may round past it).
         for (step_m, len) in [(5e-6, 251), (2e-6, 626), (20e-6, 64)] {
             let x = steady(step_m, 2000);
-            let got = w.window_len(&x);
+            let got = w.window_span(&x).len;
             assert!(got.abs_diff(len) <= 1, "{step_m}: {got}");
             let span = (x[x.len() - 1] - x[x.len() - got]).abs();
             assert!(span >= 1.25e-3 - 1e-12 || got == 625, "{step_m}: {span}");
         }
         // Slower than 2 mm/s, capped; at the stroke's start, all there is; a stroke that turns
         // back counts both ways; a still tip takes the longest window.
-        assert_eq!(w.window_len(&steady(1e-6, 2000)), 625);
-        assert_eq!(w.window_len(&steady(5e-6, 100)), 100);
+        assert_eq!(w.window_span(&steady(1e-6, 2000)).len, 625);
+        assert_eq!(w.window_span(&steady(5e-6, 100)).len, 100);
         let there_and_back: Vec<f64> = (0..400)
             .map(|k| {
                 if k < 200 {
@@ -892,12 +886,12 @@ mod tests {
                 }
             })
             .collect();
-        assert!(w.window_len(&there_and_back).abs_diff(251) <= 1);
-        assert_eq!(w.window_len(&[0.0; 1000]), 625);
-        assert_eq!(w.window_len(&[0.0]), 1);
+        assert!(w.window_span(&there_and_back).len.abs_diff(251) <= 1);
+        assert_eq!(w.window_span(&[0.0; 1000]).len, 625);
+        assert_eq!(w.window_span(&[0.0]).len, 1);
         // Windows of fixed length are what they were.
         let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
-        assert_eq!(fixed.window_len(&steady(2e-6, 2000)), 250);
+        assert_eq!(fixed.window_span(&steady(2e-6, 2000)).len, 250);
     }
 
     /// Down to the slowest speed a window's evidence is its length's; below it, at the most
