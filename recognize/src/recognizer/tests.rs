@@ -589,6 +589,48 @@ fn training_refuses_a_class_whose_captures_give_no_window() {
     );
 }
 
+/// Over travel, a class whose captures were all rubbed well below the slowest speed the windows
+/// read gives windows, but training leaves every one out: the error says so rather than blaming
+/// the capture's length or travel.
+#[test]
+fn training_says_when_a_class_lost_every_window_to_a_tool_too_slow() {
+    let mut captures = three_surfaces(4.0);
+    // 0.5 mm/s: a window's 625 samples span a quarter of its 1.25 mm.
+    captures.push(from(
+        rubbing_at("cork", 10e-6, 1e-3, 0.15, 14.0, 0.5e-3),
+        "cork-slow.csv",
+    ));
+    let settings = TrainSettings {
+        features: FeatureSet::Nakano,
+        window_s: 0.25,
+        mirrored_end: true,
+        windows_over_travel: true,
+        slowest_speed_mps: Some(0.002),
+        ..TrainSettings::new(Method::Knn)
+    };
+    let err = train(&captures, &settings).expect_err("cork has no window kept");
+    let RecognizeError::ClassWithoutWindows { class, captures: why } = &err else {
+        panic!("{err}");
+    };
+    assert_eq!(class, "cork");
+    assert_eq!(why.len(), 1);
+    assert_eq!(why[0].path, Path::new("cork-slow.csv"));
+    let text = err.to_string();
+    eprintln!("{text}");
+    assert!(
+        text.contains("capture cork-slow.csv gave ") && text.contains(" training windows, all left out"),
+        "{text}"
+    );
+    assert!(
+        text.contains("slowest speed the windows read (2.0 mm/s)"),
+        "{text}"
+    );
+    // The same capture rubbed at 5 mm/s keeps its windows.
+    captures.pop();
+    captures.push(from(rubbing_at("cork", 10e-6, 1e-3, 0.15, 4.0, 5e-3), "cork.csv"));
+    train(&captures, &settings).expect("cork rubbed at 5 mm/s");
+}
+
 #[test]
 fn evaluation_refuses_no_decisions_and_lists_captures_without_one() {
     let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");

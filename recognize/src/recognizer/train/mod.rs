@@ -423,14 +423,15 @@ pub(crate) fn training_windows_left_out(
     let groups = recording_groups(captures);
     let training = windowing.training();
     let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut left_out, mut of) = (0, 0);
-    for (c, &group) in captures.iter().zip(&groups) {
+    let mut left_out = vec![0; captures.len()];
+    let mut of = 0;
+    for ((c, &group), left_out) in captures.iter().zip(&groups).zip(&mut left_out) {
         check_rate(c, windowing.rate_hz)?;
         let label = class_index(classes, c)?;
         for (_, span, v) in window_vectors(c, &training, features, cell_scale)? {
             of += 1;
             if training.travel_share(span) < LEAST_TRAINING_TRAVEL_SHARE {
-                left_out += 1;
+                *left_out += 1;
                 continue;
             }
             x.push(v);
@@ -438,22 +439,24 @@ pub(crate) fn training_windows_left_out(
             g.push(group);
         }
     }
-    every_class_has_windows(captures, classes, &y, &training)?;
+    every_class_has_windows(captures, classes, &y, &training, &left_out)?;
     if x.is_empty() {
         return Err(RecognizeError::NoTrainingData);
     }
-    Ok(((x, y, g), left_out, of))
+    Ok(((x, y, g), left_out.iter().sum(), of))
 }
 
 /// Refuses training when a class of `classes` has no vector among `labels` (the class index of
 /// each training window of `captures`, cut by the training windowing `training`): a recognizer
-/// would list that class but could never answer it. The error names the class and why each of
-/// its captures gave no window.
+/// would list that class but could never answer it. `left_out` is, per capture, how many of
+/// its windows were left out for covering too little of their travel (all 0 where none are).
+/// The error names the class and why each of its captures gave no window.
 pub(crate) fn every_class_has_windows(
     captures: &[LabelledCapture],
     classes: &[String],
     labels: &[usize],
     training: &NakanoWindowing,
+    left_out: &[usize],
 ) -> Result<(), RecognizeError> {
     let mut counts = vec![0usize; classes.len()];
     for &l in labels {
@@ -467,10 +470,36 @@ pub(crate) fn every_class_has_windows(
     let class = classes[empty].clone();
     let captures = captures
         .iter()
-        .filter(|c| c.label == class)
-        .map(|c| WindowlessCapture::of(c, training, "training"))
+        .zip(left_out.iter().copied().chain(std::iter::repeat(0)))
+        .filter(|(c, _)| c.label == class)
+        .map(|(c, left_out)| match left_out {
+            0 => WindowlessCapture::of(c, training, "training"),
+            n => all_short_of_travel(c, training, n),
+        })
         .collect();
     Err(RecognizeError::ClassWithoutWindows { class, captures })
+}
+
+/// Why capture `c`, whose `left_out` training windows were all left out for covering less than
+/// [`LEAST_TRAINING_TRAVEL_SHARE`] of their travel, gave none.
+fn all_short_of_travel(
+    c: &LabelledCapture,
+    training: &NakanoWindowing,
+    left_out: usize,
+) -> WindowlessCapture {
+    let slowest = training
+        .slowest_speed_mps()
+        .map(|v| format!(" ({:.1} mm/s)", 1e3 * v))
+        .unwrap_or_default();
+    WindowlessCapture {
+        path: c.reference.path.clone(),
+        reason: format!(
+            "gave {left_out} training windows, all left out: each covered less than {:.0} % of its travel, \
+             so its tool rested or moved slower than the slowest speed the windows read{slowest}; if the rig \
+             rubs that slowly, a lower --slowest-speed-mps reads it",
+            100.0 * LEAST_TRAINING_TRAVEL_SHARE
+        ),
+    }
 }
 
 /// Training windows for a k-NN or SVM over windows, scaled by the [`WindowScaling`] fitted to

@@ -221,7 +221,7 @@ impl RecognizerFile {
                 labels.push(label);
             }
         }
-        every_class_has_windows(captures, &classes, &labels, &training)?;
+        every_class_has_windows(captures, &classes, &labels, &training, &[])?;
         if data.is_empty() {
             return Err(RecognizeError::NoTrainingData);
         }
