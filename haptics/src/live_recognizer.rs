@@ -43,7 +43,7 @@ use std::collections::VecDeque;
 
 use recognize::nakano::{EdgeWindow, TravelFriction};
 use recognize::{
-    FEATURES, FeatureSet, NakanoStream, NakanoWindowing, RecognizerBody, RecognizerFile as Model,
+    FEATURES, FeatureSet, NakanoStream, NakanoWindowing, PlayedPath, RecognizerBody, RecognizerFile as Model,
     SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
 };
 use vibration::VibrationSense;
@@ -100,6 +100,8 @@ pub struct LiveRecognizer {
     /// Vibration recognizers fused into the posterior ([`LiveRecognizer::fused`]).
     senses: Vec<VibrationSense>,
     first_position_m: Option<f64>,
+    /// The stroke's path through the play, which windows over travel span.
+    played: PlayedPath,
     current: Option<LiveDecision>,
 }
 
@@ -107,8 +109,9 @@ pub struct LiveRecognizer {
 #[derive(Debug)]
 struct Edge {
     window: EdgeWindow,
-    /// Position, height and friction, oldest first; at most [`EdgeWindow::history_samples`].
-    samples: [VecDeque<f64>; 3],
+    /// Position, height, friction and the path through the play ([`PlayedPath`]), oldest
+    /// first; at most [`EdgeWindow::history_samples`].
+    samples: [VecDeque<f64>; 4],
     /// Samples pushed since the stroke began.
     pushed: u64,
 }
@@ -149,12 +152,13 @@ impl Edge {
         self.pushed = 0;
     }
 
-    /// Adds a sample; returns the start and features of the window it completes when that is
-    /// a decision window, and its evidence relative to a window of the nominal length
-    /// ([`NakanoWindowing::evidence`]) (`x0`: the stroke's first position).
+    /// Adds a sample (position, height, friction, path through the play); returns the start
+    /// and features of the window it completes when that is a decision window, and its
+    /// evidence relative to a window of the nominal length ([`NakanoWindowing::evidence`])
+    /// (`x0`: the stroke's first position).
     fn push(
         &mut self,
-        sample: [f64; 3],
+        sample: [f64; 4],
         x0: f64,
         windowing: &NakanoWindowing,
     ) -> Result<Option<(u64, [f64; FEATURES], f64)>, HapticsError> {
@@ -170,18 +174,19 @@ impl Edge {
         let Some(start) = self.pushed.checked_sub(len as u64) else {
             return Ok(None);
         };
-        let [x, z, f] = &mut self.samples;
+        let [x, z, f, path] = &mut self.samples;
         let travel_m = (x[x.len() - len] - x0).abs();
         if !windowing.is_decision_window(start, travel_m) {
             return Ok(None);
         }
         // The rings hold the stroke from the window's history on, as the offline windows read.
-        let (x, z, f) = (
+        let (x, z, f, path) = (
             &*x.make_contiguous(),
             &*z.make_contiguous(),
             &*f.make_contiguous(),
+            &*path.make_contiguous(),
         );
-        let span = windowing.window_span(x);
+        let span = windowing.window_span(path);
         let features =
             self.window
                 .features_of((self.pushed - span.len as u64) as usize, span.len, x, z, f)?;
@@ -273,6 +278,7 @@ impl LiveRecognizer {
                 .transpose()?,
             senses: Vec::new(),
             first_position_m: None,
+            played: PlayedPath::new(),
             current: None,
         })
     }
@@ -359,12 +365,13 @@ impl LiveRecognizer {
             });
         }
         let x0 = *self.first_position_m.get_or_insert(position_m);
+        let path_m = self.played.push(position_m);
         let friction_n = match &mut self.friction {
             Some(filter) => filter.push(position_m, friction_n),
             None => friction_n,
         };
         let window = match &mut self.edge {
-            Some(edge) => edge.push([position_m, height_m, friction_n], x0, &self.windowing)?,
+            Some(edge) => edge.push([position_m, height_m, friction_n, path_m], x0, &self.windowing)?,
             None => self
                 .stream
                 .push(position_m, height_m, friction_n)
@@ -381,7 +388,7 @@ impl LiveRecognizer {
         }
         if let (Some(v), Decider::Sequential { state, .. }) = (vibration_mps2, &mut self.decider) {
             for sense in &mut self.senses {
-                if let Some(w) = sense.push(position_m, v, x0)? {
+                if let Some(w) = sense.push(position_m, path_m, v, x0)? {
                     let step = state.push_window(w.probabilities, w.scale, w.share)?;
                     decided = Some(LiveDecision {
                         label: step.decided,
@@ -443,6 +450,7 @@ impl LiveRecognizer {
         }
         self.senses.iter_mut().for_each(VibrationSense::clear);
         self.first_position_m = None;
+        self.played.reset();
         if let Decider::Sequential { state, .. } = &mut self.decider {
             state.reset();
         }

@@ -35,8 +35,8 @@ pub use eval::{ConfusionMatrix, natural_cmp};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
 pub use features::{
-    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, WindowScaling, WindowSpan,
-    WindowlessCapture,
+    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, PlayedPath, TRAINING_WINDOW_S, TRAVEL_PLAY_M,
+    WindowScaling, WindowSpan, WindowlessCapture,
 };
 pub use fusion::{BehaviourData, ReliabilityFusion, argmax, fuse, fused_label};
 pub use knn::{FeatureScaling, Knn, KnnParams};

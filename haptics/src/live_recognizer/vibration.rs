@@ -15,10 +15,12 @@ use recognize::{FeatureSet, NakanoWindowing, RecognizerFile as Model, WindowClas
 
 use crate::error::HapticsError;
 
-/// The latest positions and vibration samples of a stroke, newest last, in fixed storage.
+/// The latest positions, paths through the play and vibration samples of a stroke, newest
+/// last, in fixed storage.
 #[derive(Debug, Clone)]
 struct Rings {
     position_m: Vec<f64>,
+    path_m: Vec<f64>,
     vibration_mps2: Vec<f64>,
     /// Where the next sample goes.
     head: usize,
@@ -30,6 +32,7 @@ impl Rings {
     fn new(room: usize) -> Self {
         Self {
             position_m: vec![0.0; room],
+            path_m: vec![0.0; room],
             vibration_mps2: vec![0.0; room],
             head: 0,
             pushed: 0,
@@ -40,8 +43,9 @@ impl Rings {
         self.position_m.len()
     }
 
-    fn push(&mut self, position_m: f64, vibration_mps2: f64) {
+    fn push(&mut self, position_m: f64, path_m: f64, vibration_mps2: f64) {
         self.position_m[self.head] = position_m;
+        self.path_m[self.head] = path_m;
         self.vibration_mps2[self.head] = vibration_mps2;
         self.head = (self.head + 1) % self.room();
         self.pushed += 1;
@@ -54,15 +58,15 @@ impl Rings {
         self.position_m[(self.head + room - 1 - back) % room]
     }
 
-    /// Copies the samples held, oldest first, into `position_m` and `vibration_mps2` (each
-    /// as long as the room); returns how many.
-    fn copy_into(&self, position_m: &mut [f64], vibration_mps2: &mut [f64]) -> usize {
+    /// Copies the paths and vibration samples held, oldest first, into `path_m` and
+    /// `vibration_mps2` (each as long as the room); returns how many.
+    fn copy_into(&self, path_m: &mut [f64], vibration_mps2: &mut [f64]) -> usize {
         let room = self.room();
         let held = (self.pushed.min(room as u64)) as usize;
         let first = (self.head + room - held) % room;
         for k in 0..held {
             let i = (first + k) % room;
-            position_m[k] = self.position_m[i];
+            path_m[k] = self.path_m[i];
             vibration_mps2[k] = self.vibration_mps2[i];
         }
         held
@@ -96,7 +100,7 @@ pub(super) struct VibrationSense {
     scratch: SpectrumScratch,
     rings: Rings,
     /// A window copied out of the rings.
-    window_position_m: Vec<f64>,
+    window_path_m: Vec<f64>,
     window_vibration_mps2: Vec<f64>,
     /// Its windows' weight relative to the Nakano recognizer's.
     factor: f64,
@@ -143,22 +147,24 @@ impl VibrationSense {
             classifier: Box::new(classifier),
             windowing,
             rings: Rings::new(room),
-            window_position_m: vec![0.0; room],
+            window_path_m: vec![0.0; room],
             window_vibration_mps2: vec![0.0; room],
             factor,
             probabilities: vec![0.0; classes],
         })
     }
 
-    /// Adds a sample (`x0`: the stroke's first position); returns the decision window it
-    /// completes, if any.
+    /// Adds a sample: its position, the stroke's path through the play to it
+    /// ([`recognize::PlayedPath`]) and its vibration (`x0`: the stroke's first position);
+    /// returns the decision window it completes, if any.
     pub(super) fn push(
         &mut self,
         position_m: f64,
+        path_m: f64,
         vibration_mps2: f64,
         x0: f64,
     ) -> Result<Option<SenseWindow<'_>>, HapticsError> {
-        self.rings.push(position_m, vibration_mps2);
+        self.rings.push(position_m, path_m, vibration_mps2);
         let len = self.windowing.window_samples;
         let Some(start) = self.rings.pushed.checked_sub(len as u64) else {
             return Ok(None);
@@ -169,13 +175,13 @@ impl VibrationSense {
         }
         let held = self
             .rings
-            .copy_into(&mut self.window_position_m, &mut self.window_vibration_mps2);
-        let span = self.windowing.window_span(&self.window_position_m[..held]);
+            .copy_into(&mut self.window_path_m, &mut self.window_vibration_mps2);
+        let span = self.windowing.window_span(&self.window_path_m[..held]);
         let r = held - span.len..held;
         let features = self.windowing.vibration_features(
             &self.plan,
             &self.window_vibration_mps2[r.clone()],
-            &self.window_position_m[r],
+            &self.window_path_m[r],
             self.classifier.cell_scale(),
             &mut self.scratch,
         )?;

@@ -25,6 +25,7 @@
 //!   (`recognize eval --sequential --fuse`).
 
 pub mod nakano;
+mod played_path;
 mod scaling;
 pub mod spectral;
 pub mod window_spectrum;
@@ -37,6 +38,7 @@ use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLU
 use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION_COLUMN};
 use window_spectrum::SPECTRUM_LEN;
 
+pub use played_path::{PlayedPath, TRAVEL_PLAY_M};
 pub use scaling::WindowScaling;
 pub use windowing::{
     DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TravelWindows, WindowSpan,

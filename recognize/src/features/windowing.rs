@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::FeatureSet;
 use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
+use super::played_path::PlayedPath;
 use super::spectral::{self, ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use super::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 use crate::{LabelledCapture, RecognizeError};
@@ -228,14 +229,16 @@ impl NakanoWindowing {
         Ok(windowing)
     }
 
-    /// The window that ends with the last of `position_m` (the stroke's positions from its
-    /// first sample, or at least the window's): its samples, [`NakanoWindowing::window_samples`],
-    /// or over travel as many as span [`TravelWindows::window_m`] of path length back from its
-    /// end (a stroke that turns back counts both ways), at least 2 and at most
-    /// [`NakanoWindowing::max_window_samples`] or the samples there are; and the path length
-    /// they span (for a window of fixed length, over its last samples or those there are).
-    pub fn window_span(&self, position_m: &[f64]) -> WindowSpan {
-        let n = position_m.len();
+    /// The window that ends with the last of `path_m` (the stroke's path through the play,
+    /// [`PlayedPath`], from its first sample, or at least the window's): its samples,
+    /// [`NakanoWindowing::window_samples`], or over travel as many as span
+    /// [`TravelWindows::window_m`] of that path back from its end, at least 2 and at most
+    /// [`NakanoWindowing::max_window_samples`] or the samples there are; and the path they span
+    /// (for a window of fixed length, over its last samples or those there are). Read through
+    /// the play, a tool that trembles at rest spans nothing, and a stroke that turns back counts
+    /// both ways less the play.
+    pub fn window_span(&self, path_m: &[f64]) -> WindowSpan {
+        let n = path_m.len();
         let (most, window_m) = match &self.travel {
             Some(travel) => (self.max_window_samples().min(n), travel.window_m),
             None => (self.window_samples.min(n), f64::INFINITY),
@@ -243,7 +246,7 @@ impl NakanoWindowing {
         let mut len = 1;
         let mut travel_m = 0.0;
         while len < most && (len < 2 || travel_m < window_m) {
-            travel_m += (position_m[n - len] - position_m[n - len - 1]).abs();
+            travel_m += (path_m[n - len] - path_m[n - len - 1]).abs();
             len += 1;
         }
         if self.travel.is_none() {
@@ -627,6 +630,7 @@ pub(crate) fn windows(
     let Some(&x0) = x.first() else {
         return Ok(Vec::new());
     };
+    let path = PlayedPath::series(x);
     let margin = windowing.filters.lookahead_samples();
     let len = windowing.window_samples;
     if windowing.mirrored_end {
@@ -641,7 +645,7 @@ pub(crate) fn windows(
             .filter(|&s| windowing.is_decision_window(s as u64, (x[s] - x0).abs()))
             .map(|s| {
                 let end = s + len;
-                let span = windowing.window_span(&x[..end]);
+                let span = windowing.window_span(&path[..end]);
                 let start = end - span.len;
                 let known = edge.history_start(start)..end;
                 let features = edge
@@ -670,7 +674,7 @@ pub(crate) fn windows(
         .map(|s| {
             Ok((
                 s,
-                windowing.window_span(&x[..s + len]),
+                windowing.window_span(&path[..s + len]),
                 signals
                     .features(s + pad, len, &windowing.filters)
                     .map_err(nakano)?,
@@ -726,7 +730,8 @@ pub(crate) fn window_vectors(
             .capture
             .column(nakano::POSITION_COLUMN)
             .map_err(|e| spectral(RecognizeError::NakanoColumn(e)))?;
-        return vibration_vectors(nakano, windowing, axes, position_m, cell_scale).map_err(spectral);
+        let path_m = PlayedPath::series(position_m);
+        return vibration_vectors(nakano, windowing, axes, &path_m, cell_scale).map_err(spectral);
     }
     let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
@@ -749,13 +754,13 @@ pub(crate) fn window_vectors(
 /// [`FeatureSet::Vibration`]'s vectors of Nakano's windows: each window's own samples (the
 /// `len` that end where the window ends, so that a window over travel reads the same stretch
 /// as its Nakano features), all before its decision. Over travel, the bands are too
-/// ([`WindowSpectrumPlan::features_over_travel`]), at the window's path length over its
-/// duration.
+/// ([`WindowSpectrumPlan::features_over_travel`]), at the window's path (`path_m`, the
+/// capture's [`PlayedPath`]) over its duration.
 fn vibration_vectors(
     nakano: Vec<(usize, WindowSpan, [f64; FEATURES])>,
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
-    position_m: &[f64],
+    path_m: &[f64],
     cell_scale: CellScale,
 ) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
@@ -776,7 +781,7 @@ fn vibration_vectors(
                 Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
             };
             let spectrum =
-                windowing.vibration_features(&plan, &signal, &position_m[r], cell_scale, &mut scratch)?;
+                windowing.vibration_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch)?;
             Ok((s, span, spectrum.to_vec()))
         })
         .collect()
@@ -785,21 +790,21 @@ fn vibration_vectors(
 impl NakanoWindowing {
     /// [`FeatureSet::Vibration`]'s features of one window: the spectrum of `signal` (the
     /// window's vibration samples, a single axis or the axes' magnitude), over travel when the
-    /// windows are ([`NakanoWindowing::travel_reference_speed_mps`], at the path speed of
-    /// `position_m`, the same samples' positions), by `plan` (made for
+    /// windows are ([`NakanoWindowing::travel_reference_speed_mps`], at the speed along
+    /// `path_m`, the same samples' [`PlayedPath`]), by `plan` (made for
     /// [`NakanoWindowing::max_window_samples`] at this rate) in `scratch`. The offline vectors
     /// and the live recognizer both read windows through it, so the two agree to the bit.
     pub fn vibration_features(
         &self,
         plan: &WindowSpectrumPlan,
         signal: &[f64],
-        position_m: &[f64],
+        path_m: &[f64],
         cell_scale: CellScale,
         scratch: &mut SpectrumScratch,
     ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
         match self.travel_reference_speed_mps() {
             Some(reference) => {
-                let speed_mps = path_speed_mps(position_m, self.rate_hz);
+                let speed_mps = path_speed_mps(path_m, self.rate_hz);
                 plan.features_over_travel_with(signal, speed_mps, reference, cell_scale, scratch)
             }
             None => plan.features_with(signal, cell_scale, scratch),
@@ -807,14 +812,14 @@ impl NakanoWindowing {
     }
 }
 
-/// Path length of `position_m` over its duration at `rate_hz`, m/s (a stroke that turns back
-/// counts both ways, as [`NakanoWindowing::window_span`] does); 0 for fewer than two samples.
-fn path_speed_mps(position_m: &[f64], rate_hz: f64) -> f64 {
-    if position_m.len() < 2 {
+/// The path along `path_m` (a [`PlayedPath`]'s) over its duration at `rate_hz`, m/s; 0 for
+/// fewer than two samples.
+fn path_speed_mps(path_m: &[f64], rate_hz: f64) -> f64 {
+    if path_m.len() < 2 {
         return 0.0;
     }
-    let path_m: f64 = position_m.windows(2).map(|p| (p[1] - p[0]).abs()).sum();
-    path_m * rate_hz / (position_m.len() - 1) as f64
+    let travel_m: f64 = path_m.windows(2).map(|p| (p[1] - p[0]).abs()).sum();
+    travel_m * rate_hz / (path_m.len() - 1) as f64
 }
 
 /// The accelerometer columns a window's histogram is computed from.
@@ -874,7 +879,7 @@ mod tests {
             assert!(span >= 1.25e-3 - 1e-12 || got == 625, "{step_m}: {span}");
         }
         // Slower than 2 mm/s, capped; at the stroke's start, all there is; a stroke that turns
-        // back counts both ways; a still tip takes the longest window.
+        // back counts both ways, less the play; a still tip takes the longest window.
         assert_eq!(w.window_span(&steady(1e-6, 2000)).len, 625);
         assert_eq!(w.window_span(&steady(5e-6, 100)).len, 100);
         let there_and_back: Vec<f64> = (0..400)
@@ -886,7 +891,10 @@ mod tests {
                 }
             })
             .collect();
-        assert!(w.window_span(&there_and_back).len.abs_diff(251) <= 1);
+        // Back: 0.8 mm past the play's 0.2 mm (200 samples); out: the other 0.45 mm.
+        let span = w.window_span(&PlayedPath::series(&there_and_back));
+        assert!(span.len.abs_diff(291) <= 1, "{span:?}");
+        assert!(span.travel_m >= 1.25e-3 - 1e-12, "{span:?}");
         assert_eq!(w.window_span(&[0.0; 1000]).len, 625);
         assert_eq!(w.window_span(&[0.0]).len, 1);
         // Windows of fixed length are what they were.
@@ -915,6 +923,15 @@ mod tests {
             evidence(1e-6)
         );
         assert_eq!(w.evidence(w.window_span(&[0.0; 1000])), 0.0);
+        // A hand that trembles 30 µm at 9 Hz, read by a 10 µm encoder: its samples' own path
+        // would make a window of rubbing; through the play it is at rest.
+        let trembling: Vec<f64> = (0..1000)
+            .map(|k| (3.0 * (2.0 * std::f64::consts::PI * 9.0 * k as f64 / 1e3).sin()).round() * 1e-5)
+            .collect();
+        // 120 µm a cycle: 0.68 mm over 625 samples, 54 % of the travel, of the floor's 0.4.
+        let raw = w.evidence(w.window_span(&trembling));
+        assert!((raw - 0.4 * 0.675 / 1.25).abs() < 0.02, "{raw}");
+        assert_eq!(w.evidence(w.window_span(&PlayedPath::series(&trembling))), 0.0);
         assert!(w.short_of_travel(span) && !w.short_of_travel(w.window_span(&steady(2.5e-6, 2000))));
         assert!((w.slowest_speed_mps().expect("over travel") - 0.002).abs() < 1e-12);
         // At the stroke's start a window short of its travel but not of samples counts whole.
