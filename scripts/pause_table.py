@@ -10,10 +10,15 @@ as paused, and prints one Markdown row each: named decisions right, the calibrat
 mean time to the stable right surface and the slowest surface's mean, strokes not ending named
 right, and flips of the named surface per second.
 
-    python3 scripts/pause_table.py [--palpus target/release/palpus] [--at-s 3] [--pause-s 2]
+A hand that holds a tool still still trembles: the last rows pause again with the resting tool's
+tangential position swaying by `--tremor-um` micrometres at 9 Hz around where it stopped, read by
+the capture's encoder (its `sensor.encoder_quantum_m`); everything else is held as without it.
+
+    python3 scripts/pause_table.py [--palpus target/release/palpus] [--at-s 3] [--pause-s 2] [--tremor-um 30]
 """
 
 import json
+import math
 import tempfile
 from pathlib import Path
 
@@ -21,8 +26,12 @@ from palpus_cli import palpus, parser as cli_parser
 from speed_table import OVER_TRAVEL
 
 
-def paused(src, dst, at_s, pause_s):
-    """Writes `src` (a capture) to `dst` with the tool at rest for `pause_s` from `at_s`."""
+TREMOR_HZ = 9.0
+
+
+def paused(src, dst, at_s, pause_s, tremor_m=0.0):
+    """Writes `src` (a capture) to `dst` with the tool at rest for `pause_s` from `at_s`, its
+    tangential position swaying by `tremor_m` at `TREMOR_HZ` through the capture's encoder."""
     lines = Path(src).read_text().splitlines()
     header = [l for l in lines if l.startswith("#")]
     body = [l for l in lines if not l.startswith("#")]
@@ -31,6 +40,9 @@ def paused(src, dst, at_s, pause_s):
     at = next(i for i, r in enumerate(rows) if float(r[0]) >= at_s)
     time_digits = max(len(r[0].split(".")[1]) if "." in r[0] else 0 for r in rows)
     t = lambda v: f"{v:.{time_digits}f}"
+    quantum = float(next(w for l in header for w in l.split()
+                         if w.startswith("sensor.encoder_quantum_m=")).split("=")[1])
+    x = names.index("tangential_position_m")
     still = []
     for k in range(1, round(pause_s * rate_hz) + 1):
         r = list(rows[at])
@@ -38,6 +50,9 @@ def paused(src, dst, at_s, pause_s):
         for i, n in enumerate(names):
             if n.endswith("_velocity_mps"):
                 r[i] = "0.0"
+        if tremor_m > 0.0:
+            sway = tremor_m * math.sin(2.0 * math.pi * TREMOR_HZ * k / rate_hz)
+            r[x] = repr(round((float(rows[at][x]) + sway) / quantum) * quantum)
         still.append(r)
     later = [[t(float(r[0]) + pause_s), *r[1:]] for r in rows[at + 1:]]
     out = header + [body[0]] + [",".join(r) for r in rows[: at + 1] + still + later]
@@ -48,6 +63,7 @@ def main():
     parser = cli_parser(__doc__)
     parser.add_argument("--at-s", type=float, default=3.0)
     parser.add_argument("--pause-s", type=float, default=2.0)
+    parser.add_argument("--tremor-um", type=float, default=30.0)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
@@ -55,11 +71,14 @@ def main():
         captures = sorted((root / "protocol" / "nakano").glob("*.csv"))
         train = [str(p) for p in captures if p.stem.endswith("run0")]
         test = [p for p in captures if not p.stem.endswith("run0")]
-        (root / "paused").mkdir()
-        stopped = []
-        for p in test:
-            paused(p, root / "paused" / p.name, args.at_s, args.pause_s)
-            stopped.append(str(root / "paused" / p.name))
+        pause = f"at rest {args.pause_s:g} s from {args.at_s:g} s"
+        variants = [("as rubbed", [str(p) for p in test])]
+        for label, tremor_m in [(pause, 0.0), (f"{pause}, {args.tremor_um:g} µm tremor", 1e-6 * args.tremor_um)]:
+            out = root / f"paused_{len(variants)}"
+            out.mkdir()
+            for p in test:
+                paused(p, out / p.name, args.at_s, args.pause_s, tremor_m)
+            variants.append((label, [str(out / p.name) for p in test]))
         print("| windows | strokes | named right | calibration error | stable right (mean) | slowest surface "
               "| strokes not ending right | flips/s |")
         print("|---|---|---|---|---|---|---|---|")
@@ -67,8 +86,7 @@ def main():
             model = str(root / f"{name}.json")
             palpus(args.palpus, "recognize", "train", *train, "--method", "svm", "--features", "nakano",
                    "--window-s", "0.25", "--mirrored-end", *extra, "--out", model)
-            for strokes, files in [("as rubbed", [str(p) for p in test]),
-                                   (f"at rest {args.pause_s:g} s from {args.at_s:g} s", stopped)]:
+            for strokes, files in variants:
                 e = json.loads(palpus(args.palpus, "recognize", "eval", model, *files,
                                       "--sequential", "0.9", "--json"))
                 s = e["rows"][0]
