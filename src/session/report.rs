@@ -375,11 +375,15 @@ pub fn write_summary(dir: &Path, report: &SessionReport) -> Result<(), ReportErr
 
 use std::io::Write;
 
-/// What a window spans, in words: `window_s`, or `window_m` of travel, and the friction's
-/// filter over travel if any.
+/// What a window spans, in words: `window_s`, or `window_m` of travel (read through the play,
+/// [`recognize::PlayedPath`]), and the friction's filter over travel if any.
 pub fn windows_in_words(window_s: f64, window_m: Option<f64>, friction_cutoff_m: Option<f64>) -> String {
     let windows = match window_m {
-        Some(m) => format!("windows of {:.2} mm of travel", m * 1e3),
+        Some(m) => format!(
+            "windows of {:.2} mm of travel read through a {:.2} mm play",
+            m * 1e3,
+            recognize::TRAVEL_PLAY_M * 1e3
+        ),
         None => format!("windows of {window_s} s"),
     };
     match friction_cutoff_m {
