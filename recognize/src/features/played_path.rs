@@ -5,9 +5,11 @@
 //! sample by sample, the path of a tool at rest grows by tens of micrometres a tremor cycle, so
 //! a rest reads as slow rubbing and a slow stroke as a faster one. Through the play (the
 //! backlash, or Krasnosel'skii–Pokrovskii "play", operator) a sway narrower than the play adds
-//! nothing, a stroke in one direction adds exactly its displacement once it has moved half the
-//! play, and each turn back costs the play. The play is [`WAVE_SMOOTHING_M`], the span the
-//! roughness features smooth over: a tool that stays within it reads one spot of the surface.
+//! at most its reach once (a stroke leaves the point half the play behind the tool, so a sway
+//! onward drags it that far) and then nothing; a stroke in one direction adds exactly its
+//! displacement once it has moved half the play; each turn back costs the play. The play is
+//! [`WAVE_SMOOTHING_M`], the span the roughness features smooth over: a tool that stays within
+//! it reads one spot of the surface.
 //!
 //! Hand-written: it is a few lines of state, and the windows offline and the live recognizer
 //! must run the same ones to agree to the bit.
