@@ -44,7 +44,7 @@ use std::collections::VecDeque;
 use recognize::nakano::{EdgeWindow, TravelFriction};
 use recognize::{
     FEATURES, FeatureSet, NakanoStream, NakanoWindowing, PlayedPath, RecognizerBody, RecognizerFile as Model,
-    SequentialParams, SequentialState, Som, WindowClassifier, sequential::DEFAULT_MEMORY_S,
+    SequentialParams, SequentialState, Som, WindowClassifier, WindowSpan, sequential::DEFAULT_MEMORY_S,
 };
 use vibration::VibrationSense;
 
@@ -92,6 +92,9 @@ pub struct LiveRecognizer {
     windowing: NakanoWindowing,
     classes: Vec<String>,
     stream: NakanoStream,
+    /// Without a mirrored end, the stroke's latest paths through the play, enough for the
+    /// windows the stream completes ([`StreamPaths`]).
+    stream_paths: StreamPaths,
     /// With a mirrored end, the stroke's latest samples, which replace the stream.
     edge: Option<Edge>,
     /// For a model whose windows read friction over travel, that filter, run from the
@@ -103,6 +106,54 @@ pub struct LiveRecognizer {
     /// The stroke's path through the play, which windows over travel span.
     played: PlayedPath,
     current: Option<LiveDecision>,
+}
+
+/// The paths through the play ([`PlayedPath`]) of a stroke's latest samples, in fixed storage:
+/// as many as a window and the filters' lookahead after it, so that the window the stream
+/// completes is still held when it is decided.
+#[derive(Debug, Clone)]
+struct StreamPaths {
+    ring: Vec<f64>,
+    /// Samples pushed since the stroke began.
+    pushed: u64,
+}
+
+impl StreamPaths {
+    fn new(windowing: &NakanoWindowing) -> Self {
+        Self {
+            ring: vec![0.0; windowing.window_samples + windowing.lookahead_samples() + 1],
+            pushed: 0,
+        }
+    }
+
+    fn push(&mut self, path_m: f64) {
+        let room = self.ring.len() as u64;
+        self.ring[(self.pushed % room) as usize] = path_m;
+        self.pushed += 1;
+    }
+
+    /// The evidence ([`NakanoWindowing::evidence`]) of the stream's window (of fixed length)
+    /// starting at sample `start`, as the offline windows weigh it. The path never decreases,
+    /// so the window's path is its last value less its first: exactly 0 where the offline sum
+    /// of its steps is, and the share of a window of fixed length asks no more than that.
+    fn evidence(&self, start: u64, windowing: &NakanoWindowing) -> f64 {
+        let (room, len) = (self.ring.len() as u64, windowing.window_samples as u64);
+        let held = start + len <= self.pushed && self.pushed - start <= room;
+        debug_assert!(held, "window {start} not held ({} pushed)", self.pushed);
+        if !held {
+            return 1.0;
+        }
+        let at = |k: u64| self.ring[(k % room) as usize];
+        let span = WindowSpan {
+            len: windowing.window_samples,
+            travel_m: at(start + len - 1) - at(start),
+        };
+        windowing.evidence(span)
+    }
+
+    fn clear(&mut self) {
+        self.pushed = 0;
+    }
 }
 
 /// A stroke's latest samples, and the window computed at its edge from them.
@@ -260,6 +311,7 @@ impl LiveRecognizer {
             decider,
             windowing,
             classes: model.classes.clone(),
+            stream_paths: StreamPaths::new(&windowing),
             stream: {
                 let stream = NakanoStream::new(windowing.filters, windowing.window_samples)?;
                 if windowing.mirrored_start {
@@ -372,14 +424,25 @@ impl LiveRecognizer {
         };
         let window = match &mut self.edge {
             Some(edge) => edge.push([position_m, height_m, friction_n, path_m], x0, &self.windowing)?,
-            None => self
-                .stream
-                .push(position_m, height_m, friction_n)
-                .filter(|w| {
-                    let travel_m = (w.start_position_m - x0).abs();
-                    self.windowing.is_decision_window(w.start, travel_m)
-                })
-                .map(|w| (w.start, w.features, 1.0)),
+            None => {
+                self.stream_paths.push(path_m);
+                self.stream
+                    .push(position_m, height_m, friction_n)
+                    .filter(|w| {
+                        let travel_m = (w.start_position_m - x0).abs();
+                        self.windowing.is_decision_window(w.start, travel_m)
+                    })
+                    .map(|w| {
+                        // A SOM decides each window alone, and weighs none.
+                        let evidence = match self.decider {
+                            Decider::Som { .. } => 1.0,
+                            Decider::Sequential { .. } => {
+                                self.stream_paths.evidence(w.start, &self.windowing)
+                            }
+                        };
+                        (w.start, w.features, evidence)
+                    })
+            }
         };
         let mut decided = None;
         if let Some((window_start, features, evidence_scale)) = window {
@@ -442,6 +505,7 @@ impl LiveRecognizer {
     /// A new stroke from the next sample, the last decision kept.
     fn restart_stroke(&mut self) {
         self.stream.reset();
+        self.stream_paths.clear();
         if let Some(edge) = &mut self.edge {
             edge.clear();
         }

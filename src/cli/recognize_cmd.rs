@@ -586,15 +586,22 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         }
     }
     if e.short_of_travel > 0 {
-        let slowest = model
-            .sequential_windowing()
-            .and_then(|w| w.slowest_speed_mps())
-            .map_or_else(String::new, |v| format!(" ({:.1} mm/s)", v * 1e3));
-        println!(
-            "{} of {} windows were rubbed slower than the slowest speed the windows read{slowest}: \
-             each counted for the share of its travel it covered, a tool at rest for nothing",
-            e.short_of_travel, e.steps
-        );
+        match model.sequential_windowing().and_then(|w| w.slowest_speed_mps()) {
+            Some(v) => println!(
+                "{} of {} windows were rubbed slower than the slowest speed the windows read ({:.1} mm/s): \
+                 each counted for the share of its travel it covered, a tool at rest for nothing",
+                e.short_of_travel,
+                e.steps,
+                v * 1e3
+            ),
+            None => println!(
+                "{} of {} windows held the tool at rest (it never left the {:.1} mm play): they counted for \
+                 nothing",
+                e.short_of_travel,
+                e.steps,
+                recognize::TRAVEL_PLAY_M * 1e3
+            ),
+        }
     }
     if let Some(p) = &plot {
         println!(

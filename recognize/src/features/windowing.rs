@@ -256,20 +256,24 @@ impl NakanoWindowing {
     }
 
     /// The evidence a window of `span` carries, relative to a window of the nominal length:
-    /// [`NakanoWindowing::evidence_scale`] of its length, and over travel, for a window that
-    /// takes the most samples a window takes and still spans less than its travel, the share
-    /// of its travel it spans. Such a window was rubbed slower than the slowest speed the
-    /// windows read: the features of a tool at rest read one spot of a surface, not its
-    /// texture, and none of it counts; a tool crawling below that speed counts for the travel
-    /// it covered.
+    /// [`NakanoWindowing::evidence_scale`] of its length times
+    /// [`NakanoWindowing::travel_share`]. The features of a tool at rest read one spot of a
+    /// surface, not its texture, and none of it counts, whatever the windows; over travel, a
+    /// window rubbed slower than the slowest speed the windows read counts for the travel it
+    /// covered.
     pub fn evidence(&self, span: WindowSpan) -> f64 {
         self.evidence_scale(span.len) * self.travel_share(span)
     }
 
-    /// The share of its travel a window of `span` covers: below 1 only over travel, for a
-    /// window that takes the most samples a window takes and still spans less than its travel
-    /// (rubbed slower than [`NakanoWindowing::slowest_speed_mps`]); 0 for a tool at rest.
+    /// The share of its travel a window of `span` covers: 0 for a window during which the tool
+    /// never left the play ([`crate::PlayedPath`]), which read one spot of the surface, of fixed
+    /// length or over travel; otherwise below 1 only over travel, for a window that takes the
+    /// most samples a window takes and still spans less than its travel (rubbed slower than
+    /// [`NakanoWindowing::slowest_speed_mps`]).
     pub fn travel_share(&self, span: WindowSpan) -> f64 {
+        if span.len >= 2 && span.travel_m == 0.0 {
+            return 0.0;
+        }
         match &self.travel {
             Some(t) if span.len >= self.max_window_samples() && span.travel_m < t.window_m => {
                 span.travel_m / t.window_m
@@ -278,7 +282,8 @@ impl NakanoWindowing {
         }
     }
 
-    /// Whether a window of `span` covers less than its travel ([`NakanoWindowing::travel_share`]).
+    /// Whether a window of `span` covers less than its travel, or none
+    /// ([`NakanoWindowing::travel_share`]).
     pub fn short_of_travel(&self, span: WindowSpan) -> bool {
         self.travel_share(span) < 1.0
     }
@@ -903,7 +908,8 @@ mod tests {
     }
 
     /// Down to the slowest speed a window's evidence is its length's; below it, at the most
-    /// samples, the share of its travel it covers; at rest, none. Fixed windows count whole.
+    /// samples, the share of its travel it covers; at rest, none. Fixed windows count whole
+    /// unless the tool never left the play.
     #[test]
     fn a_window_short_of_its_travel_counts_for_the_travel_it_covers() {
         let w = over_travel();
@@ -938,9 +944,13 @@ mod tests {
         let start = w.window_span(&steady(5e-6, 100));
         assert_eq!(w.evidence(start), w.evidence_scale(100));
         assert!(!w.short_of_travel(start));
+        // A window of fixed length counts whole however slowly it was rubbed, and for nothing if
+        // the tool never left the play.
         let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
-        assert_eq!(fixed.evidence(fixed.window_span(&[0.0; 1000])), 1.0);
-        assert!(!fixed.short_of_travel(fixed.window_span(&[0.0; 1000])));
+        assert_eq!(fixed.evidence(fixed.window_span(&steady(0.1e-6, 2000))), 1.0);
+        assert!(!fixed.short_of_travel(fixed.window_span(&steady(0.1e-6, 2000))));
+        assert_eq!(fixed.evidence(fixed.window_span(&[0.0; 1000])), 0.0);
+        assert!(fixed.short_of_travel(fixed.window_span(&[0.0; 1000])));
         assert_eq!(fixed.slowest_speed_mps(), None);
         let fixed_span = fixed.window_span(&steady(2e-6, 2000));
         assert_eq!(fixed_span.len, 250);

@@ -405,9 +405,11 @@ pub(crate) fn training_windows(
     training_windows_left_out(captures, classes, windowing, features, cell_scale).map(|(data, ..)| data)
 }
 
-/// A training window over travel that covers less than this share of its travel is left out:
-/// it holds mostly a tool at rest, one spot of the surface rather than its texture. One that
-/// covers more reads the texture, if less of it than the others.
+/// A training window that covers less than this share of its travel
+/// ([`NakanoWindowing::travel_share`]) is left out: over travel it holds mostly a tool at rest,
+/// one spot of the surface rather than its texture, and one of fixed length that covers none
+/// held the tool within the play throughout. One that covers more reads the texture, if less of
+/// it than the others.
 pub const LEAST_TRAINING_TRAVEL_SHARE: f64 = 0.5;
 
 /// [`training_windows`], and how many windows were left out for covering less than
@@ -487,18 +489,22 @@ fn all_short_of_travel(
     training: &NakanoWindowing,
     left_out: usize,
 ) -> WindowlessCapture {
-    let slowest = training
-        .slowest_speed_mps()
-        .map(|v| format!(" ({:.1} mm/s)", 1e3 * v))
-        .unwrap_or_default();
+    let why = match training.slowest_speed_mps() {
+        Some(v) => format!(
+            "each covered less than {:.0} % of its travel, so its tool rested or moved slower than the \
+             slowest speed the windows read ({:.1} mm/s); if the rig rubs that slowly, a lower \
+             --slowest-speed-mps reads it",
+            100.0 * LEAST_TRAINING_TRAVEL_SHARE,
+            1e3 * v
+        ),
+        None => format!(
+            "in each the tool never left the {:.1} mm play, so it rested",
+            1e3 * crate::TRAVEL_PLAY_M
+        ),
+    };
     WindowlessCapture {
         path: c.reference.path.clone(),
-        reason: format!(
-            "gave {left_out} training windows, all left out: each covered less than {:.0} % of its travel, \
-             so its tool rested or moved slower than the slowest speed the windows read{slowest}; if the rig \
-             rubs that slowly, a lower --slowest-speed-mps reads it",
-            100.0 * LEAST_TRAINING_TRAVEL_SHARE
-        ),
+        reason: format!("gave {left_out} training windows, all left out: {why}"),
     }
 }
 

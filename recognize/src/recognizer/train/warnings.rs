@@ -1,13 +1,14 @@
 //! Warnings about the training data, found before training: a class with too few training
-//! vectors, features that are the same in every vector, windows over travel left out for a
-//! tool at rest. Training still runs; the library returns them as data
-//! ([`TrainSettings::data_warnings`]) and the CLI prints them.
+//! vectors, features that are the same in every vector, windows left out for a tool at rest.
+//! Training still runs; the library returns them as data ([`TrainSettings::data_warnings`]) and
+//! the CLI prints them.
 
 use super::{
     CV_FOLDS, LEAST_TRAINING_TRAVEL_SHARE, Method, TrainSettings, histograms_by_behaviour,
     training_windows_left_out,
 };
 use crate::RecognizeError;
+use crate::TRAVEL_PLAY_M;
 use crate::features::FeatureSet;
 use crate::recognizer::LabelledCapture;
 use crate::recognizer::labelled::class_list;
@@ -46,15 +47,16 @@ pub enum TrainingWarning {
         /// Training vectors of the classifier.
         vectors: usize,
     },
-    /// Training windows over travel left out for covering less than
-    /// [`LEAST_TRAINING_TRAVEL_SHARE`] of their travel: the tool rested or crawled below the
-    /// slowest speed the windows read.
+    /// Training windows left out for covering less than [`LEAST_TRAINING_TRAVEL_SHARE`] of
+    /// their travel: the tool rested, or over travel crawled below the slowest speed the
+    /// windows read.
     ShortOfTravel {
         /// Windows left out, and windows in all.
         left_out: usize,
         of: usize,
-        /// The slowest speed the windows read, m/s.
-        slowest_speed_mps: f64,
+        /// Over travel, the slowest speed the windows read, m/s; `None` for windows of fixed
+        /// length, which leave out only a tool at rest.
+        slowest_speed_mps: Option<f64>,
     },
 }
 
@@ -102,12 +104,21 @@ impl std::fmt::Display for TrainingWarning {
             Self::ShortOfTravel {
                 left_out,
                 of,
-                slowest_speed_mps,
+                slowest_speed_mps: Some(slowest_speed_mps),
             } => write!(
                 f,
                 "{left_out} of {of} training windows were left out: each covered less than {:.0} % of its travel, rubbed well below the slowest speed the windows read ({:.1} mm/s), so it holds mostly the tool at rest; if the rig rubs that slowly, a lower --slowest-speed-mps reads it",
                 100.0 * LEAST_TRAINING_TRAVEL_SHARE,
                 1e3 * slowest_speed_mps
+            ),
+            Self::ShortOfTravel {
+                left_out,
+                of,
+                slowest_speed_mps: None,
+            } => write!(
+                f,
+                "{left_out} of {of} training windows were left out: in each the tool never left the {:.1} mm play, so it holds the tool at rest",
+                1e3 * TRAVEL_PLAY_M
             ),
         }
     }
@@ -171,13 +182,11 @@ impl TrainSettings {
                     training_windows_left_out(captures, &classes, &windowing, windowed, self.cell_scale)?;
                 let x: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
                 check(None, &x, &y);
-                if let (true, Some(slowest_speed_mps)) =
-                    (left_out > 0, windowing.training().slowest_speed_mps())
-                {
+                if left_out > 0 {
                     warnings.push(TrainingWarning::ShortOfTravel {
                         left_out,
                         of,
-                        slowest_speed_mps,
+                        slowest_speed_mps: windowing.training().slowest_speed_mps(),
                     });
                 }
             }
