@@ -690,26 +690,7 @@ fn a_tool_at_rest_mid_stroke_leaves_the_posterior_as_it_was_live_as_offline() {
         let steps = offline_steps(&knn, c, params);
         // The pause spans samples 3000 to 5000: the windows that end from 625 samples into it
         // hold the tool at rest alone.
-        let rest: Vec<&SequentialStep> = steps
-            .iter()
-            .filter(|s| (3625..=5000).contains(&s.0))
-            .map(|s| &s.2)
-            .collect();
-        let before = steps
-            .iter()
-            .rev()
-            .find(|s| s.0 < 3625)
-            .map(|s| s.2)
-            .expect("windows before");
-        for step in &rest {
-            assert_eq!(
-                (step.best, step.probability, step.decided),
-                (before.best, before.probability, before.decided),
-                "{}",
-                c.reference.path.display()
-            );
-        }
-        at_rest += rest.len();
+        at_rest += posterior_stands_at_rest(&steps, |at| (3625..=5000).contains(&at), c);
     }
     assert!(at_rest >= 14 * 13, "{at_rest}");
     // The evaluation says how many windows were short of their travel: the pauses'.
@@ -725,6 +706,28 @@ fn a_tool_at_rest_mid_stroke_leaves_the_posterior_as_it_was_live_as_offline() {
     let stopped = short(paused.iter().flat_map(|r| &r[1..]).collect());
     eprintln!("windows short of their travel: {stopped} paused, {rubbed} as rubbed");
     assert!(stopped >= at_rest && rubbed < at_rest / 10, "{stopped}, {rubbed}");
+}
+
+/// Checks that each of `steps` (of capture `c`) decided at a sample `at_rest` says, leaves the
+/// most probable surface, its posterior and the surface named as the last step before them left
+/// them; returns how many there were.
+fn posterior_stands_at_rest(
+    steps: &[OfflineStep],
+    at_rest: impl Fn(usize) -> bool,
+    c: &LabelledCapture,
+) -> usize {
+    let first = steps.iter().position(|s| at_rest(s.0)).expect("windows at rest");
+    let before = &steps[first.checked_sub(1).expect("windows before")].2;
+    let rest: Vec<&SequentialStep> = steps.iter().filter(|s| at_rest(s.0)).map(|s| &s.2).collect();
+    for step in &rest {
+        assert_eq!(
+            (step.best, step.probability, step.decided),
+            (before.best, before.probability, before.decided),
+            "{}",
+            c.reference.path.display()
+        );
+    }
+    rest.len()
 }
 
 /// Windows of fixed time know no travel, but a window during which the tool never left the play
@@ -758,26 +761,8 @@ fn windows_of_fixed_time_at_rest_leave_the_posterior_as_it_was_live_as_offline()
             // The pause spans samples 3000 to 5000; a window of 250 samples from 3100 on holds
             // the tool alone at rest.
             let window = |at: usize| at + 1 - 250 - windowing.lookahead_samples();
-            let rest: Vec<&SequentialStep> = offline
-                .iter()
-                .filter(|s| window(s.0) >= 3100 && window(s.0) + 250 <= 5001)
-                .map(|s| &s.2)
-                .collect();
-            let before = offline
-                .iter()
-                .rev()
-                .find(|s| window(s.0) < 3100)
-                .map(|s| s.2)
-                .expect("windows before");
-            for step in &rest {
-                assert_eq!(
-                    (step.best, step.probability, step.decided),
-                    (before.best, before.probability, before.decided),
-                    "{}",
-                    c.reference.path.display()
-                );
-            }
-            at_rest += rest.len();
+            at_rest +=
+                posterior_stands_at_rest(&offline, |at| window(at) >= 3100 && window(at) + 250 <= 5001, c);
         }
         assert!(at_rest >= 14 * 15, "{at_rest}");
     }
