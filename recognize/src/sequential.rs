@@ -138,6 +138,22 @@ impl SequentialParams {
         self.smallest_share
     }
 
+    /// These settings through [`SequentialParamsBuilder::build`]'s checks again: settings read
+    /// back from a file were never built.
+    fn checked(self) -> Result<Self, RecognizeError> {
+        SequentialParamsBuilder {
+            threshold: self.threshold,
+            release: Some(self.release),
+            weight: self.weight,
+            floor: self.floor,
+            memory: self.memory,
+            smallest_share: self.smallest_share,
+            change_test: self.change_log_odds.is_some(),
+            change_log_odds: self.change_log_odds,
+        }
+        .build()
+    }
+
     /// Windows the memory can hold: `memory / smallest_share`, rounded up.
     pub fn capacity(&self) -> usize {
         (self.memory as f64 / self.smallest_share).ceil() as usize
@@ -309,18 +325,7 @@ impl SequentialState {
             });
         }
         // Settings read back from a file did not pass the builder's checks.
-        if !(params.smallest_share > 0.0
-            && params.smallest_share <= 1.0
-            && params.memory >= 1
-            && params.memory as f64 / params.smallest_share <= MAX_WINDOWS)
-        {
-            return Err(RecognizeError::Parameter {
-                of: "sequential decision parameter",
-                name: "smallest_share",
-                value: params.smallest_share,
-                reason: "must be in (0, 1], the memory holding at most 10^7 windows",
-            });
-        }
+        let params = params.checked()?;
         Ok(Self {
             params,
             ring: vec![0.0; params.capacity() * classes],

@@ -51,11 +51,12 @@ pub struct WindowProbabilities {
     /// Probability of each class, in [`RecognizerFile::classes`]' order; they sum to 1.
     pub probabilities: Vec<f64>,
     /// Its evidence relative to a window of the windowing's nominal length
-    /// ([`NakanoWindowing::evidence`]): 1 but for windows over travel, 0 for one rubbed by a
-    /// tool at rest.
+    /// ([`NakanoWindowing::evidence`]): 1 but for windows over travel, 0 for one in which the
+    /// tool never left the play.
     pub evidence_scale: f64,
-    /// Whether it was rubbed slower than the slowest speed its windows read
-    /// ([`NakanoWindowing::short_of_travel`]).
+    /// Whether it covered less than its travel ([`NakanoWindowing::short_of_travel`]): over
+    /// travel, rubbed slower than the slowest speed its windows read; of either windowing, a
+    /// tool at rest.
     pub short_of_travel: bool,
 }
 

@@ -120,9 +120,9 @@ pub struct SequentialEvaluation {
     /// Captures evaluated, and windows over all of them.
     pub captures: usize,
     pub steps: usize,
-    /// Windows rubbed slower than the slowest speed their windows read
-    /// ([`NakanoWindowing::short_of_travel`]): they count for the travel they covered, and
-    /// not at all at rest.
+    /// Windows short of their travel ([`NakanoWindowing::short_of_travel`]): over travel,
+    /// rubbed slower than the slowest speed their windows read, which count for the travel
+    /// they covered; of either windowing, a tool at rest, which counts not at all.
     pub short_of_travel: usize,
     /// One per threshold, in the order given.
     pub rows: Vec<SequentialRow>,
