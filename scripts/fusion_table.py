@@ -12,8 +12,8 @@ the stable right surface and the slowest surface's mean, trials not ending named
 the posterior's calibration error.
 
 Then the same for k-NNs over the same windows (at `--knn-thresholds`): each k-NN's raw vote
-fractions (its file without the calibration, as files were written before it), its calibrated
-probabilities, and each fused with the other sense's SVM and k-NN.
+fractions (its file without the calibration and the fitted weight, as files were written before
+them), its calibrated probabilities, and each fused with the other sense's SVM and k-NN.
 
     python3 scripts/fusion_table.py [--palpus target/release/palpus] [--thresholds 0.5,0.9,0.95]
         [--knn-thresholds 0.9]
@@ -50,6 +50,7 @@ def main():
                     print(f"- k-NN over {features}: {calibration[len('window probabilities: '):]}")
                     raw = json.loads(Path(models[method, features]).read_text())
                     raw["body"].pop("calibration")
+                    raw.pop("posterior_weight", None)
                     models["raw", features] = str(root / f"raw_{features}.json")
                     Path(models["raw", features]).write_text(json.dumps(raw))
 

@@ -103,6 +103,7 @@ pub fn line(live: &LiveRecognizer) -> RecognizerLine {
         threshold: params.map(|p| p.threshold()),
         memory_s: params.map(|p| p.memory() as f64 * hop_s),
         change_odds: params.and_then(|p| p.change_log_odds()).map(f64::exp),
+        window_weight: params.map(|p| p.weight()),
     }
 }
 

@@ -165,6 +165,11 @@ impl Knn {
         })
     }
 
+    /// Neighbours that vote.
+    pub fn k(&self) -> usize {
+        self.k
+    }
+
     /// Number of classes.
     pub fn classes(&self) -> usize {
         self.classes

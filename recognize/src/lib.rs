@@ -44,11 +44,11 @@ pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{
     BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,
     Decision, Evaluation, FEW_TRAINING_VECTORS, FeatureNeeds, FusedEvaluation, KnnTrainer, LABEL_KEY,
-    LEAST_TRAINING_TRAVEL_SHARE, LabelledCapture, Method, RECOGNIZER_FORMAT, RECOGNIZER_VERSION,
-    RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer, SvmC, SvmTrainer,
-    TRIAL_KEY, TrainSettings, Trainer, TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C,
-    WindowProbabilities, recording_groups, som_nodes, som_params, train, trial_groups, window_som_nodes,
-    window_svc_params,
+    LEAST_TRAINING_TRAVEL_SHARE, LabelledCapture, Method, PosteriorWeight, RECOGNIZER_FORMAT,
+    RECOGNIZER_VERSION, RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer,
+    SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, TrainingWarning, UnmappedClasses,
+    WINDOW_SVM_FALLBACK_C, WindowProbabilities, recording_groups, som_nodes, som_params, train, trial_groups,
+    window_som_nodes, window_svc_params,
 };
 pub use recognizer::{
     Calibration, FusionMember, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,

@@ -73,7 +73,11 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
             // One recognizer per surface, each with the given seed.
             let mut settings = None;
             let captures = read(&args.inputs, &mut |first| {
-                let settings = settings.insert(args.training.settings(method, first));
+                // Confusions are counted window by window: no posterior, no weight to fit.
+                let settings = settings.insert(recognize::TrainSettings {
+                    fit_posterior_weight: false,
+                    ..args.training.settings(method, first)
+                });
                 Ok(FeatureNeeds::training_and_decisions(
                     settings,
                     first.capture.metadata().rate_hz(),

@@ -109,8 +109,9 @@ struct EvalArgs {
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
     /// Anytime decisions (k-NN or SVM over windows): every window's probabilities, from
-    /// contact on, multiplied into a posterior over the surfaces (each window weighing hop /
-    /// window, so overlapping windows count each sample once; probabilities floored at 1e-3);
+    /// contact on, multiplied into a posterior over the surfaces (each window weighing the
+    /// weight fitted on held-out recordings in training, else hop / window, so overlapping
+    /// windows count each sample once; probabilities floored at 1e-3);
     /// a surface is named once its posterior reaches the threshold, and held until it falls
     /// below half of it. Several thresholds, comma-separated (`0.5,0.9,0.99`), print accuracy
     /// against how soon a surface is named, and the posterior's calibration.
@@ -127,7 +128,8 @@ struct EvalArgs {
     #[arg(long, value_name = "R", default_value_t = recognize::sequential::DEFAULT_CHANGE_ODDS, requires = "sequential")]
     change_odds: f64,
     /// With --sequential: the exponent each window's probabilities are raised to, in (0, 1];
-    /// by default hop / window, so that overlapping windows count each sample once.
+    /// by default the one fitted on held-out recordings when the recognizer was trained, else
+    /// hop / window, so that overlapping windows count each sample once.
     #[arg(long, value_name = "W", requires = "sequential", conflicts_with = "fuse")]
     window_weight: Option<f64>,
     /// With --sequential: fuse this recognizer's evidence into the posterior too (repeatable):
@@ -135,8 +137,9 @@ struct EvalArgs {
     /// of each (so that its accuracy was cross-validated, and a k-NN's votes calibrated on
     /// held-out windows), over other features than the others (such as
     /// `--features vibration` beside `nakano`). Every recognizer's windows count in the order
-    /// they are decided, each weighing hop / window times its cross-validated accuracy above
-    /// chance relative to the most reliable recognizer's.
+    /// they are decided, each weighing its own fitted weight when every recognizer has one,
+    /// else its weight alone times its cross-validated accuracy above chance relative to the
+    /// most reliable recognizer's.
     #[arg(long, value_name = "MODEL.json", requires = "sequential")]
     fuse: Vec<PathBuf>,
     #[command(flatten)]
@@ -238,6 +241,7 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
     print_reliabilities(&model, trained_s);
     print_window_c(&model);
     print_vote_calibration(&model);
+    print_posterior_weight(&model);
     warn_unmapped(&model);
     Ok(())
 }
@@ -330,6 +334,24 @@ fn print_vote_calibration(model: &RecognizerFile) {
                  run or trial, or holding one out leaves fewer windows than k), so this k-NN cannot be fused"
             ),
         }
+    }
+}
+
+/// The weight of a window in anytime decisions, and how it was set.
+fn print_posterior_weight(model: &RecognizerFile) {
+    let Some(hop) = model.hop_weight() else {
+        return;
+    };
+    match &model.posterior_weight {
+        Some(p) => println!(
+            "posterior weight {:.3} a window (hop / window {hop:.3}), fitted on {} windows held out in {}-fold \
+             cross-validation by run: Brier score {:.3} against {:.3}",
+            p.weight, p.windows, p.folds, p.brier, p.hop_brier
+        ),
+        None => println!(
+            "posterior weight hop / window, {hop:.3} a window (not fitted: a surface has captures of a single run \
+             or trial, or --no-weight-fit)"
+        ),
     }
 }
 
@@ -501,9 +523,15 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     } else {
         ""
     };
+    let weighed = match (args.window_weight, &model.posterior_weight) {
+        (Some(_), _) => " as given",
+        (None, Some(_)) if others.is_empty() => ", fitted on held-out recordings",
+        (None, None) if others.is_empty() => ", hop / window",
+        _ => "",
+    };
     println!(
         "{} on {} captures, anytime decisions over {} {} every {:.2} s from contact, \
-         {} (each weighing {:.3}{scaled}; evidence of the last {}):",
+         {} (each weighing {:.3}{weighed}{scaled}; evidence of the last {}):",
         model.method(),
         e.captures,
         e.steps,
@@ -515,7 +543,12 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     );
     if !e.fused.is_empty() {
         println!(
-            "fused with the evidence of (each window's weight: hop / window × reliability over the most reliable's):"
+            "fused with the evidence of (each window's weight: {}):",
+            if e.fused.iter().all(|m| m.fitted) {
+                "its own, fitted on held-out recordings"
+            } else {
+                "its weight alone × reliability over the most reliable's"
+            }
         );
         for (path, m) in std::iter::once(&args.model).chain(&args.fuse).zip(&e.fused) {
             println!(
@@ -701,7 +734,12 @@ fn cv(args: &CvArgs) -> anyhow::Result<()> {
     }
     let mut settings = None;
     let captures = read_keeping(&args.input, &args.captures, None, |first| {
-        let settings = settings.insert(args.training.settings(first));
+        // Each round's recognizer is scored window by window, which the posterior's weight
+        // does not touch: fitting it would only refit every round once per fold.
+        let settings = settings.insert(recognize::TrainSettings {
+            fit_posterior_weight: false,
+            ..args.training.settings(first)
+        });
         Ok(FeatureNeeds::training_and_decisions(
             settings,
             first.capture.metadata().rate_hz(),

@@ -151,6 +151,11 @@ pub(crate) struct TrainOptions {
     /// cross-validation by run, or 10 when a surface has a single run.
     #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
     c: CArg,
+    /// knn, svm over windows: keep each window's weight in anytime decisions at hop / window
+    /// instead of fitting it on recordings held out of training (the fit refits the recognizer
+    /// once per fold; it needs two runs or trials of every surface).
+    #[arg(long)]
+    no_weight_fit: bool,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -280,6 +285,7 @@ impl TrainOptions {
                 CArg::Auto => SvmC::auto(),
                 CArg::Fixed(c) => SvmC::Fixed(c),
             },
+            fit_posterior_weight: !self.no_weight_fit,
             ..TrainSettings::new(method)
         };
         if let Some(warning) = window_warning(&settings) {

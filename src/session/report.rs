@@ -127,6 +127,10 @@ pub struct RecognizerLine {
     /// Likelihood ratio at which the change test drops the evidence before a change; `None`
     /// without one.
     pub change_odds: Option<f64>,
+    /// The exponent a window of whole evidence is raised to in the posterior (the recognizer's
+    /// weight fitted on held-out recordings, else hop / window).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_weight: Option<f64>,
 }
 
 /// The whole report (`report.json`).
@@ -277,8 +281,11 @@ impl SessionReport {
                     let change = r.change_odds.map_or("no change test".to_owned(), |o| {
                         format!("a change of surface at {o:.0}:1")
                     });
+                    let weight = r
+                        .window_weight
+                        .map_or(String::new(), |w| format!("each window weighing {w:.3}, "));
                     format!(
-                        "names a surface once its posterior reaches {p} (evidence of the last {}, {change})",
+                        "names a surface once its posterior reaches {p} ({weight}evidence of the last {}, {change})",
                         memory_in_words(m, r.window_s, r.window_m)
                     )
                 }

@@ -186,6 +186,17 @@ impl NakanoWindowing {
         }
     }
 
+    /// The same windows from contact on, as anytime decisions take them: no travel before the
+    /// first, and the stroke's start mirrored so that the first window starts at its first
+    /// sample.
+    pub fn from_contact(self) -> Self {
+        Self {
+            start_travel_m: 0.0,
+            mirrored_start: true,
+            ..self
+        }
+    }
+
     /// The same windowing over travel: each window spans the travel of its time window at
     /// the protocol's 5 mm/s (1.25 mm for 0.25 s), and takes at most as many samples as that
     /// travel at the slowest speed the filters follow (the protocol's 5 mm/s unless

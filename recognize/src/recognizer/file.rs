@@ -7,6 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::LabelledCapture;
+use super::posterior_weight::PosteriorWeight;
 #[cfg(doc)]
 use super::{SvmC, trial_groups};
 use crate::RecognizeError;
@@ -216,6 +217,11 @@ pub struct RecognizerFile {
     pub training_sha256: String,
     /// Number of training vectors.
     pub n_train: usize,
+    /// A k-NN's or SVM's posterior weight fitted on recordings held out of its training
+    /// ([`RecognizerFile::fit_posterior_weight`]); `None` where its captures could not be
+    /// cross-validated, or the file predates the fit: then windows weigh `hop / window`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub posterior_weight: Option<PosteriorWeight>,
 }
 
 impl RecognizerFile {
@@ -239,6 +245,7 @@ impl RecognizerFile {
             training,
             training_sha256: sha256_hex(joined.as_bytes()),
             n_train,
+            posterior_weight: None,
         }
     }
 
@@ -513,6 +520,19 @@ impl RecognizerFile {
                     self.feature_set().dim()
                 ),
             );
+        }
+        if let Some(p) = &self.posterior_weight {
+            if self.hop_weight().is_none() {
+                return bad(
+                    "posterior_weight",
+                    format!(
+                        "a {} over `{}` gives no window probabilities to weigh",
+                        self.method(),
+                        self.feature_set()
+                    ),
+                );
+            }
+            p.check().map_err(|(f, r)| (format!("posterior_weight.{f}"), r))?;
         }
         Ok(())
     }

@@ -22,8 +22,10 @@ mod file;
 mod grouping;
 mod kept;
 pub(crate) mod labelled;
+mod posterior_weight;
 mod sequential_eval;
 mod train;
+mod weight_fit;
 mod window_classifier;
 
 pub use decide::{BehaviourReliability, Decision, WindowProbabilities};
@@ -37,6 +39,7 @@ pub use kept::FeatureNeeds;
 pub use labelled::{
     BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SurfaceChange,
 };
+pub use posterior_weight::{PosteriorWeight, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE};
 pub use sequential_eval::{
     Calibration, FusionMember, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
 };

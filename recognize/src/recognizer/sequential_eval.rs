@@ -5,8 +5,11 @@
 //! **Fusing what the tool feels.** Several recognizers over the same surfaces (one over
 //! Nakano's friction and roughness, one over the vibration spectrum) can feed one posterior:
 //! every recognizer's windows are taken in the order they are decided, each raised to its own
-//! weight, so a sense that speaks sooner is heard sooner. A recognizer's weight is its own
-//! `hop / window` (each sample counted once) times its measured reliability relative to the
+//! weight, so a sense that speaks sooner is heard sooner. Where every recognizer's weight was
+//! fitted on recordings held out of its training ([`super::posterior_weight`]), each keeps its
+//! own: the fit measured how much its windows say. Otherwise a recognizer's weight is its own
+//! (`hop / window`, each sample counted once, or its fitted weight) times its measured
+//! reliability relative to the
 //! most reliable one's, after Sinapov et al.'s reliability-weighted fusion (IEEE T-RO 2011,
 //! Sec. IV-C): the reliability is its cross-validated accuracy per window (recorded when it was
 //! trained, whole runs or trials held out) less chance, `(a − 1/K) / (1 − 1/K)` for `K`
@@ -148,30 +151,34 @@ pub struct FusionMember {
     pub accuracy: f64,
     /// That accuracy's share above chance, `(a − 1/K) / (1 − 1/K)`.
     pub reliability: f64,
-    /// The exponent its windows' probabilities are raised to: `hop / window` times its
-    /// reliability over the most reliable recognizer's.
+    /// The exponent its windows' probabilities are raised to: when every recognizer fused
+    /// has a weight fitted on held-out recordings ([`RecognizerFile::posterior_weight`]), its
+    /// own; else its weight alone ([`RecognizerFile::window_weight`]) times its reliability over
+    /// the most reliable recognizer's.
     pub weight: f64,
+    /// Whether its weight alone was fitted on held-out recordings.
+    pub fitted: bool,
 }
 
 /// One capture's windows: truth, and each window's time from contact and probabilities.
-struct Stroke {
-    truth: usize,
+pub(super) struct Stroke {
+    pub(super) truth: usize,
     /// When the stroke slides onto another surface, and which.
-    change: Option<(f64, usize)>,
-    duration_s: f64,
+    pub(super) change: Option<(f64, usize)>,
+    pub(super) duration_s: f64,
     /// Its windows of every recognizer, in the order they are decided.
-    windows: Vec<StrokeWindow>,
+    pub(super) windows: Vec<StrokeWindow>,
 }
 
 /// One window of a stroke, as the posterior takes it.
-struct StrokeWindow {
-    at_s: f64,
+pub(super) struct StrokeWindow {
+    pub(super) at_s: f64,
     /// Its evidence scale ([`NakanoWindowing::evidence_scale`]) times its recognizer's weight
     /// relative to the first recognizer's.
-    scale: f64,
+    pub(super) scale: f64,
     /// Its share of the memory: its evidence scale alone.
-    share: f64,
-    probabilities: Vec<f64>,
+    pub(super) share: f64,
+    pub(super) probabilities: Vec<f64>,
 }
 
 impl Stroke {
@@ -184,6 +191,11 @@ impl Stroke {
     }
 }
 
+/// `hop / window` of `windowing`, at most 1.
+fn hop_weight(windowing: &NakanoWindowing) -> f64 {
+    (windowing.hop_samples as f64 / windowing.rate_hz / windowing.window_s()).min(1.0)
+}
+
 /// The least share of the posterior's memory a window of `windowing` takes: its longest
 /// window's evidence scale (1 for windows of fixed length).
 fn smallest_share(windowing: &NakanoWindowing) -> f64 {
@@ -192,7 +204,8 @@ fn smallest_share(windowing: &NakanoWindowing) -> f64 {
 
 impl RecognizerFile {
     /// The settings [`RecognizerFile::evaluate_sequential`] starts from for this recognizer:
-    /// each window weighs `hop / window` (every sample counted once), and the evidence of
+    /// each window weighs [`RecognizerFile::window_weight`] (fitted on held-out recordings, or
+    /// `hop / window`, every sample counted once), and the evidence of
     /// the last `memory_s` counts; `None` for a recognizer without window probabilities.
     pub fn sequential_params(&self, memory_s: f64) -> Option<SequentialParamsBuilder> {
         let w = self.window_probability_windowing()?;
@@ -200,26 +213,37 @@ impl RecognizerFile {
         let memory = (memory_s / hop_s).round().max(1.0) as usize;
         Some(
             SequentialParams::builder()
-                .weight((hop_s / w.window_s()).min(1.0))
+                .weight(self.window_weight()?)
                 .memory(memory)
                 .smallest_share(smallest_share(w)),
         )
+    }
+
+    /// `hop / window` of a k-NN's or SVM's windows, at most 1: the weight that counts every
+    /// sample once.
+    pub fn hop_weight(&self) -> Option<f64> {
+        self.window_probability_windowing().map(hop_weight)
+    }
+
+    /// The exponent a window of whole evidence is raised to in the posterior: the weight
+    /// fitted on held-out recordings when training could fit one
+    /// ([`RecognizerFile::posterior_weight`]), else [`RecognizerFile::hop_weight`].
+    pub fn window_weight(&self) -> Option<f64> {
+        self.posterior_weight
+            .map(|p| p.weight)
+            .or_else(|| self.hop_weight())
     }
 
     /// The windows anytime decisions are made on: a k-NN's or SVM's own, from contact on (the
     /// start travel set to 0, and the stroke's start mirrored so that the first window starts
     /// at its first sample); `None` for a recognizer without window probabilities.
     pub fn sequential_windowing(&self) -> Option<NakanoWindowing> {
-        self.window_probability_windowing().map(|own| NakanoWindowing {
-            start_travel_m: 0.0,
-            mirrored_start: true,
-            ..*own
-        })
+        self.window_probability_windowing().map(|own| own.from_contact())
     }
 
     /// [`RecognizerFile::sequential_windowing`], or the error saying this recognizer gives no
     /// window probabilities.
-    fn windowing_with_probabilities(&self) -> Result<NakanoWindowing, RecognizeError> {
+    pub(super) fn windowing_with_probabilities(&self) -> Result<NakanoWindowing, RecognizeError> {
         self.sequential_windowing()
             .ok_or(RecognizeError::NoWindowProbabilities {
                 method: self.method(),
@@ -291,15 +315,17 @@ impl RecognizerFile {
             if reliability.is_nan() || reliability <= 0.0 {
                 return Err(RecognizeError::Unreliable { index, accuracy });
             }
-            let hop_s = windowing.hop_samples as f64 / windowing.rate_hz;
             members.push(FusionMember {
                 method: model.method(),
                 features: model.feature_set().name(),
                 window_s: windowing.window_s(),
-                hop_s,
+                hop_s: windowing.hop_samples as f64 / windowing.rate_hz,
                 accuracy,
                 reliability,
-                weight: (hop_s / windowing.window_s()).min(1.0),
+                weight: model
+                    .posterior_weight
+                    .map_or(hop_weight(&windowing), |p| p.weight),
+                fitted: model.posterior_weight.is_some(),
             });
         }
         // The product assumes each recognizer brings its own evidence: two over the same
@@ -320,9 +346,13 @@ impl RecognizerFile {
                 });
             }
         }
-        let most = members.iter().map(|m| m.reliability).fold(0.0, f64::max);
-        for m in &mut members {
-            m.weight *= m.reliability / most;
+        // A fitted weight has measured how much a recognizer's windows say, its reliability
+        // included: scaling it by the reliability again would count that twice.
+        if !members.iter().all(|m| m.fitted) {
+            let most = members.iter().map(|m| m.reliability).fold(0.0, f64::max);
+            for m in &mut members {
+                m.weight *= m.reliability / most;
+            }
         }
         Ok(members)
     }
@@ -377,36 +407,7 @@ impl RecognizerFile {
         let mut strokes = Vec::with_capacity(captures.len());
         let mut short_of_travel = 0;
         for c in captures {
-            let c = c.borrow();
-            let rate_hz = c.capture.metadata().rate_hz();
-            let mut windows = Vec::new();
-            for (model, windowing, factor) in &sources {
-                windows.extend(
-                    model
-                        .window_probabilities(c, Some(windowing))?
-                        .unwrap_or_default()
-                        .into_iter()
-                        .inspect(|w| short_of_travel += usize::from(w.short_of_travel))
-                        .map(|w| StrokeWindow {
-                            at_s: w.decision.decided_at as f64 / rate_hz,
-                            scale: w.evidence_scale * factor,
-                            share: w.evidence_scale,
-                            probabilities: w.probabilities,
-                        }),
-                );
-            }
-            // Stable: windows decided at the same sample keep the recognizers' order.
-            windows.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
-            let change = match &c.change {
-                Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
-                None => None,
-            };
-            strokes.push(Stroke {
-                truth: class_index(&self.classes, c)?,
-                change,
-                duration_s: c.samples() as f64 / rate_hz,
-                windows,
-            });
+            strokes.push(self.stroke(&sources, c.borrow(), &mut short_of_travel)?);
         }
         let steps = strokes.iter().map(|s| s.windows.len()).sum();
         if steps == 0 {
@@ -445,7 +446,48 @@ impl RecognizerFile {
         })
     }
 
-    fn sequential_row(
+    /// One capture's windows from every recognizer of `sources` (each with its windowing and
+    /// the factor from the first recognizer's weight to its own), in the order they are
+    /// decided, labelled against this recognizer's surfaces; adds the windows short of their
+    /// travel to `short_of_travel`.
+    pub(super) fn stroke(
+        &self,
+        sources: &[(&RecognizerFile, NakanoWindowing, f64)],
+        c: &LabelledCapture,
+        short_of_travel: &mut usize,
+    ) -> Result<Stroke, RecognizeError> {
+        let rate_hz = c.capture.metadata().rate_hz();
+        let mut windows = Vec::new();
+        for (model, windowing, factor) in sources {
+            windows.extend(
+                model
+                    .window_probabilities(c, Some(windowing))?
+                    .unwrap_or_default()
+                    .into_iter()
+                    .inspect(|w| *short_of_travel += usize::from(w.short_of_travel))
+                    .map(|w| StrokeWindow {
+                        at_s: w.decision.decided_at as f64 / rate_hz,
+                        scale: w.evidence_scale * factor,
+                        share: w.evidence_scale,
+                        probabilities: w.probabilities,
+                    }),
+            );
+        }
+        // Stable: windows decided at the same sample keep the recognizers' order.
+        windows.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        let change = match &c.change {
+            Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
+            None => None,
+        };
+        Ok(Stroke {
+            truth: class_index(&self.classes, c)?,
+            change,
+            duration_s: c.samples() as f64 / rate_hz,
+            windows,
+        })
+    }
+
+    pub(super) fn sequential_row(
         &self,
         strokes: &[Stroke],
         params: SequentialParams,

@@ -7,6 +7,7 @@ use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, window_vectors};
 use crate::knn::KnnParams;
 use crate::recognizer::labelled::class_list;
+use crate::recognizer::sequential_eval::{Stroke, StrokeWindow};
 use crate::recognizer::train::training_windows;
 use crate::som::SomParams;
 use crate::svc::{CSearch, Svc, SvcParams};
@@ -964,11 +965,15 @@ fn short_windows(method: Method, features: FeatureSet) -> TrainSettings {
 
 /// Anytime decisions fused over two senses: each recognizer's windows in the order they are
 /// decided, each weighing its `hop / window` times its cross-validated accuracy above chance
-/// relative to the most reliable one's.
+/// relative to the most reliable one's (no weight fitted on held-out trials; see
+/// [`fitted_posterior_weights_fuse_as_fitted`] for those).
 #[test]
 fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
     let train_set = with_tones(0..2, 4.0);
-    let settings = |features| short_windows(Method::Svm, features);
+    let settings = |features| TrainSettings {
+        fit_posterior_weight: false,
+        ..short_windows(Method::Svm, features)
+    };
     let nakano = train(&train_set, &settings(FeatureSet::Nakano)).expect("nakano");
     let vibration = train(&train_set, &settings(FeatureSet::Vibration)).expect("vibration");
     // The vibration's windows are decided at their last sample: nothing waits for a filter.
@@ -1093,6 +1098,202 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
     )
     .expect_err("SOM over vibration");
     assert!(err.to_string().contains("k-NN or an SVM"), "{err}");
+}
+
+/// Strokes of three surfaces whose windows each report a calibrated likelihood of one symbol
+/// drawn from the surface (its own with probability 1/2, each other one 1/4), every window
+/// repeated `repeats` times in a row.
+fn symbol_strokes(strokes: usize, windows: usize, repeats: usize) -> Vec<Stroke> {
+    let mut rng = capture::rng::SplitMix64::new(7);
+    (0..strokes)
+        .map(|i| {
+            let truth = i % 3;
+            let mut stroke_windows = Vec::new();
+            for w in 0..windows {
+                let symbol = match rng.below(4) {
+                    0 | 1 => truth,
+                    u => (truth + u - 1) % 3,
+                };
+                let probabilities: Vec<f64> = (0..3).map(|c| if c == symbol { 0.5 } else { 0.25 }).collect();
+                for r in 0..repeats {
+                    stroke_windows.push(StrokeWindow {
+                        at_s: (w * repeats + r) as f64 * 0.01,
+                        scale: 1.0,
+                        share: 1.0,
+                        probabilities: probabilities.clone(),
+                    });
+                }
+            }
+            Stroke {
+                truth,
+                change: None,
+                duration_s: (windows * repeats) as f64 * 0.01,
+                windows: stroke_windows,
+            }
+        })
+        .collect()
+}
+
+/// On windows that are independent and calibrated, the posterior of whole windows is Bayes'
+/// rule, the best a posterior can be under a proper score: the fit keeps the weight whole.
+/// Each window said four times over says nothing new: the fit weighs it a quarter.
+#[test]
+fn the_weight_fitted_counts_independent_windows_whole_and_a_window_said_four_times_a_quarter() {
+    let model = train(
+        &three_surfaces(3.0),
+        &short_windows(Method::Svm, FeatureSet::Nakano),
+    )
+    .expect("train");
+    assert_eq!(model.classes.len(), 3);
+    // No forgetting and no change test: the posterior is the product of every window so far.
+    let base = crate::sequential::SequentialParams::builder()
+        .memory(100_000)
+        .without_change_test();
+    let fit = |repeats| {
+        model
+            .least_brier_weight(&symbol_strokes(60, 40, repeats), base, 1.0)
+            .expect("fit")
+    };
+    let (whole, brier, at_whole) = fit(1);
+    assert!(whole >= 2f64.powf(-0.5), "independent windows weighed {whole}");
+    assert!(brier <= at_whole);
+    let (quarter, brier, at_whole) = fit(4);
+    assert!(
+        (2f64.powf(-2.5)..=2f64.powf(-1.5)).contains(&quarter),
+        "windows said four times weighed {quarter}"
+    );
+    assert!(brier < at_whole, "{brier} against {at_whole} at 1");
+}
+
+/// A k-NN or SVM over windows trained on two trials or more of each surface fits its
+/// posterior's weight on the trials held out; anytime decisions and files take it, and a
+/// single trial, or a training told not to, keeps `hop / window`.
+#[test]
+fn a_recognizer_trained_on_several_trials_fits_its_posterior_weight() {
+    let train_set = with_tones(0..3, 3.0);
+    for method in [Method::Svm, Method::Knn] {
+        let settings = short_windows(method, FeatureSet::Nakano);
+        let model = train(&train_set, &settings).expect("train");
+        let fit = model.posterior_weight.expect("fitted");
+        assert_eq!(fit.hop_weight, 0.4);
+        assert_eq!(model.hop_weight(), Some(0.4));
+        assert_eq!(fit.folds, 3);
+        // Every held-out capture's windows, from contact on.
+        let windowing = model.sequential_windowing().expect("windows");
+        let held_out: usize = train_set
+            .iter()
+            .map(|c| {
+                model
+                    .window_probabilities(c, Some(&windowing))
+                    .expect("windows")
+                    .map_or(0, |w| w.len())
+            })
+            .sum();
+        assert_eq!(fit.windows, held_out, "{method:?}");
+        assert!(fit.brier <= fit.hop_brier, "{fit:?}");
+        // On the grid: a whole number of quarter octaves from hop / window, or capped at 1.
+        let steps = (fit.weight / fit.hop_weight).log2() * 4.0;
+        assert!(
+            fit.weight == 1.0 || ((steps - steps.round()).abs() < 1e-9 && (-12.0..=8.0).contains(&steps)),
+            "{fit:?}"
+        );
+        let params = model
+            .sequential_params(3.0)
+            .expect("params")
+            .build()
+            .expect("valid");
+        assert_eq!(params.weight(), fit.weight);
+        assert_eq!(model.window_weight(), Some(fit.weight));
+        let back =
+            RecognizerFile::from_json(&serde_json::to_string(&model).expect("json"), Path::new("m.json"))
+                .expect("round trip");
+        assert_eq!(back.posterior_weight, Some(fit));
+
+        let unfitted = train(
+            &train_set,
+            &TrainSettings {
+                fit_posterior_weight: false,
+                ..settings.clone()
+            },
+        )
+        .expect("train");
+        assert_eq!(unfitted.posterior_weight, None);
+        assert_eq!(unfitted.window_weight(), Some(0.4));
+        let one_trial = train(&train_set[..3], &settings).expect("one trial");
+        assert_eq!(one_trial.posterior_weight, None, "nothing to hold out");
+    }
+}
+
+/// A fitted weight read from a file is checked, and only a recognizer with window
+/// probabilities may carry one.
+#[test]
+fn a_bad_posterior_weight_names_its_field() {
+    let model = train(
+        &with_tones(0..2, 3.0),
+        &short_windows(Method::Svm, FeatureSet::Nakano),
+    )
+    .expect("train");
+    assert!(model.posterior_weight.is_some());
+    for (field, value) in [
+        ("weight", 0.0),
+        ("weight", 1.5),
+        ("hop_brier", f64::NAN),
+        ("folds", 1.0),
+    ] {
+        let mut json = serde_json::to_value(&model).expect("serialize");
+        json["posterior_weight"][field] = if field == "folds" {
+            serde_json::json!(1)
+        } else {
+            serde_json::json!(value)
+        };
+        let text = json.to_string();
+        let err = RecognizerFile::from_json(&text, Path::new("m.json")).expect_err(field);
+        assert!(
+            err.to_string().contains(&format!("posterior_weight.{field}")) || field == "hop_brier",
+            "{field}: {err}"
+        );
+    }
+    let som = RecognizerFile::train_som(
+        &three_surfaces(3.0),
+        NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid"),
+        SomParams::default(),
+    )
+    .expect("SOM");
+    let mut json = serde_json::to_value(&som).expect("serialize");
+    json["posterior_weight"] = serde_json::to_value(model.posterior_weight).expect("serialize");
+    let err = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect_err("a SOM");
+    assert!(err.to_string().contains("field `posterior_weight`"), "{err}");
+}
+
+/// Recognizers whose weights were all fitted on held-out trials fuse with those weights: the
+/// fit has measured what a reliability weighting would guess.
+#[test]
+fn fitted_posterior_weights_fuse_as_fitted() {
+    let train_set = with_tones(0..3, 3.0);
+    let settings = |features| short_windows(Method::Svm, features);
+    let nakano = train(&train_set, &settings(FeatureSet::Nakano)).expect("nakano");
+    let vibration = train(&train_set, &settings(FeatureSet::Vibration)).expect("vibration");
+    let members = nakano.fusion_members(&[&vibration]).expect("members");
+    for (m, model) in members.iter().zip([&nakano, &vibration]) {
+        assert!(m.fitted);
+        assert_eq!(Some(m.weight), model.posterior_weight.map(|p| p.weight));
+    }
+    // One without a fit: every weight is its own times its reliability over the most reliable.
+    let unfitted = train(
+        &train_set,
+        &TrainSettings {
+            fit_posterior_weight: false,
+            ..settings(FeatureSet::Vibration)
+        },
+    )
+    .expect("vibration");
+    let members = nakano.fusion_members(&[&unfitted]).expect("members");
+    let most = members[0].reliability.max(members[1].reliability);
+    let own = [nakano.window_weight(), unfitted.window_weight()].map(|w| w.expect("weight"));
+    for (m, w) in members.iter().zip(own) {
+        assert!((m.weight - w * m.reliability / most).abs() < 1e-15, "{m:?}");
+    }
+    assert!(members[0].fitted && !members[1].fitted);
 }
 
 #[test]

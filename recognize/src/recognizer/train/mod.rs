@@ -161,13 +161,17 @@ pub struct TrainSettings {
     /// SOM: nodes of each map; `None` for as many as the classes need ([`window_som_nodes`]
     /// over windows, [`som_nodes`] over whole scratches).
     pub som_nodes: Option<usize>,
+    /// k-NN or SVM over windows: fit the posterior's weight on recordings held out of
+    /// training ([`RecognizerFile::fit_posterior_weight`]) where the captures allow.
+    pub fit_posterior_weight: bool,
 }
 
 impl TrainSettings {
     /// The defaults of `method`: its own features, [`DECISION_WINDOW_S`] decision windows
     /// every [`HOP_S`] on the method's training windows
     /// ([`TrainSettings::training_window_s`]), seed 0, [`Normalization::LogWithinClass`], k = 3,
-    /// C chosen by cross-validation ([`SvmC::auto`]), mean cells, maps sized by their classes.
+    /// C chosen by cross-validation ([`SvmC::auto`]), mean cells, maps sized by their classes, the
+    /// posterior's weight fitted where the captures allow.
     pub fn new(method: Method) -> Self {
         Self {
             method,
@@ -186,6 +190,7 @@ impl TrainSettings {
             c: SvmC::auto(),
             cell_scale: CellScale::Mean,
             som_nodes: None,
+            fit_posterior_weight: true,
         }
     }
 
@@ -240,11 +245,16 @@ impl FeatureNeeds {
         let needs = Self::new();
         Ok(match settings.features {
             FeatureSet::Spectral => needs.with_histogram(settings.cell_scale),
-            windowed => needs.with_windows(
-                settings.windowing_at(rate_hz)?.training(),
-                windowed,
-                settings.cell_scale,
-            ),
+            windowed => {
+                let windowing = settings.windowing_at(rate_hz)?;
+                let needs = needs.with_windows(windowing.training(), windowed, settings.cell_scale);
+                // Fitting the posterior's weight runs anytime decisions on held-out captures.
+                if settings.fit_posterior_weight && settings.method != Method::Som {
+                    needs.with_windows(windowing.from_contact(), windowed, settings.cell_scale)
+                } else {
+                    needs
+                }
+            }
         })
     }
 
@@ -303,7 +313,11 @@ impl TrainSettings {
         progress: Progress<'_>,
     ) -> Result<RecognizerFile, RecognizeError> {
         self.features.check_columns(captures)?;
-        self.method.trainer().train_observed(captures, self, progress)
+        let mut file = self.method.trainer().train_observed(captures, self, progress)?;
+        if self.fit_posterior_weight {
+            file.posterior_weight = file.fit_posterior_weight(captures, progress)?;
+        }
+        Ok(file)
     }
 }
 

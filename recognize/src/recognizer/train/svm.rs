@@ -276,6 +276,40 @@ impl RecognizerFile {
         cell_scale: CellScale,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
+        Self::svm_windows(captures, windowing, features, c, true, cell_scale, progress)
+    }
+
+    /// The SVM over windows of this recognizer's settings, refitted on `captures` with its own
+    /// C and no search for one: a fold's model in [`RecognizerFile::fit_posterior_weight`].
+    pub(crate) fn refit_svm_windows(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        c: f64,
+        cell_scale: CellScale,
+    ) -> Result<Self, RecognizeError> {
+        Self::svm_windows(
+            captures,
+            windowing,
+            features,
+            &SvmC::Fixed(c),
+            false,
+            cell_scale,
+            &no_progress,
+        )
+    }
+
+    /// [`RecognizerFile::train_svm_windows_observed`], searching for C (when `c` asks and the
+    /// captures allow) only if `search_c`.
+    fn svm_windows(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        c: &SvmC,
+        search_c: bool,
+        cell_scale: CellScale,
+        progress: Progress<'_>,
+    ) -> Result<Self, RecognizeError> {
         let ScaledWindows {
             classes,
             scaling,
@@ -291,7 +325,7 @@ impl RecognizerFile {
         let progress = naming_progress(progress, &names, &label);
         let chosen = c
             .choose(WINDOW_SVM_FALLBACK_C, |grid| {
-                every_class_in_two_groups(&y, &groups).then(|| {
+                (search_c && every_class_in_two_groups(&y, &groups)).then(|| {
                     select_c_observed(
                         params,
                         grid,

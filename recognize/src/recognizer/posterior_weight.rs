@@ -1,0 +1,53 @@
+//! The posterior's window weight as a recognizer file keeps it: fitted on recordings held out
+//! of training (see
+//! [`RecognizerFile::fit_posterior_weight`](crate::RecognizerFile::fit_posterior_weight) for how
+//! and why).
+
+use serde::{Deserialize, Serialize};
+
+/// Weights tried per doubling of the weight.
+pub const WEIGHT_STEPS_PER_OCTAVE: i32 = 4;
+
+/// The weights tried, in steps of [`WEIGHT_STEPS_PER_OCTAVE`] per octave from `hop / window`:
+/// three octaves below it and two above (capped at 1, a window's whole evidence). Below,
+/// because windows that overlap or repeat one another say less than they seem to; above,
+/// because a classifier's window probabilities can be too cautious (a k-NN's vote fractions
+/// hedge, an SVM's Platt scaling is fitted on its own cross-validation).
+pub const WEIGHT_OCTAVES: (i32, i32) = (-3, 2);
+
+/// The posterior's weight fitted on held-out recordings, and what it was measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PosteriorWeight {
+    /// The exponent of a window of whole evidence's probabilities.
+    pub weight: f64,
+    /// `hop / window`: the weight without the fit.
+    pub hop_weight: f64,
+    /// Folds of the cross-validation by recording.
+    pub folds: usize,
+    /// Held-out windows the posterior was scored on.
+    pub windows: usize,
+    /// The posterior's mean Brier score over them at `weight`.
+    pub brier: f64,
+    /// The same at `hop_weight`.
+    pub hop_brier: f64,
+}
+
+impl PosteriorWeight {
+    /// Checks a fit read from a file: `Err((field, reason))`.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        for (field, w) in [("weight", self.weight), ("hop_weight", self.hop_weight)] {
+            if !(w > 0.0 && w <= 1.0) {
+                return Err((field, format!("{w} is not in (0, 1]")));
+            }
+        }
+        if self.folds < 2 {
+            return Err(("folds", format!("{} folds; cross-validation needs 2", self.folds)));
+        }
+        for (field, b) in [("brier", self.brier), ("hop_brier", self.hop_brier)] {
+            if !(0.0..=2.0).contains(&b) {
+                return Err((field, format!("{b} is not a Brier score in [0, 2]")));
+            }
+        }
+        Ok(())
+    }
+}

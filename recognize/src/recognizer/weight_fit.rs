@@ -1,0 +1,169 @@
+//! The posterior's window weight, fitted on recordings held out of training.
+//!
+//! Anytime decisions raise each window's probabilities to a weight before multiplying them into
+//! the posterior. `hop / window` counts every sample once, which is right only if windows that
+//! do not overlap are independent evidence and the classifier's probabilities are calibrated
+//! one window at a time. Neither is known on a rig we have not seen: a surface's texture
+//! repeats, a hand sways slowly, and the same stretch of surface read twice says the same
+//! thing twice. The exponent that calibrates the posterior depends on the rig, the surfaces and
+//! the classifier, so it is measured: when every surface has captures in at least two
+//! recordings (runs or trials), training refits the recognizer with each fold of recordings
+//! held out, runs the posterior over the held-out strokes at every weight of a grid around
+//! `hop / window`, and keeps the weight with the least Brier score. The Brier score is a proper
+//! scoring rule, least for a calibrated posterior; this is temperature scaling (Guo et al.,
+//! ICML 2017) of the whole posterior rather than of one window. Without two recordings of every
+//! surface there is nothing to hold out, and the weight stays `hop / window`.
+
+use super::file::{RecognizerBody, RecognizerFile};
+use super::labelled::class_index;
+use super::posterior_weight::{PosteriorWeight, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE};
+use super::sequential_eval::Stroke;
+use super::train::{CV_FOLDS, every_class_in_two_groups};
+use super::{LabelledCapture, recording_groups};
+use crate::RecognizeError;
+use crate::folds::group_folds;
+use crate::sequential::{DEFAULT_MEMORY_S, SequentialParamsBuilder};
+use crate::svc::{FitEvent, Progress};
+
+impl RecognizerFile {
+    /// This recognizer's settings for anytime decisions ([`RecognizerFile::sequential_params`])
+    /// fitted on `captures`, the ones it was trained on: the weight of the grid
+    /// ([`WEIGHT_OCTAVES`]) whose posterior, run over each fold of recordings held out of a
+    /// refit, has the least Brier score; ties go to the smaller weight. `None` for a
+    /// recognizer without window probabilities, or captures that cannot be cross-validated:
+    /// a surface in fewer than two recordings, or a fold whose refit would lose a surface or
+    /// its vote calibration.
+    /// `progress` is told of each fold's refit.
+    pub fn fit_posterior_weight(
+        &self,
+        captures: &[LabelledCapture],
+        progress: Progress<'_>,
+    ) -> Result<Option<PosteriorWeight>, RecognizeError> {
+        let (Some(params), Some(hop_weight)) = (self.sequential_params(DEFAULT_MEMORY_S), self.hop_weight())
+        else {
+            return Ok(None);
+        };
+        let base = params.weight(hop_weight);
+        let groups = recording_groups(captures);
+        let labels = captures
+            .iter()
+            .map(|c| class_index(&self.classes, c))
+            .collect::<Result<Vec<_>, _>>()?;
+        if !every_class_in_two_groups(&labels, &groups) {
+            return Ok(None);
+        }
+        let (fold, folds) = group_folds(&groups, CV_FOLDS)?;
+        let mut strokes = Vec::with_capacity(captures.len());
+        progress(FitEvent::Step {
+            what: "fitting the posterior's weight on held-out recordings",
+            total: folds,
+        });
+        for f in 0..folds {
+            let kept: Vec<LabelledCapture> = captures
+                .iter()
+                .zip(&fold)
+                .filter(|(_, g)| **g != f)
+                .map(|(c, _)| c.clone())
+                .collect();
+            let Some(model) = self.refit(&kept)? else {
+                return Ok(None);
+            };
+            let sources = [(&model, model.windowing_with_probabilities()?, 1.0)];
+            let mut short_of_travel = 0;
+            for (c, _) in captures.iter().zip(&fold).filter(|(_, g)| **g == f) {
+                strokes.push(self.stroke(&sources, c, &mut short_of_travel)?);
+            }
+            progress(FitEvent::Advance);
+        }
+        let windows = strokes.iter().map(|s| s.windows.len()).sum();
+        if windows == 0 {
+            return Ok(None);
+        }
+        let (weight, brier, hop_brier) = self.least_brier_weight(&strokes, base, hop_weight)?;
+        Ok(Some(PosteriorWeight {
+            weight,
+            hop_weight,
+            folds,
+            windows,
+            brier,
+            hop_brier,
+        }))
+    }
+
+    /// The same recognizer trained on `captures` with this one's settings (an SVM's C as
+    /// chosen, no search): `None` where the refit lost a surface, or a k-NN's vote calibration
+    /// that this one has (so that its probabilities would not be this recognizer's kind), or
+    /// where a k-NN's windows are fewer than k.
+    fn refit(&self, captures: &[LabelledCapture]) -> Result<Option<RecognizerFile>, RecognizeError> {
+        let model = match &self.body {
+            RecognizerBody::SvmWindows {
+                features,
+                windowing,
+                cell_scale,
+                svc,
+                ..
+            } => Self::refit_svm_windows(captures, *windowing, *features, svc.params().c, *cell_scale)?,
+            RecognizerBody::KnnWindows {
+                features,
+                windowing,
+                cell_scale,
+                knn,
+                calibration,
+                ..
+            } => {
+                // A fold's windows can be fewer than k where all of them are not: then nothing
+                // can be held out, as with a single run.
+                let model =
+                    match Self::train_knn_windows(captures, *windowing, *features, knn.k(), *cell_scale) {
+                        Err(RecognizeError::Classifier { source, .. })
+                            if matches!(*source, RecognizeError::TooFewPoints { .. }) =>
+                        {
+                            return Ok(None);
+                        }
+                        other => other?,
+                    };
+                let calibrated = matches!(
+                    model.body,
+                    RecognizerBody::KnnWindows {
+                        calibration: Some(_),
+                        ..
+                    }
+                );
+                if calibrated != calibration.is_some() {
+                    return Ok(None);
+                }
+                model
+            }
+            _ => return Ok(None),
+        };
+        Ok((model.classes == self.classes).then_some(model))
+    }
+
+    /// The weight of the grid ([`WEIGHT_OCTAVES`] around `hop_weight`) at which the posterior
+    /// over `strokes`, otherwise as `base` sets it, has the least mean Brier score (ties to
+    /// the smaller weight): `(weight, its Brier score, the Brier score at hop_weight)`.
+    pub(super) fn least_brier_weight(
+        &self,
+        strokes: &[Stroke],
+        base: SequentialParamsBuilder,
+        hop_weight: f64,
+    ) -> Result<(f64, f64, f64), RecognizeError> {
+        let brier_at = |w: f64| -> Result<f64, RecognizeError> {
+            Ok(self
+                .sequential_row(strokes, base.weight(w).build()?)?
+                .calibration
+                .brier)
+        };
+        let hop_brier = brier_at(hop_weight)?;
+        let (mut weight, mut brier) = (hop_weight, hop_brier);
+        let (low, high) = WEIGHT_OCTAVES;
+        for step in low * WEIGHT_STEPS_PER_OCTAVE..=high * WEIGHT_STEPS_PER_OCTAVE {
+            let w = (hop_weight * 2f64.powf(f64::from(step) / f64::from(WEIGHT_STEPS_PER_OCTAVE))).min(1.0);
+            let b = if step == 0 { hop_brier } else { brier_at(w)? };
+            if b < brier || (b == brier && w < weight) {
+                (weight, brier) = (w, b);
+            }
+        }
+        Ok((weight, brier, hop_brier))
+    }
+}
