@@ -620,6 +620,19 @@ fn windowless_list(captures: &[WindowlessCapture]) -> String {
 }
 
 impl RecognizeError {
+    /// The error and its sources, outer to inner, on one line, as the command line prints
+    /// them.
+    pub fn chain(&self) -> String {
+        let mut text = self.to_string();
+        let mut source = std::error::Error::source(self);
+        while let Some(s) = source {
+            text.push_str(": ");
+            text.push_str(&s.to_string());
+            source = s.source();
+        }
+        text
+    }
+
     /// Wraps a k-NN's error, naming the classifier's behaviour (none for one over windows).
     pub(crate) fn knn(behaviour: Option<&str>) -> impl Fn(Self) -> Self + '_ {
         Self::classifier("k-NN", behaviour)

@@ -6,16 +6,15 @@
 //! Nakano's friction and roughness, one over the vibration spectrum) can feed one posterior:
 //! every recognizer's windows are taken in the order they are decided, each raised to its own
 //! weight, so a sense that speaks sooner is heard sooner. Where every recognizer's weight was
-//! fitted on recordings held out of its training ([`super::posterior_weight`]), each keeps its
-//! own: the fit measured how much its windows say. Otherwise a recognizer's weight is its own
-//! (`hop / window`, each sample counted once, or its fitted weight) times its measured
-//! reliability relative to the
-//! most reliable one's, after Sinapov et al.'s reliability-weighted fusion (IEEE T-RO 2011,
-//! Sec. IV-C): the reliability is its cross-validated accuracy per window (recorded when it was
-//! trained, whole runs or trials held out) less chance, `(a − 1/K) / (1 − 1/K)` for `K`
-//! surfaces; a recognizer no better than a guess is refused, as it would add nothing. The most
-//! reliable recognizer weighs as it would alone; a less reliable one less, so that where the
-//! two disagree the more reliable wins. Multiplying the two is right only as far as they err
+//! fitted on recordings held out of its training ([`RecognizerFile::fit_posterior_weight`]),
+//! each keeps its own: the fit measured how much its windows say. Otherwise a recognizer's
+//! weight is its own (`hop / window`, each sample counted once, or its fitted weight) times its
+//! measured reliability relative to the most reliable one's, after Sinapov et al.'s
+//! reliability-weighted fusion (IEEE T-RO 2011, Sec. IV-C): the reliability is its
+//! cross-validated accuracy per window (recorded when it was trained, whole runs or trials held
+//! out) less chance, `(a − 1/K) / (1 − 1/K)` for `K` surfaces; a recognizer no better than a
+//! guess is refused, as it would add nothing. The most reliable recognizer weighs as it would
+//! alone; a less reliable one less, so that where the two disagree the more reliable wins. Multiplying the two is right only as far as they err
 //! independently (friction and vibration are different sensors, but the same surface drives
 //! both), so the calibration of the fused posterior is reported beside its accuracy; two
 //! recognizers over the same features would count one piece of evidence twice, and are

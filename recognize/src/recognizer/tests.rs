@@ -1138,7 +1138,7 @@ fn symbol_strokes(strokes: usize, windows: usize, repeats: usize) -> Vec<Stroke>
 /// rule, the best a posterior can be under a proper score: the fit keeps the weight whole.
 /// Each window said four times over says nothing new: the fit weighs it a quarter.
 #[test]
-fn the_weight_fitted_counts_independent_windows_whole_and_a_window_said_four_times_a_quarter() {
+fn the_posterior_weight_fitted_counts_independent_windows_whole_and_one_said_four_times_a_quarter() {
     let model = train(
         &three_surfaces(3.0),
         &short_windows(Method::Svm, FeatureSet::Nakano),

@@ -26,14 +26,14 @@ use crate::sequential::{DEFAULT_MEMORY_S, SequentialParamsBuilder};
 use crate::svc::{FitEvent, Progress};
 
 impl RecognizerFile {
-    /// This recognizer's settings for anytime decisions ([`RecognizerFile::sequential_params`])
-    /// fitted on `captures`, the ones it was trained on: the weight of the grid
-    /// ([`WEIGHT_OCTAVES`]) whose posterior, run over each fold of recordings held out of a
-    /// refit, has the least Brier score; ties go to the smaller weight. `None` for a
-    /// recognizer without window probabilities, or captures that cannot be cross-validated:
-    /// a surface in fewer than two recordings, or a fold whose refit would lose a surface or
-    /// its vote calibration.
-    /// `progress` is told of each fold's refit.
+    /// The weight of a window in this recognizer's anytime decisions, fitted on `captures`,
+    /// the ones it was trained on: the weight of the grid ([`WEIGHT_OCTAVES`]) whose posterior
+    /// (otherwise as [`RecognizerFile::sequential_params`] sets it, over
+    /// [`DEFAULT_MEMORY_S`]), run over each fold of recordings held out of a refit, has the
+    /// least Brier score; ties go to the smaller weight. `None` for a recognizer without window
+    /// probabilities, or captures that cannot be cross-validated: a surface in fewer than two
+    /// recordings, or a fold without which the refit fails or cannot stand for this recognizer
+    /// (a warning to `progress` says why). `progress` is told of each fold's refit.
     pub fn fit_posterior_weight(
         &self,
         captures: &[LabelledCapture],
@@ -65,8 +65,16 @@ impl RecognizerFile {
                 .filter(|(_, g)| **g != f)
                 .map(|(c, _)| c.clone())
                 .collect();
-            let Some(model) = self.refit(&kept)? else {
-                return Ok(None);
+            let model = match self.refit(&kept) {
+                Ok(model) => model,
+                Err(why) => {
+                    progress(FitEvent::Warning(format!(
+                        "the posterior's weight stays hop / window: the refit without fold {} of {folds} \
+                         cannot stand for the recognizer: {why}",
+                        f + 1
+                    )));
+                    return Ok(None);
+                }
             };
             let sources = [(&model, model.windowing_with_probabilities()?, 1.0)];
             let mut short_of_travel = 0;
@@ -91,10 +99,9 @@ impl RecognizerFile {
     }
 
     /// The same recognizer trained on `captures` with this one's settings (an SVM's C as
-    /// chosen, no search): `None` where the refit lost a surface, or a k-NN's vote calibration
-    /// that this one has (so that its probabilities would not be this recognizer's kind), or
-    /// where a k-NN's windows are fewer than k.
-    fn refit(&self, captures: &[LabelledCapture]) -> Result<Option<RecognizerFile>, RecognizeError> {
+    /// chosen, no search), or why its probabilities would not stand for this recognizer's: the
+    /// refit failed, lost a surface, or lost (or gained) a k-NN's vote calibration.
+    fn refit(&self, captures: &[LabelledCapture]) -> Result<RecognizerFile, String> {
         let model = match &self.body {
             RecognizerBody::SvmWindows {
                 features,
@@ -102,41 +109,37 @@ impl RecognizerFile {
                 cell_scale,
                 svc,
                 ..
-            } => Self::refit_svm_windows(captures, *windowing, *features, svc.params().c, *cell_scale)?,
+            } => Self::refit_svm_windows(captures, *windowing, *features, svc.params().c, *cell_scale),
             RecognizerBody::KnnWindows {
                 features,
                 windowing,
                 cell_scale,
                 knn,
-                calibration,
                 ..
-            } => {
-                // A fold's windows can be fewer than k where all of them are not: then nothing
-                // can be held out, as with a single run.
-                let model =
-                    match Self::train_knn_windows(captures, *windowing, *features, knn.k(), *cell_scale) {
-                        Err(RecognizeError::Classifier { source, .. })
-                            if matches!(*source, RecognizeError::TooFewPoints { .. }) =>
-                        {
-                            return Ok(None);
-                        }
-                        other => other?,
-                    };
-                let calibrated = matches!(
-                    model.body,
-                    RecognizerBody::KnnWindows {
-                        calibration: Some(_),
-                        ..
-                    }
-                );
-                if calibrated != calibration.is_some() {
-                    return Ok(None);
+            } => Self::train_knn_windows(captures, *windowing, *features, knn.k(), *cell_scale),
+            _ => return Err(format!("a {} gives no window probabilities", self.method())),
+        }
+        .map_err(|e| e.chain())?;
+        let calibrated = |m: &RecognizerFile| {
+            matches!(
+                m.body,
+                RecognizerBody::KnnWindows {
+                    calibration: Some(_),
+                    ..
                 }
-                model
-            }
-            _ => return Ok(None),
+            )
         };
-        Ok((model.classes == self.classes).then_some(model))
+        if model.classes != self.classes {
+            return Err(format!(
+                "its captures hold {} of the {} surfaces",
+                model.classes.len(),
+                self.classes.len()
+            ));
+        }
+        if calibrated(&model) != calibrated(self) {
+            return Err("its k-NN's votes could not be calibrated as this one's were".into());
+        }
+        Ok(model)
     }
 
     /// The weight of the grid ([`WEIGHT_OCTAVES`] around `hop_weight`) at which the posterior

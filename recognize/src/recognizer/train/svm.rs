@@ -372,19 +372,6 @@ impl RecognizerFile {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::error::Error;
-
-    /// An error and its sources, outer to inner, as the command line prints them.
-    fn chain(e: &dyn Error) -> String {
-        let mut text = e.to_string();
-        let mut source = e.source();
-        while let Some(s) = source {
-            text.push_str(": ");
-            text.push_str(&s.to_string());
-            source = s.source();
-        }
-        text
-    }
 
     #[test]
     fn errors_and_warnings_name_the_classes_and_the_behaviour() {
@@ -399,7 +386,7 @@ mod tests {
         };
         let e = svc_error("lateral scratch", &classes)(failed(1e5));
         assert_eq!(
-            chain(&e),
+            e.chain(),
             "SVC of behaviour `lateral scratch`: SMO did not converge in 10000000 iterations at C = 1e5 \
              (classes `sandpaper_80` and `styrol_rough`)"
         );
@@ -408,7 +395,7 @@ mod tests {
         let e = svc_error(&label, &classes)(RecognizeError::EveryCFailed {
             failures: vec![(1e4, failed(1e4)), (1e5, failed(1e5))],
         });
-        let text = chain(&e);
+        let text = e.chain();
         assert!(
             text.starts_with("SVC of behaviour `nakano windows`: every candidate C failed: C = 1e4: ")
                 && text.contains("C = 1e5: SMO did not converge")
@@ -422,9 +409,9 @@ mod tests {
         assert_eq!(behaviour_label(Some("poke")), "poke");
         let e = svc_error(behaviour_label(None), &classes)(failed(1.0));
         assert!(
-            chain(&e).starts_with("SVC of behaviour `(no behaviour)`: "),
+            e.chain().starts_with("SVC of behaviour `(no behaviour)`: "),
             "{}",
-            chain(&e)
+            e.chain()
         );
 
         // A skipped candidate reaches the caller as one warning line in the recognizer's terms.
