@@ -23,7 +23,7 @@ import json
 import tempfile
 from pathlib import Path
 
-from palpus_cli import import_sliding_study, palpus, parser as cli_parser
+from palpus_cli import palpus, parser as cli_parser, sequential_table, sliding_study
 
 TRAIN_TRIALS = 5
 
@@ -35,10 +35,7 @@ def main():
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
-        palpus(args.palpus, "gen", "--out", str(root / "logs"), "--only", "multistream", "-q")
-        train, test = [], []
-        for trial, capture in import_sliding_study(args.palpus, root / "logs" / "multistream", root / "captures"):
-            (train if trial <= TRAIN_TRIALS else test).append(capture)
+        train, test = sliding_study(args.palpus, root, TRAIN_TRIALS)
         models = {}
         for method in ("svm", "knn"):
             for features in ("nakano", "vibration"):
@@ -77,25 +74,9 @@ def main():
         for m in runs[-1][1]["fused"]:
             print(f"- {m['features']}: cross-validated accuracy {100 * m['accuracy']:.1f} %, "
                   f"reliability {m['reliability']:.3f}, weight {m['weight']:.3f}")
-        table(runs, "senses")
-        table(knn_runs, "recognizers")
+        sequential_table(runs, "senses")
+        sequential_table(knn_runs, "recognizers")
 
-
-def table(runs, first):
-    """One Markdown row per run and threshold."""
-    print()
-    print(f"| {first} | threshold | windows named | named right | stable right (mean) | slowest surface "
-          "| trials not ending right | calibration error |")
-    print("|---|---|---|---|---|---|---|---|")
-    for name, e in runs:
-        for r in e["rows"]:
-            worst = r["worst_surface"]
-            stable = r["time_to_stable_correct_s"]
-            print(f"| {name} | {r['threshold']:g} | {100 * r['decided'] / e['steps']:.1f} % "
-                  f"| {100 * r['correct'] / max(r['decided'], 1):.1f} % "
-                  f"| {'-' if stable is None else f'{stable:.2f} s'} "
-                  f"| {f'{worst[1]:.2f} s ({worst[0]})' if worst else '-'} "
-                  f"| {r['not_stable']} of {e['captures']} | {100 * r['calibration']['ece']:.1f} % |")
 
 if __name__ == "__main__":
     main()

@@ -7,8 +7,11 @@ from pathlib import Path
 
 
 def palpus(binary, *args):
-    """Runs `binary` with `args` (failing on a non-zero exit) and returns its stdout."""
-    out = subprocess.run([binary, *args], check=True, capture_output=True, text=True)
+    """Runs `binary` with `args` and returns its stdout; a non-zero exit stops the script with
+    the command and what it said on stderr."""
+    out = subprocess.run([binary, *args], capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit(f"{binary} {' '.join(args)} exited with {out.returncode}:\n{out.stderr}")
     return out.stdout
 
 
@@ -47,3 +50,36 @@ def import_sliding_study(binary, logs, out, keep=lambda surface, trial: True):
                "--meta", f"trial={int(trial)}", "--out", str(capture))
         imported.append((int(trial), str(capture)))
     return imported
+
+
+def sliding_study(binary, root, train_trials):
+    """Generates the multi-stream sliding study under folder `root` (`palpus gen --only
+    multistream`) and imports every trial ([`import_sliding_study`]): returns the captures of
+    trials 1 to `train_trials`, and those of the rest."""
+    palpus(binary, "gen", "--out", str(Path(root) / "logs"), "--only", "multistream", "-q")
+    train, test = [], []
+    for trial, capture in import_sliding_study(binary, Path(root) / "logs" / "multistream", Path(root) / "captures"):
+        (train if trial <= train_trials else test).append(capture)
+    return train, test
+
+def sequential_table(runs, first, not_ending="trials not ending right", scores=False):
+    """Prints one Markdown row per `(name, evaluation)` of `runs` and threshold, from `recognize
+    eval --sequential --json`: windows named, named decisions right, the mean time to the stable
+    right surface and the slowest surface's, strokes not ending named right (the column called
+    `not_ending`), with `scores` flips per second and the posterior's Brier score, and its
+    calibration error. `first` heads the column of names."""
+    extra = " flips/s | Brier |" if scores else ""
+    print()
+    print(f"| {first} | threshold | windows named | named right | stable right (mean) | slowest surface "
+          f"| {not_ending} |{extra} calibration error |")
+    print("|---|---|---|---|---|---|---|" + ("---|---|" if scores else "") + "---|")
+    for name, e in runs:
+        for r in e["rows"]:
+            worst = r["worst_surface"]
+            stable = r["time_to_stable_correct_s"]
+            cells = (f" {r['flips_per_s']:.3f} | {r['calibration']['brier']:.3f} |" if scores else "")
+            print(f"| {name} | {r['threshold']:g} | {100 * r['decided'] / e['steps']:.1f} % "
+                  f"| {100 * r['correct'] / max(r['decided'], 1):.1f} % "
+                  f"| {'-' if stable is None else f'{stable:.2f} s'} "
+                  f"| {f'{worst[1]:.2f} s ({worst[0]})' if worst else '-'} "
+                  f"| {r['not_stable']} of {e['captures']} |{cells} {100 * r['calibration']['ece']:.1f} % |")

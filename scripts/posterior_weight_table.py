@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""README's table of the posterior's weight fitted on held-out recordings against hop / window.
+
+Two sets, each recognizer trained twice on the same captures: as `recognize train` does by
+default (the weight fitted on the recordings held out of training) and with `--no-weight-fit`
+(every window weighing hop / window). Each is then evaluated on recordings it never saw.
+
+- The scene `surfaces_nakano`: its SVM trained as the scene's header says, on captures made
+  through the simulated device on tracks 10, 60 and 110 mm into each patch, and evaluated on
+  tracks 35 and 85 mm in (`--sequential` at `--thresholds`); then the same over windows of fixed
+  time (the header's command without its three travel options).
+- The multi-stream sliding study (as `scripts/fusion_table.py`): SVMs over Nakano's features
+  and over the vibration spectrum on trials 1-5, evaluated on trials 6-10 alone and fused, at
+  threshold 0.9.
+
+Prints each fit as `recognize train` reports it, then one Markdown row per recognizer, weight
+and threshold: windows named, named decisions right, the mean time to the stable right surface
+and the slowest surface's, strokes not ending named right, flips per second, the posterior's
+Brier score and its calibration error.
+
+    python3 scripts/posterior_weight_table.py [--palpus target/release/palpus]
+        [--thresholds 0.5,0.8,0.9,0.95]
+"""
+
+import json
+import re
+import tempfile
+from pathlib import Path
+
+from palpus_cli import palpus, parser as cli_parser, sequential_table, sliding_study
+
+SCENE = Path(__file__).resolve().parent.parent / "scenes" / "surfaces_nakano.toml"
+TRAIN_TRACKS_MM = (10, 60, 110)
+TEST_TRACKS_MM = (35, 85)
+TRAIN_TRIALS = 5
+
+
+def scene_training():
+    """The scene's surfaces and the options its header trains its SVM with."""
+    text = SCENE.read_text()
+    surfaces = re.findall(r'^surface = "([^"]+)"', text, re.M)
+    header = " ".join(line.lstrip("#").strip().rstrip("\\") for line in text.splitlines() if line.startswith("#"))
+    found = re.search(r"palpus recognize train \S+ (--method .*?) --out", header)
+    if not surfaces or not found:
+        raise SystemExit(f"{SCENE} names no surfaces or no training command")
+    return surfaces, found.group(1).split()
+
+
+def fixed_time(options):
+    """The scene's training options without the three that read windows over travel (as
+    README's fixed-time column of the scene's times)."""
+    out, skip = [], 0
+    for o in options:
+        if skip:
+            skip -= 1
+        elif o in ("--windows-over-travel", "--friction-over-travel"):
+            pass
+        elif o == "--slowest-speed-mps":
+            skip = 1
+        else:
+            out.append(o)
+    return out
+
+
+def train_both(binary, captures, options, out):
+    """Trains with the weight fitted and without; returns {label: model path}."""
+    out.mkdir()
+    models = {}
+    for label, extra in (("fitted", []), ("hop / window", ["--no-weight-fit"])):
+        path = str(out / f"{len(models)}.json")
+        trained = palpus(binary, "recognize", "train", *captures, *options, *extra, "--out", path)
+        fit = next(line for line in trained.splitlines() if line.startswith("posterior weight"))
+        print(f"- {label}: {fit}")
+        models[label] = path
+    return models
+
+
+def evaluate(binary, model, captures, thresholds, fuse=()):
+    extra = [a for other in fuse for a in ("--fuse", other)]
+    return json.loads(palpus(binary, "recognize", "eval", model, *captures, "--sequential", thresholds,
+                             *extra, "--json"))
+
+
+def main():
+    parser = cli_parser(__doc__)
+    parser.add_argument("--thresholds", default="0.5,0.8,0.9,0.95")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        surfaces, options = scene_training()
+        sets = {}
+        for name, tracks in (("train", TRAIN_TRACKS_MM), ("test", TEST_TRACKS_MM)):
+            (root / name).mkdir()
+            sets[name] = []
+            for s in surfaces:
+                for o in tracks:
+                    path = str(root / name / f"{s}_{o}.csv")
+                    palpus(args.palpus, "capture", "--device", "sim", "--protocol", "rubbing", "--surface", s,
+                           "--track-offset-mm", str(o), "--unpaced", "-q", "--out", path)
+                    sets[name].append(path)
+            # In the order the scene header's shell glob gives them: the folds follow it.
+            sets[name].sort()
+        runs = []
+        for windows, opts in (("over travel", options), ("over fixed time", fixed_time(options))):
+            print(f"scene surfaces_nakano, windows {windows}, trained on tracks {TRAIN_TRACKS_MM} mm, "
+                  f"tested on {TEST_TRACKS_MM} mm:")
+            scene = train_both(args.palpus, sets["train"], opts, root / windows.replace(" ", "_"))
+            runs += [(f"scene SVM {windows}, {label}", evaluate(args.palpus, m, sets["test"], args.thresholds))
+                     for label, m in scene.items()]
+
+        train, test = sliding_study(args.palpus, root / "study", TRAIN_TRIALS)
+        study = {}
+        for features in ("nakano", "vibration"):
+            print(f"sliding study, SVM over {features} on trials 1-{TRAIN_TRIALS}:")
+            study[features] = train_both(args.palpus, train, ["--method", "svm", "--features", features,
+                                                              "--window-s", "0.25", "--mirrored-end"],
+                                         root / features)
+        for label in ("fitted", "hop / window"):
+            nakano, vibration = study["nakano"][label], study["vibration"][label]
+            runs += [(f"study, Nakano's features, {label}", evaluate(args.palpus, nakano, test, "0.9")),
+                     (f"study, vibration, {label}", evaluate(args.palpus, vibration, test, "0.9")),
+                     (f"study, fused, {label}", evaluate(args.palpus, nakano, test, "0.9", [vibration]))]
+        sequential_table(runs, "recognizer, weight", "not ending right", scores=True)
+
+
+if __name__ == "__main__":
+    main()
