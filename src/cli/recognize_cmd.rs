@@ -349,8 +349,8 @@ fn print_posterior_weight(model: &RecognizerFile) {
             p.weight, p.windows, p.folds, p.brier, p.hop_brier
         ),
         None => println!(
-            "posterior weight hop / window, {hop:.3} a window (not fitted: --no-weight-fit, a surface has captures \
-             of a single run or trial, or a warning above says why)"
+            "posterior weight hop / window, {hop:.3} a window (not fitted: a surface has captures of a single run \
+             or trial, --no-weight-fit was given, or a fold's refit could not stand for this recognizer)"
         ),
     }
 }

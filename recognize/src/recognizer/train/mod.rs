@@ -240,7 +240,8 @@ impl TrainSettings {
 
 impl FeatureNeeds {
     /// What training as `settings` say on captures sampled at `rate_hz` reads: the training
-    /// windows of windowed features, else each capture's histogram.
+    /// windows of windowed features (and a k-NN's or SVM's windows from contact on, which the
+    /// fit of its posterior's weight decides on), else each capture's histogram.
     pub fn training(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
         let needs = Self::new();
         Ok(match settings.features {
