@@ -212,7 +212,7 @@ impl RecognizerFile {
         let memory = (memory_s / hop_s).round().max(1.0) as usize;
         Some(
             SequentialParams::builder()
-                .weight(self.window_weight()?)
+                .weight(self.weight_of(w))
                 .memory(memory)
                 .smallest_share(smallest_share(w)),
         )
@@ -228,9 +228,13 @@ impl RecognizerFile {
     /// fitted on held-out recordings when training could fit one
     /// ([`RecognizerFile::posterior_weight`]), else [`RecognizerFile::hop_weight`].
     pub fn window_weight(&self) -> Option<f64> {
-        self.posterior_weight
-            .map(|p| p.weight)
-            .or_else(|| self.hop_weight())
+        self.window_probability_windowing().map(|w| self.weight_of(w))
+    }
+
+    /// [`RecognizerFile::window_weight`] of this recognizer's windows, `windowing` (its own,
+    /// or the same from contact on).
+    fn weight_of(&self, windowing: &NakanoWindowing) -> f64 {
+        self.posterior_weight.map_or(hop_weight(windowing), |p| p.weight)
     }
 
     /// The windows anytime decisions are made on: a k-NN's or SVM's own, from contact on (the
@@ -321,9 +325,7 @@ impl RecognizerFile {
                 hop_s: windowing.hop_samples as f64 / windowing.rate_hz,
                 accuracy,
                 reliability,
-                weight: model
-                    .posterior_weight
-                    .map_or(hop_weight(&windowing), |p| p.weight),
+                weight: model.weight_of(&windowing),
                 fitted: model.posterior_weight.is_some(),
             });
         }
