@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::{
-    BehaviourHistograms, CV_FOLDS, Method, ScaledWindows, SvmC, TrainSettings, Trainer,
+    BehaviourHistograms, CV_FOLDS, ChosenC, Method, ScaledWindows, SvmC, TrainSettings, Trainer,
     every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizeError;
@@ -276,7 +276,14 @@ impl RecognizerFile {
         cell_scale: CellScale,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
-        Self::svm_windows(captures, windowing, features, c, true, cell_scale, progress)
+        Self::svm_windows(
+            captures,
+            windowing,
+            features,
+            WindowC::Choose(c),
+            cell_scale,
+            progress,
+        )
     }
 
     /// The SVM over windows of this recognizer's settings, refitted on `captures` with its own
@@ -292,21 +299,18 @@ impl RecognizerFile {
             captures,
             windowing,
             features,
-            &SvmC::Fixed(c),
-            false,
+            WindowC::Known(c),
             cell_scale,
             &no_progress,
         )
     }
 
-    /// [`RecognizerFile::train_svm_windows_observed`], searching for C (when `c` asks and the
-    /// captures allow) only if `search_c`.
+    /// [`RecognizerFile::train_svm_windows_observed`], with its C come by as `c` says.
     fn svm_windows(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         features: FeatureSet,
-        c: &SvmC,
-        search_c: bool,
+        c: WindowC<'_>,
         cell_scale: CellScale,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
@@ -323,24 +327,27 @@ impl RecognizerFile {
         let names = classes.clone();
         let svc_error = svc_error(&label, &names);
         let progress = naming_progress(progress, &names, &label);
-        let chosen = c
-            .choose(WINDOW_SVM_FALLBACK_C, |grid| {
-                (search_c && every_class_in_two_groups(&y, &groups)).then(|| {
-                    select_c_observed(
-                        params,
-                        grid,
-                        &BehaviourData {
-                            features: &x,
-                            labels: &y,
-                            groups: &groups,
-                        },
-                        classes.len(),
-                        CV_FOLDS,
-                        &progress,
-                    )
+        let chosen = match c {
+            WindowC::Choose(c) => c
+                .choose(WINDOW_SVM_FALLBACK_C, |grid| {
+                    every_class_in_two_groups(&y, &groups).then(|| {
+                        select_c_observed(
+                            params,
+                            grid,
+                            &BehaviourData {
+                                features: &x,
+                                labels: &y,
+                                groups: &groups,
+                            },
+                            classes.len(),
+                            CV_FOLDS,
+                            &progress,
+                        )
+                    })
                 })
-            })
-            .map_err(&svc_error)?;
+                .map_err(&svc_error)?,
+            WindowC::Known(c) => ChosenC { c, search: None },
+        };
         let svc = Svc::fit_observed(
             SvcParams {
                 c: chosen.c,
@@ -367,6 +374,16 @@ impl RecognizerFile {
             x.len(),
         ))
     }
+}
+
+/// How [`RecognizerFile`]'s SVM over windows comes by its C.
+enum WindowC<'a> {
+    /// As the settings say: the best of the candidates under cross-validation by recording
+    /// where the captures allow one (even a single C given is cross-validated, as the file
+    /// keeps that accuracy for the fusion's reliability weighting).
+    Choose(&'a SvmC),
+    /// This C, chosen already: a fold's refit needs no cross-validation of its own.
+    Known(f64),
 }
 
 #[cfg(test)]
