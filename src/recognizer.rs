@@ -16,13 +16,15 @@ use recognize::sequential::{DEFAULT_MEMORY_S, DEFAULT_THRESHOLD};
 use recognize::{FeatureNeeds, FeatureSet, LabelledCapture, Method, RecognizerFile, TrainSettings};
 
 use crate::scene::Scene;
-use crate::session::report::{Recognition, RecognizerLine, SurfaceTiming};
+use crate::session::report::{Recognition, RecognizerLine, SurfaceTiming, WindowWeightFrom};
 use crate::session::{SegmentKind, SegmentRun};
 
 /// A loaded recognizer and its live state.
 #[derive(Debug)]
 pub struct SceneRecognizer {
     live: LiveRecognizer,
+    /// Where its windows' weight in the posterior came from, for the report.
+    weight_from: Option<WindowWeightFrom>,
 }
 
 impl SceneRecognizer {
@@ -53,6 +55,7 @@ impl SceneRecognizer {
             (None, None) => return Ok(None),
         };
         let rate_hz = scene.device.rate_hz;
+        let weight_from = WindowWeightFrom::of(&model);
         let live = match model.sequential_params(section.memory_s.unwrap_or(DEFAULT_MEMORY_S)) {
             Some(params) => {
                 let params = params.threshold(section.threshold.unwrap_or(DEFAULT_THRESHOLD));
@@ -67,7 +70,7 @@ impl SceneRecognizer {
             None => LiveRecognizer::new(&model, rate_hz),
         }
         .context("starting the live recognizer")?;
-        Ok(Some(Self { live }))
+        Ok(Some(Self { live, weight_from }))
     }
 
     /// A copy of the recognizer for one segment's haptic thread (allocated here, on the
@@ -78,7 +81,12 @@ impl SceneRecognizer {
 
     /// How the report names it.
     pub fn line(&self) -> RecognizerLine {
-        line(&self.live)
+        line(&self.live, self.weight_from)
+    }
+
+    /// The surfaces it names, in the order of its posterior.
+    pub fn classes(&self) -> &[String] {
+        self.live.classes()
     }
 
     /// The decisions a segment's haptic thread made, in order (none for other segments).
@@ -87,8 +95,9 @@ impl SceneRecognizer {
     }
 }
 
-/// How the report names `live` and the settings it decides with.
-pub fn line(live: &LiveRecognizer) -> RecognizerLine {
+/// How the report names `live` and the settings it decides with (its windows' weight taken
+/// from `weight_from`).
+fn line(live: &LiveRecognizer, weight_from: Option<WindowWeightFrom>) -> RecognizerLine {
     let w = live.windowing();
     let params = live.sequential_params();
     let hop_s = w.hop_samples as f64 / w.rate_hz;
@@ -104,6 +113,7 @@ pub fn line(live: &LiveRecognizer) -> RecognizerLine {
         memory_s: params.map(|p| p.memory() as f64 * hop_s),
         change_odds: params.and_then(|p| p.change_log_odds()).map(f64::exp),
         window_weight: params.map(|p| p.weight()),
+        window_weight_from: params.and(weight_from),
     }
 }
 

@@ -14,11 +14,12 @@ use std::time::Instant;
 
 use glam::DVec3;
 use haptics::live::{self, LiveView, RecentSamples};
-use haptics::live_recognizer::{LiveRecognizer, channel};
+use haptics::live_recognizer::channel;
 use haptics::sim::hand::LiveHand;
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
 
+use crate::recognizer::SceneRecognizer;
 use crate::scene::Scene;
 use crate::session::report::Recognition as Decision;
 use crate::session::{
@@ -71,7 +72,7 @@ struct Session {
     recent: RecentSamples,
     worker: Option<JoinHandle<Result<SegmentRun, SessionError>>>,
     hand_m: DVec3,
-    recognizer: Option<LiveRecognizer>,
+    recognizer: Option<SceneRecognizer>,
     recognized: Option<Recognition>,
     /// The recognizer channel's decision count at the last sample read.
     decisions_seen: f64,
@@ -98,7 +99,7 @@ impl Session {
         cache_dir: PathBuf,
     ) -> anyhow::Result<Self> {
         let view = SceneView::load(&scene)?;
-        let recognizer = live_recognizer(&scene)?;
+        let recognizer = SceneRecognizer::for_scene(&scene)?;
         let mut scenes: Vec<PathBuf> = std::fs::read_dir(scene.base_dir())
             .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
             .unwrap_or_default();
@@ -151,7 +152,7 @@ impl Session {
             self.scene.clone(),
             self.options.clone(),
             self.segments.len(),
-            self.recognizer.clone(),
+            self.recognizer.as_ref().map(SceneRecognizer::live),
         );
         self.worker = Some(std::thread::spawn(move || {
             session::run_segment(&scene, &segment, n, &options, Some(link), recognizer)
@@ -174,7 +175,7 @@ impl Session {
         let models = crate::models::resolve_with_progress(&scene, &self.cache_dir)?;
         let segments = session::segments(&scene, &models)?;
         let view = SceneView::load(&scene)?;
-        let recognizer = live_recognizer(&scene)?;
+        let recognizer = SceneRecognizer::for_scene(&scene)?;
         self.stop();
         self.scene = scene;
         self.segments = segments;
@@ -208,12 +209,6 @@ impl Session {
         };
         self.hand.set(self.hand_m, 0.01);
     }
-}
-
-/// The scene's recognizer as the headless run resolves it: its file, or one trained from its
-/// folder of captures.
-fn live_recognizer(scene: &Scene) -> anyhow::Result<Option<LiveRecognizer>> {
-    Ok(crate::recognizer::SceneRecognizer::for_scene(scene)?.map(|r| r.live()))
 }
 
 impl WindowApp for Session {
@@ -376,6 +371,6 @@ pub fn run(
     }
     let mut outcome = std::mem::take(&mut session.outcome);
     outcome.scene = Some(session.scene.clone());
-    outcome.recognizer = session.recognizer.as_ref().map(crate::recognizer::line);
+    outcome.recognizer = session.recognizer.as_ref().map(SceneRecognizer::line);
     Ok(outcome)
 }

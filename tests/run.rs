@@ -308,6 +308,19 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
     assert_eq!(f(&r["recognizer"]["threshold"]), 0.9);
     // Its SVM decides each window at its last sample, and the report says so.
     assert_eq!(f(&r["recognizer"]["decided_after_s"]), 0.0);
+    // The committed SVM carries a weight fitted on held-out tracks, and the report says where
+    // the weight it decides with came from: the file's fit, not hop / window.
+    let model: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("assets/models/nakano_svm.json")).unwrap())
+            .unwrap();
+    let fitted = f(&model["posterior_weight"]["weight"]);
+    let weight_from = &r["recognizer"]["window_weight_from"];
+    assert_eq!(weight_from["from"], "held_out", "{weight_from}");
+    assert_eq!(f(&r["recognizer"]["window_weight"]), fitted);
+    assert_eq!(
+        f(&weight_from["hop_weight"]),
+        f(&model["posterior_weight"]["hop_weight"])
+    );
     // Every surface ends named right, well before any decision on a fixed 3 s window could be
     // made (3 s plus the filters' 0.27 s look-ahead), and never before the first 0.25 s window
     // is in: the model decides each window at its last sample.

@@ -131,6 +131,46 @@ pub struct RecognizerLine {
     /// weight fitted on held-out recordings, else hop / window).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub window_weight: Option<f64>,
+    /// Where that weight came from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_weight_from: Option<WindowWeightFrom>,
+}
+
+/// Where a window's weight in the posterior came from, so that a report read later says whether
+/// the confidence it shows was calibrated on recordings the recognizer never saw.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "from")]
+pub enum WindowWeightFrom {
+    /// Fitted on recordings held out of training; `hop / window` would have been `hop_weight`.
+    HeldOut {
+        /// `hop / window` of the recognizer's windows.
+        hop_weight: f64,
+    },
+    /// `hop / window`, every sample counted once: the file carries no fit (written before fits
+    /// were made, trained on a single recording, or with `--no-weight-fit`).
+    HopWindow,
+}
+
+impl WindowWeightFrom {
+    /// Where the weight of `model`'s windows comes from; `None` for a recognizer without window
+    /// probabilities (a SOM).
+    pub fn of(model: &recognize::RecognizerFile) -> Option<Self> {
+        let hop_weight = model.hop_weight()?;
+        Some(match model.posterior_weight {
+            Some(_) => Self::HeldOut { hop_weight },
+            None => Self::HopWindow,
+        })
+    }
+
+    /// The words after the weight in the report.
+    fn words(self) -> String {
+        match self {
+            Self::HeldOut { hop_weight } => {
+                format!(" as fitted on held-out recordings rather than hop / window's {hop_weight:.3}")
+            }
+            Self::HopWindow => " (hop / window)".to_owned(),
+        }
+    }
 }
 
 /// The whole report (`report.json`).
@@ -281,9 +321,12 @@ impl SessionReport {
                     let change = r.change_odds.map_or("no change test".to_owned(), |o| {
                         format!("a change of surface at {o:.0}:1")
                     });
+                    let from = r
+                        .window_weight_from
+                        .map_or(String::new(), WindowWeightFrom::words);
                     let weight = r
                         .window_weight
-                        .map_or(String::new(), |w| format!("each window weighing {w:.3}, "));
+                        .map_or(String::new(), |w| format!("each window weighing {w:.3}{from}, "));
                     format!(
                         "names a surface once its posterior reaches {p} ({weight}evidence of the last {}, {change})",
                         memory_in_words(m, r.window_s, r.window_m)
