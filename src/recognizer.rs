@@ -56,7 +56,11 @@ impl SceneRecognizer {
         };
         let rate_hz = scene.device.rate_hz;
         let weight_from = WindowWeightFrom::of(&model);
-        let live = match model.sequential_params(section.memory_s.unwrap_or(DEFAULT_MEMORY_S)) {
+        let memory_s = section.memory_s.unwrap_or(DEFAULT_MEMORY_S);
+        if let Some(note) = weight_memory_note(&model, memory_s) {
+            eprintln!("warning: {}: recognizer: {note}", scene.path.display());
+        }
+        let live = match model.sequential_params(memory_s) {
             Some(params) => {
                 let params = params.threshold(section.threshold.unwrap_or(DEFAULT_THRESHOLD));
                 let params = match section.change_odds {
@@ -93,6 +97,17 @@ impl SceneRecognizer {
     pub fn recognize(&self, run: &SegmentRun) -> Vec<Recognition> {
         decisions(self.live.classes(), run)
     }
+}
+
+/// Why `model`'s window weight does not hold for a posterior keeping `memory_s` of evidence:
+/// it was fitted at another memory. `None` when it holds, or when no weight was fitted.
+pub fn weight_memory_note(model: &RecognizerFile, memory_s: f64) -> Option<String> {
+    let fit = model.posterior_weight.filter(|p| !p.fitted_at_memory(memory_s))?;
+    Some(format!(
+        "its window weight was fitted over a memory of {} s and is used over {memory_s} s, outside \
+         what the fit measured (train with --weight-fit-memory-s {memory_s} to fit it there)",
+        fit.memory_s
+    ))
 }
 
 /// How the report names `live` and the settings it decides with (its windows' weight taken

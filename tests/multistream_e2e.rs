@@ -319,6 +319,24 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
         assert_eq!(m["fitted"], true, "{m}");
         assert_eq!(m["weight"], file(path)["posterior_weight"]["weight"], "{m}");
     }
+    // Both were fitted over the default memory; decided over another, the weight says it is
+    // outside what the fit measured.
+    let mut args = vec![
+        "recognize",
+        "eval",
+        nakano,
+        "--sequential",
+        "0.9",
+        "--memory-s",
+        "1",
+        "--json",
+    ];
+    args.extend(test.iter().map(String::as_str));
+    let warned = String::from_utf8_lossy(&succeeds(&args).stderr).into_owned();
+    assert!(
+        warned.contains("its window weight was fitted over a memory of 3 s and is used over 1 s"),
+        "{warned}"
+    );
     // Fused, the posterior is right at least as often as either sense alone, names the stable
     // right surface sooner, leaves no more strokes unresolved, and is no worse calibrated than
     // the friction alone.

@@ -345,8 +345,8 @@ fn print_posterior_weight(model: &RecognizerFile) {
     match &model.posterior_weight {
         Some(p) => println!(
             "posterior weight {:.3} a window (hop / window {hop:.3}), fitted on {} windows held out in {}-fold \
-             cross-validation by run: Brier score {:.3} against {:.3}",
-            p.weight, p.windows, p.folds, p.brier, p.hop_brier
+             cross-validation by run, over a memory of {} s: Brier score {:.3} against {:.3}",
+            p.weight, p.windows, p.folds, p.memory_s, p.brier, p.hop_brier
         ),
         None => println!(
             "posterior weight hop / window, {hop:.3} a window (not fitted: a surface has captures of a single run \
@@ -496,7 +496,15 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
     };
     let params = match args.window_weight {
         Some(w) => params.weight(w),
-        None => params,
+        None => {
+            let models = std::iter::once(model).chain(others.iter().copied());
+            for (path, m) in std::iter::once(&args.model).chain(&args.fuse).zip(models) {
+                if let Some(note) = crate::recognizer::weight_memory_note(m, args.memory_s) {
+                    eprintln!("warning: {}: {note}", path.display());
+                }
+            }
+            params
+        }
     };
     let rate_hz = model.windowing().map(|w| w.rate_hz);
     let captures = read_keeping(&args.input, &args.captures, rate_hz, |_| Ok(needs.clone()))?;

@@ -156,6 +156,12 @@ pub(crate) struct TrainOptions {
     /// once per fold; it needs two runs or trials of every surface).
     #[arg(long)]
     no_weight_fit: bool,
+    /// knn, svm over windows: the posterior's memory the weight is fitted at, s: the one the
+    /// recognizer will decide with (`eval --memory-s`, a scene's `recognizer.memory_s`). A
+    /// window's weight and the memory trade against each other, and a recognizer used with
+    /// another memory says so.
+    #[arg(long, value_name = "S", default_value_t = recognize::sequential::DEFAULT_MEMORY_S, conflicts_with = "no_weight_fit")]
+    weight_fit_memory_s: f64,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -286,6 +292,7 @@ impl TrainOptions {
                 CArg::Fixed(c) => SvmC::Fixed(c),
             },
             fit_posterior_weight: !self.no_weight_fit,
+            weight_fit_memory_s: self.weight_fit_memory_s,
             ..TrainSettings::new(method)
         };
         if let Some(warning) = window_warning(&settings) {

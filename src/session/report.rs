@@ -145,6 +145,8 @@ pub enum WindowWeightFrom {
     HeldOut {
         /// `hop / window` of the recognizer's windows.
         hop_weight: f64,
+        /// The posterior's memory the fit was made at, s.
+        memory_s: f64,
     },
     /// `hop / window`, every sample counted once: the file carries no fit (written before fits
     /// were made, trained on a single recording, or with `--no-weight-fit`).
@@ -157,16 +159,29 @@ impl WindowWeightFrom {
     pub fn of(model: &recognize::RecognizerFile) -> Option<Self> {
         let hop_weight = model.hop_weight()?;
         Some(match model.posterior_weight {
-            Some(_) => Self::HeldOut { hop_weight },
+            Some(p) => Self::HeldOut {
+                hop_weight,
+                memory_s: p.memory_s,
+            },
             None => Self::HopWindow,
         })
     }
 
-    /// The words after the weight in the report.
-    fn words(self) -> String {
+    /// The words after the weight in the report of a posterior keeping `memory_s`.
+    fn words(self, memory_s: f64) -> String {
         match self {
-            Self::HeldOut { hop_weight } => {
-                format!(" as fitted on held-out recordings rather than hop / window's {hop_weight:.3}")
+            Self::HeldOut {
+                hop_weight,
+                memory_s: fitted_s,
+            } => {
+                let elsewhere = if (memory_s - fitted_s).abs() >= 5e-4 {
+                    format!(" over a memory of {fitted_s} s, not this one,")
+                } else {
+                    String::new()
+                };
+                format!(
+                    " as fitted on held-out recordings{elsewhere} rather than hop / window's {hop_weight:.3}"
+                )
             }
             Self::HopWindow => " (hop / window)".to_owned(),
         }
@@ -321,9 +336,7 @@ impl SessionReport {
                     let change = r.change_odds.map_or("no change test".to_owned(), |o| {
                         format!("a change of surface at {o:.0}:1")
                     });
-                    let from = r
-                        .window_weight_from
-                        .map_or(String::new(), WindowWeightFrom::words);
+                    let from = r.window_weight_from.map_or(String::new(), |f| f.words(m));
                     let weight = r
                         .window_weight
                         .map_or(String::new(), |w| format!("each window weighing {w:.3}{from}, "));
@@ -461,5 +474,27 @@ pub fn decided_after(seconds: f64) -> String {
         format!("each decided {seconds:.2} s after its last sample")
     } else {
         "each decided at its last sample".to_owned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_report_says_where_the_window_weight_came_from_and_at_what_memory() {
+        let fitted = WindowWeightFrom::HeldOut {
+            hop_weight: 0.08,
+            memory_s: 3.0,
+        };
+        assert_eq!(
+            fitted.words(3.0),
+            " as fitted on held-out recordings rather than hop / window's 0.080"
+        );
+        assert_eq!(
+            fitted.words(6.0),
+            " as fitted on held-out recordings over a memory of 3 s, not this one, rather than hop / window's 0.080"
+        );
+        assert_eq!(WindowWeightFrom::HopWindow.words(6.0), " (hop / window)");
     }
 }

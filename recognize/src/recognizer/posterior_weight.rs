@@ -5,6 +5,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::sequential::DEFAULT_MEMORY_S;
+
 /// Weights tried per doubling of the weight.
 pub const WEIGHT_STEPS_PER_OCTAVE: i32 = 4;
 
@@ -30,6 +32,17 @@ pub struct PosteriorWeight {
     pub brier: f64,
     /// The same at `hop_weight`.
     pub hop_brier: f64,
+    /// The posterior's memory the weight was fitted at, s (as `--memory-s` gives it: over
+    /// travel, the travel of that long at the windows' speed). A window's weight and the
+    /// memory trade against each other, so a posterior that keeps another memory is outside
+    /// what the fit measured. Files written before the field fitted at
+    /// [`DEFAULT_MEMORY_S`].
+    #[serde(default = "default_memory_s")]
+    pub memory_s: f64,
+}
+
+fn default_memory_s() -> f64 {
+    DEFAULT_MEMORY_S
 }
 
 impl PosteriorWeight {
@@ -48,6 +61,18 @@ impl PosteriorWeight {
                 return Err((field, format!("{b} is not a Brier score in [0, 2]")));
             }
         }
+        if !(self.memory_s.is_finite() && self.memory_s > 0.0) {
+            return Err((
+                "memory_s",
+                format!("{} s is not a positive memory", self.memory_s),
+            ));
+        }
         Ok(())
+    }
+
+    /// Whether a posterior keeping `memory_s` keeps the memory this weight was fitted at (to
+    /// the millisecond, as memories are given).
+    pub fn fitted_at_memory(&self, memory_s: f64) -> bool {
+        (self.memory_s - memory_s).abs() < 5e-4
     }
 }

@@ -1208,6 +1208,39 @@ fn a_recognizer_trained_on_several_trials_fits_its_posterior_weight() {
             RecognizerFile::from_json(&serde_json::to_string(&model).expect("json"), Path::new("m.json"))
                 .expect("round trip");
         assert_eq!(back.posterior_weight, Some(fit));
+        // Fitted at the default memory, and it says so: a posterior keeping another memory is
+        // outside what the fit measured. A file from before the field was fitted there too.
+        assert_eq!(fit.memory_s, crate::sequential::DEFAULT_MEMORY_S);
+        assert!(fit.fitted_at_memory(3.0) && !fit.fitted_at_memory(0.5));
+        let mut json = serde_json::to_value(&model).expect("serialize");
+        json["posterior_weight"]
+            .as_object_mut()
+            .expect("a fit")
+            .remove("memory_s");
+        let older = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("older file");
+        assert_eq!(older.posterior_weight, Some(fit));
+        // Fitted at a shorter memory, the posterior is scored over that memory: a stroke of
+        // 3 s keeps only its last 0.5 s of windows, so the Brier score at hop / window moves.
+        let short = train(
+            &train_set,
+            &TrainSettings {
+                weight_fit_memory_s: 0.5,
+                ..settings.clone()
+            },
+        )
+        .expect("train")
+        .posterior_weight
+        .expect("fitted");
+        assert_eq!(short.memory_s, 0.5);
+        assert_ne!(short.hop_brier, fit.hop_brier, "{short:?} against {fit:?}");
+        let err = model
+            .fit_posterior_weight(&train_set, 0.0, &crate::svc::no_progress)
+            .expect_err("no memory");
+        assert!(
+            err.to_string()
+                .contains("memory the posterior's weight is fitted at"),
+            "{err}"
+        );
 
         let unfitted = train(
             &train_set,
@@ -1239,6 +1272,7 @@ fn a_bad_posterior_weight_names_its_field() {
         ("weight", 1.5),
         ("hop_brier", f64::NAN),
         ("folds", 1.0),
+        ("memory_s", 0.0),
     ] {
         let mut json = serde_json::to_value(&model).expect("serialize");
         json["posterior_weight"][field] = if field == "folds" {

@@ -22,14 +22,16 @@ use super::train::{CV_FOLDS, every_class_in_two_groups};
 use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
 use crate::folds::group_folds;
-use crate::sequential::{DEFAULT_MEMORY_S, SequentialParamsBuilder};
+#[cfg(doc)]
+use crate::sequential::DEFAULT_MEMORY_S;
+use crate::sequential::SequentialParamsBuilder;
 use crate::svc::{FitEvent, Progress};
 
 impl RecognizerFile {
     /// The weight of a window in this recognizer's anytime decisions, fitted on `captures`,
     /// the ones it was trained on: the weight of the grid ([`WEIGHT_OCTAVES`]) whose posterior
-    /// (otherwise as [`RecognizerFile::sequential_params`] sets it, over
-    /// [`DEFAULT_MEMORY_S`]), run over each fold of recordings held out of a refit, has the
+    /// (otherwise as [`RecognizerFile::sequential_params`] sets it, keeping `memory_s` of
+    /// evidence: [`DEFAULT_MEMORY_S`] unless the recognizer is meant for another), run over each fold of recordings held out of a refit, has the
     /// least Brier score; ties go to the smaller weight. `None` for a recognizer without window
     /// probabilities, or captures that cannot be cross-validated: a surface in fewer than two
     /// recordings, or a fold without which the refit fails or cannot stand for this recognizer
@@ -37,10 +39,18 @@ impl RecognizerFile {
     pub fn fit_posterior_weight(
         &self,
         captures: &[LabelledCapture],
+        memory_s: f64,
         progress: Progress<'_>,
     ) -> Result<Option<PosteriorWeight>, RecognizeError> {
-        let (Some(params), Some(hop_weight)) = (self.sequential_params(DEFAULT_MEMORY_S), self.hop_weight())
-        else {
+        if !(memory_s.is_finite() && memory_s > 0.0) {
+            return Err(RecognizeError::Parameter {
+                of: "setting",
+                name: "the memory the posterior's weight is fitted at, s",
+                value: memory_s,
+                reason: "must be positive and finite",
+            });
+        }
+        let (Some(params), Some(hop_weight)) = (self.sequential_params(memory_s), self.hop_weight()) else {
             return Ok(None);
         };
         let base = params.weight(hop_weight);
@@ -95,6 +105,7 @@ impl RecognizerFile {
             windows,
             brier,
             hop_brier,
+            memory_s,
         }))
     }
 

@@ -32,6 +32,7 @@ use crate::features::{
     capture_histogram, histogram_names, window_vectors,
 };
 use crate::knn::PAPER_K;
+use crate::sequential::DEFAULT_MEMORY_S;
 use crate::som::Normalization;
 #[cfg(doc)]
 use crate::svc::SvcParams;
@@ -164,6 +165,9 @@ pub struct TrainSettings {
     /// k-NN or SVM over windows: fit the posterior's weight on recordings held out of
     /// training ([`RecognizerFile::fit_posterior_weight`]) where the captures allow.
     pub fit_posterior_weight: bool,
+    /// The posterior's memory that weight is fitted at, s: the one the recognizer will decide
+    /// with (a scene's `memory_s`, `eval --memory-s`).
+    pub weight_fit_memory_s: f64,
 }
 
 impl TrainSettings {
@@ -171,7 +175,7 @@ impl TrainSettings {
     /// every [`HOP_S`] on the method's training windows
     /// ([`TrainSettings::training_window_s`]), seed 0, [`Normalization::LogWithinClass`], k = 3,
     /// C chosen by cross-validation ([`SvmC::auto`]), mean cells, maps sized by their classes, the
-    /// posterior's weight fitted where the captures allow.
+    /// posterior's weight fitted where the captures allow, at [`DEFAULT_MEMORY_S`].
     pub fn new(method: Method) -> Self {
         Self {
             method,
@@ -191,6 +195,7 @@ impl TrainSettings {
             cell_scale: CellScale::Mean,
             som_nodes: None,
             fit_posterior_weight: true,
+            weight_fit_memory_s: DEFAULT_MEMORY_S,
         }
     }
 
@@ -316,7 +321,8 @@ impl TrainSettings {
         self.features.check_columns(captures)?;
         let mut file = self.method.trainer().train_observed(captures, self, progress)?;
         if self.fit_posterior_weight {
-            file.posterior_weight = file.fit_posterior_weight(captures, progress)?;
+            file.posterior_weight =
+                file.fit_posterior_weight(captures, self.weight_fit_memory_s, progress)?;
         }
         Ok(file)
     }
