@@ -51,7 +51,12 @@ impl SceneRecognizer {
                 }
                 model
             }
-            (None, Some(dir)) => train(&scene.resolve(dir), method, section.window_s)?,
+            (None, Some(dir)) => train(
+                &scene.resolve(dir),
+                method,
+                section.window_s,
+                section.memory_s.unwrap_or(DEFAULT_MEMORY_S),
+            )?,
             (None, None) => return Ok(None),
         };
         let rate_hz = scene.device.rate_hz;
@@ -217,10 +222,16 @@ pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceT
 
 /// Trains a `method` recognizer on Nakano's features of every `*.csv` rubbing capture in
 /// `dir`, with the method's defaults ([`TrainSettings::new`]: the protocol's windows,
-/// [`NakanoWindowing::protocol`]) but for the decision window `window_s` if given. Each
+/// [`NakanoWindowing::protocol`]) but for the decision window `window_s` if given, its windows'
+/// weight fitted (where the captures allow) over the scene's memory, `memory_s`. Each
 /// capture is kept only as its training windows once read, so a folder of many long captures
 /// holds one capture's samples at a time.
-fn train(dir: &std::path::Path, method: Method, window_s: Option<f64>) -> anyhow::Result<RecognizerFile> {
+fn train(
+    dir: &std::path::Path,
+    method: Method,
+    window_s: Option<f64>,
+    memory_s: f64,
+) -> anyhow::Result<RecognizerFile> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading recognizer captures in {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -233,6 +244,9 @@ fn train(dir: &std::path::Path, method: Method, window_s: Option<f64>) -> anyhow
     if let Some(w) = window_s {
         settings.window_s = w;
     }
+    // Where the captures allow a fit, the windows' weight is fitted over the memory the scene
+    // decides with.
+    settings.weight_fit_memory_s = memory_s;
     let mut needs: Option<FeatureNeeds> = None;
     let mut captures = Vec::with_capacity(paths.len());
     for p in &paths {
