@@ -7,8 +7,9 @@
 //! repeats, a hand sways slowly, and the same stretch of surface read twice says the same
 //! thing twice. The exponent that calibrates the posterior depends on the rig, the surfaces and
 //! the classifier, so it is measured: when every surface has captures in at least two
-//! recordings (runs or trials), training refits the recognizer with each fold of recordings
-//! held out, runs the posterior over the held-out strokes at every weight of a grid around
+//! recordings (runs or trials), training refits the recognizer with each recording held out in
+//! turn (at most [`WEIGHT_FIT_FOLDS`] folds, so that a fold's recognizer is nearly the final
+//! one), runs the posterior over the held-out strokes at every weight of a grid around
 //! `hop / window`, and keeps the weight with the least Brier score. The Brier score is a proper
 //! scoring rule, least for a calibrated posterior; this is temperature scaling (Guo et al.,
 //! ICML 2017) of the whole posterior rather than of one window. Without two recordings of every
@@ -16,9 +17,9 @@
 
 use super::file::{RecognizerBody, RecognizerFile};
 use super::labelled::class_index;
-use super::posterior_weight::{PosteriorWeight, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE};
+use super::posterior_weight::{PosteriorWeight, WEIGHT_FIT_FOLDS, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE};
 use super::sequential_eval::Stroke;
-use super::train::{CV_FOLDS, every_class_in_two_groups};
+use super::train::every_class_in_two_groups;
 use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
 use crate::folds::group_folds;
@@ -31,8 +32,9 @@ impl RecognizerFile {
     /// The weight of a window in this recognizer's anytime decisions, fitted on `captures`,
     /// the ones it was trained on: the weight of the grid ([`WEIGHT_OCTAVES`]) whose posterior
     /// (otherwise as [`RecognizerFile::sequential_params`] sets it, keeping `memory_s` of
-    /// evidence: [`DEFAULT_MEMORY_S`] unless the recognizer is meant for another), run over each fold of recordings held out of a refit, has the
-    /// least Brier score; ties go to the smaller weight. `None` for a recognizer without window
+    /// evidence: [`DEFAULT_MEMORY_S`] unless the recognizer is meant for another), run over
+    /// each recording held out of a refit ([`WEIGHT_FIT_FOLDS`] at most), has the least Brier
+    /// score; ties go to the smaller weight. `None` for a recognizer without window
     /// probabilities, or captures that cannot be cross-validated: a surface in fewer than two
     /// recordings, or a fold without which the refit fails or cannot stand for this recognizer
     /// (a warning to `progress` says why). `progress` is told of each fold's refit.
@@ -62,7 +64,7 @@ impl RecognizerFile {
         if !every_class_in_two_groups(&labels, &groups) {
             return Ok(None);
         }
-        let (fold, folds) = group_folds(&groups, CV_FOLDS)?;
+        let (fold, folds) = group_folds(&groups, WEIGHT_FIT_FOLDS)?;
         let mut strokes = Vec::with_capacity(captures.len());
         progress(FitEvent::Step {
             what: "fitting the posterior's weight on held-out recordings",
