@@ -22,6 +22,53 @@ def parser(doc):
     return p
 
 
+SCENE = Path(__file__).resolve().parent.parent / "scenes" / "surfaces_nakano.toml"
+# The tracks into each patch the scene's recognizer is trained on, as its header says.
+SCENE_TRAIN_TRACKS_MM = (10, 60, 110)
+
+
+def scene_training():
+    """The scene's surfaces and the options its header trains its SVM with."""
+    text = SCENE.read_text()
+    surfaces = re.findall(r'^surface = "([^"]+)"', text, re.M)
+    header = " ".join(line.lstrip("#").strip().rstrip("\\") for line in text.splitlines() if line.startswith("#"))
+    found = re.search(r"palpus recognize train \S+ (--method .*?) --out", header)
+    if not surfaces or not found:
+        raise SystemExit(f"{SCENE} names no surfaces or no training command")
+    return surfaces, found.group(1).split()
+
+
+def fixed_time(options):
+    """The scene's training options without the three that read windows over travel (as
+    README's fixed-time column of the scene's times)."""
+    out, skip = [], 0
+    for o in options:
+        if skip:
+            skip -= 1
+        elif o in ("--windows-over-travel", "--friction-over-travel"):
+            pass
+        elif o == "--slowest-speed-mps":
+            skip = 1
+        else:
+            out.append(o)
+    return out
+
+
+def scene_captures(binary, surfaces, tracks_mm, out):
+    """Rubs each surface through the simulated device on each track as the scene header's
+    `palpus capture` does; returns the paths in the order the header's shell glob gives them
+    (the weight fit's folds follow it)."""
+    out.mkdir()
+    paths = []
+    for s in surfaces:
+        for o in tracks_mm:
+            path = str(out / f"{s}_{o}.csv")
+            palpus(binary, "capture", "--device", "sim", "--protocol", "rubbing", "--surface", s,
+                   "--track-offset-mm", str(o), "--unpaced", "-q", "--out", path)
+            paths.append(path)
+    return sorted(paths)
+
+
 def import_sliding_study(binary, logs, out, keep=lambda surface, trial: True):
     """Imports the trials of a generated sliding study (`palpus gen --only multistream`) in
     folder `logs` that `keep(surface, trial)` accepts, each as one capture under `out`, with the

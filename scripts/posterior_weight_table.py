@@ -25,46 +25,17 @@ Brier score and its calibration error.
 """
 
 import json
-import re
 import tempfile
 from pathlib import Path
 
-from palpus_cli import palpus, parser as cli_parser, sequential_table, sliding_study
+from palpus_cli import (SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser, scene_captures, scene_training,
+                        sequential_table, sliding_study)
 
-SCENE = Path(__file__).resolve().parent.parent / "scenes" / "surfaces_nakano.toml"
-TRAIN_TRACKS_MM = (10, 60, 110)
 TEST_TRACKS_MM = (35, 85)
 TRAIN_TRIALS = 5
 # A memory other than the default's (3 s), for the rows that show what fitting at the memory used
 # is worth.
 SHORT_MEMORY_S = "1"
-
-
-def scene_training():
-    """The scene's surfaces and the options its header trains its SVM with."""
-    text = SCENE.read_text()
-    surfaces = re.findall(r'^surface = "([^"]+)"', text, re.M)
-    header = " ".join(line.lstrip("#").strip().rstrip("\\") for line in text.splitlines() if line.startswith("#"))
-    found = re.search(r"palpus recognize train \S+ (--method .*?) --out", header)
-    if not surfaces or not found:
-        raise SystemExit(f"{SCENE} names no surfaces or no training command")
-    return surfaces, found.group(1).split()
-
-
-def fixed_time(options):
-    """The scene's training options without the three that read windows over travel (as
-    README's fixed-time column of the scene's times)."""
-    out, skip = [], 0
-    for o in options:
-        if skip:
-            skip -= 1
-        elif o in ("--windows-over-travel", "--friction-over-travel"):
-            pass
-        elif o == "--slowest-speed-mps":
-            skip = 1
-        else:
-            out.append(o)
-    return out
 
 
 def train_both(binary, captures, options, out):
@@ -95,21 +66,11 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         surfaces, options = scene_training()
-        sets = {}
-        for name, tracks in (("train", TRAIN_TRACKS_MM), ("test", TEST_TRACKS_MM)):
-            (root / name).mkdir()
-            sets[name] = []
-            for s in surfaces:
-                for o in tracks:
-                    path = str(root / name / f"{s}_{o}.csv")
-                    palpus(args.palpus, "capture", "--device", "sim", "--protocol", "rubbing", "--surface", s,
-                           "--track-offset-mm", str(o), "--unpaced", "-q", "--out", path)
-                    sets[name].append(path)
-            # In the order the scene header's shell glob gives them: the folds follow it.
-            sets[name].sort()
+        sets = {name: scene_captures(args.palpus, surfaces, tracks, root / name)
+                for name, tracks in (("train", SCENE_TRAIN_TRACKS_MM), ("test", TEST_TRACKS_MM))}
         runs = []
         for windows, opts in (("over travel", options), ("over fixed time", fixed_time(options))):
-            print(f"scene surfaces_nakano, windows {windows}, trained on tracks {TRAIN_TRACKS_MM} mm, "
+            print(f"scene surfaces_nakano, windows {windows}, trained on tracks {SCENE_TRAIN_TRACKS_MM} mm, "
                   f"tested on {TEST_TRACKS_MM} mm:")
             scene = train_both(args.palpus, sets["train"], opts, root / windows.replace(" ", "_"))
             runs += [(f"scene SVM {windows}, {label}", evaluate(args.palpus, m, sets["test"], args.thresholds))
