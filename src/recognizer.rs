@@ -35,6 +35,7 @@ impl SceneRecognizer {
         };
         // The scene checked the name when it was read.
         let method = Method::named(&section.method).unwrap_or(Method::Som);
+        let memory_s = section.memory_s.unwrap_or(DEFAULT_MEMORY_S);
         let model = match (&section.file, &section.captures) {
             (Some(file), _) => {
                 let path = scene.resolve(file);
@@ -51,17 +52,11 @@ impl SceneRecognizer {
                 }
                 model
             }
-            (None, Some(dir)) => train(
-                &scene.resolve(dir),
-                method,
-                section.window_s,
-                section.memory_s.unwrap_or(DEFAULT_MEMORY_S),
-            )?,
+            (None, Some(dir)) => train(&scene.resolve(dir), method, section.window_s, memory_s)?,
             (None, None) => return Ok(None),
         };
         let rate_hz = scene.device.rate_hz;
         let weight_from = WindowWeightFrom::of(&model);
-        let memory_s = section.memory_s.unwrap_or(DEFAULT_MEMORY_S);
         if let Some(note) = weight_memory_note(&model, memory_s) {
             eprintln!("warning: {}: recognizer: {note}", scene.path.display());
         }

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use recognize::PosteriorWeight;
 use serde::Serialize;
 
 use super::analysis::SegmentSummary;
@@ -141,13 +142,9 @@ pub struct RecognizerLine {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "from")]
 pub enum WindowWeightFrom {
-    /// Fitted on recordings held out of training; `hop / window` would have been `hop_weight`.
-    HeldOut {
-        /// `hop / window` of the recognizer's windows.
-        hop_weight: f64,
-        /// The posterior's memory the fit was made at, s.
-        memory_s: f64,
-    },
+    /// Fitted on recordings held out of training: the file's fit, with `hop / window` and the
+    /// memory it was fitted over.
+    HeldOut(PosteriorWeight),
     /// `hop / window`, every sample counted once: the file carries no fit (written before fits
     /// were made, trained on a single recording, or with `--no-weight-fit`).
     HopWindow,
@@ -157,30 +154,22 @@ impl WindowWeightFrom {
     /// Where the weight of `model`'s windows comes from; `None` for a recognizer without window
     /// probabilities (a SOM).
     pub fn of(model: &recognize::RecognizerFile) -> Option<Self> {
-        let hop_weight = model.hop_weight()?;
-        Some(match model.posterior_weight {
-            Some(p) => Self::HeldOut {
-                hop_weight,
-                memory_s: p.memory_s,
-            },
-            None => Self::HopWindow,
-        })
+        model.hop_weight()?;
+        Some(model.posterior_weight.map_or(Self::HopWindow, Self::HeldOut))
     }
 
     /// The words after the weight in the report of a posterior keeping `memory_s`.
     fn words(self, memory_s: f64) -> String {
         match self {
-            Self::HeldOut {
-                hop_weight,
-                memory_s: fitted_s,
-            } => {
-                let elsewhere = if (memory_s - fitted_s).abs() >= 5e-4 {
-                    format!(" over a memory of {fitted_s} s, not this one,")
-                } else {
+            Self::HeldOut(fit) => {
+                let elsewhere = if fit.fitted_at_memory(memory_s) {
                     String::new()
+                } else {
+                    format!(" over a memory of {} s, not this one,", fit.memory_s)
                 };
                 format!(
-                    " as fitted on held-out recordings{elsewhere} rather than hop / window's {hop_weight:.3}"
+                    " as fitted on held-out recordings{elsewhere} rather than hop / window's {:.3}",
+                    fit.hop_weight
                 )
             }
             Self::HopWindow => " (hop / window)".to_owned(),
@@ -483,10 +472,15 @@ mod tests {
 
     #[test]
     fn the_report_says_where_the_window_weight_came_from_and_at_what_memory() {
-        let fitted = WindowWeightFrom::HeldOut {
+        let fitted = WindowWeightFrom::HeldOut(PosteriorWeight {
+            weight: 0.057,
             hop_weight: 0.08,
+            folds: 20,
+            windows: 6258,
+            brier: 0.151,
+            hop_brier: 0.158,
             memory_s: 3.0,
-        };
+        });
         assert_eq!(
             fitted.words(3.0),
             " as fitted on held-out recordings rather than hop / window's 0.080"
