@@ -15,6 +15,13 @@ def palpus(binary, *args):
     return out.stdout
 
 
+def train_reporting_fit(binary, captures, options, out):
+    """`palpus recognize train CAPTURES OPTIONS --out OUT`; returns the line that says how each
+    window weighs in the posterior (fitted on held-out recordings, or hop / window and why)."""
+    trained = palpus(binary, "recognize", "train", *captures, *options, "--out", str(out))
+    return next(line for line in trained.splitlines() if line.startswith("posterior weight"))
+
+
 def parser(doc):
     """An argument parser described by `doc`'s first line, with `--palpus` (the binary)."""
     p = argparse.ArgumentParser(description=doc.splitlines()[0])

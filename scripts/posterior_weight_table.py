@@ -29,7 +29,7 @@ import tempfile
 from pathlib import Path
 
 from palpus_cli import (SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser, scene_captures, scene_training,
-                        sequential_table, sliding_study)
+                        sequential_table, sliding_study, train_reporting_fit)
 
 TEST_TRACKS_MM = (35, 85)
 TRAIN_TRIALS = 5
@@ -44,9 +44,7 @@ def train_both(binary, captures, options, out):
     models = {}
     for label, extra in (("fitted", []), ("hop / window", ["--no-weight-fit"])):
         path = str(out / f"{len(models)}.json")
-        trained = palpus(binary, "recognize", "train", *captures, *options, *extra, "--out", path)
-        fit = next(line for line in trained.splitlines() if line.startswith("posterior weight"))
-        print(f"- {label}: {fit}")
+        print(f"- {label}: {train_reporting_fit(binary, captures, options + extra, path)}")
         models[label] = path
     return models
 
@@ -80,9 +78,7 @@ def main():
 
         print(f"scene surfaces_nakano, windows over travel, the weight fitted over {SHORT_MEMORY_S} s:")
         short = str(root / "short_memory.json")
-        trained = palpus(args.palpus, "recognize", "train", *sets["train"], *options,
-                         "--weight-fit-memory-s", SHORT_MEMORY_S, "--out", short)
-        print("- " + next(line for line in trained.splitlines() if line.startswith("posterior weight")))
+        print("- " + train_reporting_fit(args.palpus, sets["train"], options + ["--weight-fit-memory-s", SHORT_MEMORY_S], short))
         runs += [(f"scene SVM over travel, decided over {SHORT_MEMORY_S} s, fitted over {fitted_s} s",
                   evaluate(args.palpus, m, sets["test"], "0.9", memory_s=SHORT_MEMORY_S))
                  for fitted_s, m in (("3", over_travel), (SHORT_MEMORY_S, short))]

@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 from palpus_cli import SCENE, SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser, scene_captures, \
-    scene_training
+    scene_training, train_reporting_fit
 
 COMMITTED = SCENE.parent.parent / "assets" / "models" / "nakano_svm.json"
 
@@ -52,16 +52,14 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         surfaces, options = scene_training()
-        train = scene_captures(args.palpus, surfaces, SCENE_TRAIN_TRACKS_MM, root / "train")
+        captures = scene_captures(args.palpus, surfaces, SCENE_TRAIN_TRACKS_MM, root / "train")
         columns = [("over travel, fitted", options), ("fixed time, fitted", fixed_time(options)),
                    ("over travel, hop / window", options + ["--no-weight-fit"]),
                    ("fixed time, hop / window", fixed_time(options) + ["--no-weight-fit"])]
         timing, totals = {}, []
         for i, (label, opts) in enumerate(columns):
             model = root / f"{i}.json"
-            trained = palpus(args.palpus, "recognize", "train", *train, *opts, "--out", str(model))
-            fit = next(line for line in trained.splitlines() if line.startswith("posterior weight"))
-            print(f"- {label}: {fit}")
+            print(f"- {label}: {train_reporting_fit(args.palpus, captures, opts, model)}")
             if i == 0:
                 same = without_paths(json.loads(model.read_text())) == without_paths(json.loads(COMMITTED.read_text()))
                 print(f"  {'the same as' if same else 'DIFFERS from'} {COMMITTED.name}, but for where the captures lay")
