@@ -118,7 +118,7 @@ fn line(live: &LiveRecognizer, weight_from: Option<WindowWeightFrom>) -> Recogni
     let hop_s = w.hop_samples as f64 / w.rate_hz;
     RecognizerLine {
         method: live.method().to_owned(),
-        features: FeatureSet::Nakano.name().to_owned(),
+        features: live.features().name().to_owned(),
         window_s: w.window_s(),
         hop_s,
         window_m: w.travel.map(|t| t.window_m),

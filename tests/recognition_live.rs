@@ -75,6 +75,23 @@ fn runs() -> Vec<Vec<LabelledCapture>> {
         .collect()
 }
 
+/// `runs[surface][run]` rubbed at `speed_mps`, labelled, generated in memory (seed 1).
+fn runs_at(speed_mps: f64) -> Vec<Vec<LabelledCapture>> {
+    nakano_surfaces()
+        .iter()
+        .map(|surface| {
+            let patch = SurfacePatch::new(surface);
+            (0..RUNS)
+                .map(|run| {
+                    let capture = rubbing_run_at(&patch, run, 1, speed_mps).expect("run");
+                    let name = format!("{}_run{run}_{}mmps.csv", surface.name, speed_mps * 1e3);
+                    LabelledCapture::new(capture, Path::new(&name), String::new()).expect("labelled")
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Feeds `c`'s samples to `live` one by one while the counter watches this thread (nothing may
 /// allocate), and returns the decisions made with the sample index that made each, room made
 /// beforehand for `expected` of them.
@@ -571,7 +588,7 @@ fn a_mirrored_end_decides_each_window_at_its_last_sample_live_as_offline() {
         mirrored_end: true,
         ..NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid")
     };
-    let (named, right) = mirrored_end_live_as_offline(&runs, &runs, windowing);
+    let (named, right) = mirrored_end_live_as_offline(&runs, &runs, windowing, FeatureSet::Nakano);
     eprintln!("knn with a mirrored end: {right} of {named} named decisions right");
     assert!(
         named > 14 * 20 && right as f64 >= 0.9 * named as f64,
@@ -585,30 +602,70 @@ fn a_mirrored_end_decides_each_window_at_its_last_sample_live_as_offline() {
 #[test]
 fn windows_over_travel_decide_live_as_offline_at_another_speed() {
     let train = runs();
-    let fast: Vec<Vec<LabelledCapture>> = nakano_surfaces()
-        .iter()
-        .map(|surface| {
-            let patch = SurfacePatch::new(surface);
-            (0..RUNS)
-                .map(|run| {
-                    let capture = rubbing_run_at(&patch, run, 1, 0.02).expect("run");
-                    let name = format!("{}_run{run}_20mmps.csv", surface.name);
-                    LabelledCapture::new(capture, Path::new(&name), String::new()).expect("labelled")
-                })
-                .collect()
-        })
-        .collect();
+    let fast = runs_at(0.02);
     let windowing = NakanoWindowing {
         friction_over_travel: Some(FrictionOverTravel::protocol()),
         ..over_travel_to_2mmps()
     };
-    let (named, right) = mirrored_end_live_as_offline(&train, &fast, windowing);
+    let (named, right) = mirrored_end_live_as_offline(&train, &fast, windowing, FeatureSet::Nakano);
     // Measured: 139 of 156 (89.1 %); the SVM of `tests/recognition_speed.rs` names 98.1 % right.
     eprintln!("knn over travel, at 20 mm/s: {right} of {named} named decisions right");
     assert!(
         named > 14 * 5 && right as f64 >= 0.85 * named as f64,
         "{right}/{named}"
     );
+}
+
+/// Nakano's features followed by the spectrum of the tip's height, over travel, trained at
+/// 5 mm/s and rubbed at 20 mm/s: each window's spectrum is read live from the same samples, in
+/// the same bands over travel, as offline, so every decision is the offline one to the bit.
+#[test]
+fn the_heights_spectrum_decides_live_as_offline_at_another_speed() {
+    let train = runs();
+    let fast = runs_at(0.02);
+    let windowing = NakanoWindowing {
+        friction_over_travel: Some(FrictionOverTravel::protocol()),
+        ..over_travel_to_2mmps()
+    }
+    .reading_spectra_up_to(0.025)
+    .expect("valid");
+    let (named, right) = mirrored_end_live_as_offline(&train, &fast, windowing, FeatureSet::NakanoSpectrum);
+    eprintln!("knn over nakano_spectrum, at 20 mm/s: {right} of {named} named decisions right");
+    assert!(
+        named > 14 * 5 && right as f64 >= 0.85 * named as f64,
+        "{right}/{named}"
+    );
+    // Without bands reaching 20 mm/s, a window that fast is a typed error naming its speed.
+    let slow_bands = NakanoWindowing {
+        friction_over_travel: Some(FrictionOverTravel::protocol()),
+        ..over_travel_to_2mmps()
+    };
+    let (knn, _) = knn_on_run0(&train, slow_bands, FeatureSet::NakanoSpectrum);
+    let err = knn
+        .window_probabilities(&fast[0][1], knn.sequential_windowing().as_ref())
+        .expect_err("too fast for its bands");
+    let chain: Vec<String> = std::iter::successors(Some(&err as &dyn std::error::Error), |e| e.source())
+        .map(ToString::to_string)
+        .collect();
+    assert!(chain[0].contains("height spectrum"), "{chain:?}");
+    assert!(
+        chain.iter().any(|e| e.contains("--fastest-speed-mps")),
+        "{chain:?}"
+    );
+    // Decided after the filters' lookahead, the spectrum's samples are not the window's last:
+    // such a recognizer does not run live.
+    let (late, _) = knn_on_run0(
+        &train,
+        NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid"),
+        FeatureSet::NakanoSpectrum,
+    );
+    assert!(matches!(
+        LiveRecognizer::new(&late, 1000.0),
+        Err(HapticsError::LiveMethod {
+            features: "nakano_spectrum",
+            ..
+        })
+    ));
 }
 
 /// 0.25 s windows every 0.1 s over travel, each decided at its last sample, the filters
@@ -674,8 +731,9 @@ fn a_tool_at_rest_mid_stroke_leaves_the_posterior_as_it_was_live_as_offline() {
         .map(|r| r.iter().map(|c| with_pause(c, 3.0, 2.0)).collect())
         .collect();
     let windowing = over_travel_to_2mmps();
-    let (named, right) = mirrored_end_live_as_offline(&train, &paused, windowing);
-    let (named_rubbed, right_rubbed) = mirrored_end_live_as_offline(&train, &train, windowing);
+    let (named, right) = mirrored_end_live_as_offline(&train, &paused, windowing, FeatureSet::Nakano);
+    let (named_rubbed, right_rubbed) =
+        mirrored_end_live_as_offline(&train, &train, windowing, FeatureSet::Nakano);
     // Measured: 938 of 1,046 paused (89.7 %), 707 of 770 as rubbed (91.8 %): the windows that
     // straddle the pause's start and end still mix rest with rubbing.
     eprintln!(
@@ -684,7 +742,7 @@ fn a_tool_at_rest_mid_stroke_leaves_the_posterior_as_it_was_live_as_offline() {
     );
     let share = |r: usize, n: usize| r as f64 / n as f64;
     assert!(share(right, named) >= share(right_rubbed, named_rubbed) - 0.06);
-    let (knn, params) = knn_on_run0(&train, windowing);
+    let (knn, params) = knn_on_run0(&train, windowing, FeatureSet::Nakano);
     let mut at_rest = 0;
     for c in paused.iter().flat_map(|r| &r[1..]) {
         let steps = offline_steps(&knn, c, params);
@@ -747,7 +805,7 @@ fn windows_of_fixed_time_at_rest_leave_the_posterior_as_it_was_live_as_offline()
         ..streamed
     };
     for windowing in [streamed, mirrored] {
-        let (knn, params) = knn_on_run0(&train, windowing);
+        let (knn, params) = knn_on_run0(&train, windowing, FeatureSet::Nakano);
         let mut live = LiveRecognizer::new(&knn, 1000.0).expect("live").clone();
         let mut at_rest = 0;
         for c in paused.iter().flat_map(|r| &r[1..]) {
@@ -847,15 +905,16 @@ fn training_leaves_out_windows_of_a_tool_at_rest_and_says_so() {
     );
 }
 
-/// A 5-NN over Nakano's features under `windowing`, trained on run 0 of `train`, and its default
-/// anytime settings.
+/// A 5-NN over `features` of windows under `windowing`, trained on run 0 of `train`, and its
+/// default anytime settings.
 fn knn_on_run0(
     train: &[Vec<LabelledCapture>],
     windowing: NakanoWindowing,
+    features: FeatureSet,
 ) -> (RecognizerFile, SequentialParams) {
     let train: Vec<LabelledCapture> = train.iter().map(|r| r[0].clone()).collect();
-    let knn = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 5, CellScale::Mean)
-        .expect("k-NN");
+    let knn =
+        RecognizerFile::train_knn_windows(&train, windowing, features, 5, CellScale::Mean).expect("k-NN");
     let params = knn
         .sequential_params(DEFAULT_MEMORY_S)
         .expect("window probabilities")
@@ -864,17 +923,19 @@ fn knn_on_run0(
     (knn, params)
 }
 
-/// Trains a k-NN under `windowing` on run 0 of `train`, then feeds runs 1 and 2 of `test` to a
-/// live copy and checks every decision against the offline one, bit for bit, with nothing
-/// allocated: the named decisions and how many were right.
+/// Trains a k-NN over `features` under `windowing` on run 0 of `train`, then feeds runs 1 and 2
+/// of `test` to a live copy and checks every decision against the offline one, bit for bit,
+/// with nothing allocated: the named decisions and how many were right.
 fn mirrored_end_live_as_offline(
     train: &[Vec<LabelledCapture>],
     test: &[Vec<LabelledCapture>],
     windowing: NakanoWindowing,
+    features: FeatureSet,
 ) -> (usize, usize) {
-    let (knn, params) = knn_on_run0(train, windowing);
+    let (knn, params) = knn_on_run0(train, windowing, features);
     // A copy, as a scene hands each haptic thread: it must have all its storage too.
     let mut live = LiveRecognizer::new(&knn, 1000.0).expect("live").clone();
+    assert_eq!(live.features(), features);
     let (mut named, mut right) = (0, 0);
     for surface_runs in test {
         for c in &surface_runs[1..] {

@@ -177,7 +177,8 @@ pub enum HapticsError {
     /// Only a recognizer over Nakano's rubbing features, per window, runs live.
     #[error(
         "a {method} recognizer over {features} features cannot run live: only a som, k-NN or svm \
-         over windows of nakano features decides from the rubbing stream"
+         over windows of nakano features, or a k-NN or svm over windows of nakano_spectrum features \
+         decided at their last sample, decides from the rubbing stream"
     )]
     LiveMethod {
         /// The recognizer's method.

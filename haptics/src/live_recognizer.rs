@@ -1,7 +1,9 @@
 //! The live surface recognizer of the haptic thread: Nakano's features updated in O(1) per
 //! sample and a decision every hop, (surface, probability) out.
 //!
-//! Two kinds of recognizer run live, both over Nakano's rubbing features:
+//! Two kinds of recognizer run live, both over Nakano's rubbing features (the second also over
+//! those features followed by the spectrum of the window's heights, `nakano_spectrum`, read
+//! from the same samples at each window's last one):
 //! - **A SOM** names the surface of each window on its own, with the map's margin as its
 //!   confidence (Nakano's recognizer; it names nodes, not a distribution over the surfaces).
 //! - **A k-NN or SVM over windows** gives every surface's probability per window; the windows
@@ -40,17 +42,46 @@ use crate::rt::{CHANNELS, HapticSample};
 #[cfg(doc)]
 use recognize::RecognizerFile;
 use std::collections::VecDeque;
+use std::sync::Arc;
 
+use recognize::features::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 use recognize::nakano::{EdgeWindow, TravelFriction};
 use recognize::{
-    FEATURES, FeatureSet, NakanoStream, NakanoWindowing, PlayedPath, RecognizerBody, RecognizerFile as Model,
-    SequentialParams, SequentialState, Som, WindowClassifier, WindowSpan, sequential::DEFAULT_MEMORY_S,
+    CellScale, FEATURES, FeatureSet, NakanoStream, NakanoWindowing, PlayedPath, RecognizerBody,
+    RecognizerFile as Model, SequentialParams, SequentialState, Som, WindowClassifier, WindowSpan,
+    sequential::DEFAULT_MEMORY_S,
 };
 use vibration::VibrationSense;
 
 /// Cut-off of the reaction-force observer whose friction [`SampleRecognizer`] reads
 /// ([`acquire::rubbing_signals`]: the rubbing controller's, Nakano's gains), rad/s.
 pub const RUBBING_OBSERVER_CUTOFF_RADPS: f64 = crate::control::MotionGains::NAKANO.g_reac_radps;
+
+/// The longest window vector decided live: Nakano's features and a spectrum
+/// ([`FeatureSet::NakanoSpectrum`]).
+const MAX_WINDOW_FEATURES: usize = FEATURES + SPECTRUM_LEN;
+
+/// One window's feature vector, in fixed storage: its first `len` values.
+#[derive(Debug, Clone, Copy)]
+struct WindowVector {
+    values: [f64; MAX_WINDOW_FEATURES],
+    len: usize,
+}
+
+impl WindowVector {
+    fn nakano(features: [f64; FEATURES]) -> Self {
+        let mut values = [0.0; MAX_WINDOW_FEATURES];
+        values[..FEATURES].copy_from_slice(&features);
+        Self {
+            values,
+            len: FEATURES,
+        }
+    }
+
+    fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+}
 
 /// One live decision.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,6 +119,7 @@ enum Decider {
 #[derive(Debug, Clone)]
 pub struct LiveRecognizer {
     method: &'static str,
+    features: FeatureSet,
     decider: Decider,
     windowing: NakanoWindowing,
     classes: Vec<String>,
@@ -160,6 +192,9 @@ impl StreamPaths {
 #[derive(Debug)]
 struct Edge {
     window: EdgeWindow,
+    /// For [`FeatureSet::NakanoSpectrum`], the spectrum of the window's heights after its
+    /// Nakano features.
+    spectrum: Option<HeightSpectrum>,
     /// Position, height, friction and the path through the play ([`PlayedPath`]), oldest
     /// first; at most [`EdgeWindow::history_samples`].
     samples: [VecDeque<f64>; 4],
@@ -174,18 +209,41 @@ impl Clone for Edge {
         let room = self.window.history_samples();
         Self {
             window: self.window.clone(),
+            spectrum: self.spectrum.clone(),
             samples: std::array::from_fn(|k| Self::ring_copy(&self.samples[k], room)),
             pushed: self.pushed,
         }
     }
 }
 
+/// The spectrum of a window's heights ([`FeatureSet::NakanoSpectrum`]), read as the offline
+/// vectors read it ([`NakanoWindowing::vibration_features`]), in buffers made here.
+#[derive(Debug, Clone)]
+struct HeightSpectrum {
+    /// Shared by copies: the DFT's plan is read-only, and copying it would plan it again.
+    plan: Arc<WindowSpectrumPlan>,
+    scratch: SpectrumScratch,
+    cell_scale: CellScale,
+}
+
 impl Edge {
-    fn new(windowing: &NakanoWindowing) -> Result<Self, HapticsError> {
+    fn new(windowing: &NakanoWindowing, spectrum: Option<CellScale>) -> Result<Self, HapticsError> {
         let window = EdgeWindow::new(windowing.filters, windowing.max_window_samples())?;
         let room = window.history_samples();
+        let spectrum = match spectrum {
+            Some(cell_scale) => {
+                let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
+                Some(HeightSpectrum {
+                    scratch: plan.scratch(),
+                    plan: Arc::new(plan),
+                    cell_scale,
+                })
+            }
+            None => None,
+        };
         Ok(Self {
             window,
+            spectrum,
             samples: std::array::from_fn(|_| VecDeque::with_capacity(room)),
             pushed: 0,
         })
@@ -204,15 +262,16 @@ impl Edge {
     }
 
     /// Adds a sample (position, height, friction, path through the play); returns the start
-    /// and features of the window it completes when that is a decision window, and its
-    /// evidence relative to a window of the nominal length ([`NakanoWindowing::evidence`])
-    /// (`x0`: the stroke's first position).
+    /// and features of the window it completes when that is a decision window (Nakano's, then
+    /// the spectrum of its heights when it reads one), and its evidence relative to a window
+    /// of the nominal length ([`NakanoWindowing::evidence`]) (`x0`: the stroke's first
+    /// position).
     fn push(
         &mut self,
         sample: [f64; 4],
         x0: f64,
         windowing: &NakanoWindowing,
-    ) -> Result<Option<(u64, [f64; FEATURES], f64)>, HapticsError> {
+    ) -> Result<Option<(u64, WindowVector, f64)>, HapticsError> {
         let room = self.window.history_samples();
         for (ring, v) in self.samples.iter_mut().zip(sample) {
             if ring.len() == room {
@@ -241,7 +300,21 @@ impl Edge {
         let features =
             self.window
                 .features_of((self.pushed - span.len as u64) as usize, span.len, x, z, f)?;
-        Ok(Some((start, features, windowing.evidence(span))))
+        let mut vector = WindowVector::nakano(features);
+        if let Some(h) = &mut self.spectrum {
+            // The window's own samples, as the offline vectors read them.
+            let r = z.len() - span.len..z.len();
+            let bands = windowing.vibration_features(
+                &h.plan,
+                &z[r.clone()],
+                &path[r],
+                h.cell_scale,
+                &mut h.scratch,
+            )?;
+            vector.values[FEATURES..].copy_from_slice(&bands);
+            vector.len = MAX_WINDOW_FEATURES;
+        }
+        Ok(Some((start, vector, windowing.evidence(span))))
     }
 }
 
@@ -282,7 +355,9 @@ impl LiveRecognizer {
                 *windowing,
             ),
             (RecognizerBody::KnnWindows { .. } | RecognizerBody::SvmWindows { .. }, Some(params))
-                if model.body.feature_set() == FeatureSet::Nakano =>
+                if model.body.feature_set() == FeatureSet::Nakano
+                    || (model.body.feature_set() == FeatureSet::NakanoSpectrum
+                        && model.sequential_windowing().is_some_and(|w| w.mirrored_end)) =>
             {
                 let classifier = WindowClassifier::new(model)?;
                 let windowing = *classifier.windowing();
@@ -298,6 +373,14 @@ impl LiveRecognizer {
             }
             _ => return Err(refused()),
         };
+        let height_spectrum = match &decider {
+            Decider::Sequential { classifier, .. }
+                if model.body.feature_set() == FeatureSet::NakanoSpectrum =>
+            {
+                Some(classifier.cell_scale())
+            }
+            _ => None,
+        };
         // Written so that a NaN rate is refused too.
         let same_rate = (loop_hz - windowing.rate_hz).abs() <= 1e-9 * windowing.rate_hz;
         if !same_rate {
@@ -308,6 +391,7 @@ impl LiveRecognizer {
         }
         Ok(Self {
             method: model.method(),
+            features: model.body.feature_set(),
             decider,
             windowing,
             classes: model.classes.clone(),
@@ -322,7 +406,7 @@ impl LiveRecognizer {
             },
             edge: windowing
                 .mirrored_end
-                .then(|| Edge::new(&windowing))
+                .then(|| Edge::new(&windowing, height_spectrum))
                 .transpose()?,
             friction: windowing
                 .friction_over_travel
@@ -440,13 +524,13 @@ impl LiveRecognizer {
                                 self.stream_paths.evidence(w.start, &self.windowing)
                             }
                         };
-                        (w.start, w.features, evidence)
+                        (w.start, WindowVector::nakano(w.features), evidence)
                     })
             }
         };
         let mut decided = None;
         if let Some((window_start, features, evidence_scale)) = window {
-            decided = Some(self.decide(window_start, &features, evidence_scale)?);
+            decided = Some(self.decide(window_start, features.as_slice(), evidence_scale)?);
             self.current = decided;
         }
         if let (Some(v), Decider::Sequential { state, .. }) = (vibration_mps2, &mut self.decider) {
@@ -470,7 +554,7 @@ impl LiveRecognizer {
     fn decide(
         &mut self,
         window_start: u64,
-        features: &[f64; FEATURES],
+        features: &[f64],
         evidence_scale: f64,
     ) -> Result<LiveDecision, HapticsError> {
         let decision = match &mut self.decider {
@@ -556,6 +640,11 @@ impl LiveRecognizer {
     /// The recognizer's method: `som`, `knn` or `svm`.
     pub fn method(&self) -> &'static str {
         self.method
+    }
+
+    /// The features its windows are decided on: `nakano` or `nakano_spectrum`.
+    pub fn features(&self) -> FeatureSet {
+        self.features
     }
 
     /// Class names; [`LiveDecision::label`] indexes them.

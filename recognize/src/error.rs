@@ -431,7 +431,7 @@ pub enum RecognizeError {
     },
     /// A window over travel slid so fast that its vibration bands pass the Nyquist frequency.
     #[error(
-        "a window slid at {speed_mps:.4} m/s: its vibration bands over travel pass the Nyquist frequency of {rate_hz} Hz above {max_speed_mps:.4} m/s (train with a higher --travel-speed-mps, or record at a higher rate)"
+        "a window slid at {speed_mps:.4} m/s: its spectrum's bands over travel pass the Nyquist frequency of {rate_hz} Hz above {max_speed_mps:.4} m/s (train with a higher --fastest-speed-mps, or record at a higher rate)"
     )]
     TooFastForBands {
         /// The window's speed, m/s.

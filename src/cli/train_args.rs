@@ -66,10 +66,17 @@ pub(crate) struct TrainOptions {
     /// vibration_mps2) or vibration (knn, svm: each such window's vibration spectrum alone, 25
     /// bands of 8 Hz, windows of at least 0.125 s, to fuse with a nakano classifier in `eval
     /// --sequential --fuse`; with --windows-over-travel the bands are over travel too, see
-    /// --travel-speed-mps). Default: both when the first capture carries the columns of both
-    /// and the windows are long enough for a histogram (1.92 s); else the method's own (som
-    /// nakano, knn and svm spectral), else the set the capture carries.
-    #[arg(long, value_enum, value_name = "nakano|spectral|both|vibration")]
+    /// --travel-speed-mps) or nakano-spectrum (knn, svm: each rubbing window's nakano
+    /// features followed by the same window's spectrum of the tip's height, which every device
+    /// measures; decided at the window's last sample). Default: both when the first capture
+    /// carries the columns of both and the windows are long enough for a histogram (1.92 s);
+    /// else the method's own (som nakano, knn and svm spectral), else the set the capture
+    /// carries.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "nakano|spectral|both|vibration|nakano-spectrum"
+    )]
     features: Option<Features>,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
     /// filters' 0.27 s lookahead, none with --mirrored-end).
@@ -111,6 +118,13 @@ pub(crate) struct TrainOptions {
     /// so a texture lands in the same band however fast it is slid.
     #[arg(long, requires = "windows_over_travel", value_name = "MPS")]
     travel_speed_mps: Option<f64>,
+    /// With --windows-over-travel and --features vibration or nakano-spectrum: the fastest
+    /// stroke the spectra read, m/s. Their 25 bands over travel end at the Nyquist frequency
+    /// at this speed (at 1 kHz and 0.025 m/s: wavelengths down to 50 µm), so every wavelength
+    /// such a stroke still samples is read; a faster window is an error. Default: bands of
+    /// 0–200 Hz at the travel speed, readable up to 2.5 times it at 1 kHz.
+    #[arg(long, requires = "windows_over_travel", value_name = "MPS")]
+    fastest_speed_mps: Option<f64>,
     /// The vibration features' scaling (--features spectral|both|vibration): mean (each
     /// cell's or band's mean magnitude, the default) or unit-sum (divided by their total: the
     /// spectrum's shape alone, whatever the vibration's level, e.g. a sensor's gain or the
@@ -228,6 +242,7 @@ enum Features {
     Spectral,
     Both,
     Vibration,
+    NakanoSpectrum,
 }
 
 impl From<Features> for FeatureSet {
@@ -237,6 +252,7 @@ impl From<Features> for FeatureSet {
             Features::Spectral => Self::Spectral,
             Features::Both => Self::Both,
             Features::Vibration => Self::Vibration,
+            Features::NakanoSpectrum => Self::NakanoSpectrum,
         }
     }
 }
@@ -276,6 +292,7 @@ impl TrainOptions {
             slowest_speed_mps: self.slowest_speed_mps,
             windows_over_travel: self.windows_over_travel,
             travel_speed_mps: self.travel_speed_mps,
+            fastest_speed_mps: self.fastest_speed_mps,
             cell_scale: match self.cells {
                 CellsArg::Mean => CellScale::Mean,
                 CellsArg::UnitSum => CellScale::UnitSum,

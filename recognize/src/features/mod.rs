@@ -23,6 +23,10 @@
 //!   alone ([`window_spectrum`]), short enough for anytime decisions; its classifier's evidence
 //!   is fused with a Nakano classifier's over time, each weighed by its measured reliability
 //!   (`recognize eval --sequential --fuse`).
+//! - **`nakano_spectrum`** (k-NN, SVM: the window variants): each window's Nakano features
+//!   followed by the spectrum of the tip's height over the same samples ([`window_spectrum`]),
+//!   one classifier over both. It needs no sensor beyond Nakano's, so a scene on any device
+//!   decides on it live.
 
 pub mod nakano;
 mod played_path;
@@ -63,6 +67,12 @@ pub enum FeatureSet {
     /// fused with a Nakano classifier's (`recognize eval --sequential --fuse`). The windows are
     /// placed as Nakano's are, so the capture needs their columns too.
     Vibration,
+    /// Per window of a rubbing capture: Nakano's five features followed by the spectrum of the
+    /// tip's height over the same window ([`window_spectrum`], 25 bands; 30 features). It reads
+    /// only what Nakano's features read, the encoder at the loop rate, so every device has it:
+    /// the spectrum says at which wavelengths the surface is rough, where Nakano's roughness
+    /// says only how rough, and it speaks from the window's first millimetre.
+    NakanoSpectrum,
 }
 
 impl FeatureSet {
@@ -73,6 +83,7 @@ impl FeatureSet {
             Self::Spectral => "spectral",
             Self::Both => "both",
             Self::Vibration => "vibration",
+            Self::NakanoSpectrum => "nakano_spectrum",
         }
     }
 
@@ -83,6 +94,7 @@ impl FeatureSet {
             Self::Spectral => FEATURE_LEN,
             Self::Both => nakano::FEATURES + FEATURE_LEN,
             Self::Vibration => SPECTRUM_LEN,
+            Self::NakanoSpectrum => nakano::FEATURES + SPECTRUM_LEN,
         }
     }
 
@@ -93,6 +105,7 @@ impl FeatureSet {
             Self::Spectral => &[FEATURE_LEN],
             Self::Both => &[nakano::FEATURES, FEATURE_LEN],
             Self::Vibration => &[SPECTRUM_LEN],
+            Self::NakanoSpectrum => &[nakano::FEATURES, SPECTRUM_LEN],
         }
     }
 
@@ -104,6 +117,9 @@ impl FeatureSet {
             Self::Spectral => histogram_names(),
             Self::Both => nakano.chain(histogram_names()).collect(),
             Self::Vibration => (0..SPECTRUM_LEN).map(|b| format!("spectrum_f{b}")).collect(),
+            Self::NakanoSpectrum => nakano
+                .chain((0..SPECTRUM_LEN).map(|b| format!("height_spectrum_f{b}")))
+                .collect(),
         }
     }
 
@@ -114,7 +130,10 @@ impl FeatureSet {
     pub fn missing_columns(self, capture: &LabelledCapture) -> Vec<String> {
         let has = |name: &str| capture.capture.columns().iter().any(|c| c == name);
         let mut missing = Vec::new();
-        if matches!(self, Self::Nakano | Self::Both | Self::Vibration) {
+        if matches!(
+            self,
+            Self::Nakano | Self::Both | Self::Vibration | Self::NakanoSpectrum
+        ) {
             for name in [POSITION_COLUMN, HEIGHT_COLUMN] {
                 if !has(name) {
                     missing.push(name.to_owned());

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::FeatureSet;
 use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::played_path::PlayedPath;
-use super::spectral::{self, ACCEL_COLUMNS, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
+use super::spectral::{self, ACCEL_COLUMNS, BAND_HZ, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use super::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 use crate::{LabelledCapture, RecognizeError};
 use capture::Capture;
@@ -31,6 +31,11 @@ pub struct TravelWindows {
     /// Most samples a window takes, however slowly the tip moves: where it spans less travel
     /// than asked.
     pub max_samples: usize,
+    /// The fastest stroke whose windows' spectra are read, m/s: their bands over travel end
+    /// at the Nyquist frequency at this speed ([`NakanoWindowing::reading_spectra_up_to`]).
+    /// `None`: 0–200 Hz at the reference speed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fastest_speed_mps: Option<f64>,
 }
 
 /// How a rubbing stream is cut into the windows the map decides on.
@@ -180,7 +185,7 @@ impl NakanoWindowing {
             travel: self.travel.map(|t| TravelWindows {
                 window_m: t.training_window_m.unwrap_or(t.window_m),
                 training_window_m: None,
-                max_samples: t.max_samples,
+                ..t
             }),
             ..*self
         }
@@ -233,6 +238,7 @@ impl NakanoWindowing {
                 window_m: travel_of(self.window_samples),
                 training_window_m: self.training_window_samples.map(travel_of),
                 max_samples: (travel_of(longest) / slowest_step_m).ceil().max(longest as f64) as usize,
+                fastest_speed_mps: None,
             }),
             ..self
         };
@@ -436,6 +442,45 @@ impl NakanoWindowing {
     pub fn travel_reference_speed_mps(&self) -> Option<f64> {
         self.travel
             .map(|t| t.window_m * self.rate_hz / self.window_samples as f64)
+    }
+
+    /// The same windows over travel, their spectra ([`FeatureSet::Vibration`],
+    /// [`FeatureSet::NakanoSpectrum`]) read in bands over travel that end at the Nyquist
+    /// frequency at `fastest_speed_mps`: the whole of a surface's wavelengths that a stroke
+    /// that fast still samples, in 25 bands of cycles per metre. Without it the bands span
+    /// 0–200 Hz at the windows' reference speed, and a stroke faster than 2.5 times that
+    /// (at 1 kHz) cannot be read. A window slid faster than `fastest_speed_mps` is a typed
+    /// error. Needs windows over travel.
+    pub fn reading_spectra_up_to(self, fastest_speed_mps: f64) -> Result<Self, RecognizeError> {
+        let invalid = |reason| RecognizeError::Parameter {
+            of: "setting",
+            name: "fastest_speed_mps",
+            value: fastest_speed_mps,
+            reason,
+        };
+        let Some(travel) = self.travel else {
+            return Err(invalid("needs windows over travel"));
+        };
+        if !(fastest_speed_mps.is_finite() && fastest_speed_mps > 0.0 && fastest_speed_mps <= 10.0) {
+            return Err(invalid("positive and at most 10 m/s"));
+        }
+        Ok(Self {
+            travel: Some(TravelWindows {
+                fastest_speed_mps: Some(fastest_speed_mps),
+                ..travel
+            }),
+            ..self
+        })
+    }
+
+    /// With windows over travel, the speed at which the spectra's bands over travel span
+    /// 0 … [`BAND_HZ`], m/s: [`NakanoWindowing::travel_reference_speed_mps`], or where the
+    /// bands end at the Nyquist frequency at [`TravelWindows::fastest_speed_mps`].
+    pub fn spectrum_reference_speed_mps(&self) -> Option<f64> {
+        match self.travel?.fastest_speed_mps {
+            Some(fastest) => Some(fastest * 2.0 * BAND_HZ / self.rate_hz),
+            None => self.travel_reference_speed_mps(),
+        }
     }
 
     /// Window length, s.
@@ -724,11 +769,24 @@ pub(crate) fn window_vectors(
     if features == FeatureSet::Nakano {
         return Ok(nakano.into_iter().map(|(s, n, f)| (s, n, f.to_vec())).collect());
     }
-    let spectral = |source| RecognizeError::Features {
+    let features_error = |features, source| RecognizeError::Features {
         path: c.reference.path.clone(),
-        features: "spectrotemporal",
+        features,
         source: Box::new(source),
     };
+    let spectral = |source| features_error("spectrotemporal", source);
+    let nakano_column = |name| {
+        c.capture
+            .column(name)
+            .map_err(|e| spectral(RecognizeError::NakanoColumn(e)))
+    };
+    if features == FeatureSet::NakanoSpectrum {
+        let height_spectrum = |source| features_error("height spectrum", source);
+        let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
+        let height = Axes::One(nakano_column(nakano::HEIGHT_COLUMN)?);
+        return spectrum_vectors(nakano, windowing, height, &path_m, cell_scale, true)
+            .map_err(height_spectrum);
+    }
     let column = |name| {
         c.capture
             .column(name)
@@ -742,12 +800,8 @@ pub(crate) fn window_vectors(
         Axes::Three(column(x)?, column(y)?, column(z)?)
     };
     if features == FeatureSet::Vibration {
-        let position_m = c
-            .capture
-            .column(nakano::POSITION_COLUMN)
-            .map_err(|e| spectral(RecognizeError::NakanoColumn(e)))?;
-        let path_m = PlayedPath::series(position_m);
-        return vibration_vectors(nakano, windowing, axes, &path_m, cell_scale).map_err(spectral);
+        let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
+        return spectrum_vectors(nakano, windowing, axes, &path_m, cell_scale, false).map_err(spectral);
     }
     let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
@@ -767,17 +821,19 @@ pub(crate) fn window_vectors(
         .collect()
 }
 
-/// [`FeatureSet::Vibration`]'s vectors of Nakano's windows: each window's own samples (the
-/// `len` that end where the window ends, so that a window over travel reads the same stretch
-/// as its Nakano features), all before its decision. Over travel, the bands are too
-/// ([`WindowSpectrumPlan::features_over_travel`]), at the window's path (`path_m`, the
-/// capture's [`PlayedPath`]) over its duration.
-fn vibration_vectors(
+/// The spectra of Nakano's windows ([`FeatureSet::Vibration`]'s vectors; after each window's
+/// Nakano features when `after_nakano`, [`FeatureSet::NakanoSpectrum`]'s): of each window's
+/// own samples of `axes` (the `len` that end where the window ends, so that a window over
+/// travel reads the same stretch as its Nakano features), all before its decision. Over
+/// travel, the bands are too ([`WindowSpectrumPlan::features_over_travel`]), at the window's
+/// path (`path_m`, the capture's [`PlayedPath`]) over its duration.
+fn spectrum_vectors(
     nakano: Vec<(usize, WindowSpan, [f64; FEATURES])>,
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
     path_m: &[f64],
     cell_scale: CellScale,
+    after_nakano: bool,
 ) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
     let mut scratch = plan.scratch();
@@ -787,7 +843,7 @@ fn vibration_vectors(
     };
     nakano
         .into_iter()
-        .map(|(s, span, _)| {
+        .map(|(s, span, nakano)| {
             let end = (s + windowing.window_samples).min(samples);
             let r = end.saturating_sub(span.len)..end;
             let signal = match axes {
@@ -798,7 +854,12 @@ fn vibration_vectors(
             };
             let spectrum =
                 windowing.vibration_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch)?;
-            Ok((s, span, spectrum.to_vec()))
+            let vector = if after_nakano {
+                nakano.iter().chain(&spectrum).copied().collect()
+            } else {
+                spectrum.to_vec()
+            };
+            Ok((s, span, vector))
         })
         .collect()
 }
@@ -818,7 +879,7 @@ impl NakanoWindowing {
         cell_scale: CellScale,
         scratch: &mut SpectrumScratch,
     ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
-        match self.travel_reference_speed_mps() {
+        match self.spectrum_reference_speed_mps() {
             Some(reference) => {
                 let speed_mps = path_speed_mps(path_m, self.rate_hz);
                 plan.features_over_travel_with(signal, speed_mps, reference, cell_scale, scratch)
@@ -1004,6 +1065,53 @@ mod tests {
         assert!((path_speed_mps(&steady(25e-6 / 2.2, 551), 2200.0) - 0.025).abs() < 1e-12);
         assert_eq!(path_speed_mps(&[0.0], 2200.0), 0.0);
         assert!((path_speed_mps(&[0.0, 1e-5, 0.0], 1000.0) - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn spectra_read_up_to_the_fastest_stroke() {
+        let w = over_travel();
+        // By default 0–200 Hz at the windows' 5 mm/s: readable up to 12.5 mm/s at 1 kHz.
+        assert_eq!(w.spectrum_reference_speed_mps(), Some(0.005));
+        let fast = w.reading_spectra_up_to(0.025).expect("valid");
+        // The bands end at 500 Hz at 25 mm/s: 0–200 Hz at 10 mm/s.
+        assert!((fast.spectrum_reference_speed_mps().expect("over travel") - 0.01).abs() < 1e-15);
+        // Nothing else changes: the windows' travel, the training windows, the file.
+        assert_eq!(fast.travel_reference_speed_mps(), w.travel_reference_speed_mps());
+        assert_eq!(
+            fast.training().travel.and_then(|t| t.fastest_speed_mps),
+            Some(0.025)
+        );
+        let text = serde_json::to_string(&fast).expect("json");
+        assert_eq!(
+            serde_json::from_str::<NakanoWindowing>(&text).expect("back"),
+            fast
+        );
+        assert!(!serde_json::to_string(&w).expect("json").contains("fastest"));
+        // A window at 25 mm/s is read; one at 26 mm/s passes the Nyquist frequency.
+        let plan = WindowSpectrumPlan::new(1000.0, w.max_window_samples()).expect("plan");
+        let mut scratch = plan.scratch();
+        let signal: Vec<f64> = (0..60).map(|k| (k as f64 * 0.7).sin()).collect();
+        let read = |w: &NakanoWindowing, step_m: f64, scratch: &mut SpectrumScratch| {
+            w.vibration_features(&plan, &signal, &steady(step_m, 60), CellScale::Mean, scratch)
+        };
+        assert!(read(&fast, 25e-6, &mut scratch).is_ok());
+        assert!(read(&fast, 26e-6, &mut scratch).is_err());
+        assert!(read(&w, 25e-6, &mut scratch).is_err());
+        assert!(read(&w, 12.5e-6, &mut scratch).is_ok());
+        // Only over travel, and only a speed.
+        let fixed = NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid");
+        for (windowing, bad) in [(fixed, 0.025), (w, 0.0), (w, -0.01), (w, f64::NAN), (w, 11.0)] {
+            assert!(
+                matches!(
+                    windowing.reading_spectra_up_to(bad),
+                    Err(RecognizeError::Parameter {
+                        name: "fastest_speed_mps",
+                        ..
+                    })
+                ),
+                "{bad}"
+            );
+        }
     }
 
     #[test]

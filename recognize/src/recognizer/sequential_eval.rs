@@ -330,16 +330,21 @@ impl RecognizerFile {
             });
         }
         // The product assumes each recognizer brings its own evidence: two over the same
-        // features (or `both` beside either of its parts) would count it twice.
+        // features (or `both` or `nakano_spectrum` beside one of its parts) would count it
+        // twice.
         let sets: Vec<FeatureSet> = std::iter::once(self)
             .chain(others.iter().copied())
             .map(RecognizerFile::feature_set)
             .collect();
+        let overlap = |a: FeatureSet, b: FeatureSet| {
+            use FeatureSet::{Both, Nakano, NakanoSpectrum};
+            a == b
+                || a == Both
+                || b == Both
+                || matches!((a, b), (Nakano, NakanoSpectrum) | (NakanoSpectrum, Nakano))
+        };
         for (j, &b) in sets.iter().enumerate() {
-            if let Some(i) = sets[..j]
-                .iter()
-                .position(|&a| a == b || a == FeatureSet::Both || b == FeatureSet::Both)
-            {
+            if let Some(i) = sets[..j].iter().position(|&a| overlap(a, b)) {
                 return Err(RecognizeError::FusionOverlap {
                     first: i,
                     second: j,

@@ -963,6 +963,89 @@ fn short_windows(method: Method, features: FeatureSet) -> TrainSettings {
     }
 }
 
+/// `nakano_spectrum` windows: each window's five Nakano features, as `nakano` reads them,
+/// followed by the spectrum of the same window's heights, whose strongest band is the one the
+/// surface's wavelength vibrates in at the rubbing speed. A k-NN or SVM trains on them, decided
+/// at each window's last sample; a SOM refuses them; fused beside a recognizer over Nakano's
+/// features they would count the height and the friction twice, beside one over the
+/// accelerometer they would not.
+#[test]
+fn nakano_spectrum_windows_read_the_heights_spectrum_after_nakanos_features() {
+    let windowing = NakanoWindowing {
+        mirrored_end: true,
+        ..NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid")
+    };
+    // 5 mm/s over a sine of 0.3 mm (16.7 Hz) and of 1.5 mm (3.3 Hz): the strongest of the
+    // bands of 8 Hz is within a DFT bin (4 Hz in 0.25 s) of that frequency.
+    for (c, tone_hz) in three_surfaces(4.0)
+        .iter()
+        .zip([Some(5e-3 / 0.3e-3), Some(5e-3 / 1.5e-3), None])
+    {
+        let both =
+            window_vectors(c, &windowing, FeatureSet::NakanoSpectrum, CellScale::Mean).expect("windows");
+        let nakano = window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean).expect("windows");
+        assert_eq!(both.len(), nakano.len());
+        assert!(both.len() > 20, "{}", both.len());
+        for ((s, span, v), (s_n, span_n, n)) in both.iter().zip(&nakano) {
+            assert_eq!((s, span), (s_n, span_n));
+            assert_eq!(v.len(), FeatureSet::NakanoSpectrum.dim());
+            assert_eq!(&v[..5], &n[..]);
+            let spectrum = &v[5..];
+            let strongest = (0..spectrum.len())
+                .max_by(|&a, &b| spectrum[a].total_cmp(&spectrum[b]))
+                .expect("bands");
+            if let Some(f) = tone_hz {
+                let (lo, hi) = (8.0 * strongest as f64, 8.0 * (strongest + 1) as f64);
+                let off_hz = (lo - f).max(f - hi).max(0.0);
+                assert!(off_hz <= 4.0, "{}: band {strongest} of {spectrum:?}", c.label);
+            }
+        }
+    }
+    assert_eq!(FeatureSet::NakanoSpectrum.blocks(), [5, 25]);
+    assert_eq!(
+        FeatureSet::NakanoSpectrum.feature_names()[5],
+        "height_spectrum_f0"
+    );
+
+    let train_set = with_tones(0..2, 4.0);
+    let settings = |method, features| TrainSettings {
+        fit_posterior_weight: false,
+        ..short_windows(method, features)
+    };
+    let spectrum = train(&train_set, &settings(Method::Svm, FeatureSet::NakanoSpectrum)).expect("svm");
+    assert_eq!(spectrum.feature_set(), FeatureSet::NakanoSpectrum);
+    // Its spectrum is read from the window's own samples, so it is decided at its last one.
+    assert!(spectrum.windowing().expect("windows").mirrored_end);
+    let evaluation = spectrum
+        .evaluate_sequential(
+            &with_tones(2..3, 4.0),
+            &[0.9],
+            spectrum.sequential_params(3.0).expect("params"),
+        )
+        .expect("evaluated");
+    assert_eq!(
+        evaluation.rows[0].correct, evaluation.rows[0].decided,
+        "{evaluation:?}"
+    );
+    assert!(evaluation.rows[0].decided > 0, "{evaluation:?}");
+    let err = train(&train_set, &settings(Method::Som, FeatureSet::NakanoSpectrum)).expect_err("a SOM");
+    assert!(matches!(err, RecognizeError::Config { .. }), "{err}");
+
+    let nakano = train(&train_set, &settings(Method::Svm, FeatureSet::Nakano)).expect("nakano");
+    let vibration = train(&train_set, &settings(Method::Svm, FeatureSet::Vibration)).expect("vibration");
+    for (a, b) in [(&nakano, &spectrum), (&spectrum, &nakano)] {
+        let err = a.fusion_members(&[b]).expect_err("the height twice");
+        assert!(matches!(err, RecognizeError::FusionOverlap { .. }), "{err}");
+    }
+    assert_eq!(
+        spectrum
+            .fusion_members(&[&vibration])
+            .expect("other senses")
+            .len(),
+        2
+    );
+}
+
 /// Anytime decisions fused over two senses: each recognizer's windows in the order they are
 /// decided, each weighing its `hop / window` times its cross-validated accuracy above chance
 /// relative to the most reliable one's (no weight fitted on held-out trials; see

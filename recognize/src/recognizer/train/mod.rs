@@ -96,7 +96,9 @@ impl Method {
         let own = self.default_features();
         let other = match own {
             FeatureSet::Nakano => FeatureSet::Spectral,
-            FeatureSet::Spectral | FeatureSet::Both | FeatureSet::Vibration => FeatureSet::Nakano,
+            FeatureSet::Spectral | FeatureSet::Both | FeatureSet::Vibration | FeatureSet::NakanoSpectrum => {
+                FeatureSet::Nakano
+            }
         };
         let rate_hz = capture.capture.metadata().rate_hz();
         let holds_a_histogram = SpectrogramPlan::at_rate(rate_hz)
@@ -148,6 +150,9 @@ pub struct TrainSettings {
     /// Windows over travel: the speed at which a window spans `window_s`, m/s; `None` for
     /// the protocol's 5 mm/s ([`NakanoWindowing::over_travel_at`]).
     pub travel_speed_mps: Option<f64>,
+    /// Windows over travel: the fastest stroke whose spectra the windows read, m/s; `None`
+    /// for bands of 0–200 Hz at the travel speed ([`NakanoWindowing::reading_spectra_up_to`]).
+    pub fastest_speed_mps: Option<f64>,
     /// SOM: seed of the map's initial vectors and presentation order.
     pub seed: u64,
     /// SOM over windows: how features are scaled before the map (a SOM over whole-scratch
@@ -188,6 +193,7 @@ impl TrainSettings {
             slowest_speed_mps: None,
             windows_over_travel: false,
             travel_speed_mps: None,
+            fastest_speed_mps: None,
             seed: 0,
             normalization: Normalization::LogWithinClass,
             k: PAPER_K,
@@ -229,16 +235,22 @@ impl TrainSettings {
             None => windowing,
         };
         let windowing = NakanoWindowing {
-            // Nothing of a window's vibration spectrum waits for a filter's lookahead, so its
-            // windows are decided at their last sample.
-            mirrored_end: self.mirrored_end || self.features == FeatureSet::Vibration,
+            // Nothing of a window's spectrum waits for a filter's lookahead, so its windows are
+            // decided at their last sample, and live its spectrum is read from the same samples
+            // as its Nakano features.
+            mirrored_end: self.mirrored_end
+                || matches!(self.features, FeatureSet::Vibration | FeatureSet::NakanoSpectrum),
             friction_over_travel: self.friction_over_travel.then(FrictionOverTravel::protocol),
             ..windowing
         };
-        match (self.windows_over_travel, self.travel_speed_mps) {
-            (true, Some(speed_mps)) => windowing.over_travel_at(speed_mps),
-            (true, None) => windowing.over_travel(),
-            (false, _) => Ok(windowing),
+        let windowing = match (self.windows_over_travel, self.travel_speed_mps) {
+            (true, Some(speed_mps)) => windowing.over_travel_at(speed_mps)?,
+            (true, None) => windowing.over_travel()?,
+            (false, _) => windowing,
+        };
+        match self.fastest_speed_mps {
+            Some(fastest) => windowing.reading_spectra_up_to(fastest),
+            None => Ok(windowing),
         }
     }
 }

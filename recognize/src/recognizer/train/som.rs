@@ -79,6 +79,12 @@ impl Trainer for SomTrainer {
                          probabilities are fused with a Nakano classifier's); a SOM names a node, \
                          not a distribution over the surfaces",
             }),
+            FeatureSet::NakanoSpectrum => Err(RecognizeError::Config {
+                of: "training",
+                reason: "`--features nakano-spectrum` trains a k-NN or an SVM over windows, whose \
+                         probabilities accumulate into the anytime posterior; a SOM over windows \
+                         reads `nakano` or `both`",
+            }),
         }
     }
 }
