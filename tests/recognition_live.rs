@@ -652,6 +652,31 @@ fn the_heights_spectrum_decides_live_as_offline_at_another_speed() {
         chain.iter().any(|e| e.contains("--fastest-speed-mps")),
         "{chain:?}"
     );
+    // Live, each such window is flagged unread on the sample that completes it, and adds
+    // nothing: no decision is made, and no sample is taken for a non-finite one.
+    let mut recognizer = SampleRecognizer::new(LiveRecognizer::new(&knn, 1000.0).expect("live"));
+    let c = &fast[0][1];
+    let column = |name| c.capture.column(name).expect("column");
+    let (x, z, f) = (
+        column("tangential_position_m"),
+        column("normal_position_m"),
+        column("friction_force_n"),
+    );
+    let (mut unread, mut not_finite, mut decisions) = (0, 0, 0.0);
+    for i in 0..x.len() {
+        let mut sample = haptics::rt::HapticSample::default();
+        sample.state.position_m = glam::DVec3::new(x[i], 0.0, z[i]);
+        sample.channels[haptics::control::rubbing::channel::FRICTION_N] = f[i];
+        sample.channels[haptics::control::rubbing::channel::PHASE] =
+            haptics::control::RubbingPhase::Rub.code();
+        recognizer.annotate(&mut sample);
+        unread += usize::from(sample.flags & haptics::safety::flag::RECOGNIZER_WINDOW_UNREAD != 0);
+        not_finite += usize::from(sample.flags & haptics::safety::flag::RECOGNIZER_INPUT_NOT_FINITE != 0);
+        decisions = sample.channels[channel::DECISIONS];
+    }
+    // A window every 0.1 s of a 1.5 s stroke at 20 mm/s, each past its bands.
+    assert!(unread >= 10, "{unread}");
+    assert_eq!((not_finite, decisions), (0, 0.0));
     // Decided after the filters' lookahead, the spectrum's samples are not the window's last:
     // such a recognizer does not run live.
     let (late, _) = knn_on_run0(

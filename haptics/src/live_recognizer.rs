@@ -708,7 +708,9 @@ pub fn decision_in(channels: &[f64; CHANNELS]) -> Option<ChannelDecision> {
 ///
 /// Nothing here allocates, locks, logs or does I/O. A non-finite sample gets
 /// [`crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE`] and restarts the recognizer's stroke
-/// from the next sample; the last decision stands until a new one.
+/// from the next sample; a window the recognizer cannot read (a spectrum slid past its bands)
+/// gets [`crate::safety::flag::RECOGNIZER_WINDOW_UNREAD`] and adds nothing. Either way the
+/// last decision stands until a new one.
 #[derive(Debug, Clone)]
 pub struct SampleRecognizer {
     live: LiveRecognizer,
@@ -738,7 +740,10 @@ impl SampleRecognizer {
                 match self.live.push(x, z, f) {
                     Ok(Some(_)) => self.decisions += 1,
                     Ok(None) => {}
-                    Err(_) => sample.flags |= crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE,
+                    Err(HapticsError::NotFiniteSample { .. }) => {
+                        sample.flags |= crate::safety::flag::RECOGNIZER_INPUT_NOT_FINITE;
+                    }
+                    Err(_) => sample.flags |= crate::safety::flag::RECOGNIZER_WINDOW_UNREAD,
                 }
             }
             None => self.rubbing = false,

@@ -195,6 +195,11 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         recognition,
         recognition_accuracy: accuracy,
         recognition_timing: timing,
+        recognition_unread_windows: runs
+            .iter()
+            .flat_map(|r| &r.samples)
+            .filter(|s| s.flags & haptics::safety::flag::RECOGNIZER_WINDOW_UNREAD != 0)
+            .count(),
         frame,
         recorded: runs.iter().filter_map(|r| r.recorded.clone()).collect(),
         wall_s: started.elapsed().as_secs_f64(),

@@ -198,6 +198,10 @@ pub struct SessionReport {
     pub recognition_accuracy: Option<f64>,
     /// Per surface segment, how soon its surface was named.
     pub recognition_timing: Vec<SurfaceTiming>,
+    /// Samples whose window the recognizer could not read
+    /// ([`haptics::safety::flag::RECOGNIZER_WINDOW_UNREAD`]: slid faster than its spectra's
+    /// bands reach); each added no evidence.
+    pub recognition_unread_windows: usize,
     /// The rendered frame, or why there is none.
     pub frame: Result<PathBuf, String>,
     /// Captures recorded.
@@ -353,6 +357,14 @@ impl SessionReport {
                 "  recognition: {:.1} % of {named} named decisions right ({} undecided)",
                 a * 100.0,
                 self.recognition.len() - named
+            );
+        }
+        if self.recognition_unread_windows > 0 {
+            let _ = writeln!(
+                t,
+                "  {} windows could not be read: slid faster than the recognizer's spectra reach \
+                 (train it with a higher --fastest-speed-mps); they added no evidence",
+                self.recognition_unread_windows
             );
         }
         for s in &self.recognition_timing {
