@@ -2,11 +2,13 @@
 """README's table of anytime recognition at other rubbing speeds, from one run.
 
 Generates Nakano's surfaces rubbed at 2, 5 and 20 mm/s (`palpus gen --only nakano`,
-`--rub-speed-mps`) and the two-patch strokes at each speed (`--two-patch`), trains two SVMs over
+`--rub-speed-mps`) and the two-patch strokes at each speed (`--two-patch`), trains three SVMs over
 0.25 s windows decided at their last sample on run 0 at 5 mm/s: one over windows of fixed time,
 one with the friction filtered over travel, the roughness filters following the speed down to
-2 mm/s and windows over travel. Evaluates both at threshold 0.9 on runs 1-2 and on the two-patch
-strokes at each speed. Prints one Markdown row per speed and SVM: named decisions right, the
+2 mm/s and windows over travel, and the same over travel with each window's height spectrum
+after Nakano's features (`--features nakano-spectrum`, its bands reaching the fastest speed
+rubbed with a quarter to spare: `--fastest-speed-mps`). Evaluates each at threshold 0.9 on
+runs 1-2 and on the two-patch strokes at each speed. Prints one Markdown row per speed and SVM: named decisions right, the
 calibration error, the mean time to the stable right surface and the slowest surface's mean,
 strokes not ending named right, and on the two-patch strokes the mean and slowest time from the
 seam to the stable new surface and the strokes not followed.
@@ -31,10 +33,15 @@ def main():
         root = Path(tmp)
         palpus(args.palpus, "gen", "--out", str(root / "protocol"), "--only", "nakano", "-q")
         train = [str(p) for p in sorted((root / "protocol" / "nakano").glob("*run0.csv"))]
+        fastest = 1.25 * max(float(s) for s in args.speeds.split(","))
+        spectrum = ["--features", "nakano-spectrum", "--fastest-speed-mps", f"{fastest:g}"]
+        kinds = [("time", "fixed time", ["--features", "nakano"]),
+                 ("travel", "over travel", ["--features", "nakano", *OVER_TRAVEL]),
+                 ("spectrum", "over travel, height spectrum", [*spectrum, *OVER_TRAVEL])]
         models = {}
-        for name, extra in [("time", []), ("travel", OVER_TRAVEL)]:
+        for name, _, extra in kinds:
             models[name] = str(root / f"{name}.json")
-            palpus(args.palpus, "recognize", "train", *train, "--method", "svm", "--features", "nakano",
+            palpus(args.palpus, "recognize", "train", *train, "--method", "svm",
                    "--window-s", "0.25", "--mirrored-end", *extra, "--out", models[name])
 
         def row(model, captures):
@@ -55,7 +62,7 @@ def main():
             test = [str(p) for p in sorted((out / "nakano").glob("*.csv")) if not p.stem.endswith("run0")]
             two_patch = [str(p) for p in sorted((out / "nakano_two_patch").glob("*.csv"))
                          if not p.stem.endswith("run0")]
-            for name, label in [("time", "fixed time"), ("travel", "over travel")]:
+            for name, label, _ in kinds:
                 (s, ece), (t, _) = row(models[name], test), row(models[name], two_patch)
                 worst = s["worst_surface"]
                 print(f"| {1e3 * float(speed):g} mm/s | {label} "

@@ -8,6 +8,10 @@
 //! them from the streaming sums). A recognizer that streams with a mirrored start has one more
 //! dear sample a stroke, the one that pushes the mirror image through the filters.
 //!
+//! The height's spectrum: an SVM over windows over travel of Nakano's features alone and
+//! followed by the spectrum of the window's heights (`nakano_spectrum`), both trained on run 0:
+//! what the DFT adds to the sample that decides.
+//!
 //! Fusion: a k-NN over 0.25 s windows of Nakano's features decided at their last sample,
 //! alone and with a k-NN over each window's vibration spectrum fused into its posterior
 //! (`LiveRecognizer::fused`), on runs whose vibration is a tone per surface (the simulated
@@ -26,8 +30,9 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use haptics::live_recognizer::LiveRecognizer;
 use haptics::sim::protocols::nakano::rubbing_run;
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+use recognize::nakano::FrictionOverTravel;
 use recognize::sequential::DEFAULT_MEMORY_S;
-use recognize::{CellScale, FeatureSet, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams};
+use recognize::{CellScale, FeatureSet, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams, SvmC};
 
 fn bench(c: &mut Criterion) {
     let surfaces = nakano_surfaces();
@@ -45,8 +50,29 @@ fn bench(c: &mut Criterion) {
     let test = rubbing_run(&SurfacePatch::new(&surfaces[2]), 1, 1).expect("run");
     let signals = ["tangential_position_m", "normal_position_m", "friction_force_n"]
         .map(|name| test.column(name).expect("rubbing column").to_vec());
+    // The same SVM over windows of Nakano's features alone and followed by the height's
+    // spectrum (a DFT of up to 625 samples on each deciding sample), trained on run 0.
+    let over_travel = NakanoWindowing {
+        mirrored_end: true,
+        friction_over_travel: Some(FrictionOverTravel::protocol()),
+        ..NakanoWindowing::new(0.25, 0.02, 1000.0)
+            .and_then(|w| w.following_speeds_down_to(0.002))
+            .expect("valid")
+    }
+    .over_travel()
+    .and_then(|w| w.reading_spectra_up_to(0.025))
+    .expect("valid");
+    let [nakano, spectrum] = [FeatureSet::Nakano, FeatureSet::NakanoSpectrum].map(|features| {
+        RecognizerFile::train_svm_windows(&train, over_travel, features, &SvmC::Fixed(10.0), CellScale::Mean)
+            .expect("SVM")
+    });
     let mut group = c.benchmark_group("live_recognizer");
-    for (name, model) in [("som", &som), ("svm", &svm)] {
+    for (name, model) in [
+        ("som", &som),
+        ("svm", &svm),
+        ("svm_nakano_run0", &nakano),
+        ("svm_nakano_spectrum_run0", &spectrum),
+    ] {
         bench_model(&mut group, name, model, &signals);
     }
     bench_fusion(&mut group, &surfaces);
