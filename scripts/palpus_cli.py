@@ -45,6 +45,19 @@ def scene_training():
     return surfaces, found.group(1).split()
 
 
+# The fastest stroke the spectra of the scene's windows read, m/s: five times its plan's 5 mm/s.
+SCENE_FASTEST_SPEED_MPS = "0.025"
+
+
+def with_height_spectrum(options):
+    """The scene's training options over Nakano's features followed by each window's height
+    spectrum, its bands reaching SCENE_FASTEST_SPEED_MPS."""
+    if "nakano" not in options:
+        raise SystemExit(f"expected --features nakano in {options}")
+    return [("nakano-spectrum" if o == "nakano" else o) for o in options] + \
+        ["--fastest-speed-mps", SCENE_FASTEST_SPEED_MPS]
+
+
 def fixed_time(options):
     """The scene's training options without the three that read windows over travel (as
     README's fixed-time column of the scene's times)."""

@@ -8,7 +8,9 @@ default (the weight fitted on the recordings held out of training) and with `--n
 - The scene `surfaces_nakano`: its SVM trained as the scene's header says, on captures made
   through the simulated device on tracks 10, 60 and 110 mm into each patch, and evaluated on
   tracks 35 and 85 mm in (`--sequential` at `--thresholds`); then the same over windows of fixed
-  time (the header's command without its three travel options). Last, decided over a memory of
+  time (the header's command without its three travel options), and over travel with each
+  window's height spectrum after Nakano's features (`--features nakano-spectrum`, its bands
+  reaching 25 mm/s; the weight fitted only). Last, decided over a memory of
   `SHORT_MEMORY_S` instead of the default 3 s: the over-travel SVM whose weight was fitted over
   3 s against the same trained with `--weight-fit-memory-s` set to that memory (threshold 0.9).
 - The multi-stream sliding study (as `scripts/fusion_table.py`): SVMs over Nakano's features
@@ -29,7 +31,7 @@ import tempfile
 from pathlib import Path
 
 from palpus_cli import (SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser, scene_captures, scene_training,
-                        sequential_table, sliding_study, train_reporting_fit)
+                        sequential_table, sliding_study, train_reporting_fit, with_height_spectrum)
 
 TEST_TRACKS_MM = (35, 85)
 TRAIN_TRIALS = 5
@@ -75,6 +77,11 @@ def main():
                      for label, m in scene.items()]
             if windows == "over travel":
                 over_travel = scene["fitted"]
+                print("scene surfaces_nakano, windows over travel, Nakano's features and the height's spectrum:")
+                spectrum = str(root / "height_spectrum.json")
+                print("- " + train_reporting_fit(args.palpus, sets["train"], with_height_spectrum(options), spectrum))
+                runs.append(("scene SVM over travel, height spectrum, fitted",
+                             evaluate(args.palpus, spectrum, sets["test"], args.thresholds)))
 
         print(f"scene surfaces_nakano, windows over travel, the weight fitted over {SHORT_MEMORY_S} s:")
         short = str(root / "short_memory.json")

@@ -3,7 +3,8 @@
 
 Captures the scene's training tracks as its header says, trains its SVM four ways on them (the
 header's command; the same without the three options that read windows over travel; each with
-and without `--no-weight-fit`), runs the scene headless with each in place of the committed file
+and without `--no-weight-fit`; and the header's command over `--features nakano-spectrum`, its
+bands reaching 25 mm/s), runs the scene headless with each in place of the committed file
 (a copy of the scene in a temporary folder, its paths made absolute), and prints, per surface in
 the scene's order, the time from the stroke's start to the surface named right for good, then
 each model's named and undecided decisions. The first column's model is the committed one
@@ -19,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 from palpus_cli import SCENE, SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser, scene_captures, \
-    scene_training, train_reporting_fit
+    scene_training, train_reporting_fit, with_height_spectrum
 
 COMMITTED = SCENE.parent.parent / "assets" / "models" / "nakano_svm.json"
 
@@ -55,7 +56,8 @@ def main():
         captures = scene_captures(args.palpus, surfaces, SCENE_TRAIN_TRACKS_MM, root / "train")
         columns = [("over travel, fitted", options), ("fixed time, fitted", fixed_time(options)),
                    ("over travel, hop / window", options + ["--no-weight-fit"]),
-                   ("fixed time, hop / window", fixed_time(options) + ["--no-weight-fit"])]
+                   ("fixed time, hop / window", fixed_time(options) + ["--no-weight-fit"]),
+                   ("over travel, height spectrum, fitted", with_height_spectrum(options))]
         timing, totals = {}, []
         for i, (label, opts) in enumerate(columns):
             model = root / f"{i}.json"

@@ -135,7 +135,7 @@ pub struct TrainSettings {
     /// Windowed features: time between decisions (and between training windows), s.
     pub hop_s: f64,
     /// Windowed features: decide each window at its last sample
-    /// ([`NakanoWindowing::mirrored_end`]); always so for `vibration`.
+    /// ([`NakanoWindowing::mirrored_end`]); always so for `vibration` and `nakano_spectrum`.
     pub mirrored_end: bool,
     /// Windowed features: filter the friction over travel
     /// ([`NakanoWindowing::friction_over_travel`], at [`FrictionOverTravel::protocol`]'s
