@@ -860,6 +860,53 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
             "{shown}"
         );
     }
+
+    // Nakano's features followed by the height's spectrum: windows over travel whose bands
+    // reach 25 mm/s, decided at their last sample, anytime.
+    let spectrum = dir.path().join("svm_nakano_spectrum.json");
+    let spectrum_s = spectrum.to_string_lossy().into_owned();
+    let options = [
+        "--features",
+        "nakano-spectrum",
+        "--window-s",
+        "0.25",
+        "--mirrored-end",
+        "--windows-over-travel",
+        "--fastest-speed-mps",
+        "0.025",
+    ];
+    let (summary, file) = train_model("svm", &options, &spectrum, &train_s);
+    assert!(summary.contains("over nakano_spectrum features"), "{summary}");
+    assert_eq!(file["features"], "nakano_spectrum");
+    assert_eq!(file["feature_names"].as_array().expect("names").len(), 30);
+    assert_eq!(file["body"]["windowing"]["mirrored_end"], true);
+    assert_eq!(file["body"]["windowing"]["travel"]["fastest_speed_mps"], 0.025);
+    let report = eval_json(&spectrum_s, &test_s, &["--sequential", "0.9"]);
+    let row = &report["rows"][0];
+    let (right, named) = (
+        row["correct"].as_u64().expect("right"),
+        row["decided"].as_u64().expect("named"),
+    );
+    eprintln!("svm --features nakano-spectrum, anytime at 0.9: {right} of {named} named right");
+    assert!(named > 0 && right as f64 >= 0.95 * named as f64, "{report}");
+    fails_with(
+        &args(
+            &train_head(
+                "knn",
+                &["--features", "nakano-spectrum", "--fastest-speed-mps", "0.025"],
+                &x_s,
+            ),
+            &train_s,
+        ),
+        &["--windows-over-travel"],
+    );
+    fails_with(
+        &args(
+            &train_head("som", &["--features", "nakano-spectrum"], &x_s),
+            &train_s,
+        ),
+        &["trains a k-NN or an SVM"],
+    );
     eprintln!("took {:.1} s", start.elapsed().as_secs_f64());
 }
 
