@@ -12,7 +12,7 @@ use haptics::HapticsError;
 use haptics::live_recognizer::{
     ChannelDecision, LiveDecision, LiveRecognizer, SampleRecognizer, channel, decision_in,
 };
-use haptics::sim::protocols::nakano::{RUNS, rubbing_run, rubbing_run_at};
+use haptics::sim::protocols::nakano::{RUNS, SPEED_MPS, rubbing_run_at};
 use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
 use recognize::nakano::FrictionOverTravel;
 use recognize::sequential::DEFAULT_MEMORY_S;
@@ -60,22 +60,11 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 
 /// `runs[surface][run]`, labelled, generated in memory (seed 1).
 fn runs() -> Vec<Vec<LabelledCapture>> {
-    nakano_surfaces()
-        .iter()
-        .map(|surface| {
-            let patch = SurfacePatch::new(surface);
-            (0..RUNS)
-                .map(|run| {
-                    let capture = rubbing_run(&patch, run, 1).expect("run");
-                    let name = format!("{}_run{run}.csv", surface.name);
-                    LabelledCapture::new(capture, Path::new(&name), String::new()).expect("labelled")
-                })
-                .collect()
-        })
-        .collect()
+    runs_at(SPEED_MPS)
 }
 
-/// `runs[surface][run]` rubbed at `speed_mps`, labelled, generated in memory (seed 1).
+/// `runs[surface][run]` rubbed at `speed_mps`, labelled, generated in memory (seed 1); named
+/// for the speed when it is not the protocol's.
 fn runs_at(speed_mps: f64) -> Vec<Vec<LabelledCapture>> {
     nakano_surfaces()
         .iter()
@@ -84,7 +73,11 @@ fn runs_at(speed_mps: f64) -> Vec<Vec<LabelledCapture>> {
             (0..RUNS)
                 .map(|run| {
                     let capture = rubbing_run_at(&patch, run, 1, speed_mps).expect("run");
-                    let name = format!("{}_run{run}_{}mmps.csv", surface.name, speed_mps * 1e3);
+                    let name = if speed_mps == SPEED_MPS {
+                        format!("{}_run{run}.csv", surface.name)
+                    } else {
+                        format!("{}_run{run}_{}mmps.csv", surface.name, speed_mps * 1e3)
+                    };
                     LabelledCapture::new(capture, Path::new(&name), String::new()).expect("labelled")
                 })
                 .collect()
@@ -603,11 +596,8 @@ fn a_mirrored_end_decides_each_window_at_its_last_sample_live_as_offline() {
 fn windows_over_travel_decide_live_as_offline_at_another_speed() {
     let train = runs();
     let fast = runs_at(0.02);
-    let windowing = NakanoWindowing {
-        friction_over_travel: Some(FrictionOverTravel::protocol()),
-        ..over_travel_to_2mmps()
-    };
-    let (named, right) = mirrored_end_live_as_offline(&train, &fast, windowing, FeatureSet::Nakano);
+    let (named, right) =
+        mirrored_end_live_as_offline(&train, &fast, friction_over_travel_to_2mmps(), FeatureSet::Nakano);
     // Measured: 139 of 156 (89.1 %); the SVM of `tests/recognition_speed.rs` names 98.1 % right.
     eprintln!("knn over travel, at 20 mm/s: {right} of {named} named decisions right");
     assert!(
@@ -623,12 +613,9 @@ fn windows_over_travel_decide_live_as_offline_at_another_speed() {
 fn the_heights_spectrum_decides_live_as_offline_at_another_speed() {
     let train = runs();
     let fast = runs_at(0.02);
-    let windowing = NakanoWindowing {
-        friction_over_travel: Some(FrictionOverTravel::protocol()),
-        ..over_travel_to_2mmps()
-    }
-    .reading_spectra_up_to(0.025)
-    .expect("valid");
+    let windowing = friction_over_travel_to_2mmps()
+        .reading_spectra_up_to(0.025)
+        .expect("valid");
     let (named, right) = mirrored_end_live_as_offline(&train, &fast, windowing, FeatureSet::NakanoSpectrum);
     eprintln!("knn over nakano_spectrum, at 20 mm/s: {right} of {named} named decisions right");
     assert!(
@@ -636,11 +623,11 @@ fn the_heights_spectrum_decides_live_as_offline_at_another_speed() {
         "{right}/{named}"
     );
     // Without bands reaching 20 mm/s, a window that fast is a typed error naming its speed.
-    let slow_bands = NakanoWindowing {
-        friction_over_travel: Some(FrictionOverTravel::protocol()),
-        ..over_travel_to_2mmps()
-    };
-    let (knn, _) = knn_on_run0(&train, slow_bands, FeatureSet::NakanoSpectrum);
+    let (knn, _) = knn_on_run0(
+        &train,
+        friction_over_travel_to_2mmps(),
+        FeatureSet::NakanoSpectrum,
+    );
     let err = knn
         .window_probabilities(&fast[0][1], knn.sequential_windowing().as_ref())
         .expect_err("too fast for its bands");
@@ -691,6 +678,14 @@ fn the_heights_spectrum_decides_live_as_offline_at_another_speed() {
             ..
         })
     ));
+}
+
+/// [`over_travel_to_2mmps`] with the friction filtered over travel too.
+fn friction_over_travel_to_2mmps() -> NakanoWindowing {
+    NakanoWindowing {
+        friction_over_travel: Some(FrictionOverTravel::protocol()),
+        ..over_travel_to_2mmps()
+    }
 }
 
 /// 0.25 s windows every 0.1 s over travel, each decided at its last sample, the filters
