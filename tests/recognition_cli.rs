@@ -907,6 +907,12 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
         ),
         &["trains a k-NN or an SVM"],
     );
+    // Nakano's features alone read no spectrum: a fastest speed would go unread.
+    let nakano_fast = options.map(|o| if o == "nakano-spectrum" { "nakano" } else { o });
+    fails_with(
+        &args(&train_head("svm", &nakano_fast, &x_s), &train_s),
+        &["fastest_speed_mps", "only a spectrum reads it"],
+    );
     eprintln!("took {:.1} s", start.elapsed().as_secs_f64());
 }
 

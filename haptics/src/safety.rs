@@ -21,13 +21,13 @@ pub mod flag {
     pub const MODEL_OUTPUT_NOT_FINITE: u32 = 1 << 5;
     /// The live surface recognizer was fed a non-finite sample (its decision stands).
     pub const RECOGNIZER_INPUT_NOT_FINITE: u32 = 1 << 6;
+    /// The force was held below the command after a stall of the loop (zero on the tick
+    /// after it, then ramping back).
+    pub const STALL_RECOVERY: u32 = 1 << 7;
     /// The live surface recognizer could not read the window this sample completes (such as
     /// one slid faster than its spectra's bands reach): the window adds no evidence and the
     /// decision stands.
     pub const RECOGNIZER_WINDOW_UNREAD: u32 = 1 << 8;
-    /// The force was held below the command after a stall of the loop (zero on the tick
-    /// after it, then ramping back).
-    pub const STALL_RECOVERY: u32 = 1 << 7;
 }
 
 /// `command` scaled by `scale`, read as 0–1 (NaN as 0). Scaling a filtered command keeps it

@@ -249,6 +249,14 @@ impl TrainSettings {
             (false, _) => windowing,
         };
         match self.fastest_speed_mps {
+            Some(fastest) if !matches!(self.features, FeatureSet::Vibration | FeatureSet::NakanoSpectrum) => {
+                Err(RecognizeError::Parameter {
+                    of: "setting",
+                    name: "fastest_speed_mps",
+                    value: fastest,
+                    reason: "only a spectrum reads it: --features vibration or nakano-spectrum",
+                })
+            }
             Some(fastest) => windowing.reading_spectra_up_to(fastest),
             None => Ok(windowing),
         }
