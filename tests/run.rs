@@ -321,6 +321,13 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
         f(&weight_from["hop_weight"]),
         f(&model["posterior_weight"]["hop_weight"])
     );
+    // Every window of the plan's 5 mm/s strokes was read.
+    assert_eq!(r["recognizer"]["features"], "nakano");
+    assert_eq!(
+        r["recognition_unread_windows"], 0,
+        "{}",
+        r["recognition_unread_windows"]
+    );
     // Every surface ends named right, well before any decision on a fixed 3 s window could be
     // made (3 s plus the filters' 0.27 s look-ahead), and never before the first 0.25 s window
     // is in: the model decides each window at its last sample.
