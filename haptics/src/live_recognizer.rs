@@ -119,7 +119,6 @@ enum Decider {
 #[derive(Debug, Clone)]
 pub struct LiveRecognizer {
     method: &'static str,
-    features: FeatureSet,
     decider: Decider,
     windowing: NakanoWindowing,
     classes: Vec<String>,
@@ -217,7 +216,7 @@ impl Clone for Edge {
 }
 
 /// The spectrum of a window's heights ([`FeatureSet::NakanoSpectrum`]), read as the offline
-/// vectors read it ([`NakanoWindowing::vibration_features`]), in buffers made here.
+/// vectors read it ([`NakanoWindowing::spectrum_features`]), in buffers made here.
 #[derive(Debug, Clone)]
 struct HeightSpectrum {
     /// Shared by copies: the DFT's plan is read-only, and copying it would plan it again.
@@ -304,7 +303,7 @@ impl Edge {
         if let Some(h) = &mut self.spectrum {
             // The window's own samples, as the offline vectors read them.
             let r = z.len() - span.len..z.len();
-            let bands = windowing.vibration_features(
+            let bands = windowing.spectrum_features(
                 &h.plan,
                 &z[r.clone()],
                 &path[r],
@@ -391,7 +390,6 @@ impl LiveRecognizer {
         }
         Ok(Self {
             method: model.method(),
-            features: model.body.feature_set(),
             decider,
             windowing,
             classes: model.classes.clone(),
@@ -642,9 +640,14 @@ impl LiveRecognizer {
         self.method
     }
 
-    /// The features its windows are decided on: `nakano` or `nakano_spectrum`.
+    /// The features its windows are decided on: `nakano`, or `nakano_spectrum` when its edge
+    /// reads the heights' spectrum too.
     pub fn features(&self) -> FeatureSet {
-        self.features
+        if self.edge.as_ref().is_some_and(|e| e.spectrum.is_some()) {
+            FeatureSet::NakanoSpectrum
+        } else {
+            FeatureSet::Nakano
+        }
     }
 
     /// Class names; [`LiveDecision::label`] indexes them.

@@ -3,7 +3,7 @@
 //!
 //! Its windows are placed as the offline ones are (Nakano's windows of its own windowing, from
 //! contact on, each decided at its last sample) and read through the same function
-//! ([`NakanoWindowing::vibration_features`]), so each window's probabilities are the offline
+//! ([`NakanoWindowing::spectrum_features`]), so each window's probabilities are the offline
 //! ones to the bit. Everything is allocated when it is built: per sample it writes two ring
 //! slots; per decision window it copies the window out of the rings, takes one DFT in its own
 //! buffers and classifies.
@@ -178,7 +178,7 @@ impl VibrationSense {
             .copy_into(&mut self.window_path_m, &mut self.window_vibration_mps2);
         let span = self.windowing.window_span(&self.window_path_m[..held]);
         let r = held - span.len..held;
-        let features = self.windowing.vibration_features(
+        let features = self.windowing.spectrum_features(
             &self.plan,
             &self.window_vibration_mps2[r.clone()],
             &self.window_path_m[r],

@@ -784,8 +784,12 @@ pub(crate) fn window_vectors(
         let height_spectrum = |source| features_error("height spectrum", source);
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
         let height = Axes::One(nakano_column(nakano::HEIGHT_COLUMN)?);
-        return spectrum_vectors(nakano, windowing, height, &path_m, cell_scale, true)
-            .map_err(height_spectrum);
+        let spectra =
+            window_spectra(nakano, windowing, height, &path_m, cell_scale).map_err(height_spectrum)?;
+        return Ok(spectra
+            .into_iter()
+            .map(|(s, span, nakano, spectrum)| (s, span, nakano.iter().chain(&spectrum).copied().collect()))
+            .collect());
     }
     let column = |name| {
         c.capture
@@ -801,7 +805,11 @@ pub(crate) fn window_vectors(
     };
     if features == FeatureSet::Vibration {
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
-        return spectrum_vectors(nakano, windowing, axes, &path_m, cell_scale, false).map_err(spectral);
+        let spectra = window_spectra(nakano, windowing, axes, &path_m, cell_scale).map_err(spectral)?;
+        return Ok(spectra
+            .into_iter()
+            .map(|(s, span, _, spectrum)| (s, span, spectrum.to_vec()))
+            .collect());
     }
     let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
@@ -821,20 +829,22 @@ pub(crate) fn window_vectors(
         .collect()
 }
 
-/// The spectra of Nakano's windows ([`FeatureSet::Vibration`]'s vectors; after each window's
-/// Nakano features when `after_nakano`, [`FeatureSet::NakanoSpectrum`]'s): of each window's
-/// own samples of `axes` (the `len` that end where the window ends, so that a window over
-/// travel reads the same stretch as its Nakano features), all before its decision. Over
-/// travel, the bands are too ([`WindowSpectrumPlan::features_over_travel`]), at the window's
-/// path (`path_m`, the capture's [`PlayedPath`]) over its duration.
-fn spectrum_vectors(
+/// A window's first sample, span, Nakano features and spectrum.
+type SpectrumWindow = (usize, WindowSpan, [f64; FEATURES], [f64; SPECTRUM_LEN]);
+
+/// Nakano's windows, each with its spectrum ([`FeatureSet::Vibration`]'s vectors alone,
+/// [`FeatureSet::NakanoSpectrum`]'s after the window's Nakano features): of each window's own
+/// samples of `axes` (the `len` that end where the window ends, so that a window over travel
+/// reads the same stretch as its Nakano features), all before its decision. Over travel, the
+/// bands are too ([`WindowSpectrumPlan::features_over_travel`]), at the window's path
+/// (`path_m`, the capture's [`PlayedPath`]) over its duration.
+fn window_spectra(
     nakano: Vec<(usize, WindowSpan, [f64; FEATURES])>,
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
     path_m: &[f64],
     cell_scale: CellScale,
-    after_nakano: bool,
-) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
+) -> Result<Vec<SpectrumWindow>, RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
     let mut scratch = plan.scratch();
     let samples = match axes {
@@ -853,25 +863,21 @@ fn spectrum_vectors(
                 Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
             };
             let spectrum =
-                windowing.vibration_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch)?;
-            let vector = if after_nakano {
-                nakano.iter().chain(&spectrum).copied().collect()
-            } else {
-                spectrum.to_vec()
-            };
-            Ok((s, span, vector))
+                windowing.spectrum_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch)?;
+            Ok((s, span, nakano, spectrum))
         })
         .collect()
 }
 
 impl NakanoWindowing {
-    /// [`FeatureSet::Vibration`]'s features of one window: the spectrum of `signal` (the
-    /// window's vibration samples, a single axis or the axes' magnitude), over travel when the
-    /// windows are ([`NakanoWindowing::travel_reference_speed_mps`], at the speed along
-    /// `path_m`, the same samples' [`PlayedPath`]), by `plan` (made for
+    /// The spectrum of one window ([`FeatureSet::Vibration`]'s features, the last of
+    /// [`FeatureSet::NakanoSpectrum`]'s): of `signal` (the window's vibration samples, a single
+    /// axis or the axes' magnitude, or its heights), over travel when the windows are
+    /// ([`NakanoWindowing::spectrum_reference_speed_mps`], at the speed along `path_m`, the
+    /// same samples' [`PlayedPath`]), by `plan` (made for
     /// [`NakanoWindowing::max_window_samples`] at this rate) in `scratch`. The offline vectors
     /// and the live recognizer both read windows through it, so the two agree to the bit.
-    pub fn vibration_features(
+    pub fn spectrum_features(
         &self,
         plan: &WindowSpectrumPlan,
         signal: &[f64],
@@ -1092,7 +1098,7 @@ mod tests {
         let mut scratch = plan.scratch();
         let signal: Vec<f64> = (0..60).map(|k| (k as f64 * 0.7).sin()).collect();
         let read = |w: &NakanoWindowing, step_m: f64, scratch: &mut SpectrumScratch| {
-            w.vibration_features(&plan, &signal, &steady(step_m, 60), CellScale::Mean, scratch)
+            w.spectrum_features(&plan, &signal, &steady(step_m, 60), CellScale::Mean, scratch)
         };
         assert!(read(&fast, 25e-6, &mut scratch).is_ok());
         assert!(read(&fast, 26e-6, &mut scratch).is_err());
