@@ -574,32 +574,41 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
         }
     }
     println!(
-        "{:>9} {:>8} {:>10} {:>12} {:>14} {:>26} {:>10} {:>8} {:>7} {:>7}",
+        "{:>9} {:>8} {:>10} {:>12} {:>14} {:>12} {:>26} {:>27} {:>10} {:>8} {:>7} {:>7}",
         "threshold",
         "named",
         "accuracy",
         "first named",
         "stable right",
+        "(travel)",
         "slowest surface",
+        "most travel",
         "not right",
         "flips/s",
         "Brier",
         "ECE"
     );
     let secs = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |s| format!("{s:.2} s"));
+    let mm = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |m| format!("{:.1} mm", 1e3 * m));
     for r in &e.rows {
         let slowest = r
             .worst_surface
             .as_ref()
             .map_or_else(|| "-".to_owned(), |(name, s)| format!("{name} {s:.2} s"));
+        let farthest = r
+            .worst_surface_travel
+            .as_ref()
+            .map_or_else(|| "-".to_owned(), |(name, m)| format!("{name} {:.1} mm", 1e3 * m));
         println!(
-            "{:>9} {:>7.1}% {:>10} {:>12} {:>14} {:>26} {:>10} {:>8.3} {:>7.4} {:>6.2}%",
+            "{:>9} {:>7.1}% {:>10} {:>12} {:>14} {:>12} {:>26} {:>27} {:>10} {:>8.3} {:>7.4} {:>6.2}%",
             r.threshold,
             100.0 * r.decided as f64 / e.steps as f64,
             percent(r.accuracy()),
             secs(r.time_to_first_decision_s),
             secs(r.time_to_stable_correct_s),
+            mm(r.travel_to_stable_correct_m),
             slowest,
+            farthest,
             r.not_stable,
             r.flips_per_s,
             r.calibration.brier,
@@ -612,16 +621,24 @@ fn eval_sequential(args: &EvalArgs, model: &RecognizerFile) -> anyhow::Result<()
              named right = right for the surface under the tool):"
         );
         println!(
-            "{:>9} {:>8} {:>16} {:>16} {:>14}",
-            "threshold", "strokes", "change followed", "slowest change", "not followed"
+            "{:>9} {:>8} {:>16} {:>12} {:>16} {:>12} {:>14}",
+            "threshold",
+            "strokes",
+            "change followed",
+            "(travel)",
+            "slowest change",
+            "(travel)",
+            "not followed"
         );
         for r in &e.rows {
             println!(
-                "{:>9} {:>8} {:>16} {:>16} {:>14}",
+                "{:>9} {:>8} {:>16} {:>12} {:>16} {:>12} {:>14}",
                 r.threshold,
                 r.changes,
                 secs(r.change_followed_s),
+                mm(r.change_followed_m),
                 secs(r.slowest_change_s),
+                mm(r.slowest_change_m),
                 r.changes_not_followed
             );
         }

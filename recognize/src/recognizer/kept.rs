@@ -15,7 +15,7 @@ use super::file::{RecognizerBody, RecognizerFile};
 use super::labelled::{KeptFeatures, KeptWindows, LabelledCapture, check_rate};
 use crate::RecognizeError;
 use crate::features::spectral::CellScale;
-use crate::features::{FeatureSet, NakanoWindowing, Travel, capture_histogram, window_vectors};
+use crate::features::{FeatureSet, NakanoWindowing, PlayedPath, Travel, capture_histogram, window_vectors};
 use capture::Capture;
 
 /// The features a training or an evaluation reads from each capture: window vectors (of a
@@ -180,6 +180,7 @@ impl LabelledCapture {
             .collect::<Result<_, RecognizeError>>()?;
         let kept = KeptFeatures {
             samples: self.capture.len(),
+            path_m: self.played_path_m().into_iter().map(|m| m as f32).collect(),
             travel: Travel::of(
                 &self.capture,
                 needs.windows.iter().map(|(w, ..)| w.start_travel_m),
@@ -204,6 +205,19 @@ impl LabelledCapture {
     /// Samples of the capture, also after its samples were dropped.
     pub fn samples(&self) -> usize {
         self.kept.as_ref().map_or(self.capture.len(), |k| k.samples())
+    }
+
+    /// The tool's path from the first sample to each sample, read through the play
+    /// ([`PlayedPath`]), m; empty for a capture without a position column.
+    pub(crate) fn played_path_m(&self) -> Vec<f64> {
+        match (
+            &self.kept,
+            self.capture.column(capture::kind::TANGENTIAL_POSITION_M),
+        ) {
+            (Some(k), _) => k.path_m.iter().map(|&m| f64::from(m)).collect(),
+            (None, Ok(x)) => PlayedPath::series(x),
+            (None, Err(_)) => Vec::new(),
+        }
     }
 
     /// The features kept when the samples were dropped.

@@ -131,6 +131,10 @@ pub(crate) struct KeptFeatures {
     pub(super) samples: usize,
     /// How far its tip travelled, for the reason a capture gave no window.
     pub(super) travel: Travel,
+    /// Its tool's path to each sample ([`LabelledCapture::played_path_m`]), m, to tell how far
+    /// a decision came into a stroke; single precision, as it holds a value per sample (a
+    /// micrometre's accuracy up to 8 m of path).
+    pub(super) path_m: Vec<f32>,
     pub(super) windows: Vec<KeptWindows>,
     pub(super) histograms: Vec<(CellScale, [f64; FEATURE_LEN])>,
 }

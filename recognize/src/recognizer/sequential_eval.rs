@@ -51,6 +51,12 @@ pub struct SequentialRow {
     pub time_to_stable_correct_s: Option<f64>,
     /// The surface with the longest such mean, and that mean, s.
     pub worst_surface: Option<(String, f64)>,
+    /// The same decisions in travel, how much of the surface each took: the mean over those
+    /// captures of the tool's path from contact to that decision, read through the play
+    /// ([`crate::PlayedPath`]), m; and the surface with the longest such mean, and that mean,
+    /// m. `None` where a capture has no position column.
+    pub travel_to_stable_correct_m: Option<f64>,
+    pub worst_surface_travel: Option<(String, f64)>,
     /// Captures (of one surface) that do not end named right.
     pub not_stable: usize,
     /// Of the captures that slide onto another surface part-way: the mean time from the change
@@ -59,6 +65,9 @@ pub struct SequentialRow {
     /// not end named right. The single-surface times above leave these captures out.
     pub change_followed_s: Option<f64>,
     pub slowest_change_s: Option<f64>,
+    /// The same two in travel since the change, m.
+    pub change_followed_m: Option<f64>,
+    pub slowest_change_m: Option<f64>,
     pub changes: usize,
     pub changes_not_followed: usize,
     /// Changes of named surface (undecided stretches not counted) per second of stroke.
@@ -164,6 +173,9 @@ pub(super) struct Stroke {
     pub(super) truth: usize,
     /// When the stroke slides onto another surface, and which.
     pub(super) change: Option<(f64, usize)>,
+    /// The tool's path from contact to that change, read through the play, m (`None` without
+    /// a position column).
+    pub(super) change_travel_m: Option<f64>,
     pub(super) duration_s: f64,
     /// Its windows of every recognizer, in the order they are decided.
     pub(super) windows: Vec<StrokeWindow>,
@@ -172,6 +184,9 @@ pub(super) struct Stroke {
 /// One window of a stroke, as the posterior takes it.
 pub(super) struct StrokeWindow {
     pub(super) at_s: f64,
+    /// The tool's path from contact to the sample it is decided at, read through the play, m
+    /// (`None` without a position column).
+    pub(super) travel_m: Option<f64>,
     /// Its evidence scale ([`NakanoWindowing::evidence_scale`]) times its recognizer's weight
     /// relative to the first recognizer's.
     pub(super) scale: f64,
@@ -463,6 +478,8 @@ impl RecognizerFile {
         short_of_travel: &mut usize,
     ) -> Result<Stroke, RecognizeError> {
         let rate_hz = c.capture.metadata().rate_hz();
+        let path_m = c.played_path_m();
+        let travel_at = |sample: usize| path_m.get(sample).copied();
         let mut windows = Vec::new();
         for (model, windowing, factor) in sources {
             windows.extend(
@@ -473,6 +490,7 @@ impl RecognizerFile {
                     .inspect(|w| *short_of_travel += usize::from(w.short_of_travel))
                     .map(|w| StrokeWindow {
                         at_s: w.decision.decided_at as f64 / rate_hz,
+                        travel_m: travel_at(w.decision.decided_at),
                         scale: w.evidence_scale * factor,
                         share: w.evidence_scale,
                         probabilities: w.probabilities,
@@ -485,9 +503,11 @@ impl RecognizerFile {
             Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
             None => None,
         };
+        let change_travel_m = change.and_then(|(at_s, _)| travel_at((at_s * rate_hz).round() as usize));
         Ok(Stroke {
             truth: class_index(&self.classes, c)?,
             change,
+            change_travel_m,
             duration_s: c.samples() as f64 / rate_hz,
             windows,
         })
@@ -501,58 +521,77 @@ impl RecognizerFile {
         let classes = self.classes.len();
         let mut state = SequentialState::new(params, classes)?;
         let (mut decided, mut correct, mut flips, mut not_stable) = (0, 0, 0, 0);
-        let (mut first, mut stable) = (Vec::new(), Vec::new());
+        let (mut first, mut stable, mut stable_m) = (Vec::new(), Vec::new(), Vec::new());
         let mut stable_by_class: Vec<Vec<f64>> = vec![Vec::new(); classes];
+        let mut stable_m_by_class: Vec<Vec<Option<f64>>> = vec![Vec::new(); classes];
         let mut duration_s = 0.0;
-        let (mut followed, mut not_followed) = (Vec::new(), 0);
+        let (mut followed, mut followed_m, mut not_followed) = (Vec::new(), Vec::new(), 0);
         let mut tally = CalibrationTally::default();
         for s in strokes {
             state.reset();
             duration_s += s.duration_s;
-            let mut named: Vec<(f64, usize)> = Vec::new();
+            // Each named decision: when, the path by then, and the surface named.
+            let mut named: Vec<(f64, Option<f64>, usize)> = Vec::new();
             for w in &s.windows {
                 let step = state.push_window(&w.probabilities, w.scale, w.share)?;
                 tally.add(state.posterior(), step.best, step.probability, s.truth_at(w.at_s));
                 if let Some(d) = step.decided {
-                    named.push((w.at_s, d));
+                    named.push((w.at_s, w.travel_m, d));
                 }
             }
             decided += named.len();
-            correct += named.iter().filter(|(t, d)| *d == s.truth_at(*t)).count();
-            flips += named.windows(2).filter(|w| w[0].1 != w[1].1).count();
+            correct += named.iter().filter(|(t, _, d)| *d == s.truth_at(*t)).count();
+            flips += named.windows(2).filter(|w| w[0].2 != w[1].2).count();
             // The named decision that starts the final run of right ones, if the stroke ends
             // named right.
             let final_right = |truth: usize| match named.last() {
-                Some(&(_, d)) if d == truth => {
-                    let wrong = named.iter().rposition(|(_, d)| *d != truth);
-                    Some(named[wrong.map_or(0, |w| w + 1)].0)
+                Some(&(.., d)) if d == truth => {
+                    let wrong = named.iter().rposition(|(.., d)| *d != truth);
+                    Some(named[wrong.map_or(0, |w| w + 1)])
                 }
                 _ => None,
             };
             if let Some((at_s, after)) = s.change {
                 match final_right(after) {
-                    Some(t) if t >= at_s => followed.push(t - at_s),
+                    Some((t, travel_m, _)) if t >= at_s => {
+                        followed.push(t - at_s);
+                        followed_m.push(travel_m.zip(s.change_travel_m).map(|(a, b)| a - b));
+                    }
                     _ => not_followed += 1,
                 }
                 continue;
             }
-            if let Some(&(t, _)) = named.first() {
+            if let Some(&(t, ..)) = named.first() {
                 first.push(t);
             }
             match final_right(s.truth) {
-                Some(t) => {
+                Some((t, travel_m, _)) => {
                     stable.push(t);
+                    stable_m.push(travel_m);
                     stable_by_class[s.truth].push(t);
+                    stable_m_by_class[s.truth].push(travel_m);
                 }
                 None => not_stable += 1,
             }
         }
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
-        let worst_surface = stable_by_class
-            .iter()
-            .enumerate()
-            .filter_map(|(c, v)| mean(v).map(|m| (self.classes[c].clone(), m)))
-            .max_by(|a, b| a.1.total_cmp(&b.1));
+        // Travel is reported only where every capture it is taken over has it.
+        let all = |v: &[Option<f64>]| v.iter().copied().collect::<Option<Vec<f64>>>();
+        let worst = |by_class: Vec<Option<f64>>| {
+            by_class
+                .into_iter()
+                .enumerate()
+                .filter_map(|(c, m)| m.map(|m| (self.classes[c].clone(), m)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        let worst_surface = worst(stable_by_class.iter().map(|v| mean(v)).collect());
+        let worst_surface_travel = all(&stable_m).and(worst(
+            stable_m_by_class
+                .iter()
+                .map(|v| all(v).and_then(|v| mean(&v)))
+                .collect(),
+        ));
+        let followed_m = all(&followed_m);
         Ok(SequentialRow {
             threshold: params.threshold(),
             decided,
@@ -560,9 +599,13 @@ impl RecognizerFile {
             time_to_first_decision_s: mean(&first),
             time_to_stable_correct_s: mean(&stable),
             worst_surface,
+            travel_to_stable_correct_m: all(&stable_m).and_then(|v| mean(&v)),
+            worst_surface_travel,
             not_stable,
             change_followed_s: mean(&followed),
             slowest_change_s: followed.iter().copied().reduce(f64::max),
+            change_followed_m: followed_m.as_deref().and_then(mean),
+            slowest_change_m: followed_m.and_then(|v| v.into_iter().reduce(f64::max)),
             changes: followed.len() + not_followed,
             changes_not_followed: not_followed,
             flips_per_s: if duration_s > 0.0 {

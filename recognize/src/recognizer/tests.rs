@@ -1201,6 +1201,7 @@ fn symbol_strokes(strokes: usize, windows: usize, repeats: usize) -> Vec<Stroke>
                 for r in 0..repeats {
                     stroke_windows.push(StrokeWindow {
                         at_s: (w * repeats + r) as f64 * 0.01,
+                        travel_m: None,
                         scale: 1.0,
                         share: 1.0,
                         probabilities: probabilities.clone(),
@@ -1210,6 +1211,7 @@ fn symbol_strokes(strokes: usize, windows: usize, repeats: usize) -> Vec<Stroke>
             Stroke {
                 truth,
                 change: None,
+                change_travel_m: None,
                 duration_s: (windows * repeats) as f64 * 0.01,
                 windows: stroke_windows,
             }
@@ -1639,6 +1641,88 @@ fn a_change_of_surface_is_read_from_the_metadata_and_checked() {
     assert_eq!(c.change_followed_s, None);
     // The stroke with a change is left out of the single-surface times.
     assert!(p.time_to_stable_correct_s.is_some() && c.time_to_stable_correct_s.is_none());
+}
+
+/// The anytime decisions say how far into the stroke they came as well as how soon: the path
+/// through the play, which at a steady 5 mm/s from the first sample is 5 mm a second less the
+/// play's first 0.1 mm; after a change, the path since it. A capture that kept only its
+/// features says the same.
+#[test]
+fn anytime_decisions_say_how_far_into_the_stroke_they_came() {
+    let knn = RecognizerFile::train_knn_windows(
+        &three_surfaces(4.0),
+        NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid"),
+        FeatureSet::Nakano,
+        3,
+        CellScale::Mean,
+    )
+    .expect("k-NN");
+    let params = knn.sequential_params(3.0).expect("window probabilities");
+    let path_m = |t_s: f64| (5e-3 * t_s - crate::TRAVEL_PLAY_M / 2.0).max(0.0);
+    // Fine for 3 s, then coarse for 4 s, on one steady stroke.
+    let (fine, coarse) = (
+        rubbing("fine", 5e-6, 0.3e-3, 0.10, 7.0),
+        rubbing("coarse", 30e-6, 1.5e-3, 0.20, 7.0),
+    );
+    let mut data = fine.capture.data().to_vec();
+    for (column, after) in data.iter_mut().zip(coarse.capture.data()) {
+        column[3000..].copy_from_slice(&after[3000..]);
+    }
+    let mut meta = fine.capture.metadata().clone();
+    meta.insert(SURFACE_AFTER_KEY, "coarse");
+    meta.insert(SURFACE_CHANGE_S_KEY, "3.0");
+    let two = Capture::new(meta, fine.capture.columns().to_vec(), data).expect("valid");
+    let two = LabelledCapture::new(two, Path::new("two.csv"), "00".into()).expect("labelled");
+    let set = vec![
+        rubbing("fine", 5e-6, 0.3e-3, 0.10, 4.0),
+        rubbing("coarse", 30e-6, 1.5e-3, 0.20, 4.0),
+        two,
+    ];
+    let e = knn.evaluate_sequential(&set, &[0.9], params).expect("eval");
+    let r = &e.rows[0];
+    let (t_s, m) = (
+        r.time_to_stable_correct_s.expect("both single strokes end right"),
+        r.travel_to_stable_correct_m.expect("positions"),
+    );
+    // The mean of two paths is the path at the mean time where neither is within the play.
+    assert!(t_s > 0.1 && (m - path_m(t_s)).abs() < 1e-12, "{t_s} s, {m} m");
+    let (name, worst_m) = r.worst_surface_travel.clone().expect("worst surface");
+    let (worst_name, worst_s) = r.worst_surface.clone().expect("worst surface");
+    assert_eq!(name, worst_name);
+    assert!(
+        (worst_m - path_m(worst_s)).abs() < 1e-12,
+        "{worst_m} m at {worst_s} s"
+    );
+    assert_eq!((r.changes, r.changes_not_followed), (1, 0), "{r:?}");
+    let (after_s, after_m) = (
+        r.change_followed_s.expect("followed"),
+        r.change_followed_m.expect("positions"),
+    );
+    assert!(
+        after_s > 0.0 && (after_m - 5e-3 * after_s).abs() < 1e-12,
+        "{after_s} s, {after_m} m"
+    );
+    assert_eq!(r.slowest_change_m, Some(after_m));
+
+    let needs = FeatureNeeds::sequential(&knn).expect("needs");
+    let kept: Vec<LabelledCapture> = set
+        .iter()
+        .map(|c| c.clone().keep_features(&needs).expect("keeps"))
+        .collect();
+    let k = &knn
+        .evaluate_sequential(&kept, &[0.9], params)
+        .expect("eval kept")
+        .rows[0];
+    assert_eq!(k.time_to_stable_correct_s, r.time_to_stable_correct_s);
+    // Kept in single precision: within a micrometre.
+    assert!(
+        (k.travel_to_stable_correct_m.expect("kept") - m).abs() < 1e-6,
+        "{k:?}"
+    );
+    assert!(
+        (k.change_followed_m.expect("kept") - after_m).abs() < 1e-6,
+        "{k:?}"
+    );
 }
 
 /// A k-NN over windows trained on two trials calibrates its votes on windows held out by
