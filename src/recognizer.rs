@@ -192,6 +192,21 @@ pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceT
                 .iter()
                 .find(|s| s.channels[haptics::control::rubbing::channel::PHASE] == rubbing)?
                 .time_s;
+            // The tool's path through the play from the stroke's start, by loop time, read from
+            // the position the recognizer reads.
+            let mut played = recognize::PlayedPath::new();
+            let path: Vec<(f64, f64)> = run
+                .samples
+                .iter()
+                .filter_map(|s| {
+                    let [x_m, ..] = haptics::acquire::rubbing_signals(&s.state, &s.channels)?;
+                    Some((s.time_s, played.push(x_m)))
+                })
+                .collect();
+            let path_at = |t_s: f64| {
+                let after = path.partition_point(|(time_s, _)| *time_s <= t_s);
+                after.checked_sub(1).map(|i| path[i].1)
+            };
             let named: Vec<&Recognition> = recognition
                 .iter()
                 .filter(|r| r.object == run.segment.object && r.label.is_some())
@@ -200,14 +215,14 @@ pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceT
             // The named decision that starts the final run of right ones.
             let right = |r: &&&Recognition| r.label.as_deref() == Some(surface.as_str());
             let trailing_right = named.iter().rev().take_while(right).count();
-            let stable_right_after_s =
-                (trailing_right > 0).then(|| named[named.len() - trailing_right].time_s - stroke_s);
+            let stable_right = (trailing_right > 0).then(|| named[named.len() - trailing_right].time_s);
             Some(SurfaceTiming {
                 object: run.segment.object.clone(),
                 truth: surface.clone(),
                 stroke_s,
                 first_named_after_s,
-                stable_right_after_s,
+                stable_right_after_s: stable_right.map(|t| t - stroke_s),
+                stable_right_after_m: stable_right.and_then(path_at),
                 named: named.len(),
                 right: named.iter().filter(right).count(),
             })

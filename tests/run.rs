@@ -337,6 +337,10 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
         let stable = f(&t["stable_right_after_s"]);
         assert!((0.25..2.0).contains(&stable), "{t}");
         assert!(t["first_named_after_s"].as_f64().unwrap() <= stable, "{t}");
+        // The same decision in travel: no farther than the plan's 5 mm/s reaches by then (the
+        // stroke starts from rest), and not at rest.
+        let travel_m = f(&t["stable_right_after_m"]);
+        assert!(travel_m > 0.0 && travel_m <= 5e-3 * stable, "{t}");
     }
     // The timeline says "undecided" (an empty label) before each surface is named, with the
     // surface most likely so far and its probability.

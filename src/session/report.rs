@@ -56,6 +56,9 @@ pub struct SurfaceTiming {
     /// From the stroke's start to the named decision that starts the final run of right ones,
     /// s; `None` when the segment does not end named right.
     pub stable_right_after_s: Option<f64>,
+    /// The same decision in travel, how much of the surface it took: the tool's path from the
+    /// stroke's start, read through the play ([`recognize::PlayedPath`]), m.
+    pub stable_right_after_m: Option<f64>,
     /// Decisions that named a surface.
     pub named: usize,
     /// Of those, named right.
@@ -369,9 +372,12 @@ impl SessionReport {
         }
         for s in &self.recognition_timing {
             let after = |v: Option<f64>| v.map_or("never".to_owned(), |v| format!("{v:.2} s"));
+            let travel = s
+                .stable_right_after_m
+                .map_or(String::new(), |m| format!(" and {:.1} mm", 1e3 * m));
             let _ = writeln!(
                 t,
-                "    {}: first named {}, named right for good {} after the stroke began ({} of {} named right)",
+                "    {}: first named {}, named right for good {}{travel} after the stroke began ({} of {} named right)",
                 s.object,
                 after(s.first_named_after_s),
                 after(s.stable_right_after_s),
