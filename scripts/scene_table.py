@@ -6,7 +6,8 @@ header's command; the same without the three options that read windows over trav
 and without `--no-weight-fit`; and the header's command over `--features nakano-spectrum`, its
 bands reaching 25 mm/s), runs the scene headless with each in place of the committed file
 (a copy of the scene in a temporary folder, its paths made absolute), and prints, per surface in
-the scene's order, the time from the stroke's start to the surface named right for good, then
+the scene's order, the time from the stroke's start to the surface named right for good and the
+tool's path by then (through the play), then
 each model's named and undecided decisions. The first column's model is the committed one
 (`assets/models/nakano_svm.json`), retrained: the script says whether the two differ (but for
 the captures' folders).
@@ -71,7 +72,7 @@ def main():
                    "--report", str(out / "report"))
             report = json.loads((out / "report" / "report.json").read_text())
             for t in report["recognition_timing"]:
-                timing.setdefault(t["object"], []).append(t["stable_right_after_s"])
+                timing.setdefault(t["object"], []).append((t["stable_right_after_s"], t["stable_right_after_m"]))
             named = sum(1 for r in report["recognition"] if r["label"] is not None)
             right = report["recognition_accuracy"]
             totals.append(f"{label}: {100 * right:.1f} % of {named:,} named decisions right, "
@@ -79,11 +80,18 @@ def main():
         print(f"\nthreshold {args.threshold}\n")
         print("| surface | " + " | ".join(label for label, _ in columns) + " |")
         print("|---" * (len(columns) + 1) + "|")
+        def cell(t_s, m):
+            return "never" if t_s is None else f"{t_s:.2f} s, {1e3 * m:.1f} mm"
+
         for surface, times in timing.items():
-            cells = ["never" if t is None else f"{t:.2f} s" for t in times]
-            print(f"| {surface} | " + " | ".join(cells) + " |")
-        columns_times = [[t[i] for t in timing.values()] for i in range(len(columns))]
-        means = ["-" if None in c else f"{sum(c) / len(c):.2f} s" for c in columns_times]
+            print(f"| {surface} | " + " | ".join(cell(*t) for t in times) + " |")
+        means = []
+        for i in range(len(columns)):
+            column = [t[i] for t in timing.values()]
+            if any(t_s is None for t_s, _ in column):
+                means.append("-")
+            else:
+                means.append(cell(*(sum(v) / len(column) for v in zip(*column))))
         print("| mean | " + " | ".join(means) + " |")
         print()
         for line in totals:

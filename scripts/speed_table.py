@@ -10,8 +10,9 @@ after Nakano's features (`--features nakano-spectrum`, its bands reaching the fa
 rubbed with a quarter to spare: `--fastest-speed-mps`). Evaluates each at threshold 0.9 on
 runs 1-2 and on the two-patch strokes at each speed. Prints one Markdown row per speed and SVM: named decisions right, the
 calibration error, the mean time to the stable right surface and the slowest surface's mean,
-strokes not ending named right, and on the two-patch strokes the mean and slowest time from the
-seam to the stable new surface and the strokes not followed.
+each with the tool's path by then (through the play), strokes not ending named right, and on the
+two-patch strokes the mean and slowest time from the seam to the stable new surface, with the path
+since the seam, and the strokes not followed.
 
     python3 scripts/speed_table.py [--palpus target/release/palpus] [--speeds 0.002,0.005,0.02]
 """
@@ -52,6 +53,22 @@ def main():
         def secs(v):
             return "-" if v is None else f"{v:.2f} s"
 
+        def at(v, m):
+            """A time and the path by then."""
+            return secs(v) if m is None else f"{secs(v)}, {1e3 * m:.1f} mm"
+
+        def slowest(s):
+            """The slowest surface's mean time and path, and the surface; the surface with the
+            longest path too where that is another."""
+            worst, farthest = s["worst_surface"], s["worst_surface_travel"]
+            if not worst:
+                return "-"
+            if not farthest:
+                return f"{secs(worst[1])} ({worst[0]})"
+            if farthest[0] != worst[0]:
+                return f"{secs(worst[1])} ({worst[0]}); {1e3 * farthest[1]:.1f} mm ({farthest[0]})"
+            return f"{at(worst[1], farthest[1])} ({worst[0]})"
+
         print("| speed | windows | named right | calibration error | stable right (mean) | slowest surface "
               "| strokes not ending right | two-patch: new surface after the seam (mean) | slowest | not followed |")
         print("|---|---|---|---|---|---|---|---|---|---|")
@@ -64,13 +81,13 @@ def main():
                          if not p.stem.endswith("run0")]
             for name, label, _ in kinds:
                 (s, ece), (t, _) = row(models[name], test), row(models[name], two_patch)
-                worst = s["worst_surface"]
                 print(f"| {1e3 * float(speed):g} mm/s | {label} "
                       f"| {100 * s['correct'] / s['decided']:.1f} % | {100 * ece:.1f} % "
-                      f"| {secs(s['time_to_stable_correct_s'])} "
-                      f"| {secs(worst[1] if worst else None)} ({worst[0] if worst else '-'}) "
+                      f"| {at(s['time_to_stable_correct_s'], s['travel_to_stable_correct_m'])} "
+                      f"| {slowest(s)} "
                       f"| {s['not_stable']} of {len(test)} "
-                      f"| {secs(t['change_followed_s'])} | {secs(t['slowest_change_s'])} "
+                      f"| {at(t['change_followed_s'], t['change_followed_m'])} "
+                      f"| {at(t['slowest_change_s'], t['slowest_change_m'])} "
                       f"| {t['changes_not_followed']} of {t['changes']} |")
 
 
