@@ -85,7 +85,7 @@ impl SceneRecognizer {
 
     /// How the report names it.
     pub fn line(&self) -> RecognizerLine {
-        line(&self.live, self.weight_from)
+        line(&self.live, self.weight_from.clone())
     }
 
     /// The surfaces it names, in the order of its posterior.
@@ -102,7 +102,10 @@ impl SceneRecognizer {
 /// Why `model`'s window weight does not hold for a posterior keeping `memory_s` of evidence:
 /// it was fitted at another memory. `None` when it holds, or when no weight was fitted.
 pub fn weight_memory_note(model: &RecognizerFile, memory_s: f64) -> Option<String> {
-    let fit = model.posterior_weight.filter(|p| !p.fitted_at_memory(memory_s))?;
+    let fit = model
+        .posterior_weight
+        .as_ref()
+        .filter(|p| !p.fitted_at_memory(memory_s))?;
     Some(format!(
         "its window weight was fitted over a memory of {} s and is used over {memory_s} s, outside \
          what the fit measured (train with --weight-fit-memory-s {memory_s} to fit it there)",

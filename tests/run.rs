@@ -321,6 +321,17 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
         f(&weight_from["hop_weight"]),
         f(&model["posterior_weight"]["hop_weight"])
     );
+    // With what its decisions needed on the tracks held out in training, in the summary too.
+    let held_out = &model["posterior_weight"]["held_out"];
+    assert_eq!(&weight_from["held_out"], held_out, "{weight_from}");
+    let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
+    let said = format!(
+        "in training, anytime decisions at 0.9 on {} held-out strokes: the stable \
+         right surface {:.1} mm",
+        held_out["strokes"],
+        1e3 * f(&held_out["stable_right_m"])
+    );
+    assert!(summary.contains(&said), "{said}\n{summary}");
     // Every window of the plan's 5 mm/s strokes was read.
     assert_eq!(r["recognizer"]["features"], "nakano");
     assert_eq!(

@@ -43,8 +43,8 @@ pub use knn::{FeatureScaling, Knn, KnnParams};
 pub use protocol::{ProtocolResult, SINAPOV_FOLDS, Split, surface_confusion};
 pub use recognizer::{
     BEHAVIOUR_KEY, BehaviourKnn, BehaviourReliability, BehaviourScore, BehaviourSom, BehaviourSvc, CV_FOLDS,
-    Decision, Evaluation, FEW_TRAINING_VECTORS, FeatureNeeds, FusedEvaluation, KnnTrainer, LABEL_KEY,
-    LEAST_TRAINING_TRAVEL_SHARE, LabelledCapture, Method, PosteriorWeight, RECOGNIZER_FORMAT,
+    Decision, Evaluation, FEW_TRAINING_VECTORS, FeatureNeeds, FusedEvaluation, HeldOutDecisions, KnnTrainer,
+    LABEL_KEY, LEAST_TRAINING_TRAVEL_SHARE, LabelledCapture, Method, PosteriorWeight, RECOGNIZER_FORMAT,
     RECOGNIZER_VERSION, RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer,
     SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, TrainingWarning, UnmappedClasses,
     WINDOW_SVM_FALLBACK_C, WindowProbabilities, recording_groups, som_nodes, som_params, train, trial_groups,
@@ -52,7 +52,7 @@ pub use recognizer::{
 };
 pub use recognizer::{
     Calibration, FusionMember, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,
-    SequentialRow, SurfaceChange, WindowClassifier,
+    SequentialRow, SurfaceChange, SurfaceWait, WindowClassifier,
 };
 pub use sequential::{SequentialParams, SequentialParamsBuilder, SequentialState, SequentialStep};
 pub use som::{Normalization, Som, SomParams};

@@ -343,11 +343,16 @@ fn print_posterior_weight(model: &RecognizerFile) {
         return;
     };
     match &model.posterior_weight {
-        Some(p) => println!(
-            "posterior weight {:.3} a window (hop / window {hop:.3}), fitted on {} windows held out in {}-fold \
-             cross-validation by run, over a memory of {} s: Brier score {:.3} against {:.3}",
-            p.weight, p.windows, p.folds, p.memory_s, p.brier, p.hop_brier
-        ),
+        Some(p) => {
+            println!(
+                "posterior weight {:.3} a window (hop / window {hop:.3}), fitted on {} windows held out in {}-fold \
+                 cross-validation by run, over a memory of {} s: Brier score {:.3} against {:.3}",
+                p.weight, p.windows, p.folds, p.memory_s, p.brier, p.hop_brier
+            );
+            if let Some(h) = &p.held_out {
+                println!("  anytime decisions at that weight, {h}");
+            }
+        }
         None => println!(
             "posterior weight hop / window, {hop:.3} a window (not fitted: a surface has captures of a single run \
              or trial, --no-weight-fit was given, or a fold's refit could not stand for this recognizer)"

@@ -142,7 +142,7 @@ pub struct RecognizerLine {
 
 /// Where a window's weight in the posterior came from, so that a report read later says whether
 /// the confidence it shows was calibrated on recordings the recognizer never saw.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "from")]
 pub enum WindowWeightFrom {
     /// Fitted on recordings held out of training: the file's fit, with `hop / window` and the
@@ -158,11 +158,16 @@ impl WindowWeightFrom {
     /// probabilities (a SOM).
     pub fn of(model: &recognize::RecognizerFile) -> Option<Self> {
         model.hop_weight()?;
-        Some(model.posterior_weight.map_or(Self::HopWindow, Self::HeldOut))
+        Some(
+            model
+                .posterior_weight
+                .clone()
+                .map_or(Self::HopWindow, Self::HeldOut),
+        )
     }
 
     /// The words after the weight in the report of a posterior keeping `memory_s`.
-    fn words(self, memory_s: f64) -> String {
+    fn words(&self, memory_s: f64) -> String {
         match self {
             Self::HeldOut(fit) => {
                 let elsewhere = if fit.fitted_at_memory(memory_s) {
@@ -332,7 +337,10 @@ impl SessionReport {
                     let change = r.change_odds.map_or("no change test".to_owned(), |o| {
                         format!("a change of surface at {o:.0}:1")
                     });
-                    let from = r.window_weight_from.map_or(String::new(), |f| f.words(m));
+                    let from = r
+                        .window_weight_from
+                        .as_ref()
+                        .map_or(String::new(), |f| f.words(m));
                     let weight = r
                         .window_weight
                         .map_or(String::new(), |w| format!("each window weighing {w:.3}{from}, "));
@@ -352,6 +360,12 @@ impl SessionReport {
                 r.hop_s,
                 decided_after(r.decided_after_s)
             );
+            if let Some(WindowWeightFrom::HeldOut(PosteriorWeight {
+                held_out: Some(h), ..
+            })) = &r.window_weight_from
+            {
+                let _ = writeln!(t, "    in training, anytime decisions {h}");
+            }
         }
         if let Some(a) = self.recognition_accuracy {
             let named = self.recognition.iter().filter(|r| r.label.is_some()).count();
@@ -498,6 +512,7 @@ mod tests {
             brier: 0.151,
             hop_brier: 0.158,
             memory_s: 3.0,
+            held_out: None,
         });
         assert_eq!(
             fitted.words(3.0),

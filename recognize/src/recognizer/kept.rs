@@ -178,9 +178,23 @@ impl LabelledCapture {
             .iter()
             .map(|&scale| Ok((scale, capture_histogram(&self, scale)?)))
             .collect::<Result<_, RecognizeError>>()?;
+        // The path at every sample a kept window is decided at, and at a change of surface.
+        let path_m = self.played_path().path_m;
+        let mut decided: Vec<usize> = windows
+            .iter()
+            .flat_map(|k| k.vectors.iter().map(|(start, ..)| k.windowing.decided_at(*start)))
+            .chain(
+                self.change
+                    .as_ref()
+                    .map(|c| change_sample(c.at_s, self.capture.metadata().rate_hz())),
+            )
+            .filter(|&i| i < path_m.len())
+            .collect();
+        decided.sort_unstable();
+        decided.dedup();
         let kept = KeptFeatures {
             samples: self.capture.len(),
-            path_m: self.played_path_m().into_iter().map(|m| m as f32).collect(),
+            path_m: decided.into_iter().map(|i| (i, path_m[i])).collect(),
             travel: Travel::of(
                 &self.capture,
                 needs.windows.iter().map(|(w, ..)| w.start_travel_m),
@@ -207,16 +221,26 @@ impl LabelledCapture {
         self.kept.as_ref().map_or(self.capture.len(), |k| k.samples())
     }
 
-    /// The tool's path from the first sample to each sample, read through the play
-    /// ([`PlayedPath`]), m; empty for a capture without a position column.
-    pub(crate) fn played_path_m(&self) -> Vec<f64> {
+    /// The tool's path from the first sample, read through the play ([`PlayedPath`]): at
+    /// every sample, or after [`LabelledCapture::keep_features`] at those its kept windows are
+    /// decided at and its change of surface; none for a capture without a position column.
+    pub(crate) fn played_path(&self) -> PathOfCapture<'_> {
         match (
             &self.kept,
             self.capture.column(capture::kind::TANGENTIAL_POSITION_M),
         ) {
-            (Some(k), _) => k.path_m.iter().map(|&m| f64::from(m)).collect(),
-            (None, Ok(x)) => PlayedPath::series(x),
-            (None, Err(_)) => Vec::new(),
+            (Some(k), _) => PathOfCapture {
+                path_m: Vec::new(),
+                kept: &k.path_m,
+            },
+            (None, Ok(x)) => PathOfCapture {
+                path_m: PlayedPath::series(x),
+                kept: &[],
+            },
+            (None, Err(_)) => PathOfCapture {
+                path_m: Vec::new(),
+                kept: &[],
+            },
         }
     }
 
@@ -238,4 +262,31 @@ impl LabelledCapture {
 fn first_sample(capture: &Capture) -> Result<Capture, capture::CaptureError> {
     let data = capture.data().iter().map(|column| column[..1].to_vec()).collect();
     Capture::new(capture.metadata().clone(), capture.columns().to_vec(), data)
+}
+
+/// A capture's path through the play ([`LabelledCapture::played_path`]).
+pub(crate) struct PathOfCapture<'a> {
+    /// At every sample, m.
+    path_m: Vec<f64>,
+    /// Kept at some samples: each sample and the path there, m, in order of sample.
+    kept: &'a [(usize, f64)],
+}
+
+impl PathOfCapture<'_> {
+    /// The path at `sample`, m; `None` where it was neither measured nor kept.
+    pub(crate) fn at(&self, sample: usize) -> Option<f64> {
+        match self.path_m.get(sample) {
+            Some(&m) => Some(m),
+            None => self
+                .kept
+                .binary_search_by_key(&sample, |&(i, _)| i)
+                .ok()
+                .map(|k| self.kept[k].1),
+        }
+    }
+}
+
+/// The sample a change of surface `at_s` into a capture at `rate_hz` falls on.
+pub(crate) fn change_sample(at_s: f64, rate_hz: f64) -> usize {
+    (at_s * rate_hz).round() as usize
 }

@@ -131,10 +131,10 @@ pub(crate) struct KeptFeatures {
     pub(super) samples: usize,
     /// How far its tip travelled, for the reason a capture gave no window.
     pub(super) travel: Travel,
-    /// Its tool's path to each sample ([`LabelledCapture::played_path_m`]), m, to tell how far
-    /// a decision came into a stroke; single precision, as it holds a value per sample (a
-    /// micrometre's accuracy up to 8 m of path).
-    pub(super) path_m: Vec<f32>,
+    /// Its tool's path ([`LabelledCapture::played_path`]) at each sample a kept window is
+    /// decided at and at its change of surface, in order of sample, m: how far a decision came
+    /// into a stroke.
+    pub(super) path_m: Vec<(usize, f64)>,
     pub(super) windows: Vec<KeptWindows>,
     pub(super) histograms: Vec<(CellScale, [f64; FEATURE_LEN])>,
 }

@@ -27,7 +27,7 @@ pub const WEIGHT_OCTAVES: (i32, i32) = (-3, 2);
 pub const WEIGHT_FIT_FOLDS: usize = 20;
 
 /// The posterior's weight fitted on held-out recordings, and what it was measured against.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorWeight {
     /// The exponent of a window of whole evidence's probabilities.
     pub weight: f64,
@@ -48,6 +48,36 @@ pub struct PosteriorWeight {
     /// [`DEFAULT_MEMORY_S`].
     #[serde(default = "default_memory_s")]
     pub memory_s: f64,
+    /// How the anytime decisions at `weight` did on the held-out strokes: how far into a
+    /// stroke and how soon this rig's surfaces were named. Files written before the field have
+    /// none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_out: Option<HeldOutDecisions>,
+}
+
+/// The anytime decisions on the strokes held out of the weight's fit, at the fitted weight and
+/// one threshold: what the recognizer's surfaces need on the rig they were recorded on. The
+/// path (through the play) is what carries to another stroke speed, as long as the windows
+/// read that speed as well.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutDecisions {
+    /// The posterior a surface was named at.
+    pub threshold: f64,
+    /// Held-out strokes of one surface, and of those, how many did not end named right.
+    pub strokes: usize,
+    pub not_stable: usize,
+    /// Share of the named decisions that named the right surface.
+    pub named_right: f64,
+    /// Mean over the strokes that end named right of the time from contact to the decision that
+    /// starts the final run of right ones, s, and of the tool's path by then, m (`None` where
+    /// a capture has no position column).
+    pub stable_right_s: f64,
+    pub stable_right_m: Option<f64>,
+    /// The surface with the longest mean path to its stable right decision (or time, without
+    /// positions), its mean time, s, and its mean path, m.
+    pub slowest_surface: String,
+    pub slowest_surface_s: f64,
+    pub slowest_surface_m: Option<f64>,
 }
 
 fn default_memory_s() -> f64 {
@@ -76,12 +106,81 @@ impl PosteriorWeight {
                 format!("{} s is not a positive memory", self.memory_s),
             ));
         }
-        Ok(())
+        match &self.held_out {
+            Some(h) => h.check(),
+            None => Ok(()),
+        }
     }
 
     /// Whether a posterior keeping `memory_s` keeps the memory this weight was fitted at (to
     /// the millisecond, as memories are given).
     pub fn fitted_at_memory(&self, memory_s: f64) -> bool {
         (self.memory_s - memory_s).abs() < 5e-4
+    }
+}
+
+impl HeldOutDecisions {
+    /// Checks decisions read from a file: `Err((field, reason))`.
+    fn check(&self) -> Result<(), (&'static str, String)> {
+        if !(self.threshold > 0.0 && self.threshold <= 1.0) {
+            return Err((
+                "held_out.threshold",
+                format!("{} is not in (0, 1]", self.threshold),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.named_right) {
+            return Err((
+                "held_out.named_right",
+                format!("{} is not a share in [0, 1]", self.named_right),
+            ));
+        }
+        if self.not_stable >= self.strokes {
+            return Err((
+                "held_out.not_stable",
+                format!(
+                    "{} of {} strokes: some stroke must end named right",
+                    self.not_stable, self.strokes
+                ),
+            ));
+        }
+        let lengths = [
+            ("held_out.stable_right_s", Some(self.stable_right_s)),
+            ("held_out.stable_right_m", self.stable_right_m),
+            ("held_out.slowest_surface_s", Some(self.slowest_surface_s)),
+            ("held_out.slowest_surface_m", self.slowest_surface_m),
+        ];
+        for (field, v) in lengths {
+            if let Some(v) = v
+                && !(v.is_finite() && v >= 0.0)
+            {
+                return Err((field, format!("{v} is not a time or path of at least 0")));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl std::fmt::Display for HeldOutDecisions {
+    /// "at 0.9 on 21 held-out strokes: the stable right surface 4.8 mm (1.08 s) into a stroke
+    /// on average, 8.4 mm (1.83 s) on the slowest surface (sandpaper_80); 100.0 % of named
+    /// decisions right, 0 of 21 strokes not ending right"
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let at = |m: Option<f64>, s: f64| match m {
+            Some(m) => format!("{:.1} mm ({s:.2} s)", 1e3 * m),
+            None => format!("{s:.2} s"),
+        };
+        write!(
+            f,
+            "at {} on {} held-out strokes: the stable right surface {} into a stroke on average, {} on \
+             the slowest surface ({}); {:.1} % of named decisions right, {} of {} strokes not ending right",
+            self.threshold,
+            self.strokes,
+            at(self.stable_right_m, self.stable_right_s),
+            at(self.slowest_surface_m, self.slowest_surface_s),
+            self.slowest_surface,
+            100.0 * self.named_right,
+            self.not_stable,
+            self.strokes
+        )
     }
 }

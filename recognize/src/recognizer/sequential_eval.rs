@@ -26,6 +26,7 @@ use serde::Serialize;
 
 use super::LabelledCapture;
 use super::file::RecognizerFile;
+use super::kept::change_sample;
 use super::labelled::{class_index, class_named};
 use crate::RecognizeError;
 use crate::features::{FeatureSet, NakanoWindowing, WindowlessCapture};
@@ -57,6 +58,8 @@ pub struct SequentialRow {
     /// m. `None` where a capture has no position column.
     pub travel_to_stable_correct_m: Option<f64>,
     pub worst_surface_travel: Option<(String, f64)>,
+    /// The same per surface, in the recognizer's order.
+    pub surfaces: Vec<SurfaceWait>,
     /// Captures (of one surface) that do not end named right.
     pub not_stable: usize,
     /// Of the captures that slide onto another surface part-way: the mean time from the change
@@ -75,6 +78,20 @@ pub struct SequentialRow {
     /// The posterior's calibration over every window at this threshold (the change test runs
     /// only while a surface is named, so the posterior depends on the threshold a little).
     pub calibration: Calibration,
+}
+
+/// One surface's strokes of that surface alone, at one threshold.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SurfaceWait {
+    pub surface: String,
+    /// Its strokes, and how many of them end named right.
+    pub strokes: usize,
+    pub stable: usize,
+    /// Over those that end named right, the mean time from contact to the decision that starts
+    /// the final run of right ones, s, and the mean path by then, m (`None` where a capture has
+    /// no position column).
+    pub stable_right_s: Option<f64>,
+    pub stable_right_m: Option<f64>,
 }
 
 impl SequentialRow {
@@ -249,7 +266,9 @@ impl RecognizerFile {
     /// [`RecognizerFile::window_weight`] of this recognizer's windows, `windowing` (its own,
     /// or the same from contact on).
     fn weight_of(&self, windowing: &NakanoWindowing) -> f64 {
-        self.posterior_weight.map_or(hop_weight(windowing), |p| p.weight)
+        self.posterior_weight
+            .as_ref()
+            .map_or(hop_weight(windowing), |p| p.weight)
     }
 
     /// The windows anytime decisions are made on: a k-NN's or SVM's own, from contact on (the
@@ -478,8 +497,8 @@ impl RecognizerFile {
         short_of_travel: &mut usize,
     ) -> Result<Stroke, RecognizeError> {
         let rate_hz = c.capture.metadata().rate_hz();
-        let path_m = c.played_path_m();
-        let travel_at = |sample: usize| path_m.get(sample).copied();
+        let path = c.played_path();
+        let travel_at = |sample: usize| path.at(sample);
         let mut windows = Vec::new();
         for (model, windowing, factor) in sources {
             windows.extend(
@@ -503,7 +522,7 @@ impl RecognizerFile {
             Some(ch) => Some((ch.at_s, class_named(&self.classes, &ch.after, c)?)),
             None => None,
         };
-        let change_travel_m = change.and_then(|(at_s, _)| travel_at((at_s * rate_hz).round() as usize));
+        let change_travel_m = change.and_then(|(at_s, _)| travel_at(change_sample(at_s, rate_hz)));
         Ok(Stroke {
             truth: class_index(&self.classes, c)?,
             change,
@@ -522,6 +541,7 @@ impl RecognizerFile {
         let mut state = SequentialState::new(params, classes)?;
         let (mut decided, mut correct, mut flips, mut not_stable) = (0, 0, 0, 0);
         let (mut first, mut stable, mut stable_m) = (Vec::new(), Vec::new(), Vec::new());
+        let mut strokes_by_class = vec![0; classes];
         let mut stable_by_class: Vec<Vec<f64>> = vec![Vec::new(); classes];
         let mut stable_m_by_class: Vec<Vec<Option<f64>>> = vec![Vec::new(); classes];
         let mut duration_s = 0.0;
@@ -561,6 +581,7 @@ impl RecognizerFile {
                 }
                 continue;
             }
+            strokes_by_class[s.truth] += 1;
             if let Some(&(t, ..)) = named.first() {
                 first.push(t);
             }
@@ -577,20 +598,24 @@ impl RecognizerFile {
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         // Travel is reported only where every capture it is taken over has it.
         let all = |v: &[Option<f64>]| v.iter().copied().collect::<Option<Vec<f64>>>();
-        let worst = |by_class: Vec<Option<f64>>| {
-            by_class
-                .into_iter()
-                .enumerate()
-                .filter_map(|(c, m)| m.map(|m| (self.classes[c].clone(), m)))
+        let surfaces: Vec<SurfaceWait> = (0..classes)
+            .filter(|&c| strokes_by_class[c] > 0)
+            .map(|c| SurfaceWait {
+                surface: self.classes[c].clone(),
+                strokes: strokes_by_class[c],
+                stable: stable_by_class[c].len(),
+                stable_right_s: mean(&stable_by_class[c]),
+                stable_right_m: all(&stable_m_by_class[c]).and_then(|v| mean(&v)),
+            })
+            .collect();
+        let worst = |of: fn(&SurfaceWait) -> Option<f64>| {
+            surfaces
+                .iter()
+                .filter_map(|w| of(w).map(|v| (w.surface.clone(), v)))
                 .max_by(|a, b| a.1.total_cmp(&b.1))
         };
-        let worst_surface = worst(stable_by_class.iter().map(|v| mean(v)).collect());
-        let worst_surface_travel = all(&stable_m).and(worst(
-            stable_m_by_class
-                .iter()
-                .map(|v| all(v).and_then(|v| mean(&v)))
-                .collect(),
-        ));
+        let worst_surface = worst(|w| w.stable_right_s);
+        let worst_surface_travel = all(&stable_m).and(worst(|w| w.stable_right_m));
         let followed_m = all(&followed_m);
         Ok(SequentialRow {
             threshold: params.threshold(),
@@ -601,6 +626,7 @@ impl RecognizerFile {
             worst_surface,
             travel_to_stable_correct_m: all(&stable_m).and_then(|v| mean(&v)),
             worst_surface_travel,
+            surfaces,
             not_stable,
             change_followed_s: mean(&followed),
             slowest_change_s: followed.iter().copied().reduce(f64::max),

@@ -1259,8 +1259,43 @@ fn a_recognizer_trained_on_several_trials_fits_its_posterior_weight() {
     for method in [Method::Svm, Method::Knn] {
         let settings = short_windows(method, FeatureSet::Nakano);
         let model = train(&train_set, &settings).expect("train");
-        let fit = model.posterior_weight.expect("fitted");
+        let fit = model.posterior_weight.clone().expect("fitted");
         assert_eq!(fit.hop_weight, 0.4);
+        // The anytime decisions at the fitted weight on the held-out strokes, as an evaluation
+        // of the same strokes would give them: the path at a steady 5 mm/s is 5 mm a second
+        // less the play's first 0.1 mm (every stroke is named past it), and the slowest
+        // surface takes the longest path.
+        let h = fit.held_out.clone().expect("held-out decisions");
+        assert_eq!(
+            (h.threshold, h.strokes),
+            (crate::sequential::DEFAULT_THRESHOLD, train_set.len())
+        );
+        assert!(
+            h.not_stable < h.strokes && (0.0..=1.0).contains(&h.named_right),
+            "{h:?}"
+        );
+        let path_m = |t_s: f64| 5e-3 * t_s - crate::TRAVEL_PLAY_M / 2.0;
+        let (m, slowest_m) = (
+            h.stable_right_m.expect("positions"),
+            h.slowest_surface_m.expect("positions"),
+        );
+        assert!((m - path_m(h.stable_right_s)).abs() < 1e-6, "{h:?}");
+        assert!((slowest_m - path_m(h.slowest_surface_s)).abs() < 1e-6, "{h:?}");
+        assert!(
+            slowest_m >= m && model.classes.contains(&h.slowest_surface),
+            "{h:?}"
+        );
+        let said = h.to_string();
+        assert!(
+            said.starts_with(&format!("at 0.9 on {} held-out strokes", h.strokes))
+                && said.contains(&format!(
+                    "{:.1} mm ({:.2} s) into a stroke",
+                    1e3 * m,
+                    h.stable_right_s
+                ))
+                && said.contains(&format!("({})", h.slowest_surface)),
+            "{said}"
+        );
         assert_eq!(model.hop_weight(), Some(0.4));
         assert_eq!(fit.folds, 3);
         // Every held-out capture's windows, from contact on.
@@ -1292,7 +1327,7 @@ fn a_recognizer_trained_on_several_trials_fits_its_posterior_weight() {
         let back =
             RecognizerFile::from_json(&serde_json::to_string(&model).expect("json"), Path::new("m.json"))
                 .expect("round trip");
-        assert_eq!(back.posterior_weight, Some(fit));
+        assert_eq!(back.posterior_weight, Some(fit.clone()));
         // Fitted at the default memory, and it says so: a posterior keeping another memory is
         // outside what the fit measured. A file from before the field was fitted there too.
         assert_eq!(fit.memory_s, crate::sequential::DEFAULT_MEMORY_S);
@@ -1302,8 +1337,18 @@ fn a_recognizer_trained_on_several_trials_fits_its_posterior_weight() {
             .as_object_mut()
             .expect("a fit")
             .remove("memory_s");
+        json["posterior_weight"]
+            .as_object_mut()
+            .expect("a fit")
+            .remove("held_out");
         let older = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect("older file");
-        assert_eq!(older.posterior_weight, Some(fit));
+        assert_eq!(
+            older.posterior_weight,
+            Some(PosteriorWeight {
+                held_out: None,
+                ..fit.clone()
+            })
+        );
         // Fitted at a shorter memory, the posterior is scored over that memory: a stroke of
         // 3 s keeps only its last 0.5 s of windows, so the Brier score at hop / window moves.
         let short = train(
@@ -1358,10 +1403,19 @@ fn a_bad_posterior_weight_names_its_field() {
         ("hop_brier", f64::NAN),
         ("folds", 1.0),
         ("memory_s", 0.0),
+        ("held_out.threshold", 1.5),
+        ("held_out.named_right", -0.1),
+        ("held_out.not_stable", 99.0),
+        ("held_out.stable_right_m", -1e-3),
+        ("held_out.slowest_surface_s", -1.0),
     ] {
         let mut json = serde_json::to_value(&model).expect("serialize");
-        json["posterior_weight"][field] = if field == "folds" {
-            serde_json::json!(1)
+        let slot = match field.split_once('.') {
+            Some((outer, inner)) => &mut json["posterior_weight"][outer][inner],
+            None => &mut json["posterior_weight"][field],
+        };
+        *slot = if matches!(field, "folds" | "held_out.not_stable") {
+            serde_json::json!(value as u64)
         } else {
             serde_json::json!(value)
         };
@@ -1379,7 +1433,7 @@ fn a_bad_posterior_weight_names_its_field() {
     )
     .expect("SOM");
     let mut json = serde_json::to_value(&som).expect("serialize");
-    json["posterior_weight"] = serde_json::to_value(model.posterior_weight).expect("serialize");
+    json["posterior_weight"] = serde_json::to_value(&model.posterior_weight).expect("serialize");
     let err = RecognizerFile::from_json(&json.to_string(), Path::new("m.json")).expect_err("a SOM");
     assert!(err.to_string().contains("field `posterior_weight`"), "{err}");
 }
@@ -1395,7 +1449,7 @@ fn fitted_posterior_weights_fuse_as_fitted() {
     let members = nakano.fusion_members(&[&vibration]).expect("members");
     for (m, model) in members.iter().zip([&nakano, &vibration]) {
         assert!(m.fitted);
-        assert_eq!(Some(m.weight), model.posterior_weight.map(|p| p.weight));
+        assert_eq!(Some(m.weight), model.posterior_weight.as_ref().map(|p| p.weight));
     }
     // One without a fit: every weight is its own times its reliability over the most reliable.
     let unfitted = train(
@@ -1646,7 +1700,7 @@ fn a_change_of_surface_is_read_from_the_metadata_and_checked() {
 /// The anytime decisions say how far into the stroke they came as well as how soon: the path
 /// through the play, which at a steady 5 mm/s from the first sample is 5 mm a second less the
 /// play's first 0.1 mm; after a change, the path since it. A capture that kept only its
-/// features says the same.
+/// features says exactly the same.
 #[test]
 fn anytime_decisions_say_how_far_into_the_stroke_they_came() {
     let knn = RecognizerFile::train_knn_windows(
@@ -1713,16 +1767,7 @@ fn anytime_decisions_say_how_far_into_the_stroke_they_came() {
         .evaluate_sequential(&kept, &[0.9], params)
         .expect("eval kept")
         .rows[0];
-    assert_eq!(k.time_to_stable_correct_s, r.time_to_stable_correct_s);
-    // Kept in single precision: within a micrometre.
-    assert!(
-        (k.travel_to_stable_correct_m.expect("kept") - m).abs() < 1e-6,
-        "{k:?}"
-    );
-    assert!(
-        (k.change_followed_m.expect("kept") - after_m).abs() < 1e-6,
-        "{k:?}"
-    );
+    assert_eq!(k, r);
 }
 
 /// A k-NN over windows trained on two trials calibrates its votes on windows held out by

@@ -17,8 +17,10 @@
 
 use super::file::{RecognizerBody, RecognizerFile};
 use super::labelled::class_index;
-use super::posterior_weight::{PosteriorWeight, WEIGHT_FIT_FOLDS, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE};
-use super::sequential_eval::Stroke;
+use super::posterior_weight::{
+    HeldOutDecisions, PosteriorWeight, WEIGHT_FIT_FOLDS, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE,
+};
+use super::sequential_eval::{Stroke, SurfaceWait};
 use super::train::every_class_in_two_groups;
 use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
@@ -100,6 +102,7 @@ impl RecognizerFile {
             return Ok(None);
         }
         let (weight, brier, hop_brier) = self.least_brier_weight(&strokes, base, hop_weight)?;
+        let held_out = self.held_out_decisions(&strokes, base.weight(weight))?;
         Ok(Some(PosteriorWeight {
             weight,
             hop_weight,
@@ -108,6 +111,44 @@ impl RecognizerFile {
             brier,
             hop_brier,
             memory_s,
+            held_out,
+        }))
+    }
+
+    /// The anytime decisions over the held-out `strokes` as `params` sets them; `None` when no
+    /// stroke of one surface ends named right.
+    fn held_out_decisions(
+        &self,
+        strokes: &[Stroke],
+        params: SequentialParamsBuilder,
+    ) -> Result<Option<HeldOutDecisions>, RecognizeError> {
+        let params = params.build()?;
+        let row = self.sequential_row(strokes, params)?;
+        // The slowest surface is the one that takes the longest path where paths are known:
+        // that is what stays about the same at another speed.
+        let slowest = match &row.worst_surface_travel {
+            Some((name, _)) => row.surfaces.iter().find(|w| w.surface == *name),
+            None => row.surfaces.iter().max_by(|a, b| {
+                let s = |w: &SurfaceWait| w.stable_right_s.unwrap_or(-1.0);
+                s(a).total_cmp(&s(b))
+            }),
+        };
+        let (Some(stable_right_s), Some(slowest)) = (row.time_to_stable_correct_s, slowest) else {
+            return Ok(None);
+        };
+        let Some(slowest_surface_s) = slowest.stable_right_s else {
+            return Ok(None);
+        };
+        Ok(Some(HeldOutDecisions {
+            threshold: params.threshold(),
+            strokes: row.surfaces.iter().map(|w| w.strokes).sum(),
+            not_stable: row.not_stable,
+            named_right: row.accuracy().unwrap_or(0.0),
+            stable_right_s,
+            stable_right_m: row.travel_to_stable_correct_m,
+            slowest_surface: slowest.surface.clone(),
+            slowest_surface_s,
+            slowest_surface_m: slowest.stable_right_m,
         }))
     }
 
