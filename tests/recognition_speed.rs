@@ -14,7 +14,7 @@
 //! (`--features nakano-spectrum --fastest-speed-mps 0.025`), measured: 98.0 %, 100 % and 100 %
 //! right, calibration errors of 2.8, 1.3 and 2.0 %, and the stable right surface sooner on
 //! average at every speed. At 2 and 5 mm/s the stable right surface comes about as far into the
-//! stroke (3.1 and 3.2 mm on average; 3.9 and 4.4 mm without the spectrum).
+//! stroke (3.1 mm on average at both; 3.9 and 4.4 mm without the spectrum).
 
 mod common;
 
@@ -127,7 +127,7 @@ fn windows_over_travel_recognize_at_two_five_and_twenty_mm_per_s() {
         }
     }
     // What a surface waits for is surface: at 2 mm/s the stable right surface comes about as far
-    // into the stroke as at 5 mm/s (measured 3.9 and 4.4 mm, with the spectrum 3.1 and 3.2 mm),
+    // into the stroke as at 5 mm/s (measured 3.9 and 4.4 mm, with the spectrum 3.1 mm at both),
     // so about 2.5 times as late.
     for (slow, protocol) in waits[0].1.iter().zip(&waits[1].1) {
         assert!(
