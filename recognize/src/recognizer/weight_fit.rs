@@ -20,7 +20,7 @@ use super::labelled::class_index;
 use super::posterior_weight::{
     HeldOutDecisions, PosteriorWeight, WEIGHT_FIT_FOLDS, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE,
 };
-use super::sequential_eval::{Stroke, SurfaceWait};
+use super::sequential_eval::Stroke;
 use super::train::every_class_in_two_groups;
 use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
@@ -126,13 +126,11 @@ impl RecognizerFile {
         let row = self.sequential_row(strokes, params)?;
         // The slowest surface is the one that takes the longest path where paths are known:
         // that is what stays about the same at another speed.
-        let slowest = match &row.worst_surface_travel {
-            Some((name, _)) => row.surfaces.iter().find(|w| w.surface == *name),
-            None => row.surfaces.iter().max_by(|a, b| {
-                let s = |w: &SurfaceWait| w.stable_right_s.unwrap_or(-1.0);
-                s(a).total_cmp(&s(b))
-            }),
-        };
+        let slowest = row
+            .worst_surface_travel
+            .as_ref()
+            .or(row.worst_surface.as_ref())
+            .and_then(|(name, _)| row.surfaces.iter().find(|w| w.surface == *name));
         let (Some(stable_right_s), Some(slowest)) = (row.time_to_stable_correct_s, slowest) else {
             return Ok(None);
         };
