@@ -1065,6 +1065,74 @@ fn fused_live_as_offline(
     )
 }
 
+/// A window the first sense cannot read costs the fused senses nothing: Nakano's features with
+/// the height's spectrum, whose bands reach 12.5 mm/s, fused with the vibration over windows of
+/// fixed time, fed a stroke at 20 mm/s. Every window of the first is an error on the sample that
+/// completes it, and the vibration still takes every sample: after each of its windows the
+/// posterior is that of the vibration's windows alone, offline, to the bit.
+#[test]
+fn a_window_one_sense_cannot_read_leaves_the_others_every_sample() {
+    let tones = [40.0, 40.0, 72.0, 104.0, 104.0, 136.0, 168.0];
+    let train: Vec<LabelledCapture> = runs_with_tones()
+        .iter()
+        .flat_map(|r| r[..2].iter().cloned())
+        .collect();
+    let fixed = NakanoWindowing {
+        mirrored_end: true,
+        ..NakanoWindowing::new(0.25, 0.1, 1000.0).expect("valid")
+    };
+    let knn = |windowing, features| {
+        RecognizerFile::train_knn_windows(&train, windowing, features, 5, CellScale::Mean).expect("k-NN")
+    };
+    let heights = knn(friction_over_travel_to_2mmps(), FeatureSet::NakanoSpectrum);
+    let vibration = knn(fixed, FeatureSet::Vibration);
+    let members = heights.fusion_members(&[&vibration]).expect("fusable");
+    let factor = members[1].weight / members[0].weight;
+    let params = heights
+        .fused_sequential_params(&[&vibration], DEFAULT_MEMORY_S)
+        .expect("params")
+        .build()
+        .expect("valid");
+    let mut live = LiveRecognizer::fused(&heights, &[&vibration], 1000.0, params).expect("fused");
+    let fast = runs_at(0.02);
+    let (mut unread, mut checked) = (0, 0);
+    for (surface_runs, tone) in fast.iter().zip(tones) {
+        let c = with_vibration(&surface_runs[2], tone);
+        let offline =
+            common::last_per_sample(common::offline_fused_steps(&[&vibration], &[factor], &c, params));
+        let column = |name| c.capture.column(name).expect("column");
+        let (x, z, f, v) = (
+            column("tangential_position_m"),
+            column("normal_position_m"),
+            column("friction_force_n"),
+            column("vibration_mps2"),
+        );
+        live.reset();
+        let mut next = offline.iter().peekable();
+        for i in 0..x.len() {
+            match live.push_with_vibration(x[i], z[i], f[i], v[i]) {
+                Err(HapticsError::NotFiniteSample { .. } | HapticsError::NotFiniteVibration { .. }) => {
+                    panic!("finite samples")
+                }
+                Err(_) => unread += 1,
+                Ok(_) => {}
+            }
+            if let Some((_, step)) = next.next_if(|(at, _)| *at == i) {
+                let d = live.current().expect("a vibration window's decision");
+                assert_eq!(
+                    (d.best, d.label, d.confidence),
+                    (step.best, step.decided, step.probability)
+                );
+                checked += 1;
+            }
+        }
+        assert!(next.next().is_none(), "{}", c.reference.path.display());
+    }
+    // A window of the first sense every 0.1 s of each 1.5 s stroke, every one unread.
+    assert!(unread >= 7 * 10, "{unread}");
+    assert!(checked >= 7 * 10, "{checked}");
+}
+
 /// A k-NN over Nakano's windows with a k-NN over the vibration spectrum fused into its
 /// posterior runs live exactly as the offline fusion, over windows of fixed time and over
 /// travel: every window of both, in the same order, the same posterior to the bit, with

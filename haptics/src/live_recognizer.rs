@@ -467,7 +467,9 @@ impl LiveRecognizer {
     /// ([`LiveRecognizer::fused`]): the same sample's vibration too, m/s² (the accelerometer's
     /// magnitude or its single axis, as the vibration recognizers were trained on). Without
     /// senses the vibration is not used. A non-finite vibration starts the stroke afresh, as a
-    /// non-finite position does.
+    /// non-finite position does. A window one sense cannot read (slid past its spectrum's
+    /// bands) is an error too, but every other sense still takes the sample: the error comes
+    /// after them, and a decision one of them made on it is [`LiveRecognizer::current`].
     pub fn push_with_vibration(
         &mut self,
         position_m: f64,
@@ -504,8 +506,16 @@ impl LiveRecognizer {
             Some(filter) => filter.push(position_m, friction_n),
             None => friction_n,
         };
+        // A window of one sense that cannot be read must not keep this sample from the others:
+        // each sense is fed every sample, and the first error is returned once all were.
+        let mut failed = None;
         let window = match &mut self.edge {
-            Some(edge) => edge.push([position_m, height_m, friction_n, path_m], x0, &self.windowing)?,
+            Some(edge) => edge
+                .push([position_m, height_m, friction_n, path_m], x0, &self.windowing)
+                .unwrap_or_else(|e| {
+                    failed = Some(e);
+                    None
+                }),
             None => {
                 self.stream_paths.push(path_m);
                 self.stream
@@ -528,24 +538,42 @@ impl LiveRecognizer {
         };
         let mut decided = None;
         if let Some((window_start, features, evidence_scale)) = window {
-            decided = Some(self.decide(window_start, features.as_slice(), evidence_scale)?);
-            self.current = decided;
+            match self.decide(window_start, features.as_slice(), evidence_scale) {
+                Ok(d) => {
+                    decided = Some(d);
+                    self.current = decided;
+                }
+                Err(e) => failed = failed.or(Some(e)),
+            }
         }
         if let (Some(v), Decider::Sequential { state, .. }) = (vibration_mps2, &mut self.decider) {
             for sense in &mut self.senses {
-                if let Some(w) = sense.push(position_m, path_m, v, x0)? {
-                    let step = state.push_window(w.probabilities, w.scale, w.share)?;
-                    decided = Some(LiveDecision {
-                        label: step.decided,
-                        best: step.best,
-                        confidence: step.probability,
-                        window_start: w.start,
-                    });
-                    self.current = decided;
+                let step = match sense.push(position_m, path_m, v, x0) {
+                    Ok(Some(w)) => state
+                        .push_window(w.probabilities, w.scale, w.share)
+                        .map(|step| (step, w.start))
+                        .map_err(HapticsError::from),
+                    Ok(None) => continue,
+                    Err(e) => Err(e),
+                };
+                match step {
+                    Ok((step, window_start)) => {
+                        decided = Some(LiveDecision {
+                            label: step.decided,
+                            best: step.best,
+                            confidence: step.probability,
+                            window_start,
+                        });
+                        self.current = decided;
+                    }
+                    Err(e) => failed = failed.or(Some(e)),
                 }
             }
         }
-        Ok(decided)
+        match failed {
+            Some(e) => Err(e),
+            None => Ok(decided),
+        }
     }
 
     /// The decision on one window of Nakano's features.
