@@ -55,7 +55,30 @@ fn anytime_decisions_are_right_sooner_than_a_fixed_window_and_calibrated() {
     let e = json(&args);
     eprintln!("fixed 3 s window: accuracy {baseline_accuracy}, first correct {baseline_first_s} s");
     eprintln!("{}", serde_json::to_string_pretty(&e).expect("json"));
-    assert!(dir.path().join("plots/sequential.png").is_file());
+    // Three panels: the reliability diagram, the threshold's trade, and a bar per surface for
+    // the path its decisions took (drawn in the bars' green, in the right third only).
+    let png = dir.path().join("plots/sequential.png");
+    let mut reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).expect("png")))
+        .read_info()
+        .expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+    let info = reader.next_frame(&mut buf).expect("png frame");
+    assert_eq!((info.width, info.height), (1800, 540));
+    let green_columns: Vec<usize> = buf[..info.buffer_size()]
+        .chunks_exact(3)
+        .enumerate()
+        .filter(|(_, p)| *p == [90, 150, 90])
+        .map(|(i, _)| i % info.width as usize)
+        .collect();
+    assert!(
+        green_columns.len() > 7 * 100,
+        "{} bar pixels",
+        green_columns.len()
+    );
+    assert!(
+        green_columns.iter().all(|&x| x >= 1200),
+        "a bar outside the right panel"
+    );
     assert_eq!(e["captures"], 14);
     let steps = e["steps"].as_f64().expect("steps");
     let rows = e["rows"].as_array().expect("rows");
