@@ -1239,10 +1239,12 @@ fn the_posterior_weight_fitted_counts_independent_windows_whole_and_one_said_fou
             .least_brier_weight(&symbol_strokes(60, 40, repeats), base, 1.0)
             .expect("fit")
     };
-    let (whole, brier, at_whole) = fit(1);
+    let (whole, row, at_whole) = fit(1);
+    let brier = row.calibration.brier;
     assert!(whole >= 2f64.powf(-0.5), "independent windows weighed {whole}");
     assert!(brier <= at_whole);
-    let (quarter, brier, at_whole) = fit(4);
+    let (quarter, row, at_whole) = fit(4);
+    let brier = row.calibration.brier;
     assert!(
         (2f64.powf(-2.5)..=2f64.powf(-1.5)).contains(&quarter),
         "windows said four times weighed {quarter}"

@@ -20,7 +20,7 @@ use super::labelled::class_index;
 use super::posterior_weight::{
     HeldOutDecisions, PosteriorWeight, WEIGHT_FIT_FOLDS, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE,
 };
-use super::sequential_eval::Stroke;
+use super::sequential_eval::{SequentialRow, Stroke};
 use super::train::every_class_in_two_groups;
 use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
@@ -101,52 +101,16 @@ impl RecognizerFile {
         if windows == 0 {
             return Ok(None);
         }
-        let (weight, brier, hop_brier) = self.least_brier_weight(&strokes, base, hop_weight)?;
-        let held_out = self.held_out_decisions(&strokes, base.weight(weight))?;
+        let (weight, row, hop_brier) = self.least_brier_weight(&strokes, base, hop_weight)?;
         Ok(Some(PosteriorWeight {
             weight,
             hop_weight,
             folds,
             windows,
-            brier,
+            brier: row.calibration.brier,
             hop_brier,
             memory_s,
-            held_out,
-        }))
-    }
-
-    /// The anytime decisions over the held-out `strokes` as `params` sets them; `None` when no
-    /// stroke of one surface ends named right.
-    fn held_out_decisions(
-        &self,
-        strokes: &[Stroke],
-        params: SequentialParamsBuilder,
-    ) -> Result<Option<HeldOutDecisions>, RecognizeError> {
-        let params = params.build()?;
-        let row = self.sequential_row(strokes, params)?;
-        // The slowest surface is the one that takes the longest path where paths are known:
-        // that is what stays about the same at another speed.
-        let slowest = row
-            .worst_surface_travel
-            .as_ref()
-            .or(row.worst_surface.as_ref())
-            .and_then(|(name, _)| row.surfaces.iter().find(|w| w.surface == *name));
-        let (Some(stable_right_s), Some(slowest)) = (row.time_to_stable_correct_s, slowest) else {
-            return Ok(None);
-        };
-        let Some(slowest_surface_s) = slowest.stable_right_s else {
-            return Ok(None);
-        };
-        Ok(Some(HeldOutDecisions {
-            threshold: params.threshold(),
-            strokes: row.surfaces.iter().map(|w| w.strokes).sum(),
-            not_stable: row.not_stable,
-            named_right: row.accuracy().unwrap_or(0.0),
-            stable_right_s,
-            stable_right_m: row.travel_to_stable_correct_m,
-            slowest_surface: slowest.surface.clone(),
-            slowest_surface_s,
-            slowest_surface_m: slowest.stable_right_m,
+            held_out: held_out_decisions(&row),
         }))
     }
 
@@ -196,29 +160,51 @@ impl RecognizerFile {
 
     /// The weight of the grid ([`WEIGHT_OCTAVES`] around `hop_weight`) at which the posterior
     /// over `strokes`, otherwise as `base` sets it, has the least mean Brier score (ties to
-    /// the smaller weight): `(weight, its Brier score, the Brier score at hop_weight)`.
+    /// the smaller weight): `(weight, the decisions at it, the Brier score at hop_weight)`.
     pub(super) fn least_brier_weight(
         &self,
         strokes: &[Stroke],
         base: SequentialParamsBuilder,
         hop_weight: f64,
-    ) -> Result<(f64, f64, f64), RecognizeError> {
-        let brier_at = |w: f64| -> Result<f64, RecognizeError> {
-            Ok(self
-                .sequential_row(strokes, base.weight(w).build()?)?
-                .calibration
-                .brier)
-        };
-        let hop_brier = brier_at(hop_weight)?;
-        let (mut weight, mut brier) = (hop_weight, hop_brier);
+    ) -> Result<(f64, SequentialRow, f64), RecognizeError> {
+        let row_at = |w: f64| self.sequential_row(strokes, base.weight(w).build()?);
+        let mut best = (hop_weight, row_at(hop_weight)?);
+        let hop_brier = best.1.calibration.brier;
         let (low, high) = WEIGHT_OCTAVES;
         for step in low * WEIGHT_STEPS_PER_OCTAVE..=high * WEIGHT_STEPS_PER_OCTAVE {
+            if step == 0 {
+                continue;
+            }
             let w = (hop_weight * 2f64.powf(f64::from(step) / f64::from(WEIGHT_STEPS_PER_OCTAVE))).min(1.0);
-            let b = if step == 0 { hop_brier } else { brier_at(w)? };
-            if b < brier || (b == brier && w < weight) {
-                (weight, brier) = (w, b);
+            let row = row_at(w)?;
+            let (b, brier) = (row.calibration.brier, best.1.calibration.brier);
+            if b < brier || (b == brier && w < best.0) {
+                best = (w, row);
             }
         }
-        Ok((weight, brier, hop_brier))
+        Ok((best.0, best.1, hop_brier))
     }
+}
+
+/// What the anytime decisions of `row`, over the strokes held out of the weight's fit, needed;
+/// `None` when no stroke of one surface ends named right.
+fn held_out_decisions(row: &SequentialRow) -> Option<HeldOutDecisions> {
+    // The slowest surface is the one that takes the longest path where paths are known: that
+    // is what stays about the same at another speed.
+    let slowest = row
+        .worst_surface_travel
+        .as_ref()
+        .or(row.worst_surface.as_ref())
+        .and_then(|(name, _)| row.surfaces.iter().find(|w| w.surface == *name))?;
+    Some(HeldOutDecisions {
+        threshold: row.threshold,
+        strokes: row.surfaces.iter().map(|w| w.strokes).sum(),
+        not_stable: row.not_stable,
+        named_right: row.accuracy().unwrap_or(0.0),
+        stable_right_s: row.time_to_stable_correct_s?,
+        stable_right_m: row.travel_to_stable_correct_m,
+        slowest_surface: slowest.surface.clone(),
+        slowest_surface_s: slowest.stable_right_s?,
+        slowest_surface_m: slowest.stable_right_m,
+    })
 }
