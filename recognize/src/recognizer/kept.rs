@@ -179,7 +179,10 @@ impl LabelledCapture {
             .map(|&scale| Ok((scale, capture_histogram(&self, scale)?)))
             .collect::<Result<_, RecognizeError>>()?;
         // The path at every sample a kept window is decided at, and at a change of surface.
-        let path_m = self.played_path().path_m;
+        let path_m = self
+            .capture
+            .column(capture::kind::TANGENTIAL_POSITION_M)
+            .map_or_else(|_| Vec::new(), PlayedPath::series);
         let mut decided: Vec<usize> = windows
             .iter()
             .flat_map(|k| k.vectors.iter().map(|(start, ..)| k.windowing.decided_at(*start)))
@@ -229,18 +232,9 @@ impl LabelledCapture {
             &self.kept,
             self.capture.column(capture::kind::TANGENTIAL_POSITION_M),
         ) {
-            (Some(k), _) => PathOfCapture {
-                path_m: Vec::new(),
-                kept: &k.path_m,
-            },
-            (None, Ok(x)) => PathOfCapture {
-                path_m: PlayedPath::series(x),
-                kept: &[],
-            },
-            (None, Err(_)) => PathOfCapture {
-                path_m: Vec::new(),
-                kept: &[],
-            },
+            (Some(k), _) => PathOfCapture::Kept(&k.path_m),
+            (None, Ok(x)) => PathOfCapture::Every(PlayedPath::series(x)),
+            (None, Err(_)) => PathOfCapture::Every(Vec::new()),
         }
     }
 
@@ -264,24 +258,23 @@ fn first_sample(capture: &Capture) -> Result<Capture, capture::CaptureError> {
     Capture::new(capture.metadata().clone(), capture.columns().to_vec(), data)
 }
 
-/// A capture's path through the play ([`LabelledCapture::played_path`]).
-pub(crate) struct PathOfCapture<'a> {
-    /// At every sample, m.
-    path_m: Vec<f64>,
-    /// Kept at some samples: each sample and the path there, m, in order of sample.
-    kept: &'a [(usize, f64)],
+/// A capture's path through the play ([`LabelledCapture::played_path`]), m.
+pub(crate) enum PathOfCapture<'a> {
+    /// At every sample (none without a position column).
+    Every(Vec<f64>),
+    /// Kept at some samples: each sample and the path there, in order of sample.
+    Kept(&'a [(usize, f64)]),
 }
 
 impl PathOfCapture<'_> {
     /// The path at `sample`, m; `None` where it was neither measured nor kept.
     pub(crate) fn at(&self, sample: usize) -> Option<f64> {
-        match self.path_m.get(sample) {
-            Some(&m) => Some(m),
-            None => self
-                .kept
+        match self {
+            Self::Every(path_m) => path_m.get(sample).copied(),
+            Self::Kept(kept) => kept
                 .binary_search_by_key(&sample, |&(i, _)| i)
                 .ok()
-                .map(|k| self.kept[k].1),
+                .map(|k| kept[k].1),
         }
     }
 }
