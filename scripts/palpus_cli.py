@@ -32,6 +32,8 @@ def parser(doc):
 SCENE = Path(__file__).resolve().parent.parent / "scenes" / "surfaces_nakano.toml"
 # The tracks into each patch the scene's recognizer is trained on, as its header says.
 SCENE_TRAIN_TRACKS_MM = (10, 60, 110)
+# Tracks the scene's recognizer never saw, where the table scripts test it.
+SCENE_TEST_TRACKS_MM = (35, 85)
 
 
 def scene_training():

@@ -30,10 +30,10 @@ import json
 import tempfile
 from pathlib import Path
 
-from palpus_cli import (SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser, scene_captures, scene_training,
-                        sequential_table, sliding_study, train_reporting_fit, with_height_spectrum)
+from palpus_cli import (SCENE_TEST_TRACKS_MM, SCENE_TRAIN_TRACKS_MM, fixed_time, palpus, parser as cli_parser,
+                        scene_captures, scene_training, sequential_table, sliding_study, train_reporting_fit,
+                        with_height_spectrum)
 
-TEST_TRACKS_MM = (35, 85)
 TRAIN_TRIALS = 5
 # A memory other than the default's (3 s), for the rows that show what fitting at the memory used
 # is worth.
@@ -67,11 +67,11 @@ def main():
         root = Path(tmp)
         surfaces, options = scene_training()
         sets = {name: scene_captures(args.palpus, surfaces, tracks, root / name)
-                for name, tracks in (("train", SCENE_TRAIN_TRACKS_MM), ("test", TEST_TRACKS_MM))}
+                for name, tracks in (("train", SCENE_TRAIN_TRACKS_MM), ("test", SCENE_TEST_TRACKS_MM))}
         runs = []
         for windows, opts in (("over travel", options), ("over fixed time", fixed_time(options))):
             print(f"scene surfaces_nakano, windows {windows}, trained on tracks {SCENE_TRAIN_TRACKS_MM} mm, "
-                  f"tested on {TEST_TRACKS_MM} mm:")
+                  f"tested on {SCENE_TEST_TRACKS_MM} mm:")
             scene = train_both(args.palpus, sets["train"], opts, root / windows.replace(" ", "_"))
             runs += [(f"scene SVM {windows}, {label}", evaluate(args.palpus, m, sets["test"], args.thresholds))
                      for label, m in scene.items()]

@@ -20,10 +20,9 @@ import json
 import tempfile
 from pathlib import Path
 
-from palpus_cli import SCENE_TRAIN_TRACKS_MM, palpus, parser as cli_parser, scene_captures, scene_training, \
-    with_height_spectrum
+from palpus_cli import (SCENE_TEST_TRACKS_MM, SCENE_TRAIN_TRACKS_MM, palpus, parser as cli_parser, scene_captures,
+                        scene_training, with_height_spectrum)
 
-TEST_TRACKS_MM = (35, 85)
 # Window lengths at the scene's 5 mm/s, s, and the travel each spans, mm.
 WINDOWS = (("0.25", 1.25), ("0.5", 2.5), ("1", 5.0))
 
@@ -43,7 +42,7 @@ def main():
         root = Path(tmp)
         surfaces, options = scene_training()
         train = scene_captures(args.palpus, surfaces, SCENE_TRAIN_TRACKS_MM, root / "train")
-        test = scene_captures(args.palpus, surfaces, TEST_TRACKS_MM, root / "test")
+        test = scene_captures(args.palpus, surfaces, SCENE_TEST_TRACKS_MM, root / "test")
         rows = []
         for label, opts in (("Nakano's features", options), ("+ height spectrum", with_height_spectrum(options))):
             for window_s, travel_mm in WINDOWS:
