@@ -271,6 +271,39 @@ impl Capture {
     pub fn source(&self) -> &Path {
         &self.source
     }
+
+    /// The same capture, from the same source, without the rows `drop` names (0-based, any
+    /// order; indices past the end are ignored). Time still increases and every value stays
+    /// finite, so only taking every row away fails.
+    pub fn without_rows(&self, drop: &[usize]) -> Result<Self, CaptureError> {
+        let mut keep = vec![true; self.len()];
+        for &i in drop {
+            if let Some(k) = keep.get_mut(i) {
+                *k = false;
+            }
+        }
+        if !keep.contains(&true) {
+            return Err(CaptureError::new(&self.source, CaptureErrorKind::NoSamples));
+        }
+        let data = self
+            .data
+            .iter()
+            .map(|column| {
+                column
+                    .iter()
+                    .zip(&keep)
+                    .filter(|(_, k)| **k)
+                    .map(|(v, _)| *v)
+                    .collect()
+            })
+            .collect();
+        Ok(Capture {
+            meta: self.meta.clone(),
+            columns: self.columns.clone(),
+            data,
+            source: self.source.clone(),
+        })
+    }
 }
 
 #[cfg(test)]

@@ -91,7 +91,16 @@ impl InputScaling {
         let scale = lo
             .iter()
             .zip(&hi)
-            .map(|(l, h)| if h > l { h - l } else { 1.0 })
+            // An input that does not vary (one speed: a digitized curve's velocity is the stated
+            // speed, up to rounding) keeps unit scale; 1/rounding error would blow its noise
+            // up to the whole [0, 1] range.
+            .map(|(l, h)| {
+                if h - l > 1e-9 * l.abs().max(h.abs()) {
+                    h - l
+                } else {
+                    1.0
+                }
+            })
             .collect();
         Self { offset: lo, scale }
     }

@@ -98,7 +98,17 @@ pub(super) fn read_table(path: &Path, spec: &ImportSpec, header_only: bool) -> R
             .all(|name| name.parse::<f64>().is_ok_and(f64::is_finite));
     let mut indices = Vec::with_capacity(map.entries.len());
     for entry in &map.entries {
-        let matches: Vec<usize> = (0..header.len()).filter(|&i| header[i] == entry.source).collect();
+        let mut matches: Vec<usize> = (0..header.len()).filter(|&i| header[i] == entry.source).collect();
+        // Loggers often write the unit into the header (`t[ms]`): `time_s=t[ms]` then names
+        // that column, its unit read from the map as always.
+        if matches.is_empty()
+            && let Some(unit) = &entry.unit
+        {
+            let with_unit = format!("{}[{unit}]", entry.source);
+            matches = (0..header.len())
+                .filter(|&i| header[i].replace(' ', "") == with_unit)
+                .collect();
+        }
         match matches.as_slice() {
             [] if looks_like_data => {
                 return Err(fail(CaptureErrorKind::BadMap {

@@ -1105,3 +1105,22 @@ fn packed_rows_errors_name_file_line_and_column() {
     let text = err("no_time.csv", PACKED, &no_time).to_string();
     assert!(text.contains("needs a time column"), "{text}");
 }
+
+#[test]
+fn a_header_that_carries_its_units_is_matched_by_the_same_name_and_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "log.csv",
+        "t[ms];depth [mm];F[mN]\n0;-1;0\n10;0.5;20\n20;1.5;40\n",
+    );
+    let mut spec = ImportSpec::new(
+        CaptureKind::Insertion,
+        map("time_s=t[ms],depth_m=depth[mm],axial_force_n=F[mN]"),
+    );
+    spec.rate_hz = Some(100.0);
+    let c = import_csv_report(&path, &spec).unwrap().capture;
+    let near = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+    assert!(near(c.column("depth_m").unwrap(), &[-0.001, 0.0005, 0.0015]));
+    assert!(near(c.column("axial_force_n").unwrap(), &[0.0, 0.02, 0.04]));
+}
