@@ -379,6 +379,7 @@ fn resolve_one(
                 gamma: source.gamma,
                 max_samples: source.max_samples(),
                 max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
+                keep_outliers: false,
             },
             None,
         ),
@@ -391,6 +392,7 @@ fn resolve_one(
                 gamma: choice.gamma,
                 max_samples: choice.n,
                 max_fit_samples: identify::DEFAULT_MAX_FIT_SAMPLES,
+                keep_outliers: false,
             };
             knobs = FitKnobs {
                 tolerance: choice.tol,

@@ -41,7 +41,7 @@ fn held_out(train: &Capture, test: &Capture) -> Vec<f64> {
     for (name, other) in [
         ("smooth SVR", m.smooth_svr.unwrap().aise),
         ("Okamura piecewise", m.okamura_piecewise.unwrap().aise),
-        ("RBF network", m.rbf_network.aise),
+        ("RBF network", m.rbf_network.unwrap().aise),
         ("Fc+c·v+k·d", m.coulomb_viscous_stiffness.unwrap().aise),
     ] {
         assert!(m.svr.aise < other, "phases {} vs {name} {other}", m.svr.aise);

@@ -9,8 +9,9 @@ use std::time::Instant;
 use crate::baselines::CoulombViscous;
 use crate::error::IdentifyError;
 use crate::identification::{
-    FitLimits, Fitted, FrictionData, Identified, IdentifyOptions, KGF_N, MAX_SEGMENT_SAMPLES, SvrProblem,
-    even_indices, finish, metrics, range, rbf_network, scaled, svr, svr_with, train_and_test_data,
+    BaselineNotFitted, FitLimits, Fitted, FrictionData, Identified, IdentifyOptions, KGF_N,
+    MAX_SEGMENT_SAMPLES, SvrProblem, baseline, even_indices, finish, metrics, range, rbf_network, scaled,
+    svr, svr_with, train_and_test_data,
 };
 use crate::metrics::Metrics;
 use crate::model_file::{ModelBody, ModelFile, ModelKind, Quantity, SvrHyper};
@@ -21,21 +22,19 @@ use svm::{InputScaling, Kernel, SvrFit};
 /// Both baselines for friction data, evaluated on `eval`. The RBF network sees the inputs the
 /// SVR model sees: normal force alone for hard contact (whose law ignores speed, and whose
 /// held-out trajectory runs at other speeds), normal force and speed for soft contact.
+/// A baseline that cannot be fitted on the data is left out with its reason in `skipped`.
 fn friction_baselines(
     tr: &FrictionData,
     eval: &FrictionData,
     with_speed: bool,
-) -> Result<(Metrics, Metrics), IdentifyError> {
-    let cv =
-        CoulombViscous::fit(&tr.normal_force_n, &tr.velocity_mps, &tr.friction_force_n).map_err(|e| {
-            IdentifyError::Baseline {
-                what: "Coulomb+viscous",
-                source: Box::new(e),
-            }
-        })?;
-    let cv_pred: Vec<f64> = (0..eval.time_s.len())
-        .map(|i| cv.predict(eval.normal_force_n[i], eval.velocity_mps[i]))
-        .collect();
+    skipped: &mut Vec<BaselineNotFitted>,
+) -> (Option<Metrics>, Option<Metrics>) {
+    let cv = CoulombViscous::fit(&tr.normal_force_n, &tr.velocity_mps, &tr.friction_force_n).and_then(|cv| {
+        let cv_pred: Vec<f64> = (0..eval.time_s.len())
+            .map(|i| cv.predict(eval.normal_force_n[i], eval.velocity_mps[i]))
+            .collect();
+        metrics(&eval.time_s, &eval.friction_force_n, &cv_pred)
+    });
     let inputs = |d: &FrictionData| -> Vec<f64> {
         (0..d.time_s.len())
             .flat_map(|i| {
@@ -49,11 +48,12 @@ fn friction_baselines(
     };
     let (x_tr, x_ev) = (inputs(tr), inputs(eval));
     let dim = if with_speed { 2 } else { 1 };
-    let net_pred = rbf_network(&x_tr, dim, &tr.friction_force_n, &x_ev)?;
-    Ok((
-        metrics(&eval.time_s, &eval.friction_force_n, &cv_pred)?,
-        metrics(&eval.time_s, &eval.friction_force_n, &net_pred)?,
-    ))
+    let net = rbf_network(&x_tr, dim, &tr.friction_force_n, &x_ev)
+        .and_then(|pred| metrics(&eval.time_s, &eval.friction_force_n, &pred));
+    (
+        baseline("coulomb_viscous", cv, skipped),
+        baseline("rbf_network", net, skipped),
+    )
 }
 
 /// Hard contact: one linear ε-SVR of friction against normal force (defaults: the paper's
@@ -93,7 +93,8 @@ pub(crate) fn hard(
         Some(t) => predict(t)?,
         None => train_metrics,
     };
-    let (cv, net) = friction_baselines(&tr, ev, false)?;
+    let mut skipped = Vec::new();
+    let (cv, net) = friction_baselines(&tr, ev, false, &mut skipped);
     let hyper = vec![SvrHyper {
         label: "svr".into(),
         c,
@@ -117,9 +118,11 @@ pub(crate) fn hard(
         n_fit_rows: tr.len(),
         train_metrics,
         svr_metrics,
-        coulomb_viscous: Some(cv),
+        coulomb_viscous: cv,
         coulomb_viscous_stiffness: None,
         rbf_network: net,
+        mean: None,
+        baselines_not_fitted: skipped,
         fits: &[&f],
         started,
         input_range: range(&all.normal_force_n, 1),
@@ -272,7 +275,8 @@ pub(crate) fn soft(
         Some(t) => metrics(&t.time_s, &t.friction_force_n, &model_eval(t))?,
         None => train_metrics,
     };
-    let (cv, net) = friction_baselines(&tr, ev, true)?;
+    let mut skipped = Vec::new();
+    let (cv, net) = friction_baselines(&tr, ev, true, &mut skipped);
     let hyper = vec![
         SvrHyper {
             label: "stage1".into(),
@@ -320,9 +324,11 @@ pub(crate) fn soft(
         n_fit_rows: fit_rows,
         train_metrics,
         svr_metrics,
-        coulomb_viscous: Some(cv),
+        coulomb_viscous: cv,
         coulomb_viscous_stiffness: None,
         rbf_network: net,
+        mean: None,
+        baselines_not_fitted: skipped,
         fits: &all_fits,
         started,
         input_range: range(&x_range, 2),

@@ -71,6 +71,8 @@ pub struct IdentifyOptions {
     /// Every model: at most this many training rows, evenly spaced over the capture (the
     /// needle model takes the smaller of this and `max_samples`).
     pub max_fit_samples: usize,
+    /// Needle: fit the rows the outlier screen finds too (they are reported either way).
+    pub keep_outliers: bool,
 }
 
 impl IdentifyOptions {
@@ -83,6 +85,7 @@ impl IdentifyOptions {
             gamma: None,
             max_samples: 350,
             max_fit_samples: DEFAULT_MAX_FIT_SAMPLES,
+            keep_outliers: false,
         }
     }
 }
@@ -95,10 +98,16 @@ pub struct ComparedMetrics {
     /// Coulomb (∝ normal force) + viscous (∝ velocity) least squares; friction models only.
     pub coulomb_viscous: Option<Metrics>,
     /// `F = Fc·sgn(v) + c·v + k·depth` least squares ([`CoulombViscousStiffness`](crate::CoulombViscousStiffness)); the
-    /// needle only, whose force no friction law describes.
+    /// needle only, whose force no friction law describes. `None` also where it could not be
+    /// fitted (one speed: its three terms have rank 2; see [`Report::baselines_not_fitted`]).
     pub coulomb_viscous_stiffness: Option<Metrics>,
-    /// RBF network (k-means centres, least-squares weights).
-    pub rbf_network: Metrics,
+    /// RBF network (k-means centres, least-squares weights); `None` when it could not be
+    /// fitted ([`Report::baselines_not_fitted`] says why).
+    pub rbf_network: Option<Metrics>,
+    /// The training force's mean as a constant: what any model must beat to say anything.
+    /// The needle models.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mean: Option<Metrics>,
     /// Li & Bi's smooth ε-SVR over [depth, velocity], when the model is the phase-aware needle
     /// (whose own figures are then the ones under `svr`: the identified model's).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -170,6 +179,43 @@ pub struct Report {
     /// Needle: every puncture detected in the evaluation capture beside the model's along the
     /// same strokes ([`crate::compare_punctures`]); empty for the friction models.
     pub punctures: Vec<crate::PunctureComparison>,
+    /// Baselines that could not be fitted on this capture, and why: the model is reported
+    /// without them (their metrics are `null`).
+    pub baselines_not_fitted: Vec<BaselineNotFitted>,
+    /// Needle: the rows the outlier screen found in the training capture and in the test
+    /// capture ([`crate::OutlierScreen`]), left out of every fit unless kept.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub outliers: Vec<crate::OutlierScreen>,
+    /// What a user should know about the model before trusting it (a law that was not
+    /// measured, a threshold measured at one speed only, outliers left out).
+    pub warnings: Vec<String>,
+}
+
+/// A baseline left out of a report ([`Report::baselines_not_fitted`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BaselineNotFitted {
+    /// Which: `coulomb_viscous`, `coulomb_viscous_stiffness`, `rbf_network`.
+    pub baseline: String,
+    /// Why, as its fit said.
+    pub reason: String,
+}
+
+/// A baseline's metrics, or its name and reason in `skipped` when it could not be fitted.
+pub(crate) fn baseline(
+    name: &str,
+    result: Result<Metrics, IdentifyError>,
+    skipped: &mut Vec<BaselineNotFitted>,
+) -> Option<Metrics> {
+    match result {
+        Ok(m) => Some(m),
+        Err(e) => {
+            skipped.push(BaselineNotFitted {
+                baseline: name.into(),
+                reason: e.to_string(),
+            });
+            None
+        }
+    }
 }
 
 /// A baseline's punctures beside the measured ones ([`Report::baseline_punctures`]).
@@ -552,7 +598,10 @@ pub(crate) struct Fitted<'a> {
     /// The baselines on the evaluated capture (the ones that apply to this model).
     pub(crate) coulomb_viscous: Option<Metrics>,
     pub(crate) coulomb_viscous_stiffness: Option<Metrics>,
-    pub(crate) rbf_network: Metrics,
+    pub(crate) rbf_network: Option<Metrics>,
+    pub(crate) mean: Option<Metrics>,
+    /// Baselines that could not be fitted.
+    pub(crate) baselines_not_fitted: Vec<BaselineNotFitted>,
     /// Every SVR fit behind the model (the soft contact's final two first).
     pub(crate) fits: &'a [&'a SvrFit],
     pub(crate) started: Instant,
@@ -582,6 +631,8 @@ pub(crate) fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         coulomb_viscous,
         coulomb_viscous_stiffness,
         rbf_network,
+        mean,
+        baselines_not_fitted,
         fits,
         started,
         input_range,
@@ -619,6 +670,7 @@ pub(crate) fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
             coulomb_viscous,
             coulomb_viscous_stiffness,
             rbf_network,
+            mean,
             smooth_svr: None,
             okamura_piecewise: None,
         },
@@ -629,6 +681,9 @@ pub(crate) fn finish(fitted: Fitted<'_>) -> Result<Identified, IdentifyError> {
         parts: Vec::new(),
         baseline_punctures: Vec::new(),
         punctures: Vec::new(),
+        baselines_not_fitted,
+        outliers: Vec::new(),
+        warnings: Vec::new(),
     };
     let mut training = vec![capture_ref(train.source())];
     training.retain(|r| !r.path.as_os_str().is_empty());
@@ -671,12 +726,8 @@ pub(crate) fn check_written(
     let mut all = vec![
         ("training", "ε-SVR", train, model.train_metrics),
         (report.evaluated_on.as_str(), "ε-SVR", eval, Some(m.svr)),
-        (
-            report.evaluated_on.as_str(),
-            "RBF network",
-            eval,
-            Some(m.rbf_network),
-        ),
+        (report.evaluated_on.as_str(), "RBF network", eval, m.rbf_network),
+        (report.evaluated_on.as_str(), "mean force", eval, m.mean),
     ];
     all.push((
         report.evaluated_on.as_str(),

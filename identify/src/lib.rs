@@ -20,6 +20,7 @@ mod identification;
 mod metrics;
 mod model_file;
 mod needle_identification;
+mod outliers;
 mod phase_identification;
 mod phase_parts;
 mod phases;
@@ -27,12 +28,13 @@ mod punctures;
 mod search;
 
 pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
-pub use by_kind::{identify, identify_with};
+pub use by_kind::{PLAUSIBLE_RANGE_MARGIN, identify, identify_with};
 pub use error::IdentifyError;
 pub use grid_spec::{GridSpecError, MAX_GRID_VALUES};
 pub use identification::{
-    BaselinePunctures, ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits, Identified,
-    IdentifyOptions, MAX_SEGMENT_SAMPLES, OutOfDomain, Report, model_column, model_rows, out_of_domain,
+    BaselineNotFitted, BaselinePunctures, ComparedMetrics, DEFAULT_MAX_FIT_SAMPLES, DOMAIN_MARGIN, FitLimits,
+    Identified, IdentifyOptions, MAX_SEGMENT_SAMPLES, OutOfDomain, Report, model_column, model_rows,
+    out_of_domain,
 };
 pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
@@ -41,15 +43,16 @@ pub use model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
     ScaledSvr, SvrHyper,
 };
+pub use outliers::{Outlier, OutlierScreen, force_noise_n};
 pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
 pub use phase_parts::PartComparison;
 pub use phases::{
     Domain, LayerModel, Loading, MAX_LAYERS, PartSvr, Phase, PhaseExit, PhaseModel, PhaseState, PhaseStep,
-    REVERSAL_MPS, ShaftLaw, Threshold,
+    REVERSAL_MPS, Rupture, ShaftLaw, Threshold, WithdrawalSource,
 };
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,
-    detect_punctures, force_noise_n, group_layers,
+    detect_punctures, group_layers,
 };
 pub use search::{
     PREDICT_TIMING_PASSES, SearchGrid, SearchPoint, best, search, search_with, timed_predictions,

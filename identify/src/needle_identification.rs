@@ -7,14 +7,20 @@ use std::time::Instant;
 use crate::baselines::CoulombViscousStiffness;
 use crate::error::IdentifyError;
 use crate::identification::{
-    FitLimits, Fitted, Identified, IdentifyOptions, SvrProblem, finish, metrics, range, rbf_network,
-    require_kind, scaled, svr_with, velocity,
+    FitLimits, Fitted, Identified, IdentifyOptions, SvrProblem, baseline, finish, metrics, range,
+    rbf_network, require_kind, scaled, svr_with, velocity,
 };
 
 use crate::model_file::{ModelBody, ModelKind, Quantity, SvrHyper};
 use capture::kind;
 use capture::{Capture, CaptureKind};
 use svm::{InputScaling, Kernel};
+
+/// Fewest samples in tissue a needle model is fitted on: a digitized curve has a few hundred,
+/// a truncated log a dozen.
+const MIN_TISSUE_SAMPLES: usize = 30;
+/// Least depth of tissue those samples must cover, m: less holds no layer and its cutting.
+const MIN_TISSUE_SPAN_M: f64 = 3e-3;
 
 /// In-tissue samples of an insertion capture: time, [depth, velocity] row-major, force.
 pub(crate) type NeedleSamples = (Vec<f64>, Vec<f64>, Vec<f64>);
@@ -30,10 +36,19 @@ pub(crate) fn needle_data(c: &Capture) -> Result<NeedleSamples, IdentifyError> {
     let force = c.column(kind::AXIAL_FORCE_N)?;
     let vel = velocity(c, kind::VELOCITY_MPS, kind::DEPTH_M)?;
     let idx: Vec<usize> = (0..c.len()).filter(|&i| depth[i] > 0.0).collect();
-    if idx.len() < 10 {
+    let span_m = idx.iter().map(|&i| depth[i]).fold(f64::NEG_INFINITY, f64::max)
+        - idx.iter().map(|&i| depth[i]).fold(f64::INFINITY, f64::min);
+    if idx.len() < MIN_TISSUE_SAMPLES || span_m < MIN_TISSUE_SPAN_M {
         return Err(IdentifyError::Data {
             path: c.source().to_owned(),
-            reason: format!("only {} samples in tissue", idx.len()),
+            reason: format!(
+                "only {} samples in tissue over {:.2} mm of depth: a needle model needs at least \
+                 {MIN_TISSUE_SAMPLES} samples over at least {:.0} mm; record the insertion from \
+                 the surface to past the deepest layer (depth ≤ 0 in air, > 0 in tissue)",
+                idx.len(),
+                span_m.max(0.0) * 1e3,
+                MIN_TISSUE_SPAN_M * 1e3
+            ),
         });
     }
     Ok((
@@ -116,18 +131,20 @@ pub(crate) fn needle(
         Some(_) => metrics(&t_ev, &y_ev, &predict(&x_ev))?,
         None => train_metrics,
     };
-    let net_pred = rbf_network(&x, 2, &y, &x_ev)?;
-    let net_metrics = metrics(&t_ev, &y_ev, &net_pred)?;
+    // A baseline that cannot be fitted on this capture (one speed, too few rows) is reported
+    // as such; it never stops the model it is only compared with.
+    let mut skipped = Vec::new();
+    let net = rbf_network(&x, 2, &y, &x_ev).and_then(|pred| metrics(&t_ev, &y_ev, &pred));
+    let net_metrics = baseline("rbf_network", net, &mut skipped);
     // The physical baseline trains on the samples the SVR and the network train on.
     let column = |xx: &[f64], k: usize| -> Vec<f64> { xx.iter().skip(k).step_by(2).copied().collect() };
-    let law = CoulombViscousStiffness::fit(&column(&x, 0), &column(&x, 1), &y).map_err(|e| {
-        IdentifyError::Baseline {
-            what: "Coulomb+viscous+stiffness",
-            source: Box::new(e),
-        }
-    })?;
-    let law_pred: Vec<f64> = x_ev.chunks_exact(2).map(|r| law.predict(r[0], r[1])).collect();
-    let law_metrics = metrics(&t_ev, &y_ev, &law_pred)?;
+    let law = CoulombViscousStiffness::fit(&column(&x, 0), &column(&x, 1), &y).and_then(|law| {
+        let law_pred: Vec<f64> = x_ev.chunks_exact(2).map(|r| law.predict(r[0], r[1])).collect();
+        metrics(&t_ev, &y_ev, &law_pred)
+    });
+    let law_metrics = baseline("coulomb_viscous_stiffness", law, &mut skipped);
+    let mean_n = y.iter().sum::<f64>() / y.len().max(1) as f64;
+    let mean_metrics = metrics(&t_ev, &y_ev, &vec![mean_n; y_ev.len()])?;
     let hyper = vec![SvrHyper {
         label: "svr".into(),
         c,
@@ -148,8 +165,10 @@ pub(crate) fn needle(
         train_metrics,
         svr_metrics,
         coulomb_viscous: None,
-        coulomb_viscous_stiffness: Some(law_metrics),
+        coulomb_viscous_stiffness: law_metrics,
         rbf_network: net_metrics,
+        mean: Some(mean_metrics),
+        baselines_not_fitted: skipped,
         fits: &[&f],
         started,
         input_range: range(&x, 2),

@@ -20,7 +20,8 @@ use crate::metrics::Metrics;
 use crate::model_file::{Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind};
 use crate::needle_identification::{needle, needle_inputs, needle_output};
 use crate::phases::{
-    Domain, LayerModel, Loading, MAX_LAYERS, PhaseModel, ShaftLaw, Threshold, Varies, fit_linear, fit_terms,
+    Domain, LayerModel, Loading, MAX_LAYERS, PhaseModel, ShaftLaw, Threshold, Varies, WithdrawalSource,
+    fit_linear, fit_terms,
 };
 use crate::punctures::{PunctureParams, compare_punctures, detect_punctures, group_layers};
 
@@ -160,6 +161,11 @@ pub(crate) fn needle_phases(
 /// Fewest samples that fit one linear law (four coefficients, and a margin for noise).
 const MIN_LAW_SAMPLES: usize = 8;
 
+/// Fewest samples of cutting between two layers: a few suffice for its constant, and layers a
+/// couple of millimetres apart on a digitized curve leave no more (its depth term needs
+/// 3 mm of them anyway, see [`Varies`]).
+const MIN_BEFORE_SAMPLES: usize = 4;
+
 /// Candidate contact depths tried per layer.
 const CONTACT_CANDIDATES: usize = 96;
 
@@ -278,7 +284,8 @@ pub fn identify_phases_as(
     // the force that was not a rupture: a surge slowing down, a slip): its events are taken
     // out and the rest fitted again.
     let hold_band_mps = params.min_speed_mps;
-    let (b, mut models) = 'refit: loop {
+    let (b, mut models, above) = 'refit: loop {
+        let mut above = None;
         let mut layer_of = vec![usize::MAX; events.len()];
         for (k, l) in layers.iter().enumerate() {
             for &e in &l.events {
@@ -327,7 +334,9 @@ pub fn identify_phases_as(
                         flush(&mut pending, &mut b, punctured, d);
                         punctured += 1;
                         deepest = d;
-                        skip_until_m = d + params.max_travel_m;
+                        // The fall itself is neither law: the next one starts where the
+                        // force stopped falling.
+                        skip_until_m = events[event_at[i]].bottom_depth_m;
                     }
                 }
             } else {
@@ -353,10 +362,39 @@ pub fn identify_phases_as(
                 .copied()
                 .filter(|s| s[3].is_finite() || s[0] < layer.min_depth_m)
                 .collect();
-            let lo = models
-                .last()
-                .map_or(0.0, |_| layers[k - 1].max_depth_m + params.max_travel_m);
+            // The next membrane can be met as soon as the force has stopped falling after the
+            // one above gave (the loading curve's restart), however close the two lie.
+            let lo = models.last().map_or(0.0, |_| {
+                layers[k - 1]
+                    .events
+                    .iter()
+                    .map(|&e| events[e].bottom_depth_m)
+                    .fold(layers[k - 1].max_depth_m, f64::max)
+            });
             let hi = layer.min_depth_m - 1e-4;
+            // A membrane's loading rises to its punctures without sagging first; a contact
+            // whose split makes the loading sag (the fade of the cutting above read as a
+            // negative stiffness) or not rise is no candidate.
+            let membrane_like = |l: &Loading, c: f64| {
+                let u_max = layer.max_depth_m - c;
+                let elastic = |u: f64| l.a1_npm * u + l.a2_npm2 * u * u;
+                // The lowest point of a1·u + a2·u² over [0, u_max], and the rise to the puncture.
+                let u_low = if l.a2_npm2 > 0.0 {
+                    (-l.a1_npm / (2.0 * l.a2_npm2)).clamp(0.0, u_max)
+                } else {
+                    u_max
+                };
+                let sag = elastic(u_low.min(u_max)).min(elastic(u_max));
+                // Steep where it gives: over the last millimetre (the drop's own travel) the
+                // membrane adds at least a puncture's worth of force. Cutting and shaft
+                // friction rise slowly and steadily; a drop at their end (the cutting stopping
+                // where the tip meets the next membrane) is no rupture.
+                let last = elastic(u_max) - elastic((u_max - params.max_travel_m).max(0.0));
+                sag >= -(3.0 * detection.noise_n).max(params.min_drop_n)
+                    && elastic(u_max) >= detection.threshold_n
+                    && last >= detection.threshold_n
+            };
+            let mut fitted_any = false;
             let mut best: Option<(f64, f64, Loading, Option<ShaftLaw>)> = None;
             for j in 0..CONTACT_CANDIDATES {
                 let c = lo + (hi - lo) * j as f64 / (CONTACT_CANDIDATES - 1) as f64;
@@ -370,11 +408,17 @@ pub fn identify_phases_as(
                     continue;
                 }
                 // The law before the contact: cutting below the layer above, fitted on the
-                // samples before this candidate (nothing above the first layer).
+                // samples before this candidate; above the first layer, the tissue over it
+                // where the capture holds some (nothing where the membrane is the surface).
                 let cut = if k == 0 {
-                    None
+                    if before.len() < MIN_BEFORE_SAMPLES {
+                        None
+                    } else {
+                        let col = |q: usize| before.iter().map(|s| s[q]).collect::<Vec<f64>>();
+                        Some(shaft(&col(0), &col(1), &col(2))?)
+                    }
                 } else {
-                    if before.len() < MIN_LAW_SAMPLES {
+                    if before.len() < MIN_BEFORE_SAMPLES {
                         continue;
                     }
                     let col = |q: usize| before.iter().map(|s| s[q]).collect::<Vec<f64>>();
@@ -409,11 +453,27 @@ pub fn identify_phases_as(
                     .map(|(s, r)| (r - l.eval_raw(s[0] - c, s[1])).powi(2))
                     .sum();
                 let total = sse_before + sse_loading;
-                if best.as_ref().is_none_or(|b| total < b.0) {
+                fitted_any = true;
+                if membrane_like(&l, c) && best.as_ref().is_none_or(|b| total < b.0) {
                     best = Some((total, c, l, cut.map(|(law, _)| law)));
                 }
             }
-            let Some((_, contact, loading, cut)) = best else {
+            if best.is_none() && !fitted_any && k > 0 {
+                // Two drops too close for the deeper one's loading to fit between them: the
+                // smaller is the cutting stopping as the tip met the next membrane, or a
+                // membrane too thin to model apart; the larger is kept.
+                let drop = |l: &crate::punctures::Layer| {
+                    l.events.iter().map(|&e| events[e].drop_n).fold(0.0, f64::max)
+                };
+                let smaller = if drop(&layers[k - 1]) < drop(layer) {
+                    k - 1
+                } else {
+                    k
+                };
+                layers.remove(smaller);
+                continue 'refit;
+            }
+            if best.is_none() && !fitted_any {
                 return Err(data_error(format!(
                     "layer {} (punctures at {:.1}–{:.1} mm): too few advancing samples before its \
                  punctures to fit its loading",
@@ -421,19 +481,8 @@ pub fn identify_phases_as(
                     layer.min_depth_m * 1e3,
                     layer.max_depth_m * 1e3
                 )));
-            };
-            let u_max = layer.max_depth_m - contact;
-            let elastic = |u: f64| loading.a1_npm * u + loading.a2_npm2 * u * u;
-            // The lowest point of a1·u + a2·u² over [0, u_max], and the rise to the puncture.
-            let u_low = if loading.a2_npm2 > 0.0 {
-                (-loading.a1_npm / (2.0 * loading.a2_npm2)).clamp(0.0, u_max)
-            } else {
-                u_max
-            };
-            let sag = elastic(u_low.min(u_max)).min(elastic(u_max));
-            if sag < -(3.0 * detection.noise_n).max(params.min_drop_n)
-                || elastic(u_max) < detection.threshold_n
-            {
+            }
+            let Some((_, contact, loading, cut)) = best else {
                 layers.remove(k);
                 if layers.is_empty() {
                     return Err(data_error(
@@ -444,9 +493,11 @@ pub fn identify_phases_as(
                     ));
                 }
                 continue 'refit;
-            }
-            if let (Some(cut), Some(prev)) = (cut, models.last_mut()) {
-                prev.after = cut;
+            };
+            match (cut, models.last_mut()) {
+                (Some(cut), Some(prev)) => prev.after = cut,
+                (cut, None) => above = cut,
+                (None, Some(_)) => {}
             }
             // The threshold through the layer's events.
             let points: Vec<[f64; 2]> = layer
@@ -472,7 +523,7 @@ pub fn identify_phases_as(
                 peak_force_n: layer.peak_force_n,
             });
         }
-        break (b, models);
+        break (b, models, above);
     };
     let nl = layers.len();
     // Below the last layer: every advancing sample past its drop.
@@ -489,28 +540,61 @@ pub fn identify_phases_as(
     if let Some(last) = models.last_mut() {
         last.after = shaft(&col(&tail, 0), &col(&tail, 1), &col(&tail, 2))?.0;
     }
-    if b.withdrawal.len() < MIN_LAW_SAMPLES {
-        return Err(data_error(format!(
-            "only {} withdrawing samples in punctured tissue: too few to fit withdrawal friction",
-            b.withdrawal.len()
-        )));
-    }
-    let w = &b.withdrawal;
-    let withdrawal = shaft(
-        &w.iter().map(|x| x[0]).collect::<Vec<_>>(),
-        &w.iter().map(|x| x[1]).collect::<Vec<_>>(),
-        &w.iter().map(|x| x[2]).collect::<Vec<_>>(),
-    )?
-    .0;
+    let (withdrawal, withdrawal_source) = if b.withdrawal.len() >= MIN_LAW_SAMPLES {
+        let w = &b.withdrawal;
+        let law = shaft(
+            &w.iter().map(|x| x[0]).collect::<Vec<_>>(),
+            &w.iter().map(|x| x[1]).collect::<Vec<_>>(),
+            &w.iter().map(|x| x[2]).collect::<Vec<_>>(),
+        )?
+        .0;
+        (law, WithdrawalSource::Measured)
+    } else {
+        (
+            withdrawal_from_insertion(models.last().map(|l| &l.after)),
+            WithdrawalSource::FromInsertion,
+        )
+    };
     let model = PhaseModel {
+        above,
         layers: models,
         withdrawal,
+        withdrawal_source,
         hold_band_mps,
     };
     model.validate().map_err(|(field, reason)| {
         data_error(format!("the identified phases are not usable: {field}: {reason}"))
     })?;
     Ok(model)
+}
+
+/// The withdrawal law of a capture without withdrawal ([`WithdrawalSource::FromInsertion`]):
+/// the depth term of the deepest layer's cutting law, with the sign of the motion.
+fn withdrawal_from_insertion(deepest: Option<&ShaftLaw>) -> ShaftLaw {
+    let (per_depth_npm, domain) = match deepest {
+        Some(after) => (
+            after.per_depth_npm.max(0.0),
+            Domain {
+                depth_m: after.domain.depth_m,
+                velocity_mps: [-after.domain.velocity_mps[1], -after.domain.velocity_mps[0]],
+            },
+        ),
+        None => (
+            0.0,
+            Domain {
+                depth_m: [0.0, 0.0],
+                velocity_mps: [0.0, 0.0],
+            },
+        ),
+    };
+    ShaftLaw {
+        constant_n: 0.0,
+        per_depth_npm: -per_depth_npm,
+        per_speed_nspm: 0.0,
+        per_depth_speed_nspm2: 0.0,
+        domain,
+        svr: None,
+    }
 }
 
 /// Deflection at puncture against speed: a polynomial of degree up to `max_degree` (2), lower

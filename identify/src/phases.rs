@@ -291,12 +291,50 @@ pub struct LayerModel {
 /// The phase-aware model (see the module documentation).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PhaseModel {
+    /// The force in tissue above the first membrane (cutting and shaft friction of what lies
+    /// over it), when the capture has any: a membrane under skin or fat is reached through
+    /// tissue that already resists. Files without it: none (the first membrane at the
+    /// surface).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub above: Option<ShaftLaw>,
     /// Layers, shallowest first.
     pub layers: Vec<LayerModel>,
     /// Withdrawal friction.
     pub withdrawal: ShaftLaw,
+    /// Where [`PhaseModel::withdrawal`] comes from (files without the field: measured).
+    #[serde(default)]
+    pub withdrawal_source: WithdrawalSource,
     /// |v| below which the needle counts as held, m/s.
     pub hold_band_mps: f64,
+}
+
+/// Where a phase model's withdrawal law comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WithdrawalSource {
+    /// Fitted on the capture's withdrawing samples in punctured tissue.
+    #[default]
+    Measured,
+    /// The capture holds no withdrawal (an insertion-only record): the law is the shaft
+    /// friction the insertion measured below the deepest layer, its depth term
+    /// (`per_depth_npm` of that layer's cutting law, when positive) with the sign of the
+    /// motion, `F = −k·d` pulling out; no cutting, no viscous term. It is bounded by what the
+    /// insertion felt: `k·d` is at most the cutting law's own depth part over the inserted
+    /// length, and 0 where the insertion measured no depth dependence.
+    FromInsertion,
+}
+
+impl WithdrawalSource {
+    /// `measured`, or what stands in for the law.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Measured => "measured",
+            Self::FromInsertion => {
+                "not measured (no withdrawal in the capture): the insertion's shaft friction below the \
+                 deepest layer, with the sign of the motion"
+            }
+        }
+    }
 }
 
 /// Where a step finds the needle.
@@ -362,6 +400,21 @@ impl PhaseState {
     }
 }
 
+/// One rupture of a trajectory ([`PhaseModel::ruptures_along`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Rupture {
+    /// The sample at which the model gives.
+    pub index: usize,
+    /// Which layer (0: the shallowest).
+    pub layer: usize,
+    /// Depth of the tip at the threshold, m.
+    pub depth_m: f64,
+    /// The force just before it, N.
+    pub peak_force_n: f64,
+    /// The force at the sample after it, N.
+    pub force_after_n: f64,
+}
+
 /// What one step gives.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PhaseStep {
@@ -377,11 +430,11 @@ pub struct PhaseStep {
 
 impl PhaseModel {
     /// The force of the phase below `punctured` layers while advancing into uncut tissue
-    /// (0 above the first layer).
+    /// (above the first layer: [`PhaseModel::above`], or 0).
     fn cutting(&self, punctured: usize, d: f64, v: f64) -> (f64, bool) {
         match punctured.checked_sub(1).and_then(|k| self.layers.get(k)) {
             Some(layer) => layer.after.eval(d, v),
-            None => (0.0, true),
+            None => self.above.as_ref().map_or((0.0, true), |l| l.eval(d, v)),
         }
     }
 
@@ -431,7 +484,19 @@ impl PhaseModel {
             }
         }
         if state.punctured == 0 {
-            return out(0.0, Phase::Air, false, true);
+            // Above the first membrane: its tissue's law while advancing; held or backing out,
+            // the force eases linearly to nothing at [`REVERSAL_MPS`] outwards (no friction
+            // law was measured for it the other way).
+            let Some(above) = &self.above else {
+                return out(0.0, Phase::Air, false, true);
+            };
+            if v > band {
+                let (f, inside) = above.eval(d, v);
+                return out(f, Phase::Air, false, inside);
+            }
+            let (f_hi, _) = above.eval(d, band);
+            let w = ((v + REVERSAL_MPS) / (band + REVERSAL_MPS)).clamp(0.0, 1.0);
+            return out(w * f_hi, Phase::Air, false, true);
         }
         // Shaft friction reverses over a band, not at a point: between the hold band on the
         // side the tool last moved to and [`REVERSAL_MPS`] on the other side, the force runs
@@ -484,6 +549,32 @@ impl PhaseModel {
             .zip(velocity_mps)
             .map(|(&d, &v)| self.step(&mut state, d, v))
             .collect()
+    }
+
+    /// Every rupture along a recorded trajectory from a fresh site, where the model puts it:
+    /// at the depth its threshold lies at the sample's speed and with the force just before
+    /// it, which a sparse trajectory (a digitized curve) steps over between two samples.
+    pub fn ruptures_along(&self, depth_m: &[f64], velocity_mps: &[f64]) -> Vec<Rupture> {
+        let mut state = PhaseState::default();
+        let mut out = Vec::new();
+        for (i, (&d, &v)) in depth_m.iter().zip(velocity_mps).enumerate() {
+            let before = state;
+            let s = self.step(&mut state, d, v);
+            let Some(layer) = s.ruptured.then(|| self.layers.get(before.punctured)).flatten() else {
+                continue;
+            };
+            let at = (layer.contact_depth_m + layer.threshold.deflection_m(v)).min(d);
+            // Just short of the threshold, from the state before: the membrane's peak.
+            let peak = self.step(&mut before.clone(), at - 1e-9, v);
+            out.push(Rupture {
+                index: i,
+                layer: before.punctured,
+                depth_m: at,
+                peak_force_n: peak.force_n,
+                force_after_n: s.force_n,
+            });
+        }
+        out
     }
 
     /// The force of a fresh site at depth `d` reached at constant speed `v` (v ≤ 0: on the
@@ -562,6 +653,9 @@ impl PhaseModel {
         if !law_ok(&self.withdrawal) {
             return bad("body.withdrawal".into(), "coefficients and domain must be finite");
         }
+        if !self.above.as_ref().is_none_or(law_ok) {
+            return bad("body.above".into(), "coefficients and domain must be finite");
+        }
         let mut previous = f64::NEG_INFINITY;
         for (k, layer) in self.layers.iter().enumerate() {
             let field = |name: &str| format!("body.layers[{k}].{name}");
@@ -604,7 +698,8 @@ impl PhaseModel {
             .layers
             .iter()
             .flat_map(|l| [l.loading.domain, l.after.domain])
-            .chain([self.withdrawal.domain]);
+            .chain([self.withdrawal.domain])
+            .chain(self.above.as_ref().map(|l| l.domain));
         let mut d = [f64::INFINITY, f64::NEG_INFINITY];
         let mut v = d;
         for dom in domains {

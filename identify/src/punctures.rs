@@ -7,15 +7,21 @@
 //! estimated robustly from the signal itself: the median absolute second difference,
 //! `σ = 1.4826 · MAD(Δ²f) / √6` (white noise of standard deviation σ has a second difference
 //! of variance 6σ²; the second difference removes the loading's ramp, and the median ignores
-//! the few samples at the punctures themselves). Samples that do not advance (held, withdrawn,
+//! the few samples at the punctures themselves). The detector reads the force with its
+//! one- and two-sample excursions bridged (`outliers`: a logger's spike, a digitizing slip), so
+//! a single low point neither makes a drop nor restarts a loading, and a single high one is
+//! no peak. The samples may be as sparse and irregular as a digitized curve's: every length
+//! is a travel of the tip or a time, never a count of samples. Samples that do not advance (held, withdrawn,
 //! slower than [`PunctureParams::min_speed_mps`]) never take part in a drop, so a held
 //! needle's relaxing friction and a withdrawal's reversal are not punctures. Two more checks
 //! keep out drops that are no rupture:
-//! - **a loading before it**: within [`PunctureParams::loading_travel_m`] before the peak the
-//!   (and since the previous drop) the force rose by at least the drop. A membrane is loaded from the force the tip felt before
-//!   touching it and, once through, the tip feels about that force again (cutting and shaft
-//!   friction); a step down with no rise before it (cutting that stops as the tip meets the
-//!   next membrane) is not a puncture.
+//! - **a loading before it**: within [`PunctureParams::loading_travel_m`] before the peak
+//!   (and since the previous drop) the force rose by at least the threshold. A step down with
+//!   no rise before it (cutting that stops as the tip meets the next membrane) is not a
+//!   puncture. What the force does after the drop does not matter: a membrane that opens into
+//!   something softer (a lumen, a cavity, a softer layer) ends below the force the tip felt
+//!   before touching it, and that loss of resistance is the puncture a trainee is taught to
+//!   feel.
 //! - **the speed kept**: over [`PunctureParams::speed_window_s`] after the bottom of the drop
 //!   the tip advances on average at [`PunctureParams::min_speed_kept`] of its speed at the
 //!   peak or more. A needle that slows
@@ -24,9 +30,12 @@
 //!
 //! A recording holds several strokes (insert, withdraw, insert again): the stroke count rises
 //! at each withdrawal that follows an advance. [`group_layers`] then puts events of all strokes
-//! and speeds into layers: sorted by depth, a gap larger than [`PunctureParams::layer_gap_m`]
-//! starts a new layer (a membrane ruptures at a depth that moves with speed, by its
-//! deflection's rate dependence, but far less than the distance between membranes).
+//! and speeds into layers: sorted by depth, a gap larger than the layer gap starts a new layer
+//! (a membrane ruptures at a depth that moves with speed, by its deflection's rate dependence,
+//! but far less than the distance between membranes). The gap comes from the data: a membrane
+//! gives once per stroke, so two events of one stroke are two layers, and the layer gap is
+//! [`PunctureParams::layer_gap_m`] or half the smallest distance between two events of one
+//! stroke, whichever is smaller (layers 2 mm apart stay two layers).
 //!
 //! [`compare_punctures`] runs the same detector on a needle model's prediction along a
 //! capture's own trajectory, so every puncture measured there gets the model's depth and
@@ -38,6 +47,7 @@ use serde::Serialize;
 use crate::error::{IdentifyError, check_series};
 use crate::identification::model_column;
 use crate::model_file::{ModelBody, ModelFile, ModelKind};
+use crate::outliers::{force_noise_n, median};
 
 /// The detector's parameters (see the module documentation for how they are used).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -64,7 +74,8 @@ pub struct PunctureParams {
     /// How long after the drop that speed is averaged, s (a few tens of milliseconds: long
     /// enough to see a stroke stop, short enough to end before the next event).
     pub speed_window_s: f64,
-    /// Events further apart in depth than this belong to different layers, m.
+    /// Events further apart in depth than this belong to different layers, m (at most: the
+    /// data can make it smaller, see [`group_layers`]).
     pub layer_gap_m: f64,
 }
 
@@ -84,6 +95,12 @@ impl Default for PunctureParams {
 }
 
 impl PunctureParams {
+    /// The smallest drop that counts on a force whose white noise is `noise_n`:
+    /// `max(noise_multiple · σ, min_drop_n)`.
+    pub fn threshold_n(&self, noise_n: f64) -> f64 {
+        (self.noise_multiple * noise_n).max(self.min_drop_n)
+    }
+
     fn check(&self) -> Result<(), IdentifyError> {
         let positive = |name: &'static str, value: f64| {
             if value.is_finite() && value > 0.0 {
@@ -122,6 +139,8 @@ pub struct PunctureEvent {
     pub peak_force_n: f64,
     /// Fall from the peak to the median force over the travel window after it, N.
     pub drop_n: f64,
+    /// Depth of the tip at the bottom of the drop, where the next loading can start, m.
+    pub bottom_depth_m: f64,
     /// Stroke (0-based; a withdrawal after an advance starts the next).
     pub stroke: usize,
 }
@@ -135,29 +154,6 @@ pub struct PunctureDetection {
     pub noise_n: f64,
     /// Smallest drop that counted, N.
     pub threshold_n: f64,
-}
-
-/// Robust standard deviation of the white noise on `force_n` (see the module documentation);
-/// 0 with fewer than 3 samples.
-pub fn force_noise_n(force_n: &[f64]) -> f64 {
-    if force_n.len() < 3 {
-        return 0.0;
-    }
-    let mut d2: Vec<f64> = force_n
-        .windows(3)
-        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
-        .collect();
-    1.4826 * median(&mut d2) / 6f64.sqrt()
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 /// Finds the puncture events in a recording (see the module documentation). The four series
@@ -183,7 +179,9 @@ pub fn detect_punctures(
         });
     }
     let noise_n = force_noise_n(force_n);
-    let threshold_n = (params.noise_multiple * noise_n).max(params.min_drop_n);
+    let threshold_n = params.threshold_n(noise_n);
+    let bridged = crate::outliers::bridged(time_s, force_n, threshold_n);
+    let force_n = &bridged[..];
     let advancing = |i: usize| velocity_mps[i] > params.min_speed_mps;
 
     let mut events = Vec::new();
@@ -236,7 +234,7 @@ pub fn detect_punctures(
                 k -= 1;
                 low = low.min(force_n[k]);
             }
-            let loaded = force_n[peak] - low >= drop_n;
+            let loaded = force_n[peak] - low >= threshold_n;
             let mut after = bottom;
             while after + 1 < n && time_s[after] < time_s[bottom] + params.speed_window_s {
                 after += 1;
@@ -255,6 +253,7 @@ pub fn detect_punctures(
                     speed_mps: velocity_mps[peak],
                     peak_force_n: force_n[peak],
                     drop_n,
+                    bottom_depth_m: depth_m[bottom],
                     stroke,
                 });
             }
@@ -294,15 +293,23 @@ pub struct Layer {
     pub events: Vec<usize>,
 }
 
-/// Groups `events` into layers by depth: sorted by depth, a gap over `gap_m` starts a new
-/// layer. Layers come shallowest first.
+/// Groups `events` into layers by depth: sorted by depth, a gap over the layer gap starts a
+/// new layer, and so does an event whose stroke the layer already holds (a membrane gives once
+/// per stroke). The layer gap is `gap_m`, or half the smallest distance between two events of
+/// one stroke when that is smaller. Layers come shallowest first.
 pub fn group_layers(events: &[PunctureEvent], gap_m: f64) -> Vec<Layer> {
+    let gap_m = gap_m.min(0.5 * smallest_spacing_in_a_stroke(events));
     let mut order: Vec<usize> = (0..events.len()).collect();
     order.sort_by(|&a, &b| events[a].depth_m.total_cmp(&events[b].depth_m));
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for i in order {
         match groups.last_mut() {
-            Some(g) if events[i].depth_m - events[g[g.len() - 1]].depth_m <= gap_m => g.push(i),
+            Some(g)
+                if events[i].depth_m - events[g[g.len() - 1]].depth_m <= gap_m
+                    && g.iter().all(|&e| events[e].stroke != events[i].stroke) =>
+            {
+                g.push(i)
+            }
             _ => groups.push(vec![i]),
         }
     }
@@ -320,6 +327,15 @@ pub fn group_layers(events: &[PunctureEvent], gap_m: f64) -> Vec<Layer> {
             }
         })
         .collect()
+}
+
+/// The smallest depth between two consecutive events of one stroke, m (∞ with none).
+fn smallest_spacing_in_a_stroke(events: &[PunctureEvent]) -> f64 {
+    events
+        .windows(2)
+        .filter(|w| w[0].stroke == w[1].stroke)
+        .map(|w| (w[1].depth_m - w[0].depth_m).abs())
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// One puncture measured in a capture beside the model's along the same stroke.
@@ -399,9 +415,9 @@ pub fn compare_punctures(
     let measured = detect_punctures(time, &depth, &velocity, force, params)?;
     // A model with memory says itself where each layer gave: those are the punctures a
     // trainee feels. A smooth model's are found in its force by the detector.
-    let rendered = match &along {
-        Some(steps) => ruptures(steps, time, &depth, &velocity, params),
-        None => detect_punctures(time, &depth, &velocity, &predicted, params)?.events,
+    let rendered = match &model.body {
+        ModelBody::Phases(p) => ruptures(p, time, &depth, &velocity, params),
+        _ => detect_punctures(time, &depth, &velocity, &predicted, params)?.events,
     };
     Ok(measured
         .events
@@ -430,40 +446,46 @@ pub fn compare_punctures(
         .collect())
 }
 
-/// The phase model's own ruptures along a trajectory, as events: the peak is the step before
-/// the rupture, the drop the fall to the step of it; strokes are counted as the detector counts
-/// them (a withdrawal after an advance starts the next).
+/// The phase model's own ruptures along a trajectory, as events: the peak is the model's force
+/// just before its threshold ([`crate::PhaseModel::ruptures_along`]), the drop the fall to the
+/// sample after it; strokes are counted as the detector counts them (a withdrawal after an
+/// advance starts the next).
 fn ruptures(
-    steps: &[crate::phases::PhaseStep],
+    model: &crate::PhaseModel,
     time_s: &[f64],
     depth_m: &[f64],
     velocity_mps: &[f64],
     params: &PunctureParams,
 ) -> Vec<PunctureEvent> {
-    let mut out = Vec::new();
+    let mut stroke_of = Vec::with_capacity(depth_m.len());
     let mut stroke = 0;
     let mut advanced = false;
-    for i in 0..steps.len() {
-        let v = velocity_mps[i];
+    for &v in velocity_mps {
         if v > params.min_speed_mps {
             advanced = true;
         } else if v < -params.min_speed_mps && advanced {
             stroke += 1;
             advanced = false;
         }
-        if steps[i].ruptured && i > 0 {
-            out.push(PunctureEvent {
-                index: i - 1,
-                time_s: time_s[i - 1],
-                depth_m: depth_m[i - 1],
-                speed_mps: velocity_mps[i - 1],
-                peak_force_n: steps[i - 1].force_n,
-                drop_n: steps[i - 1].force_n - steps[i].force_n,
-                stroke,
-            });
-        }
+        stroke_of.push(stroke);
     }
-    out
+    model
+        .ruptures_along(depth_m, velocity_mps)
+        .into_iter()
+        .map(|r| {
+            let i = r.index;
+            PunctureEvent {
+                index: i.saturating_sub(1),
+                time_s: time_s[i],
+                depth_m: r.depth_m,
+                speed_mps: velocity_mps[i],
+                peak_force_n: r.peak_force_n,
+                drop_n: r.peak_force_n - r.force_after_n,
+                bottom_depth_m: depth_m[i],
+                stroke: stroke_of[i],
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

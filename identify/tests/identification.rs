@@ -31,7 +31,7 @@ fn soft_contact_svr_beats_both_baselines_on_held_out_data() {
     let (svr, cv, net) = (
         r.metrics.svr.aise,
         r.metrics.coulomb_viscous.unwrap().aise,
-        r.metrics.rbf_network.aise,
+        r.metrics.rbf_network.unwrap().aise,
     );
     println!("soft AISE: SVR {svr:.3e}, Coulomb+viscous {cv:.3e}, RBF network {net:.3e}");
     assert!(svr < cv && svr < net, "{svr} {cv} {net}");
@@ -48,11 +48,14 @@ fn needle_svr_beats_the_rbf_network_on_held_out_data() {
     let r = &identified.report;
     println!(
         "needle AISE: SVR {:.3e}, RBF network {:.3e}; {} SVs / {}",
-        r.metrics.svr.aise, r.metrics.rbf_network.aise, r.n_sv, r.n_train
+        r.metrics.svr.aise,
+        r.metrics.rbf_network.unwrap().aise,
+        r.n_sv,
+        r.n_train
     );
     assert_eq!(r.n_train, 350);
     assert!(r.metrics.coulomb_viscous.is_none());
-    assert!(r.metrics.svr.aise < r.metrics.rbf_network.aise);
+    assert!(r.metrics.svr.aise < r.metrics.rbf_network.unwrap().aise);
     assert!(r.relative_gap < 1e-6);
     // The model reproduces the puncture: near the capsule the force is high, just past it low.
     let m = &identified.model;

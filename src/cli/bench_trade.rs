@@ -243,6 +243,7 @@ fn held_out(
         gamma: point.gamma,
         max_samples: n,
         max_fit_samples: DEFAULT_MAX_FIT_SAMPLES,
+        keep_outliers: false,
     };
     let identified = identify_with(train, Some(test), &options, limits)
         .with_context(|| format!("fitting C = {:e}, ε = {:e} at n = {n}", point.c, point.epsilon))?;

@@ -107,6 +107,12 @@ pub(crate) struct IdentifyArgs {
     /// difference between the two over the training inputs.
     #[arg(long, value_name = "K", value_parser = parse_max_sv)]
     max_sv: Option<usize>,
+    /// Needle: fit the gross outliers too. By default every insertion capture is screened
+    /// (a run of one or two samples off both neighbours by more than the puncture threshold,
+    /// max(10σ, 0.05 N)) and the rows found are left out of every fit and metric; a warning
+    /// and `outliers` in --json list them either way.
+    #[arg(long)]
+    keep_outliers: bool,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -161,6 +167,7 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         gamma: args.gamma,
         max_samples: args.max_samples,
         max_fit_samples: args.max_fit_samples,
+        keep_outliers: args.keep_outliers,
     };
     let explored = if args.search || args.grid.is_some() {
         let grid = match &args.grid {
@@ -278,6 +285,9 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         }
     }
     if !args.quiet {
+        for w in &r.warnings {
+            eprintln!("warning: {w}");
+        }
         for o in &r.test_out_of_domain {
             eprintln!("warning: {}", out_of_domain_line(o));
         }
@@ -550,8 +560,27 @@ fn print_table(r: &Report, body: &ModelBody, args: &IdentifyArgs) {
     if let Some(law) = &r.metrics.coulomb_viscous_stiffness {
         row("Fc+c·v+k·depth", law);
     }
-    row("RBF network", &r.metrics.rbf_network);
-    if r.metrics.coulomb_viscous.is_none() {
+    if let Some(net) = &r.metrics.rbf_network {
+        row("RBF network", net);
+    }
+    if let Some(mean) = &r.metrics.mean {
+        row("mean force", mean);
+    }
+    for skipped in &r.baselines_not_fitted {
+        let name = match skipped.baseline.as_str() {
+            "coulomb_viscous" => "Coulomb+viscous",
+            "coulomb_viscous_stiffness" => "Fc+c·v+k·depth",
+            "rbf_network" => "RBF network",
+            other => other,
+        };
+        println!("  {name:<18} {:>12}   not fitted: {}", "—", skipped.reason);
+    }
+    if r.metrics.coulomb_viscous.is_none()
+        && !r
+            .baselines_not_fitted
+            .iter()
+            .any(|b| b.baseline == "coulomb_viscous")
+    {
         println!(
             "  (no Coulomb+viscous: it is a friction law of velocity and normal force and does not \
              apply to puncture force; Fc+c·v+k·depth is F = Fc·sgn(v) + c·v + k·depth by least squares)"

@@ -161,6 +161,8 @@ mod tests {
                 },
                 svr: None,
             },
+            withdrawal_source: identify::WithdrawalSource::Measured,
+            above: None,
             hold_band_mps: 2e-4,
         }
     }
