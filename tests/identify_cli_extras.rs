@@ -210,3 +210,147 @@ fn a_support_vector_budget_keeps_the_model_within_it_and_says_what_it_cost() {
     let shown = common::fails(&["identify", &train, "--model", "needle", "--max-sv", "0"]);
     assert!(shown.contains("not a support-vector count"), "{shown}");
 }
+
+/// A file of the needle corpus (`scripts/needle_corpus.py`).
+fn corpus(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/captures/needle_corpus")
+        .join(name)
+        .to_str()
+        .unwrap()
+        .to_owned()
+}
+
+fn num(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+/// Every puncture of the report's table is the model's own, within 1 mm and 10 % of `truth`
+/// (depths m, peaks N), and there are as many as the tissue had.
+fn punctures_match(report: &serde_json::Value, depths: &[f64], peaks: &[f64]) {
+    let rows = report["punctures"].as_array().unwrap();
+    for (d, f) in depths.iter().zip(peaks) {
+        let hit = rows.iter().find(|p| {
+            p["predicted_depth_m"]
+                .as_f64()
+                .is_some_and(|m| (m - d).abs() < 1e-3)
+        });
+        let hit = hit.unwrap_or_else(|| panic!("no rupture within 1 mm of {d}: {rows:?}"));
+        let peak = num(&hit["predicted_peak_force_n"]);
+        assert!((peak / f - 1.0).abs() < 0.10, "peak {peak} vs the tissue's {f}");
+    }
+}
+
+#[test]
+fn a_foreign_insertion_log_in_other_units_is_imported_and_identified_without_a_script() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("foreign.csv");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(corpus("foreign_units.truth.json")).unwrap()).unwrap();
+    let map = truth["import_map"].as_str().unwrap();
+    succeeds(&[
+        "import",
+        &corpus("foreign_units.csv"),
+        "--kind",
+        "insertion",
+        "--map",
+        map,
+        "--rate-hz",
+        "200",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let report = json(&[
+        "identify",
+        out.to_str().unwrap(),
+        "--model",
+        "needle-phases",
+        "--json",
+    ]);
+    let list = |key: &str| -> Vec<f64> {
+        truth["insertions"][0][key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(num)
+            .collect()
+    };
+    punctures_match(&report, &list("puncture_depths_m"), &list("puncture_peaks_n"));
+    // One speed, no withdrawal: said, not refused.
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("withdrawal law not measured"), "{warnings}");
+    // Its velocity comes from the position (pseudo-differentiation): the phases beat the mean
+    // and every baseline that could be fitted.
+    let m = &report["metrics"];
+    for baseline in ["mean", "coulomb_viscous_stiffness", "rbf_network", "smooth_svr"] {
+        if let Some(other) = m[baseline]["aise"].as_f64() {
+            assert!(num(&m["svr"]["aise"]) < other, "{baseline}: {m}");
+        }
+    }
+}
+
+#[test]
+fn a_curve_digitized_against_depth_gets_its_time_from_a_stated_speed_and_gives_both_models() {
+    // A force–depth curve as read off a figure: depth and force, no time.
+    let text = std::fs::read_to_string(corpus("digitized_train.csv")).unwrap();
+    let mut curve = String::from("depth_mm,force_N\n");
+    for line in text.lines().skip(2) {
+        let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        curve.push_str(&format!("{},{}\n", f[1] * 1e3, f[2]));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("curve.csv"), dir.path().join("curve_capture.csv"));
+    std::fs::write(&input, curve).unwrap();
+    succeeds(&[
+        "import",
+        input.to_str().unwrap(),
+        "--kind",
+        "insertion",
+        "--map",
+        "depth_m=depth_mm[mm],axial_force_n=force_N",
+        "--time-from-position",
+        "depth_mm[mm]",
+        "--speed-mps",
+        "0.003",
+        "--rate-hz",
+        "100",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let out = out.to_str().unwrap();
+    for model in ["needle", "needle-phases"] {
+        let report = json(&["identify", out, "--model", model, "--json"]);
+        // At one speed F = Fc·sgn(v) + c·v + k·depth has rank 2: reported, never blocking.
+        let skipped = &report["baselines_not_fitted"][0];
+        assert_eq!(skipped["baseline"], "coulomb_viscous_stiffness", "{report}");
+        assert!(skipped["reason"].as_str().unwrap().contains("rank"), "{skipped}");
+        let table = String::from_utf8(succeeds(&["identify", out, "--model", model]).stdout).unwrap();
+        assert!(table.contains("—   not fitted:"), "{table}");
+    }
+    let capture = std::fs::read_to_string(corpus("digitized_train.csv")).unwrap();
+    let meta = capture.lines().next().unwrap();
+    let truth = |key: &str| -> Vec<f64> {
+        let v = meta
+            .split(' ')
+            .find_map(|kv| kv.strip_prefix(&format!("{key}=")))
+            .unwrap();
+        v.split(';').map(|x| x.parse().unwrap()).collect()
+    };
+    let report = json(&["identify", out, "--model", "needle-phases", "--json"]);
+    punctures_match(
+        &report,
+        &truth("truth.insertion.0.puncture_depths_m"),
+        &truth("truth.insertion.0.puncture_peaks_n"),
+    );
+}
+
+#[test]
+fn a_gel_without_a_membrane_and_a_truncated_log_are_refused_with_what_would_make_them_usable() {
+    let gel = common::fails(&["identify", &corpus("gel_train.csv"), "--model", "needle-phases"]);
+    assert!(
+        gel.contains("no puncture found") && gel.contains("--model needle"),
+        "{gel}"
+    );
+    let tiny = common::fails(&["identify", &corpus("tiny_train.csv"), "--model", "needle-phases"]);
+    assert!(tiny.contains("record the insertion"), "{tiny}");
+}

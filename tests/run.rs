@@ -281,6 +281,58 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
 }
 
 #[test]
+fn scenes_on_models_from_real_world_shaped_records_render_every_layer_bounded() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let scene_text = std::fs::read_to_string(root().join("scenes/needle_liver.toml")).unwrap();
+    let scene_text = common::without_budgets(&scene_text).replace("../", &format!("{}/", root().display()));
+    // One speed with no withdrawal, a digitized curve, layers 2 mm apart, a wall opening into
+    // a lumen (assets/captures/needle_corpus).
+    for record in ["one_speed", "digitized", "close_layers", "lumen"] {
+        let capture = root().join(format!("assets/captures/needle_corpus/{record}_train.csv"));
+        let text = scene_text
+            .lines()
+            .map(|l| {
+                if l.starts_with("capture = ") {
+                    format!("capture = {:?}", capture.display().to_string())
+                } else {
+                    l.to_owned()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let scene = dir.path().join(format!("{record}.toml"));
+        std::fs::write(&scene, text).unwrap();
+        let r = run_unpaced(&[scene.to_str().unwrap()], &dir.path().join(record), &cache);
+        let seg = &r["segments"][0];
+        assert_eq!(f(&seg["non_finite_commands"]), 0.0, "{record}: {seg}");
+        assert!(
+            f(&seg["max_command_n"]) <= f(&seg["device_limit_n"]) + 1e-9,
+            "{record}: {seg}"
+        );
+        // Every layer of the model the trainee's stroke reaches gives, once.
+        let model = ModelFile::load(Path::new(r["models"][0]["path"].as_str().unwrap())).unwrap();
+        let identify::ModelBody::Phases(p) = &model.body else {
+            panic!("{record}: not a phase model")
+        };
+        let deepest = f(&seg["max_depth_m"]);
+        let speed = f(&seg["punctures"][0]["speed_mps"]);
+        let reached = p
+            .layers
+            .iter()
+            .filter(|l| l.contact_depth_m + l.threshold.deflection_m(speed) < deepest)
+            .count();
+        assert!(reached >= 1, "{record}: no layer reached");
+        assert_eq!(
+            seg["punctures"].as_array().unwrap().len(),
+            reached,
+            "{record}: {seg}"
+        );
+    }
+}
+
+#[test]
 fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
