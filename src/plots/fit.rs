@@ -86,17 +86,6 @@ fn err(e: impl ToString) -> String {
     e.to_string()
 }
 
-fn legend<'a, 'b: 'a>(chart: &mut super::Chart<'a, 'b>) -> Result<(), String> {
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((super::FAMILY, 15))
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(err)
-}
-
 fn needle(root: &Area<'_>, sets: &[FitSet], model_label: &str) -> Result<(), String> {
     let depth_mm = |s: &FitSet| -> Vec<f64> { s.inputs[0].iter().map(|d| d * 1e3).collect() };
     let depth = range(sets.iter().flat_map(|s| &s.inputs[0]));
@@ -133,7 +122,7 @@ fn needle(root: &Area<'_>, sets: &[FitSet], model_label: &str) -> Result<(), Str
                 .legend(|(x, y)| Circle::new((x + 10, y), 4, MODEL.filled()));
         }
     }
-    legend(&mut chart)
+    super::legend(&mut chart)
 }
 
 fn hard(root: &Area<'_>, model: &ModelFile, sets: &[FitSet]) -> Result<(), String> {
@@ -170,7 +159,7 @@ fn hard(root: &Area<'_>, model: &ModelFile, sets: &[FitSet]) -> Result<(), Strin
         .map_err(err)?
         .label("ε-SVR model")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], MODEL.stroke_width(2)));
-    legend(&mut chart)
+    super::legend(&mut chart)
 }
 
 fn soft(root: &Area<'_>, model: &ModelFile, sets: &[FitSet]) -> Result<(), String> {
@@ -264,5 +253,5 @@ fn soft(root: &Area<'_>, model: &ModelFile, sets: &[FitSet]) -> Result<(), Strin
             ))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
     }
-    legend(&mut chart)
+    super::legend(&mut chart)
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::{Area, Frame, PlotError, axes, render};
-use crate::session::{SegmentKind, SegmentRun, traces};
+use crate::session::{SURFACE_Z_M, SegmentKind, SegmentRun, traces};
 
 /// Draws `force.png`: per segment, force against depth (needle) or position (rubbing), and
 /// against time.
@@ -25,15 +25,36 @@ pub fn write_force_plot(path: &Path, runs: &[SegmentRun]) -> Result<(), PlotErro
             let ys: Vec<f64> = run.samples.iter().map(force).collect();
             let title = format!("{}: {what} vs {quantity}", run.segment.object);
             let ts: Vec<f64> = run.samples.iter().map(|s| s.time_s).collect();
-            line_chart(&rows[2 * i], &title, &x_label, &xs, &ys)?;
+            // A needle on the simulator: the simulated liver's own force along the same
+            // trajectory beside the rendered one.
+            let tissue = (matches!(run.segment.kind, SegmentKind::Needle { .. })
+                && !run.device.starts_with("replay"))
+            .then(|| crate::session::truth_along::tissue_force(&run.samples, SURFACE_Z_M));
+            line_chart(&rows[2 * i], &title, &x_label, &xs, &ys, tissue.as_deref())?;
             let title_t = format!("{}: force vs time", run.segment.object);
-            line_chart(&rows[2 * i + 1], &title_t, "time [s]", &ts, &ys)?;
+            line_chart(
+                &rows[2 * i + 1],
+                &title_t,
+                "time [s]",
+                &ts,
+                &ys,
+                tissue.as_deref(),
+            )?;
         }
         Ok(())
     })
 }
 
-fn line_chart(area: &Area<'_>, title: &str, x_label: &str, xs: &[f64], ys: &[f64]) -> Result<(), String> {
+/// `ys` against `xs` in red, and `tissue` (the simulated tissue's force at the same samples)
+/// in grey behind it, with a legend, when given.
+fn line_chart(
+    area: &Area<'_>,
+    title: &str,
+    x_label: &str,
+    xs: &[f64],
+    ys: &[f64],
+    tissue: Option<&[f64]>,
+) -> Result<(), String> {
     let range = |v: &[f64]| {
         let (lo, hi) = v
             .iter()
@@ -52,14 +73,39 @@ fn line_chart(area: &Area<'_>, title: &str, x_label: &str, xs: &[f64], ys: &[f64
         title_px: 20,
         margin_px: 12,
     };
-    let mut chart = axes(area, title, frame, (range(xs), x_label), (range(ys), "force [N]"))?;
+    let all: Vec<f64> = ys.iter().chain(tissue.unwrap_or(&[])).copied().collect();
+    let mut chart = axes(
+        area,
+        title,
+        frame,
+        (range(xs), x_label),
+        (range(&all), "force [N]"),
+    )?;
     // A plot needs no more points than pixels across.
     let step = (xs.len() / 4000).max(1);
-    chart
+    let grey = RGBColor(120, 120, 120);
+    let red = RGBColor(180, 40, 40);
+    if let Some(tissue) = tissue {
+        chart
+            .draw_series(LineSeries::new(
+                xs.iter().zip(tissue).step_by(step).map(|(&x, &y)| (x, y)),
+                grey.stroke_width(2),
+            ))
+            .map_err(|e| e.to_string())?
+            .label("simulated liver")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], grey.stroke_width(2)));
+    }
+    let rendered = chart
         .draw_series(LineSeries::new(
             xs.iter().zip(ys).step_by(step).map(|(&x, &y)| (x, y)),
-            &RGBColor(180, 40, 40),
+            &red,
         ))
         .map_err(|e| e.to_string())?;
+    if tissue.is_some() {
+        rendered
+            .label("rendered")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], red));
+        super::legend(&mut chart)?;
+    }
     Ok(())
 }

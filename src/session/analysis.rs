@@ -96,6 +96,10 @@ pub struct SegmentSummary {
     pub punctures: Vec<Puncture>,
     /// Every membrane of the simulated tissue, felt or missed (needle).
     pub layers: Vec<LayerFidelity>,
+    /// The rendered force against the simulated tissue's along the run (needle on the
+    /// simulator): RMSE, the largest error and where, false and missed pops.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth_along: Option<super::truth_along::TruthAlong>,
     /// Deepest tool depth (needle), m.
     pub max_depth_m: Option<f64>,
     /// Largest model force (needle: axial; friction: normal), N.
@@ -167,6 +171,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
     }
     let mut layers = Vec::new();
     let mut outside = Vec::new();
+    let mut truth_along = None;
     let (kind, punctures, max_depth_m, max_model_force_n, ratio) = match &run.segment.kind {
         SegmentKind::Needle { .. } => {
             let surface_z_m = if matches!(run.device.as_str(), d if d.starts_with("replay")) {
@@ -176,6 +181,9 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
             };
             let punctures = punctures(s);
             layers = layer_fidelity(s, surface_z_m);
+            if !run.device.starts_with("replay") {
+                truth_along = Some(super::truth_along::along(s, surface_z_m));
+            }
             outside = out_of_domain(s, surface_z_m);
             let depth = s
                 .iter()
@@ -257,6 +265,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         out_of_domain: outside,
         punctures,
         layers,
+        truth_along,
         max_depth_m,
         max_model_force_n,
         mean_friction_ratio: ratio,

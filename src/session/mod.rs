@@ -10,6 +10,7 @@
 pub mod analysis;
 pub mod report;
 pub mod script;
+pub mod truth_along;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;

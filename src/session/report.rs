@@ -315,6 +315,33 @@ impl SessionReport {
                 };
                 let _ = writeln!(t, "    layer {}: {felt} ({truth})", l.name);
             }
+            if let Some(a) = &s.truth_along {
+                let _ = writeln!(
+                    t,
+                    "    along the run against the simulated liver: RMSE {:.3} N over {} ticks, largest error {:.3} N at {:.1} mm ({:.2} s)",
+                    a.rmse_n,
+                    a.ticks,
+                    a.max_error_n,
+                    a.max_error_depth_m * 1e3,
+                    a.max_error_time_s
+                );
+                let list = |pops: &[crate::session::truth_along::Pop]| {
+                    if pops.is_empty() {
+                        "none".to_owned()
+                    } else {
+                        pops.iter()
+                            .map(|p| format!("{:.2} N at {:.1} mm", p.drop_n, p.depth_m * 1e3))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    }
+                };
+                let _ = writeln!(
+                    t,
+                    "    pops the liver does not have: {}; its pops not rendered: {}",
+                    list(&a.false_pops),
+                    list(&a.missed_pops)
+                );
+            }
             if let Some(d) = s.max_depth_m {
                 let _ = writeln!(
                     t,
