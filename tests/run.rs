@@ -197,6 +197,14 @@ fn the_default_scene_feels_both_layers_where_and_as_hard_as_the_tissue_gives() {
     for layer in seg["layers"].as_array().unwrap() {
         assert_eq!(layer["status"], "felt", "{layer}");
     }
+    // Along the whole run, against the simulated liver's own force on the same trajectory: no
+    // pop the liver does not have, and a hold that does not chatter.
+    let along = &seg["truth_along"];
+    assert!(f(&along["ticks"]) > 5000.0, "{along}");
+    assert!(f(&along["rmse_n"]) < 0.3, "{along}");
+    assert_eq!(along["false_pops"].as_array().unwrap().len(), 0, "{along}");
+    assert!(f(&along["held_ticks"]) > 300.0, "{along}");
+    assert!(f(&along["held_ripple_n"]) < 0.02, "{along}");
     // Every tick whose inputs left the trained domain is accounted for by state.
     let explained: f64 = seg["out_of_domain"]
         .as_array()

@@ -57,6 +57,20 @@ pub const MAX_LAYERS: usize = 8;
 /// 0.8 kg virtual tool at 1 kHz renders stably.
 pub const REVERSAL_MPS: f64 = 0.002;
 
+/// Half-width of the play the velocity is read through where shaft friction reverses, m/s.
+/// A tool held by a hand under admittance control creeps and trembles by a few tenths of a
+/// millimetre per second at 1 kHz (up to ±0.3 mm/s as the default scene's hold settles); read
+/// directly, that jitter crossed the reversal band's slope (about 350 N·s/m) as ±0.03 N of
+/// chatter during a hold. Through the play, the velocity the band reads moves only when the
+/// tool's has moved by more than 0.5 mm/s the other way, so a held needle's force stands still
+/// and a real reversal still passes the whole band (continuously: the play only delays it by
+/// 0.5 mm/s).
+pub const PLAY_MPS: f64 = 5e-4;
+
+/// How far behind the deepest point cut the tip still bears on uncut tissue, m: a tenth of a
+/// millimetre, about a needle tip's bevel, and far more than a held hand creeps.
+pub const TIP_CONTACT_M: f64 = 1e-4;
+
 /// How far past a phase's trained range, as a fraction of its width or of its largest
 /// magnitude (whichever is larger: a protocol at one speed has a range of almost no width), an
 /// input still counts as inside it.
@@ -391,6 +405,8 @@ pub struct PhaseState {
     deepest_m: f64,
     /// The last step it moved, it moved out.
     backward: bool,
+    /// The velocity read through a play of ±[`PLAY_MPS`] (see [`PhaseModel::step`]).
+    played_mps: f64,
 }
 
 impl PhaseState {
@@ -457,6 +473,8 @@ impl PhaseModel {
             *state = PhaseState::default();
             return out(0.0, Phase::Air, false, true);
         }
+        state.played_mps = state.played_mps.clamp(v - PLAY_MPS, v + PLAY_MPS);
+        let vp = state.played_mps;
         let band = self.hold_band_mps;
         let mut ruptured = false;
         if let Some(layer) = self.layers.get(state.punctured)
@@ -490,12 +508,12 @@ impl PhaseModel {
             let Some(above) = &self.above else {
                 return out(0.0, Phase::Air, false, true);
             };
-            if v > band {
-                let (f, inside) = above.eval(d, v);
+            if vp > band {
+                let (f, inside) = above.eval(d, v.max(band));
                 return out(f, Phase::Air, false, inside);
             }
             let (f_hi, _) = above.eval(d, band);
-            let w = ((v + REVERSAL_MPS) / (band + REVERSAL_MPS)).clamp(0.0, 1.0);
+            let w = ((vp + REVERSAL_MPS) / (band + REVERSAL_MPS)).clamp(0.0, 1.0);
             return out(w * f_hi, Phase::Air, false, true);
         }
         // Shaft friction reverses over a band, not at a point: between the hold band on the
@@ -503,26 +521,27 @@ impl PhaseModel {
         // linearly from one direction's law to the other's. A held needle keeps most of the
         // force it had (static friction holds it), a tool trembling at rest does not flip
         // ±friction every tick (it chattered), and the force's slope in velocity stays one an
-        // admittance loop renders stably.
+        // admittance loop renders stably. The band reads the velocity through a play
+        // ([`PLAY_MPS`]); each direction's law reads the velocity itself.
         let reversal = REVERSAL_MPS.max(2.0 * band);
         let (lo, hi) = if state.backward {
             (-band, reversal)
         } else {
             (-reversal, band)
         };
-        if v > hi || ruptured {
+        if vp > hi || ruptured {
             state.backward = false;
-            let (f, phase, inside) = self.forward(state, d, v, true);
+            let (f, phase, inside) = self.forward(state, d, v.max(hi), true);
             return out(f, phase, ruptured, inside);
         }
-        if v < lo {
+        if vp < lo {
             state.backward = true;
-            let (f, inside) = self.withdrawal.eval(d, v);
+            let (f, inside) = self.withdrawal.eval(d, v.min(lo));
             return out(f, Phase::Withdrawal, false, inside);
         }
         let (f_lo, _) = self.withdrawal.eval(d, lo);
         let (f_hi, _, _) = self.forward(state, d, hi, false);
-        let w = (v - lo) / (hi - lo);
+        let w = (vp - lo) / (hi - lo);
         out(f_lo + w * (f_hi - f_lo), Phase::Held, false, true)
     }
 
@@ -530,9 +549,12 @@ impl PhaseModel {
     /// (which then counts as cut when `advance`), else friction along the channel (withdrawal
     /// friction mirrored: friction is odd in velocity).
     fn forward(&self, state: &mut PhaseState, d: f64, v: f64, advance: bool) -> (f64, Phase, bool) {
-        if d > state.deepest_m {
+        // The tip bears on the uncut tissue while it stays within [`TIP_CONTACT_M`] of the
+        // deepest point cut, so a hand creeping by micrometres at the cut front does not flip
+        // between cutting and channel friction every tick (it chattered by 0.05 N in a hold).
+        if d > state.deepest_m - TIP_CONTACT_M {
             if advance {
-                state.deepest_m = d;
+                state.deepest_m = state.deepest_m.max(d);
             }
             let (f, inside) = self.cutting(state.punctured, d, v);
             return (f, Phase::Cutting(state.punctured - 1), inside);

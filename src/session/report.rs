@@ -337,9 +337,11 @@ impl SessionReport {
                 };
                 let _ = writeln!(
                     t,
-                    "    pops the liver does not have: {}; its pops not rendered: {}",
+                    "    pops the liver does not have: {}; its pops not rendered: {}; held {} ticks, rendered force within {:.4} N of its 51-tick mean",
                     list(&a.false_pops),
-                    list(&a.missed_pops)
+                    list(&a.missed_pops),
+                    a.held_ticks,
+                    a.held_ripple_n
                 );
             }
             if let Some(d) = s.max_depth_m {

@@ -54,7 +54,18 @@ pub struct TruthAlong {
     pub false_pops: Vec<Pop>,
     /// Pops of the tissue the rendered force does not have.
     pub missed_pops: Vec<Pop>,
+    /// Ticks held in the tissue (|v| below [`HELD_MPS`]).
+    pub held_ticks: usize,
+    /// Chatter of the rendered force while held: the largest distance from its own mean over
+    /// the [`RIPPLE_WINDOW`] ticks around, where all of them are held, N.
+    pub held_ripple_n: f64,
 }
+
+/// Slowest speed at which the tool counts as moving, m/s: a hand holding still under
+/// admittance control creeps by less, and the phase model reads no less through its play.
+pub const HELD_MPS: f64 = identify::PLAY_MPS;
+/// Ticks the held force's chatter is measured against the mean of (centred).
+pub const RIPPLE_WINDOW: usize = 51;
 
 /// The simulated liver's force at every sample, the tool at `surface_z_m − z`.
 pub fn tissue_force(samples: &[HapticSample], surface_z_m: f64) -> Vec<f64> {
@@ -160,7 +171,29 @@ pub fn along(samples: &[HapticSample], surface_z_m: f64) -> TruthAlong {
             .copied()
             .collect()
     };
+    let held: Vec<usize> = (0..samples.len())
+        .filter(|&i| depth[i] > 0.0 && velocity[i].abs() < HELD_MPS)
+        .collect();
+    let half = RIPPLE_WINDOW / 2;
+    // Held for the whole window: a rebound that passes through rest is no hold.
+    let held_around = |i: usize| {
+        i >= half
+            && i + half < rendered.len()
+            && (i - half..=i + half).all(|k| depth[k] > 0.0 && velocity[k].abs() < HELD_MPS)
+    };
+    let held_ripple_n = held
+        .iter()
+        .filter(|&&i| held_around(i))
+        .map(|&i| {
+            // The centred mean is also the window's straight line at its centre: a steady
+            // ramp (a reversal) is no chatter.
+            let mean = rendered[i - half..=i + half].iter().sum::<f64>() / RIPPLE_WINDOW as f64;
+            (rendered[i] - mean).abs()
+        })
+        .fold(0.0, f64::max);
     TruthAlong {
+        held_ticks: held.len(),
+        held_ripple_n,
         ticks,
         rmse_n: if ticks > 0 {
             (sum / ticks as f64).sqrt()
