@@ -57,19 +57,15 @@ pub const MAX_LAYERS: usize = 8;
 /// 0.8 kg virtual tool at 1 kHz renders stably.
 pub const REVERSAL_MPS: f64 = 0.002;
 
-/// Half-width of the play the velocity is read through where shaft friction reverses, m/s.
-/// A tool held by a hand under admittance control creeps and trembles by a few tenths of a
-/// millimetre per second at 1 kHz (up to ±0.3 mm/s as the default scene's hold settles); read
+/// Speed below which the tool reads as at rest where shaft friction reverses, m/s. A tool
+/// held by a hand under admittance control creeps and trembles by a few tenths of a
+/// millimetre per second at 1 kHz (up to ±0.4 mm/s as the default scene's hold settles); read
 /// directly, that jitter crossed the reversal band's slope (about 350 N·s/m) as ±0.03 N of
-/// chatter during a hold. Through the play, the velocity the band reads moves only when the
-/// tool's has moved by more than 0.5 mm/s the other way, so a held needle's force stands still
-/// and a real reversal still passes the whole band (continuously: the play only delays it by
-/// 0.5 mm/s).
-pub const PLAY_MPS: f64 = 5e-4;
-
-/// How far behind the deepest point cut the tip still bears on uncut tissue, m: a tenth of a
-/// millimetre, about a needle tip's bevel, and far more than a held hand creeps.
-pub const TIP_CONTACT_M: f64 = 1e-4;
+/// chatter during a hold. The band reads `sgn(v)·max(|v| − HOLD_JITTER_MPS, 0)`: continuous,
+/// at rest within the jitter, and a real reversal still passes the whole band, 0.5 mm/s later.
+/// Forward friction (with cutting at the cut front) likewise needs the tool to pass the band's
+/// forward end by this much to start, and holds until it (nearly) stops.
+pub const HOLD_JITTER_MPS: f64 = 5e-4;
 
 /// How far past a phase's trained range, as a fraction of its width or of its largest
 /// magnitude (whichever is larger: a protocol at one speed has a range of almost no width), an
@@ -405,8 +401,9 @@ pub struct PhaseState {
     deepest_m: f64,
     /// The last step it moved, it moved out.
     backward: bool,
-    /// The velocity read through a play of ±[`PLAY_MPS`] (see [`PhaseModel::step`]).
-    played_mps: f64,
+    /// Advancing for real: from past the band's forward end plus [`HOLD_JITTER_MPS`] until
+    /// the tool (nearly) stops.
+    advancing: bool,
 }
 
 impl PhaseState {
@@ -473,9 +470,19 @@ impl PhaseModel {
             *state = PhaseState::default();
             return out(0.0, Phase::Air, false, true);
         }
-        state.played_mps = state.played_mps.clamp(v - PLAY_MPS, v + PLAY_MPS);
-        let vp = state.played_mps;
+        // What the reversal band reads: rest within the hold's jitter.
+        let vp = v.signum() * (v.abs() - HOLD_JITTER_MPS).max(0.0);
         let band = self.hold_band_mps;
+        // Hysteresis, not a threshold: a tool that slows into a hold stops cutting as it
+        // stops (as tissue does), and trembling at rest does not start it again.
+        let advancing = |state: &mut PhaseState, hi: f64| {
+            if v > hi + HOLD_JITTER_MPS {
+                state.advancing = true;
+            } else if v < 0.5 * band {
+                state.advancing = false;
+            }
+            state.advancing
+        };
         let mut ruptured = false;
         if let Some(layer) = self.layers.get(state.punctured)
             && d > layer.contact_depth_m
@@ -508,7 +515,7 @@ impl PhaseModel {
             let Some(above) = &self.above else {
                 return out(0.0, Phase::Air, false, true);
             };
-            if vp > band {
+            if advancing(state, band) {
                 let (f, inside) = above.eval(d, v.max(band));
                 return out(f, Phase::Air, false, inside);
             }
@@ -521,15 +528,21 @@ impl PhaseModel {
         // linearly from one direction's law to the other's. A held needle keeps most of the
         // force it had (static friction holds it), a tool trembling at rest does not flip
         // ±friction every tick (it chattered), and the force's slope in velocity stays one an
-        // admittance loop renders stably. The band reads the velocity through a play
-        // ([`PLAY_MPS`]); each direction's law reads the velocity itself.
+        // admittance loop renders stably. The band reads the velocity less the hold's jitter
+        // ([`HOLD_JITTER_MPS`]); each direction's law reads the velocity itself. Inside the
+        // band the forward side is the channel's friction: a tip at rest cuts nothing, and a
+        // hand creeping by micrometres at the cut front no longer flips between cutting and
+        // channel friction (0.05 N) every few ticks.
         let reversal = REVERSAL_MPS.max(2.0 * band);
         let (lo, hi) = if state.backward {
             (-band, reversal)
         } else {
             (-reversal, band)
         };
-        if vp > hi || ruptured {
+        if ruptured {
+            state.advancing = true;
+        }
+        if advancing(state, hi) {
             state.backward = false;
             let (f, phase, inside) = self.forward(state, d, v.max(hi), true);
             return out(f, phase, ruptured, inside);
@@ -540,8 +553,8 @@ impl PhaseModel {
             return out(f, Phase::Withdrawal, false, inside);
         }
         let (f_lo, _) = self.withdrawal.eval(d, lo);
-        let (f_hi, _, _) = self.forward(state, d, hi, false);
-        let w = (vp - lo) / (hi - lo);
+        let f_hi = -self.withdrawal.eval(d, -hi).0;
+        let w = ((vp - lo) / (hi - lo)).min(1.0);
         out(f_lo + w * (f_hi - f_lo), Phase::Held, false, true)
     }
 
@@ -549,12 +562,9 @@ impl PhaseModel {
     /// (which then counts as cut when `advance`), else friction along the channel (withdrawal
     /// friction mirrored: friction is odd in velocity).
     fn forward(&self, state: &mut PhaseState, d: f64, v: f64, advance: bool) -> (f64, Phase, bool) {
-        // The tip bears on the uncut tissue while it stays within [`TIP_CONTACT_M`] of the
-        // deepest point cut, so a hand creeping by micrometres at the cut front does not flip
-        // between cutting and channel friction every tick (it chattered by 0.05 N in a hold).
-        if d > state.deepest_m - TIP_CONTACT_M {
+        if d > state.deepest_m {
             if advance {
-                state.deepest_m = state.deepest_m.max(d);
+                state.deepest_m = d;
             }
             let (f, inside) = self.cutting(state.punctured, d, v);
             return (f, Phase::Cutting(state.punctured - 1), inside);

@@ -62,8 +62,8 @@ pub struct TruthAlong {
 }
 
 /// Slowest speed at which the tool counts as moving, m/s: a hand holding still under
-/// admittance control creeps by less, and the phase model reads no less through its play.
-pub const HELD_MPS: f64 = identify::PLAY_MPS;
+/// admittance control creeps by less, and the phase model reads it as rest.
+pub const HELD_MPS: f64 = identify::HOLD_JITTER_MPS;
 /// Ticks the held force's chatter is measured against the mean of (centred).
 pub const RIPPLE_WINDOW: usize = 51;
 
