@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of the anytime recognizer's change test, from one run.
+"""docs/recognition-anytime.md's table of the anytime recognizer's change test, from one run.
 
 Generates Nakano's surfaces (`palpus gen --only nakano`) and the two-patch strokes from each
 surface onto the next (`palpus gen --two-patch`), trains an SVM over 0.25 s windows on run 0,

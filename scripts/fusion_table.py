@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of anytime decisions fused over friction and vibration, from one run.
+"""docs/recognition-fusion.md's table of anytime decisions fused over friction and vibration, from one run.
 
 Generates the multi-stream sliding study (`palpus gen --only multistream`: 20 surfaces x 10
 trials, force, position and velocity at ~88 Hz and a 2.2 kHz vibration channel), imports every

@@ -83,7 +83,8 @@ def main():
             command += ["--test", str(test)]
         out = subprocess.run(command, capture_output=True, text=True)
         if out.returncode != 0:
-            reason = out.stderr.strip().splitlines()[-1].split(": ", 1)[-1]
+            # The last line names the capture, then says why.
+            reason = out.stderr.strip().splitlines()[-1].split(".csv: ", 1)[-1]
             print(f"| {record} | refused | | | | | | | {reason} |")
             continue
         r = json.loads(out.stdout)
@@ -93,7 +94,13 @@ def main():
             law = "— (" + next(b["reason"] for b in r["baselines_not_fitted"]
                                if b["baseline"] == "coulomb_viscous_stiffness").split(":")[-1].strip() + ")"
         outliers = sum(len(s["rows"]) for s in r.get("outliers", []))
-        notes = "; ".join(w.split(":")[0] if "outlier" in w else w.split(":")[0] for w in r["warnings"])
+        notes = []
+        if any("withdrawal law not measured" in w for w in r["warnings"]):
+            notes.append("withdrawal not measured")
+        one_speed = sum("measured at one speed" in w for w in r["warnings"])
+        if one_speed:
+            notes.append(f"{one_speed} of {r['n_layers']} thresholds at one speed")
+        notes = "; ".join(notes)
         print(f"| {record} ({evaluated}) | {aise(m['svr'])} | {aise(m.get('smooth_svr'))} | {law} "
               f"| {aise(m['rbf_network'])} | {aise(m['mean'])} | {found(r, ruptures)} of {len(ruptures)} "
               f"| {outliers} | {notes} |")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of the phase-aware needle model against its baselines, from one run.
+"""docs/needle.md's table of the phase-aware needle model against its baselines, from one run.
 
 Generates the held-out captures (a second tissue, strokes of varying speed) with `palpus gen`,
 identifies `--model needle-phases` on each training capture with `--json`, and prints one

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of anytime recognition when the tool rests on the surface mid-stroke, from one run.
+"""docs/recognition-anytime.md's table of anytime recognition when the tool rests on the surface mid-stroke, from one run.
 
 Generates Nakano's surfaces (`palpus gen --only nakano`), trains the two SVMs of
 `scripts/speed_table.py` on run 0 (0.25 s windows decided at their last sample: one over windows

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of the posterior's weight fitted on held-out recordings against hop / window.
+"""docs/recognition-anytime.md's table of the posterior's weight fitted on held-out recordings against hop / window.
 
 Two sets, each recognizer trained twice on the same captures: as `recognize train` does by
 default (the weight fitted on the recordings held out of training) and with `--no-weight-fit`

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of how soon `palpus run scenes/surfaces_nakano.toml` names each surface.
+"""docs/recognition-anytime.md's table of how soon `palpus run scenes/surfaces_nakano.toml` names each surface.
 
 Captures the scene's training tracks as its header says, trains its SVM four ways on them (the
 header's command; the same without the three options that read windows over travel; each with

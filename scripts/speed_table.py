@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of anytime recognition at other rubbing speeds, from one run.
+"""docs/recognition-anytime.md's table of anytime recognition at other rubbing speeds, from one run.
 
 Generates Nakano's surfaces rubbed at 2, 5 and 20 mm/s (`palpus gen --only nakano`,
 `--rub-speed-mps`) and the two-patch strokes at each speed (`--two-patch`), trains three SVMs over

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of vibration recognition at sliding speeds it was not trained at, from one run.
+"""docs/recognition-fusion.md's table of vibration recognition at sliding speeds it was not trained at, from one run.
 
 Generates the multi-stream sliding study (`palpus gen --only multistream --slide-speed-mps V`:
 20 surfaces x 10 trials, a 2.2 kHz vibration channel) at the study's 25 mm/s and at each test

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's table of what one window over a few millimetres of stroke can tell, per surface.
+"""docs/recognition-anytime.md's table of what one window over a few millimetres of stroke can tell, per surface.
 
 The scene `surfaces_nakano`'s SVM (its header's options) is trained with windows spanning 1.25,
 2.5 and 5 mm of travel (`--window-s` 0.25, 0.5 and 1 at 5 mm/s), over Nakano's features and over
