@@ -48,7 +48,7 @@ pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
 pub use phase_parts::PartComparison;
 pub use phases::{
     Domain, HOLD_JITTER_MPS, LayerModel, Loading, MAX_LAYERS, PartSvr, Phase, PhaseExit, PhaseModel,
-    PhaseState, PhaseStep, REVERSAL_MPS, Rupture, ShaftLaw, Threshold, WithdrawalSource,
+    PhaseState, PhaseStep, REVERSAL_MPS, Rupture, ShaftLaw, TIP_CONTACT_M, Threshold, WithdrawalSource,
 };
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,

@@ -59,13 +59,16 @@ pub const REVERSAL_MPS: f64 = 0.002;
 
 /// Speed below which the tool reads as at rest where shaft friction reverses, m/s. A tool
 /// held by a hand under admittance control creeps and trembles by a few tenths of a
-/// millimetre per second at 1 kHz (up to ±0.4 mm/s as the default scene's hold settles); read
-/// directly, that jitter crossed the reversal band's slope (about 350 N·s/m) as ±0.03 N of
-/// chatter during a hold. The band reads `sgn(v)·max(|v| − HOLD_JITTER_MPS, 0)`: continuous,
-/// at rest within the jitter, and a real reversal still passes the whole band, 0.5 mm/s later.
-/// Forward friction (with cutting at the cut front) likewise needs the tool to pass the band's
-/// forward end by this much to start, and holds until it (nearly) stops.
+/// millimetre per second at 1 kHz; read directly, that jitter crossed the reversal band's
+/// slope (about 350 N·s/m) and made the held force chatter. The band reads
+/// `sgn(v)·max(|v| − HOLD_JITTER_MPS, 0)`, and it is flat on the side the tool last moved to
+/// (see [`PhaseModel::step`]): continuous, still within the jitter, and a real reversal still
+/// passes the whole band, 0.5 mm/s later.
 pub const HOLD_JITTER_MPS: f64 = 5e-4;
+
+/// How far behind the deepest point cut the tip still bears on uncut tissue, m: a tenth of a
+/// millimetre, about a needle tip's bevel, and far more than a held hand creeps.
+pub const TIP_CONTACT_M: f64 = 1e-4;
 
 /// How far past a phase's trained range, as a fraction of its width or of its largest
 /// magnitude (whichever is larger: a protocol at one speed has a range of almost no width), an
@@ -401,9 +404,6 @@ pub struct PhaseState {
     deepest_m: f64,
     /// The last step it moved, it moved out.
     backward: bool,
-    /// Advancing for real: from past the band's forward end plus [`HOLD_JITTER_MPS`] until
-    /// the tool (nearly) stops.
-    advancing: bool,
 }
 
 impl PhaseState {
@@ -473,16 +473,6 @@ impl PhaseModel {
         // What the reversal band reads: rest within the hold's jitter.
         let vp = v.signum() * (v.abs() - HOLD_JITTER_MPS).max(0.0);
         let band = self.hold_band_mps;
-        // Hysteresis, not a threshold: a tool that slows into a hold stops cutting as it
-        // stops (as tissue does), and trembling at rest does not start it again.
-        let advancing = |state: &mut PhaseState, hi: f64| {
-            if v > hi + HOLD_JITTER_MPS {
-                state.advancing = true;
-            } else if v < 0.5 * band {
-                state.advancing = false;
-            }
-            state.advancing
-        };
         let mut ruptured = false;
         if let Some(layer) = self.layers.get(state.punctured)
             && d > layer.contact_depth_m
@@ -515,7 +505,7 @@ impl PhaseModel {
             let Some(above) = &self.above else {
                 return out(0.0, Phase::Air, false, true);
             };
-            if advancing(state, band) {
+            if vp > band {
                 let (f, inside) = above.eval(d, v.max(band));
                 return out(f, Phase::Air, false, inside);
             }
@@ -523,26 +513,21 @@ impl PhaseModel {
             let w = ((vp + REVERSAL_MPS) / (band + REVERSAL_MPS)).clamp(0.0, 1.0);
             return out(w * f_hi, Phase::Air, false, true);
         }
-        // Shaft friction reverses over a band, not at a point: between the hold band on the
-        // side the tool last moved to and [`REVERSAL_MPS`] on the other side, the force runs
-        // linearly from one direction's law to the other's. A held needle keeps most of the
+        // Shaft friction reverses over a band, not at a point: between rest and
+        // [`REVERSAL_MPS`] on the side the tool did not last move to, the force runs linearly
+        // from one direction's law to the other's; from rest to the hold band on the side it
+        // last moved to, it keeps that side's law. A held needle keeps most of the
         // force it had (static friction holds it), a tool trembling at rest does not flip
         // ±friction every tick (it chattered), and the force's slope in velocity stays one an
         // admittance loop renders stably. The band reads the velocity less the hold's jitter
-        // ([`HOLD_JITTER_MPS`]); each direction's law reads the velocity itself. Inside the
-        // band the forward side is the channel's friction: a tip at rest cuts nothing, and a
-        // hand creeping by micrometres at the cut front no longer flips between cutting and
-        // channel friction (0.05 N) every few ticks.
+        // ([`HOLD_JITTER_MPS`]); each direction's law reads the velocity itself.
         let reversal = REVERSAL_MPS.max(2.0 * band);
         let (lo, hi) = if state.backward {
             (-band, reversal)
         } else {
             (-reversal, band)
         };
-        if ruptured {
-            state.advancing = true;
-        }
-        if advancing(state, hi) {
+        if vp > hi || ruptured {
             state.backward = false;
             let (f, phase, inside) = self.forward(state, d, v.max(hi), true);
             return out(f, phase, ruptured, inside);
@@ -553,8 +538,14 @@ impl PhaseModel {
             return out(f, Phase::Withdrawal, false, inside);
         }
         let (f_lo, _) = self.withdrawal.eval(d, lo);
-        let f_hi = -self.withdrawal.eval(d, -hi).0;
-        let w = ((vp - lo) / (hi - lo)).min(1.0);
+        let (f_hi, _, _) = self.forward(state, d, hi, false);
+        // Flat on the side the tool last moved to: at rest and trembling within the jitter
+        // it keeps that side's friction; the slope lies between rest and the other side.
+        let w = if state.backward {
+            (vp / hi).clamp(0.0, 1.0)
+        } else {
+            ((vp - lo) / -lo).clamp(0.0, 1.0)
+        };
         out(f_lo + w * (f_hi - f_lo), Phase::Held, false, true)
     }
 
@@ -562,9 +553,12 @@ impl PhaseModel {
     /// (which then counts as cut when `advance`), else friction along the channel (withdrawal
     /// friction mirrored: friction is odd in velocity).
     fn forward(&self, state: &mut PhaseState, d: f64, v: f64, advance: bool) -> (f64, Phase, bool) {
-        if d > state.deepest_m {
+        // The tip bears on the uncut tissue while it stays within [`TIP_CONTACT_M`] of the
+        // deepest point cut, so a hand creeping by micrometres at the cut front does not flip
+        // between cutting and channel friction every tick (it chattered by 0.05 N in a hold).
+        if d > state.deepest_m - TIP_CONTACT_M {
             if advance {
-                state.deepest_m = d;
+                state.deepest_m = state.deepest_m.max(d);
             }
             let (f, inside) = self.cutting(state.punctured, d, v);
             return (f, Phase::Cutting(state.punctured - 1), inside);

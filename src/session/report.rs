@@ -337,7 +337,7 @@ impl SessionReport {
                 };
                 let _ = writeln!(
                     t,
-                    "    pops the liver does not have: {}; its pops not rendered: {}; held {} ticks, rendered force within {:.4} N of its 51-tick mean",
+                    "    pops the liver does not have: {}; its pops not rendered: {}; held {} ticks, the rendered force went back and forth by at most {:.4} N over 0.2 s",
                     list(&a.false_pops),
                     list(&a.missed_pops),
                     a.held_ticks,

@@ -7,8 +7,9 @@
 //! recorded from) is stepped at every tick's depth and velocity of the virtual tool, from a
 //! fresh site, exactly as the simulated rig stepped it when it recorded; its force is then the
 //! force the tissue would have given the trainee. A drop is a fall of more than [`POP_N`]
-//! within [`POP_TRAVEL_M`] of advancing travel (the detector's travel, with no loading asked
-//! for: a false pop need not follow one); a drop of one series with none of the other within
+//! within [`POP_TRAVEL_M`] of travel while the needle is not withdrawn (the detector's travel,
+//! with no loading asked for: a false pop need not follow one; a needle slowing to a stop
+//! counts, since tissue stops cutting then); a drop of one series with none of the other within
 //! [`POP_MATCH_M`] is a false pop (rendered only) or a missed one (tissue only).
 
 use haptics::HapticSample;
@@ -23,8 +24,9 @@ pub const POP_N: f64 = 0.1;
 pub const POP_TRAVEL_M: f64 = 1e-3;
 /// A rendered and a tissue pop this close in depth are the same one, m.
 pub const POP_MATCH_M: f64 = 1e-3;
-/// Slowest advance, m/s (the puncture detector's).
-const ADVANCING_MPS: f64 = 2e-4;
+/// Fastest withdrawal at which a fall still counts, m/s: a drop as the needle slows to a stop
+/// is the tissue's too (cutting stops), at whatever speed each of them lets go of it.
+const NOT_WITHDRAWING_MPS: f64 = -2e-4;
 
 /// One fall of the force while advancing.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -54,18 +56,22 @@ pub struct TruthAlong {
     pub false_pops: Vec<Pop>,
     /// Pops of the tissue the rendered force does not have.
     pub missed_pops: Vec<Pop>,
-    /// Ticks held in the tissue (|v| below [`HELD_MPS`]).
+    /// Ticks held in the tissue: the tool within [`HELD_SPAN_M`] and slower than
+    /// [`identify::HOLD_JITTER_MPS`] over the [`RIPPLE_WINDOW`] ticks around.
     pub held_ticks: usize,
-    /// Chatter of the rendered force while held: the largest distance from its own mean over
-    /// the [`RIPPLE_WINDOW`] ticks around, where all of them are held, N.
+    /// Chatter of the rendered force while held: over the [`RIPPLE_WINDOW`] ticks around a
+    /// held tick, how far the force went back and forth (half its total variation less its net
+    /// change, so a steady ramp, a reversal's, counts nothing), the largest, N.
     pub held_ripple_n: f64,
 }
 
-/// Slowest speed at which the tool counts as moving, m/s: a hand holding still under
-/// admittance control creeps by less, and the phase model reads it as rest.
-pub const HELD_MPS: f64 = identify::HOLD_JITTER_MPS;
-/// Ticks the held force's chatter is measured against the mean of (centred).
-pub const RIPPLE_WINDOW: usize = 51;
+/// Most depth the tool may cover over [`RIPPLE_WINDOW`] ticks and count as held, m: a hand
+/// holding still creeps and trembles by less, a stroke at 1 mm/s covers twice that, and a
+/// rebound that turns in place lasts less than the window. Depth, not speed: an oscillation of
+/// the tool in place is a hold, at whatever speed it trembles.
+pub const HELD_SPAN_M: f64 = 0.1e-3;
+/// Ticks (centred) over which a held force's chatter is measured: 0.2 s at 1 kHz.
+pub const RIPPLE_WINDOW: usize = 201;
 
 /// The simulated liver's force at every sample, the tool at `surface_z_m − z`.
 pub fn tissue_force(samples: &[HapticSample], surface_z_m: f64) -> Vec<f64> {
@@ -89,7 +95,7 @@ pub fn tissue_force(samples: &[HapticSample], surface_z_m: f64) -> Vec<f64> {
 
 /// Every fall of `force_n` by more than [`POP_N`] within [`POP_TRAVEL_M`] of advancing travel.
 fn pops(time_s: &[f64], depth_m: &[f64], velocity_mps: &[f64], force_n: &[f64]) -> Vec<Pop> {
-    let advancing = |i: usize| velocity_mps[i] > ADVANCING_MPS && depth_m[i] > 0.0;
+    let advancing = |i: usize| velocity_mps[i] > NOT_WITHDRAWING_MPS && depth_m[i] > 0.0;
     let mut out = Vec::new();
     // The current advance's samples within the travel window behind the sample, their forces
     // decreasing: the front is the window's highest.
@@ -171,24 +177,29 @@ pub fn along(samples: &[HapticSample], surface_z_m: f64) -> TruthAlong {
             .copied()
             .collect()
     };
-    let held: Vec<usize> = (0..samples.len())
-        .filter(|&i| depth[i] > 0.0 && velocity[i].abs() < HELD_MPS)
-        .collect();
     let half = RIPPLE_WINDOW / 2;
-    // Held for the whole window: a rebound that passes through rest is no hold.
-    let held_around = |i: usize| {
-        i >= half
-            && i + half < rendered.len()
-            && (i - half..=i + half).all(|k| depth[k] > 0.0 && velocity[k].abs() < HELD_MPS)
-    };
+    let held: Vec<usize> = (half..samples.len().saturating_sub(half))
+        .filter(|&i| {
+            let window = &depth[i - half..=i + half];
+            let (lo, hi) = window
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
+            // At rest by the model's own reading too: a reversal starting is no hold.
+            lo > 0.0
+                && hi - lo <= HELD_SPAN_M
+                && velocity[i - half..=i + half]
+                    .iter()
+                    .all(|v| v.abs() <= identify::HOLD_JITTER_MPS)
+        })
+        .collect();
     let held_ripple_n = held
         .iter()
-        .filter(|&&i| held_around(i))
         .map(|&i| {
-            // The centred mean is also the window's straight line at its centre: a steady
-            // ramp (a reversal) is no chatter.
-            let mean = rendered[i - half..=i + half].iter().sum::<f64>() / RIPPLE_WINDOW as f64;
-            (rendered[i] - mean).abs()
+            let window = &rendered[i - half..=i + half];
+            let travel: f64 = window.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
+            0.5 * (travel - (window[window.len() - 1] - window[0]).abs())
         })
         .fold(0.0, f64::max);
     TruthAlong {
