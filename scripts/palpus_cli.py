@@ -62,7 +62,7 @@ def with_height_spectrum(options):
 
 def fixed_time(options):
     """The scene's training options without the three that read windows over travel (as
-    README's fixed-time column of the scene's times)."""
+    docs/recognition-anytime.md's fixed-time column of the scene's times)."""
     out, skip = [], 0
     for o in options:
         if skip:

@@ -250,8 +250,9 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
         .collect();
     assert_eq!(fusion_train.len(), 60);
     let fusion_models = parallel_map(&["nakano", "vibration"], |features| {
-        // `--c 1`: what the C search picks for both (and the README's table's), given to keep
-        // the test short; the accuracy the fusion weighs by is cross-validated all the same.
+        // `--c 1`: what the C search picks for both (and docs/recognition-fusion.md's table's),
+        // given to keep the test short; the accuracy the fusion weighs by is cross-validated
+        // all the same.
         let extra = ["--window-s", "0.25", "--mirrored-end", "--c", "1"];
         train_svm(
             dir.path(),

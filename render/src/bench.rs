@@ -176,7 +176,7 @@ impl BenchTable {
         s
     }
 
-    /// The same table in Markdown, as README shows it.
+    /// The same table in Markdown, as docs/rendering.md shows it.
     pub fn to_markdown(&self) -> String {
         let names: Vec<&str> = COLUMNS.iter().map(|(name, _)| *name).collect();
         let mut s = format!("| {} |\n|{}\n", names.join(" | "), "---|".repeat(COLUMNS.len()));

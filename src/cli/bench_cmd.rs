@@ -37,7 +37,7 @@ struct RenderArgs {
     /// Frames timed per configuration.
     #[arg(long, default_value_t = 30)]
     frames: u32,
-    /// Print the table as Markdown (README's table).
+    /// Print the table as Markdown (docs/rendering.md's table).
     #[arg(long)]
     markdown: bool,
 }
