@@ -12,7 +12,7 @@ use identify::{
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::identify_cmd::{ModelArg, fit_set};
+use super::model_arg::{ModelArg, fit_set};
 use crate::trade::{HeldOut, TradeRow, TradeTable, pareto_front};
 
 /// Measure the speed/accuracy trade of a model's fit.

@@ -6,11 +6,9 @@ use anyhow::Context;
 use capture::CaptureKind;
 use capture::import::{
     ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, SlowColumns,
-    TimeFromPosition, Unroll, import_csv, import_streams,
+    TimeFromPosition, Unroll, import_streams,
 };
-use capture::sha256_hex;
 use clap::Args;
-use recognize::LabelledCapture;
 
 /// Import a CSV log recorded with another tool as a capture, or join several logs recorded
 /// on separate clocks into one.
@@ -168,7 +166,7 @@ pub(crate) struct ImportArgs {
     device: String,
     /// Extra metadata, repeatable: `--meta surface=sandpaper_400 --meta behaviour=scratch`
     /// (the recognizers read the class from `surface`). No spaces in values.
-    #[arg(long = "meta", value_name = "KEY=VALUE", value_parser = parse_meta)]
+    #[arg(long = "meta", value_name = "KEY=VALUE", value_parser = super::meta_arg::parse_meta)]
     meta: Vec<(String, String)>,
     /// The capture file to write (written atomically: nothing is left on error).
     #[arg(long, value_name = "FILE")]
@@ -199,13 +197,6 @@ fn parse_offset(s: &str) -> Result<(usize, f64), String> {
         .split_once('=')
         .and_then(|(input, seconds)| Some((input.trim().parse().ok()?, seconds.trim().parse().ok()?)));
     parsed.ok_or_else(|| format!("`{s}`: expected N=SECONDS (input number, offset in s), e.g. 2=0.013"))
-}
-
-fn parse_meta(s: &str) -> Result<(String, String), String> {
-    match s.split_once('=') {
-        Some((key, value)) if !key.is_empty() => Ok((key.to_owned(), value.to_owned())),
-        _ => Err(format!("`{s}`: expected KEY=VALUE")),
-    }
 }
 
 pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
@@ -321,68 +312,4 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// `recognize train|eval` reading researchers' logs directly, through the same column map as
-/// `palpus import`.
-#[derive(Debug, Args)]
-pub(crate) struct MappedCaptures {
-    /// Read the captures as CSV logs through this column map (as `palpus import --map`)
-    /// instead of as palpus captures.
-    #[arg(long, value_name = "SPEC")]
-    map: Option<String>,
-    /// With --map: resample the logs to this rate, Hz.
-    #[arg(long, value_name = "HZ", requires = "map")]
-    rate_hz: Option<f64>,
-    /// With --map: the logs' rate, Hz, when they have no time column.
-    #[arg(long, value_name = "HZ", requires = "map")]
-    input_rate_hz: Option<f64>,
-    /// With --map: metadata for every log, repeatable. `{dir}` and `{stem}` in a value stand
-    /// for the log's folder name and file name without extension, so logs laid out as
-    /// `SURFACE/RUN.csv` are labelled by `--meta surface={dir}`.
-    #[arg(long = "meta", value_name = "KEY=VALUE", value_parser = parse_meta, requires = "map")]
-    meta: Vec<(String, String)>,
-}
-
-impl MappedCaptures {
-    /// Reads `paths` as labelled rubbing captures: palpus captures, or logs through the map,
-    /// resampled to `--rate-hz`, else to `default_rate_hz` (a recognizer's own rate) if given.
-    pub(crate) fn read(
-        &self,
-        paths: &[PathBuf],
-        default_rate_hz: Option<f64>,
-    ) -> anyhow::Result<Vec<LabelledCapture>> {
-        let Some(spec) = &self.map else {
-            return paths
-                .iter()
-                .map(|p| LabelledCapture::read(p).with_context(|| format!("reading capture {}", p.display())))
-                .collect();
-        };
-        let map = ColumnMap::parse(spec)?;
-        paths
-            .iter()
-            .map(|p| {
-                let name = |s: Option<&std::ffi::OsStr>| {
-                    s.map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
-                };
-                let (dir, stem) = (name(p.parent().and_then(|d| d.file_name())), name(p.file_stem()));
-                let spec = ImportSpec {
-                    kind: CaptureKind::Rubbing,
-                    map: map.clone(),
-                    rate_hz: self.rate_hz.or(default_rate_hz),
-                    input_rate_hz: self.input_rate_hz,
-                    device: "imported".into(),
-                    metadata: self
-                        .meta
-                        .iter()
-                        .map(|(k, v)| (k.clone(), v.replace("{dir}", &dir).replace("{stem}", &stem)))
-                        .collect(),
-                    ..ImportSpec::new(CaptureKind::Rubbing, map.clone())
-                };
-                let capture = import_csv(p, &spec)?;
-                let bytes = std::fs::read(p).with_context(|| format!("reading {}", p.display()))?;
-                Ok(LabelledCapture::new(capture, p, sha256_hex(&bytes))?)
-            })
-            .collect()
-    }
 }

@@ -78,7 +78,7 @@ struct TrainArgs {
     #[command(flatten)]
     training: Training,
     #[command(flatten)]
-    input: super::import_cmd::MappedCaptures,
+    input: super::mapped_captures::MappedCaptures,
 }
 
 /// Evaluate a recognizer on labelled captures: accuracy, per-class rates, confusion matrix,
@@ -143,7 +143,7 @@ struct EvalArgs {
     #[arg(long, value_name = "MODEL.json", requires = "sequential")]
     fuse: Vec<PathBuf>,
     #[command(flatten)]
-    input: super::import_cmd::MappedCaptures,
+    input: super::mapped_captures::MappedCaptures,
 }
 
 /// Run a paper's protocol: train and evaluate again and again on captures split by recording,
@@ -182,7 +182,7 @@ struct CvArgs {
     #[command(flatten)]
     training: Training,
     #[command(flatten)]
-    input: super::import_cmd::MappedCaptures,
+    input: super::mapped_captures::MappedCaptures,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -251,7 +251,7 @@ fn train(args: &TrainArgs) -> anyhow::Result<()> {
 /// capture's samples at a time however many captures there are, and the results are those of
 /// the whole captures. A bar on stderr counts the captures read (only on a terminal).
 fn read_keeping(
-    input: &super::import_cmd::MappedCaptures,
+    input: &super::mapped_captures::MappedCaptures,
     paths: &[PathBuf],
     default_rate_hz: Option<f64>,
     needs: impl FnMut(&LabelledCapture) -> anyhow::Result<FeatureNeeds>,
