@@ -233,7 +233,7 @@ pub struct ModelSource {
 }
 
 /// The needle's training samples when a scene gives neither `max_samples` nor a budget.
-pub const DEFAULT_MAX_SAMPLES: usize = 350;
+pub const DEFAULT_MAX_SAMPLES: usize = identify::NEEDLE_SAMPLES;
 
 impl ModelSource {
     /// The needle's training size the scene gives, else [`DEFAULT_MAX_SAMPLES`].

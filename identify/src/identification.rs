@@ -83,7 +83,7 @@ impl IdentifyOptions {
             c: None,
             epsilon: None,
             gamma: None,
-            max_samples: 350,
+            max_samples: crate::NEEDLE_SAMPLES,
             max_fit_samples: DEFAULT_MAX_FIT_SAMPLES,
             keep_outliers: false,
         }

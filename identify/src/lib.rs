@@ -43,6 +43,7 @@ pub use model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
     ScaledSvr, SvrHyper,
 };
+pub use needle_identification::{NEEDLE_C, NEEDLE_EPSILON_N, NEEDLE_GAMMA, NEEDLE_SAMPLES};
 pub use outliers::{Outlier, OutlierScreen, force_noise_n};
 pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
 pub use phase_parts::PartComparison;

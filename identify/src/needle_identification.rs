@@ -16,6 +16,17 @@ use capture::kind;
 use capture::{Capture, CaptureKind};
 use svm::{InputScaling, Kernel};
 
+/// Li & Bi's needle SVR (Sec. III-D): the training samples it is fitted on (the paper's 350).
+pub const NEEDLE_SAMPLES: usize = 350;
+/// Its regularisation constant C.
+pub const NEEDLE_C: f64 = 100.0;
+/// Its ε, N.
+pub const NEEDLE_EPSILON_N: f64 = 0.02;
+/// Its RBF γ on inputs scaled to [0, 1]: narrow enough to follow the puncture's fall, which a
+/// wider kernel smears over the neighbouring depths (held-out AISE 1.3e-2 against 3.1e-2 at
+/// γ = 10 on the default capture set).
+pub const NEEDLE_GAMMA: f64 = 30.0;
+
 /// Fewest samples in tissue a needle model is fitted on: a digitized curve has a few hundred,
 /// a truncated log a dozen.
 const MIN_TISSUE_SAMPLES: usize = 30;
@@ -100,13 +111,10 @@ pub(crate) fn needle(
     let (t_all, x_all, y_all) = all;
     let scaling = InputScaling::min_max(&x, 2);
     let xs = scaling.apply(&x);
-    // γ = 30 on inputs scaled to [0, 1]: narrow enough to follow the puncture's fall, which
-    // a wider kernel smears over the neighbouring depths (held-out AISE 1.3e-2 against 3.1e-2
-    // at γ = 10 on the default capture set).
     let (c, epsilon, gamma) = (
-        o.c.unwrap_or(100.0),
-        o.epsilon.unwrap_or(0.02),
-        o.gamma.unwrap_or(30.0),
+        o.c.unwrap_or(NEEDLE_C),
+        o.epsilon.unwrap_or(NEEDLE_EPSILON_N),
+        o.gamma.unwrap_or(NEEDLE_GAMMA),
     );
     let f = svr_with(
         limits,

@@ -17,13 +17,14 @@ use serde::Serialize;
 
 use crate::error::IdentifyError;
 use crate::identification::{SvrProblem, even_indices, svr};
+use crate::needle_identification::{NEEDLE_C, NEEDLE_EPSILON_N, NEEDLE_GAMMA, NEEDLE_SAMPLES};
 use crate::phases::{Loading, PartSvr, Phase, PhaseModel, ShaftLaw, Varies, fit_terms};
 use svm::{InputScaling, Kernel, reduce_support};
 
 /// Fraction of the law's held-out RMS the SVR must beat to replace it: a clear win, not noise.
 const SVR_MUST_BEAT: f64 = 0.9;
-/// Most samples an SVR of one part trains on (the paper's needle SVR trains on 350).
-const MAX_SVR_SAMPLES: usize = 350;
+/// Most samples an SVR of one part trains on: the paper's needle SVR's.
+const MAX_SVR_SAMPLES: usize = NEEDLE_SAMPLES;
 /// Most support vectors of a part's SVR ([`svm::reduce_support`]): the haptic tick evaluates
 /// it in f64, and 32 RBF terms keep that well under a microsecond. The held-out score is the
 /// reduced model's, so the choice is made on what is rendered.
@@ -167,9 +168,9 @@ fn part_svr(samples: &[Sample]) -> Result<PartSvr, IdentifyError> {
     let fit = svr(
         "phase part SVR",
         SvrProblem {
-            c: 100.0,
-            epsilon: 0.02,
-            kernel: Kernel::Rbf { gamma: 30.0 },
+            c: NEEDLE_C,
+            epsilon: NEEDLE_EPSILON_N,
+            kernel: Kernel::Rbf { gamma: NEEDLE_GAMMA },
             x: &xs,
             dim: 2,
             y: &y,

@@ -76,7 +76,7 @@ pub(crate) struct IdentifyArgs {
     #[arg(long, value_name = "FILE")]
     libsvm: Option<PathBuf>,
     /// Needle: at most this many training samples.
-    #[arg(long, default_value_t = 350)]
+    #[arg(long, default_value_t = identify::NEEDLE_SAMPLES)]
     max_samples: usize,
     /// Every model: at most this many training rows, evenly spaced over the capture.
     #[arg(long, value_name = "N", default_value_t = identify::DEFAULT_MAX_FIT_SAMPLES)]
