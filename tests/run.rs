@@ -56,6 +56,24 @@ fn printed_layers(dir: &Path) -> String {
     std::fs::read_to_string(dir.join("summary.txt")).unwrap()
 }
 
+/// The default scene, its paths absolute and without budgets, with `model_source` (a
+/// `capture = …` or `file = …` line) in place of its model's capture.
+fn needle_scene_with(model_source: &str) -> String {
+    let text = std::fs::read_to_string(root().join("scenes/needle_liver.toml")).unwrap();
+    common::without_budgets(&text)
+        .replace("../", &format!("{}/", root().display()))
+        .lines()
+        .map(|l| {
+            if l.starts_with("capture = ") {
+                model_source.to_owned()
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 fn report(dir: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
@@ -235,19 +253,7 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
     assert!(o.status.success(), "{}", text(&o));
 
     // The same scene with the re-identified model file in place of the capture.
-    let scene_text = std::fs::read_to_string(root().join("scenes/needle_liver.toml")).unwrap();
-    let scene_text = common::without_budgets(&scene_text)
-        .replace("../", &format!("{}/", root().display()))
-        .lines()
-        .map(|l| {
-            if l.starts_with("capture = ") {
-                format!("file = {:?}", reidentified.display().to_string())
-            } else {
-                l.to_owned()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join("\n");
+    let scene_text = needle_scene_with(&format!("file = {:?}", reidentified.display().to_string()));
     let scene = dir.path().join("re.toml");
     std::fs::write(&scene, scene_text).unwrap();
     let second = dir.path().join("second");
@@ -293,23 +299,11 @@ fn scenes_on_models_from_real_world_shaped_records_render_every_layer_bounded() 
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
-    let scene_text = std::fs::read_to_string(root().join("scenes/needle_liver.toml")).unwrap();
-    let scene_text = common::without_budgets(&scene_text).replace("../", &format!("{}/", root().display()));
     // One speed with no withdrawal, a digitized curve, layers 2 mm apart, a wall opening into
     // a lumen (assets/captures/needle_corpus).
     for record in ["one_speed", "digitized", "close_layers", "lumen"] {
         let capture = root().join(format!("assets/captures/needle_corpus/{record}_train.csv"));
-        let text = scene_text
-            .lines()
-            .map(|l| {
-                if l.starts_with("capture = ") {
-                    format!("capture = {:?}", capture.display().to_string())
-                } else {
-                    l.to_owned()
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("\n");
+        let text = needle_scene_with(&format!("capture = {:?}", capture.display().to_string()));
         let scene = dir.path().join(format!("{record}.toml"));
         std::fs::write(&scene, text).unwrap();
         let r = run_unpaced(&[scene.to_str().unwrap()], &dir.path().join(record), &cache);
