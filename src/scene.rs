@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use haptics::DeviceSpecs;
+use haptics::device::{DeviceChoice, Registry};
 use serde::Deserialize;
 
 /// The scene `palpus run` starts when none is given.
@@ -54,7 +54,8 @@ pub struct Scene {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DeviceSection {
-    /// `sim` or `omega7` (`palpus run --device` overrides it).
+    /// A device of the registry by name, without an option (`sim`, `omega7`; `palpus run
+    /// --device` overrides it, with an option if it needs one). Its specs bound the scene.
     #[serde(default = "default_device")]
     pub kind: String,
     /// Haptic rate, Hz.
@@ -344,8 +345,6 @@ impl fmt::Display for ModelRole {
     }
 }
 
-/// The device every scene's bounds come from (the simulator is a faithful Omega.7).
-const DEVICE: DeviceSpecs = DeviceSpecs::OMEGA7;
 /// Heaviest virtual tool, kg: far heavier than any instrument held in one hand, which the
 /// trainee could no longer move against the device's 12 N.
 const MAX_VIRTUAL_MASS_KG: f64 = 10.0;
@@ -478,16 +477,26 @@ impl Scene {
         out
     }
 
+    /// The scene's device, from the registry.
+    pub fn device_choice(&self) -> Result<DeviceChoice, SceneError> {
+        let kind = &self.device.kind;
+        let choice = Registry::builtin()
+            .choose(kind)
+            .map_err(|e| self.invalid("device.kind", e.to_string()))?;
+        if choice.option().is_some() {
+            return Err(self.invalid(
+                "device.kind",
+                format!("`{kind}`: a scene names its device; an option goes on the command line (--device)"),
+            ));
+        }
+        Ok(choice)
+    }
+
     fn validate(&self) -> Result<(), SceneError> {
         if let Err(reason) = check_name(&self.name) {
             return Err(self.invalid("name", reason));
         }
-        if !matches!(self.device.kind.as_str(), "sim" | "omega7") {
-            return Err(self.invalid(
-                "device.kind",
-                format!("`{}`: expected sim or omega7", self.device.kind),
-            ));
-        }
+        let device = self.device_choice()?.backend().specs;
         let rate = self.device.rate_hz;
         if !(rate.is_finite() && (100.0..=10_000.0).contains(&rate)) {
             return Err(self.invalid("device.rate_hz", format!("{rate}: expected 100–10000 Hz")));
@@ -503,19 +512,19 @@ impl Scene {
             (
                 "haptics.virtual_damping_nspm",
                 h.virtual_damping_nspm,
-                DEVICE.max_damping_nspm,
+                device.max_damping_nspm,
                 "the Omega.7's largest stable damping",
             ),
             (
                 "haptics.grip_stiffness_npm",
                 h.grip_stiffness_npm,
-                DEVICE.max_stiffness_npm,
+                device.max_stiffness_npm,
                 "the Omega.7's stiffest stable spring",
             ),
             (
                 "haptics.rupture_min_peak_n",
                 h.rupture_min_peak_n,
-                DEVICE.max_force_n,
+                device.max_force_n,
                 "the Omega.7's largest force",
             ),
         ] {
@@ -572,7 +581,7 @@ impl Scene {
             self.in_range(
                 &key("contact_stiffness_npm"),
                 m.contact_stiffness_npm,
-                DEVICE.max_stiffness_npm,
+                device.max_stiffness_npm,
                 "the Omega.7's stiffest stable spring",
             )?;
             // The virtual tool is integrated semi-implicitly (haptics::control::admittance): a
@@ -811,7 +820,7 @@ impl Scene {
                 self.in_range(
                     "task.stroke_m",
                     stroke_m,
-                    2.0 * DEVICE.workspace_radius_m,
+                    2.0 * self.device_choice()?.backend().specs.workspace_radius_m,
                     "the Omega.7's workspace diameter",
                 )?;
                 speed("speed_mps", speed_mps)?;

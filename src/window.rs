@@ -15,9 +15,9 @@ use std::time::Instant;
 use glam::DVec3;
 use haptics::live::{self, LiveView, RecentSamples};
 use haptics::live_recognizer::channel;
-use haptics::sim::hand::LiveHand;
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
+use sim::hand::LiveHand;
 
 use crate::recognizer::SceneRecognizer;
 use crate::scene::Scene;
@@ -276,7 +276,7 @@ impl WindowApp for Session {
         let running = self.worker.as_ref().is_some_and(|w| !w.is_finished());
         overlay.device_status = format!(
             "{} · {} · {}{}",
-            self.options.device_label(),
+            self.options.device.label(),
             object.unwrap_or("-"),
             if running { "running" } else { "stopped" },
             if self.segments.len() > 1 {

@@ -18,8 +18,8 @@ use crate::error::HapticsError;
 use crate::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
 use crate::recorder::{Recorder, RecorderConfig};
 use crate::rt::{HapticSample, LoopConfig, LoopIo, RateStats, RtStatus, StopReason, sched, spawn};
-use crate::sim::hand::{HandImpedance, Waypoints};
-use crate::sim::world::needle::NeedleTissue;
+use sim::hand::{HandImpedance, Waypoints};
+use sim::world::needle::NeedleTissue;
 
 /// What to benchmark.
 #[derive(Debug, Clone, Copy, PartialEq)]

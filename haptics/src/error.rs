@@ -12,6 +12,7 @@ use std::time::Duration;
 use capture::CaptureError;
 use identify::{IdentifyError, ModelKind};
 use recognize::RecognizeError;
+use sim::SimError;
 use svm::SvmError;
 
 /// Why a haptics operation failed: a device, the loop, a recording, a capture protocol, the
@@ -147,24 +148,18 @@ pub enum HapticsError {
         #[source]
         source: std::io::Error,
     },
-    /// A generated capture could not be built or written.
-    #[error("capture {}", path.display())]
-    GeneratedCapture {
-        /// The capture's path, relative to the output folder.
-        path: PathBuf,
-        /// What was wrong (boxed: the path beside it would make every haptics error large).
-        #[source]
-        source: Box<CaptureError>,
-    },
-    /// A setting of a simulated protocol is out of its range.
-    #[error("{name} = {value}: must be {reason}")]
-    Setting {
-        /// The setting.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// What it must be.
-        reason: &'static str,
+    /// The simulated world or one of its protocols refused a setting or could not write.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// No registered device backend has this name, or its option is missing or unwanted.
+    #[error("device `{given}`: {reason} (expected one of: {expected})")]
+    UnknownDevice {
+        /// What was asked for (at most 200 characters of it).
+        given: String,
+        /// What is wrong with it.
+        reason: String,
+        /// The registered devices, comma-separated.
+        expected: String,
     },
     /// No simulated surface has this name.
     #[error("unknown surface `{name}` (expected one of: {expected})")]

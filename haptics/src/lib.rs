@@ -1,7 +1,7 @@
-//! The haptic side of palpus: devices, the 1 kHz loop, control, force laws, the recorder, and
-//! the simulated world they are tested against.
+//! The haptic side of palpus: devices, the 1 kHz loop, control, force laws, the recorder and the
+//! live recognizer. The simulated world they are tested against is the `sim` crate.
 //!
-//! May import `capture` (the data contract), `svm`, `identify` and `recognize`, each through its
+//! May import `capture` (the data contract), `svm`, `identify`, `recognize` and `sim`, each through its
 //! door (what its `lib.rs` re-exports), and no other palpus crate; only the binary imports
 //! haptics. Threads with timing duties (haptic loop, watchdog, recorder) start here.
 //!
@@ -18,7 +18,6 @@
 //! - [`live`]: a window's view of a running loop (triple buffers and a bounded ring);
 //! - [`acquire`]: the protocols `palpus capture` runs through a device;
 //! - [`bench`](mod@bench): the loop benchmark (`palpus bench loop`), the full haptic path wired together;
-//! - [`sim`]: the ground-truth world, the papers' protocols, the simulated hand;
 //! - [`error`]: [`HapticsError`], every failure of the above as one type, wrapping the lower
 //!   crates' errors; the variants the haptic thread can meet carry no heap data.
 
@@ -38,7 +37,6 @@ pub mod live_recognizer;
 pub mod recorder;
 pub mod rt;
 pub mod safety;
-pub mod sim;
 
 pub use device::{
     DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice, InternalForces,

@@ -16,8 +16,8 @@ use haptics::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiSta
 use haptics::rt::{
     self, HapticSample, LoopConfig, LoopIo, LoopShared, Pacing, RateStats, RtRequest, StopReason,
 };
-use haptics::sim::hand::{HandImpedance, Waypoints};
-use haptics::sim::world::needle::{NeedleSite, NeedleTissue};
+use sim::hand::{HandImpedance, Waypoints};
+use sim::world::needle::{NeedleSite, NeedleTissue};
 
 struct Counting;
 

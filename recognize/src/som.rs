@@ -26,7 +26,7 @@
 //!
 //! Both are deviations from a literal reading of Eq. 2.26 (the map, its training and the
 //! inner-product winner are the thesis's); the scaling is learned from the training data only
-//! and applied unchanged to test data. `tests/recognition_nakano.rs` tabulates all three.
+//! and applied unchanged to test data. `tests/it/recognition_nakano.rs` tabulates all three.
 //!
 //! **Labels.** Each node takes the majority label of the training vectors it wins (ties to the
 //! smallest label); a node that wins none takes the label of the nearest labelled node along the

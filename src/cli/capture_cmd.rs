@@ -3,12 +3,13 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
-use clap::{Args, ValueEnum};
-use haptics::acquire::{CaptureOptions, Protocol, run_capture, sim_device};
-use haptics::device::HapticDevice;
-use haptics::device::omega7::Omega7;
+use clap::Args;
+use haptics::acquire::{CaptureOptions, Protocol, run_capture, sim_setup};
+use haptics::device::{DeviceChoice, Motion};
 use haptics::recorder::partial_path;
 use haptics::rt::Pacing;
+
+use super::device_arg::parse_device;
 
 /// Record a capture through a haptic device.
 ///
@@ -22,9 +23,10 @@ use haptics::rt::Pacing;
 /// sample under the tip.
 #[derive(Debug, Args)]
 pub(crate) struct CaptureArgs {
-    /// The device: the simulated Omega.7, or a real one through the Force Dimension SDK.
-    #[arg(long, value_enum)]
-    device: DeviceKind,
+    /// The device: sim (the simulated Omega.7) or omega7[:PATH] (a Force Dimension Omega.7,
+    /// PATH its SDK library, default $PALPUS_DHD_LIBRARY, then libdhd.so).
+    #[arg(long, value_name = "NAME[:OPTION]", value_parser = parse_device)]
+    device: DeviceChoice,
     /// What to capture: needle, hard, soft or rubbing.
     #[arg(long, value_parser = parse_protocol)]
     protocol: Protocol,
@@ -45,20 +47,9 @@ pub(crate) struct CaptureArgs {
     /// clock is the tick count).
     #[arg(long)]
     unpaced: bool,
-    /// Omega.7 only: the SDK library to load (default: $PALPUS_DHD_LIBRARY, then libdhd.so).
-    #[arg(long, value_name = "PATH")]
-    dhd_library: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum DeviceKind {
-    /// The simulated Omega.7.
-    Sim,
-    /// A Force Dimension Omega.7.
-    Omega7,
 }
 
 fn parse_protocol(s: &str) -> Result<Protocol, String> {
@@ -78,15 +69,22 @@ pub(crate) fn run(args: &CaptureArgs) -> anyhow::Result<()> {
     if args.unpaced {
         options.pacing = Pacing::Unpaced;
     }
-    let device: Box<dyn HapticDevice> = match args.device {
-        DeviceKind::Sim => Box::new(sim_device(&options)?),
-        DeviceKind::Omega7 => {
-            if args.unpaced {
-                bail!("--unpaced is for the simulator only: a real device runs in real time");
-            }
-            Box::new(Omega7::open(args.dhd_library.as_deref()).context("opening the Omega.7")?)
-        }
-    };
+    let backend = args.device.backend();
+    if backend.motion == Motion::Recorded {
+        bail!(
+            "`{}` plays recorded motion: a protocol needs a device it can move",
+            backend.name
+        );
+    }
+    if args.unpaced && !backend.simulated {
+        bail!("--unpaced is for the simulator only: a real device runs in real time");
+    }
+    let period_s = 1.0 / options.loop_config.rate_hz;
+    let device = args
+        .device
+        .open(period_s, sim_setup(&options)?, options.protocol.kind())
+        .with_context(|| format!("opening {}", args.device.label()))?
+        .device;
     if !args.quiet && options.pacing != Pacing::Unpaced {
         println!(
             "capturing `{}` on {} in real time into {} ...",

@@ -196,9 +196,9 @@ fn write_similarity(path: &Path, names: &[String], s: &[Vec<f64>]) -> anyhow::Re
 mod tests {
     use super::*;
 
-    use haptics::sim::protocols::sinapov::scratch_capture;
-    use haptics::sim::world::scratch::{Behaviour, household_surfaces};
     use recognize::{CellScale, KnnParams};
+    use sim::protocols::sinapov::scratch_capture;
+    use sim::world::scratch::{Behaviour, household_surfaces};
 
     #[test]
     fn categorizes_knn_confusions_on_generated_scratches() {

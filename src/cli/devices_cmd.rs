@@ -1,24 +1,47 @@
 //! `palpus devices`.
 
-use std::path::PathBuf;
-
 use clap::Args;
 use haptics::device::hid::list_hid_devices;
-use haptics::device::omega7::{DhdLibrary, FORCE_DIMENSION_VENDOR_ID, Omega7, usb_devices};
+use haptics::device::{DeviceChoice, Registry};
 
-/// List input devices: HID devices (foot pedals, clutches) and whether the Omega.7's SDK and
-/// the device itself are found.
+use super::device_arg::parse_device;
+
+/// List the haptic devices palpus can open and whether each is found, and the HID input
+/// devices (foot pedals, clutches).
 ///
-/// The Omega.7 is raw USB, not HID: it is looked for on the USB bus (vendor 0x1451) and
-/// through the Force Dimension SDK (libdhd). Finding nothing is not an error.
+/// Every device of the registry is looked for without being opened: the Omega.7 on the USB bus
+/// (vendor 0x1451; it is raw USB, not HID) and through the Force Dimension SDK (libdhd).
+/// Finding nothing is not an error.
 #[derive(Debug, Args)]
 pub(crate) struct DevicesArgs {
-    /// The SDK library to try (default: $PALPUS_DHD_LIBRARY, then libdhd.so).
-    #[arg(long, value_name = "PATH")]
-    dhd_library: Option<PathBuf>,
+    /// A device's option to look with, as `--device` takes it (omega7:PATH tries that SDK
+    /// library instead of $PALPUS_DHD_LIBRARY, then libdhd.so). Repeatable.
+    #[arg(long, value_name = "NAME:OPTION", value_parser = parse_device)]
+    device: Vec<DeviceChoice>,
 }
 
 pub(crate) fn run(args: &DevicesArgs) -> anyhow::Result<()> {
+    let registry = Registry::builtin();
+    println!("Haptic devices (--device NAME[:OPTION]):");
+    for backend in registry.backends() {
+        let option = args
+            .device
+            .iter()
+            .rev()
+            .find(|d| d.backend() == *backend)
+            .and_then(DeviceChoice::option);
+        let specs = &backend.specs;
+        println!(
+            "  {:<8} {} (max {} N, workspace radius {} mm)",
+            backend.name,
+            backend.summary,
+            specs.max_force_n,
+            specs.workspace_radius_m * 1e3
+        );
+        for line in (backend.probe)(option) {
+            println!("           {line}");
+        }
+    }
     println!("HID devices:");
     match list_hid_devices() {
         Ok(list) if list.is_empty() => println!("  none found"),
@@ -37,46 +60,6 @@ pub(crate) fn run(args: &DevicesArgs) -> anyhow::Result<()> {
             }
         }
         Err(e) => println!("  none found ({e})"),
-    }
-
-    println!("Force Dimension devices on USB (vendor {FORCE_DIMENSION_VENDOR_ID:04x}):");
-    let usb = usb_devices();
-    if usb.is_empty() {
-        println!("  none found");
-    }
-    for d in &usb {
-        println!(
-            "  {:04x}:{:04x}  {}  {}",
-            FORCE_DIMENSION_VENDOR_ID,
-            d.product_id,
-            d.product.as_deref().unwrap_or("?"),
-            d.path.display()
-        );
-    }
-
-    println!("Omega.7 SDK (libdhd):");
-    match DhdLibrary::load(args.dhd_library.as_deref()) {
-        Err(e) => {
-            println!("  not found: {e}");
-            println!("Omega.7: not available; use --device sim");
-        }
-        Ok(lib) => {
-            let version = lib.sdk_version().map_or("unknown".into(), |v| v.to_string());
-            println!("  {} (SDK {version})", lib.path().display());
-            let missing: Vec<&str> = lib
-                .available()
-                .into_iter()
-                .filter(|(_, present)| !present)
-                .map(|(name, _)| name)
-                .collect();
-            if !missing.is_empty() {
-                println!("  optional functions missing: {}", missing.join(", "));
-            }
-            match Omega7::open_with(std::sync::Arc::new(lib)) {
-                Ok(device) => println!("Omega.7: connected ({})", device.system_name()),
-                Err(e) => println!("Omega.7: none found ({e})"),
-            }
-        }
     }
     Ok(())
 }

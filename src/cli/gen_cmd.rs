@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use haptics::sim::protocols::{CaptureSet, generate};
+use sim::protocols::{CaptureSet, generate};
 
 /// Write a reproducible set of simulated captures.
 ///
@@ -86,10 +86,8 @@ enum NeedleSpeedArg {
 /// `--needle-rate-hz`, `--needle-tissue`, `--needle-speed`: only the needle's training and
 /// held-out captures, with that protocol.
 fn needle_only(args: &GenArgs, log_rate_hz: u32) -> anyhow::Result<()> {
-    use haptics::sim::protocols::Split;
-    use haptics::sim::protocols::li_bi::{
-        NeedleProtocol, NeedleTissueKind, SpeedProfile, needle_insertion_with,
-    };
+    use sim::protocols::Split;
+    use sim::protocols::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile, needle_insertion_with};
     let protocol = NeedleProtocol {
         log_rate_hz,
         rounds: args.needle_rounds,
@@ -124,8 +122,8 @@ fn write_capture(args: &GenArgs, path: &std::path::Path, capture: &capture::Capt
 
 /// `--two-patch`: only strokes from each Nakano surface onto the next, at `speed_mps`.
 fn two_patch_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use haptics::sim::protocols::nakano::{RUNS, two_patch_file_name, two_patch_run};
-    use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+    use sim::protocols::nakano::{RUNS, two_patch_file_name, two_patch_run};
+    use sim::world::surface::{SurfacePatch, nakano_surfaces};
     let dir = args.out.join("nakano_two_patch");
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let surfaces = nakano_surfaces();
@@ -147,8 +145,8 @@ fn two_patch_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
 
 /// `--rub-speed-mps`: only Nakano's rubbing runs, at that speed.
 fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use haptics::sim::protocols::nakano::{RUNS, rubbing_run_at, run_file_name};
-    use haptics::sim::world::surface::{SurfacePatch, nakano_surfaces};
+    use sim::protocols::nakano::{RUNS, rubbing_run_at, run_file_name};
+    use sim::world::surface::{SurfacePatch, nakano_surfaces};
     let dir = args.out.join("nakano");
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     for surface in nakano_surfaces() {
@@ -163,7 +161,7 @@ fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
 
 /// `--slide-speed-mps`: only the multi-stream sliding study, at that speed.
 fn sliding_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use haptics::sim::protocols::multistream::{SlidingStudy, write_logs};
+    use sim::protocols::multistream::{SlidingStudy, write_logs};
     let study = SlidingStudy::default().at_speed(speed_mps)?;
     write_logs(&args.out, args.seed, study, &mut |file| {
         if !args.quiet {
@@ -182,9 +180,7 @@ pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
         return needle_only(args, args.needle_rate_hz.unwrap_or(100));
     }
     if args.two_patch {
-        let speed_mps = args
-            .rub_speed_mps
-            .unwrap_or(haptics::sim::protocols::nakano::SPEED_MPS);
+        let speed_mps = args.rub_speed_mps.unwrap_or(sim::protocols::nakano::SPEED_MPS);
         return two_patch_only(args, speed_mps);
     }
     if let Some(speed_mps) = args.rub_speed_mps {

@@ -9,6 +9,7 @@ mod bench_svr;
 mod bench_trade;
 mod capture_cmd;
 mod categorize_cmd;
+mod device_arg;
 mod devices_cmd;
 mod gen_cmd;
 mod identify_cmd;

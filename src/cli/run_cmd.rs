@@ -6,10 +6,12 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 
+use super::device_arg::parse_device;
 use crate::models;
 use crate::scene::{DEFAULT_SCENE, Scene};
 use crate::session::report::{self, ModelLine, SessionReport};
-use crate::session::{self, DeviceChoice, SessionOptions, analysis};
+use crate::session::{self, SessionOptions, analysis};
+use haptics::device::DeviceChoice;
 
 /// Run a scene: identify or load the models it needs, render them on the haptic thread, show
 /// the tissue, report.
@@ -24,9 +26,11 @@ pub(crate) struct RunArgs {
     /// The scene file.
     #[arg(default_value = DEFAULT_SCENE)]
     scene: PathBuf,
-    /// sim, omega7, or replay:FILE (a capture played back as the device's motion).
-    #[arg(long, default_value = "sim", value_parser = parse_device)]
-    device: DeviceChoice,
+    /// The device: sim (the simulated Omega.7), omega7[:PATH] (a Force Dimension Omega.7, PATH
+    /// its SDK library, default $PALPUS_DHD_LIBRARY, then libdhd.so), or replay:FILE (a capture
+    /// played back as the device's motion). Default: the scene's `[device] kind`.
+    #[arg(long, value_name = "NAME[:OPTION]", value_parser = parse_device)]
+    device: Option<DeviceChoice>,
     /// No window: the scripted trainee performs the task.
     #[arg(long)]
     headless: bool,
@@ -53,13 +57,6 @@ pub(crate) struct RunArgs {
     /// mouse (a demonstration, and how the window is tested under Xvfb).
     #[arg(long)]
     autopilot: bool,
-    /// Omega.7 only: the SDK library to load.
-    #[arg(long, value_name = "PATH")]
-    dhd_library: Option<PathBuf>,
-}
-
-fn parse_device(s: &str) -> Result<DeviceChoice, String> {
-    s.parse()
 }
 
 /// Whether a window can be opened here.
@@ -77,13 +74,17 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     {
         anyhow::bail!("--duration {d}: expected a positive number of seconds");
     }
-    if args.unpaced && args.device != DeviceChoice::Sim {
+    let device = match &args.device {
+        Some(device) => device.clone(),
+        None => scene.device_choice()?,
+    };
+    if args.unpaced && !device.backend().simulated {
         anyhow::bail!("--unpaced is for the simulator only: a real device runs in real time");
     }
     let cache_dir = args.cache_dir.clone().unwrap_or_else(models::default_cache_dir);
     let resolved = models::resolve_with_progress(&scene, &cache_dir)?;
     let options = SessionOptions {
-        device: args.device.clone(),
+        device,
         duration_s: args.duration,
         record: args.record.clone(),
         pacing: if args.unpaced {
@@ -91,7 +92,6 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         } else {
             haptics::rt::Pacing::REALTIME
         },
-        dhd_library: args.dhd_library.clone(),
         autopilot: args.autopilot,
     };
     let segments = session::segments(&scene, &resolved)?;
@@ -105,7 +105,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         println!(
             "running scene {} headless on {} ({} part{}) ...",
             scene.name,
-            options.device_label(),
+            options.device.label(),
             segments.len(),
             if segments.len() == 1 { "" } else { "s" }
         );
@@ -127,7 +127,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         println!(
             "running scene {} in a window on {}: drag or scroll to push the tool, arrows/WASD to move it, F12 for a screenshot",
             scene.name,
-            options.device_label()
+            options.device.label()
         );
         let screenshot = dir(&scene).join("window.png");
         std::fs::create_dir_all(dir(&scene))
@@ -188,7 +188,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         scene_file: scene.path.clone(),
         device: runs
             .first()
-            .map_or_else(|| options.device_label(), |r| r.device.clone()),
+            .map_or_else(|| options.device.label(), |r| r.device.clone()),
         models: resolved.iter().map(ModelLine::new).collect(),
         segments: runs.iter().map(analysis::summarize).collect(),
         recognizer: recognizer_line,

@@ -4,8 +4,8 @@
 use haptics::HapticSample;
 use haptics::control::rubbing::channel as rub;
 use haptics::law::PunctureState;
-use haptics::sim::world::needle::NeedleTissue;
 use serde::Serialize;
+use sim::world::needle::NeedleTissue;
 
 use super::{SURFACE_Z_M, SegmentKind, SegmentRun};
 use haptics::control::admittance::channel as c;

@@ -13,7 +13,6 @@ pub mod script;
 pub mod truth_along;
 
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -22,15 +21,14 @@ use capture::kind::{
     AXIAL_FORCE_N, DEPTH_M, FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M,
     TANGENTIAL_VELOCITY_MPS, TIME_S, VELOCITY_MPS,
 };
-use capture::{Capture, CaptureKind, CaptureWriter, Metadata};
+use capture::{CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
+use haptics::HapticSample;
 use haptics::acquire::{self, CaptureOptions, Protocol};
 use haptics::control::admittance::channel;
 use haptics::control::{Admittance, AdmittanceConfig, Direct};
-use haptics::device::HapticDevice;
-use haptics::device::omega7::Omega7;
-use haptics::device::replay::ReplayDevice;
-use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
+use haptics::device::sim_omega7::{SimOmega7Config, SimWorld};
+use haptics::device::{DeviceChoice, Motion, OpenedDevice, SimSetup};
 use haptics::law::{
     Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig,
     PhasedNeedleLaw, SoftFriction, hard_friction_model, needle_model, soft_friction_models,
@@ -39,9 +37,8 @@ use haptics::live::LiveFeed;
 use haptics::live_recognizer::{LiveRecognizer, SampleRecognizer};
 use haptics::recorder::{Recorder, RecorderConfig};
 use haptics::rt::{self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, WatchdogConfig};
-use haptics::sim::hand::{HandImpedance, HandScript, LiveHand};
-use haptics::{DeviceSpecs, HapticSample};
 use identify::{ModelFile, ModelKind};
+use sim::hand::{HandImpedance, HandScript, LiveHand};
 
 use crate::models::ResolvedModel;
 use crate::scene::{ModelRole, Scene, Task};
@@ -53,32 +50,6 @@ pub const SURFACE_Z_M: f64 = -0.02;
 /// Where on a simulated patch a session rubs, m: a track the recognizer's training captures
 /// (offsets 10, 60 and 110 mm) never touched.
 pub const LIVE_TRACK_OFFSET_M: f64 = 0.2;
-
-/// Which device the session runs on.
-#[derive(Debug, Clone, PartialEq)]
-pub enum DeviceChoice {
-    /// The simulated Omega.7 (with a scripted or UI-driven hand).
-    Sim,
-    /// A Force Dimension Omega.7 through its SDK.
-    Omega7,
-    /// A capture played back as the device's motion.
-    Replay(PathBuf),
-}
-
-impl FromStr for DeviceChoice {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "sim" => Ok(Self::Sim),
-            "omega7" => Ok(Self::Omega7),
-            _ => match s.strip_prefix("replay:") {
-                Some(path) if !path.is_empty() => Ok(Self::Replay(PathBuf::from(path))),
-                _ => Err(format!("`{s}`: expected sim, omega7 or replay:FILE")),
-            },
-        }
-    }
-}
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -92,21 +63,8 @@ pub struct SessionOptions {
     pub record: Option<PathBuf>,
     /// Real time, or as fast as the simulator goes (tests of the whole chain).
     pub pacing: Pacing,
-    /// Omega.7 only: the SDK library.
-    pub dhd_library: Option<PathBuf>,
     /// Simulator in a window: the scripted trainee moves the hand instead of the mouse (demos).
     pub autopilot: bool,
-}
-
-impl SessionOptions {
-    /// The device in a few words.
-    pub fn device_label(&self) -> String {
-        match &self.device {
-            DeviceChoice::Sim => "simulated Omega.7".into(),
-            DeviceChoice::Omega7 => "Omega.7".into(),
-            DeviceChoice::Replay(p) => format!("replay of {}", p.display()),
-        }
-    }
 }
 
 /// What a segment works on.
@@ -481,65 +439,61 @@ pub fn run_segment(
     let started = Instant::now();
     let rate_hz = scene.device.rate_hz;
     let period_s = 1.0 / rate_hz;
-    let mut surface_z_m = SURFACE_Z_M;
-    let mut script_end_s = None;
-    let mut direct = false;
-    let device: Box<dyn HapticDevice> = match (&options.device, &segment.kind) {
-        (DeviceChoice::Sim, SegmentKind::Surface { surface }) => {
+    let backend = options.device.backend();
+    let (sim, recording_kind) = match &segment.kind {
+        SegmentKind::Surface { surface } => {
+            if !backend.simulated {
+                return Err(SessionError::Unsupported(format!(
+                    "the surfaces of a recognition scene are simulated; `{}` touches a real one: run \
+                     it with a simulated device (--device sim)",
+                    backend.name
+                )));
+            }
             let mut capture = CaptureOptions::new(Protocol::Rubbing);
             capture.surface = surface.clone();
             capture.track_offset_m = LIVE_TRACK_OFFSET_M;
             capture.loop_config.rate_hz = rate_hz;
-            Box::new(acquire::sim_device(&capture)?)
+            (acquire::sim_setup(&capture)?, CaptureKind::Rubbing)
         }
-        (DeviceChoice::Sim, _) => {
+        _ => {
             let impedance = HandImpedance {
                 stiffness_npm: scene.haptics.grip_stiffness_npm,
                 ..HandImpedance::default()
             };
-            let hand: Box<dyn HandScript> = match &live {
-                Some(link) if !options.autopilot => Box::new(link.hand.clone()),
+            let hand: (Box<dyn HandScript>, Option<f64>) = match &live {
+                Some(link) if !options.autopilot => (Box::new(link.hand.clone()), None),
                 _ => {
                     let w = script::trainee(&scene.task, SURFACE_Z_M, impedance.stiffness_npm);
-                    script_end_s = Some(w.end_s());
-                    Box::new(w)
+                    let end_s = w.end_s();
+                    (Box::new(w), Some(end_s))
                 }
             };
-            let device = SimOmega7::new(
-                SimOmega7Config {
+            let setup = SimSetup {
+                config: SimOmega7Config {
                     period_s,
                     start_m: start_position_m(scene),
                     ..SimOmega7Config::default()
                 },
-                SimWorld::Free,
-            )
-            .with_hand(impedance, hand);
-            Box::new(device)
-        }
-        (DeviceChoice::Omega7, SegmentKind::Surface { .. }) => {
-            return Err(SessionError::Unsupported(
-                "the surfaces of a recognition scene are simulated; run it with --device sim".into(),
-            ));
-        }
-        (DeviceChoice::Omega7, _) => Box::new(
-            Omega7::open(options.dhd_library.as_deref()).map_err(|e| SessionError::Device(Box::new(e)))?,
-        ),
-        (DeviceChoice::Replay(path), kind) => {
-            let expected = match kind {
-                SegmentKind::Needle { .. } => CaptureKind::Insertion,
-                _ => CaptureKind::Rubbing,
+                world: SimWorld::Free,
+                hand: Some((impedance, hand.0, hand.1)),
             };
-            let capture = Capture::read_file(path, expected)?;
-            let device = ReplayDevice::new(&capture, period_s)?;
-            script_end_s = Some(device.duration_s());
-            // A replayed insertion's depth runs along −z from 0.
-            surface_z_m = 0.0;
-            direct = true;
-            Box::new(device)
+            (setup, CaptureKind::Insertion)
         }
     };
+    let OpenedDevice { device, script_end_s } =
+        options
+            .device
+            .open(period_s, sim, recording_kind)
+            .map_err(|e| match e {
+                haptics::HapticsError::Capture(e) => SessionError::Replay(e),
+                e => SessionError::Device(Box::new(e)),
+            })?;
+    // A recording moves the tool: the law is rendered straight from the played position, and a
+    // replayed insertion's depth runs along −z from 0.
+    let direct = backend.motion == Motion::Recorded;
+    let surface_z_m = if direct { 0.0 } else { SURFACE_Z_M };
     let device_name = device.name().to_owned();
-    let max_force_n = DeviceSpecs::OMEGA7.max_force_n;
+    let max_force_n = backend.specs.max_force_n;
     let controller = controller(scene, segment, direct, surface_z_m)?;
     let mut recognizer = match (recognizer, &segment.kind) {
         (Some(r), SegmentKind::Surface { .. }) => Some(SampleRecognizer::new(r)),
@@ -622,7 +576,7 @@ pub fn run_segment(
     };
     if options.pacing == Pacing::Unpaced {
         config.watchdog = None;
-    } else if options.device == DeviceChoice::Sim {
+    } else if backend.simulated {
         // A simulated device cannot hurt a hand, and a busy or virtual machine stalls a thread
         // for tens of milliseconds now and then: the simulator's watchdog only ends a session
         // that has really hung. A real device keeps the default 4 ms bound.

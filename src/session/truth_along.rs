@@ -14,8 +14,8 @@
 
 use haptics::HapticSample;
 use haptics::control::admittance::channel as c;
-use haptics::sim::world::needle::{NeedleSite, NeedleTissue};
 use serde::Serialize;
+use sim::world::needle::{NeedleSite, NeedleTissue};
 
 /// Smallest fall that counts as a pop, N: about the smallest change of a ~1 N axial force a
 /// hand tells apart.

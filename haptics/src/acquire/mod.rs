@@ -24,17 +24,17 @@ use capture::kind::{
 use capture::{CaptureKind, Metadata};
 
 use crate::control::{MotionGains, RubbingController, RubbingPlan};
-use crate::device::HapticDevice;
 use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld, Texture};
+use crate::device::{HapticDevice, SimSetup};
 use crate::error::HapticsError;
 use crate::recorder::{RecorderConfig, RecorderSummary, record_to_file};
 use crate::rt::{
     self, CHANNELS, Controller, HapticSample, LoopConfig, LoopIo, LoopOutcome, Pacing, RateStats, RtStatus,
 };
-use crate::sim::world::friction::{HardContact, SoftContact};
-use crate::sim::world::needle::NeedleTissue;
-use crate::sim::world::surface::{SurfacePatch, nakano_surfaces};
 pub use needle::{InsertionController, InsertionPhase, InsertionPlan};
+use sim::world::friction::{HardContact, SoftContact};
+use sim::world::needle::NeedleTissue;
+use sim::world::surface::{SurfacePatch, nakano_surfaces};
 
 /// What to capture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -168,6 +168,13 @@ pub fn surface_names() -> Vec<&'static str> {
 
 /// The simulated Omega.7 set up for `options`: the world the protocol needs, the tip above it.
 pub fn sim_device(options: &CaptureOptions) -> Result<SimOmega7, HapticsError> {
+    let SimSetup { config, world, .. } = sim_setup(options)?;
+    Ok(SimOmega7::new(config, world))
+}
+
+/// What a simulated device needs for `options`: the world the protocol needs, the tip above
+/// it, no hand (the protocol moves the device).
+pub fn sim_setup(options: &CaptureOptions) -> Result<SimSetup, HapticsError> {
     let start_m = glam::DVec3::new(0.0, 0.0, SURFACE_Z_M + 0.003);
     let world = match options.protocol {
         Protocol::Needle => SimWorld::needle_block(
@@ -206,14 +213,15 @@ pub fn sim_device(options: &CaptureOptions) -> Result<SimOmega7, HapticsError> {
             )
         }
     };
-    Ok(SimOmega7::new(
-        SimOmega7Config {
+    Ok(SimSetup {
+        config: SimOmega7Config {
             period_s: 1.0 / options.loop_config.rate_hz,
             start_m,
             ..SimOmega7Config::default()
         },
         world,
-    ))
+        hand: None,
+    })
 }
 
 /// What a capture produced.
@@ -244,7 +252,7 @@ pub fn metadata(protocol: Protocol, device: &str, rate_hz: f64, options: &Captur
         .with("control.mass_n_kg", g.mass_n_kg)
         .with(
             "sensor.encoder_quantum_m",
-            crate::sim::world::sensor::Encoder::OMEGA7_QUANTUM_M,
+            sim::world::sensor::Encoder::OMEGA7_QUANTUM_M,
         )
         .with("sensor.velocity", "pseudo-differentiation")
         .with(
@@ -329,7 +337,7 @@ pub fn controller(protocol: Protocol) -> Box<dyn Controller> {
 /// 0.1 mN.
 pub fn row(protocol: Protocol, s: &HapticSample, row: &mut Vec<f64>) -> bool {
     use crate::control::rubbing::channel as rub;
-    use crate::sim::world::sensor::{Encoder, round_to};
+    use sim::world::sensor::{Encoder, round_to};
     let time = round_to(s.time_s, 1e-6);
     let position = |x: f64| round_to(x, Encoder::OMEGA7_QUANTUM_M);
     let velocity = |v: f64| round_to(v, 1e-6);
@@ -367,7 +375,7 @@ pub fn row(protocol: Protocol, s: &HapticSample, row: &mut Vec<f64>) -> bool {
 /// outside the rubbing phase. No allocation, so the haptic thread can call it.
 pub fn rubbing_signals(state: &crate::device::DeviceState, channels: &[f64; CHANNELS]) -> Option<[f64; 3]> {
     use crate::control::rubbing::channel as rub;
-    use crate::sim::world::sensor::{Encoder, round_to};
+    use sim::world::sensor::{Encoder, round_to};
     (channels[rub::PHASE] == crate::control::RubbingPhase::Rub.code()).then(|| {
         [
             round_to(state.position_m.x, Encoder::OMEGA7_QUANTUM_M),

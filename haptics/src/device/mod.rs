@@ -8,14 +8,24 @@
 //! - [`replay::ReplayDevice`]: a capture played back at its recorded rate;
 //! - [`fault::FaultyDevice`]: any device that fails on purpose after a number of ticks.
 //!
+//! The first three are [`Backend`]s of the [`Registry`] (CHAI3D's `cHapticDeviceHandler`): the
+//! one list of devices that scenes and the commands read. A new vendor is one file defining its
+//! `Backend` and one line in [`BUILTIN`].
+//!
 //! Axes are the Omega.7's: x towards the operator, y to the right, z up. Positions in metres,
 //! velocities in m/s, forces in newtons, all as seen at the end effector.
 
+mod backend;
 pub mod fault;
 pub mod hid;
 pub mod omega7;
+mod registry;
 pub mod replay;
 pub mod sim_omega7;
+mod sim_world;
+
+pub use backend::{Backend, BackendOption, Motion, OpenRequest, OpenedDevice, SimSetup};
+pub use registry::{BUILTIN, DeviceChoice, Registry};
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};

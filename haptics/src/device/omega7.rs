@@ -16,6 +16,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
+use super::backend::{Backend, BackendOption, Motion, OpenRequest, OpenedDevice};
 use super::{DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice, InternalForces};
 use crate::error::HapticsError;
 
@@ -570,6 +571,69 @@ fn usb_devices_under(root: &Path) -> Vec<UsbDevice> {
         .collect();
     found.sort_by(|a, b| a.path.cmp(&b.path));
     found
+}
+
+/// The Omega.7 in the device registry: `omega7` or `omega7:PATH` (the SDK library).
+pub static BACKEND: Backend = Backend {
+    name: "omega7",
+    summary: "Force Dimension Omega.7",
+    specs: DeviceSpecs::OMEGA7,
+    option: Some(BackendOption {
+        value_name: "PATH",
+        help: "the Force Dimension SDK library (default: $PALPUS_DHD_LIBRARY, then libdhd.so)",
+        required: false,
+    }),
+    simulated: false,
+    motion: Motion::Operator,
+    open,
+    probe,
+};
+
+fn open(request: OpenRequest<'_>) -> Result<OpenedDevice, HapticsError> {
+    Ok(OpenedDevice {
+        device: Box::new(Omega7::open(request.option.map(Path::new))?),
+        script_end_s: None,
+    })
+}
+
+/// The Omega.7 on the USB bus (it is raw USB, not HID) and through its SDK.
+fn probe(library: Option<&str>) -> Vec<String> {
+    let mut lines = Vec::new();
+    let usb = usb_devices();
+    if usb.is_empty() {
+        lines.push(format!(
+            "USB (vendor {FORCE_DIMENSION_VENDOR_ID:04x}): none found"
+        ));
+    }
+    for d in &usb {
+        lines.push(format!(
+            "USB: {FORCE_DIMENSION_VENDOR_ID:04x}:{:04x}  {}  {}",
+            d.product_id,
+            d.product.as_deref().unwrap_or("?"),
+            d.path.display()
+        ));
+    }
+    match DhdLibrary::load(library.map(Path::new)) {
+        Err(e) => lines.push(format!("SDK: not found: {e}")),
+        Ok(lib) => {
+            let version = lib.sdk_version().map_or("unknown".into(), |v| v.to_string());
+            lines.push(format!("SDK: {} (SDK {version})", lib.path().display()));
+            let missing: Vec<&str> = lib
+                .available()
+                .into_iter()
+                .filter(|(_, present)| !present)
+                .map(|(name, _)| name)
+                .collect();
+            if !missing.is_empty() {
+                lines.push(format!("SDK: optional functions missing: {}", missing.join(", ")));
+            }
+            match Omega7::open_with(Arc::new(lib)) {
+                Ok(device) => lines.push(format!("connected ({})", device.system_name())),
+                Err(e) => lines.push(format!("none found ({e})")),
+            }
+        }
+    }
+    lines
 }
 
 #[cfg(test)]

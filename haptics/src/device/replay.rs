@@ -15,8 +15,38 @@ use capture::kind::{
 use capture::{Capture, CaptureKind};
 use glam::DVec3;
 
+use super::backend::{Backend, BackendOption, Motion, OpenRequest, OpenedDevice};
 use super::{DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
 use crate::error::HapticsError;
+
+/// Replay in the device registry: `replay:FILE`.
+pub static BACKEND: Backend = Backend {
+    name: "replay",
+    summary: "replay of a capture",
+    specs: DeviceSpecs::OMEGA7,
+    option: Some(BackendOption {
+        value_name: "FILE",
+        help: "the capture whose motion is played",
+        required: true,
+    }),
+    simulated: true,
+    motion: Motion::Recorded,
+    open,
+    probe: |file| match file {
+        Some(file) => vec![format!("plays {file}")],
+        None => vec!["plays a capture's motion: replay:FILE".into()],
+    },
+};
+
+fn open(request: OpenRequest<'_>) -> Result<OpenedDevice, HapticsError> {
+    let path = std::path::Path::new(request.option.unwrap_or_default());
+    let capture = Capture::read_file(path, request.recording_kind)?;
+    let device = ReplayDevice::new(&capture, request.period_s)?;
+    Ok(OpenedDevice {
+        script_end_s: Some(device.duration_s()),
+        device: Box::new(device),
+    })
+}
 
 /// A capture played back.
 #[derive(Debug)]

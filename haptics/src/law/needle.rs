@@ -233,7 +233,7 @@ mod tests {
     use super::*;
     use crate::law::reference::NeedleQuasiStatic;
     use crate::safety::flag;
-    use crate::sim::world::needle::NeedleTissue;
+    use sim::world::needle::NeedleTissue;
 
     fn law() -> NeedleLaw<NeedleQuasiStatic> {
         NeedleLaw::new(

@@ -1,7 +1,7 @@
 /* A stand-in for Force Dimension's libdhd: the same C symbols and prototypes (dhdc.h), with
  * canned device readings and a record of what was commanded, so the loader, the calling
  * convention and the error paths can be tested without the SDK or a device.
- * Built by haptics/tests/omega7_loader.rs with the system C compiler. */
+ * Built by haptics/tests/it/omega7_loader.rs with the system C compiler. */
 
 #include <string.h>
 

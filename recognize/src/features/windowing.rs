@@ -167,7 +167,7 @@ impl NakanoWindowing {
     /// windows only. Short training windows give it many, varied windows (the spread a surface
     /// shows from place to place), while long decision windows average more roughness waves
     /// into each decision: a 1 s training window with a 3 s decision window recognizes every
-    /// Nakano surface at ≥ 95 % (`tests/recognition_nakano.rs`) where 1 s / 1 s does not.
+    /// Nakano surface at ≥ 95 % (`tests/it/recognition_nakano.rs`) where 1 s / 1 s does not.
     pub fn with_training_window_s(self, training_window_s: f64) -> Result<Self, RecognizeError> {
         let windowing = Self {
             training_window_samples: Some(samples("training_window_s", training_window_s, self.rate_hz)?),

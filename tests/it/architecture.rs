@@ -1,0 +1,340 @@
+//! The layout's rules, checked on the source tree: crates import only the crates below them
+//! (capture and svm at the bottom, the binary on top), and no two files of a crate import each
+//! other, directly or around a longer circle.
+//!
+//! The file graph is read from `crate::…`, `super::…` and `self::…` paths outside test
+//! modules; a path resolves to the file of its longest module prefix. A module declaring its
+//! children (`mod x;`) or re-exporting them (`pub use x::…`) is not an import of the child, and
+//! a path through the crate root (`crate::Name`) goes through the door, so neither makes a
+//! circle.
+
+#![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Each crate's folder and the palpus crates it may depend on.
+const LAYERS: [(&str, &str, &[&str]); 8] = [
+    ("capture", "capture", &[]),
+    ("svm", "svm", &[]),
+    ("identify", "identify", &["capture", "svm"]),
+    ("recognize", "recognize", &["capture", "svm"]),
+    ("sim", "sim", &["capture", "recognize"]),
+    (
+        "haptics",
+        "haptics",
+        &["capture", "svm", "identify", "recognize", "sim"],
+    ),
+    ("render", "render", &["capture"]),
+    (
+        "palpus",
+        ".",
+        &[
+            "capture",
+            "svm",
+            "identify",
+            "recognize",
+            "sim",
+            "haptics",
+            "render",
+        ],
+    ),
+];
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The palpus crates named in a manifest's `[dependencies]` (not dev- or build-dependencies).
+fn palpus_dependencies(manifest: &Path) -> BTreeSet<String> {
+    let text = std::fs::read_to_string(manifest).unwrap();
+    let names: BTreeSet<&str> = LAYERS.iter().map(|(name, _, _)| *name).collect();
+    let mut in_dependencies = false;
+    let mut found = BTreeSet::new();
+    for line in text.lines().map(str::trim) {
+        if line.starts_with('[') {
+            in_dependencies = line == "[dependencies]";
+            continue;
+        }
+        if !in_dependencies {
+            continue;
+        }
+        let name = line.split(['.', '=', ' ']).next().unwrap_or_default();
+        if names.contains(name) {
+            found.insert(name.to_owned());
+        }
+    }
+    found
+}
+
+#[test]
+fn crates_import_only_the_layers_below_them() {
+    for (name, folder, allowed) in LAYERS {
+        let deps = palpus_dependencies(&root().join(folder).join("Cargo.toml"));
+        let allowed: BTreeSet<String> = allowed.iter().map(|s| (*s).to_owned()).collect();
+        let extra: Vec<&String> = deps.difference(&allowed).collect();
+        assert!(extra.is_empty(), "{name} depends on {extra:?}, outside its layer");
+    }
+}
+
+/// A source file's module path: `lib.rs` is the root, `a/mod.rs` and `a.rs` are `a`.
+fn module_path(relative: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = relative
+        .with_extension("")
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if matches!(parts.last().map(String::as_str), Some("lib" | "main" | "mod")) {
+        parts.pop();
+    }
+    parts
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+fn is_ident(c: char) -> bool {
+    c.is_ascii_alphanumeric() || c == '_'
+}
+
+/// Splits `a, b::{c, d}, e` at its top-level commas.
+fn top_level_items(inner: &str) -> Vec<&str> {
+    let mut items = Vec::new();
+    let (mut depth, mut start) = (0usize, 0usize);
+    for (i, c) in inner.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth = depth.saturating_sub(1),
+            ',' if depth == 0 => {
+                items.push(&inner[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    items.push(&inner[start..]);
+    items
+}
+
+/// The module paths named by a use tree or path starting at `text` (after `crate::`).
+fn paths_in(text: &str) -> Vec<Vec<String>> {
+    let text = text.trim_start();
+    if let Some(rest) = text.strip_prefix('{') {
+        let mut depth = 1usize;
+        let end = rest
+            .char_indices()
+            .find(|&(_, c)| {
+                match c {
+                    '{' => depth += 1,
+                    '}' => depth -= 1,
+                    _ => {}
+                }
+                depth == 0
+            })
+            .map_or(rest.len(), |(i, _)| i);
+        return top_level_items(&rest[..end])
+            .into_iter()
+            .flat_map(paths_in)
+            .collect();
+    }
+    let mut segments = Vec::new();
+    let mut rest = text;
+    loop {
+        let len = rest.find(|c: char| !is_ident(c)).unwrap_or(rest.len());
+        if len == 0 {
+            break;
+        }
+        segments.push(rest[..len].to_owned());
+        rest = &rest[len..];
+        match rest.strip_prefix("::") {
+            Some(next) if next.starts_with('{') => {
+                return paths_in(next)
+                    .into_iter()
+                    .map(|tail| segments.iter().cloned().chain(tail).collect())
+                    .collect();
+            }
+            Some(next) => rest = next,
+            None => break,
+        }
+    }
+    vec![segments]
+}
+
+/// The files of one crate and the files each imports from.
+fn file_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    let modules: BTreeMap<Vec<String>, String> = files
+        .iter()
+        .map(|f| {
+            let relative = f.strip_prefix(src).unwrap();
+            (module_path(relative), relative.to_string_lossy().into_owned())
+        })
+        .collect();
+    let mut graph = BTreeMap::new();
+    for (here, name) in &modules {
+        if name.ends_with("tests.rs") || name.contains("tests/") {
+            continue;
+        }
+        let text = std::fs::read_to_string(src.join(name)).unwrap();
+        let text = text.split("#[cfg(test)]").next().unwrap_or_default();
+        let code: String = text
+            .lines()
+            .map(|line| line.split("//").next().unwrap_or_default())
+            .collect::<Vec<_>>()
+            .join("\n");
+        let mut targets = BTreeSet::new();
+        for (at, _) in code.match_indices("::") {
+            let before = &code[..at];
+            let word_start = before.rfind(|c: char| !is_ident(c)).map_or(0, |i| i + 1);
+            if before[..word_start].ends_with("::") {
+                continue; // not the head of a path
+            }
+            let mut tail = &code[at + 2..];
+            let base = match &before[word_start..] {
+                "crate" => Vec::new(),
+                "self" => here.clone(),
+                "super" => {
+                    let mut up = 1;
+                    while let Some(rest) = tail.strip_prefix("super::") {
+                        tail = rest;
+                        up += 1;
+                    }
+                    here[..here.len().saturating_sub(up)].to_vec()
+                }
+                _ => continue,
+            };
+            for path in paths_in(tail) {
+                let full: Vec<String> = base.iter().cloned().chain(path).collect();
+                let target = (0..=full.len())
+                    .rev()
+                    .find_map(|k| modules.get(&full[..k]).map(|file| (k, file)));
+                if let Some((k, file)) = target
+                    && k > 0
+                    && file != name
+                {
+                    targets.insert(file.clone());
+                }
+            }
+        }
+        graph.insert(name.clone(), targets);
+    }
+    graph
+}
+
+/// Strongly connected components of more than one file (Tarjan).
+fn circles(graph: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
+    struct State<'a> {
+        graph: &'a BTreeMap<String, BTreeSet<String>>,
+        index: BTreeMap<&'a str, usize>,
+        low: BTreeMap<&'a str, usize>,
+        stack: Vec<&'a str>,
+        found: Vec<Vec<String>>,
+    }
+    fn visit<'a>(s: &mut State<'a>, v: &'a str) {
+        let i = s.index.len();
+        s.index.insert(v, i);
+        s.low.insert(v, i);
+        s.stack.push(v);
+        let graph = s.graph;
+        for w in graph.get(v).into_iter().flatten() {
+            let w = w.as_str();
+            if !s.index.contains_key(w) {
+                visit(s, w);
+                let low = s.low[v].min(s.low[w]);
+                s.low.insert(v, low);
+            } else if s.stack.contains(&w) {
+                let low = s.low[v].min(s.index[w]);
+                s.low.insert(v, low);
+            }
+        }
+        if s.low[v] == s.index[v] {
+            let mut component = Vec::new();
+            while let Some(w) = s.stack.pop() {
+                component.push(w.to_owned());
+                if w == v {
+                    break;
+                }
+            }
+            if component.len() > 1 {
+                s.found.push(component);
+            }
+        }
+    }
+    let mut s = State {
+        graph,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        found: Vec::new(),
+    };
+    for v in graph.keys() {
+        if !s.index.contains_key(v.as_str()) {
+            visit(&mut s, v);
+        }
+    }
+    s.found
+}
+
+#[test]
+fn no_two_files_import_each_other() {
+    let mut all = Vec::new();
+    for (name, folder, _) in LAYERS {
+        for circle in circles(&file_graph(&root().join(folder).join("src"))) {
+            all.push(format!("{name}: {}", circle.join(" <-> ")));
+        }
+    }
+    assert!(all.is_empty(), "import circles:\n{}", all.join("\n"));
+}
+
+#[test]
+fn the_circle_finder_sees_a_circle_and_a_grouped_import() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    std::fs::create_dir_all(src.join("a")).unwrap();
+    std::fs::write(src.join("lib.rs"), "mod a; mod b;\n").unwrap();
+    std::fs::write(src.join("a/mod.rs"), "mod c;\nuse crate::{b::Thing, x};\n").unwrap();
+    std::fs::write(src.join("a/c.rs"), "use super::super::b::Other;\n").unwrap();
+    std::fs::write(
+        src.join("b.rs"),
+        "use crate::a::Item;\n#[cfg(test)]\nuse crate::a::c::T;\n",
+    )
+    .unwrap();
+    let graph = file_graph(src);
+    assert_eq!(graph["a/c.rs"], BTreeSet::from(["b.rs".to_owned()]));
+    assert_eq!(graph["b.rs"], BTreeSet::from(["a/mod.rs".to_owned()]));
+    let found = circles(&graph);
+    assert_eq!(found.len(), 1, "{found:?}");
+    let mut circle = found[0].clone();
+    circle.sort();
+    assert_eq!(circle, ["a/mod.rs", "b.rs"]);
+}
+
+/// The 1 kHz core (`haptics::rt`) is the bottom of the haptic side: it drives a device through
+/// the safety filter and knows nothing of what runs on it (laws, controllers, the simulated
+/// world, recording, acquisition protocols), which wire themselves to it from above.
+#[test]
+fn the_haptic_loop_imports_nothing_above_it() {
+    let graph = file_graph(&root().join("haptics/src"));
+    let above = ["control", "law", "sim", "recorder", "acquire", "bench"];
+    let mut upward = Vec::new();
+    for (file, targets) in graph.iter().filter(|(file, _)| file.starts_with("rt/")) {
+        for target in targets {
+            if above
+                .iter()
+                .any(|a| target.starts_with(&format!("{a}/")) || *target == format!("{a}.rs"))
+            {
+                upward.push(format!("{file} -> {target}"));
+            }
+        }
+    }
+    assert!(upward.is_empty(), "rt/ imports upward: {upward:?}");
+}
