@@ -7,11 +7,14 @@
 //! [`plots`] draws every figure.
 
 pub mod cli;
+pub mod fit_files;
 pub mod models;
 pub mod plots;
 pub mod recognizer;
 pub mod scene;
 pub mod session;
+mod tables;
 pub mod trade;
+pub mod training;
 pub mod view;
 pub mod window;

@@ -1,28 +1,11 @@
-//! `palpus bench`.
+//! `palpus bench loop` and `palpus bench render`.
 
 use std::time::Duration;
 
-use clap::{Args, Subcommand};
+use clap::Args;
 use haptics::bench::{BenchConfig, loop_bench};
 use haptics::rt::{LoopConfig, Percentiles, RtRequest};
 use indicatif::{ProgressBar, ProgressStyle};
-
-/// Measure performance.
-#[derive(Debug, Args)]
-pub(crate) struct BenchArgs {
-    #[command(subcommand)]
-    what: BenchWhat,
-}
-
-#[derive(Debug, Subcommand)]
-enum BenchWhat {
-    Loop(LoopArgs),
-    Svr(super::bench_svr::SvrArgs),
-    SvrScale(super::bench_svr::SvrScaleArgs),
-    Trade(super::bench_trade::TradeArgs),
-    NeedleLaw(super::bench_needle::NeedleLawArgs),
-    Render(RenderArgs),
-}
 
 /// Frames per second of the renderer, headless, with where a frame's time goes.
 ///
@@ -33,7 +16,7 @@ enum BenchWhat {
 /// no GPU). A second pass waits for the device after each stage to split a frame into drawing,
 /// MSAA resolve, overlay CPU work and readback.
 #[derive(Debug, Args)]
-struct RenderArgs {
+pub(crate) struct RenderArgs {
     /// Frames timed per configuration.
     #[arg(long, default_value_t = 30)]
     frames: u32,
@@ -55,7 +38,7 @@ struct RenderArgs {
 /// to zero and comes back over 100 ms. The run ends early only on a stall over 100 ms or more
 /// than 5 stalls within a second.
 #[derive(Debug, Args)]
-struct LoopArgs {
+pub(crate) struct LoopArgs {
     /// How long to run, s.
     #[arg(long, default_value_t = 10.0)]
     seconds: f64,
@@ -86,41 +69,32 @@ fn quantiles(p: &Percentiles) -> String {
     )
 }
 
-pub(crate) fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    match &args.what {
-        BenchWhat::Loop(args) => run_loop(args),
-        BenchWhat::Svr(args) => super::bench_svr::run(args),
-        BenchWhat::SvrScale(args) => super::bench_svr::run_scale(args),
-        BenchWhat::Trade(args) => super::bench_trade::run(args),
-        BenchWhat::NeedleLaw(args) => super::bench_needle::run(args),
-        BenchWhat::Render(args) => {
-            if args.frames == 0 {
-                anyhow::bail!("--frames must be at least 1");
-            }
-            let options = render::bench::BenchOptions {
-                frames: args.frames,
-                ..render::bench::BenchOptions::default()
-            };
-            let bar = ProgressBar::new(render::bench::row_count(&options) as u64).with_style(
-                ProgressStyle::with_template(
-                    "drawing {bar:30} {pos}/{len} configurations {elapsed} (eta {eta})",
-                )
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            let table = render::bench::run_reporting(&options, |done, _| bar.set_position(done as u64));
-            bar.finish_and_clear();
-            let table = table?;
-            if args.markdown {
-                print!("{}", table.to_markdown());
-            } else {
-                print!("{}", table.to_text());
-            }
-            Ok(())
-        }
+/// `palpus bench render`.
+pub(crate) fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
+    if args.frames == 0 {
+        anyhow::bail!("--frames must be at least 1");
     }
+    let options = render::bench::BenchOptions {
+        frames: args.frames,
+        ..render::bench::BenchOptions::default()
+    };
+    let bar = ProgressBar::new(render::bench::row_count(&options) as u64).with_style(
+        ProgressStyle::with_template("drawing {bar:30} {pos}/{len} configurations {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let table = render::bench::run_reporting(&options, |done, _| bar.set_position(done as u64));
+    bar.finish_and_clear();
+    let table = table?;
+    if args.markdown {
+        print!("{}", table.to_markdown());
+    } else {
+        print!("{}", table.to_text());
+    }
+    Ok(())
 }
 
-fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
+/// `palpus bench loop`.
+pub(crate) fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
     if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 86_400.0) {
         anyhow::bail!("--seconds must be in (0, 86400], not {}", args.seconds);
     }

@@ -90,7 +90,7 @@ pub(crate) struct ImportArgs {
     #[arg(value_name = "IN.csv", required = true, num_args = 1..)]
     inputs: Vec<PathBuf>,
     /// Capture kind to produce: rubbing or insertion.
-    #[arg(long, value_parser = parse_kind)]
+    #[arg(long)]
     kind: CaptureKind,
     /// Column mapping, e.g. `time_s=t[ms],tangential_position_m=x[mm],normal_force_n=Fz*0.001`.
     #[arg(long, value_name = "SPEC")]
@@ -115,7 +115,7 @@ pub(crate) struct ImportArgs {
     /// or `bridge` (interpolate in time from the column's finite neighbours, at most 10 rows
     /// in a row, not at the file's ends, not in time); the number dropped or bridged is
     /// printed. Default: drop with --drop-implausible, else error.
-    #[arg(long, value_name = "MODE", value_parser = parse_non_finite)]
+    #[arg(long, value_name = "MODE")]
     non_finite: Option<NonFinite>,
     /// Take time from this position column at --speed-mps: `depth[mm]` (the unit in
     /// brackets is required). time = (position − first position) / speed.
@@ -146,7 +146,7 @@ pub(crate) struct ImportArgs {
     /// Consecutive rows with the same time: `error` (refuse the file), `mean` (merge them
     /// into one row, the mean of each column) or `drop` (keep the first); the number of rows
     /// merged or dropped is printed.
-    #[arg(long, value_name = "MODE", default_value = "error", value_parser = parse_repeated_time)]
+    #[arg(long, value_name = "MODE", default_value = "error")]
     repeated_time: RepeatedTime,
     /// A fast channel packed several samples per row: `NAME=PREFIX_0..PREFIX_N`
     /// (`acc=acc_0..acc_21`). Each row's packed columns become consecutive samples of the
@@ -155,7 +155,7 @@ pub(crate) struct ImportArgs {
     unroll: Option<String>,
     /// With --unroll: how the other mapped columns fill the unrolled samples between rows:
     /// `interpolate` (linearly, towards the next row) or `hold` (the row's value).
-    #[arg(long, value_name = "MODE", default_value = "interpolate", value_parser = parse_slow, requires = "unroll")]
+    #[arg(long, value_name = "MODE", default_value = "interpolate", requires = "unroll")]
     unroll_slow: SlowColumns,
     /// Add this many seconds to input N's times (before joining several), repeatable:
     /// `--clock-offset-s 2=0.013` (input 2's clock reads 13 ms less than the others').
@@ -174,22 +174,6 @@ pub(crate) struct ImportArgs {
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
-}
-
-fn parse_kind(s: &str) -> Result<CaptureKind, String> {
-    s.parse().map_err(|e: capture::UnknownKind| e.to_string())
-}
-
-fn parse_repeated_time(s: &str) -> Result<RepeatedTime, String> {
-    s.parse()
-}
-
-fn parse_non_finite(s: &str) -> Result<NonFinite, String> {
-    s.parse()
-}
-
-fn parse_slow(s: &str) -> Result<SlowColumns, String> {
-    s.parse()
 }
 
 fn parse_offset(s: &str) -> Result<(usize, f64), String> {

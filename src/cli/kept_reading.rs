@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use indicatif::{ProgressBar, ProgressStyle};
 use recognize::{FeatureNeeds, LabelledCapture};
 
+use super::mapped_captures::MappedCaptures;
+
 /// Reads `paths` one at a time with `read` and keeps of each capture only the features `needs`
 /// names, dropping its samples before the next is read. `needs` is asked once, with the first
 /// capture (its rate, its columns), before anything is kept.
@@ -32,4 +34,21 @@ pub(crate) fn keeping_each(
     }
     bar.finish_and_clear();
     Ok(captures)
+}
+
+/// Reads `paths` one at a time and keeps of each only the features `needs` lists (asked once,
+/// with the first capture), dropping its samples before the next is read: memory holds one
+/// capture's samples at a time however many captures there are, and the results are those of
+/// the whole captures. A bar on stderr counts the captures read (only on a terminal).
+pub(crate) fn read_keeping(
+    input: &MappedCaptures,
+    paths: &[PathBuf],
+    default_rate_hz: Option<f64>,
+    needs: impl FnMut(&LabelledCapture) -> anyhow::Result<FeatureNeeds>,
+) -> anyhow::Result<Vec<LabelledCapture>> {
+    keeping_each(
+        paths,
+        |path| input.read(std::slice::from_ref(path), default_rate_hz),
+        needs,
+    )
 }

@@ -18,12 +18,14 @@ mod kept_reading;
 mod mapped_captures;
 mod meta_arg;
 mod model_arg;
-mod recognize_cmd;
+mod recognize_cv_cmd;
+mod recognize_eval_cmd;
+mod recognize_train_cmd;
 mod render_cmd;
 mod run_cmd;
 mod train_args;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 
 /// palpus — haptic VR training on identified dynamics.
 ///
@@ -46,10 +48,45 @@ enum Command {
     Identify(identify_cmd::IdentifyArgs),
     Capture(capture_cmd::CaptureArgs),
     Devices(devices_cmd::DevicesArgs),
-    Bench(bench_cmd::BenchArgs),
-    Recognize(recognize_cmd::RecognizeArgs),
+    Bench(BenchArgs),
+    Recognize(RecognizeArgs),
     // `palpus import`: its help is `ImportArgs`' doc comment (a `///` here would replace it).
     Import(import_cmd::ImportArgs),
+}
+
+/// Measure performance.
+#[derive(Debug, Args)]
+struct BenchArgs {
+    #[command(subcommand)]
+    what: BenchWhat,
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchWhat {
+    Loop(bench_cmd::LoopArgs),
+    Svr(bench_svr::SvrArgs),
+    SvrScale(bench_svr::SvrScaleArgs),
+    Trade(bench_trade::TradeArgs),
+    NeedleLaw(bench_needle::NeedleLawArgs),
+    Render(bench_cmd::RenderArgs),
+}
+
+/// Train and evaluate surface recognizers.
+///
+/// A capture's class is the `surface` in its metadata (and, for scratches, its `behaviour`
+/// picks which classifier answers), so `palpus gen` captures are used as they are.
+#[derive(Debug, Args)]
+struct RecognizeArgs {
+    #[command(subcommand)]
+    what: RecognizeWhat,
+}
+
+#[derive(Debug, Subcommand)]
+enum RecognizeWhat {
+    Train(recognize_train_cmd::TrainArgs),
+    Eval(recognize_eval_cmd::EvalArgs),
+    Cv(recognize_cv_cmd::CvArgs),
+    Categorize(categorize_cmd::CategorizeArgs),
 }
 
 /// Runs the parsed command line.
@@ -90,8 +127,20 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Identify(args) => identify_cmd::run(&args),
         Command::Capture(args) => capture_cmd::run(&args),
         Command::Devices(args) => devices_cmd::run(&args),
-        Command::Bench(args) => bench_cmd::run(&args),
-        Command::Recognize(args) => recognize_cmd::run(&args),
+        Command::Bench(args) => match &args.what {
+            BenchWhat::Loop(args) => bench_cmd::run_loop(args),
+            BenchWhat::Svr(args) => bench_svr::run(args),
+            BenchWhat::SvrScale(args) => bench_svr::run_scale(args),
+            BenchWhat::Trade(args) => bench_trade::run(args),
+            BenchWhat::NeedleLaw(args) => bench_needle::run(args),
+            BenchWhat::Render(args) => bench_cmd::run_render(args),
+        },
+        Command::Recognize(args) => match &args.what {
+            RecognizeWhat::Train(args) => recognize_train_cmd::run(args),
+            RecognizeWhat::Eval(args) => recognize_eval_cmd::run(args),
+            RecognizeWhat::Cv(args) => recognize_cv_cmd::run(args),
+            RecognizeWhat::Categorize(args) => categorize_cmd::run(args),
+        },
         Command::Import(args) => import_cmd::run(&args),
     }
 }

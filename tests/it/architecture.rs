@@ -284,6 +284,52 @@ fn circles(graph: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
     s.found
 }
 
+/// Whether a `src/cli` module is a command (its subcommand's arguments and run), not an
+/// argument module the commands share.
+fn is_command(module: &str) -> bool {
+    module.ends_with("_cmd") || module.starts_with("bench_")
+}
+
+#[test]
+fn commands_are_thin_and_import_no_other_command() {
+    let dir = root().join("src/cli");
+    let mut found = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let Some(module) = path.file_stem().and_then(|s| s.to_str()).map(str::to_owned) else {
+            continue;
+        };
+        if path.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines = text.lines().count();
+        assert!(
+            lines <= 300,
+            "src/cli/{module}.rs has {lines} lines: its tables or loops belong outside the command"
+        );
+        if module == "mod" {
+            continue;
+        }
+        for (at, _) in text.match_indices("super::") {
+            let other: String = text[at + "super::".len()..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            assert!(
+                !(is_command(&other) && other != module),
+                "src/cli/{module}.rs imports the command `{other}`: share an argument module instead"
+            );
+        }
+        found += usize::from(is_command(&module));
+    }
+    assert!(
+        found >= 10,
+        "only {found} command modules found in {}",
+        dir.display()
+    );
+}
+
 #[test]
 fn no_two_files_import_each_other() {
     let mut all = Vec::new();
