@@ -24,7 +24,8 @@ use identify::{FitLimits, IdentifyOptions, ModelFile, ModelKind, identify_with};
 use sha2::{Digest, Sha256};
 
 use crate::scene::{ModelBudget, ModelRole, ModelSource, Scene};
-use crate::trade::{Budget, TradeTable, sha256_hex};
+use crate::trade::{Budget, TradeTable};
+use capture::sha256_hex;
 
 /// Bumped when identification changes in a way that makes cached models stale.
 const CACHE_VERSION: &str = "palpus-model-cache 1";

@@ -5,11 +5,9 @@
 //! training capture's bytes, so that a scene never picks hyperparameters from a front measured
 //! on another capture (its own capture changed, or the wrong file was named).
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use identify::{ModelKind, SearchPoint};
-use sha2::{Digest, Sha256};
 
 /// The start of a trade table's first line.
 const MAGIC: &str = "# palpus-trade format=1";
@@ -102,20 +100,12 @@ pub fn pareto_front(rows: &[TradeRow]) -> Vec<bool> {
         .collect()
 }
 
-/// SHA-256 of `bytes`, in hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().fold(String::new(), |mut s, b| {
-        let _ = write!(s, "{b:02x}");
-        s
-    })
-}
-
 /// A trade table: what was measured, and the points.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TradeTable {
     /// The model kind.
     pub model: ModelKind,
-    /// SHA-256 of the training capture's bytes ([`sha256_hex`]).
+    /// SHA-256 of the training capture's bytes ([`capture::sha256_hex`]).
     pub capture_sha256: String,
     /// The points, in the order measured.
     pub rows: Vec<TradeRow>,
@@ -466,7 +456,7 @@ mod tests {
         rows.iter_mut().zip(front).for_each(|(r, f)| r.on_front = f);
         TradeTable {
             model: ModelKind::NeedlePuncture,
-            capture_sha256: sha256_hex(b"capture"),
+            capture_sha256: capture::sha256_hex(b"capture"),
             rows,
         }
     }

@@ -20,7 +20,7 @@
 
 use capture::kind;
 use capture::rng::SplitMix64;
-use nalgebra::{DMatrix, DVector};
+use faer::Mat;
 use serde::{Deserialize, Serialize};
 
 use svm::InputScaling;
@@ -81,7 +81,7 @@ impl CoulombViscous {
         check_series(kind::VELOCITY_MPS, velocity_mps, n)?;
         check_series(kind::FRICTION_FORCE_N, friction_force_n, n)?;
         let columns = if intercept { 3 } else { 2 };
-        let a = DMatrix::from_fn(n, columns, |i, j| {
+        let a = Mat::from_fn(n, columns, |i, j| {
             let s = sign(velocity_mps[i]);
             match j {
                 0 => s * normal_force_n[i],
@@ -89,8 +89,7 @@ impl CoulombViscous {
                 _ => s,
             }
         });
-        let b = DVector::from_column_slice(friction_force_n);
-        let x = least_squares(a, b, Rank::Required("Coulomb+viscous"))?;
+        let x = least_squares(a, friction_force_n, Rank::Required("Coulomb+viscous"))?;
         Ok(Self {
             coulomb: x[0],
             viscous_nspm: x[1],
@@ -152,13 +151,12 @@ impl CoulombViscousStiffness {
         check_series(kind::DEPTH_M, depth_m, n)?;
         check_series(kind::VELOCITY_MPS, velocity_mps, n)?;
         check_series(kind::AXIAL_FORCE_N, force_n, n)?;
-        let a = DMatrix::from_fn(n, 3, |i, j| match j {
+        let a = Mat::from_fn(n, 3, |i, j| match j {
             0 => sign(velocity_mps[i]),
             1 => velocity_mps[i],
             _ => depth_m[i],
         });
-        let b = DVector::from_column_slice(force_n);
-        let x = least_squares(a, b, Rank::Required("Coulomb+viscous+stiffness"))?;
+        let x = least_squares(a, force_n, Rank::Required("Coulomb+viscous+stiffness"))?;
         Ok(Self {
             coulomb_n: x[0],
             viscous_nspm: x[1],
@@ -339,7 +337,7 @@ impl RbfNetwork {
         let inv_two_sigma2 = 0.5 / (width * width);
         let rows = n + k;
         let lambda_rows = (params.ridge * n as f64).sqrt();
-        let mut a = DMatrix::zeros(rows, k + 1);
+        let mut a = Mat::zeros(rows, k + 1);
         for i in 0..n {
             let xi = &xs[i * dim..(i + 1) * dim];
             for j in 0..k {
@@ -350,15 +348,15 @@ impl RbfNetwork {
         for j in 0..k {
             a[(n + j, j)] = lambda_rows;
         }
-        let mut b = DVector::zeros(rows);
-        b.rows_mut(0, n).copy_from_slice(y);
-        let solution = least_squares(a, b, Rank::MinimumNorm)?;
+        let mut b = vec![0.0; rows];
+        b[..n].copy_from_slice(y);
+        let solution = least_squares(a, &b, Rank::MinimumNorm)?;
         Ok(Self {
             scaling,
             dim,
             centres,
             width,
-            weights: solution.rows(0, k).iter().copied().collect(),
+            weights: solution[..k].to_vec(),
             bias: solution[k],
         })
     }
@@ -571,34 +569,34 @@ pub(crate) enum Rank {
 }
 
 /// `argmin ‖A x − b‖` by SVD of `A` with its columns scaled to unit norm (which makes the rank
-/// decision independent of the regressors' units).
-pub(crate) fn least_squares(
-    mut a: DMatrix<f64>,
-    b: DVector<f64>,
-    rank: Rank,
-) -> Result<DVector<f64>, IdentifyError> {
+/// decision independent of the regressors' units); singular values up to
+/// `ε · max(rows, columns)` × the largest count as zero.
+pub(crate) fn least_squares(mut a: Mat<f64>, b: &[f64], rank: Rank) -> Result<Vec<f64>, IdentifyError> {
     let columns = a.ncols();
     let mut norms = Vec::with_capacity(columns);
-    for mut col in a.column_iter_mut() {
-        let norm = col.norm();
+    for j in 0..columns {
+        let norm = a.col(j).norm_l2();
         let s = if norm > 0.0 { norm } else { 1.0 };
-        col /= s;
+        for i in 0..a.nrows() {
+            a[(i, j)] /= s;
+        }
         norms.push(s);
     }
-    let svd = a.svd(true, true);
-    let sigma_max = svd.singular_values.max();
-    let tolerance = sigma_max * f64::EPSILON * (svd.singular_values.len().max(b.len()) as f64);
-    if let Rank::Required(model) = rank {
-        let rank = svd.rank(tolerance);
-        if rank < columns || sigma_max == 0.0 {
-            return Err(IdentifyError::RankDeficient { model, rank, columns });
-        }
-    }
-    let mut x = svd
-        .solve(&b, tolerance)
-        .map_err(|reason| IdentifyError::Numerical {
-            reason: reason.to_owned(),
+    let relative_cutoff = f64::EPSILON * (columns.min(a.nrows()).max(b.len()) as f64);
+    let solution =
+        svm::least_squares_svd(&a, b, relative_cutoff).ok_or_else(|| IdentifyError::Numerical {
+            reason: "the singular value decomposition did not converge".to_owned(),
         })?;
+    if let Rank::Required(model) = rank
+        && (solution.rank < columns || solution.sigma_max == 0.0)
+    {
+        return Err(IdentifyError::RankDeficient {
+            model,
+            rank: solution.rank,
+            columns,
+        });
+    }
+    let mut x = solution.x;
     for (xi, s) in x.iter_mut().zip(&norms) {
         *xi /= s;
     }

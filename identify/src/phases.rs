@@ -43,7 +43,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::baselines::{Rank, least_squares};
 use crate::error::IdentifyError;
-use nalgebra::{DMatrix, DVector};
+use faer::Mat;
 use svm::{InputScaling, SvrModel};
 
 /// Most layers a model holds.
@@ -816,7 +816,6 @@ pub(crate) fn fit_linear(
 ) -> Result<Vec<f64>, IdentifyError> {
     let rows: Vec<Vec<f64>> = (0..n).map(row).collect();
     let cols = rows.first().map_or(0, Vec::len);
-    let a = DMatrix::from_fn(n, cols, |i, j| rows[i][j]);
-    let x = least_squares(a, DVector::from_column_slice(target), Rank::MinimumNorm)?;
-    Ok(x.iter().copied().collect())
+    let a = Mat::from_fn(n, cols, |i, j| rows[i][j]);
+    least_squares(a, target, Rank::MinimumNorm)
 }

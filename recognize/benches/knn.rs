@@ -10,6 +10,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
+use capture::rng::SplitMix64;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use recognize::knn::{FeatureScaling, Knn, KnnParams};
 
@@ -17,31 +18,17 @@ use recognize::knn::{FeatureScaling, Knn, KnnParams};
 const QUERIES: usize = 200;
 const CLASSES: usize = 20;
 
-/// A small deterministic generator (SplitMix64), so the bench needs no random-number crate.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// `n` points of `dim` values in 20 blobs, labels by blob, and `QUERIES` queries drawn the
 /// same way.
 fn data(n: usize, dim: usize, seed: u64) -> (Vec<Vec<f64>>, Vec<usize>, Vec<Vec<f64>>) {
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64::new(seed);
     let centres: Vec<Vec<f64>> = (0..CLASSES)
-        .map(|_| (0..dim).map(|_| 0.2 + 0.6 * rng.next()).collect())
+        .map(|_| (0..dim).map(|_| 0.2 + 0.6 * rng.next_f64()).collect())
         .collect();
-    let point = |c: usize, rng: &mut Rng| -> Vec<f64> {
+    let point = |c: usize, rng: &mut SplitMix64| -> Vec<f64> {
         centres[c]
             .iter()
-            .map(|&m| (m + 0.15 * (rng.next() + rng.next() + rng.next() - 1.5)).clamp(0.0, 1.0))
+            .map(|&m| (m + 0.15 * (rng.next_f64() + rng.next_f64() + rng.next_f64() - 1.5)).clamp(0.0, 1.0))
             .collect()
     };
     let labels: Vec<usize> = (0..n).map(|i| i % CLASSES).collect();

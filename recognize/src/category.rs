@@ -7,7 +7,7 @@
 //! surfaces the recognizer cannot tell apart belong together, whatever the features' scales.
 //! Matrices are `&[Vec<f64>]`, row-major and square.
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use faer::{Mat, Side};
 use serde::Serialize;
 
 use crate::RecognizeError;
@@ -165,17 +165,15 @@ pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut,
     // (several disconnected groups), where the solver's order among equal eigenvalues would
     // otherwise be arbitrary.
     let u: Vec<f64> = degree.iter().map(|d| d.sqrt() / norm).collect();
-    let laplacian = DMatrix::from_fn(m, m, |a, b| {
+    let laplacian = Mat::from_fn(m, m, |a, b| {
         let identity = if a == b { 1.0 } else { 0.0 };
         identity - inv_sqrt[a] * similarity[indices[a]][indices[b]] * inv_sqrt[b] + 3.0 * u[a] * u[b]
     });
-    let eig = SymmetricEigen::new(laplacian);
+    let (values, vectors) = symmetric_eigen(&laplacian)?;
     let smallest = (0..m)
-        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+        .min_by(|&a, &b| values[a].total_cmp(&values[b]))
         .ok_or(RecognizeError::EmptyMatrix)?;
-    let y: Vec<f64> = (0..m)
-        .map(|a| eig.eigenvectors[(a, smallest)] * inv_sqrt[a])
-        .collect();
+    let y: Vec<f64> = (0..m).map(|a| vectors[(a, smallest)] * inv_sqrt[a]).collect();
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| y[a].total_cmp(&y[b]).then(indices[a].cmp(&indices[b])));
     let mut best: Option<(f64, usize)> = None;
@@ -316,21 +314,23 @@ pub fn classical_mds<const D: usize>(distances: &[Vec<f64>]) -> Result<Vec<[f64;
             "MDS needs at least one dimension",
         ));
     }
-    let sq = DMatrix::from_fn(n, n, |i, j| distances[i][j] * distances[i][j]);
-    let row_mean: Vec<f64> = (0..n).map(|i| sq.row(i).mean()).collect();
-    let all_mean = sq.mean();
+    let sq = |i: usize, j: usize| distances[i][j] * distances[i][j];
+    let row_mean: Vec<f64> = (0..n)
+        .map(|i| (0..n).map(|j| sq(i, j)).sum::<f64>() / n as f64)
+        .collect();
+    let all_mean = row_mean.iter().sum::<f64>() / n as f64;
     // B = −½ J D² J, written out: −½ (d²_ij − mean_i − mean_j + mean).
-    let b = DMatrix::from_fn(n, n, |i, j| {
-        -0.5 * (sq[(i, j)] - row_mean[i] - row_mean[j] + all_mean)
+    let b = Mat::from_fn(n, n, |i, j| {
+        -0.5 * (sq(i, j) - row_mean[i] - row_mean[j] + all_mean)
     });
-    let eig = SymmetricEigen::new(b);
+    let (values, vectors) = symmetric_eigen(&b)?;
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    order.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
     let mut out = vec![[0.0; D]; n];
     for (axis, &k) in order.iter().take(D).enumerate() {
         // Negative eigenvalues mean the distances are not Euclidean; those axes carry nothing.
-        let scale = eig.eigenvalues[k].max(0.0).sqrt();
-        let column = eig.eigenvectors.column(k);
+        let scale = values[k].max(0.0).sqrt();
+        let column = vectors.col(k);
         let flip = column
             .iter()
             .copied()
@@ -341,6 +341,17 @@ pub fn classical_mds<const D: usize>(distances: &[Vec<f64>]) -> Result<Vec<[f64;
         }
     }
     Ok(out)
+}
+
+/// The eigenvalues and eigenvectors (as columns) of the symmetric matrix `a`, from its lower
+/// triangle.
+fn symmetric_eigen(a: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>), RecognizeError> {
+    let eig = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| RecognizeError::category_config("the eigendecomposition did not converge"))?;
+    let s = eig.S().column_vector();
+    let values = (0..s.nrows()).map(|k| s[k]).collect();
+    Ok((values, eig.U().to_owned()))
 }
 
 /// ISOMAP (Tenenbaum et al.): geodesic distances along the graph joining each point to its

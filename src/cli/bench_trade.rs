@@ -70,7 +70,7 @@ pub(crate) fn run(args: &TradeArgs) -> anyhow::Result<()> {
     };
     let read = |p: &Path| Capture::read_file(p, args.model.capture_kind());
     let train = read(&args.capture)?;
-    let capture_sha256 = crate::trade::sha256_hex(
+    let capture_sha256 = capture::sha256_hex(
         &std::fs::read(&args.capture).with_context(|| format!("reading {}", args.capture.display()))?,
     );
     let test = args.test.as_deref().map(read).transpose()?;

@@ -28,13 +28,8 @@ fn read(path: &str) -> Set {
 /// A needle-like curve: force rising with depth, a fall at a puncture, a velocity term, noise
 /// from a fixed linear congruential sequence.
 fn synthetic(n: usize) -> Set {
-    let mut state = 12345u64;
-    let mut noise = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = capture::rng::SplitMix64::new(12345u64);
+    let mut noise = move || rng.next_f64() - 0.5;
     let (mut x, mut y) = (Vec::new(), Vec::new());
     for k in 0..n {
         let d = k as f64 / n as f64;

@@ -51,21 +51,45 @@ pub(crate) fn solve_bordered(
 /// Minimum-norm least-squares solution of `a x = b` by the thin SVD, singular values up to
 /// `1e-12 ×` the largest counted as zero.
 pub(crate) fn svd_solve(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
+    least_squares_svd(a, b, 1e-12).map(|s| s.x)
+}
+
+/// A least-squares solution by SVD and what it rests on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SvdSolution {
+    /// The minimum-norm `x` minimising `‖a x − b‖`.
+    pub x: Vec<f64>,
+    /// How many singular values lie above the cutoff: `x`'s columns are independent when this
+    /// equals their count.
+    pub rank: usize,
+    /// The largest singular value.
+    pub sigma_max: f64,
+}
+
+/// Minimum-norm least-squares solution of `a x = b` by the thin SVD, singular values up to
+/// `relative_cutoff ×` the largest counted as zero (the pseudo-inverse's rule); `None` when the
+/// SVD does not converge or `b` is not as long as `a` is tall.
+pub fn least_squares_svd(a: &Mat<f64>, b: &[f64], relative_cutoff: f64) -> Option<SvdSolution> {
+    if b.len() != a.nrows() {
+        return None;
+    }
     let svd = a.thin_svd().ok()?;
     let (u, v) = (svd.U(), svd.V());
     let s = svd.S().column_vector();
-    let largest = (0..s.nrows()).fold(0.0f64, |m, i| m.max(s[i]));
-    let cutoff = 1e-12 * largest;
+    let sigma_max = (0..s.nrows()).fold(0.0f64, |m, i| m.max(s[i]));
+    let cutoff = relative_cutoff * sigma_max;
     let mut x = vec![0.0; a.ncols()];
+    let mut rank = 0;
     for i in 0..s.nrows() {
         if s[i] > cutoff {
+            rank += 1;
             let coefficient = (0..a.nrows()).map(|r| u[(r, i)] * b[r]).sum::<f64>() / s[i];
             for (col, xc) in x.iter_mut().enumerate() {
                 *xc += v[(col, i)] * coefficient;
             }
         }
     }
-    Some(x)
+    Some(SvdSolution { x, rank, sigma_max })
 }
 
 #[cfg(test)]

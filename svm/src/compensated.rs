@@ -122,14 +122,12 @@ mod tests {
     #[test]
     fn the_error_bound_holds_against_exact_integers() {
         // Sums of integers below 2⁵³ are exact in i128: the bound must cover the f64 result.
-        let mut state = 12345u64;
+        let mut rng = capture::rng::SplitMix64::new(12345);
         for _ in 0..200 {
             let mut acc = Accumulator::new();
             let mut exact: i128 = 0;
             for _ in 0..50 {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                let state = rng.next_u64();
                 let v = ((state >> 11) as i64 - (1i64 << 52)) as f64 * 2f64.powi(((state >> 3) % 40) as i32);
                 acc.add(v);
                 exact += v as i128;

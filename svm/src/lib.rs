@@ -34,6 +34,7 @@ mod sample;
 mod smo;
 mod smo_finish;
 
+pub use bordered::{SvdSolution, least_squares_svd};
 pub use certificate::ACCEPT_GAP;
 pub use error::SvmError;
 pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};

@@ -24,19 +24,6 @@ fn import(input: &Path, out: &Path, args: &[&str]) -> std::process::Output {
     palpus(&all)
 }
 
-/// Deterministic uniform numbers in [-1, 1) (xorshift64*), so the test needs no RNG crate.
-struct Jitter(u64);
-
-impl Jitter {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        bits as f64 / (1u64 << 52) as f64 - 1.0
-    }
-}
-
 // The analytic test signals, SI units: slow motion and load plus a 2 kHz tool vibration.
 const HF_HZ: f64 = 2000.0;
 const POS_AMPLITUDE_M: f64 = 0.01;
@@ -88,10 +75,15 @@ struct Downsampled {
 fn downsample(jitter_ms: f64) -> Downsampled {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("robot_log.csv");
-    let mut jitter = Jitter(0x9e37_79b9_7f4a_7c15);
+    let mut rng = capture::rng::SplitMix64::new(0x9e37_79b9_7f4a_7c15);
     // 20 006 samples span 2.0005 s, so the 1 kHz grid ends at t0 + 2 s whatever the jitter.
     let times_ms: Vec<String> = (0..20_006)
-        .map(|i| format!("{:.6}", 12.5 + 0.1 * i as f64 + jitter_ms * jitter.next()))
+        .map(|i| {
+            format!(
+                "{:.6}",
+                12.5 + 0.1 * i as f64 + jitter_ms * (2.0 * rng.next_f64() - 1.0)
+            )
+        })
         .collect();
     let t0: f64 = times_ms[0].parse::<f64>().unwrap() / 1000.0;
     let mut csv = String::from("# logged by rig-7, 10 kHz\n\"Time\";\"X pos\";\"Fz\";\"status\"\n");

@@ -260,7 +260,7 @@ fn bench_trade_writes_every_point_and_the_front_nothing_beats() {
         lines.next().unwrap(),
         format!(
             "# palpus-trade format=1 model=hard capture_sha256={}",
-            palpus::trade::sha256_hex(&bytes)
+            capture::sha256_hex(&bytes)
         )
     );
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -7,10 +7,11 @@
 use crate::common;
 use std::path::{Path, PathBuf};
 
+use capture::sha256_hex;
 use identify::{ModelKind, SearchPoint};
 use palpus::models::{self, ModelError, ResolvedModel, Sources};
 use palpus::scene::Scene;
-use palpus::trade::{TradeRow, TradeTable, pareto_front, sha256_hex};
+use palpus::trade::{TradeRow, TradeTable, pareto_front};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -23,15 +23,6 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Deterministic numbers in [0, 1) for jittered clocks (a linear congruential generator: the
-/// test needs variety, not quality).
-fn jitter(state: &mut u64) -> f64 {
-    *state = state
-        .wrapping_mul(6_364_136_223_846_793_005)
-        .wrapping_add(1_442_695_040_888_963_407);
-    (*state >> 11) as f64 / (1u64 << 53) as f64
-}
-
 // Straight lines in true time, which linear interpolation and the zero-phase low-pass both
 // reproduce, so the joined values must equal them to rounding.
 fn force_n(t: f64) -> f64 {
@@ -50,13 +41,13 @@ fn accel_mps2(t: f64) -> f64 {
 /// ms), position at ~70 Hz jittered on a clock 0.25 s behind (time `stamp` in µs), and an
 /// accelerometer uniform at 5 kHz from 0.031 s (time in s).
 fn three_clocks(dir: &Path) -> [PathBuf; 3] {
-    let mut state = 7;
+    let mut rng = crate::rng::SplitMix64::new(7);
     let mut force = String::from("t,Fz\n");
     let mut t = 0.0;
     while t <= 1.0 {
         let t_ms = (t * 1e3_f64 * 1e3).round() / 1e3;
         writeln!(force, "{t_ms},{}", force_n(t_ms / 1e3)).unwrap();
-        t += (0.8 + 0.4 * jitter(&mut state)) / 90.0;
+        t += (0.8 + 0.4 * rng.next_f64()) / 90.0;
     }
     let mut position = String::from("stamp,x\n");
     let mut t = 0.012;
@@ -64,7 +55,7 @@ fn three_clocks(dir: &Path) -> [PathBuf; 3] {
         let t_us = (t * 1e6_f64).round();
         // The stage's clock reads 0.25 s less than the force sensor's.
         writeln!(position, "{},{}", t_us - 250_000.0, position_m(t_us / 1e6) * 1e3).unwrap();
-        t += (0.8 + 0.4 * jitter(&mut state)) / 70.0;
+        t += (0.8 + 0.4 * rng.next_f64()) / 70.0;
     }
     let mut accel = String::from("time,ax\n");
     for j in 0..4900 {

@@ -8,18 +8,12 @@ use std::path::Path;
 use capture::{Capture, CaptureKind};
 use identify::{PunctureParams, detect_punctures, force_noise_n, group_layers};
 
-/// A deterministic standard normal sequence (SplitMix64 + Box–Muller), so the tests need no
+/// A deterministic standard normal sequence (`capture::rng` + Box–Muller), so the tests need no
 /// RNG crate and give the same noise every run.
 fn normals(seed: u64, n: usize) -> Vec<f64> {
-    let mut state = seed;
-    let mut next = move || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    };
+    let mut rng = capture::rng::SplitMix64::new(seed);
+    // Half a step above 0 so that the logarithm below is finite.
+    let mut next = move || ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
     (0..n)
         .map(|_| {
             let (u1, u2) = (next(), next());

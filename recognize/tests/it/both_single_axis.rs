@@ -20,13 +20,10 @@ const SAMPLES: usize = 4500;
 /// `three_axes`, the z axis of an accelerometer whose x and y read 0: their magnitude is the
 /// same signal.
 fn rub(surface: &str, tones_hz: [f64; 2], trial: u32, three_axes: bool) -> LabelledCapture {
-    let mut state = 0x2545_f491_4f6c_dd1d_u64 ^ (u64::from(trial) << 21) ^ tones_hz[0].to_bits();
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = capture::rng::SplitMix64::new(
+        0x2545_f491_4f6c_dd1d_u64 ^ (u64::from(trial) << 21) ^ tones_hz[0].to_bits(),
+    );
+    let mut noise = move || rng.next_f64() - 0.5;
     let t: Vec<f64> = (0..SAMPLES).map(|i| i as f64 / RATE_HZ).collect();
     let phase = f64::from(trial) * 0.9;
     let position: Vec<f64> = t.iter().map(|t| 0.005 * t).collect();

@@ -34,13 +34,8 @@ fn friction_n(x: f64) -> f64 {
 /// A stroke at `speed_mps` (after a 0.2 s ramp) over 50 mm, sampled at [`RATE_HZ`] with an
 /// encoder of 1 µm and 1 µm of height noise: positions, heights, friction.
 fn stroke(speed_mps: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-    let mut state = 11u64;
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
+    let mut rng = capture::rng::SplitMix64::new(11u64);
+    let mut noise = move || rng.next_f64() - 0.5;
     let quantize = |v: f64| (v / 1e-6).round() * 1e-6;
     let dt = 1.0 / RATE_HZ;
     let (mut xs, mut zs, mut fs) = (Vec::new(), Vec::new(), Vec::new());
@@ -138,13 +133,8 @@ fn at_the_protocol_speed_following_changes_nothing() {
 #[test]
 fn streaming_equals_batch_when_following_a_changing_speed() {
     // Speeding up from 2 to 20 mm/s and back over the stroke.
-    let mut state = 3u64;
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
+    let mut rng = capture::rng::SplitMix64::new(3u64);
+    let mut noise = move || rng.next_f64() - 0.5;
     let n = 8000;
     let (mut xs, mut zs, mut fs) = (Vec::new(), Vec::new(), Vec::new());
     let mut x = 0.0;

@@ -16,13 +16,10 @@ const RATE_HZ: f64 = 400.0;
 /// deterministic noise that differs per trial.
 fn scratch(surface: &str, tones_hz: [f64; 2], trial: u32) -> LabelledCapture {
     let n = 1200;
-    let mut state = 0x9e37_79b9_7f4a_7c15_u64 ^ (u64::from(trial) << 17) ^ tones_hz[0].to_bits();
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = capture::rng::SplitMix64::new(
+        0x9e37_79b9_7f4a_7c15_u64 ^ (u64::from(trial) << 17) ^ tones_hz[0].to_bits(),
+    );
+    let mut noise = move || rng.next_f64() - 0.5;
     let phase = f64::from(trial) * 0.7;
     let vibration: Vec<f64> = (0..n)
         .map(|i| {

@@ -138,27 +138,19 @@ fn assert_brackets(fitted: &svm::SvrFit, best: f64, ctx: &str) {
     assert!(fitted.relative_gap() <= svm::ACCEPT_GAP, "{ctx}");
 }
 
-/// A small deterministic generator so the test needs no RNG crate.
-fn lcg(state: &mut u64) -> f64 {
-    *state = state
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    ((*state >> 11) as f64) / ((1u64 << 53) as f64)
-}
-
 #[test]
 fn linear_1d_problems_match_the_exact_optimum_across_c_and_epsilon() {
-    let mut state = 42u64;
+    let mut rng = capture::rng::SplitMix64::new(42);
     for n in [1usize, 2, 5, 31] {
         for c in [1e-3, 1.0, 1e3, 1e11] {
             for eps in [0.0, 1e-6, 0.01, 0.1] {
-                let x: Vec<f64> = (0..n).map(|_| 2.0 * lcg(&mut state)).collect();
+                let x: Vec<f64> = (0..n).map(|_| 2.0 * rng.next_f64()).collect();
                 // A line with noise and a few gross outliers, so samples sit outside the tube.
                 let y: Vec<f64> = x
                     .iter()
                     .enumerate()
                     .map(|(i, xi)| {
-                        0.3 * xi + 0.05 + 0.02 * (lcg(&mut state) - 0.5) + if i % 7 == 3 { 0.5 } else { 0.0 }
+                        0.3 * xi + 0.05 + 0.02 * (rng.next_f64() - 0.5) + if i % 7 == 3 { 0.5 } else { 0.0 }
                     })
                     .collect();
                 let fitted =

@@ -5,13 +5,8 @@ use super::*;
 
 /// A rough, wavy, tilted profile with noisy friction, sampled like the thesis's rubbing.
 fn signals(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-    let mut state = 7u64;
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
+    let mut rng = capture::rng::SplitMix64::new(7u64);
+    let mut noise = move || rng.next_f64() - 0.5;
     let step_m = 5e-6;
     let mut x = Vec::new();
     let mut z = Vec::new();
