@@ -260,17 +260,39 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
             &extra,
         )
     });
-    let anytime = |model: &str, fuse: Option<&str>| {
+    let anytime_args = |model: &str, fuse: Option<&str>, memory_s: Option<&str>| {
         let mut args = vec!["recognize", "eval", model, "--sequential", "0.9", "--json"];
         if let Some(other) = fuse {
             args.extend(["--fuse", other]);
         }
+        if let Some(memory_s) = memory_s {
+            args.extend(["--memory-s", memory_s]);
+        }
         args.extend(test.iter().map(String::as_str));
-        json(&args)
+        args.into_iter().map(str::to_owned).collect::<Vec<String>>()
+    };
+    let anytime = |model: &str, fuse: Option<&str>| {
+        let args = anytime_args(model, fuse, None);
+        json(&args.iter().map(String::as_str).collect::<Vec<_>>())
     };
     let (nakano, vibration) = (&fusion_models[0], &fusion_models[1]);
-    let alone = [anytime(nakano, None), anytime(vibration, None)];
-    let fused = anytime(nakano, Some(vibration));
+    // The evaluations are independent: they share the cores. The last decides over another
+    // memory than the weights were fitted over.
+    let mut outputs = parallel_map(
+        &[
+            anytime_args(nakano, None, None),
+            anytime_args(vibration, None, None),
+            anytime_args(nakano, Some(vibration), None),
+            anytime_args(nakano, None, Some("1")),
+        ],
+        |args| succeeds(&args.iter().map(String::as_str).collect::<Vec<_>>()),
+    )
+    .into_iter();
+    let mut next = || outputs.next().expect("an evaluation");
+    let mut read = || -> serde_json::Value { serde_json::from_slice(&next().stdout).expect("json") };
+    let alone = [read(), read()];
+    let fused = read();
+    let warned = String::from_utf8_lossy(&next().stderr).into_owned();
     let row = |e: &serde_json::Value| e["rows"][0].clone();
     let number = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"));
     let accuracy = |e: &serde_json::Value| number(&row(e), "correct") / number(&row(e), "decided");
@@ -320,18 +342,6 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
     }
     // Both were fitted over the default memory; decided over another, the weight says it is
     // outside what the fit measured.
-    let mut args = vec![
-        "recognize",
-        "eval",
-        nakano,
-        "--sequential",
-        "0.9",
-        "--memory-s",
-        "1",
-        "--json",
-    ];
-    args.extend(test.iter().map(String::as_str));
-    let warned = String::from_utf8_lossy(&succeeds(&args).stderr).into_owned();
     assert!(
         warned.contains("its window weight was fitted over a memory of 3 s and is used over 1 s"),
         "{warned}"
@@ -374,9 +384,18 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
         .remove("posterior_weight");
     let raw = dir.path().join("anytime_knn_raw.json");
     std::fs::write(&raw, file.to_string()).expect("write");
-    let raw = anytime(raw.to_str().expect("utf-8 path"), None);
-    let calibrated = anytime(&knn, None);
-    let knn_fused = anytime(&knn, Some(vibration));
+    let raw = raw.to_str().expect("utf-8 path");
+    let mut evaluations = parallel_map(
+        &[
+            (raw, None),
+            (knn.as_str(), None),
+            (knn.as_str(), Some(vibration.as_str())),
+        ],
+        |(model, fuse)| anytime(model, *fuse),
+    )
+    .into_iter();
+    let mut next = || evaluations.next().expect("an evaluation");
+    let (raw, calibrated, knn_fused) = (next(), next(), next());
     let summary = summarize(&[
         (&raw, "k-NN raw"),
         (&calibrated, "k-NN calibrated"),
@@ -520,7 +539,11 @@ fn multistream_logs_import_and_every_method_recognizes_with_default_options() {
         args.extend(slow_test.iter().map(String::as_str));
         json(&args)
     };
-    let (in_hz, in_travel) = (at_half_speed(vibration), at_half_speed(&over_travel));
+    let [in_hz, in_travel] = <[serde_json::Value; 2]>::try_from(parallel_map(
+        &[vibration.as_str(), over_travel.as_str()],
+        |model| at_half_speed(model),
+    ))
+    .expect("two evaluations");
     let speeds = format!(
         "at half speed: in hertz {:.1} % right, {} not ending right; over travel {:.1} %, {}",
         100.0 * accuracy(&in_hz),
