@@ -7,6 +7,7 @@
 //! [`plots`] draws every figure.
 
 pub mod cli;
+pub mod exit;
 pub mod fit_files;
 pub mod models;
 pub mod plots;

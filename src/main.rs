@@ -2,6 +2,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use palpus::cli::{Cli, describe, run};
+use palpus::exit::exit_code;
 
 fn main() -> ExitCode {
     end_quietly_on_a_closed_pipe();
@@ -14,7 +15,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {}", describe(&error));
-            ExitCode::FAILURE
+            ExitCode::from(exit_code(&error))
         }
     };
     drop(quiet);

@@ -567,3 +567,102 @@ fn palpus_render_draws_each_default_scene_and_the_dimple() {
         text(&o)
     );
 }
+
+#[test]
+fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let _one = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    // The model is identified and cached first, so that the stop below lands in the loop.
+    run_unpaced(&["--duration", "0.2"], &dir.path().join("warm"), &cache);
+    let target = dir.path().join("session.csv");
+    let mut child = palpus_at_root(
+        "run",
+        &[
+            "--headless",
+            "--duration",
+            "6",
+            "--record",
+            target.to_str().unwrap(),
+            "--report",
+            dir.path().join("report").to_str().unwrap(),
+        ],
+        &cache,
+    )
+    .env_remove("DISPLAY")
+    .env_remove("WAYLAND_DISPLAY")
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    stdout.read_line(&mut first).unwrap();
+    assert!(first.starts_with("running scene"), "{first}");
+    std::thread::sleep(std::time::Duration::from_secs(1));
+    let signal = |name: &str| {
+        let ok = std::process::Command::new("kill")
+            .args([name, &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill {name}");
+    };
+    signal("-STOP");
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    signal("-CONT");
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{first}{rest}{stderr}");
+    let partial = format!("{}.partial", target.display());
+    assert!(
+        stderr.contains("stalled") && stderr.contains(&partial),
+        "the error names the stall and the recording: {stderr}"
+    );
+    assert!(
+        !target.exists(),
+        "a session that ended early does not stand in for a whole one"
+    );
+    assert!(Path::new(&partial).exists());
+    assert!(
+        dir.path().join("report/report.json").exists(),
+        "the report is written first"
+    );
+}
+
+#[test]
+fn a_loop_benchmark_the_watchdog_ended_exits_3() {
+    let _one = serial();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
+        .args(["bench", "loop", "--seconds", "4", "--no-realtime"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let pid = child.id().to_string();
+    let kill = |name: &str| {
+        assert!(
+            std::process::Command::new("kill")
+                .args([name, &pid])
+                .status()
+                .unwrap()
+                .success()
+        );
+    };
+    kill("-STOP");
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    kill("-CONT");
+    let _ = child.stdin.take();
+    let o = child.wait_with_output().unwrap();
+    let printed = text(&o);
+    assert_eq!(o.status.code(), Some(3), "{printed}");
+    assert!(
+        printed.contains("ended early") && printed.contains("stalled"),
+        "{printed}"
+    );
+}

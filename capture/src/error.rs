@@ -248,7 +248,7 @@ pub enum CaptureErrorKind {
     /// of the crate bigger to return (clippy's `result_large_err`).
     #[error(
         "--map entry `{entry}`: the input has no column `{column}` (its columns: {})",
-        available.join(", ")
+        bounded_list(available)
     )]
     UnknownSource {
         /// The map entry.
@@ -452,7 +452,7 @@ fn describe_inputs(inputs: &[InputColumns]) -> String {
                 "{}: {} has {}",
                 i + 1,
                 input.file.display(),
-                input.columns.join(", ")
+                bounded_list(&input.columns)
             )
         })
         .collect();
@@ -561,5 +561,46 @@ mod tests {
             e.to_string(),
             "line 4: column `x`: time_s has 2 samples but position_m has 1"
         );
+    }
+}
+
+/// Most characters of names a message echoes: a log with 10⁵ columns must not make an error
+/// of megabytes.
+const LIST_CHARS: usize = 300;
+
+/// `names` comma-separated, cut after [`LIST_CHARS`] characters with how many were left out.
+pub(crate) fn bounded_list(names: &[String]) -> String {
+    let mut out = String::new();
+    for (i, name) in names.iter().enumerate() {
+        let sep = if i == 0 { "" } else { ", " };
+        if out.len() + sep.len() + name.len() > LIST_CHARS {
+            out.push_str(&format!("{sep}… and {} more", names.len() - i));
+            break;
+        }
+        out.push_str(sep);
+        out.push_str(name);
+    }
+    out
+}
+
+#[cfg(test)]
+mod bounded_tests {
+    use super::bounded_list;
+
+    #[test]
+    fn a_long_list_is_cut_with_the_count_left_out() {
+        let names: Vec<String> = (0..100_000).map(|i| format!("column_{i}")).collect();
+        let listed = bounded_list(&names);
+        assert!(listed.len() < 330, "{}", listed.len());
+        assert!(listed.starts_with("column_0, column_1, "), "{listed}");
+        let left: usize = listed
+            .rsplit("and ")
+            .next()
+            .unwrap()
+            .trim_end_matches(" more")
+            .parse()
+            .unwrap();
+        assert_eq!(left + listed.matches("column_").count(), 100_000);
+        assert_eq!(bounded_list(&names[..3]), "column_0, column_1, column_2");
     }
 }

@@ -14,7 +14,7 @@ use glam::DVec3;
 
 use crate::control::{Admittance, AdmittanceConfig};
 use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
-use crate::error::HapticsError;
+use crate::error::{EarlyEnd, HapticsError};
 use crate::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
 use crate::recorder::{Recorder, RecorderConfig};
 use crate::rt::{HapticSample, LoopConfig, LoopIo, RateStats, RtStatus, StopReason, sched, spawn};
@@ -43,7 +43,7 @@ pub struct BenchReport {
     pub load_threads: usize,
     /// How the loop ended (stalls beyond the watchdog's rules or a device error end it early;
     /// stalls it survived are in `stats`).
-    pub outcome: Result<StopReason, String>,
+    pub outcome: Result<StopReason, EarlyEnd>,
     /// Rows the recorder wrote.
     pub recorded_rows: u64,
     /// Wall-clock duration.
@@ -145,7 +145,7 @@ pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, HapticsError> {
         stats,
         rt_status,
         load_threads,
-        outcome: outcome.result.map(|r| r.reason).map_err(|e| e.to_string()),
+        outcome: outcome.result.map(|r| r.reason).map_err(|e| EarlyEnd::from(&e)),
         recorded_rows,
         elapsed,
     })

@@ -266,7 +266,53 @@ pub enum HapticsError {
     Recognize(#[from] RecognizeError),
 }
 
+/// What ended a haptic run before its end, as far as the operator must know: the watchdog
+/// released the force, or the device failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EndCause {
+    /// The haptic thread stalled ([`HapticsError::WatchdogTripped`],
+    /// [`HapticsError::RepeatedStalls`]).
+    Watchdog,
+    /// The device failed, faulted or was closed under the loop.
+    Device,
+}
+
+/// How a run ended early: what failed, in words, and the cause the exit code reports.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EarlyEnd {
+    /// The error that ended the run.
+    pub message: String,
+    /// Its cause, where it is one the operator must act on.
+    pub cause: Option<EndCause>,
+}
+
+impl From<&HapticsError> for EarlyEnd {
+    fn from(e: &HapticsError) -> Self {
+        Self {
+            message: e.to_string(),
+            cause: e.end_cause(),
+        }
+    }
+}
+
+impl fmt::Display for EarlyEnd {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
 impl HapticsError {
+    /// What this error says about the end of a run, when it ended one.
+    pub fn end_cause(&self) -> Option<EndCause> {
+        match self {
+            Self::WatchdogTripped { .. } | Self::RepeatedStalls { .. } => Some(EndCause::Watchdog),
+            Self::DeviceCall { .. } | Self::DeviceFault { .. } | Self::DeviceClosed { .. } => {
+                Some(EndCause::Device)
+            }
+            _ => None,
+        }
+    }
+
     /// Whether this is the orderly end of a finite device (a replay), not a failure.
     pub fn is_end_of_stream(&self) -> bool {
         matches!(self, HapticsError::EndOfReplay)

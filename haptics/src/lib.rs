@@ -41,6 +41,6 @@ pub mod safety;
 pub use device::{
     DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice, InternalForces,
 };
-pub use error::HapticsError;
+pub use error::{EarlyEnd, EndCause, HapticsError};
 pub use rt::{Controller, HapticSample, LoopConfig, LoopHandle, RateStats, TickInput, TickOutput};
 pub use safety::SafetyFilter;

@@ -7,6 +7,8 @@ use haptics::bench::{BenchConfig, loop_bench};
 use haptics::rt::{LoopConfig, Percentiles, RtRequest};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::exit::EndedEarly;
+
 /// Frames per second of the renderer, headless, with where a frame's time goes.
 ///
 /// Draws the needle-in-tissue demo frame at 640×480 and 1280×720, MSAA 1 and 4, with the
@@ -164,5 +166,8 @@ pub(crate) fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
         "recorder:         {} rows, {} samples dropped",
         report.recorded_rows, s.dropped_samples
     );
-    Ok(())
+    match &report.outcome {
+        Ok(_) => Ok(()),
+        Err(end) => Err(EndedEarly::new("the loop benchmark", end, None).into()),
+    }
 }

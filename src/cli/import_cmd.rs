@@ -6,7 +6,7 @@ use anyhow::Context;
 use capture::CaptureKind;
 use capture::import::{
     ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, SlowColumns,
-    TimeFromPosition, Unroll, import_streams,
+    TimeFromPosition, Unroll, check_output, import_streams,
 };
 use clap::Args;
 
@@ -213,6 +213,7 @@ pub(crate) fn run(args: &ImportArgs) -> anyhow::Result<()> {
     };
     // Import errors name the input file (and line, column or map entry) themselves.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    check_output(&args.out, &inputs)?;
     let imported = import_streams(&inputs, &spec)?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

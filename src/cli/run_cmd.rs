@@ -7,11 +7,13 @@ use anyhow::Context;
 use clap::Args;
 
 use super::device_arg::parse_device;
+use crate::exit::EndedEarly;
 use crate::models;
 use crate::scene::{DEFAULT_SCENE, Scene};
 use crate::session::report::{self, ModelLine, SessionReport};
 use crate::session::{self, SessionOptions, analysis};
 use haptics::device::DeviceChoice;
+use haptics::recorder::partial_path;
 
 /// Run a scene: identify or load the models it needs, render them on the haptic thread, show
 /// the tissue, report.
@@ -21,6 +23,10 @@ use haptics::device::DeviceChoice;
 /// rate. Without one, or with --headless, a scripted trainee performs the scene's task and a
 /// report folder is written: force plots, a rendered frame, loop statistics, the recognized
 /// surface timeline, and the summary printed here.
+///
+/// A part of the session that ended early still gets its report, and then palpus exits 3 when
+/// the haptic thread stalled and the watchdog released the force, 4 when the device failed, 5
+/// on another early end; with --record, the error names the FILE.partial the part left.
 #[derive(Debug, Args)]
 pub(crate) struct RunArgs {
     /// The scene file.
@@ -95,6 +101,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         autopilot: args.autopilot,
     };
     let segments = session::segments(&scene, &resolved)?;
+    let segment_count = segments.len();
     let headless = args.headless || !has_display();
     let dir = |scene: &Scene| {
         args.report
@@ -207,5 +214,23 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     report::write_summary(&dir, &report)?;
     print!("{}", report.to_text());
     println!("report in {}", dir.display());
-    Ok(())
+    match runs
+        .iter()
+        .find_map(|r| r.outcome.as_ref().err().map(|end| (r, end)))
+    {
+        Some((run, end)) => {
+            let partial = options
+                .record
+                .as_ref()
+                .map(|f| partial_path(&session::record_path(f, &run.segment.object, segment_count)))
+                .filter(|p| p.exists());
+            Err(EndedEarly::new(
+                format!("the session's part `{}`", run.segment.object),
+                end,
+                partial.as_deref(),
+            )
+            .into())
+        }
+        None => Ok(()),
+    }
 }

@@ -204,7 +204,7 @@ pub struct SegmentRun {
     /// Real-time scheduling granted.
     pub rt_status: Option<RtStatus>,
     /// How the loop ended.
-    pub outcome: Result<String, String>,
+    pub outcome: Result<String, haptics::EarlyEnd>,
     /// The capture written and its rows.
     pub recorded: Option<(PathBuf, u64)>,
     /// The device's force limit, N.
@@ -615,7 +615,7 @@ pub fn run_segment(
     let result = outcome
         .result
         .map(|r| format!("{:?}", r.reason))
-        .map_err(|e| e.to_string());
+        .map_err(|e| haptics::EarlyEnd::from(&e));
     let (recorded, samples) = match recorder {
         // A run that failed keeps its rows beside the target, under the partial name, and
         // leaves a file already there untouched.

@@ -1152,3 +1152,45 @@ fn joining_errors_name_the_files() {
         Some("time_s=t[ms],tangential_position_m=2:x[mm]")
     );
 }
+
+#[test]
+fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("log.csv");
+    let content = "t,x,Fz\n0,1,0.3\n0.001,2,0.3\n0.002,3,0.3\n";
+    std::fs::write(&input, content).unwrap();
+    // The same file by another path is the same file.
+    let other_path = dir.path().join(".").join("log.csv");
+    let o = import(
+        &input,
+        &other_path,
+        &["--map", "time_s=t,tangential_position_m=x,normal_force_n=Fz"],
+    );
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("is this input") && t.contains("log.csv"), "{t}");
+    assert_eq!(std::fs::read_to_string(&input).unwrap(), content);
+}
+
+#[test]
+fn an_unknown_column_among_very_many_is_named_in_a_short_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("wide.csv");
+    let header: Vec<String> = (0..100_000).map(|i| format!("channel_{i}")).collect();
+    let row: Vec<&str> = vec!["0"; header.len()];
+    std::fs::write(
+        &input,
+        format!("{}\n{}\n{}\n", header.join(","), row.join(","), row.join(",")),
+    )
+    .unwrap();
+    let out = dir.path().join("out.csv");
+    let o = import(
+        &input,
+        &out,
+        &["--map", "time_s=t,tangential_position_m=x,normal_force_n=Fz"],
+    );
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("no column `t`") && t.contains("more"), "{t}");
+    assert!(t.len() < 1000, "{} bytes: {}", t.len(), &t[..200]);
+}

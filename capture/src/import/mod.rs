@@ -559,6 +559,29 @@ pub struct StreamReport {
 
 // --- Import ------------------------------------------------------------------------------
 
+/// Refuses an output that is one of `inputs` (the same file, by whatever path): every input
+/// is read before the capture is written, so the write would replace that input with the
+/// capture made from it.
+pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<(), CaptureError> {
+    let Ok(out_file) = out.canonicalize() else {
+        // An output that does not exist yet is no input.
+        return Ok(());
+    };
+    match inputs
+        .iter()
+        .find(|input| input.canonicalize().is_ok_and(|f| f == out_file))
+    {
+        Some(input) => Err(CaptureError::new(
+            input,
+            CaptureErrorKind::BadSpec(format!(
+                "--out {} is this input: the capture would replace it; write it to another file",
+                out.display()
+            )),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Imports the CSV file at `path` as a capture, as described in the
 /// [module documentation](self). Nothing is written; see [`Capture::write_file`].
 ///
