@@ -217,8 +217,7 @@ pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceT
             let first_named_after_s = named.first().map(|r| r.time_s - stroke_s);
             // The named decision that starts the final run of right ones.
             let right = |r: &&&Recognition| r.label.as_deref() == Some(surface.as_str());
-            let trailing_right = named.iter().rev().take_while(right).count();
-            let stable_right = (trailing_right > 0).then(|| named[named.len() - trailing_right].time_s);
+            let stable_right = recognize::stable_right_from(&named, |r| right(&r)).map(|k| named[k].time_s);
             Some(SurfaceTiming {
                 object: run.segment.object.clone(),
                 truth: surface.clone(),

@@ -163,6 +163,22 @@ impl<L: PartialEq + std::fmt::Debug + Display> ConfusionMatrix<L> {
     }
 }
 
+/// The decision that names a stroke's surface for good: the first of the trailing decisions
+/// `right` accepts, as an index into `decisions`; `None` when the last decision is wrong or
+/// there is none. Offline evaluation, anytime evaluation and a session's live timing all read
+/// "stable right" this one way.
+pub fn stable_right_from<T>(decisions: &[T], right: impl Fn(&T) -> bool) -> Option<usize> {
+    if !decisions.last().is_some_and(&right) {
+        return None;
+    }
+    Some(
+        decisions
+            .iter()
+            .rposition(|d| !right(d))
+            .map_or(0, |wrong| wrong + 1),
+    )
+}
+
 /// Natural order of names: runs of ASCII digits compare as numbers (`mat2` < `mat10`, and
 /// `mat02` = `mat2` numerically, the shorter spelling first), everything else as text; names
 /// equal that way fall back to plain string order, so the order is total.
@@ -199,6 +215,15 @@ fn split_digits(s: &str) -> (&str, &str) {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn stable_right_starts_the_final_run_of_right_decisions() {
+        let right = |d: &char| *d == 'a';
+        assert_eq!(stable_right_from(&['b', 'a', 'b', 'a', 'a'], right), Some(3));
+        assert_eq!(stable_right_from(&['a', 'a'], right), Some(0));
+        assert_eq!(stable_right_from(&['a', 'b'], right), None);
+        assert_eq!(stable_right_from::<char>(&[], right), None);
+    }
     use super::*;
 
     #[test]

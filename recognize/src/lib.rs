@@ -31,7 +31,7 @@ pub use category::{
     similarity_from_confusion,
 };
 pub use error::RecognizeError;
-pub use eval::{ConfusionMatrix, natural_cmp};
+pub use eval::{ConfusionMatrix, natural_cmp, stable_right_from};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
 pub use features::{

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use sim::protocols::{CaptureSet, generate};
+use sim::protocols::{CaptureSet, Variant, generate, generate_variant};
 
 /// Write a reproducible set of simulated captures.
 ///
@@ -83,111 +83,47 @@ enum NeedleSpeedArg {
     Varying,
 }
 
-/// `--needle-rate-hz`, `--needle-tissue`, `--needle-speed`: only the needle's training and
-/// held-out captures, with that protocol.
-fn needle_only(args: &GenArgs, log_rate_hz: u32) -> anyhow::Result<()> {
-    use sim::protocols::Split;
-    use sim::protocols::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile, needle_insertion_with};
-    let protocol = NeedleProtocol {
-        log_rate_hz,
-        rounds: args.needle_rounds,
-        tissue: match args.needle_tissue {
-            Some(NeedleTissueArg::Phantom) => NeedleTissueKind::LayeredPhantom,
-            _ => NeedleTissueKind::BovineLiver,
-        },
-        speed: match args.needle_speed {
-            Some(NeedleSpeedArg::Varying) => SpeedProfile::Varying,
-            _ => SpeedProfile::Constant,
-        },
-    };
-    let dir = args.out.join("li_bi");
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    for split in [Split::Train, Split::Test] {
-        let path = dir.join(format!("needle_{}.csv", split.as_str()));
-        write_capture(args, &path, &needle_insertion_with(args.seed, split, protocol)?)?;
-    }
-    Ok(())
-}
-
-/// Writes one capture of a single-set run and, unless quiet, says so.
-fn write_capture(args: &GenArgs, path: &std::path::Path, capture: &capture::Capture) -> anyhow::Result<()> {
-    capture
-        .write_file(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    if !args.quiet {
-        println!("wrote {} ({} samples)", path.display(), capture.len());
-    }
-    Ok(())
-}
-
-/// `--two-patch`: only strokes from each Nakano surface onto the next, at `speed_mps`.
-fn two_patch_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use sim::protocols::nakano::{RUNS, two_patch_file_name, two_patch_run};
-    use sim::world::surface::{SurfacePatch, nakano_surfaces};
-    let dir = args.out.join("nakano_two_patch");
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let surfaces = nakano_surfaces();
-    let patches: Vec<SurfacePatch> = surfaces.iter().map(SurfacePatch::new).collect();
-    for (i, first) in patches.iter().enumerate() {
-        let second = &patches[(i + 1) % patches.len()];
-        // Run 0 is the training run of the single-surface set; these are test strokes.
-        for run in 1..RUNS {
-            let path = dir.join(two_patch_file_name(first.surface(), second.surface(), run));
-            write_capture(
-                args,
-                &path,
-                &two_patch_run(first, second, run, args.seed, speed_mps)?,
-            )?;
-        }
-    }
-    Ok(())
-}
-
-/// `--rub-speed-mps`: only Nakano's rubbing runs, at that speed.
-fn rubbing_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use sim::protocols::nakano::{RUNS, rubbing_run_at, run_file_name};
-    use sim::world::surface::{SurfacePatch, nakano_surfaces};
-    let dir = args.out.join("nakano");
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    for surface in nakano_surfaces() {
-        let patch = SurfacePatch::new(&surface);
-        for run in 0..RUNS {
-            let path = dir.join(run_file_name(&surface, run));
-            write_capture(args, &path, &rubbing_run_at(&patch, run, args.seed, speed_mps)?)?;
-        }
-    }
-    Ok(())
-}
-
-/// `--slide-speed-mps`: only the multi-stream sliding study, at that speed.
-fn sliding_only(args: &GenArgs, speed_mps: f64) -> anyhow::Result<()> {
-    use sim::protocols::multistream::{SlidingStudy, write_logs};
-    let study = SlidingStudy::default().at_speed(speed_mps)?;
-    write_logs(&args.out, args.seed, study, &mut |file| {
-        if !args.quiet {
-            println!(
-                "wrote {} ({} rows)",
-                args.out.join(&file.path).display(),
-                file.rows
-            );
-        }
-    })
-    .with_context(|| format!("writing the sliding study into {}", args.out.display()))
-}
-
-pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
+/// The single set `args` asks for instead of the papers' full sets, if any.
+fn variant(args: &GenArgs) -> Option<Variant> {
+    use sim::protocols::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile};
     if args.needle_rate_hz.is_some() || args.needle_tissue.is_some() || args.needle_speed.is_some() {
-        return needle_only(args, args.needle_rate_hz.unwrap_or(100));
+        return Some(Variant::Needle(NeedleProtocol {
+            log_rate_hz: args.needle_rate_hz.unwrap_or(100),
+            rounds: args.needle_rounds,
+            tissue: match args.needle_tissue {
+                Some(NeedleTissueArg::Phantom) => NeedleTissueKind::LayeredPhantom,
+                _ => NeedleTissueKind::BovineLiver,
+            },
+            speed: match args.needle_speed {
+                Some(NeedleSpeedArg::Varying) => SpeedProfile::Varying,
+                _ => SpeedProfile::Constant,
+            },
+        }));
     }
     if args.two_patch {
         let speed_mps = args.rub_speed_mps.unwrap_or(sim::protocols::nakano::SPEED_MPS);
-        return two_patch_only(args, speed_mps);
+        return Some(Variant::TwoPatch { speed_mps });
     }
     if let Some(speed_mps) = args.rub_speed_mps {
-        return rubbing_only(args, speed_mps);
+        return Some(Variant::Rubbing { speed_mps });
     }
-    if let Some(speed_mps) = args.slide_speed_mps {
-        return sliding_only(args, speed_mps);
+    args.slide_speed_mps
+        .map(|speed_mps| Variant::Sliding { speed_mps })
+}
+
+pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {
+    if let Some(variant) = variant(args) {
+        generate_variant(&args.out, args.seed, variant, &mut |file| {
+            if !args.quiet {
+                println!(
+                    "wrote {} ({} rows)",
+                    args.out.join(&file.path).display(),
+                    file.rows
+                );
+            }
+        })
+        .with_context(|| format!("writing into {}", args.out.display()))?;
+        return Ok(());
     }
     let sets = if args.only.is_empty() {
         CaptureSet::ALL.to_vec()

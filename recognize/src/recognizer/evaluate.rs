@@ -11,7 +11,7 @@ use super::grouping::trial_of;
 use super::labelled::{check_rate, class_index};
 use super::{Decision, LabelledCapture};
 use crate::RecognizeError;
-use crate::eval::ConfusionMatrix;
+use crate::eval::{ConfusionMatrix, stable_right_from};
 use crate::features::{WindowlessCapture, windows};
 #[cfg(doc)]
 use crate::fusion::fuse;
@@ -222,9 +222,8 @@ impl RecognizerFile {
             if let Some(d) = decisions.iter().find(|d| d.label == truth) {
                 first.push(at_s(d));
             }
-            if decisions.last().is_some_and(|d| d.label == truth) {
-                let wrong = decisions.iter().rposition(|d| d.label != truth);
-                stable.push(at_s(&decisions[wrong.map_or(0, |w| w + 1)]));
+            if let Some(k) = stable_right_from(&decisions, |d| d.label == truth) {
+                stable.push(at_s(&decisions[k]));
             }
             flips += decisions.windows(2).filter(|p| p[0].label != p[1].label).count();
             if let (Some(a), Some(b)) = (decisions.first(), decisions.last()) {

@@ -29,6 +29,7 @@ use super::file::RecognizerFile;
 use super::kept::change_sample;
 use super::labelled::{class_index, class_named};
 use crate::RecognizeError;
+use crate::eval::stable_right_from;
 use crate::features::{FeatureSet, NakanoWindowing, WindowlessCapture};
 use crate::sequential::{SequentialParams, SequentialParamsBuilder, SequentialState};
 
@@ -564,13 +565,8 @@ impl RecognizerFile {
             flips += named.windows(2).filter(|w| w[0].2 != w[1].2).count();
             // The named decision that starts the final run of right ones, if the stroke ends
             // named right.
-            let final_right = |truth: usize| match named.last() {
-                Some(&(.., d)) if d == truth => {
-                    let wrong = named.iter().rposition(|(.., d)| *d != truth);
-                    Some(named[wrong.map_or(0, |w| w + 1)])
-                }
-                _ => None,
-            };
+            let final_right =
+                |truth: usize| stable_right_from(&named, |&(.., d)| d == truth).map(|k| named[k]);
             if let Some((at_s, after)) = s.change {
                 match final_right(after) {
                     Some((t, travel_m, _)) if t >= at_s => {

@@ -111,49 +111,17 @@ pub fn generate(
     sets: &[CaptureSet],
     progress: &mut dyn FnMut(&Generated),
 ) -> Result<GenSummary, SimError> {
-    let mut summary = GenSummary::default();
-    let mut write = |relative: PathBuf,
-                     capture: Result<Capture, CaptureError>,
-                     protocol: &'static str,
-                     label: String,
-                     role: String| {
-        let capture = capture.map_err(|source| SimError::GeneratedCapture {
-            path: relative.clone(),
-            source: Box::new(source),
-        })?;
-        let path = out.join(&relative);
-        if let Some(parent) = path.parent() {
-            fs::create_dir_all(parent).map_err(|source| SimError::Io {
-                action: "write",
-                path: parent.to_owned(),
-                source,
-            })?;
-        }
-        capture
-            .write_file(&path)
-            .map_err(|source| SimError::GeneratedCapture {
-                path: relative.clone(),
-                source: Box::new(source),
-            })?;
-        let bytes = fs::metadata(&path)
-            .map_err(|source| SimError::Io {
-                action: "write",
-                path: path.clone(),
-                source,
-            })?
-            .len();
-        let generated = Generated {
-            path: relative,
-            protocol,
-            label,
-            role,
-            rows: capture.len(),
-            bytes,
-        };
-        progress(&generated);
-        summary.files.push(generated);
-        Ok::<(), SimError>(())
+    let mut writer = Writer {
+        out,
+        summary: GenSummary::default(),
+        progress,
     };
+    let mut write =
+        |relative: PathBuf,
+         capture: Result<Capture, CaptureError>,
+         protocol: &'static str,
+         label: String,
+         role: String| writer.capture(relative, capture, protocol, label, role);
     let mut sets = sets.to_vec();
     sets.sort();
     sets.dedup();
@@ -226,21 +194,175 @@ pub fn generate(
         }
     }
     if logs {
-        multistream::write_logs(out, seed, multistream::SlidingStudy::default(), &mut |file| {
-            let generated = Generated {
+        writer.logs(seed, multistream::SlidingStudy::default())?;
+    }
+    write_manifest(out, &writer.summary)?;
+    Ok(writer.summary)
+}
+
+/// One set written on its own, with settings of its own, into the folder the full set uses,
+/// without touching the other sets or the manifest (`palpus gen --needle-rate-hz`,
+/// `--rub-speed-mps`, `--two-patch`, `--slide-speed-mps`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Variant {
+    /// Li & Bi's needle training and held-out captures with this protocol (`li_bi/`).
+    Needle(li_bi::NeedleProtocol),
+    /// Nakano's rubbing runs at this speed, m/s (`nakano/`).
+    Rubbing {
+        /// The tip's speed, m/s.
+        speed_mps: f64,
+    },
+    /// Each Nakano surface rubbed onto the next halfway through the stroke, runs 1 and 2, at
+    /// this speed, m/s (`nakano_two_patch/`).
+    TwoPatch {
+        /// The tip's speed, m/s.
+        speed_mps: f64,
+    },
+    /// The multi-stream sliding study at about this speed, m/s (`multistream/`).
+    Sliding {
+        /// The arm's speed, m/s.
+        speed_mps: f64,
+    },
+}
+
+/// Writes `variant` under `out` (see [`Variant`]); `progress` is called after each file.
+pub fn generate_variant(
+    out: &Path,
+    seed: u64,
+    variant: Variant,
+    progress: &mut dyn FnMut(&Generated),
+) -> Result<GenSummary, SimError> {
+    let mut writer = Writer {
+        out,
+        summary: GenSummary::default(),
+        progress,
+    };
+    match variant {
+        Variant::Needle(protocol) => {
+            for split in [Split::Train, Split::Test] {
+                let s = split.as_str();
+                writer.capture(
+                    format!("li_bi/needle_{s}.csv").into(),
+                    li_bi::needle_insertion_with(seed, split, protocol),
+                    "li_bi_needle",
+                    protocol.tissue.name().into(),
+                    s.into(),
+                )?;
+            }
+        }
+        Variant::Rubbing { speed_mps } => {
+            for surface in nakano_surfaces() {
+                let patch = SurfacePatch::new(&surface);
+                for run in 0..nakano::RUNS {
+                    writer.capture(
+                        format!("nakano/{}", nakano::run_file_name(&surface, run)).into(),
+                        nakano::rubbing_run_at(&patch, run, seed, speed_mps),
+                        "nakano_rubbing",
+                        surface.name.into(),
+                        if run == 0 { "train" } else { "test" }.into(),
+                    )?;
+                }
+            }
+        }
+        Variant::TwoPatch { speed_mps } => {
+            let patches: Vec<SurfacePatch> = nakano_surfaces().iter().map(SurfacePatch::new).collect();
+            for (i, first) in patches.iter().enumerate() {
+                let second = &patches[(i + 1) % patches.len()];
+                // Run 0 is the training run of the single-surface set; these are test strokes.
+                for run in 1..nakano::RUNS {
+                    writer.capture(
+                        format!(
+                            "nakano_two_patch/{}",
+                            nakano::two_patch_file_name(first.surface(), second.surface(), run)
+                        )
+                        .into(),
+                        nakano::two_patch_run(first, second, run, seed, speed_mps),
+                        "nakano_two_patch",
+                        format!("{}+{}", first.surface().name, second.surface().name),
+                        "test".into(),
+                    )?;
+                }
+            }
+        }
+        Variant::Sliding { speed_mps } => {
+            writer.logs(seed, multistream::SlidingStudy::default().at_speed(speed_mps)?)?;
+        }
+    }
+    Ok(writer.summary)
+}
+
+/// Writes files under `out` and keeps the summary of what it wrote.
+struct Writer<'a> {
+    out: &'a Path,
+    summary: GenSummary,
+    progress: &'a mut dyn FnMut(&Generated),
+}
+
+impl Writer<'_> {
+    /// Writes `capture` to `out/relative` atomically.
+    fn capture(
+        &mut self,
+        relative: PathBuf,
+        capture: Result<Capture, CaptureError>,
+        protocol: &'static str,
+        label: String,
+        role: String,
+    ) -> Result<(), SimError> {
+        let capture = capture.map_err(|source| SimError::GeneratedCapture {
+            path: relative.clone(),
+            source: Box::new(source),
+        })?;
+        let path = self.out.join(&relative);
+        if let Some(parent) = path.parent() {
+            fs::create_dir_all(parent).map_err(|source| SimError::Io {
+                action: "write",
+                path: parent.to_owned(),
+                source,
+            })?;
+        }
+        capture
+            .write_file(&path)
+            .map_err(|source| SimError::GeneratedCapture {
+                path: relative.clone(),
+                source: Box::new(source),
+            })?;
+        let bytes = fs::metadata(&path)
+            .map_err(|source| SimError::Io {
+                action: "write",
+                path: path.clone(),
+                source,
+            })?
+            .len();
+        self.record(Generated {
+            path: relative,
+            protocol,
+            label,
+            role,
+            rows: capture.len(),
+            bytes,
+        });
+        Ok(())
+    }
+
+    /// Writes the multi-stream sliding study's logs.
+    fn logs(&mut self, seed: u64, study: multistream::SlidingStudy) -> Result<(), SimError> {
+        let out = self.out;
+        multistream::write_logs(out, seed, study, &mut |file| {
+            self.record(Generated {
                 path: file.path,
                 protocol: multistream::PROTOCOL,
                 label: file.surface.into(),
                 role: file.stream.into(),
                 rows: file.rows,
                 bytes: file.bytes,
-            };
-            progress(&generated);
-            summary.files.push(generated);
-        })?;
+            });
+        })
     }
-    write_manifest(out, &summary)?;
-    Ok(summary)
+
+    fn record(&mut self, generated: Generated) {
+        (self.progress)(&generated);
+        self.summary.files.push(generated);
+    }
 }
 
 fn write_manifest(out: &Path, summary: &GenSummary) -> Result<(), SimError> {

@@ -15,6 +15,6 @@ mod seed;
 pub mod sinapov;
 mod split;
 
-pub use generate::{CaptureSet, GenSummary, Generated, generate};
+pub use generate::{CaptureSet, GenSummary, Generated, Variant, generate, generate_variant};
 pub use seed::derive_seed;
 pub use split::Split;
