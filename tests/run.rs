@@ -568,6 +568,20 @@ fn palpus_render_draws_each_default_scene_and_the_dimple() {
     );
 }
 
+/// Stops process `pid` (SIGSTOP) for `how_long`, then lets it go on (SIGCONT): every thread of
+/// it, the haptic loop and its watchdog included, stalls at once.
+fn stall(pid: u32, how_long: std::time::Duration) {
+    let signal = |name: &str| {
+        let sent = std::process::Command::new("kill")
+            .args([name, &pid.to_string()])
+            .status();
+        assert!(sent.unwrap().success(), "kill {name} {pid}");
+    };
+    signal("-STOP");
+    std::thread::sleep(how_long);
+    signal("-CONT");
+}
+
 #[test]
 fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
     use std::io::{BufRead, BufReader};
@@ -602,17 +616,7 @@ fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
     stdout.read_line(&mut first).unwrap();
     assert!(first.starts_with("running scene"), "{first}");
     std::thread::sleep(std::time::Duration::from_secs(1));
-    let signal = |name: &str| {
-        let ok = std::process::Command::new("kill")
-            .args([name, &child.id().to_string()])
-            .status()
-            .unwrap()
-            .success();
-        assert!(ok, "kill {name}");
-    };
-    signal("-STOP");
-    std::thread::sleep(std::time::Duration::from_secs(2));
-    signal("-CONT");
+    stall(child.id(), std::time::Duration::from_secs(2));
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
     let o = child.wait_with_output().unwrap();
@@ -637,27 +641,14 @@ fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
 #[test]
 fn a_loop_benchmark_the_watchdog_ended_exits_3() {
     let _one = serial();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
         .args(["bench", "loop", "--seconds", "4", "--no-realtime"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(1500));
-    let pid = child.id().to_string();
-    let kill = |name: &str| {
-        assert!(
-            std::process::Command::new("kill")
-                .args([name, &pid])
-                .status()
-                .unwrap()
-                .success()
-        );
-    };
-    kill("-STOP");
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    kill("-CONT");
-    let _ = child.stdin.take();
+    stall(child.id(), std::time::Duration::from_millis(500));
     let o = child.wait_with_output().unwrap();
     let printed = text(&o);
     assert_eq!(o.status.code(), Some(3), "{printed}");

@@ -111,17 +111,7 @@ pub fn generate(
     sets: &[CaptureSet],
     progress: &mut dyn FnMut(&Generated),
 ) -> Result<GenSummary, SimError> {
-    let mut writer = Writer {
-        out,
-        summary: GenSummary::default(),
-        progress,
-    };
-    let mut write =
-        |relative: PathBuf,
-         capture: Result<Capture, CaptureError>,
-         protocol: &'static str,
-         label: String,
-         role: String| writer.capture(relative, capture, protocol, label, role);
+    let mut writer = Writer::new(out, progress);
     let mut sets = sets.to_vec();
     sets.sort();
     sets.dedup();
@@ -148,7 +138,7 @@ pub fn generate(
                 for split in [Split::Train, Split::Test] {
                     let s = split.as_str();
                     for (file, simulate, protocol, object) in experiments {
-                        write(
+                        writer.capture(
                             format!("li_bi/{file}_{s}.csv").into(),
                             simulate(seed, split),
                             protocol,
@@ -163,7 +153,7 @@ pub fn generate(
                     let patch = SurfacePatch::new(&surface);
                     for run in 0..nakano::RUNS {
                         let role = if run == 0 { "train" } else { "test" };
-                        write(
+                        writer.capture(
                             format!("nakano/{}", nakano::run_file_name(&surface, run)).into(),
                             nakano::rubbing_run(&patch, run, seed),
                             "nakano_rubbing",
@@ -177,7 +167,7 @@ pub fn generate(
                 for surface in household_surfaces() {
                     for behaviour in Behaviour::ALL {
                         for trial in 0..sinapov::TRIALS {
-                            write(
+                            writer.capture(
                                 format!("sinapov/{}/{}_t{trial:02}.csv", surface.name, behaviour.name())
                                     .into(),
                                 sinapov::scratch_capture(&surface, behaviour, trial, seed),
@@ -232,11 +222,7 @@ pub fn generate_variant(
     variant: Variant,
     progress: &mut dyn FnMut(&Generated),
 ) -> Result<GenSummary, SimError> {
-    let mut writer = Writer {
-        out,
-        summary: GenSummary::default(),
-        progress,
-    };
+    let mut writer = Writer::new(out, progress);
     match variant {
         Variant::Needle(protocol) => {
             for split in [Split::Train, Split::Test] {
@@ -298,7 +284,15 @@ struct Writer<'a> {
     progress: &'a mut dyn FnMut(&Generated),
 }
 
-impl Writer<'_> {
+impl<'a> Writer<'a> {
+    fn new(out: &'a Path, progress: &'a mut dyn FnMut(&Generated)) -> Self {
+        Self {
+            out,
+            summary: GenSummary::default(),
+            progress,
+        }
+    }
+
     /// Writes `capture` to `out/relative` atomically.
     fn capture(
         &mut self,
