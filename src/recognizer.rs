@@ -13,7 +13,10 @@ use haptics::rt::HapticSample;
 #[cfg(doc)]
 use recognize::NakanoWindowing;
 use recognize::sequential::{DEFAULT_MEMORY_S, DEFAULT_THRESHOLD};
-use recognize::{FeatureNeeds, FeatureSet, LabelledCapture, Method, RecognizerFile, TrainSettings};
+use recognize::{
+    DecisionTiming, FeatureNeeds, FeatureSet, LabelledCapture, Method, NamedDecision, RecognizerFile,
+    TrainSettings,
+};
 
 use crate::scene::Scene;
 use crate::session::report::{Recognition, RecognizerLine, SurfaceTiming, WindowWeightFrom};
@@ -210,23 +213,20 @@ pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceT
                 let after = path.partition_point(|(time_s, _)| *time_s <= t_s);
                 after.checked_sub(1).map(|i| path[i].1)
             };
-            let named: Vec<&Recognition> = recognition
+            let named: Vec<NamedDecision> = recognition
                 .iter()
                 .filter(|r| r.object == run.segment.object && r.label.is_some())
+                .map(|r| NamedDecision {
+                    time_s: r.time_s - stroke_s,
+                    travel_m: path_at(r.time_s),
+                    right: r.label.as_deref() == Some(surface.as_str()),
+                })
                 .collect();
-            let first_named_after_s = named.first().map(|r| r.time_s - stroke_s);
-            // The named decision that starts the final run of right ones.
-            let right = |r: &&&Recognition| r.label.as_deref() == Some(surface.as_str());
-            let stable_right = recognize::stable_right_from(&named, |r| right(&r)).map(|k| named[k].time_s);
             Some(SurfaceTiming {
                 object: run.segment.object.clone(),
                 truth: surface.clone(),
                 stroke_s,
-                first_named_after_s,
-                stable_right_after_s: stable_right.map(|t| t - stroke_s),
-                stable_right_after_m: stable_right.and_then(path_at),
-                named: named.len(),
-                right: named.iter().filter(right).count(),
+                timing: DecisionTiming::of(&named),
             })
         })
         .collect()

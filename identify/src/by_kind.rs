@@ -5,7 +5,7 @@ use capture::{Capture, kind};
 
 use crate::contact_identification::{hard, soft};
 use crate::error::IdentifyError;
-use crate::identification::{FitLimits, Identified, IdentifyOptions, model_column};
+use crate::identification::{FitLimits, Identified, IdentifyOptions, Job, model_column};
 use crate::model_file::{ModelBody, ModelKind};
 use crate::needle_identification::needle;
 use crate::outliers::{force_noise_n, screen};
@@ -57,11 +57,17 @@ pub fn identify_with(
         Some(t) => (t, test_kept.as_ref()),
         None => (train, test),
     };
+    let job = Job {
+        train,
+        test,
+        options,
+        limits,
+    };
     let identified = match options.kind {
-        ModelKind::HardFriction => hard(train, test, options, limits),
-        ModelKind::SoftFriction => soft(train, test, options, limits),
-        ModelKind::NeedlePuncture => needle(train, test, options, limits),
-        ModelKind::NeedlePhases => needle_phases(train, test, options, limits),
+        ModelKind::HardFriction => hard(&job),
+        ModelKind::SoftFriction => soft(&job),
+        ModelKind::NeedlePuncture => needle(&job),
+        ModelKind::NeedlePhases => needle_phases(&job),
     };
     // Every SVR trains on the training capture: a failed fit names it.
     let mut identified = identified.map_err(|e| match e {

@@ -9,13 +9,11 @@ use std::time::Instant;
 use crate::baselines::CoulombViscous;
 use crate::error::IdentifyError;
 use crate::identification::{
-    BaselineNotFitted, FitLimits, Fitted, FrictionData, Identified, IdentifyOptions, KGF_N,
-    MAX_SEGMENT_SAMPLES, SvrProblem, baseline, even_indices, finish, metrics, range, rbf_network, scaled,
-    svr, svr_with, train_and_test_data,
+    BaselineNotFitted, Fitted, FrictionData, FrictionSets, Identified, Job, KGF_N, MAX_SEGMENT_SAMPLES,
+    SvrProblem, baseline, even_indices, finish, metrics, range, rbf_network, scaled, svr, svr_with,
 };
 use crate::metrics::Metrics;
 use crate::model_file::{ModelBody, ModelFile, ModelKind, Quantity, SvrHyper};
-use capture::Capture;
 use capture::kind;
 use svm::{InputScaling, Kernel, SvrFit};
 
@@ -58,16 +56,11 @@ fn friction_baselines(
 
 /// Hard contact: one linear ε-SVR of friction against normal force (defaults: the paper's
 /// C = 1e11, ε = 0.003 kgf, in SI).
-pub(crate) fn hard(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
+pub(crate) fn hard(job: &Job<'_>) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let (all, held_out) = train_and_test_data(train, test)?;
-    let tr = all.thinned(o.max_fit_samples);
-    let ev = held_out.as_ref().unwrap_or(&all);
+    let (train, test, o, limits) = (job.train, job.test, job.options, job.limits);
+    let sets = FrictionSets::of(job)?;
+    let (all, tr, held_out, ev) = (&sets.all, &sets.fit, &sets.held_out, sets.eval());
     let (c, epsilon) = (o.c.unwrap_or(1e11 / KGF_N), o.epsilon.unwrap_or(0.003 * KGF_N));
     let f = svr_with(
         limits,
@@ -88,13 +81,13 @@ pub(crate) fn hard(
         let predicted: Vec<f64> = d.normal_force_n.iter().map(|p| model.predict(&[*p])).collect();
         metrics(&d.time_s, &d.friction_force_n, &predicted)
     };
-    let train_metrics = predict(&all)?;
+    let train_metrics = predict(all)?;
     let svr_metrics = match &held_out {
         Some(t) => predict(t)?,
         None => train_metrics,
     };
     let mut skipped = Vec::new();
-    let (cv, net) = friction_baselines(&tr, ev, false, &mut skipped);
+    let (cv, net) = friction_baselines(tr, ev, false, &mut skipped);
     let hyper = vec![SvrHyper {
         label: "svr".into(),
         c,
@@ -211,22 +204,17 @@ pub(crate) fn stage_one(tr: &FrictionData, source: &Path) -> Result<StageOne, Id
 
 /// Soft contact: [`stage_one`]'s per-segment lines, then RBF ε-SVRs of speed for their slope
 /// and offset.
-pub(crate) fn soft(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
+pub(crate) fn soft(job: &Job<'_>) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
-    let (all, held_out) = train_and_test_data(train, test)?;
-    let tr = all.thinned(o.max_fit_samples);
-    let ev = held_out.as_ref().unwrap_or(&all);
+    let (train, test, o, limits) = (job.train, job.test, job.options, job.limits);
+    let sets = FrictionSets::of(job)?;
+    let (all, tr, held_out, ev) = (&sets.all, &sets.fit, &sets.held_out, sets.eval());
     let StageOne {
         points: stage1,
         fits,
         fit_rows,
         ..
-    } = stage_one(&tr, train.source())?;
+    } = stage_one(tr, train.source())?;
     // Stage 2: RBF ε-SVRs of speed for w and m, on speeds scaled to [0, 1].
     let v: Vec<f64> = stage1.iter().map(|s| s[0]).collect();
     let scaling = InputScaling::min_max(&v, 1);
@@ -270,13 +258,13 @@ pub(crate) fn soft(
             .map(|i| mf(&[d.velocity_mps[i], d.normal_force_n[i]]))
             .collect()
     };
-    let train_metrics = metrics(&all.time_s, &all.friction_force_n, &model_eval(&all))?;
+    let train_metrics = metrics(&all.time_s, &all.friction_force_n, &model_eval(all))?;
     let svr_metrics = match &held_out {
         Some(t) => metrics(&t.time_s, &t.friction_force_n, &model_eval(t))?,
         None => train_metrics,
     };
     let mut skipped = Vec::new();
-    let (cv, net) = friction_baselines(&tr, ev, true, &mut skipped);
+    let (cv, net) = friction_baselines(tr, ev, true, &mut skipped);
     let hyper = vec![
         SvrHyper {
             label: "stage1".into(),

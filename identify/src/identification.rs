@@ -342,12 +342,42 @@ pub(crate) fn velocity(
     })
 }
 
-/// The training capture's friction data, and the test capture's when there is one.
-pub(crate) fn train_and_test_data(
-    train: &Capture,
-    test: Option<&Capture>,
-) -> Result<(FrictionData, Option<FrictionData>), IdentifyError> {
-    Ok((friction_data(train)?, test.map(friction_data).transpose()?))
+/// One identification to run: what every model kind's entry point reads.
+#[derive(Clone, Copy)]
+pub(crate) struct Job<'a> {
+    /// The capture the model is fitted on.
+    pub train: &'a Capture,
+    /// The capture it is evaluated on (the training capture when `None`).
+    pub test: Option<&'a Capture>,
+    /// The model kind and its hyperparameters.
+    pub options: &'a IdentifyOptions,
+    /// Tolerance, budgets and progress of every SVR fit.
+    pub limits: &'a FitLimits<'a>,
+}
+
+/// A friction job's data: every training row, the rows the fits train on, the held-out rows.
+pub(crate) struct FrictionSets {
+    /// Every row of the training capture.
+    pub all: FrictionData,
+    /// The rows the fits train on ([`FrictionData::thinned`] to the options' limit).
+    pub fit: FrictionData,
+    /// The test capture's rows, when there is one.
+    pub held_out: Option<FrictionData>,
+}
+
+impl FrictionSets {
+    /// The training capture's friction data, and the test capture's when there is one.
+    pub(crate) fn of(job: &Job<'_>) -> Result<Self, IdentifyError> {
+        let all = friction_data(job.train)?;
+        let held_out = job.test.map(friction_data).transpose()?;
+        let fit = all.thinned(job.options.max_fit_samples);
+        Ok(Self { all, fit, held_out })
+    }
+
+    /// The rows models are evaluated on: the held-out ones, else every training row.
+    pub(crate) fn eval(&self) -> &FrictionData {
+        self.held_out.as_ref().unwrap_or(&self.all)
+    }
 }
 
 /// `n` indices spread evenly over `0..n_all` (all of them when `n ≥ n_all`), first and last

@@ -45,7 +45,7 @@ pub use model_file::{
 };
 pub use needle_identification::{NEEDLE_C, NEEDLE_EPSILON_N, NEEDLE_GAMMA, NEEDLE_SAMPLES};
 pub use outliers::{Outlier, OutlierScreen, force_noise_n};
-pub use phase_identification::{PhaseForm, identify_phases, identify_phases_as};
+pub use phase_identification::{PhaseForm, identify_phases};
 pub use phase_parts::PartComparison;
 pub use phases::{
     Domain, HOLD_JITTER_MPS, LayerModel, Loading, MAX_LAYERS, PartSvr, Phase, PhaseExit, PhaseModel,

@@ -7,8 +7,8 @@ use std::time::Instant;
 use crate::baselines::CoulombViscousStiffness;
 use crate::error::IdentifyError;
 use crate::identification::{
-    FitLimits, Fitted, Identified, IdentifyOptions, SvrProblem, baseline, finish, metrics, range,
-    rbf_network, require_kind, scaled, svr_with, velocity,
+    Fitted, Identified, Job, SvrProblem, baseline, finish, metrics, range, rbf_network, require_kind, scaled,
+    svr_with, velocity,
 };
 
 use crate::model_file::{ModelBody, ModelKind, Quantity, SvrHyper};
@@ -99,13 +99,9 @@ pub(crate) fn needle_output() -> Quantity {
 }
 
 /// Needle puncture: an RBF ε-SVR of [depth, velocity] on [`spread`] samples of the capture.
-pub(crate) fn needle(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
+pub(crate) fn needle(job: &Job<'_>) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
+    let (train, test, o, limits) = (job.train, job.test, job.options, job.limits);
     let all = needle_data(train)?;
     let (_, x, y) = spread(&all, o.max_samples.min(o.max_fit_samples));
     let (t_all, x_all, y_all) = all;

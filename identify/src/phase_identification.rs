@@ -13,8 +13,7 @@ use capture::{Capture, CaptureKind, kind};
 use crate::error::IdentifyError;
 use crate::error::check_series;
 use crate::identification::{
-    FitLimits, Identified, IdentifyOptions, capture_ref, check_written, metrics, model_column, out_of_domain,
-    require_kind,
+    Identified, Job, capture_ref, check_written, metrics, model_column, out_of_domain, require_kind,
 };
 use crate::metrics::Metrics;
 use crate::model_file::{Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind};
@@ -62,18 +61,14 @@ fn metrics_along(model: &PhaseModel, c: &Capture) -> Result<(Metrics, usize), Id
     Ok((m, rows.len()))
 }
 
-pub(crate) fn needle_phases(
-    train: &Capture,
-    test: Option<&Capture>,
-    o: &IdentifyOptions,
-    limits: &FitLimits<'_>,
-) -> Result<Identified, IdentifyError> {
+pub(crate) fn needle_phases(job: &Job<'_>) -> Result<Identified, IdentifyError> {
     let started = Instant::now();
+    let Job { train, test, .. } = *job;
     // The smooth SVR and its baselines, on the same rows: what the phases must beat.
-    let smooth = needle(train, test, o, limits)?;
+    let smooth = needle(job)?;
     let s = series(train)?;
     let fit = |form| {
-        identify_phases_as(
+        identify_phases(
             form,
             train.source(),
             &s.time_s,
@@ -192,28 +187,8 @@ pub enum PhaseForm {
 }
 
 /// Identifies a [`PhaseModel`] from an insertion recording (all rows, in time order; depth
-/// ≤ 0 in air). `source` names the capture in errors.
+/// ≤ 0 in air). `source` names the capture in errors; `form` restricts the laws ([`PhaseForm::Full`] for the phase-aware model itself).
 pub fn identify_phases(
-    source: &std::path::Path,
-    time_s: &[f64],
-    depth_m: &[f64],
-    velocity_mps: &[f64],
-    force_n: &[f64],
-    params: &PunctureParams,
-) -> Result<PhaseModel, IdentifyError> {
-    identify_phases_as(
-        PhaseForm::Full,
-        source,
-        time_s,
-        depth_m,
-        velocity_mps,
-        force_n,
-        params,
-    )
-}
-
-/// [`identify_phases`] with the laws restricted to `form`.
-pub fn identify_phases_as(
     form: PhaseForm,
     source: &std::path::Path,
     time_s: &[f64],

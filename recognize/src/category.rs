@@ -636,32 +636,15 @@ mod tests {
                 ..
             })
         ));
-        assert!(matches!(
-            recursive_ncut(
-                &w,
-                StopRule {
-                    max_ncut: f64::NAN,
-                    min_size: 2
-                }
-            ),
-            Err(RecognizeError::Config {
-                of: "category parameter",
-                ..
-            })
-        ));
-        assert!(matches!(
-            recursive_ncut(
-                &w,
-                StopRule {
-                    max_ncut: 0.5,
-                    min_size: 1
-                }
-            ),
-            Err(RecognizeError::Config {
-                of: "category parameter",
-                ..
-            })
-        ));
+        for (max_ncut, min_size) in [(f64::NAN, 2), (0.5, 1)] {
+            assert!(matches!(
+                recursive_ncut(&w, StopRule { max_ncut, min_size }),
+                Err(RecognizeError::Config {
+                    of: "category parameter",
+                    ..
+                })
+            ));
+        }
     }
 
     #[test]

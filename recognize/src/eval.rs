@@ -179,6 +179,49 @@ pub fn stable_right_from<T>(decisions: &[T], right: impl Fn(&T) -> bool) -> Opti
     )
 }
 
+/// A decision that named a surface, as [`DecisionTiming::of`] reads it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NamedDecision {
+    /// When, s after the stroke's start.
+    pub time_s: f64,
+    /// The tool's path by then since the stroke's start, m; `None` where it is not known.
+    pub travel_m: Option<f64>,
+    /// Whether it named the surface under the tool.
+    pub right: bool,
+}
+
+/// How soon one stroke's surface was named: the one "stable right" type that offline
+/// evaluation (each capture of an anytime evaluation) and a live session (each rubbed
+/// segment of the report) both compute, through [`stable_right_from`].
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct DecisionTiming {
+    /// The first named decision, s after the stroke's start.
+    pub first_named_after_s: Option<f64>,
+    /// The named decision that starts the final run of right ones, s after the stroke's
+    /// start; `None` when the stroke does not end named right.
+    pub stable_right_after_s: Option<f64>,
+    /// The same decision in travel, how much of the surface it took, m.
+    pub stable_right_after_m: Option<f64>,
+    /// Decisions that named a surface.
+    pub named: usize,
+    /// Of those, named right.
+    pub right: usize,
+}
+
+impl DecisionTiming {
+    /// The timing of a stroke whose named decisions, in time order, are `named`.
+    pub fn of(named: &[NamedDecision]) -> Self {
+        let stable = stable_right_from(named, |d| d.right).map(|k| named[k]);
+        Self {
+            first_named_after_s: named.first().map(|d| d.time_s),
+            stable_right_after_s: stable.map(|d| d.time_s),
+            stable_right_after_m: stable.and_then(|d| d.travel_m),
+            named: named.len(),
+            right: named.iter().filter(|d| d.right).count(),
+        }
+    }
+}
+
 /// Natural order of names: runs of ASCII digits compare as numbers (`mat2` < `mat10`, and
 /// `mat02` = `mat2` numerically, the shorter spelling first), everything else as text; names
 /// equal that way fall back to plain string order, so the order is total.

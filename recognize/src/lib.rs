@@ -31,7 +31,7 @@ pub use category::{
     similarity_from_confusion,
 };
 pub use error::RecognizeError;
-pub use eval::{ConfusionMatrix, natural_cmp, stable_right_from};
+pub use eval::{ConfusionMatrix, DecisionTiming, NamedDecision, natural_cmp, stable_right_from};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
 pub use features::{
@@ -46,7 +46,7 @@ pub use recognizer::{
     Decision, Evaluation, FEW_TRAINING_VECTORS, FeatureNeeds, FusedEvaluation, HeldOutDecisions, KnnTrainer,
     LABEL_KEY, LEAST_TRAINING_TRAVEL_SHARE, LabelledCapture, Method, PosteriorWeight, RECOGNIZER_FORMAT,
     RECOGNIZER_VERSION, RecognizerBody, RecognizerFile, SCRATCH_SOM_NORMALIZATION, SomQuality, SomTrainer,
-    SvmC, SvmTrainer, TRIAL_KEY, TrainSettings, Trainer, TrainingWarning, UnmappedClasses,
+    SvmC, SvmTrainer, TRIAL_KEY, TrainJob, TrainSettings, Trainer, TrainingWarning, UnmappedClasses,
     WINDOW_SVM_FALLBACK_C, WindowProbabilities, recording_groups, som_nodes, som_params, train, trial_groups,
     window_som_nodes, window_svc_params,
 };

@@ -9,6 +9,7 @@
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, StrokeKind, Vec2};
 
 use crate::frame::{Overlay, UiAction};
+use crate::offscreen::texture_2d;
 
 /// Width of the overlay's side panel, points.
 pub const PANEL_WIDTH_PT: f32 = 290.0;
@@ -245,20 +246,8 @@ impl OverlayLayer {
                 .as_ref()
                 .is_some_and(|p| p.x0_px == x0_px && p.frame_size == target.size)
             {
-                let texture = device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("overlay panel"),
-                    size: wgpu::Extent3d {
-                        width: strip[0],
-                        height: strip[1],
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: self.format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                });
+                let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+                let texture = texture_2d(device, "overlay panel", strip, self.format, usage);
                 let view = texture.create_view(&Default::default());
                 self.panel = Some(PanelTexture {
                     texture,

@@ -3,6 +3,8 @@
 //! texture decodes on sampling). Fewer pixels to shade for a softer picture; the overlay stays
 //! sharp.
 
+use crate::offscreen::texture_2d;
+
 /// The stretching pass.
 pub(crate) struct Upscaler {
     pipeline: wgpu::RenderPipeline,
@@ -87,20 +89,8 @@ impl Upscaler {
         format: wgpu::TextureFormat,
         size: [u32; 2],
     ) -> (wgpu::TextureView, wgpu::BindGroup) {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("scene at internal resolution"),
-            size: wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let texture = texture_2d(device, "scene at internal resolution", size, format, usage);
         let view = texture.create_view(&Default::default());
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("upscale"),

@@ -51,18 +51,10 @@ pub struct SurfaceTiming {
     pub truth: String,
     /// Loop time of the stroke's first tick, s.
     pub stroke_s: f64,
-    /// From the stroke's start to the first named surface, s.
-    pub first_named_after_s: Option<f64>,
-    /// From the stroke's start to the named decision that starts the final run of right ones,
-    /// s; `None` when the segment does not end named right.
-    pub stable_right_after_s: Option<f64>,
-    /// The same decision in travel, how much of the surface it took: the tool's path from the
-    /// stroke's start, read through the play ([`recognize::PlayedPath`]), m.
-    pub stable_right_after_m: Option<f64>,
-    /// Decisions that named a surface.
-    pub named: usize,
-    /// Of those, named right.
-    pub right: usize,
+    /// How soon it was named, from the stroke's start; travel is the tool's path read through
+    /// the play ([`recognize::PlayedPath`]).
+    #[serde(flatten)]
+    pub timing: recognize::DecisionTiming,
 }
 
 /// A model as the report lists it.
@@ -413,19 +405,19 @@ impl SessionReport {
                 self.recognition_unread_windows
             );
         }
-        for s in &self.recognition_timing {
+        for SurfaceTiming { object, timing, .. } in &self.recognition_timing {
             let after = |v: Option<f64>| v.map_or("never".to_owned(), |v| format!("{v:.2} s"));
-            let travel = s
+            let travel = timing
                 .stable_right_after_m
                 .map_or(String::new(), |m| format!(" and {:.1} mm", 1e3 * m));
             let _ = writeln!(
                 t,
                 "    {}: first named {}, named right for good {}{travel} after the stroke began ({} of {} named right)",
-                s.object,
-                after(s.first_named_after_s),
-                after(s.stable_right_after_s),
-                s.right,
-                s.named
+                object,
+                after(timing.first_named_after_s),
+                after(timing.stable_right_after_s),
+                timing.right,
+                timing.named
             );
         }
         for (p, rows) in &self.recorded {

@@ -47,5 +47,6 @@ pub use reduce::{Reduction, reduce_support};
 #[doc(hidden)]
 pub use sample::needle_like_model;
 pub use smo::{
-    GramRows, KernelRows, SelectionCurvature, SmoSettings, SmoSettingsBuilder, SmoSolution, solve_smo,
+    GramRows, KernelRows, PairStep, SelectionCurvature, SmoSettings, SmoSettingsBuilder, SmoSolution,
+    libsvm_rho, solve_smo,
 };

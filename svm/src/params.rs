@@ -28,18 +28,10 @@ pub enum Solver {
     LowRank,
 }
 
-/// Unchecked hyperparameters; [`SvrParamsBuilder::build`] validates them.
+/// Unchecked hyperparameters; [`SvrParamsBuilder::build`] validates them into the
+/// [`SvrParams`] it holds (linfa's builder-over-checked-type pattern).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SvrParamsBuilder {
-    c: f64,
-    epsilon: f64,
-    kernel: Kernel,
-    solver: Solver,
-    tolerance: f64,
-    max_iterations: usize,
-    time_budget: Duration,
-    max_sv: Option<usize>,
-}
+pub struct SvrParamsBuilder(SvrParams);
 
 /// Checked hyperparameters of an ε-SVR.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,7 +48,7 @@ pub struct SvrParams {
 
 impl Default for SvrParamsBuilder {
     fn default() -> Self {
-        Self {
+        Self(SvrParams {
             c: 1.0,
             epsilon: 0.1,
             kernel: Kernel::Rbf { gamma: 1.0 },
@@ -65,51 +57,51 @@ impl Default for SvrParamsBuilder {
             max_iterations: 0,
             time_budget: Duration::from_secs(60),
             max_sv: None,
-        }
+        })
     }
 }
 
 impl SvrParamsBuilder {
     /// Regularisation constant C > 0 (the weight of the ε-insensitive loss against ½‖w‖²).
     pub fn c(mut self, c: f64) -> Self {
-        self.c = c;
+        self.0.c = c;
         self
     }
 
     /// Width ε ≥ 0 of the insensitive tube, in the units of the targets.
     pub fn epsilon(mut self, epsilon: f64) -> Self {
-        self.epsilon = epsilon;
+        self.0.epsilon = epsilon;
         self
     }
 
     /// The kernel.
     pub fn kernel(mut self, kernel: Kernel) -> Self {
-        self.kernel = kernel;
+        self.0.kernel = kernel;
         self
     }
 
     /// The optimiser.
     pub fn solver(mut self, solver: Solver) -> Self {
-        self.solver = solver;
+        self.0.solver = solver;
         self
     }
 
     /// Relative optimality tolerance (duality gap for the interior point, KKT violation for SMO).
     pub fn tolerance(mut self, tolerance: f64) -> Self {
-        self.tolerance = tolerance;
+        self.0.tolerance = tolerance;
         self
     }
 
     /// Iteration budget; 0 picks the solver's default (200 interior-point iterations;
     /// 100 000 · n SMO iterations).
     pub fn max_iterations(mut self, max_iterations: usize) -> Self {
-        self.max_iterations = max_iterations;
+        self.0.max_iterations = max_iterations;
         self
     }
 
     /// Wall-clock budget; a fit that exceeds it stops with [`SvmError::Budget`].
     pub fn time_budget(mut self, budget: Duration) -> Self {
-        self.time_budget = budget;
+        self.0.time_budget = budget;
         self
     }
 
@@ -117,18 +109,18 @@ impl SvrParamsBuilder {
     /// ([`crate::reduce_support`]) and the fit says how far the reduced model is from the
     /// certified one ([`crate::SvrFit::reduction`]). None (the default): no budget.
     pub fn max_sv(mut self, max_sv: Option<usize>) -> Self {
-        self.max_sv = max_sv;
+        self.0.max_sv = max_sv;
         self
     }
 
     /// Validates into [`SvrParams`].
     pub fn build(self) -> Result<SvrParams, SvmError> {
         let bad = SvmError::hyperparameter;
-        check_positive("C", self.c)?;
-        if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
-            return Err(bad("epsilon", self.epsilon, "must be finite and >= 0"));
+        check_positive("C", self.0.c)?;
+        if !(self.0.epsilon.is_finite() && self.0.epsilon >= 0.0) {
+            return Err(bad("epsilon", self.0.epsilon, "must be finite and >= 0"));
         }
-        match self.kernel {
+        match self.0.kernel {
             Kernel::Linear => {}
             Kernel::Rbf { gamma } => {
                 check_positive("gamma", gamma)?;
@@ -143,23 +135,14 @@ impl SvrParamsBuilder {
                 }
             }
         }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
-            return Err(bad("tolerance", self.tolerance, "must be in (0, 1)"));
+        if !(self.0.tolerance.is_finite() && self.0.tolerance > 0.0 && self.0.tolerance < 1.0) {
+            return Err(bad("tolerance", self.0.tolerance, "must be in (0, 1)"));
         }
-        check_time_budget(self.time_budget)?;
-        if self.max_sv == Some(0) {
+        check_time_budget(self.0.time_budget)?;
+        if self.0.max_sv == Some(0) {
             return Err(bad("max_sv", 0.0, "at least one support vector"));
         }
-        Ok(SvrParams {
-            c: self.c,
-            epsilon: self.epsilon,
-            kernel: self.kernel,
-            solver: self.solver,
-            tolerance: self.tolerance,
-            max_iterations: self.max_iterations,
-            time_budget: self.time_budget,
-            max_sv: self.max_sv,
-        })
+        Ok(self.0)
     }
 }
 

@@ -386,8 +386,21 @@ fn solve<R: PairRows, L: Labels>(
     }
 }
 
-/// libsvm's ρ at (α, ∇): the mean of `yₜ∇ₜ` over free variables, else the middle of the
-/// interval the bounded ones allow.
+/// libsvm's ρ at (α, ∇) for labels `y` (±1) and box `[0, c]`: the mean of `yₜ∇ₜ` over free
+/// variables, else the middle of the interval the bounded ones allow. Every SMO here (the
+/// ε-SVR's, the C-SVC's) reads its ρ from this one function.
+///
+/// # Panics
+/// If the three slices differ in length.
+pub fn libsvm_rho(alpha: &[f64], grad: &[f64], y: &[f64], c: f64) -> f64 {
+    assert!(
+        alpha.len() == grad.len() && grad.len() == y.len(),
+        "ρ: slices of different lengths"
+    );
+    rho(alpha, grad, Given(y), c)
+}
+
+/// [`libsvm_rho`] for any labelling.
 fn rho<L: Labels>(alpha: &[f64], grad: &[f64], labels: L, c: f64) -> f64 {
     let (mut ub, mut lb, mut sum_free, mut n_free) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
     for (t, (&a, &g)) in alpha.iter().zip(grad).enumerate() {
@@ -555,41 +568,13 @@ fn solve_with<R: PairRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
         let qjj = diag[sj];
         let qij = yi * yj * ki[sj];
         let (old_i, old_j) = (alpha[i_sel], alpha[j_sel]);
-        if yi != yj {
-            let quad = (qii + qjj + 2.0 * qij).max(TAU);
-            let delta = (-grad[i_sel] - grad[j_sel]) / quad;
-            let diff = old_i - old_j;
-            let (mut ai, mut aj) = (old_i + delta, old_j + delta);
-            if diff > 0.0 {
-                if aj < 0.0 {
-                    aj = 0.0;
-                    ai = diff;
-                }
-            } else if ai < 0.0 {
-                ai = 0.0;
-                aj = -diff;
-            }
-            if diff > 0.0 {
-                if ai > c {
-                    ai = c;
-                    aj = c - diff;
-                }
-            } else if aj > c {
-                aj = c;
-                ai = c + diff;
-            }
-            alpha[i_sel] = ai;
-            alpha[j_sel] = aj;
-        } else {
-            let quad = (qii + qjj - 2.0 * qij).max(TAU);
-            let delta = (grad[i_sel] - grad[j_sel]) / quad;
-            let sum = old_i + old_j;
-            let (mut ai, mut aj) = (old_i - delta, old_j + delta);
-            clip_equal_labels(&mut ai, &mut aj, sum, c);
-            clip_equal_labels(&mut aj, &mut ai, sum, c);
-            alpha[i_sel] = ai;
-            alpha[j_sel] = aj;
+        [alpha[i_sel], alpha[j_sel]] = PairStep {
+            same_label: yi == yj,
+            q: [qii, qjj, qij],
+            grad: [grad[i_sel], grad[j_sel]],
+            alpha: [old_i, old_j],
         }
+        .clipped(c);
         let (di, dj) = (yi * (alpha[i_sel] - old_i), yj * (alpha[j_sel] - old_j));
         for &t in &active {
             let st = sample(t);
@@ -612,6 +597,64 @@ fn solve_with<R: PairRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
         iterations,
         violation,
     })
+}
+
+/// One pair `(i, j)` of a dual `min ½ αᵀQα + pᵀα`, `yᵀα = Δ`, `0 ≤ α ≤ C` at an SMO step.
+#[derive(Debug, Clone, Copy)]
+pub struct PairStep {
+    /// `yᵢ = yⱼ`.
+    pub same_label: bool,
+    /// `[Qᵢᵢ, Qⱼⱼ, Qᵢⱼ]`, with `Qᵢⱼ = yᵢyⱼK(xᵢ, xⱼ)`.
+    pub q: [f64; 3],
+    /// `[∇ᵢ, ∇ⱼ]`.
+    pub grad: [f64; 2],
+    /// `[αᵢ, αⱼ]` before the step.
+    pub alpha: [f64; 2],
+}
+
+impl PairStep {
+    /// libsvm's analytic two-variable step, clipped to the box `[0, c]²` along the line
+    /// `yᵀα` keeps constant: the new `[αᵢ, αⱼ]`. Every SMO here (the ε-SVR's, the C-SVC's)
+    /// takes its step through this one function.
+    #[inline(always)]
+    pub fn clipped(self, c: f64) -> [f64; 2] {
+        let [qii, qjj, qij] = self.q;
+        let [gi, gj] = self.grad;
+        let [old_i, old_j] = self.alpha;
+        // libsvm: a non-positive curvature (a kernel that is not positive definite) is τ.
+        let curvature = |quad: f64| if quad > 0.0 { quad } else { TAU };
+        if self.same_label {
+            let delta = (gi - gj) / curvature(qii + qjj - 2.0 * qij);
+            let sum = old_i + old_j;
+            let (mut ai, mut aj) = (old_i - delta, old_j + delta);
+            clip_equal_labels(&mut ai, &mut aj, sum, c);
+            clip_equal_labels(&mut aj, &mut ai, sum, c);
+            [ai, aj]
+        } else {
+            let delta = (-gi - gj) / curvature(qii + qjj + 2.0 * qij);
+            let diff = old_i - old_j;
+            let (mut ai, mut aj) = (old_i + delta, old_j + delta);
+            if diff > 0.0 {
+                if aj < 0.0 {
+                    aj = 0.0;
+                    ai = diff;
+                }
+            } else if ai < 0.0 {
+                ai = 0.0;
+                aj = -diff;
+            }
+            if diff > 0.0 {
+                if ai > c {
+                    ai = c;
+                    aj = c - diff;
+                }
+            } else if aj > c {
+                aj = c;
+                ai = c + diff;
+            }
+            [ai, aj]
+        }
+    }
 }
 
 /// libsvm's clipping of a same-label pair to the box `[0, c]²` on the line `a + b = sum`, for

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use capture::{Capture, CaptureKind};
 use identify::{
-    IdentifyError, IdentifyOptions, ModelBody, ModelFile, ModelKind, PunctureParams, identify,
+    IdentifyError, IdentifyOptions, ModelBody, ModelFile, ModelKind, PhaseForm, PunctureParams, identify,
     identify_phases,
 };
 
@@ -112,6 +112,7 @@ fn a_capture_without_a_puncture_is_refused_with_the_reason() {
     let velocity = vec![0.001; n];
     let force: Vec<f64> = depth.iter().map(|d| 10.0 * d.max(0.0)).collect();
     let e = identify_phases(
+        PhaseForm::Full,
         std::path::Path::new("steady.csv"),
         &time,
         &depth,

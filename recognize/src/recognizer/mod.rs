@@ -46,8 +46,8 @@ pub use sequential_eval::{
 };
 pub use train::{
     CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, LEAST_TRAINING_TRAVEL_SHARE, Method,
-    SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainSettings, Trainer, TrainingWarning,
-    UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_som_nodes,
+    SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainJob, TrainSettings, Trainer,
+    TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_som_nodes,
     window_svc_params,
 };
 pub use window_classifier::WindowClassifier;

@@ -29,7 +29,7 @@ use super::file::RecognizerFile;
 use super::kept::change_sample;
 use super::labelled::{class_index, class_named};
 use crate::RecognizeError;
-use crate::eval::stable_right_from;
+use crate::eval::{DecisionTiming, NamedDecision, stable_right_from};
 use crate::features::{FeatureSet, NakanoWindowing, WindowlessCapture};
 use crate::sequential::{SequentialParams, SequentialParamsBuilder, SequentialState};
 
@@ -563,12 +563,9 @@ impl RecognizerFile {
             decided += named.len();
             correct += named.iter().filter(|(t, _, d)| *d == s.truth_at(*t)).count();
             flips += named.windows(2).filter(|w| w[0].2 != w[1].2).count();
-            // The named decision that starts the final run of right ones, if the stroke ends
-            // named right.
-            let final_right =
-                |truth: usize| stable_right_from(&named, |&(.., d)| d == truth).map(|k| named[k]);
             if let Some((at_s, after)) = s.change {
-                match final_right(after) {
+                // The named decision that starts the final run naming the surface slid onto.
+                match stable_right_from(&named, |&(.., d)| d == after).map(|k| named[k]) {
                     Some((t, travel_m, _)) if t >= at_s => {
                         followed.push(t - at_s);
                         followed_m.push(travel_m.zip(s.change_travel_m).map(|(a, b)| a - b));
@@ -578,15 +575,23 @@ impl RecognizerFile {
                 continue;
             }
             strokes_by_class[s.truth] += 1;
-            if let Some(&(t, ..)) = named.first() {
-                first.push(t);
-            }
-            match final_right(s.truth) {
-                Some((t, travel_m, _)) => {
+            let timing = DecisionTiming::of(
+                &named
+                    .iter()
+                    .map(|&(time_s, travel_m, d)| NamedDecision {
+                        time_s,
+                        travel_m,
+                        right: d == s.truth,
+                    })
+                    .collect::<Vec<_>>(),
+            );
+            first.extend(timing.first_named_after_s);
+            match timing.stable_right_after_s {
+                Some(t) => {
                     stable.push(t);
-                    stable_m.push(travel_m);
+                    stable_m.push(timing.stable_right_after_m);
                     stable_by_class[s.truth].push(t);
-                    stable_m_by_class[s.truth].push(travel_m);
+                    stable_m_by_class[s.truth].push(timing.stable_right_after_m);
                 }
                 None => not_stable += 1,
             }

@@ -11,7 +11,7 @@
 //! array and of every cached row, and an iteration reads two cached prefixes of the rows and
 //! the front of the arrays, contiguously.
 
-use svm::Kernel;
+use svm::{Kernel, PairStep};
 
 /// Curvature floor for non-positive-definite pairs (libsvm's τ).
 const TAU: f64 = 1e-12;
@@ -214,58 +214,13 @@ impl State<'_> {
         let qij = self.q.rows[i][j];
         let (old_i, old_j) = (self.alpha[i], self.alpha[j]);
         let (was_upper_i, was_upper_j) = (self.upper(i), self.upper(j));
-        let (mut ai, mut aj) = (old_i, old_j);
-        if self.q.y[i] != self.q.y[j] {
-            let quad = self.diag[i] + self.diag[j] + 2.0 * qij;
-            let quad = if quad > 0.0 { quad } else { TAU };
-            let delta = (-self.grad[i] - self.grad[j]) / quad;
-            let diff = ai - aj;
-            ai += delta;
-            aj += delta;
-            if diff > 0.0 {
-                if aj < 0.0 {
-                    aj = 0.0;
-                    ai = diff;
-                }
-            } else if ai < 0.0 {
-                ai = 0.0;
-                aj = -diff;
-            }
-            if diff > 0.0 {
-                if ai > c {
-                    ai = c;
-                    aj = c - diff;
-                }
-            } else if aj > c {
-                aj = c;
-                ai = c + diff;
-            }
-        } else {
-            let quad = self.diag[i] + self.diag[j] - 2.0 * qij;
-            let quad = if quad > 0.0 { quad } else { TAU };
-            let delta = (self.grad[i] - self.grad[j]) / quad;
-            let sum = ai + aj;
-            ai -= delta;
-            aj += delta;
-            if sum > c {
-                if ai > c {
-                    ai = c;
-                    aj = sum - c;
-                }
-            } else if aj < 0.0 {
-                aj = 0.0;
-                ai = sum;
-            }
-            if sum > c {
-                if aj > c {
-                    aj = c;
-                    ai = sum - c;
-                }
-            } else if ai < 0.0 {
-                ai = 0.0;
-                aj = sum;
-            }
+        let [ai, aj] = PairStep {
+            same_label: self.q.y[i] == self.q.y[j],
+            q: [self.diag[i], self.diag[j], qij],
+            grad: [self.grad[i], self.grad[j]],
+            alpha: [old_i, old_j],
         }
+        .clipped(c);
         self.alpha[i] = ai;
         self.alpha[j] = aj;
         let (di, dj) = (ai - old_i, aj - old_j);
@@ -385,35 +340,10 @@ impl State<'_> {
         }
     }
 
-    /// libsvm's ρ: the mean of `yₜ∇ₜ` over free variables, else the middle of the interval the
-    /// bounded ones allow.
+    /// libsvm's ρ over the active set ([`svm::libsvm_rho`]).
     fn rho(&self) -> f64 {
-        let (mut ub, mut lb, mut sum_free, mut n_free) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
-        for t in 0..self.active {
-            let positive = self.q.y[t] > 0.0;
-            let yg = if positive { self.grad[t] } else { -self.grad[t] };
-            if self.upper(t) {
-                if positive {
-                    lb = lb.max(yg);
-                } else {
-                    ub = ub.min(yg);
-                }
-            } else if self.lower(t) {
-                if positive {
-                    ub = ub.min(yg);
-                } else {
-                    lb = lb.max(yg);
-                }
-            } else {
-                n_free += 1;
-                sum_free += yg;
-            }
-        }
-        if n_free > 0 {
-            sum_free / n_free as f64
-        } else {
-            0.5 * (ub + lb)
-        }
+        let n = self.active;
+        svm::libsvm_rho(&self.alpha[..n], &self.grad[..n], &self.q.y[..n], self.c)
     }
 }
 

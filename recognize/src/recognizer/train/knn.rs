@@ -2,8 +2,8 @@
 //! one over rubbing windows.
 
 use super::{
-    CV_FOLDS, Method, ScaledWindows, TrainSettings, Trainer, every_class_in_two_groups,
-    histograms_by_behaviour, scaled_training_windows,
+    CV_FOLDS, Method, ScaledWindows, TrainJob, Trainer, every_class_in_two_groups, histograms_by_behaviour,
+    scaled_training_windows,
 };
 use crate::RecognizeError;
 #[cfg(doc)]
@@ -29,11 +29,10 @@ impl Trainer for KnnTrainer {
         Method::Knn
     }
 
-    fn train(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizeError> {
+    fn train(&self, job: TrainJob<'_>) -> Result<RecognizerFile, RecognizeError> {
+        let TrainJob {
+            captures, settings, ..
+        } = job;
         match settings.features {
             FeatureSet::Spectral => {
                 RecognizerFile::train_knn(captures, KnnParams::default().k(settings.k), settings.cell_scale)

@@ -295,30 +295,35 @@ impl FeatureNeeds {
     }
 }
 
+/// What a [`Trainer`] is given: labelled captures (whose columns have been checked against
+/// `settings.features`), the settings, and where to report its long steps and what it skipped.
+#[derive(Clone, Copy)]
+pub struct TrainJob<'a> {
+    /// The labelled training captures.
+    pub captures: &'a [LabelledCapture],
+    /// What to train.
+    pub settings: &'a TrainSettings,
+    /// Told how far the long steps are; a trainer without long steps reports nothing.
+    pub progress: Progress<'a>,
+}
+
+impl std::fmt::Debug for TrainJob<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TrainJob")
+            .field("captures", &self.captures.len())
+            .field("settings", self.settings)
+            .finish_non_exhaustive()
+    }
+}
+
 /// A method's trainer: trains a recognizer of that method on labelled captures, over the
-/// features `settings` names.
+/// features the settings name.
 pub trait Trainer: Sync {
     /// The method it trains.
     fn method(&self) -> Method;
 
-    /// Trains on `captures` (whose columns have been checked against `settings.features`).
-    fn train(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizeError>;
-
-    /// [`Trainer::train`], telling `progress` how far its long steps are and what it skipped;
-    /// a trainer without long steps reports nothing.
-    fn train_observed(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-        progress: Progress<'_>,
-    ) -> Result<RecognizerFile, RecognizeError> {
-        let _ = progress;
-        self.train(captures, settings)
-    }
+    /// Trains on `job.captures` as `job.settings` say.
+    fn train(&self, job: TrainJob<'_>) -> Result<RecognizerFile, RecognizeError>;
 }
 
 /// Trains the recognizer `settings` describe on `captures`: checks that the captures carry the
@@ -332,14 +337,18 @@ pub fn train(
 
 impl TrainSettings {
     /// [`train`], with `progress` told of the trainer's steps and warnings (an SVM's C search
-    /// and machines; see [`Trainer::train_observed`]): the library prints nothing itself.
+    /// and machines; see [`Trainer::train`]): the library prints nothing itself.
     pub fn train_observed(
         &self,
         captures: &[LabelledCapture],
         progress: Progress<'_>,
     ) -> Result<RecognizerFile, RecognizeError> {
         self.features.check_columns(captures)?;
-        let mut file = self.method.trainer().train_observed(captures, self, progress)?;
+        let mut file = self.method.trainer().train(TrainJob {
+            captures,
+            settings: self,
+            progress,
+        })?;
         if self.fit_posterior_weight {
             file.posterior_weight =
                 file.fit_posterior_weight(captures, self.weight_fit_memory_s, progress)?;

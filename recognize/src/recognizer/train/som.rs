@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::{
-    BehaviourHistograms, CV_FOLDS, Method, TrainSettings, Trainer, every_class_has_windows,
+    BehaviourHistograms, CV_FOLDS, Method, TrainJob, Trainer, every_class_has_windows,
     every_class_in_two_groups, histograms_by_behaviour, training_windows,
 };
 use crate::RecognizeError;
@@ -29,20 +29,8 @@ impl Trainer for SomTrainer {
         Method::Som
     }
 
-    fn train(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizeError> {
-        self.train_observed(captures, settings, &no_progress)
-    }
-
-    fn train_observed(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-        progress: Progress<'_>,
-    ) -> Result<RecognizerFile, RecognizeError> {
+    fn train(&self, job: TrainJob<'_>) -> Result<RecognizerFile, RecognizeError> {
+        let (captures, settings, progress) = (job.captures, job.settings, job.progress);
         let classes = class_list(captures).len();
         let params = |vectors| {
             let nodes = settings.som_nodes.unwrap_or(window_som_nodes(classes, vectors));

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::{
-    BehaviourHistograms, CV_FOLDS, ChosenC, Method, ScaledWindows, SvmC, TrainSettings, Trainer,
+    BehaviourHistograms, CV_FOLDS, ChosenC, Method, ScaledWindows, SvmC, TrainJob, TrainSettings, Trainer,
     every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows,
 };
 use crate::RecognizeError;
@@ -34,20 +34,8 @@ impl Trainer for SvmTrainer {
         Method::Svm
     }
 
-    fn train(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-    ) -> Result<RecognizerFile, RecognizeError> {
-        self.train_observed(captures, settings, &no_progress)
-    }
-
-    fn train_observed(
-        &self,
-        captures: &[LabelledCapture],
-        settings: &TrainSettings,
-        progress: Progress<'_>,
-    ) -> Result<RecognizerFile, RecognizeError> {
+    fn train(&self, job: TrainJob<'_>) -> Result<RecognizerFile, RecognizeError> {
+        let (captures, settings, progress) = (job.captures, job.settings, job.progress);
         match settings.features {
             FeatureSet::Spectral => RecognizerFile::train_svm_observed(
                 captures,
@@ -314,32 +302,27 @@ impl RecognizerFile {
         cell_scale: CellScale,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
-        let ScaledWindows {
-            classes,
-            scaling,
-            x,
-            y,
-            groups,
-        } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
+        let windows = scaled_training_windows(captures, &windowing, features, cell_scale)?;
+        let (x, y, groups) = (&windows.x, &windows.y, &windows.groups);
         let params = window_svc_params(features.dim());
         let label = windows_label(features);
         // The recognizer takes `classes`; errors and warnings borrow their names meanwhile.
-        let names = classes.clone();
+        let names = windows.classes.clone();
         let svc_error = svc_error(&label, &names);
         let progress = naming_progress(progress, &names, &label);
         let chosen = match c {
             WindowC::Choose(c) => c
                 .choose(WINDOW_SVM_FALLBACK_C, |grid| {
-                    every_class_in_two_groups(&y, &groups).then(|| {
+                    every_class_in_two_groups(y, groups).then(|| {
                         select_c_observed(
                             params,
                             grid,
                             &BehaviourData {
-                                features: &x,
-                                labels: &y,
-                                groups: &groups,
+                                features: x,
+                                labels: y,
+                                groups,
                             },
-                            classes.len(),
+                            names.len(),
                             CV_FOLDS,
                             &progress,
                         )
@@ -353,25 +336,26 @@ impl RecognizerFile {
                 c: chosen.c,
                 ..params
             },
-            &x,
-            &y,
-            classes.len(),
+            x,
+            y,
+            names.len(),
             &progress,
         )
         .map_err(&svc_error)?;
+        let n_vectors = x.len();
         Ok(Self::assemble(
-            classes,
+            windows.classes,
             features.feature_names(),
             RecognizerBody::SvmWindows {
                 features,
                 windowing,
                 cell_scale,
-                scaling,
+                scaling: windows.scaling,
                 svc,
                 c_search: chosen.search,
             },
             captures,
-            x.len(),
+            n_vectors,
         ))
     }
 }
