@@ -389,6 +389,10 @@ pub enum CaptureErrorKind {
         /// order.
         ranges: Box<[(PathBuf, f64, f64)]>,
     },
+    /// Two inputs of one recording span times more than [`crate::import::MAX_SPAN_RATIO`]
+    /// apart: one clock is read in other units than it counts (milliseconds as seconds).
+    #[error("{0}")]
+    SpansDisagree(Box<SpanMismatch>),
 
     // --- Signals (`signal`): slices, so these name indices rather than lines ---
     /// `time_s` and `position_m` differ in length.
@@ -602,5 +606,42 @@ mod bounded_tests {
             .unwrap();
         assert_eq!(left + listed.matches("column_").count(), 100_000);
         assert_eq!(bounded_list(&names[..3]), "column_0, column_1, column_2");
+    }
+}
+
+/// Two inputs whose time spans disagree ([`CaptureErrorKind::SpansDisagree`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpanMismatch {
+    /// The input with the longer span.
+    pub long: PathBuf,
+    /// Its span, s.
+    pub long_s: f64,
+    /// Its mean row rate, Hz.
+    pub long_rate_hz: f64,
+    /// The input with the shorter span.
+    pub short: PathBuf,
+    /// Its span, s.
+    pub short_s: f64,
+    /// Its mean row rate, Hz.
+    pub short_rate_hz: f64,
+    /// The ratio refused beyond.
+    pub ratio: f64,
+}
+
+impl fmt::Display for SpanMismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} spans {} s ({:.4} rows/s) but {} spans {} s ({:.4} rows/s), more than {}× apart: \
+             streams of one recording cover the same time; give the longer clock's unit in --map \
+             (e.g. `time_s=t[ms]`)",
+            self.long.display(),
+            self.long_s,
+            self.long_rate_hz,
+            self.short.display(),
+            self.short_s,
+            self.short_rate_hz,
+            self.ratio
+        )
     }
 }

@@ -58,7 +58,7 @@ use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 pub use atomic::write_atomically;
-pub use error::{CaptureError, CaptureErrorKind, InputColumns, OutputBudget};
+pub use error::{CaptureError, CaptureErrorKind, InputColumns, OutputBudget, SpanMismatch};
 pub use kind::{CaptureKind, UnknownKind};
 pub use meta::{METADATA_MARKER, Metadata, RESERVED_KEYS};
 pub use reader::CaptureReader;

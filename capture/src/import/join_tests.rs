@@ -441,3 +441,44 @@ fn each_input_may_name_its_own_time_column_once() {
         "Time:s"
     );
 }
+
+#[test]
+fn a_clock_in_other_units_than_the_others_is_refused_with_both_spans() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut seconds = String::from("t,Fz\n");
+    let mut millis = String::from("t,x\n");
+    for i in 0..=100 {
+        let t = f64::from(i) * 0.01;
+        writeln!(seconds, "{t},{}", force_n(t)).unwrap();
+        // The same second, its clock counting milliseconds, mapped as seconds.
+        writeln!(millis, "{},{}", t * 1e3, position_m(t)).unwrap();
+    }
+    let a = write(dir.path(), "force.csv", &seconds);
+    let b = write(dir.path(), "position.csv", &millis);
+    let error = import_streams(
+        &[a.as_path(), b.as_path()],
+        &spec("time_s=t,normal_force_n=Fz,tangential_position_m=x", 100.0),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&error.kind, CaptureErrorKind::SpansDisagree(m)
+            if m.long == b && m.long_s == 1000.0 && m.short_s == 1.0),
+        "{error:?}"
+    );
+    let text = error.to_string();
+    assert!(
+        text.contains("position.csv spans 1000 s")
+            && text.contains("force.csv spans 1 s")
+            && text.contains("t[ms]"),
+        "{text}"
+    );
+    // Its unit given, the same files join.
+    import_streams(
+        &[a.as_path(), b.as_path()],
+        &spec(
+            "time_s=1:t,normal_force_n=Fz,time_s=2:t[ms],tangential_position_m=x",
+            100.0,
+        ),
+    )
+    .unwrap();
+}

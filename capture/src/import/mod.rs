@@ -189,7 +189,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::CaptureErrorKind;
 use crate::kind::{CaptureKind, TIME_S, magnitude_limit};
-use crate::{Capture, CaptureError, Metadata, OutputBudget};
+use crate::{Capture, CaptureError, Metadata, OutputBudget, SpanMismatch};
 
 mod column_map;
 mod join;
@@ -253,6 +253,38 @@ pub const MAX_OUTPUT_ROWS: usize = 10_000_000;
 /// Fewest output samples a join of several inputs may have: a shorter overlap is clocks in
 /// different origins or units (or an offset given wrongly), not a recording.
 pub const MIN_JOINED_ROWS: usize = 4;
+
+/// Inputs of one recording whose time spans differ by more than this factor are refused
+/// ([`CaptureErrorKind::SpansDisagree`]): a clock counting milliseconds read as seconds spans
+/// 1000 times the others, and the overlap would keep a few of its rows.
+pub const MAX_SPAN_RATIO: f64 = 10.0;
+
+/// Refuses inputs whose spans lie more than [`MAX_SPAN_RATIO`] apart (the longest against the
+/// shortest).
+fn check_spans(paths: &[&Path], streams: &[Stream]) -> Result<(), CaptureError> {
+    let span = |s: &Stream| s.time[s.time.len() - 1] - s.time[0];
+    let order = |a: &&(&&Path, &Stream), b: &&(&&Path, &Stream)| span(a.1).total_cmp(&span(b.1));
+    let pairs: Vec<(&&Path, &Stream)> = paths.iter().zip(streams).collect();
+    let (Some(short), Some(long)) = (pairs.iter().min_by(order), pairs.iter().max_by(order)) else {
+        return Ok(());
+    };
+    let (short_s, long_s) = (span(short.1), span(long.1));
+    if short_s > 0.0 && long_s > MAX_SPAN_RATIO * short_s {
+        let rate = |s: &Stream, span_s: f64| (s.time.len() - 1) as f64 / span_s;
+        return Err(CaptureError::without_file(CaptureErrorKind::SpansDisagree(
+            Box::new(SpanMismatch {
+                long: long.0.to_path_buf(),
+                long_s,
+                long_rate_hz: rate(long.1, long_s),
+                short: short.0.to_path_buf(),
+                short_s,
+                short_rate_hz: rate(short.1, short_s),
+                ratio: MAX_SPAN_RATIO,
+            }),
+        )));
+    }
+    Ok(())
+}
 
 /// What to import and how: see [`import_csv`].
 #[derive(Debug, Clone, PartialEq)]
@@ -736,6 +768,7 @@ pub fn import_streams(paths: &[&Path], spec: &ImportSpec) -> Result<Imported, Ca
         .map(|((path, file_spec), &offset_s)| read_stream(path, file_spec, offset_s))
         .collect::<Result<Vec<_>, _>>()?;
 
+    check_spans(paths, &streams)?;
     // The grid spans the time all inputs cover; with one input, all of it.
     let lo = streams
         .iter()
