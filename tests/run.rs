@@ -615,7 +615,8 @@ fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
     let mut first = String::new();
     stdout.read_line(&mut first).unwrap();
     assert!(first.starts_with("running scene"), "{first}");
-    std::thread::sleep(std::time::Duration::from_secs(1));
+    // 2.5 s in, the scripted needle is in the liver, pressing on it.
+    std::thread::sleep(std::time::Duration::from_millis(2500));
     stall(child.id(), std::time::Duration::from_secs(2));
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
@@ -636,6 +637,17 @@ fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
         dir.path().join("report/report.json").exists(),
         "the report is written first"
     );
+    // The simulated Omega.7's own watchdog, armed at the software watchdog's period (250 ms
+    // for a simulator, held to the 255 × 125 µs an Omega.7's allows), saw the 2 s silence: the
+    // report says what the device would have held, and for how long.
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("report/report.json")).unwrap()).unwrap();
+    let w = &report["segments"][0]["device_watchdog"];
+    assert_eq!(w["period_ms"].as_f64(), Some(31.875), "{w}");
+    assert!(w["trips"].as_u64().unwrap() >= 1, "{w}");
+    assert!(w["longest_silence_ms"].as_f64().unwrap() > 1900.0, "{w}");
+    assert!(w["held_force_n"].as_f64().unwrap() > 0.05, "in tissue, a force was held: {w}");
+    assert!(rest.contains("device watchdog armed at 31.875 ms"), "{rest}");
 }
 
 #[test]

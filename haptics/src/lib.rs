@@ -39,7 +39,8 @@ pub mod rt;
 pub mod safety;
 
 pub use device::{
-    DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice, InternalForces,
+    DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice, HardwareWatchdog,
+    InternalForces,
 };
 pub use error::{EarlyEnd, EndCause, HapticsError};
 pub use rt::{Controller, HapticSample, LoopConfig, LoopHandle, RateStats, TickInput, TickOutput};

@@ -53,6 +53,48 @@ pub struct LayerFidelity {
     pub felt_drop_n: Option<f64>,
 }
 
+/// The device's own watchdog over a segment ([`haptics::HapticDevice::arm_watchdog`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DeviceWatchdog {
+    /// The period armed, ms.
+    pub period_ms: f64,
+    /// Silences longer than the period, each ended by the device releasing the force, where
+    /// the device reports them (the simulated Omega.7 does).
+    pub trips: Option<u32>,
+    /// The longest silence between two commands, ms, where reported.
+    pub longest_silence_ms: Option<f64>,
+    /// The force the device held when that silence began, N: held for the silence, or for
+    /// one period when the silence tripped the watchdog.
+    pub held_force_n: Option<f64>,
+}
+
+impl From<haptics::HardwareWatchdog> for DeviceWatchdog {
+    fn from(w: haptics::HardwareWatchdog) -> Self {
+        Self {
+            period_ms: w.period.as_secs_f64() * 1e3,
+            trips: w.trips,
+            longest_silence_ms: w.longest_gap.map(|(g, _)| g.as_secs_f64() * 1e3),
+            held_force_n: w.longest_gap.map(|(_, f)| f),
+        }
+    }
+}
+
+impl std::fmt::Display for DeviceWatchdog {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "device watchdog armed at {:.3} ms", self.period_ms)?;
+        match (self.trips, self.longest_silence_ms, self.held_force_n) {
+            (Some(0), Some(gap), _) => write!(f, ", never reached (longest silence {gap:.1} ms)"),
+            (Some(trips), Some(gap), Some(held)) => write!(
+                f,
+                "; {trips} silence(s) longer released the force: over the longest ({gap:.1} ms) the device \
+                 held {held:.2} N for {:.3} ms, then let go (without it: for the whole {gap:.1} ms)",
+                self.period_ms
+            ),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// The summary of one segment.
 #[derive(Debug, Clone, Serialize)]
 pub struct SegmentSummary {
@@ -106,6 +148,9 @@ pub struct SegmentSummary {
     pub max_model_force_n: f64,
     /// Mean friction / normal force while sliding (friction and surface segments).
     pub mean_friction_ratio: Option<f64>,
+    /// The device's own watchdog, when armed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device_watchdog: Option<DeviceWatchdog>,
     /// How the loop ended.
     pub outcome: String,
 }
@@ -269,6 +314,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         max_depth_m,
         max_model_force_n,
         mean_friction_ratio: ratio,
+        device_watchdog: run.hardware_watchdog.map(DeviceWatchdog::from),
         outcome: match &run.outcome {
             Ok(r) => r.clone(),
             Err(e) => format!("error: {e}"),

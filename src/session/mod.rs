@@ -211,6 +211,8 @@ pub struct SegmentRun {
     pub max_force_n: f64,
     /// The device's name.
     pub device: String,
+    /// The device's own watchdog, when the loop armed one.
+    pub hardware_watchdog: Option<haptics::HardwareWatchdog>,
     /// Wall-clock time.
     pub elapsed: Duration,
 }
@@ -610,6 +612,7 @@ pub fn run_segment(
     let rt_status = handle.shared().rt_status();
     let outcome = handle.join()?;
     let mut device = outcome.device;
+    let hardware_watchdog = device.hardware_watchdog();
     drop(outcome.io);
     let _ = device.close();
     let result = outcome
@@ -643,6 +646,7 @@ pub fn run_segment(
         recorded,
         max_force_n,
         device: device_name,
+        hardware_watchdog,
         elapsed: started.elapsed(),
     })
 }

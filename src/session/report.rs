@@ -260,6 +260,9 @@ impl SessionReport {
                 s.model_clamps,
                 s.outcome
             );
+            if let Some(w) = &s.device_watchdog {
+                let _ = writeln!(t, "    {w}");
+            }
             for o in &s.out_of_domain {
                 let _ = writeln!(
                     t,

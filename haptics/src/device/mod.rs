@@ -29,6 +29,7 @@ pub use registry::{BUILTIN, DeviceChoice, Registry};
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 
 use glam::DVec3;
 
@@ -236,7 +237,44 @@ pub trait HapticDevice: Send {
     /// Zeroes the force, disables forces and releases the device. Further calls fail with
     /// [`HapticsError::DeviceClosed`]. Closing twice is not an error.
     fn close(&mut self) -> Result<(), HapticsError>;
+
+    /// Arms the device's own watchdog, where it has one: the device releases the force by
+    /// itself when no command has come for `period` (rounded up to its resolution), however
+    /// long the host stalls (a stalled host stalls the software watchdog with it). Returns
+    /// the period armed; `None` where the device has no such watchdog.
+    fn arm_watchdog(&mut self, period: Duration) -> Result<Option<Duration>, HapticsError> {
+        let _ = period;
+        Ok(None)
+    }
+
+    /// The device's own watchdog, once armed, and what it did where the device tells.
+    fn hardware_watchdog(&self) -> Option<HardwareWatchdog> {
+        None
+    }
 }
+
+/// A device's own watchdog ([`HapticDevice::arm_watchdog`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HardwareWatchdog {
+    /// The period armed.
+    pub period: Duration,
+    /// The longest silence between two commands and the force norm the device held when it
+    /// began, N, where the device reports it (the simulated Omega.7 does; the SDK does not).
+    pub longest_gap: Option<(Duration, f64)>,
+    /// Silences longer than `period`, each ended by the device releasing the force, where
+    /// the device reports them.
+    pub trips: Option<u32>,
+}
+
+/// An Omega.7's watchdog counts in steps of 125 µs, one byte of them (SDK 3.3.2's
+/// `dhdSetWatchdog`): the steps for `period`, rounded up, within 1..=255.
+pub fn watchdog_steps(period: Duration) -> u8 {
+    let steps = (period.as_secs_f64() / WATCHDOG_STEP.as_secs_f64()).ceil();
+    steps.clamp(1.0, 255.0) as u8
+}
+
+/// The resolution of an Omega.7's watchdog.
+pub const WATCHDOG_STEP: Duration = Duration::from_micros(125);
 
 impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
     fn specs(&self) -> &DeviceSpecs {
@@ -259,6 +297,12 @@ impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
     }
     fn close(&mut self) -> Result<(), HapticsError> {
         (**self).close()
+    }
+    fn arm_watchdog(&mut self, period: Duration) -> Result<Option<Duration>, HapticsError> {
+        (**self).arm_watchdog(period)
+    }
+    fn hardware_watchdog(&self) -> Option<HardwareWatchdog> {
+        (**self).hardware_watchdog()
     }
 }
 

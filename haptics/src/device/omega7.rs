@@ -13,11 +13,14 @@ use std::ffi::{CStr, c_char, c_int, c_uchar};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 
 use glam::DVec3;
 
 use super::backend::{Backend, BackendOption, Motion, OpenRequest, OpenedDevice};
-use super::{DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice, InternalForces};
+use super::{
+    DeviceSpecs, DeviceState, ForceCommand, ForceOverride, HapticDevice, HardwareWatchdog, InternalForces,
+};
 use crate::error::HapticsError;
 
 /// Environment variable naming the library file to load instead of the default search.
@@ -65,6 +68,7 @@ type GetButtonMask = unsafe extern "C" fn(c_char) -> c_int;
 type GetTime = unsafe extern "C" fn() -> f64;
 type ErrorGetLastStr = unsafe extern "C" fn() -> *const c_char;
 type GetSystemName = unsafe extern "C" fn(c_char) -> *const c_char;
+type SetWatchdog = unsafe extern "C" fn(c_uchar, c_char) -> c_int;
 
 /// The SDK's functions, each present or not.
 #[derive(Debug, Clone, Copy, Default)]
@@ -82,10 +86,11 @@ struct Functions {
     get_time: Option<GetTime>,
     error_get_last_str: Option<ErrorGetLastStr>,
     get_system_name: Option<GetSystemName>,
+    set_watchdog: Option<SetWatchdog>,
 }
 
 /// The SDK's functions palpus looks up, and whether each is required.
-pub const SYMBOLS: [(&str, bool); 13] = [
+pub const SYMBOLS: [(&str, bool); 14] = [
     ("dhdGetDeviceCount", false),
     ("dhdOpen", true),
     ("dhdClose", true),
@@ -99,6 +104,7 @@ pub const SYMBOLS: [(&str, bool); 13] = [
     ("dhdGetTime", false),
     ("dhdErrorGetLastStr", false),
     ("dhdGetSystemName", false),
+    ("dhdSetWatchdog", false),
 ];
 
 /// The loaded SDK.
@@ -193,6 +199,7 @@ impl DhdLibrary {
                 get_time: lookup(&library, "dhdGetTime"),
                 error_get_last_str: lookup(&library, "dhdErrorGetLastStr"),
                 get_system_name: lookup(&library, "dhdGetSystemName"),
+                set_watchdog: lookup(&library, "dhdSetWatchdog"),
             }
         };
         let lib = Self {
@@ -233,6 +240,7 @@ impl DhdLibrary {
             "dhdGetTime" => f.get_time.is_some(),
             "dhdErrorGetLastStr" => f.error_get_last_str.is_some(),
             "dhdGetSystemName" => f.get_system_name.is_some(),
+            "dhdSetWatchdog" => f.set_watchdog.is_some(),
             _ => false,
         }
     }
@@ -284,6 +292,7 @@ pub struct Omega7 {
     override_: Arc<DhdOverride>,
     clock_start_s: Option<f64>,
     open: bool,
+    watchdog: Option<Duration>,
 }
 
 /// The watchdog's path to the device: scales the last command and sends it from the watchdog
@@ -373,6 +382,7 @@ impl Omega7 {
             override_,
             clock_start_s: None,
             open: true,
+            watchdog: None,
         };
         // Forces stay off until the loop enables them.
         device.enable_forces(false)?;
@@ -521,6 +531,32 @@ impl HapticDevice for Omega7 {
             self.check("dhdClose", code)?;
         }
         zeroed.and(disabled)
+    }
+
+    /// `dhdSetWatchdog` (SDK 3.3.2 and later) with the period in 125 µs steps; an older SDK
+    /// has none (`None`), and the software watchdog alone guards a stall.
+    fn arm_watchdog(&mut self, period: Duration) -> Result<Option<Duration>, HapticsError> {
+        if !self.open {
+            return Err(HapticsError::DeviceClosed { tick: None });
+        }
+        let Some(f) = self.lib.functions.set_watchdog else {
+            return Ok(None);
+        };
+        let steps = super::watchdog_steps(period);
+        // SAFETY: the period in steps and the device id, per dhdc.h.
+        let code = unsafe { f(steps, self.id()) };
+        self.check("dhdSetWatchdog", code)?;
+        let armed = super::WATCHDOG_STEP * u32::from(steps);
+        self.watchdog = Some(armed);
+        Ok(Some(armed))
+    }
+
+    fn hardware_watchdog(&self) -> Option<HardwareWatchdog> {
+        self.watchdog.map(|period| HardwareWatchdog {
+            period,
+            longest_gap: None,
+            trips: None,
+        })
     }
 }
 

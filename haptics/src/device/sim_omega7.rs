@@ -13,12 +13,15 @@
 //! of Nakano's textured patches, [`SurfacePatch`](sim::world::surface::SurfacePatch)) under the tip.
 
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use glam::DVec3;
 
 use super::backend::{Backend, Motion, OpenRequest, OpenedDevice, SimSetup};
 pub use super::sim_world::{SimOmega7Config, SimWorld, Texture};
-use super::{DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice};
+use super::{
+    DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice, HardwareWatchdog,
+};
 use crate::error::HapticsError;
 use sim::hand::{HandImpedance, HandScript};
 use sim::world::sensor::{Encoder, PseudoDifferentiator};
@@ -93,8 +96,25 @@ pub struct SimOmega7 {
     measured: DeviceState,
     last_hand_force_n: DVec3,
     last_world_force_n: DVec3,
+    last_actuator_n: f64,
     trace: Vec<SimTrace>,
     trace_capacity: usize,
+    watchdog: Option<SimWatchdog>,
+}
+
+/// The Omega.7's own watchdog as the simulator models it: it sees the host's commands arrive
+/// on its own clock (the wall clock here: a stalled host stalls the simulation with it, but
+/// not the device's firmware), and a silence longer than its period would have released the
+/// force the device was holding.
+#[derive(Debug, Clone, Copy)]
+struct SimWatchdog {
+    period: Duration,
+    last_command: Option<Instant>,
+    /// The force norm the actuators applied after the last command, N: what they hold while
+    /// no command comes.
+    holding_n: f64,
+    longest_gap: Option<(Duration, f64)>,
+    trips: u32,
 }
 
 impl std::fmt::Debug for SimOmega7 {
@@ -132,8 +152,10 @@ impl SimOmega7 {
             measured: DeviceState::default(),
             last_hand_force_n: DVec3::ZERO,
             last_world_force_n: DVec3::ZERO,
+            last_actuator_n: 0.0,
             trace: Vec::new(),
             trace_capacity: 0,
+            watchdog: None,
         };
         device.measure();
         device
@@ -283,6 +305,7 @@ impl SimOmega7 {
         }
         self.last_hand_force_n = hand_sum / f64::from(n);
         self.last_world_force_n = world_sum / f64::from(n);
+        self.last_actuator_n = actuator.force_n.length();
         self.time_s += c.period_s;
         if self.trace.len() < self.trace_capacity {
             self.trace.push(SimTrace {
@@ -333,7 +356,23 @@ impl HapticDevice for SimOmega7 {
         if self.closed {
             return Err(HapticsError::DeviceClosed { tick: None });
         }
+        if let Some(w) = self.watchdog.as_mut() {
+            let now = Instant::now();
+            if let Some(last) = w.last_command {
+                let gap = now.saturating_duration_since(last);
+                if w.longest_gap.is_none_or(|(g, _)| gap > g) {
+                    w.longest_gap = Some((gap, w.holding_n));
+                }
+                if gap > w.period {
+                    w.trips += 1;
+                }
+            }
+            w.last_command = Some(now);
+        }
         self.step(command);
+        if let Some(w) = self.watchdog.as_mut() {
+            w.holding_n = self.last_actuator_n;
+        }
         self.tick += 1;
         Ok(())
     }
@@ -348,6 +387,30 @@ impl HapticDevice for SimOmega7 {
         self.closed = true;
         Ok(())
     }
+
+    /// Modelled on the Omega.7's: 125 µs steps, up to 255 of them.
+    fn arm_watchdog(&mut self, period: Duration) -> Result<Option<Duration>, HapticsError> {
+        if self.closed {
+            return Err(HapticsError::DeviceClosed { tick: None });
+        }
+        let period = super::WATCHDOG_STEP * u32::from(super::watchdog_steps(period));
+        self.watchdog = Some(SimWatchdog {
+            period,
+            last_command: None,
+            holding_n: 0.0,
+            longest_gap: None,
+            trips: 0,
+        });
+        Ok(Some(period))
+    }
+
+    fn hardware_watchdog(&self) -> Option<HardwareWatchdog> {
+        self.watchdog.map(|w| HardwareWatchdog {
+            period: w.period,
+            longest_gap: w.longest_gap,
+            trips: Some(w.trips),
+        })
+    }
 }
 
 impl SimOmega7 {
@@ -360,6 +423,33 @@ impl SimOmega7 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn its_own_watchdog_sees_a_silence_of_the_host_and_what_it_held() {
+        let mut d = SimOmega7::new(SimOmega7Config::default(), SimWorld::Free);
+        assert_eq!(d.hardware_watchdog(), None);
+        // 4 ms is 32 steps of 125 µs; 4.01 ms rounds up to 33.
+        assert_eq!(
+            d.arm_watchdog(Duration::from_micros(4010)).unwrap(),
+            Some(Duration::from_micros(4125))
+        );
+        d.arm_watchdog(Duration::from_millis(4)).unwrap();
+        d.enable_forces(true).unwrap();
+        let push = ForceCommand {
+            force_n: DVec3::new(0.0, 0.0, 3.0),
+            gripper_force_n: 0.0,
+        };
+        d.command(&push).unwrap();
+        std::thread::sleep(Duration::from_millis(30));
+        d.command(&push).unwrap();
+        let w = d.hardware_watchdog().unwrap();
+        assert_eq!((w.period, w.trips), (Duration::from_millis(4), Some(1)));
+        let (gap, held) = w.longest_gap.unwrap();
+        assert!(
+            gap >= Duration::from_millis(30) && (held - 3.0).abs() < 1e-12,
+            "{gap:?} {held}"
+        );
+    }
     use sim::world::needle::{NeedleSite, NeedleTissue};
 
     #[test]

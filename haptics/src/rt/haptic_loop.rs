@@ -275,6 +275,14 @@ where
 
     // A new run starts with the gate open, even after a previous run's watchdog closed it.
     device.force_override().set_force_scale(1.0);
+    // The device's own watchdog, where it has one, at the software watchdog's period: a
+    // stall of the whole host (which stops the software watchdog too) still releases the force.
+    if let Some(w) = config.watchdog
+        && let Err(e) = device.arm_watchdog(w.stall)
+    {
+        safe_stop(device);
+        return Err(e.in_loop_at(0));
+    }
     if let Err(e) = device.enable_forces(true) {
         safe_stop(device);
         return Err(e.in_loop_at(0));

@@ -13,6 +13,7 @@ static int forces_enabled = -1;
 static int closed = 0;
 static double last_force[8];
 static const char *last_error = "no error";
+static int watchdog_steps = -1;
 
 int dhdGetDeviceCount(void) { return device_count; }
 
@@ -93,6 +94,14 @@ double dhdGetTime(void) { return 1234.5; }
 
 const char *dhdErrorGetLastStr(void) { return last_error; }
 
+#ifndef OMIT_WATCHDOG
+int dhdSetWatchdog(unsigned char val, char id) {
+    (void)id;
+    watchdog_steps = val;
+    return 0;
+}
+#endif
+
 const char *dhdGetSystemName(char id) {
     (void)id;
     return "omega.7 (fake)";
@@ -105,3 +114,4 @@ void fakeFailPositionAfter(int n) { fail_position_after = n; position_calls = 0;
 int fakeForcesEnabled(void) { return forces_enabled; }
 int fakeClosed(void) { return closed; }
 void fakeLastForce(double *out) { memcpy(out, last_force, sizeof last_force); }
+int fakeWatchdog(void) { return watchdog_steps; }

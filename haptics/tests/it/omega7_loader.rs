@@ -79,16 +79,25 @@ fn the_sdk_is_loaded_by_name_and_drives_the_device() {
     assert_eq!(&read_force()[..3], &[0.75, -1.125, 1.5625]);
     device.force_override().set_force_scale(1.0);
 
-    // Through the loop: forces are enabled for the run and off and zero afterwards.
+    // Through the loop: forces are enabled for the run and off and zero afterwards. A run
+    // with the software watchdog arms the device's own at its period, in 125 µs steps.
+    let watchdog = control::<unsafe extern "C" fn() -> i32>(&fake, "fakeWatchdog");
+    // SAFETY: no arguments.
+    assert_eq!(unsafe { watchdog() }, -1);
     let config = LoopConfig {
         max_ticks: Some(10),
-        ..LoopConfig::unpaced()
+        ..LoopConfig::default()
     };
+    let stall = config.watchdog.unwrap().stall;
     let outcome = rt::spawn(device, ZeroForce, LoopIo::default(), config)
         .unwrap()
         .join()
         .unwrap();
     assert_eq!(outcome.result.unwrap().reason, StopReason::TickLimit);
+    // SAFETY: no arguments.
+    assert_eq!(unsafe { watchdog() }, 32, "4 ms in 125 µs steps");
+    let armed = outcome.device.hardware_watchdog().unwrap();
+    assert_eq!((armed.period, armed.trips), (stall, None));
     // SAFETY: no arguments.
     assert_eq!(unsafe { forces_enabled() }, 0);
     assert_eq!(&read_force()[..7], &[0.0; 7]);
@@ -132,6 +141,20 @@ fn the_sdk_is_loaded_by_name_and_drives_the_device() {
     }
     let e = Omega7::open_with(dhd).unwrap_err();
     assert!(e.to_string().contains("fake: no device found"), "{e}");
+}
+
+#[test]
+fn an_sdk_without_a_watchdog_runs_on_the_software_watchdog_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = build(dir.path(), "libdhd_old.so", &["-DOMIT_WATCHDOG"]);
+    let dhd = Arc::new(DhdLibrary::load(Some(&path)).unwrap());
+    assert!(!dhd.has("dhdSetWatchdog"));
+    let mut device = Omega7::open_with(dhd).unwrap();
+    assert_eq!(
+        device.arm_watchdog(std::time::Duration::from_millis(4)).unwrap(),
+        None
+    );
+    assert_eq!(device.hardware_watchdog(), None);
 }
 
 #[test]
