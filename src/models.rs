@@ -30,11 +30,6 @@ use capture::sha256_hex;
 /// Bumped when identification changes in a way that makes cached models stale.
 const CACHE_VERSION: &str = "palpus-model-cache 1";
 
-/// Grid points per input on which a model's output is checked against the device limit: 33
-/// points put one within 1/32 of the range of any input, and cost 33² evaluations for a
-/// two-input model.
-pub const PEAK_GRID_POINTS: usize = 33;
-
 /// Why a model could not be resolved.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
@@ -86,23 +81,16 @@ pub enum ModelError {
         /// Why (boxed: identification errors are large and rare).
         source: Box<identify::IdentifyError>,
     },
-    /// The model's output over its own input range exceeds what the device can render.
-    #[error(
-        "model `{model}`: {}: the model's output reaches {peak_n} N at inputs {at:?} within its \
-         input range, beyond the device's {limit_n} N limit",
-        path.display()
-    )]
-    TooStrong {
+    /// The model cannot be proved within what the device renders (see
+    /// [`identify::ModelFile::certify`]).
+    #[error("model `{model}`: {}: {source}", path.display())]
+    Unsafe {
         /// The scene's name for the model.
         model: String,
         /// The model file (or the capture it was identified from).
         path: PathBuf,
-        /// The largest |output| found, N (NaN when the model evaluates to NaN).
-        peak_n: f64,
-        /// Where.
-        at: Vec<f64>,
-        /// The device's force limit, N.
-        limit_n: f64,
+        /// Which part, where and why (boxed: it names places and is rare).
+        source: Box<identify::BoundViolation>,
     },
     /// A force law cannot be built from the model.
     #[error("model `{model}`: {}: {source}", path.display())]
@@ -358,7 +346,7 @@ fn resolve_one(
             source: Box::new(e),
         })?;
         check_kind(name, &path, kind, &model)?;
-        check_renderable(name, &path, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
+        check_renderable(name, &path, &model, &scene.device_specs())?;
         return Ok((model, Origin::File(path), None));
     }
     let Some(capture) = &source.capture else {
@@ -411,7 +399,7 @@ fn resolve_one(
         && let Ok(model) = ModelFile::load(&cached)
         && model.kind == kind
     {
-        check_renderable(name, &cached, &model, haptics::DeviceSpecs::OMEGA7.max_force_n)?;
+        check_renderable(name, &cached, &model, &scene.device_specs())?;
         return Ok((model, Origin::Cached(cached), budget));
     }
     let capture_kind = if matches!(kind, ModelKind::NeedlePuncture | ModelKind::NeedlePhases) {
@@ -443,12 +431,7 @@ fn resolve_one(
     })?;
     let elapsed = started.elapsed();
     fitting(FitEvent::Finished { model: name, elapsed });
-    check_renderable(
-        name,
-        &path,
-        &identified.model,
-        haptics::DeviceSpecs::OMEGA7.max_force_n,
-    )?;
+    check_renderable(name, &path, &identified.model, &scene.device_specs())?;
     std::fs::create_dir_all(cache_dir).map_err(|e| ModelError::Read {
         model: name.into(),
         path: cache_dir.to_owned(),
@@ -536,23 +519,25 @@ fn check_kind(name: &str, path: &Path, expected: ModelKind, model: &ModelFile) -
     }
 }
 
-/// Refuses a model that a device with force limit `limit_n` cannot render: one whose output
-/// on a [`PEAK_GRID_POINTS`]-point grid over its input range exceeds the limit (or is not a
-/// number), or one no force law builds from. `path` is the file (or capture) named in errors.
-pub fn check_renderable(name: &str, path: &Path, model: &ModelFile, limit_n: f64) -> Result<(), ModelError> {
-    let (peak_n, at) = model.peak_output(PEAK_GRID_POINTS);
-    // NaN compares as not below the limit, so a model evaluating to NaN is refused too.
-    if peak_n.partial_cmp(&limit_n) != Some(std::cmp::Ordering::Less)
-        && peak_n.partial_cmp(&limit_n) != Some(std::cmp::Ordering::Equal)
-    {
-        return Err(ModelError::TooStrong {
-            model: name.into(),
-            path: path.to_owned(),
-            peak_n,
-            at,
-            limit_n,
-        });
-    }
+/// Refuses a model that `device` cannot render: one whose force is not proved within the
+/// device's limit over every input its law can see (and, for a needle, physical in sign and
+/// threshold; [`identify::ModelFile::certify`]), or one no force law builds from. `path` is the
+/// file (or capture) named in errors.
+pub fn check_renderable(
+    name: &str,
+    path: &Path,
+    model: &ModelFile,
+    device: &haptics::DeviceSpecs,
+) -> Result<(), ModelError> {
+    let envelope = identify::DeviceEnvelope {
+        max_force_n: device.max_force_n,
+        stroke_m: 2.0 * device.workspace_radius_m,
+    };
+    model.certify(&envelope).map_err(|source| ModelError::Unsafe {
+        model: name.into(),
+        path: path.to_owned(),
+        source: Box::new(source),
+    })?;
     // Build the fast path the force law will use, so that what it refuses is refused here,
     // with the file named, rather than when the session starts.
     let law = |source| ModelError::Law {

@@ -492,6 +492,13 @@ impl Scene {
         Ok(choice)
     }
 
+    /// The specs of the device the scene names (validation refused a name no backend has,
+    /// so the simulated Omega.7's stand only for a scene built without it).
+    pub fn device_specs(&self) -> haptics::DeviceSpecs {
+        self.device_choice()
+            .map_or(haptics::DeviceSpecs::OMEGA7, |c| c.backend().specs)
+    }
+
     fn validate(&self) -> Result<(), SceneError> {
         if let Err(reason) = check_name(&self.name) {
             return Err(self.invalid("name", reason));
@@ -652,12 +659,10 @@ impl Scene {
                 }
                 _ => {}
             }
-            for (field, value) in [("c", s.c), ("epsilon", s.epsilon), ("gamma", s.gamma)] {
-                if let Some(v) = value
-                    && !(v.is_finite() && v > 0.0)
-                {
-                    return Err(self.invalid(key(field), format!("{v}: must be a positive number")));
-                }
+            if let Err((field, v, reason)) =
+                identify::Plausibility::check_hyperparameters(s.c, s.epsilon, s.gamma)
+            {
+                return Err(self.invalid(key(field), format!("{v:e}: {reason}")));
             }
             if s.max_samples.is_some_and(|n| n < 10) {
                 return Err(self.invalid(key("max_samples"), "at least 10"));
@@ -994,6 +999,11 @@ mod tests {
             (
                 rub.replace("contact_stiffness_npm = 300.0", "contact_stiffness_npm = 1e30"),
                 "contact_stiffness_npm`",
+            ),
+            // The hyperparameter rule of the command line and of trade tables.
+            (
+                rub.replace("kind = \"soft\"", "kind = \"soft\"\nc = 1e-300"),
+                "models.soft_contact.c`: 1e-300: C must be in",
             ),
         ] {
             let e = error(&text);

@@ -362,10 +362,23 @@ impl TradeTable {
                     ));
                 }
             };
+            let (c, epsilon, gamma) = (required(1)?, required(2)?, number(3)?);
+            // A row is a model to fit: held to the rule every hyperparameter is held to.
+            identify::Plausibility::check_hyperparameters(Some(c), Some(epsilon), gamma)
+                .map_err(|(name, v, reason)| error(line, Some(name), format!("{v:e}: {reason}")))?;
+            if let Some(t) = tol
+                && !(t > 0.0 && t < 1.0)
+            {
+                return Err(error(
+                    line,
+                    Some("tol"),
+                    format!("{t}: a relative tolerance in (0, 1)"),
+                ));
+            }
             let point = SearchPoint {
-                c: required(1)?,
-                epsilon: required(2)?,
-                gamma: number(3)?,
+                c,
+                epsilon,
+                gamma,
                 cv_aise: measure(6)?,
                 n_sv: measure(7)?,
                 fit_seconds: measure(8)?,
@@ -585,6 +598,19 @@ mod tests {
             (
                 format!("{head}350,1e2,2e-2,3e1,,,1,1,1,1,,,,,,yes,\"\"\n"),
                 "column `on_front`",
+            ),
+            // Hyperparameters held to the rule a command line's and a scene's are.
+            (
+                format!("{head}350,1e-300,2e-2,3e1,,,1,1,1,1,,,,,,true,\"\"\n"),
+                "line 3, column `c`: 1e-300: C must be in [1e-6, 1e15]",
+            ),
+            (
+                format!("{head}350,1e2,2e-2,1e9,,,1,1,1,1,,,,,,true,\"\"\n"),
+                "column `gamma`",
+            ),
+            (
+                format!("{head}350,1e2,2e-2,3e1,2,,1,1,1,1,,,,,,true,\"\"\n"),
+                "column `tol`",
             ),
         ];
         for (text, want) in cases {

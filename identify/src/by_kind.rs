@@ -11,6 +11,7 @@ use crate::needle_identification::needle;
 use crate::outliers::{force_noise_n, screen};
 use crate::phase_identification::needle_phases;
 use crate::phases::WithdrawalSource;
+use crate::plausibility::Plausibility;
 use crate::punctures::PunctureParams;
 
 /// Identifies `options.kind` from `train`, evaluating on `test` when given (else on `train`).
@@ -33,6 +34,8 @@ pub fn identify_with(
     options: &IdentifyOptions,
     limits: &FitLimits<'_>,
 ) -> Result<Identified, IdentifyError> {
+    Plausibility::check_hyperparameters(options.c, options.epsilon, options.gamma)
+        .map_err(|(name, value, reason)| IdentifyError::InvalidParameter { name, value, reason })?;
     let needle_kind = matches!(options.kind, ModelKind::NeedlePuncture | ModelKind::NeedlePhases);
     let mut screens = Vec::new();
     let (train_kept, test_kept) = if needle_kind {

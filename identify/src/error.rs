@@ -98,7 +98,7 @@ pub enum IdentifyError {
         previous_s: f64,
     },
     /// A parameter is out of its domain.
-    #[error("{name} = {value}: {reason}")]
+    #[error("{name} = {value:e}: {reason}")]
     InvalidParameter {
         /// Its name.
         name: &'static str,

@@ -9,6 +9,7 @@
 use thiserror::Error;
 
 use crate::model_file::ModelKind;
+use crate::plausibility::Plausibility;
 use crate::search::SearchGrid;
 
 /// The most values one range may ask for: a grid is explored point by point with a
@@ -111,6 +112,20 @@ impl SearchGrid {
             }
             seen.push(name);
             *slot = values(item, value, positive)?;
+            for &v in slot.iter() {
+                let (c, epsilon, gamma) = match name {
+                    "c" => (Some(v), None, None),
+                    "epsilon" => (None, Some(v), None),
+                    _ => (None, None, Some(v)),
+                };
+                Plausibility::check_hyperparameters(c, epsilon, gamma).map_err(|(_, value, reason)| {
+                    GridSpecError::OutOfRange {
+                        item: item.to_owned(),
+                        value,
+                        reason,
+                    }
+                })?;
+            }
         }
         Ok(grid)
     }

@@ -12,6 +12,7 @@
 //! `identify::identify`.
 
 mod baselines;
+mod bounds;
 mod by_kind;
 mod contact_identification;
 mod error;
@@ -24,10 +25,12 @@ mod outliers;
 mod phase_identification;
 mod phase_parts;
 mod phases;
+mod plausibility;
 mod punctures;
 mod search;
 
 pub use baselines::{CentrePlacement, CoulombViscous, CoulombViscousStiffness, RbfNetwork, RbfNetworkParams};
+pub use bounds::{BoundViolation, CHECK_WORK, DeviceEnvelope, ForceCertificate, SIGN_TOLERANCE_N};
 pub use by_kind::{PLAUSIBLE_RANGE_MARGIN, identify, identify_with};
 pub use error::IdentifyError;
 pub use grid_spec::{GridSpecError, MAX_GRID_VALUES};
@@ -40,8 +43,8 @@ pub use metrics::{
     Metrics, PAPER_DURATION_S, PAPER_STEP_S, aise, aise_paper, aise_trapezoid, error_bound, errors, rmse,
 };
 pub use model_file::{
-    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Plausibility, Quantity,
-    ScaledSvr, SvrHyper,
+    Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity, ScaledSvr,
+    SvrHyper,
 };
 pub use needle_identification::{NEEDLE_C, NEEDLE_EPSILON_N, NEEDLE_GAMMA, NEEDLE_SAMPLES};
 pub use outliers::{Outlier, OutlierScreen, force_noise_n};
@@ -51,6 +54,7 @@ pub use phases::{
     Domain, HOLD_JITTER_MPS, LayerModel, Loading, MAX_LAYERS, PartSvr, Phase, PhaseExit, PhaseModel,
     PhaseState, PhaseStep, REVERSAL_MPS, Rupture, ShaftLaw, TIP_CONTACT_M, Threshold, WithdrawalSource,
 };
+pub use plausibility::Plausibility;
 pub use punctures::{
     Layer, PunctureComparison, PunctureDetection, PunctureEvent, PunctureParams, compare_punctures,
     detect_punctures, group_layers,

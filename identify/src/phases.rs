@@ -43,6 +43,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::baselines::{Rank, least_squares};
 use crate::error::IdentifyError;
+use crate::plausibility::check_svr_parts;
 use faer::Mat;
 use svm::{InputScaling, SvrModel};
 
@@ -273,6 +274,27 @@ pub struct Threshold {
 }
 
 impl Threshold {
+    /// The largest deflection at puncture at any speed, m: the polynomial (degree ≤ 2) is
+    /// largest at an end of its speed range or at its vertex.
+    pub fn max_deflection_m(&self) -> f64 {
+        self.extreme_deflection_m(f64::max)
+    }
+
+    /// The least deflection at puncture at any speed, m.
+    pub fn min_deflection_m(&self) -> f64 {
+        self.extreme_deflection_m(f64::min)
+    }
+
+    fn extreme_deflection_m(&self, pick: fn(f64, f64) -> f64) -> f64 {
+        let [v0, v1] = self.speed_mps;
+        let vertex = match self.coefficients.as_slice() {
+            [_, b, c] if *c != 0.0 => Some(-b / (2.0 * c)).filter(|v| (v0..=v1).contains(v)),
+            _ => None,
+        };
+        let ends = pick(self.deflection_m(v0), self.deflection_m(v1));
+        vertex.map_or(ends, |v| pick(ends, self.deflection_m(v)))
+    }
+
     /// Deflection at puncture for a tip advancing at `speed_mps`, m (at least 0.1 mm).
     pub fn deflection_m(&self, speed_mps: f64) -> f64 {
         let v = speed_mps.clamp(self.speed_mps[0], self.speed_mps[1]);
@@ -478,7 +500,10 @@ impl PhaseModel {
             && d > layer.contact_depth_m
         {
             let u = d - layer.contact_depth_m;
-            if v > band && u >= layer.threshold.deflection_m(v) {
+            // The membrane gives once the advancing tip deflects it to its threshold, at any
+            // speed: a slow push ruptures it too (held to the hold band, a creeping hand
+            // loaded it without end, past 50 N at 80 mm in the liver's model).
+            if v > 0.0 && u >= layer.threshold.deflection_m(v) {
                 state.punctured += 1;
                 ruptured = true;
             } else {
@@ -490,6 +515,10 @@ impl PhaseModel {
                 // so only the loading's own domain says whether the inputs are known.
                 let (base, _) = self.cutting(state.punctured, d, vl);
                 let inside = v <= band || l.domain.contains(d, v);
+                // A deflection past every threshold is reached only by a jump in depth (a tip
+                // that moves continuously gives way first): the membrane's force stops growing
+                // there, so it stays within what the force check proves.
+                let u = u.min(layer.threshold.max_deflection_m());
                 return out(
                     base + l.eval_raw(u, vl),
                     Phase::Loading(state.punctured),
@@ -609,12 +638,19 @@ impl PhaseModel {
     pub fn steady(&self, depth_m: f64, velocity_mps: f64) -> f64 {
         let mut state = PhaseState::default();
         if velocity_mps > self.hold_band_mps {
-            // Walk in at that speed: thresholds pass in order.
-            let step = 1e-5;
-            let mut d = step;
-            while d < depth_m {
-                self.step(&mut state, d, velocity_mps);
-                d += step;
+            // In at that speed: each membrane shallower than `depth_m` gives at its threshold,
+            // in order, and nothing else on the way changes the state. One step per layer, so
+            // the time does not grow with the depth.
+            let mut past_m: f64 = 0.0;
+            for layer in &self.layers {
+                let gives_m = layer.contact_depth_m + layer.threshold.deflection_m(velocity_mps);
+                // A hair past it, so that rounding cannot leave the deflection just short (and
+                // never behind the tip: a layer whose threshold the last one's passed gives at
+                // once).
+                past_m = past_m.max(gives_m + 1e-12 * (1.0 + gives_m.abs()));
+                if past_m >= depth_m || !self.step(&mut state, past_m, velocity_mps).ruptured {
+                    break;
+                }
             }
             self.step(&mut state, depth_m, velocity_mps).force_n
         } else {
@@ -676,11 +712,28 @@ impl PhaseModel {
             ]) && domain_ok(&l.domain)
                 && l.svr.as_ref().is_none_or(PartSvr::valid)
         };
+        // A part's SVR is held to what a smooth model's is (the support-vector cap included):
+        // the haptic thread evaluates both, and the force check's time grows with its size.
+        let svr_ok = |label: &str, l: &ShaftLaw| match &l.svr {
+            Some(p) => check_svr_parts(
+                label,
+                &p.scaling,
+                1.0,
+                &p.svr,
+                2,
+                &[l.domain.depth_m, l.domain.velocity_mps],
+            ),
+            None => Ok(()),
+        };
         if !law_ok(&self.withdrawal) {
             return bad("body.withdrawal".into(), "coefficients and domain must be finite");
         }
+        svr_ok("withdrawal", &self.withdrawal)?;
         if !self.above.as_ref().is_none_or(law_ok) {
             return bad("body.above".into(), "coefficients and domain must be finite");
+        }
+        if let Some(above) = &self.above {
+            svr_ok("above", above)?;
         }
         let mut previous = f64::NEG_INFINITY;
         for (k, layer) in self.layers.iter().enumerate() {
@@ -714,6 +767,7 @@ impl PhaseModel {
             if !law_ok(&layer.after) {
                 return bad(field("after"), "coefficients and domain must be finite");
             }
+            svr_ok(&format!("layers[{k}].after"), &layer.after)?;
         }
         Ok(())
     }

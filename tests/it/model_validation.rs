@@ -190,7 +190,7 @@ fn resolve(dir: &Path, name: &str, model: &Value) -> Result<Vec<models::Resolved
 }
 
 #[test]
-fn a_model_stronger_than_the_device_is_refused_at_load_naming_file_and_peak() {
+fn a_model_stronger_than_the_device_is_refused_at_load_naming_file_part_and_place() {
     let dir = tempfile::tempdir().unwrap();
     let resolved = resolve(dir.path(), "needle.json", needle_model()).unwrap();
     assert_eq!(resolved[0].model.kind, ModelKind::NeedlePuncture);
@@ -222,7 +222,7 @@ fn a_model_stronger_than_the_device_is_refused_at_load_naming_file_and_peak() {
         load(&model).unwrap_or_else(|e| panic!("{what} passes the file's own checks: {e}"));
         let e = resolve(dir.path(), "strong.json", &model).expect_err(what);
         let text = e.to_string();
-        assert!(matches!(e, ModelError::TooStrong { .. }), "{what}: {text}");
+        assert!(matches!(e, ModelError::Unsafe { .. }), "{what}: {text}");
         assert!(
             text.contains("strong.json") && text.contains("12 N"),
             "{what}: {text}"
@@ -238,15 +238,35 @@ fn a_model_stronger_than_the_device_is_refused_at_load_naming_file_and_peak() {
 }
 
 #[test]
-fn the_peak_check_covers_the_whole_input_range() {
+fn the_force_check_proves_the_bound_for_the_device_it_runs_on() {
     let model: ModelFile = serde_json::from_value(needle_model().clone()).unwrap();
-    let (peak, at) = model.peak_output(models::PEAK_GRID_POINTS);
-    assert!(peak > 0.5 && peak < 12.0, "{peak} at {at:?}");
-    let [lo, hi] = model.input_range[0];
-    assert!(at[0] >= lo && at[0] <= hi);
-    models::check_renderable("needle", Path::new("needle.json"), &model, peak * 1.01).unwrap();
-    let e = models::check_renderable("needle", Path::new("needle.json"), &model, peak * 0.99).unwrap_err();
-    assert!(e.to_string().contains("needle.json"), "{e}");
+    let omega7 = haptics::DeviceSpecs::OMEGA7;
+    let bound = model
+        .certify(&identify::DeviceEnvelope {
+            max_force_n: omega7.max_force_n,
+            stroke_m: 2.0 * omega7.workspace_radius_m,
+        })
+        .unwrap()
+        .bound_n;
+    assert!(bound > 0.5 && bound < 12.0, "{bound}");
+    models::check_renderable("needle", Path::new("needle.json"), &model, &omega7).unwrap();
+    // A device that gives less than the model's largest force (a 2-D grid finds at least that
+    // much) cannot render it, and the refusal names the file and the part.
+    let [d, v] = [model.input_range[0], model.input_range[1]];
+    let at = |r: [f64; 2], k: usize| r[0] + (r[1] - r[0]) * k as f64 / 32.0;
+    let peak = (0..=32)
+        .flat_map(|i| (0..=32).map(move |j| (i, j)))
+        .map(|(i, j)| model.predict(&[at(d, i), at(v, j)]).abs())
+        .fold(0.0, f64::max);
+    let weak = haptics::DeviceSpecs {
+        max_force_n: 0.99 * peak,
+        ..omega7
+    };
+    let e = models::check_renderable("needle", Path::new("needle.json"), &model, &weak).unwrap_err();
+    assert!(
+        e.to_string().contains("needle.json") && e.to_string().contains("body.single"),
+        "{e}"
+    );
 }
 
 /// The smooth-needle scene's text with its model read from `model` and every relative path

@@ -3,6 +3,7 @@
 // A failed unwrap is a failed test, reported with its line.
 #![allow(clippy::unwrap_used)]
 
+mod bounds;
 mod identification;
 mod needle_baseline_and_domain;
 mod needle_corpus;

@@ -137,13 +137,15 @@ fn every_record_gives_a_model_that_beats_the_baselines_and_punctures_where_the_t
             );
         }
         check_ruptures(record, &r, &test);
-        // The smooth model is never blocked by a baseline either.
-        identify(
+        crate::bounds::certified_and_sound(record, &r.model);
+        // The smooth model is never blocked by a baseline either, and is as safe to render.
+        let smooth = identify(
             &train,
             Some(&test),
             &IdentifyOptions::new(ModelKind::NeedlePuncture),
         )
         .unwrap_or_else(|e| panic!("{record} (smooth): {e}"));
+        crate::bounds::certified_and_sound(record, &smooth.model);
     }
 }
 
