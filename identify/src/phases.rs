@@ -30,10 +30,11 @@
 //!
 //! **Known domain.** Every phase records the depths and velocities it was fitted on. Outside
 //! them its law is evaluated at the nearest trained velocity (a faster surge feels the
-//! friction of the fastest trained speed, not an extrapolated viscous term) and its depth
-//! terms are extrapolated linearly (friction keeps growing with the inserted length, as a
-//! shaft's does), and the step says it left the domain so that the run can count it. The
-//! threshold likewise uses the nearest trained speed.
+//! friction of the fastest trained speed, not an extrapolated viscous term) and, past a margin
+//! of a tenth of its depth range, at the nearest such depth (a linear depth term carried to the
+//! end of a device's stroke turned a layer's resistance into a pull), and the step says it
+//! left the domain so that the run can count it. The threshold likewise uses the nearest
+//! trained speed; a membrane's deflection never exceeds its largest threshold.
 //!
 //! [`PhaseModel::step`] is allocation-free and the same code renders the model on the haptic
 //! thread and evaluates it along a capture here ([`PhaseModel::simulate`]), so the identify
@@ -109,9 +110,23 @@ impl Domain {
         }
     }
 
-    fn inside(range: [f64; 2], x: f64) -> bool {
+    /// `range` widened by the margin within which an input still counts as inside.
+    fn widened(range: [f64; 2]) -> [f64; 2] {
         let m = DOMAIN_MARGIN * (range[1] - range[0]).max(range[0].abs().max(range[1].abs()));
-        x >= range[0] - m && x <= range[1] + m
+        [range[0] - m, range[1] + m]
+    }
+
+    fn inside(range: [f64; 2], x: f64) -> bool {
+        let [lo, hi] = Self::widened(range);
+        x >= lo && x <= hi
+    }
+
+    /// The depths a shaft law is evaluated at: its trained range with the margin. Deeper or
+    /// shallower, the law holds the nearest such depth (and the step says the input left the
+    /// domain): a linear depth term fitted over 18 mm and carried to the end of a device's
+    /// stroke turned the deepest layer's resistance into a 4 N pull.
+    pub fn depth_held_m(&self) -> [f64; 2] {
+        Self::widened(self.depth_m)
     }
 
     /// Whether (d, v) lies inside, with the margin.
@@ -198,10 +213,18 @@ impl ShaftLaw {
             + self.per_depth_speed_nspm2 * d * v
     }
 
-    /// The force at (d, v), v held to the trained velocities, and whether (d, v) was inside.
+    /// The force at (d, v) with v held to the trained velocities and d not held: as the
+    /// identification fitted a membrane's loading on top of it.
+    pub(crate) fn eval_extrapolated(&self, d: f64, v: f64) -> f64 {
+        self.eval_raw(d, self.domain.clamp_velocity(v))
+    }
+
+    /// The force at (d, v), v held to the trained velocities and d to the trained depths with
+    /// their margin ([`Domain::depth_held_m`]), and whether (d, v) was inside.
     pub fn eval(&self, d: f64, v: f64) -> (f64, bool) {
+        let [lo, hi] = self.domain.depth_held_m();
         (
-            self.eval_raw(d, self.domain.clamp_velocity(v)),
+            self.eval_raw(d.clamp(lo, hi), self.domain.clamp_velocity(v)),
             self.domain.contains(d, v),
         )
     }
@@ -473,6 +496,15 @@ impl PhaseModel {
         }
     }
 
+    /// The law under a loading membrane below `punctured` layers, extended in depth as the
+    /// identification fitted the loading on top of it (0 with no tissue above the first).
+    fn base(&self, punctured: usize, d: f64, v: f64) -> f64 {
+        match punctured.checked_sub(1).and_then(|k| self.layers.get(k)) {
+            Some(layer) => layer.after.eval_extrapolated(d, v),
+            None => self.above.as_ref().map_or(0.0, |l| l.eval_extrapolated(d, v)),
+        }
+    }
+
     /// Advances `state` with the tip at `depth_m` moving at `velocity_mps` (positive
     /// inserting). Allocation-free; non-finite inputs read as a tip at rest outside.
     pub fn step(&self, state: &mut PhaseState, depth_m: f64, velocity_mps: f64) -> PhaseStep {
@@ -511,14 +543,16 @@ impl PhaseModel {
                 let ahead = v.max(0.0);
                 let l = &layer.loading;
                 let vl = l.domain.clamp_velocity(ahead);
-                // The loading was fitted on top of the law before it extended to these depths,
-                // so only the loading's own domain says whether the inputs are known.
-                let (base, _) = self.cutting(state.punctured, d, vl);
-                let inside = v <= band || l.domain.contains(d, v);
                 // A deflection past every threshold is reached only by a jump in depth (a tip
                 // that moves continuously gives way first): the membrane's force stops growing
                 // there, so it stays within what the force check proves.
-                let u = u.min(layer.threshold.max_deflection_m());
+                let max_u = layer.threshold.max_deflection_m();
+                let u = u.min(max_u);
+                // The loading was fitted on top of the law before it, extended to these depths
+                // (to the deepest the membrane can be pushed), so only the loading's own domain
+                // says whether the inputs are known.
+                let base = self.base(state.punctured, d.min(layer.contact_depth_m + max_u), vl);
+                let inside = v <= band || l.domain.contains(d, v);
                 return out(
                     base + l.eval_raw(u, vl),
                     Phase::Loading(state.punctured),

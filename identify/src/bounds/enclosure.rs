@@ -34,31 +34,27 @@ fn hull(values: impl IntoIterator<Item = f64>) -> [f64; 2] {
         })
 }
 
-/// `c + a·d + b·v + e·d·v` with `v` held to `v_range`: a shaft law's linear terms.
+/// `c + a·d + b·v + e·d·v` with `d` held to `d_range` and `v` to `v_range`: a shaft law's
+/// linear terms.
 pub(crate) struct Bilinear {
     pub(crate) terms: [f64; 4],
+    pub(crate) d_range: [f64; 2],
     pub(crate) v_range: [f64; 2],
 }
 
 impl Part for Bilinear {
     fn eval(&self, [d, v]: [f64; 2]) -> f64 {
         let [c, a, b, e] = self.terms;
+        let d = d.clamp(self.d_range[0], self.d_range[1]);
         let v = v.clamp(self.v_range[0], self.v_range[1]);
         c + a * d + b * v + e * d * v
     }
 
     fn enclose(&self, bx: &Bx) -> [f64; 2] {
         // Linear in each input with the other fixed: the extremes lie at the corners.
+        let d = clamp_interval(bx[0], self.d_range);
         let v = clamp_interval(bx[1], self.v_range);
-        hull(
-            [
-                [bx[0][0], v[0]],
-                [bx[0][0], v[1]],
-                [bx[0][1], v[0]],
-                [bx[0][1], v[1]],
-            ]
-            .map(|x| self.eval(x)),
-        )
+        hull([[d[0], v[0]], [d[0], v[1]], [d[1], v[0]], [d[1], v[1]]].map(|x| self.eval(x)))
     }
 
     fn work(&self) -> usize {
@@ -378,6 +374,7 @@ mod tests {
         encloses(
             &Bilinear {
                 terms: [0.3, 40.0, -20.0, 900.0],
+                d_range: [0.005, 0.015],
                 v_range: [0.0, 0.02],
             },
             bx,

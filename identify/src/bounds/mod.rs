@@ -250,8 +250,6 @@ impl ModelFile {
     }
 }
 
-const FREE: [f64; 2] = [f64::NEG_INFINITY, f64::INFINITY];
-
 fn two(v: &[f64], fill: f64) -> [f64; 2] {
     [
         v.first().copied().unwrap_or(fill),
@@ -270,8 +268,12 @@ fn scaled_svr(m: &ScaledSvr, clamp: Bx) -> Svr<'_> {
     }
 }
 
-/// A shaft law as [`ShaftLaw::eval`] evaluates it: velocity held to its domain, depth not.
-fn shaft(law: &ShaftLaw) -> Box<dyn Part + '_> {
+/// A shaft law as [`ShaftLaw::eval`] evaluates it (velocity held to its domain, depth to its
+/// domain with the margin), or with `extended` as the base under a loading membrane (depth
+/// not held).
+fn shaft(law: &ShaftLaw, extended: bool) -> Box<dyn Part + '_> {
+    let free = [f64::NEG_INFINITY, f64::INFINITY];
+    let d_range = if extended { free } else { law.domain.depth_held_m() };
     let v_range = law.domain.velocity_mps;
     match &law.svr {
         Some(PartSvr { scaling, svr }) => Box::new(Svr {
@@ -279,7 +281,7 @@ fn shaft(law: &ShaftLaw) -> Box<dyn Part + '_> {
             offset: two(&scaling.offset, 0.0),
             scale: two(&scaling.scale, 1.0),
             output_scale: 1.0,
-            clamp: [FREE, v_range],
+            clamp: [d_range, v_range],
         }),
         None => Box::new(Bilinear {
             terms: [
@@ -288,6 +290,7 @@ fn shaft(law: &ShaftLaw) -> Box<dyn Part + '_> {
                 law.per_speed_nspm,
                 law.per_depth_speed_nspm2,
             ],
+            d_range,
             v_range,
         }),
     }
@@ -313,7 +316,7 @@ fn phase_checks(p: &PhaseModel, stroke_m: f64, limit_n: f64) -> Vec<Check<'_>> {
     if let (Some(above), Some(first)) = (&p.above, p.layers.first()) {
         checks.push(Check {
             field: "body.above".into(),
-            part: shaft(above),
+            part: shaft(above, false),
             root: [
                 [0.0, first.contact_depth_m.min(stroke)],
                 above.domain.velocity_mps,
@@ -332,21 +335,29 @@ fn phase_checks(p: &PhaseModel, stroke_m: f64, limit_n: f64) -> Vec<Check<'_>> {
             v_range: l.domain.velocity_mps,
         });
         let base = match k.checked_sub(1) {
-            Some(j) => Some(shaft(&p.layers[j].after)),
-            None => p.above.as_ref().map(shaft),
+            Some(j) => Some(shaft(&p.layers[j].after, true)),
+            None => p.above.as_ref().map(|l| shaft(l, true)),
         };
         let mut parts: Vec<Box<dyn Part + '_>> = vec![membrane];
         parts.extend(base);
         checks.push(Check {
             field: format!("body.layers[{k}].loading"),
             part: Box::new(Sum(parts)),
-            root: [[from, stroke], l.domain.velocity_mps],
+            // Deeper than its largest threshold the step holds both the membrane and the law
+            // under it where they are there.
+            root: [
+                [
+                    from,
+                    (layer.contact_depth_m + layer.threshold.max_deflection_m()).clamp(from, stroke),
+                ],
+                l.domain.velocity_mps,
+            ],
             req: resisting,
             why: PULL,
         });
         checks.push(Check {
             field: format!("body.layers[{k}].after"),
-            part: shaft(&layer.after),
+            part: shaft(&layer.after, false),
             root: [
                 [(layer.contact_depth_m - TIP_CONTACT_M).clamp(0.0, stroke), stroke],
                 layer.after.domain.velocity_mps,
@@ -357,7 +368,7 @@ fn phase_checks(p: &PhaseModel, stroke_m: f64, limit_n: f64) -> Vec<Check<'_>> {
     }
     checks.push(Check {
         field: "body.withdrawal".into(),
-        part: shaft(&p.withdrawal),
+        part: shaft(&p.withdrawal, false),
         root: [[0.0, stroke], p.withdrawal.domain.velocity_mps],
         req: Requirement {
             max_abs: limit_n,
