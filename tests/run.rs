@@ -646,7 +646,10 @@ fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
     assert_eq!(w["period_ms"].as_f64(), Some(31.875), "{w}");
     assert!(w["trips"].as_u64().unwrap() >= 1, "{w}");
     assert!(w["longest_silence_ms"].as_f64().unwrap() > 1900.0, "{w}");
-    assert!(w["held_force_n"].as_f64().unwrap() > 0.05, "in tissue, a force was held: {w}");
+    assert!(
+        w["held_force_n"].as_f64().unwrap() > 0.05,
+        "in tissue, a force was held: {w}"
+    );
     assert!(rest.contains("device watchdog armed at 31.875 ms"), "{rest}");
 }
 

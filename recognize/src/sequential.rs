@@ -292,6 +292,9 @@ pub struct SequentialState {
     ring: Vec<f64>,
     /// Each slot's share of the memory (0 for a free slot).
     shares: Vec<f64>,
+    /// Their sum, kept as windows come and go: summing the ring every window made a push
+    /// cost the memory's capacity (a memory of 10⁵ windows, 3 × 10⁵ additions a window).
+    held_share: f64,
     /// Windows in the ring, and the slot the next one goes to.
     held: usize,
     next: usize,
@@ -330,6 +333,7 @@ impl SequentialState {
             params,
             ring: vec![0.0; params.capacity() * classes],
             shares: vec![0.0; params.capacity()],
+            held_share: 0.0,
             held: 0,
             next: 0,
             sum: vec![0.0; classes],
@@ -349,6 +353,7 @@ impl SequentialState {
     pub fn reset(&mut self) {
         self.ring.fill(0.0);
         self.shares.fill(0.0);
+        self.held_share = 0.0;
         self.sum.fill(0.0);
         self.held = 0;
         self.next = 0;
@@ -440,6 +445,7 @@ impl SequentialState {
             *slot = evidence;
         }
         self.shares[self.next] = share;
+        self.held_share += share;
         let change = self.change_test();
         self.next = (self.next + 1) % self.shares.len();
         self.held += 1;
@@ -531,12 +537,12 @@ impl SequentialState {
         let k = self.sum.len();
         if self.held == capacity {
             self.held -= 1;
+            self.held_share -= self.shares[self.next];
             self.shares[self.next] = 0.0;
         }
         // Shares that fill the memory in exact arithmetic (fifteen of 0.4 in six) fit in it.
         let limit = self.params.memory as f64 * (1.0 + 1e-9);
-        let mut held_share: f64 = self.shares.iter().sum();
-        while self.held > 0 && held_share + share > limit {
+        while self.held > 0 && self.held_share + share > limit {
             let oldest = (self.next + capacity - self.held) % capacity;
             let row = &mut self.ring[oldest * k..(oldest + 1) * k];
             for (s, e) in self.sum.iter_mut().zip(row.iter_mut()) {
@@ -544,8 +550,12 @@ impl SequentialState {
                 *e = 0.0;
             }
             self.held -= 1;
-            held_share -= self.shares[oldest];
+            self.held_share -= self.shares[oldest];
             self.shares[oldest] = 0.0;
+        }
+        if self.held == 0 {
+            // Nothing held: no rounding of the running sum carries over.
+            self.held_share = 0.0;
         }
     }
 
@@ -566,6 +576,7 @@ impl SequentialState {
             self.shares[slot] = 0.0;
         }
         self.held = keep;
+        self.held_share = self.shares.iter().sum();
         self.sum.fill(0.0);
         for row in self.ring.chunks_exact(k) {
             for (s, e) in self.sum.iter_mut().zip(row) {
