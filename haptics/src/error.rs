@@ -22,7 +22,7 @@ use svm::SvmError;
 pub enum HapticsError {
     /// The vendor library could not be loaded.
     #[error(
-        "the Force Dimension SDK (libdhd) was not found ({tried}): install the Force Dimension SDK or use --device sim"
+        "the Force Dimension SDK (libdhd) was not found ({tried}): install the Force Dimension SDK, or run on the simulated device"
     )]
     SdkMissing {
         /// What was tried and why each failed.
@@ -30,7 +30,7 @@ pub enum HapticsError {
     },
     /// The vendor library lacks a function the device needs.
     #[error(
-        "libdhd at {library} has no `{symbol}`: install a Force Dimension SDK of version 3 or newer, or use --device sim"
+        "libdhd at {library} has no `{symbol}`: install a Force Dimension SDK of version 3 or newer, or run on the simulated device"
     )]
     SymbolMissing {
         /// The library file.
@@ -39,7 +39,7 @@ pub enum HapticsError {
         symbol: &'static str,
     },
     /// The SDK loaded but found no device.
-    #[error("no Omega.7 is connected ({detail}): connect and power it on, or use --device sim")]
+    #[error("no Omega.7 is connected ({detail}): connect and power it on, or run on the simulated device")]
     NoDevice {
         /// What the SDK said.
         detail: String,

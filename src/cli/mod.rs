@@ -102,6 +102,21 @@ pub fn describe(error: &anyhow::Error) -> String {
             text.push_str(&cause);
         }
     }
+    // The device library speaks of devices, the command line of its options: how to run on
+    // the simulated device is said here.
+    let no_device = error.chain().any(|e| {
+        matches!(
+            e.downcast_ref::<haptics::HapticsError>(),
+            Some(
+                haptics::HapticsError::SdkMissing { .. }
+                    | haptics::HapticsError::SymbolMissing { .. }
+                    | haptics::HapticsError::NoDevice { .. }
+            )
+        )
+    });
+    if no_device {
+        text.push_str(" (--device sim)");
+    }
     text
 }
 

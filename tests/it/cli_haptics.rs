@@ -114,7 +114,7 @@ fn capture_errors_are_clear() {
     let t = text(&o);
     assert!(
         t.starts_with("error: opening Force Dimension Omega.7")
-            && t.contains("install the Force Dimension SDK or use --device sim"),
+            && t.contains("install the Force Dimension SDK, or run on the simulated device (--device sim)"),
         "{t}"
     );
     for (choice, message) in [

@@ -682,7 +682,7 @@ mod tests {
         let text = e.to_string();
         assert!(matches!(e, HapticsError::SdkMissing { .. }));
         assert!(
-            text.contains("install the Force Dimension SDK or use --device sim"),
+            text.contains("install the Force Dimension SDK, or run on the simulated device"),
             "{text}"
         );
         assert!(text.contains("/nonexistent/libdhd.so"), "{text}");
