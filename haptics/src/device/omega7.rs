@@ -70,42 +70,58 @@ type ErrorGetLastStr = unsafe extern "C" fn() -> *const c_char;
 type GetSystemName = unsafe extern "C" fn(c_char) -> *const c_char;
 type SetWatchdog = unsafe extern "C" fn(c_uchar, c_char) -> c_int;
 
-/// The SDK's functions, each present or not.
-#[derive(Debug, Clone, Copy, Default)]
-struct Functions {
-    get_device_count: Option<GetDeviceCount>,
-    open: Option<Open>,
-    close: Option<Close>,
-    get_position: Option<GetVec3>,
-    get_linear_velocity: Option<GetVec3>,
-    get_gripper_gap: Option<GetGripperGap>,
-    set_force_torque_gripper: Option<SetForceTorqueGripper>,
-    enable_force: Option<EnableForce>,
-    get_sdk_version: Option<GetSdkVersion>,
-    get_button_mask: Option<GetButtonMask>,
-    get_time: Option<GetTime>,
-    error_get_last_str: Option<ErrorGetLastStr>,
-    get_system_name: Option<GetSystemName>,
-    set_watchdog: Option<SetWatchdog>,
+/// The SDK's functions palpus uses, each written once: the field that holds it, its C type,
+/// its symbol and whether a library without it is refused. The macro makes of this one table
+/// the `Functions` struct, its lookup, [`SYMBOLS`] and [`DhdLibrary::has`]: a new function
+/// is one line here.
+macro_rules! dhd_functions {
+    ($($field:ident: $ty:ty = $symbol:literal, $required:literal;)*) => {
+        /// The SDK's functions, each present or not.
+        #[derive(Debug, Clone, Copy, Default)]
+        struct Functions {
+            $($field: Option<$ty>,)*
+        }
+
+        /// The SDK's functions palpus looks up, and whether each is required.
+        pub const SYMBOLS: &[(&str, bool)] = &[$(($symbol, $required),)*];
+
+        impl Functions {
+            /// Looks each function up by name.
+            ///
+            /// # Safety
+            /// Each type in the table must be the C prototype of its symbol in Force Dimension's
+            /// `dhdc.h` (SDK 3.x), with `char ID` as `c_char` and `uchar` as `c_uchar`.
+            unsafe fn look_up(library: &libloading::Library) -> Self {
+                // SAFETY: the caller guarantees each type matches its symbol.
+                unsafe { Self { $($field: lookup(library, $symbol),)* } }
+            }
+
+            fn has(&self, symbol: &str) -> bool {
+                match symbol {
+                    $($symbol => self.$field.is_some(),)*
+                    _ => false,
+                }
+            }
+        }
+    };
 }
 
-/// The SDK's functions palpus looks up, and whether each is required.
-pub const SYMBOLS: [(&str, bool); 14] = [
-    ("dhdGetDeviceCount", false),
-    ("dhdOpen", true),
-    ("dhdClose", true),
-    ("dhdGetPosition", true),
-    ("dhdGetLinearVelocity", true),
-    ("dhdGetGripperGap", false),
-    ("dhdSetForceAndTorqueAndGripperForce", true),
-    ("dhdEnableForce", true),
-    ("dhdGetSDKVersion", false),
-    ("dhdGetButtonMask", false),
-    ("dhdGetTime", false),
-    ("dhdErrorGetLastStr", false),
-    ("dhdGetSystemName", false),
-    ("dhdSetWatchdog", false),
-];
+dhd_functions! {
+    get_device_count: GetDeviceCount = "dhdGetDeviceCount", false;
+    open: Open = "dhdOpen", true;
+    close: Close = "dhdClose", true;
+    get_position: GetVec3 = "dhdGetPosition", true;
+    get_linear_velocity: GetVec3 = "dhdGetLinearVelocity", true;
+    get_gripper_gap: GetGripperGap = "dhdGetGripperGap", false;
+    set_force_torque_gripper: SetForceTorqueGripper = "dhdSetForceAndTorqueAndGripperForce", true;
+    enable_force: EnableForce = "dhdEnableForce", true;
+    get_sdk_version: GetSdkVersion = "dhdGetSDKVersion", false;
+    get_button_mask: GetButtonMask = "dhdGetButtonMask", false;
+    get_time: GetTime = "dhdGetTime", false;
+    error_get_last_str: ErrorGetLastStr = "dhdErrorGetLastStr", false;
+    get_system_name: GetSystemName = "dhdGetSystemName", false;
+    set_watchdog: SetWatchdog = "dhdSetWatchdog", false;
+}
 
 /// The loaded SDK.
 pub struct DhdLibrary {
@@ -181,33 +197,15 @@ impl DhdLibrary {
     }
 
     fn from_library(library: libloading::Library, path: PathBuf) -> Result<Self, HapticsError> {
-        // SAFETY (every lookup below): each type alias is the C prototype of that function
-        // in Force Dimension's dhdc.h (SDK 3.x), with `char ID` as c_char and `uchar` as
-        // c_uchar.
-        let functions = unsafe {
-            Functions {
-                get_device_count: lookup(&library, "dhdGetDeviceCount"),
-                open: lookup(&library, "dhdOpen"),
-                close: lookup(&library, "dhdClose"),
-                get_position: lookup(&library, "dhdGetPosition"),
-                get_linear_velocity: lookup(&library, "dhdGetLinearVelocity"),
-                get_gripper_gap: lookup(&library, "dhdGetGripperGap"),
-                set_force_torque_gripper: lookup(&library, "dhdSetForceAndTorqueAndGripperForce"),
-                enable_force: lookup(&library, "dhdEnableForce"),
-                get_sdk_version: lookup(&library, "dhdGetSDKVersion"),
-                get_button_mask: lookup(&library, "dhdGetButtonMask"),
-                get_time: lookup(&library, "dhdGetTime"),
-                error_get_last_str: lookup(&library, "dhdErrorGetLastStr"),
-                get_system_name: lookup(&library, "dhdGetSystemName"),
-                set_watchdog: lookup(&library, "dhdSetWatchdog"),
-            }
-        };
+        // SAFETY: each type in the table above is the C prototype of its function in Force
+        // Dimension's dhdc.h (SDK 3.x).
+        let functions = unsafe { Functions::look_up(&library) };
         let lib = Self {
             path,
             functions,
             _library: library,
         };
-        for (name, required) in SYMBOLS {
+        for &(name, required) in SYMBOLS {
             if required && !lib.has(name) {
                 return Err(HapticsError::SymbolMissing {
                     library: lib.path.display().to_string(),
@@ -225,24 +223,7 @@ impl DhdLibrary {
 
     /// Whether the library exports `symbol` (one of [`SYMBOLS`]).
     pub fn has(&self, symbol: &str) -> bool {
-        let f = &self.functions;
-        match symbol {
-            "dhdGetDeviceCount" => f.get_device_count.is_some(),
-            "dhdOpen" => f.open.is_some(),
-            "dhdClose" => f.close.is_some(),
-            "dhdGetPosition" => f.get_position.is_some(),
-            "dhdGetLinearVelocity" => f.get_linear_velocity.is_some(),
-            "dhdGetGripperGap" => f.get_gripper_gap.is_some(),
-            "dhdSetForceAndTorqueAndGripperForce" => f.set_force_torque_gripper.is_some(),
-            "dhdEnableForce" => f.enable_force.is_some(),
-            "dhdGetSDKVersion" => f.get_sdk_version.is_some(),
-            "dhdGetButtonMask" => f.get_button_mask.is_some(),
-            "dhdGetTime" => f.get_time.is_some(),
-            "dhdErrorGetLastStr" => f.error_get_last_str.is_some(),
-            "dhdGetSystemName" => f.get_system_name.is_some(),
-            "dhdSetWatchdog" => f.set_watchdog.is_some(),
-            _ => false,
-        }
+        self.functions.has(symbol)
     }
 
     /// Every looked-up symbol with its availability.
