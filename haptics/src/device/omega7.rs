@@ -221,6 +221,16 @@ impl DhdLibrary {
         &self.path
     }
 
+    /// Sends `c` (no torque) to device `id`: the SDK's return code, or `None` without the
+    /// function. The one path a force takes to the device, from the haptic thread and from the
+    /// watchdog's.
+    fn send_force(&self, c: &ForceCommand, id: c_char) -> Option<c_int> {
+        let f = self.functions.set_force_torque_gripper?;
+        let [x, y, z] = c.force_n.to_array();
+        // SAFETY: plain doubles and the device id, per dhdc.h.
+        Some(unsafe { f(x, y, z, 0.0, 0.0, 0.0, c.gripper_force_n, id) })
+    }
+
     /// Whether the library exports `symbol` (one of [`SYMBOLS`]).
     pub fn has(&self, symbol: &str) -> bool {
         self.functions.has(symbol)
@@ -289,23 +299,9 @@ pub struct DhdOverride {
 impl ForceOverride for DhdOverride {
     fn set_force_scale(&self, scale: f64) {
         self.gate.set_force_scale(scale);
-        let c = self.gate.applied();
         let id = self.id.load(Ordering::Relaxed) as c_char;
-        if let Some(f) = self.lib.functions.set_force_torque_gripper {
-            // SAFETY: plain doubles and the device id, per dhdc.h.
-            unsafe {
-                f(
-                    c.force_n.x,
-                    c.force_n.y,
-                    c.force_n.z,
-                    0.0,
-                    0.0,
-                    0.0,
-                    c.gripper_force_n,
-                    id,
-                )
-            };
-        }
+        // Nothing to report to from the watchdog's thread: the haptic thread sees its own.
+        let _ = self.lib.send_force(&self.gate.applied(), id);
     }
 
     fn force_scale(&self) -> f64 {
@@ -473,24 +469,11 @@ impl HapticDevice for Omega7 {
             return Err(HapticsError::DeviceClosed { tick: None });
         }
         let c = self.override_.gate.pass(command);
-        let Some(f) = self.lib.functions.set_force_torque_gripper else {
+        let Some(code) = self.lib.send_force(&c, self.id()) else {
             return Err(HapticsError::DeviceFault {
                 what: "dhdSetForceAndTorqueAndGripperForce missing",
                 tick: None,
             });
-        };
-        // SAFETY: plain doubles and the device id, per dhdc.h.
-        let code = unsafe {
-            f(
-                c.force_n.x,
-                c.force_n.y,
-                c.force_n.z,
-                0.0,
-                0.0,
-                0.0,
-                c.gripper_force_n,
-                self.id(),
-            )
         };
         self.check("dhdSetForceAndTorqueAndGripperForce", code)
     }
