@@ -195,18 +195,7 @@ impl RecognizerFile {
                 let progress = naming_progress(progress, &classes, label);
                 let chosen = c
                     .choose(SvmC::FALLBACK, |grid| {
-                        Some(select_c_observed(
-                            params,
-                            grid,
-                            &BehaviourData {
-                                features: x,
-                                labels: y,
-                                groups,
-                            },
-                            classes.len(),
-                            CV_FOLDS,
-                            &progress,
-                        ))
+                        Some(search_c(params, grid, x, y, groups, classes.len(), &progress))
                     })
                     .map_err(&svc_error)?;
                 let svc = Svc::fit_observed(
@@ -313,20 +302,8 @@ impl RecognizerFile {
         let chosen = match c {
             WindowC::Choose(c) => c
                 .choose(WINDOW_SVM_FALLBACK_C, |grid| {
-                    every_class_in_two_groups(y, groups).then(|| {
-                        select_c_observed(
-                            params,
-                            grid,
-                            &BehaviourData {
-                                features: x,
-                                labels: y,
-                                groups,
-                            },
-                            names.len(),
-                            CV_FOLDS,
-                            &progress,
-                        )
-                    })
+                    every_class_in_two_groups(y, groups)
+                        .then(|| search_c(params, grid, x, y, groups, names.len(), &progress))
                 })
                 .map_err(&svc_error)?,
             WindowC::Known(c) => ChosenC { c, search: None },
@@ -368,6 +345,26 @@ enum WindowC<'a> {
     Choose(&'a SvmC),
     /// This C, chosen already: a fold's refit needs no cross-validation of its own.
     Known(f64),
+}
+
+/// The C of `grid` that classifies `x` best under cross-validation over [`CV_FOLDS`] folds
+/// that keep each group of `groups` whole ([`select_c_observed`]): the one C search both of the
+/// SVM's trainers (per behaviour, over windows) make.
+fn search_c<V: AsRef<[f64]>>(
+    params: SvcParams,
+    grid: &[f64],
+    x: &[V],
+    y: &[usize],
+    groups: &[u64],
+    classes: usize,
+    progress: Progress<'_>,
+) -> Result<CSearch, RecognizeError> {
+    let data = BehaviourData {
+        features: x,
+        labels: y,
+        groups,
+    };
+    select_c_observed(params, grid, &data, classes, CV_FOLDS, progress)
 }
 
 #[cfg(test)]
