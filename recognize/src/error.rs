@@ -481,7 +481,7 @@ pub enum RecognizeError {
     },
     /// The FFT library rejected a buffer (a bug here, not bad input).
     #[error("FFT failed")]
-    Fft(#[from] realfft::FftError),
+    Fft(#[from] fft::FftError),
 
     // --- Confusion matrices ---
     /// A label is not one of the confusion matrix's classes.

@@ -14,12 +14,13 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Each crate's folder and the palpus crates it may depend on.
-const LAYERS: [(&str, &str, &[&str]); 8] = [
+const LAYERS: [(&str, &str, &[&str]); 9] = [
     ("capture", "capture", &[]),
+    ("fft", "fft", &[]),
     ("svm", "svm", &[]),
     ("identify", "identify", &["capture", "svm"]),
-    ("recognize", "recognize", &["capture", "svm"]),
-    ("sim", "sim", &["capture", "recognize"]),
+    ("recognize", "recognize", &["capture", "fft", "svm"]),
+    ("sim", "sim", &["capture", "fft", "recognize"]),
     (
         "haptics",
         "haptics",

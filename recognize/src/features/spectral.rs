@@ -38,7 +38,7 @@
 use std::sync::Arc;
 
 use crate::RecognizeError;
-use realfft::{RealFftPlanner, RealToComplex};
+use fft::RealToComplex;
 
 use capture::Capture;
 
@@ -211,7 +211,7 @@ impl SpectrogramPlan {
         }
         let frame_len = ((FRAME_S * rate_hz).round() as usize).max(2);
         let band_bins = band_bins(rate_hz, frame_len);
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(frame_len);
+        let fft = fft::forward_plan(frame_len);
         let window = (0..frame_len)
             .map(|i| {
                 let phase = 2.0 * std::f64::consts::PI * i as f64 / frame_len as f64;

@@ -19,8 +19,7 @@
 
 use std::sync::Arc;
 
-use realfft::num_complex::Complex;
-use realfft::{RealFftPlanner, RealToComplex};
+use fft::{Complex, RealToComplex};
 
 use super::spectral::{
     BAND_HZ, CellScale, FREQUENCY_BINS, band_bins, band_bins_to, cell_means, frequency_bin,
@@ -92,7 +91,7 @@ impl WindowSpectrumPlan {
                 reason: "too short to resolve 25 bands of 8 Hz: windows of at least 0.125 s",
             });
         }
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(fft_len);
+        let fft = fft::forward_plan(fft_len);
         Ok(Self {
             rate_hz,
             fft_len,

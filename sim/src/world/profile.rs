@@ -13,7 +13,6 @@
 
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
-use realfft::RealFftPlanner;
 
 /// Spectral description of one band of a random height profile.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,8 +42,7 @@ impl Profile {
     pub fn synthesize<R: Rng + ?Sized>(bands: &[Band], spacing_m: f64, n: usize, rng: &mut R) -> Self {
         let n = (n.max(4) + 1) & !1;
         let mut heights_m = vec![0.0; n];
-        let mut planner = RealFftPlanner::<f64>::new();
-        let inverse = planner.plan_fft_inverse(n);
+        let inverse = fft::inverse_plan(n);
         let mut spectrum = inverse.make_input_vec();
         let mut band_heights = inverse.make_output_vec();
         let length_m = spacing_m * n as f64;
@@ -57,7 +55,7 @@ impl Profile {
                 // Bin 0 is the mean and the last bin (Nyquist) must stay real: both carry no
                 // roughness.
                 if i == 0 || i == n / 2 {
-                    *bin = realfft::num_complex::Complex::new(0.0, 0.0);
+                    *bin = fft::Complex::new(0.0, 0.0);
                     continue;
                 }
                 let k = i as f64 / length_m;
@@ -65,7 +63,7 @@ impl Profile {
                 let amplitude = (-0.5 * z * z).exp().sqrt();
                 let re: f64 = StandardNormal.sample(rng);
                 let im: f64 = StandardNormal.sample(rng);
-                *bin = realfft::num_complex::Complex::new(re * amplitude, im * amplitude);
+                *bin = fft::Complex::new(re * amplitude, im * amplitude);
             }
             // The spectrum was built by us with a real DC and Nyquist bin, which is all the
             // inverse transform checks, so this cannot fail.

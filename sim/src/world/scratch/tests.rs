@@ -4,7 +4,6 @@ use super::simulate::{ShearContact, rotation};
 use super::stroke::Stroke;
 use super::*;
 use crate::world::profile::Band;
-use realfft::RealFftPlanner;
 
 /// Sinapov Sec. IV-A: |a| minus its 100-sample moving average (centred, shortened at the ends).
 fn magnitude_deviation(rec: &ScratchRecording) -> Vec<f64> {
@@ -35,8 +34,7 @@ fn energy(d: &[f64]) -> f64 {
 /// Welch power spectrum of `d`: 256-sample Hann windows, hop 128, 129 bins (1.5625 Hz apart).
 fn psd(d: &[f64]) -> Vec<f64> {
     const N: usize = 256;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(N);
+    let fft = fft::forward_plan(N);
     let mut input = fft.make_input_vec();
     let mut output = fft.make_output_vec();
     let window: Vec<f64> = (0..N)
