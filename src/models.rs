@@ -546,13 +546,12 @@ pub fn check_renderable(
         source: Box::new(source),
     };
     match model.kind {
-        ModelKind::NeedlePuncture => haptics::law::needle_model(model).map(drop),
+        ModelKind::NeedlePuncture => haptics::needle_model(model).map(drop),
         ModelKind::NeedlePhases => {
-            haptics::law::PhasedNeedleLaw::from_file(model, haptics::law::NeedleLawConfig::default())
-                .map(drop)
+            haptics::PhasedNeedleLaw::from_file(model, haptics::NeedleLawConfig::default()).map(drop)
         }
-        ModelKind::HardFriction => haptics::law::hard_friction_model(model).map(drop),
-        ModelKind::SoftFriction => haptics::law::soft_friction_models(model).map(drop),
+        ModelKind::HardFriction => haptics::hard_friction_model(model).map(drop),
+        ModelKind::SoftFriction => haptics::soft_friction_models(model).map(drop),
     }
     .map_err(law)
 }

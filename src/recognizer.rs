@@ -7,12 +7,12 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 #[cfg(doc)]
-use haptics::live_recognizer::SampleRecognizer;
-use haptics::live_recognizer::{LiveRecognizer, channel, decision_in};
+use haptics::SampleRecognizer;
 use haptics::rt::HapticSample;
+use haptics::{LiveRecognizer, decision_in, recognizer_channel as channel};
 #[cfg(doc)]
 use recognize::NakanoWindowing;
-use recognize::sequential::{DEFAULT_MEMORY_S, DEFAULT_THRESHOLD};
+use recognize::{DEFAULT_MEMORY_S, DEFAULT_THRESHOLD};
 use recognize::{
     DecisionTiming, FeatureNeeds, FeatureSet, LabelledCapture, Method, NamedDecision, RecognizerFile,
     TrainSettings,
@@ -192,11 +192,11 @@ pub fn timings(runs: &[SegmentRun], recognition: &[Recognition]) -> Vec<SurfaceT
             let SegmentKind::Surface { surface } = &run.segment.kind else {
                 return None;
             };
-            let rubbing = haptics::control::RubbingPhase::Rub.code();
+            let rubbing = haptics::RubbingPhase::Rub.code();
             let stroke_s = run
                 .samples
                 .iter()
-                .find(|s| s.channels[haptics::control::rubbing::channel::PHASE] == rubbing)?
+                .find(|s| s.channels[haptics::rubbing_channel::PHASE] == rubbing)?
                 .time_s;
             // The tool's path through the play from the stroke's start, by loop time, read from
             // the position the recognizer reads.

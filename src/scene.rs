@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use haptics::device::{DeviceChoice, Registry};
+use haptics::{DeviceChoice, Registry};
 use serde::Deserialize;
 
 /// The scene `palpus run` starts when none is given.
@@ -591,7 +591,7 @@ impl Scene {
                 device.max_stiffness_npm,
                 "the Omega.7's stiffest stable spring",
             )?;
-            // The virtual tool is integrated semi-implicitly (haptics::control::admittance): a
+            // The virtual tool is integrated semi-implicitly (haptics::admittance): a
             // spring K on mass M is stable only for T < 2·√(M/K). Asking for T ≤ √(M/K), half
             // that, keeps every contact resolved by at least 2π ticks per period.
             let stiffness_npm = m.contact_stiffness_npm + h.grip_stiffness_npm;

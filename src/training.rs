@@ -2,7 +2,7 @@
 //! where the settings do not suit the captures.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use recognize::svc::FitEvent;
+use recognize::FitEvent;
 use recognize::{FeatureSet, LabelledCapture, RecognizerFile, TrainSettings};
 
 /// Trains on `captures` as `settings` say, with a progress bar on stderr over the trainer's

@@ -12,12 +12,12 @@ use std::sync::Arc;
 
 use glam::{DVec3, EulerRot, Mat4, Quat, Vec3};
 use haptics::HapticSample;
-use haptics::law::PunctureState;
+use haptics::PunctureState;
 use render::{Camera, Dimple, Frame, Material, MeshData, Object, Overlay, TissueState, Tool};
 
 use crate::scene::Scene;
 use crate::session::{SURFACE_Z_M, SegmentKind, SegmentRun};
-use haptics::control::admittance::channel as c;
+use haptics::admittance_channel as c;
 
 /// Why a scene's meshes could not be prepared.
 #[derive(Debug, thiserror::Error)]

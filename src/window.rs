@@ -13,11 +13,11 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use glam::DVec3;
-use haptics::live::{self, LiveView, RecentSamples};
-use haptics::live_recognizer::channel;
+use haptics::recognizer_channel as channel;
+use haptics::{LiveFeed, LiveView, RecentSamples, live_channel};
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, Param, Recognition, UiAction};
-use sim::hand::LiveHand;
+use sim::LiveHand;
 
 use crate::recognizer::SceneRecognizer;
 use crate::scene::Scene;
@@ -85,9 +85,9 @@ struct Session {
 }
 
 /// The live view of a segment at `rate_hz`, and the window's buffer for its plots.
-fn live_view(rate_hz: f64) -> (live::LiveFeed, LiveView, RecentSamples) {
+fn live_view(rate_hz: f64) -> (LiveFeed, LiveView, RecentSamples) {
     let samples = |s: f64| (s * rate_hz.max(1.0)).ceil() as usize;
-    let (feed, view) = live::channel(samples(RING_S));
+    let (feed, view) = live_channel(samples(RING_S));
     (feed, view, RecentSamples::new(samples(OVERLAY_S) + 1))
 }
 

@@ -158,7 +158,7 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
         "{p}"
     );
     // Beside it, the peak the simulated liver gives at that speed.
-    let tissue = sim::world::needle::NeedleTissue::bovine_liver();
+    let tissue = sim::NeedleTissue::bovine_liver();
     let speed = f(&p["speed_mps"]);
     let truth_peak = tissue.puncture_peak_force_n(0, speed).unwrap();
     assert!((f(&p["truth_peak_force_n"]) - truth_peak).abs() < 1e-12, "{p}");

@@ -28,28 +28,28 @@
 //! [`CaptureWriter`] and [`CaptureReader`] stream rows; [`Capture`] holds a
 //! whole capture in memory, column-major. All three enforce the same rules
 //! and report problems as a [`CaptureError`] naming file, line and column,
-//! except one: [`CaptureReader`] (and so [`Capture::read_file`]) and [`import`] also refuse
+//! except one: [`CaptureReader`] (and so [`Capture::read_file`]) and [`import_csv`] also refuse
 //! values beyond [`kind::magnitude_limit`], while the writer and [`Capture::new`] store any
 //! finite value, so that a recorder never loses a run to one glitching sample and the
 //! bad value is reported, with its line and column, by whoever reads the file.
 //!
 //! Besides the format itself this crate holds what every consumer of captures shares:
-//! [`import`] of foreign logs, [`signal`] (velocity from position), [`json_file`] (the
-//! project's JSON files), [`rng`] (the one seeded generator) and [`CaptureRef`] (how a trained
+//! [`import_csv`] and [`import_streams`] of foreign logs, [`pseudo_differentiate`] (velocity from
+//! position), [`json_file`] (the project's JSON files), [`rng`] (the one seeded generator) and [`CaptureRef`] (how a trained
 //! file names its captures). It imports no other palpus crate. Everything in it that can fail
 //! fails with a [`CaptureError`]; those about no file (signal slices, a `--map` spec) have
 //! no [`CaptureError::file`].
 
-pub mod atomic;
+mod atomic;
 mod error;
-pub mod import;
+mod import;
 pub mod json_file;
 pub mod kind;
 mod meta;
 mod reader;
 mod reference;
 pub mod rng;
-pub mod signal;
+mod signal;
 mod validate;
 mod writer;
 
@@ -59,10 +59,20 @@ use std::path::{Path, PathBuf};
 
 pub use atomic::write_atomically;
 pub use error::{CaptureError, CaptureErrorKind, InputColumns, OutputBudget, SpanMismatch};
+pub use import::{
+    ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, IMPORT_KEYS, ImportSpec, Imported, MAX_OUTPUT_ROWS, MAX_RATE_HZ,
+    MAX_SPAN_RATIO, MAX_UNROLL_COLUMNS, MIN_RATE_HZ, MapEntry, NonFinite, Quantity, RepeatedTime, Resampling,
+    STANDARD_GRAVITY_MPS2, Scale, SlowColumns, StreamReport, TimeFromPosition, Unroll, check_output,
+    import_csv, import_csv_report, import_streams, unit_to_si,
+};
 pub use kind::{CaptureKind, UnknownKind};
 pub use meta::{METADATA_MARKER, Metadata, RESERVED_KEYS};
 pub use reader::CaptureReader;
 pub use reference::{CaptureRef, sha256_hex};
+pub use signal::{
+    PAUSE_FACTOR, PseudoDifferentiator, median_interval_s, pseudo_differentiate,
+    pseudo_differentiate_with_pauses,
+};
 pub use writer::CaptureWriter;
 
 use kind::TIME_S;

@@ -5,7 +5,7 @@
 use std::sync::OnceLock;
 
 use capture::CaptureKind;
-use capture::import::{ColumnMap, ImportSpec, import_csv};
+use capture::{ColumnMap, ImportSpec, import_csv};
 use libfuzzer_sys::fuzz_target;
 
 fn specs() -> &'static [ImportSpec] {

@@ -3,9 +3,9 @@
 //! alone: its features, windows and anytime settings).
 #![no_main]
 
-use haptics::live_recognizer::LiveRecognizer;
+use haptics::LiveRecognizer;
 use libfuzzer_sys::fuzz_target;
-use recognize::sequential::DEFAULT_MEMORY_S;
+use recognize::DEFAULT_MEMORY_S;
 use recognize::{FeatureNeeds, RecognizerFile};
 
 fuzz_target!(|data: &[u8]| {

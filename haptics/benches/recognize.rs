@@ -27,12 +27,12 @@ use std::path::Path;
 
 use capture::Capture;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use haptics::live_recognizer::LiveRecognizer;
+use haptics::LiveRecognizer;
+use recognize::DEFAULT_MEMORY_S;
 use recognize::nakano::FrictionOverTravel;
-use recognize::sequential::DEFAULT_MEMORY_S;
 use recognize::{CellScale, FeatureSet, LabelledCapture, NakanoWindowing, RecognizerFile, SomParams, SvmC};
-use sim::protocols::nakano::rubbing_run;
-use sim::world::surface::{SurfacePatch, nakano_surfaces};
+use sim::nakano::rubbing_run;
+use sim::{SurfacePatch, nakano_surfaces};
 
 fn bench(c: &mut Criterion) {
     let surfaces = nakano_surfaces();
@@ -95,7 +95,7 @@ fn with_tone(capture: &Capture, tone_hz: f64) -> Capture {
 
 fn bench_fusion(
     group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
-    surfaces: &[sim::world::surface::RubbingSurface],
+    surfaces: &[sim::RubbingSurface],
 ) {
     let tone_hz = |i: usize| 40.0 + 32.0 * (i / 2) as f64;
     let train: Vec<LabelledCapture> = surfaces

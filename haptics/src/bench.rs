@@ -17,9 +17,9 @@ use crate::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
 use crate::error::{EarlyEnd, HapticsError};
 use crate::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
 use crate::recorder::{Recorder, RecorderConfig};
-use crate::rt::{HapticSample, LoopConfig, LoopIo, RateStats, RtStatus, StopReason, sched, spawn};
-use sim::hand::{HandImpedance, Waypoints};
-use sim::world::needle::NeedleTissue;
+use crate::rt::{HapticSample, LoopConfig, LoopIo, RateStats, RtStatus, StopReason, core_count, spawn};
+use sim::NeedleTissue;
+use sim::{HandImpedance, Waypoints};
 
 /// What to benchmark.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,7 +104,7 @@ pub fn loop_bench(config: &BenchConfig) -> Result<BenchReport, HapticsError> {
     )?;
 
     let stop_load = Arc::new(AtomicBool::new(false));
-    let load_threads = if config.load { sched::core_count() } else { 0 };
+    let load_threads = if config.load { core_count() } else { 0 };
     let loads: Vec<_> = (0..load_threads)
         .map(|_| {
             let stop = stop_load.clone();

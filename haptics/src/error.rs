@@ -20,28 +20,30 @@ use svm::SvmError;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum HapticsError {
-    /// The vendor library could not be loaded.
-    #[error(
-        "the Force Dimension SDK (libdhd) was not found ({tried}): install the Force Dimension SDK, or run on the simulated device"
-    )]
+    /// A vendor's library could not be loaded.
+    #[error("{sdk} was not found ({tried}): install it, or run on the simulated device")]
     SdkMissing {
+        /// The library, as its backend names it (which vendor, which version).
+        sdk: &'static str,
         /// What was tried and why each failed.
         tried: String,
     },
-    /// The vendor library lacks a function the device needs.
-    #[error(
-        "libdhd at {library} has no `{symbol}`: install a Force Dimension SDK of version 3 or newer, or run on the simulated device"
-    )]
+    /// A vendor's library lacks a function the device needs.
+    #[error("{library} has no `{symbol}`: install {sdk}, or run on the simulated device")]
     SymbolMissing {
+        /// The library a backend needs, as it names it (which vendor, which version).
+        sdk: &'static str,
         /// The library file.
         library: String,
         /// The missing function.
         symbol: &'static str,
     },
-    /// The SDK loaded but found no device.
-    #[error("no Omega.7 is connected ({detail}): connect and power it on, or run on the simulated device")]
+    /// The vendor's library loaded but found no device.
+    #[error("no {device} is connected ({detail}): connect and power it on, or run on the simulated device")]
     NoDevice {
-        /// What the SDK said.
+        /// The device, as its backend names it.
+        device: &'static str,
+        /// What the library said.
         detail: String,
     },
     /// A device call returned an error code. Inside the loop, the loop then sent zero force and

@@ -44,12 +44,11 @@ use recognize::RecognizerFile;
 use std::collections::VecDeque;
 use std::sync::Arc;
 
-use recognize::features::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 use recognize::nakano::{EdgeWindow, TravelFriction};
 use recognize::{
-    CellScale, FEATURES, FeatureSet, NakanoStream, NakanoWindowing, PlayedPath, RecognizerBody,
-    RecognizerFile as Model, SequentialParams, SequentialState, Som, WindowClassifier, WindowSpan,
-    sequential::DEFAULT_MEMORY_S,
+    CellScale, DEFAULT_MEMORY_S, FEATURES, FeatureSet, NakanoStream, NakanoWindowing, PlayedPath,
+    RecognizerBody, RecognizerFile as Model, SPECTRUM_LEN, SequentialParams, SequentialState, Som,
+    SpectrumScratch, WindowClassifier, WindowSpan, WindowSpectrumPlan,
 };
 use vibration::VibrationSense;
 

@@ -10,14 +10,14 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
-use haptics::control::{Admittance, AdmittanceConfig};
-use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
-use haptics::law::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
 use haptics::rt::{
     self, HapticSample, LoopConfig, LoopIo, LoopShared, Pacing, RateStats, RtRequest, StopReason,
 };
-use sim::hand::{HandImpedance, Waypoints};
-use sim::world::needle::{NeedleSite, NeedleTissue};
+use haptics::{Admittance, AdmittanceConfig};
+use haptics::{NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic};
+use haptics::{SimOmega7, SimOmega7Config, SimWorld};
+use sim::{HandImpedance, Waypoints};
+use sim::{NeedleSite, NeedleTissue};
 
 struct Counting;
 
@@ -116,11 +116,11 @@ fn ten_thousand_ticks_allocate_nothing() {
     let mut deepest_state: f64 = 0.0;
     while let Ok(sample) = consumer.pop() {
         n += 1;
-        deepest_state = deepest_state.max(sample.channels[haptics::control::admittance::channel::ENV_STATE]);
+        deepest_state = deepest_state.max(sample.channels[haptics::admittance_channel::ENV_STATE]);
     }
     assert_eq!(n, TICKS);
     assert!(
-        deepest_state >= haptics::law::PunctureState::Insertion.code(),
+        deepest_state >= haptics::PunctureState::Insertion.code(),
         "{deepest_state}"
     );
     assert!(device.world().needle_site(0.0).unwrap().punctured() >= 1);
@@ -129,7 +129,7 @@ fn ten_thousand_ticks_allocate_nothing() {
 #[test]
 fn the_live_view_writers_allocate_nothing_and_the_reader_gets_the_newest() {
     const CAPACITY: usize = 64;
-    let (feed, mut view) = haptics::live::channel(CAPACITY);
+    let (feed, mut view) = haptics::live_channel(CAPACITY);
     let sample = |tick: u64| HapticSample {
         tick,
         time_s: tick as f64 * 1e-3,
@@ -138,7 +138,7 @@ fn the_live_view_writers_allocate_nothing_and_the_reader_gets_the_newest() {
     // Each writer on a thread of its own, as in a session: the newest sample on the haptic
     // thread, the recent samples on the recorder's, the statistics on the supervisor's. More
     // samples than the ring holds, so that the full-ring path runs too.
-    let haptics::live::LiveFeed {
+    let haptics::LiveFeed {
         mut newest,
         mut recent,
         mut stats,
@@ -199,7 +199,7 @@ fn fast_insertion(surface_z_m: f64) -> Waypoints {
 
 #[test]
 fn the_phase_aware_needle_law_allocates_nothing_along_a_recording() {
-    use haptics::law::{AxialLaw, PhasedNeedleLaw};
+    use haptics::{AxialLaw, PhasedNeedleLaw};
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/captures/li_bi/needle_train.csv");
     let capture = capture::Capture::read_file(&path, capture::CaptureKind::Insertion).unwrap();
@@ -217,10 +217,10 @@ fn the_phase_aware_needle_law_allocates_nothing_along_a_recording() {
         let before = ALLOCATIONS.load(Ordering::Relaxed);
         WATCHED.with(|w| w.set(true));
         let mut punctures = 0u32;
-        let mut last = haptics::law::PunctureState::Approach;
+        let mut last = haptics::PunctureState::Approach;
         for (&d, &v) in depth.iter().zip(&velocity) {
             let out = law.step(d, v);
-            if out.state == haptics::law::PunctureState::Puncture && last != out.state {
+            if out.state == haptics::PunctureState::Puncture && last != out.state {
                 punctures += 1;
             }
             last = out.state;

@@ -39,7 +39,7 @@ use crate::model_file::{
     Hyperparameters, MODEL_FORMAT, MODEL_VERSION, ModelBody, ModelFile, ModelKind, Quantity, ScaledSvr,
     SvrHyper,
 };
-use capture::signal::pseudo_differentiate;
+use capture::pseudo_differentiate;
 use svm::{FitProgress, InputScaling, Kernel, SvrFit, SvrParams, fit_observed};
 
 /// Standard gravity, to express the paper's kgf hyperparameters in SI.

@@ -26,9 +26,9 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use capture::PAUSE_FACTOR;
 use capture::kind;
-pub use capture::signal::PAUSE_FACTOR;
-use capture::signal::median_interval_s;
+use capture::median_interval_s;
 
 use crate::error::{self, IdentifyError, check_finite};
 

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use capture::rng::SplitMix64;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use recognize::knn::{FeatureScaling, Knn, KnnParams};
+use recognize::{FeatureScaling, Knn, KnnParams};
 
 /// Queries per measured iteration.
 const QUERIES: usize = 200;

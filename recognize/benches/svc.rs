@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::time::Instant;
 
-use recognize::svc::TrainingVectors;
+use recognize::TrainingVectors;
 use recognize::{FeatureSet, LabelledCapture, Method, Svc, SvcParams, SvmTrainer, TrainSettings};
 use svm::Kernel;
 

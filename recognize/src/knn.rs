@@ -17,7 +17,7 @@ use crate::vectors;
 mod calibration;
 mod tree;
 
-pub use calibration::{VoteCalibration, fit_votes_weight, mean_log_loss};
+pub use calibration::VoteCalibration;
 
 use tree::{Best, KdTree, squared_distance};
 

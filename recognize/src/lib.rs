@@ -4,26 +4,27 @@
 //!
 //! May import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
 //!
-//! This file is the crate's door: other crates name what they use as `recognize::X`.
+//! This file is the crate's door: other crates name what they use as `recognize::X`, or, for
+//! the three modules that are namespaces of their own, `recognize::nakano::X` (Nakano's rubbing
+//! features), `recognize::spectral::X` (Sinapov's spectrotemporal histogram) and
+//! `recognize::protocol::X` (the papers' cross-validations).
 //!
-//! - [`features`]: Nakano's rubbing features, Sinapov's spectrotemporal histogram, and how a
-//!   capture is cut into windows.
-//! - [`som`], [`knn`], [`svc`]: the classifiers.
-//! - [`recognizer`]: the recognizer file, its training, decisions and evaluation.
-//! - [`protocol`]: the papers' cross-validations; [`category`]: surface categories;
-//!   [`eval`]: confusion matrices.
-pub mod category;
+//! Inside: `features` (those two feature sets, the vibration spectrum and how a capture is cut
+//! into windows), the classifiers `som`, `knn` and `svc`, `recognizer` (the recognizer file, its
+//! training, decisions and evaluation), `sequential` (anytime decisions), `fusion`, `category`
+//! (surface categories) and `eval` (confusion matrices and decision timing).
+mod category;
 mod error;
-pub mod eval;
-pub mod features;
-pub mod folds;
-pub mod fusion;
-pub mod knn;
+mod eval;
+mod features;
+mod folds;
+mod fusion;
+mod knn;
 pub mod protocol;
-pub mod recognizer;
-pub mod sequential;
-pub mod som;
-pub mod svc;
+mod recognizer;
+mod sequential;
+mod som;
+mod svc;
 mod vectors;
 
 pub use category::{
@@ -34,9 +35,10 @@ pub use error::RecognizeError;
 pub use eval::{ConfusionMatrix, DecisionTiming, NamedDecision, natural_cmp, stable_right_from};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
+pub use features::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 pub use features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, PlayedPath, TRAINING_WINDOW_S, TRAVEL_PLAY_M,
-    WindowScaling, WindowSpan, WindowlessCapture,
+    TravelWindows, WindowScaling, WindowSpan, WindowlessCapture,
 };
 pub use fusion::{BehaviourData, ReliabilityFusion, argmax, fuse, fused_label};
 pub use knn::{FeatureScaling, Knn, KnnParams};
@@ -54,6 +56,9 @@ pub use recognizer::{
     Calibration, FusionMember, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,
     SequentialRow, SurfaceChange, SurfaceWait, WindowClassifier,
 };
-pub use sequential::{SequentialParams, SequentialParamsBuilder, SequentialState, SequentialStep};
+pub use sequential::{
+    DEFAULT_CHANGE_ODDS, DEFAULT_FLOOR, DEFAULT_MEMORY_S, DEFAULT_THRESHOLD, SequentialParams,
+    SequentialParamsBuilder, SequentialState, SequentialStep,
+};
 pub use som::{Normalization, Som, SomParams};
-pub use svc::{CSearch, Svc, SvcParams};
+pub use svc::{CSearch, CvPoint, FitEvent, Svc, SvcParams, TrainingVectors};

@@ -8,9 +8,9 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use glam::Vec3;
-use render::demo::{NeedleState, demo_overlay, tissue_scene};
 use render::window::{Input, Key, WindowApp, WindowConfig};
 use render::{Frame, MeshData, UiAction, load_glb, shapes};
+use render::{NeedleState, demo_overlay, tissue_scene};
 
 /// Depth at which the simulated skin gives way, m.
 const PUNCTURE_DEPTH_M: f32 = 0.010;

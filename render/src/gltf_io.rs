@@ -10,7 +10,7 @@ use std::fs;
 use std::io::{self, Write};
 use std::path::Path;
 
-use capture::atomic::write_atomically;
+use capture::write_atomically;
 use glam::{Mat3, Mat4, Vec3};
 use gltf::buffer::Source;
 use gltf::mesh::Mode;
@@ -71,7 +71,7 @@ pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, RenderError> {
 /// Writes `meshes` as a binary glTF 2.0 file: one node and one single-primitive mesh per entry,
 /// with f32 POSITION (with the min/max the spec requires), NORMAL, COLOR_0 (vec4) and u32 indices.
 ///
-/// The file is written through [`capture::atomic::write_atomically`], so readers never see a
+/// The file is written through [`capture::write_atomically`], so readers never see a
 /// half-written file and a failed write keeps the previous one. The same input always yields the
 /// same bytes.
 pub fn write_glb(path: &Path, meshes: &[MeshData]) -> Result<(), RenderError> {

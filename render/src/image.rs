@@ -4,7 +4,7 @@ use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::Path;
 
-use capture::atomic::write_atomically;
+use capture::write_atomically;
 
 use crate::error::RenderError;
 

@@ -2,6 +2,11 @@
 //! deformation and the overlay's data — to a window or to an offscreen image. Knows nothing of
 //! haptics: the app fills the frame.
 //!
+//! This file is the crate's door: other crates name what they use as `render::X`, or through
+//! one of its namespaces: [`window`] (`window::run` opens a window), [`golden`] (image
+//! comparison), [`bench`] (frames per second), [`shapes`] (procedural meshes) and
+//! [`assets_gen`] (the default assets and their dimensions).
+//!
 //! - [`Renderer::headless`] + [`Renderer::render`] give an [`Image`]; [`window::run`] opens a
 //!   window that draws through the same code.
 //! - Dimples bend objects marked deformable in the vertex shader; after puncture they are drawn
@@ -13,14 +18,14 @@
 
 pub mod assets_gen;
 pub mod bench;
-pub mod demo;
-pub mod error;
-pub mod frame;
-pub mod gltf_io;
+mod demo;
+mod error;
+mod frame;
+mod gltf_io;
 pub mod golden;
-pub mod gpu;
-pub mod image;
-pub mod mesh;
+mod gpu;
+mod image;
+mod mesh;
 mod offscreen;
 mod overlay;
 mod quiet_runtime;
@@ -32,6 +37,7 @@ pub mod window;
 
 pub use assets_gen::{PATCH_CENTRES_M, PATCH_NAMES, default_assets, patch_centre_m, write_default_assets};
 /// egui is part of the API: [`Renderer::render_with_events`] takes its input events.
+pub use demo::{NeedleState, demo_overlay, tissue_scene, tray_scene};
 pub use egui;
 pub use error::RenderError;
 pub use frame::{

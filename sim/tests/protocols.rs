@@ -5,8 +5,8 @@
 //! truth written in the metadata.
 
 use capture::{Capture, CaptureKind};
-use sim::protocols::{CaptureSet, Split, generate, li_bi, nakano};
-use sim::world::surface::{SurfacePatch, nakano_surfaces};
+use sim::{CaptureSet, Split, generate, li_bi, nakano};
+use sim::{SurfacePatch, nakano_surfaces};
 
 fn truth(c: &Capture, key: &str) -> f64 {
     c.metadata()
@@ -66,7 +66,7 @@ fn soft_contact_has_per_speed_lines_whose_slope_varies_nonlinearly() {
     let commanded = c.column("commanded_velocity_mps").unwrap();
     let pressure = c.column("normal_force_n").unwrap();
     let friction = c.column("friction_force_n").unwrap();
-    let law = sim::world::friction::SoftContact::sponge();
+    let law = sim::SoftContact::sponge();
     let speeds = li_bi::soft_contact_speeds_mmps(Split::Train);
     assert!(speeds.len() >= 8);
     let mut slopes = Vec::new();
@@ -389,8 +389,8 @@ fn vibration_level(c: &Capture) -> f64 {
 
 #[test]
 fn sinapov_captures_are_labelled_accelerometer_recordings() {
-    use sim::protocols::sinapov;
-    use sim::world::scratch::{Behaviour, household_surfaces};
+    use sim::sinapov;
+    use sim::{Behaviour, household_surfaces};
     let surfaces = household_surfaces();
     assert_eq!(surfaces.len(), 21);
     let by_name = |n: &str| surfaces.iter().find(|s| s.name == n).unwrap();

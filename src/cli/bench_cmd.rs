@@ -3,8 +3,8 @@
 use std::time::Duration;
 
 use clap::Args;
-use haptics::bench::{BenchConfig, loop_bench};
 use haptics::rt::{LoopConfig, Percentiles, RtRequest};
+use haptics::{BenchConfig, loop_bench};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::exit::EndedEarly;

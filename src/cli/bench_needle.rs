@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::Context;
 use capture::{Capture, CaptureKind};
 use clap::Args;
-use haptics::law::{AxialLaw, NeedleLaw, NeedleLawConfig, PhasedNeedleLaw, needle_model};
+use haptics::{AxialLaw, NeedleLaw, NeedleLawConfig, PhasedNeedleLaw, needle_model};
 use identify::{IdentifyOptions, ModelKind, identify, model_column};
 
 /// Time per tick of the needle laws, phase-aware against Li & Bi's smooth SVR in the same run.

@@ -276,19 +276,19 @@ fn held_out(
 type Predictor = Box<dyn Fn(&[f64]) -> f64>;
 
 fn fast_predictor(model: &identify::ModelFile) -> anyhow::Result<Predictor> {
-    use haptics::law::ScalarModel as _;
+    use haptics::ScalarModel as _;
     use identify::ModelKind;
     Ok(match model.kind {
         ModelKind::NeedlePuncture => {
-            let m = haptics::law::needle_model(model)?;
+            let m = haptics::needle_model(model)?;
             Box::new(move |x: &[f64]| m.eval(&[x[0], x[1]]))
         }
         ModelKind::HardFriction => {
-            let m = haptics::law::hard_friction_model(model)?;
+            let m = haptics::hard_friction_model(model)?;
             Box::new(move |x: &[f64]| m.eval(&[x[0]]))
         }
         ModelKind::SoftFriction => {
-            let (w, m) = haptics::law::soft_friction_models(model)?;
+            let (w, m) = haptics::soft_friction_models(model)?;
             Box::new(move |x: &[f64]| w.eval(&[x[0]]) * x[1] + m.eval(&[x[0]]))
         }
         ModelKind::NeedlePhases => {

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 use clap::Args;
 use haptics::acquire::{CaptureOptions, Protocol, run_capture, sim_setup};
-use haptics::device::{DeviceChoice, Motion};
-use haptics::recorder::partial_path;
+use haptics::partial_path;
 use haptics::rt::Pacing;
+use haptics::{DeviceChoice, Motion};
 
 use super::device_arg::parse_device;
 

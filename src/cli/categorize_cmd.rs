@@ -197,8 +197,8 @@ mod tests {
     use super::*;
 
     use recognize::{CellScale, KnnParams};
-    use sim::protocols::sinapov::scratch_capture;
-    use sim::world::scratch::{Behaviour, household_surfaces};
+    use sim::sinapov::scratch_capture;
+    use sim::{Behaviour, household_surfaces};
 
     #[test]
     fn categorizes_knn_confusions_on_generated_scratches() {

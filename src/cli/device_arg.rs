@@ -1,7 +1,7 @@
 //! `--device NAME[:OPTION]`, as `palpus run`, `palpus capture` and `palpus devices` take it:
 //! any backend of the device registry.
 
-use haptics::device::{DeviceChoice, Registry};
+use haptics::{DeviceChoice, Registry};
 
 /// One device of the registry, with its option.
 pub(crate) fn parse_device(s: &str) -> Result<DeviceChoice, String> {

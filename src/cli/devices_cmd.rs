@@ -1,8 +1,8 @@
 //! `palpus devices`.
 
 use clap::Args;
-use haptics::device::hid::list_hid_devices;
-use haptics::device::{DeviceChoice, Registry};
+use haptics::list_hid_devices;
+use haptics::{DeviceChoice, Registry};
 
 use super::device_arg::parse_device;
 

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use sim::protocols::{CaptureSet, Variant, generate, generate_variant};
+use sim::{CaptureSet, Variant, generate, generate_variant};
 
 /// Write a reproducible set of simulated captures.
 ///
@@ -85,7 +85,7 @@ enum NeedleSpeedArg {
 
 /// The single set `args` asks for instead of the papers' full sets, if any.
 fn variant(args: &GenArgs) -> Option<Variant> {
-    use sim::protocols::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile};
+    use sim::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile};
     if args.needle_rate_hz.is_some() || args.needle_tissue.is_some() || args.needle_speed.is_some() {
         return Some(Variant::Needle(NeedleProtocol {
             log_rate_hz: args.needle_rate_hz.unwrap_or(100),
@@ -101,7 +101,7 @@ fn variant(args: &GenArgs) -> Option<Variant> {
         }));
     }
     if args.two_patch {
-        let speed_mps = args.rub_speed_mps.unwrap_or(sim::protocols::nakano::SPEED_MPS);
+        let speed_mps = args.rub_speed_mps.unwrap_or(sim::nakano::SPEED_MPS);
         return Some(Variant::TwoPatch { speed_mps });
     }
     if let Some(speed_mps) = args.rub_speed_mps {

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use capture::CaptureKind;
-use capture::import::{
+use capture::{
     ColumnMap, DEFAULT_MAX_UPSAMPLE, Header, ImportSpec, NonFinite, RepeatedTime, SlowColumns,
     TimeFromPosition, Unroll, check_output, import_streams,
 };

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use capture::CaptureKind;
-use capture::import::{ColumnMap, ImportSpec, import_csv};
 use capture::sha256_hex;
+use capture::{ColumnMap, ImportSpec, import_csv};
 use clap::Args;
 use recognize::LabelledCapture;
 

@@ -52,12 +52,12 @@ pub(crate) struct EvalArgs {
     /// With --sequential: seconds of windows whose evidence counts; older ones are forgotten,
     /// so a new surface under the tool is named within about this time. Over travel it is the
     /// travel of those seconds at the speed the windows were made for, at any speed.
-    #[arg(long, value_name = "S", default_value_t = recognize::sequential::DEFAULT_MEMORY_S, requires = "sequential")]
+    #[arg(long, value_name = "S", default_value_t = recognize::DEFAULT_MEMORY_S, requires = "sequential")]
     memory_s: f64,
     /// With --sequential: the likelihood ratio against the named surface at which the windows
     /// since the change test began are taken to be a new surface, and the evidence from before
     /// them is dropped; 0 for no change test (only the memory then follows a new surface).
-    #[arg(long, value_name = "R", default_value_t = recognize::sequential::DEFAULT_CHANGE_ODDS, requires = "sequential")]
+    #[arg(long, value_name = "R", default_value_t = recognize::DEFAULT_CHANGE_ODDS, requires = "sequential")]
     change_odds: f64,
     /// With --sequential: the exponent each window's probabilities are raised to, in (0, 1];
     /// by default the one fitted on held-out recordings when the recognizer was trained, else

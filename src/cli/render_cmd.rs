@@ -6,8 +6,8 @@ use anyhow::{Context, bail};
 use clap::Args;
 use glam::DVec3;
 use haptics::HapticSample;
-use haptics::control::admittance::channel;
-use haptics::law::PunctureState;
+use haptics::PunctureState;
+use haptics::admittance_channel as channel;
 use serde::Deserialize;
 
 use crate::models;

@@ -12,8 +12,8 @@ use crate::models;
 use crate::scene::{DEFAULT_SCENE, Scene};
 use crate::session::report::{self, ModelLine, SessionReport};
 use crate::session::{self, SessionOptions, analysis};
-use haptics::device::DeviceChoice;
-use haptics::recorder::partial_path;
+use haptics::DeviceChoice;
+use haptics::partial_path;
 
 /// Run a scene: identify or load the models it needs, render them on the haptic thread, show
 /// the tissue, report.
@@ -205,7 +205,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         recognition_unread_windows: runs
             .iter()
             .flat_map(|r| &r.samples)
-            .filter(|s| s.flags & haptics::safety::flag::RECOGNIZER_WINDOW_UNREAD != 0)
+            .filter(|s| s.flags & haptics::flag::RECOGNIZER_WINDOW_UNREAD != 0)
             .count(),
         frame,
         recorded: runs.iter().filter_map(|r| r.recorded.clone()).collect(),

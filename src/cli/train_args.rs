@@ -142,7 +142,7 @@ pub(crate) struct TrainOptions {
     /// recognizer will decide with (`eval --memory-s`, a scene's `recognizer.memory_s`). A
     /// window's weight and the memory trade against each other, and a recognizer used with
     /// another memory says so.
-    #[arg(long, value_name = "S", default_value_t = recognize::sequential::DEFAULT_MEMORY_S, conflicts_with = "no_weight_fit")]
+    #[arg(long, value_name = "S", default_value_t = recognize::DEFAULT_MEMORY_S, conflicts_with = "no_weight_fit")]
     weight_fit_memory_s: f64,
 }
 

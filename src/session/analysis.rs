@@ -2,13 +2,13 @@
 //! truth, friction ratios, force extremes, loop rate.
 
 use haptics::HapticSample;
-use haptics::control::rubbing::channel as rub;
-use haptics::law::PunctureState;
+use haptics::PunctureState;
+use haptics::rubbing_channel as rub;
 use serde::Serialize;
-use sim::world::needle::NeedleTissue;
+use sim::NeedleTissue;
 
 use super::{SURFACE_Z_M, SegmentKind, SegmentRun};
-use haptics::control::admittance::channel as c;
+use haptics::admittance_channel as c;
 
 /// One detected capsule or membrane rupture.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -170,7 +170,7 @@ pub struct OutOfDomainTicks {
 
 /// The needle's out-of-domain ticks grouped by law state.
 fn out_of_domain(s: &[HapticSample], surface_z_m: f64) -> Vec<OutOfDomainTicks> {
-    use haptics::safety::flag;
+    use haptics::flag;
     let states = [
         (PunctureState::Approach, "approach"),
         (PunctureState::CapsuleLoading, "capsule_loading"),
@@ -271,7 +271,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
             let (mut sum, mut n) = (0.0, 0usize);
             for x in s {
                 let normal = x.channels[rub::NORMAL_FORCE_N];
-                if x.channels[rub::PHASE] == haptics::control::RubbingPhase::Rub.code() && normal > 0.1 {
+                if x.channels[rub::PHASE] == haptics::RubbingPhase::Rub.code() && normal > 0.1 {
                     sum += x.channels[rub::FRICTION_N] / normal;
                     n += 1;
                 }

@@ -24,21 +24,21 @@ use capture::kind::{
 use capture::{CaptureKind, CaptureWriter, Metadata};
 use glam::DVec3;
 use haptics::HapticSample;
+use haptics::LiveFeed;
 use haptics::acquire::{self, CaptureOptions, Protocol};
-use haptics::control::admittance::channel;
-use haptics::control::{Admittance, AdmittanceConfig, Direct};
-use haptics::device::sim_omega7::{SimOmega7Config, SimWorld};
-use haptics::device::{DeviceChoice, Motion, OpenedDevice, SimSetup};
-use haptics::law::{
+use haptics::admittance_channel as channel;
+use haptics::rt::{self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, WatchdogConfig};
+use haptics::{Admittance, AdmittanceConfig, Direct};
+use haptics::{DeviceChoice, Motion, OpenedDevice, SimSetup};
+use haptics::{
     Environment, FrictionSurface, HardFriction, NeedleEnvironment, NeedleLaw, NeedleLawConfig,
     PhasedNeedleLaw, SoftFriction, hard_friction_model, needle_model, soft_friction_models,
 };
-use haptics::live::LiveFeed;
-use haptics::live_recognizer::{LiveRecognizer, SampleRecognizer};
-use haptics::recorder::{Recorder, RecorderConfig};
-use haptics::rt::{self, Controller, LoopConfig, LoopIo, Pacing, RateStats, RtStatus, WatchdogConfig};
+use haptics::{LiveRecognizer, SampleRecognizer};
+use haptics::{Recorder, RecorderConfig};
+use haptics::{SimOmega7Config, SimWorld};
 use identify::{ModelFile, ModelKind};
-use sim::hand::{HandImpedance, HandScript, LiveHand};
+use sim::{HandImpedance, HandScript, LiveHand};
 
 use crate::models::ResolvedModel;
 use crate::scene::{ModelRole, Scene, Task};
@@ -218,7 +218,7 @@ pub struct SegmentRun {
 }
 
 /// The live connection between a running segment and a window: the window keeps the
-/// [`haptics::live::LiveView`] that goes with `feed` and clones of `hand` and `stop`.
+/// [`haptics::LiveView`] that goes with `feed` and clones of `hand` and `stop`.
 #[derive(Debug)]
 pub struct LiveLink {
     /// The hand target the UI moves (simulator only).
@@ -258,7 +258,7 @@ pub type Trace = fn(&HapticSample) -> f64;
 /// direction m — needle depth or tangential x —, force on the tool N, the position's name).
 /// The report's plots and the overlay read samples the same way; no segment reads as a needle.
 pub fn traces(kind: Option<&SegmentKind>) -> (Trace, Trace, &'static str) {
-    use haptics::control::rubbing::channel as rub;
+    use haptics::rubbing_channel as rub;
     match kind {
         Some(SegmentKind::Needle { .. }) | None => (
             |s| SURFACE_Z_M - s.channels[channel::VIRTUAL_Z_M],
@@ -426,7 +426,7 @@ pub fn record_path(record: &Path, object: &str, segments: usize) -> PathBuf {
 /// Runs one segment to its end (the task's, `duration_s`, or the UI's stop). A surface
 /// segment given a `recognizer` runs it over the loop's samples on the recorder thread, off the
 /// haptic thread ([`SampleRecognizer`]): its decisions ride in every sample's
-/// [`haptics::live_recognizer::channel`]s.
+/// [`haptics::recognizer_channel`]s.
 ///
 /// The segment's samples are kept by the recorder thread, off the haptic thread; a window
 /// reads the running segment through `live`, whose writers never wait.
@@ -548,7 +548,7 @@ pub fn run_segment(
         }
         row(&kind, surface_z_m, s, r)
     };
-    let map = haptics::recorder::annotate_then(annotate, map);
+    let map = haptics::annotate_then(annotate, map);
     let ring = RecorderConfig {
         capacity: 1 << 16,
         keep_samples: true,
@@ -560,7 +560,7 @@ pub fn run_segment(
     }
     let (producer, recorder) = match &record {
         Some(path) => {
-            let (p, r) = haptics::recorder::record_to_file(path, &meta, columns, map, ring)?;
+            let (p, r) = haptics::record_to_file(path, &meta, columns, map, ring)?;
             (p, AnyRecorder::File(r))
         }
         None => {

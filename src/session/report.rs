@@ -199,7 +199,7 @@ pub struct SessionReport {
     /// Per surface segment, how soon its surface was named.
     pub recognition_timing: Vec<SurfaceTiming>,
     /// Samples whose window the recognizer could not read
-    /// ([`haptics::safety::flag::RECOGNIZER_WINDOW_UNREAD`]: slid faster than its spectra's
+    /// ([`haptics::flag::RECOGNIZER_WINDOW_UNREAD`]: slid faster than its spectra's
     /// bands reach); each added no evidence.
     pub recognition_unread_windows: usize,
     /// The rendered frame, or why there is none.

@@ -1,7 +1,7 @@
 //! The scripted trainee of headless runs: a hand target moving through timed waypoints.
 
 use glam::DVec3;
-use sim::hand::Waypoints;
+use sim::Waypoints;
 
 use crate::scene::Task;
 
@@ -65,7 +65,7 @@ pub fn trainee(task: &Task, surface_z_m: f64, grip_npm: f64) -> Waypoints {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sim::hand::HandScript;
+    use sim::HandScript;
 
     #[test]
     fn insertion_reaches_depth_at_speed_and_returns() {

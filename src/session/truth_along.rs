@@ -13,9 +13,9 @@
 //! [`POP_MATCH_M`] is a false pop (rendered only) or a missed one (tissue only).
 
 use haptics::HapticSample;
-use haptics::control::admittance::channel as c;
+use haptics::admittance_channel as c;
 use serde::Serialize;
-use sim::world::needle::{NeedleSite, NeedleTissue};
+use sim::{NeedleSite, NeedleTissue};
 
 /// Smallest fall that counts as a pop, N: about the smallest change of a ~1 N axial force a
 /// hand tells apart.

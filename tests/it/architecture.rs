@@ -385,3 +385,159 @@ fn the_haptic_loop_imports_nothing_above_it() {
     }
     assert!(upward.is_empty(), "rt/ imports upward: {upward:?}");
 }
+
+/// The modules of each crate that other crates may name (`capture::kind::DEPTH_M`): a
+/// namespace of its own (a paper's settings, a sample's channel layout, the loop's API), listed
+/// here and in `docs/architecture.md`. Everything else is reached through the crate's root
+/// (`capture::import_csv`, not `capture::import::import_csv`).
+const NAMESPACES: [(&str, &str, &[&str]); 8] = [
+    ("capture", "capture", &["json_file", "kind", "rng"]),
+    ("fft", "fft", &[]),
+    ("svm", "svm", &[]),
+    ("identify", "identify", &[]),
+    ("recognize", "recognize", &["nakano", "protocol", "spectral"]),
+    ("sim", "sim", &["li_bi", "multistream", "nakano", "sinapov"]),
+    (
+        "haptics",
+        "haptics",
+        &[
+            "acquire",
+            "admittance_channel",
+            "flag",
+            "insertion_channel",
+            "recognizer_channel",
+            "rt",
+            "rubbing_channel",
+        ],
+    ),
+    (
+        "render",
+        "render",
+        &["assets_gen", "bench", "golden", "shapes", "window"],
+    ),
+];
+
+/// Every module name declared in the files under `src`.
+fn module_names(src: &Path) -> BTreeSet<String> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    let mut names = BTreeSet::new();
+    for file in files {
+        for line in std::fs::read_to_string(&file).unwrap().lines() {
+            let line = line.trim_start();
+            let line = line.strip_prefix("pub ").unwrap_or(line);
+            if let Some(rest) = line.strip_prefix("mod ") {
+                let name: String = rest.chars().take_while(|&c| is_ident(c)).collect();
+                names.insert(name);
+            }
+        }
+    }
+    names
+}
+
+/// The paths, after the crate's name, by which `code` names the crate `krate`.
+fn paths_into(code: &str, krate: &str) -> Vec<Vec<String>> {
+    let head = format!("{krate}::");
+    let mut paths = Vec::new();
+    for (at, _) in code.match_indices(&head) {
+        let before = code[..at].chars().next_back();
+        if before.is_some_and(|c| is_ident(c) || c == ':') {
+            continue; // inside a longer name or path
+        }
+        paths.extend(paths_in(&code[at + head.len()..]));
+    }
+    paths
+}
+
+/// Where a path from outside goes past a crate's door: through a module that is not one of
+/// its namespaces, or below a namespace into one of its modules. A segment is taken for a
+/// module only where the path goes on after it: a function of the same name (`svm::fit`, with
+/// a module `fit` inside) is an item at the door.
+fn past_the_door(path: &[String], modules: &BTreeSet<String>, namespaces: &[&str]) -> bool {
+    let Some((_, inner)) = path.split_last() else {
+        return false;
+    };
+    match inner.split_first() {
+        Some((first, below)) if namespaces.contains(&first.as_str()) => {
+            below.iter().any(|s| modules.contains(s))
+        }
+        Some((first, _)) => modules.contains(first),
+        None => false,
+    }
+}
+
+/// Source files outside `exclude` (a crate's own `src`), skipping build output.
+fn files_outside(exclude: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let root = root();
+    for entry in std::fs::read_dir(&root).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        if path.is_dir() && !name.starts_with('.') && name != "target" {
+            rust_files(&path, &mut files);
+        }
+    }
+    // This file's own examples of paths past a door are not uses.
+    let this = root.join(file!());
+    files.retain(|f| {
+        !f.starts_with(exclude) && *f != this && !f.components().any(|c| c.as_os_str() == "target")
+    });
+    files
+}
+
+#[test]
+fn other_crates_use_each_crate_through_its_door() {
+    let mut past = Vec::new();
+    for (name, folder, namespaces) in NAMESPACES {
+        let src = root().join(folder).join("src");
+        let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+        for line in lib.lines() {
+            if let Some(rest) = line.strip_prefix("pub mod ") {
+                let module = rest.trim_end_matches(';');
+                assert!(
+                    namespaces.contains(&module),
+                    "{name}/src/lib.rs: `pub mod {module}` is not one of the crate's namespaces \
+                     ({namespaces:?}): make it private and re-export what other crates use"
+                );
+            }
+        }
+        let modules = module_names(&src);
+        for file in files_outside(&src) {
+            let text = std::fs::read_to_string(&file).unwrap();
+            let code: String = text
+                .lines()
+                .map(|line| line.split("//").next().unwrap_or_default())
+                .collect::<Vec<_>>()
+                .join("\n");
+            for path in paths_into(&code, name) {
+                if past_the_door(&path, &modules, namespaces) {
+                    let relative = file.strip_prefix(root()).unwrap_or(&file);
+                    past.push(format!("{}: {name}::{}", relative.display(), path.join("::")));
+                }
+            }
+        }
+    }
+    past.sort();
+    past.dedup();
+    assert!(past.is_empty(), "paths past a crate's door:\n{}", past.join("\n"));
+}
+
+#[test]
+fn the_door_check_sees_a_deep_path_a_grouped_one_and_a_namespace() {
+    let modules: BTreeSet<String> = ["device", "sim_omega7", "rt", "pacer", "flag"]
+        .map(str::to_owned)
+        .into();
+    let namespaces = ["rt", "flag"];
+    let code = "use haptics::{HapticDevice, device::sim_omega7::SimWorld};\n\
+                let x = haptics::rt::pacer::Pacer::new();\n\
+                use haptics::rt::{self, spawn};\n\
+                let f = haptics::flag::STALL;\n\
+                use haptics::device;\n\
+                let g = my_haptics::device::X;";
+    let flagged: Vec<String> = paths_into(code, "haptics")
+        .into_iter()
+        .filter(|p| past_the_door(p, &modules, &namespaces))
+        .map(|p| p.join("::"))
+        .collect();
+    assert_eq!(flagged, ["device::sim_omega7::SimWorld", "rt::pacer::Pacer::new"]);
+}

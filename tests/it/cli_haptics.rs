@@ -114,7 +114,8 @@ fn capture_errors_are_clear() {
     let t = text(&o);
     assert!(
         t.starts_with("error: opening Force Dimension Omega.7")
-            && t.contains("install the Force Dimension SDK, or run on the simulated device (--device sim)"),
+            && t.contains("the Force Dimension SDK (libdhd, version 3 or newer) was not found")
+            && t.contains("install it, or run on the simulated device (--device sim)"),
         "{t}"
     );
     for (choice, message) in [

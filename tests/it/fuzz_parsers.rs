@@ -31,9 +31,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, Once};
 use std::time::{Duration, Instant};
 
-use capture::import::{ColumnMap, ImportSpec, import_csv};
 use capture::rng::{SplitMix64, derive_seed};
 use capture::{Capture, CaptureKind, Metadata};
+use capture::{ColumnMap, ImportSpec, import_csv};
 use identify::{IdentifyOptions, ModelFile, ModelKind};
 use palpus::scene::Scene;
 use recognize::{FeatureSet, LabelledCapture, Method, RecognizerFile, TrainSettings};

@@ -34,10 +34,10 @@ use crate::common::{
     MultistreamTrial, fails, json, last_per_sample, multistream_trials, offline_fused_steps, parallel_map,
     succeeds, text, train_svm,
 };
-use haptics::live_recognizer::{LiveDecision, LiveRecognizer};
-use recognize::sequential::DEFAULT_MEMORY_S;
+use haptics::{LiveDecision, LiveRecognizer};
+use recognize::DEFAULT_MEMORY_S;
 use recognize::{LabelledCapture, RecognizerFile};
-use sim::protocols::multistream::{IMPORT_MAP, IMPORT_RATE_HZ, IMPORT_UNROLL};
+use sim::multistream::{IMPORT_MAP, IMPORT_RATE_HZ, IMPORT_UNROLL};
 
 /// Trials 1..=TRAIN_TRIALS of every surface train, the rest test.
 const TRAIN_TRIALS: u32 = 5;

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use crate::common::{self, fails, json, nakano_captures, succeeds, text};
 use capture::kind::{FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S};
 use serde_json::Value;
-use sim::protocols::sinapov::scratch_capture;
-use sim::world::scratch::{Behaviour, household_surfaces};
+use sim::sinapov::scratch_capture;
+use sim::{Behaviour, household_surfaces};
 
 fn nakano_runs(dir: &Path) -> (Vec<PathBuf>, Vec<PathBuf>) {
     succeeds(&[

@@ -8,17 +8,18 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use haptics::HapticsError;
-use haptics::live_recognizer::{
-    ChannelDecision, LiveDecision, LiveRecognizer, SampleRecognizer, channel, decision_in,
+use haptics::{
+    ChannelDecision, LiveDecision, LiveRecognizer, SampleRecognizer, decision_in,
+    recognizer_channel as channel,
 };
+use recognize::DEFAULT_MEMORY_S;
 use recognize::nakano::FrictionOverTravel;
-use recognize::sequential::DEFAULT_MEMORY_S;
 use recognize::{
     CellScale, FeatureSet, KnnParams, LabelledCapture, Method, NakanoWindowing, RecognizerFile,
     SequentialParams, SequentialState, SequentialStep, SomParams, SvmC, TrainSettings, TrainingWarning,
 };
-use sim::protocols::nakano::{RUNS, SPEED_MPS, rubbing_run_at};
-use sim::world::surface::{SurfacePatch, nakano_surfaces};
+use sim::nakano::{RUNS, SPEED_MPS, rubbing_run_at};
+use sim::{SurfacePatch, nakano_surfaces};
 
 /// Counts allocations made by the thread that set [`COUNTING`].
 struct CountingAllocator;
@@ -221,14 +222,12 @@ fn a_recognizer_runs_live_only_at_its_own_rate_and_over_rubbing_windows() {
     assert_eq!(live.current(), None);
 
     // A k-NN over whole scratches decides once a scratch, not on a stream: it cannot run live.
-    let scratches: Vec<LabelledCapture> = sim::world::scratch::household_surfaces()
+    let scratches: Vec<LabelledCapture> = sim::household_surfaces()
         .iter()
         .take(2)
         .flat_map(|s| {
             (0..3).map(move |t| {
-                let c =
-                    sim::protocols::sinapov::scratch_capture(s, sim::world::scratch::Behaviour::ALL[0], t, 1)
-                        .expect("scratch");
+                let c = sim::sinapov::scratch_capture(s, sim::Behaviour::ALL[0], t, 1).expect("scratch");
                 LabelledCapture::new(c, Path::new("scratch.csv"), String::new()).expect("labelled")
             })
         })
@@ -314,7 +313,7 @@ fn loop_run(model: &RecognizerFile, surface: &str) -> (LabelledCapture, Vec<(usi
         .with("surface", surface)
         .with(
             recognize::nakano::OBSERVER_CUTOFF_KEY,
-            haptics::live_recognizer::RUBBING_OBSERVER_CUTOFF_RADPS,
+            haptics::RUBBING_OBSERVER_CUTOFF_RADPS,
         );
     let columns = Protocol::Rubbing
         .columns()
@@ -648,12 +647,11 @@ fn the_heights_spectrum_decides_live_as_offline_at_another_speed() {
     for i in 0..x.len() {
         let mut sample = haptics::rt::HapticSample::default();
         sample.state.position_m = glam::DVec3::new(x[i], 0.0, z[i]);
-        sample.channels[haptics::control::rubbing::channel::FRICTION_N] = f[i];
-        sample.channels[haptics::control::rubbing::channel::PHASE] =
-            haptics::control::RubbingPhase::Rub.code();
+        sample.channels[haptics::rubbing_channel::FRICTION_N] = f[i];
+        sample.channels[haptics::rubbing_channel::PHASE] = haptics::RubbingPhase::Rub.code();
         recognizer.annotate(&mut sample);
-        unread += usize::from(sample.flags & haptics::safety::flag::RECOGNIZER_WINDOW_UNREAD != 0);
-        not_finite += usize::from(sample.flags & haptics::safety::flag::RECOGNIZER_INPUT_NOT_FINITE != 0);
+        unread += usize::from(sample.flags & haptics::flag::RECOGNIZER_WINDOW_UNREAD != 0);
+        not_finite += usize::from(sample.flags & haptics::flag::RECOGNIZER_INPUT_NOT_FINITE != 0);
         decisions = sample.channels[channel::DECISIONS];
     }
     // A window every 0.1 s of a 1.5 s stroke at 20 mm/s, each past its bands.

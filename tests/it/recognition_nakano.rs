@@ -18,7 +18,7 @@ use capture::{Capture, CaptureKind};
 use recognize::{
     ConfusionMatrix, FEATURES, NakanoConfig, NakanoSignals, NakanoStream, Normalization, Som, SomParams,
 };
-use sim::protocols::{CaptureSet, generate};
+use sim::{CaptureSet, generate};
 
 /// Recognition starts after this much travel (thesis Sec. 4.3), m.
 const START_TRAVEL_M: f64 = 0.005;

@@ -10,8 +10,8 @@ use recognize::{
     BehaviourData, CellScale, FEATURE_LEN, FeatureScaling, KnnParams, ReliabilityFusion, SpectrogramPlan,
     Svc, SvcParams, argmax, fuse,
 };
-use sim::protocols::sinapov::{TRIALS, scratch_capture};
-use sim::world::scratch::{Behaviour, household_surfaces};
+use sim::sinapov::{TRIALS, scratch_capture};
+use sim::{Behaviour, household_surfaces};
 
 const SEED: u64 = 1;
 const FOLDS: usize = 10;

@@ -7,8 +7,8 @@ use std::path::Path;
 use capture::Capture;
 use capture::kind::{ACCEL_X_MPS2, ACCEL_Y_MPS2, ACCEL_Z_MPS2, VIBRATION_MPS2};
 use recognize::{LabelledCapture, Method, TrainSettings, train};
-use sim::protocols::sinapov::scratch_capture;
-use sim::world::scratch::{Behaviour, household_surfaces};
+use sim::sinapov::scratch_capture;
+use sim::{Behaviour, household_surfaces};
 
 const SEED: u64 = 1;
 /// Surfaces of the generated set used here (of 21): enough classes for the check to mean

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::common::{succeeds, text};
 use capture::{Capture, CaptureKind};
-use haptics::recorder::{partial_path, read_recording};
+use haptics::{partial_path, read_recording};
 
 #[test]
 fn a_killed_capture_keeps_the_old_file_and_leaves_a_readable_partial_one() {

@@ -10,7 +10,7 @@
 //! - `soft`: strokes at 2–40 mm/s on a sponge under a varying load (Li & Bi Sec. III-C);
 //! - `rubbing`: one 30 mm stroke at 5 mm/s under 0.3 N on one of Nakano's surfaces (Table 3.2).
 
-pub mod needle;
+pub(crate) mod needle;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -32,9 +32,9 @@ use crate::rt::{
     self, CHANNELS, Controller, HapticSample, LoopConfig, LoopIo, LoopOutcome, Pacing, RateStats, RtStatus,
 };
 pub use needle::{InsertionController, InsertionPhase, InsertionPlan};
-use sim::world::friction::{HardContact, SoftContact};
-use sim::world::needle::NeedleTissue;
-use sim::world::surface::{SurfacePatch, nakano_surfaces};
+use sim::NeedleTissue;
+use sim::{HardContact, SoftContact};
+use sim::{SurfacePatch, nakano_surfaces};
 
 /// What to capture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -250,10 +250,7 @@ pub fn metadata(protocol: Protocol, device: &str, rate_hz: f64, options: &Captur
         .with("control.kv_per_s", g.kv_per_s)
         .with("control.kf", g.kf)
         .with("control.mass_n_kg", g.mass_n_kg)
-        .with(
-            "sensor.encoder_quantum_m",
-            sim::world::sensor::Encoder::OMEGA7_QUANTUM_M,
-        )
+        .with("sensor.encoder_quantum_m", sim::Encoder::OMEGA7_QUANTUM_M)
         .with("sensor.velocity", "pseudo-differentiation")
         .with(
             "pacing",
@@ -337,7 +334,7 @@ pub fn controller(protocol: Protocol) -> Box<dyn Controller> {
 /// 0.1 mN.
 pub fn row(protocol: Protocol, s: &HapticSample, row: &mut Vec<f64>) -> bool {
     use crate::control::rubbing::channel as rub;
-    use sim::world::sensor::{Encoder, round_to};
+    use sim::{Encoder, round_to};
     let time = round_to(s.time_s, 1e-6);
     let position = |x: f64| round_to(x, Encoder::OMEGA7_QUANTUM_M);
     let velocity = |v: f64| round_to(v, 1e-6);
@@ -375,7 +372,7 @@ pub fn row(protocol: Protocol, s: &HapticSample, row: &mut Vec<f64>) -> bool {
 /// outside the rubbing phase. No allocation, so the haptic thread can call it.
 pub fn rubbing_signals(state: &crate::device::DeviceState, channels: &[f64; CHANNELS]) -> Option<[f64; 3]> {
     use crate::control::rubbing::channel as rub;
-    use sim::world::sensor::{Encoder, round_to};
+    use sim::{Encoder, round_to};
     (channels[rub::PHASE] == crate::control::RubbingPhase::Rub.code()).then(|| {
         [
             round_to(state.position_m.x, Encoder::OMEGA7_QUANTUM_M),

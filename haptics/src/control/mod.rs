@@ -10,5 +10,5 @@ pub mod rubbing;
 pub use admittance::{Admittance, AdmittanceConfig};
 pub use direct::Direct;
 pub use motion::{AccelerationControl, MotionGains};
-pub use observer::{DisturbanceObserver, InternalForces, Observed, Observers3, ReactionForceObserver};
+pub use observer::{DisturbanceObserver, Observed, Observers3, ReactionForceObserver};
 pub use rubbing::{RubbingController, RubbingPhase, RubbingPlan};

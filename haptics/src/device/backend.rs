@@ -2,7 +2,7 @@
 //! takes and gives. The list of backends is [`super::Registry`]'s.
 
 use capture::CaptureKind;
-use sim::hand::{HandImpedance, HandScript};
+use sim::{HandImpedance, HandScript};
 
 use super::sim_world::{SimOmega7Config, SimWorld};
 use super::{DeviceSpecs, HapticDevice};

@@ -32,6 +32,12 @@ pub const LIBRARY_NAMES: [&str; 2] = ["libdhd.so", "libdhd.so.3"];
 /// Force Dimension's USB vendor id.
 pub const FORCE_DIMENSION_VENDOR_ID: u16 = 0x1451;
 
+/// The library this backend needs, as its errors name it.
+const SDK: &str = "the Force Dimension SDK (libdhd, version 3 or newer)";
+
+/// The device, as its errors name it.
+const DEVICE: &str = "Omega.7";
+
 /// The friction of a simulated or real Omega.7's own mechanism, as the RFOB models it.
 pub const OMEGA7_INTERNAL: InternalForces = InternalForces {
     viscous_nspm: 0.2,
@@ -192,6 +198,7 @@ impl DhdLibrary {
             }
         }
         Err(HapticsError::SdkMissing {
+            sdk: SDK,
             tried: tried.join("; "),
         })
     }
@@ -208,6 +215,7 @@ impl DhdLibrary {
         for &(name, required) in SYMBOLS {
             if required && !lib.has(name) {
                 return Err(HapticsError::SymbolMissing {
+                    sdk: SDK,
                     library: lib.path.display().to_string(),
                     symbol: name,
                 });
@@ -319,10 +327,12 @@ impl Omega7 {
     pub fn open_with(lib: Arc<DhdLibrary>) -> Result<Self, HapticsError> {
         if lib.device_count() == Some(0) {
             return Err(HapticsError::NoDevice {
+                device: DEVICE,
                 detail: "the SDK sees no Force Dimension device".into(),
             });
         }
         let open = lib.functions.open.ok_or(HapticsError::SymbolMissing {
+            sdk: SDK,
             library: lib.path.display().to_string(),
             symbol: "dhdOpen",
         })?;
@@ -330,6 +340,7 @@ impl Omega7 {
         let id = unsafe { open() };
         if id < 0 {
             return Err(HapticsError::NoDevice {
+                device: DEVICE,
                 detail: lib
                     .last_error()
                     .unwrap_or_else(|| format!("dhdOpen returned {id}")),
@@ -646,7 +657,8 @@ mod tests {
         let text = e.to_string();
         assert!(matches!(e, HapticsError::SdkMissing { .. }));
         assert!(
-            text.contains("install the Force Dimension SDK, or run on the simulated device"),
+            text.starts_with("the Force Dimension SDK (libdhd, version 3 or newer) was not found")
+                && text.contains("install it, or run on the simulated device"),
             "{text}"
         );
         assert!(text.contains("/nonexistent/libdhd.so"), "{text}");

@@ -1,7 +1,7 @@
 //! A simulated Omega.7: what the haptic loop meets when there is no hardware.
 //!
 //! Per axis the end effector is a mass (Nakano's nominal 0.3 kg) driven by the actuators,
-//! the operator's hand ([`sim::hand`]), the world it touches, and the mechanism's own
+//! the operator's hand ([`sim::HandScript`]), the world it touches, and the mechanism's own
 //! viscous and Coulomb friction. Actuator force saturates at the device's 12 N (gripper 8 N).
 //! The device reports what the real one reports: the position through the Omega.7's 10 µm
 //! encoder quantization and a velocity estimated from that quantized position (Li & Bi's
@@ -9,8 +9,8 @@
 //! that stiff contact stays accurate.
 //!
 //! The world is the foundation's ground truth: needle insertion into layered tissue
-//! ([`NeedleSite`](sim::world::needle::NeedleSite)) along −z, or a horizontal surface (Li & Bi's hard and soft contacts, or one
-//! of Nakano's textured patches, [`SurfacePatch`](sim::world::surface::SurfacePatch)) under the tip.
+//! ([`NeedleSite`](sim::NeedleSite)) along −z, or a horizontal surface (Li & Bi's hard and soft contacts, or one
+//! of Nakano's textured patches, [`SurfacePatch`](sim::SurfacePatch)) under the tip.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -23,8 +23,9 @@ use super::{
     DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice, HardwareWatchdog,
 };
 use crate::error::HapticsError;
-use sim::hand::{HandImpedance, HandScript};
-use sim::world::sensor::{Encoder, PseudoDifferentiator};
+use capture::PseudoDifferentiator;
+use sim::Encoder;
+use sim::{HandImpedance, HandScript};
 
 /// The simulated Omega.7 in the device registry.
 pub static BACKEND: Backend = Backend {
@@ -450,7 +451,7 @@ mod tests {
             "{gap:?} {held}"
         );
     }
-    use sim::world::needle::{NeedleSite, NeedleTissue};
+    use sim::{NeedleSite, NeedleTissue};
 
     #[test]
     fn a_constant_force_accelerates_the_mass_and_saturates_at_12_n() {

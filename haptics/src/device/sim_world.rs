@@ -5,10 +5,10 @@
 use glam::DVec3;
 
 use super::DeviceSpecs;
-use sim::world::friction::{HardContact, SoftContact};
-use sim::world::needle::{NeedleSite, NeedleTissue};
-use sim::world::sensor::Encoder;
-use sim::world::surface::SurfacePatch;
+use sim::Encoder;
+use sim::SurfacePatch;
+use sim::{HardContact, SoftContact};
+use sim::{NeedleSite, NeedleTissue};
 
 /// Mechanical and sensing parameters of the simulated device.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -147,8 +147,8 @@ mod tests {
     use crate::law::friction::HardFriction;
     use crate::law::needle::{NeedleLaw, NeedleLawConfig};
     use crate::law::reference::{NeedleQuasiStatic, hard_contact_model};
-    use sim::world::friction::HardContact;
-    use sim::world::needle::NeedleTissue;
+    use sim::HardContact;
+    use sim::NeedleTissue;
 
     #[test]
     fn needle_environment_pushes_up_when_inserting_down() {

@@ -96,7 +96,7 @@ mod tests {
     use super::*;
     use crate::law::reference::{hard_contact_model, soft_contact_models};
     use crate::safety::flag;
-    use sim::world::friction::{HardContact, SoftContact};
+    use sim::{HardContact, SoftContact};
 
     #[test]
     fn hard_friction_is_the_model_in_contact_and_zero_out_of_it() {

@@ -233,7 +233,7 @@ mod tests {
     use super::*;
     use crate::law::reference::NeedleQuasiStatic;
     use crate::safety::flag;
-    use sim::world::needle::NeedleTissue;
+    use sim::NeedleTissue;
 
     fn law() -> NeedleLaw<NeedleQuasiStatic> {
         NeedleLaw::new(

@@ -3,8 +3,8 @@
 //! models where none has been loaded.
 
 use super::model::{FnModel, InputBox, ScalarModel};
-use sim::world::friction::{HardContact, SoftContact};
-use sim::world::needle::NeedleTissue;
+use sim::NeedleTissue;
+use sim::{HardContact, SoftContact};
 
 /// The needle force of [`NeedleTissue`] for a steady insertion into a fresh site: at speed
 /// `v > 0` and depth `d`, the force the needle meets when it got to `d` at constant `v`
@@ -114,7 +114,7 @@ pub fn soft_contact_models(law: SoftContact) -> (impl ScalarModel<1> + Clone, im
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sim::world::needle::NeedleSite;
+    use sim::NeedleSite;
 
     #[test]
     fn quasi_static_needle_matches_a_stepped_site_away_from_punctures() {

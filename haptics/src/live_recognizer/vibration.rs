@@ -10,8 +10,8 @@
 
 use std::sync::Arc;
 
-use recognize::features::window_spectrum::{SpectrumScratch, WindowSpectrumPlan};
 use recognize::{FeatureSet, NakanoWindowing, RecognizerFile as Model, WindowClassifier};
+use recognize::{SpectrumScratch, WindowSpectrumPlan};
 
 use crate::error::HapticsError;
 

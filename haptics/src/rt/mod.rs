@@ -1,11 +1,11 @@
 //! The real-time side: pacing, scheduling, the rate monitor, the watchdog and the loop.
 
-pub mod haptic_loop;
-pub mod monitor;
-pub mod pacer;
-pub mod sched;
-pub mod stall;
-pub mod watchdog;
+mod haptic_loop;
+mod monitor;
+mod pacer;
+mod sched;
+mod stall;
+mod watchdog;
 
 pub use haptic_loop::{
     CHANNELS, Controller, HapticSample, LoopConfig, LoopHandle, LoopIo, LoopOutcome, LoopShared, RunSummary,
@@ -13,6 +13,6 @@ pub use haptic_loop::{
 };
 pub use monitor::{Percentiles, RateMonitor, RateStats};
 pub use pacer::{Pacer, Pacing};
-pub use sched::{PinRequest, Pinning, Priority, RtRequest, RtStatus};
+pub use sched::{PinRequest, Pinning, Priority, RtRequest, RtStatus, core_count};
 pub use stall::{StallEnd, StallGuard, StallVerdict};
 pub use watchdog::{Heartbeat, Watchdog, WatchdogConfig};

@@ -2,7 +2,7 @@
 // Each test binary uses some of these, none all of them.
 #![allow(dead_code)]
 
-use haptics::device::HapticDevice;
+use haptics::HapticDevice;
 use haptics::rt::{self, Controller, HapticSample, LoopConfig, LoopIo, LoopShared};
 
 /// An unpaced run that stops after `ticks` ticks.

@@ -8,9 +8,9 @@ use crate::common::run_unpaced;
 use capture::Capture;
 use haptics::acquire::{CaptureOptions, Protocol, controller, run_capture, sim_device};
 use haptics::rt::Pacing;
-use sim::world::friction::HardContact;
-use sim::world::needle::NeedleTissue;
-use sim::world::surface::nakano_surfaces;
+use sim::HardContact;
+use sim::NeedleTissue;
+use sim::nakano_surfaces;
 
 fn capture(protocol: Protocol) -> Capture {
     let dir = tempfile::tempdir().unwrap();
@@ -130,9 +130,9 @@ fn rubbing_observers_report_the_forces_the_world_applied() {
     let mut c = controller(Protocol::Rubbing);
     let samples = run_unpaced(&mut device, &mut c, 10_000);
     let trace = device.trace();
-    use haptics::control::rubbing::channel;
+    use haptics::rubbing_channel as channel;
     let rubbing: Vec<usize> = (0..trace.len().min(samples.len()))
-        .filter(|&i| samples[i].channels[channel::PHASE] == haptics::control::RubbingPhase::Rub.code())
+        .filter(|&i| samples[i].channels[channel::PHASE] == haptics::RubbingPhase::Rub.code())
         .filter(|&i| (trace[i].velocity_mps.x - 0.005).abs() < 0.002)
         .collect();
     assert!(rubbing.len() > 1000);

@@ -5,13 +5,13 @@
 
 use crate::common::run_unpaced;
 use glam::DVec3;
-use haptics::control::{Admittance, AdmittanceConfig};
-use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimTrace, SimWorld};
-use haptics::law::{
+use haptics::{Admittance, AdmittanceConfig};
+use haptics::{
     Environment, FreeSpace, NeedleEnvironment, NeedleLaw, NeedleLawConfig, NeedleQuasiStatic, ScalarModel,
 };
-use sim::hand::{HandImpedance, Waypoints};
-use sim::world::needle::{NeedleSite, NeedleTissue};
+use haptics::{SimOmega7, SimOmega7Config, SimTrace, SimWorld};
+use sim::{HandImpedance, Waypoints};
+use sim::{NeedleSite, NeedleTissue};
 
 const SURFACE_Z_M: f64 = -0.02;
 
@@ -46,7 +46,7 @@ trait TargetAt {
 
 impl TargetAt for Waypoints {
     fn target_at(mut self, t: f64) -> DVec3 {
-        use sim::hand::HandScript;
+        use sim::HandScript;
         self.target(t).position_m
     }
 }
@@ -222,7 +222,7 @@ fn identified_needle_model_rendered_follows_the_truth() {
     let captures = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/captures/li_bi");
     let train = Capture::read_file(format!("{captures}/needle_train.csv"), CaptureKind::Insertion).unwrap();
     let identified = identify(&train, None, &IdentifyOptions::new(ModelKind::NeedlePuncture)).unwrap();
-    let model = haptics::law::needle_model(&identified.model).unwrap();
+    let model = haptics::needle_model(&identified.model).unwrap();
     let r = follow_truth(model);
     report("identified SVR", &r);
     let (all, steady, peak_felt, peak_truth) = r;

@@ -7,12 +7,12 @@ use std::sync::Arc;
 use capture::CaptureKind;
 use glam::DVec3;
 use haptics::HapticsError;
-use haptics::device::sim_omega7::{SimOmega7Config, SimWorld};
-use haptics::device::{
+use haptics::rt::{Controller, TickInput, TickOutput};
+use haptics::{
     Backend, BackendOption, DeviceSpecs, DeviceState, ForceCommand, ForceGate, ForceOverride, HapticDevice,
     InternalForces, Motion, OpenRequest, OpenedDevice, Registry, SimSetup,
 };
-use haptics::rt::{Controller, TickInput, TickOutput};
+use haptics::{SimOmega7Config, SimWorld};
 
 use crate::common::run_unpaced;
 
@@ -49,6 +49,7 @@ fn open_fake(request: OpenRequest<'_>) -> Result<OpenedDevice, HapticsError> {
     let serial = request.option.unwrap_or_default();
     if serial != "42" {
         return Err(HapticsError::NoDevice {
+            device: "Fake Desk",
             detail: format!("no Fake Desk with serial {serial}"),
         });
     }

@@ -10,18 +10,18 @@ use std::time::{Duration, Instant};
 
 use crate::common::{run_unpaced, unpaced};
 use glam::DVec3;
+use haptics::ForceOverride;
 use haptics::HapticsError;
-use haptics::control::{Admittance, AdmittanceConfig};
-use haptics::device::ForceOverride;
-use haptics::device::fault::{FaultPoint, FaultyDevice};
-use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
-use haptics::device::{ForceCommand, HapticDevice};
-use haptics::law::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
+use haptics::flag;
 use haptics::rt::{
     self, Controller, HapticSample, LoopConfig, LoopIo, LoopOutcome, Priority, RtRequest, StopReason,
     TickInput, TickOutput, WatchdogConfig, ZeroForce,
 };
-use haptics::safety::flag;
+use haptics::{Admittance, AdmittanceConfig};
+use haptics::{FaultPoint, FaultyDevice};
+use haptics::{FnModel, InputBox, NeedleEnvironment, NeedleLaw, NeedleLawConfig};
+use haptics::{ForceCommand, HapticDevice};
+use haptics::{SimOmega7, SimOmega7Config, SimWorld};
 use proptest::prelude::*;
 
 fn device() -> SimOmega7 {
@@ -189,7 +189,7 @@ fn recorded_run<C: Controller + 'static>(
     ticks: u64,
 ) -> (
     LoopOutcome<SimOmega7, C>,
-    Arc<haptics::device::ForceGate>,
+    Arc<haptics::ForceGate>,
     Arc<rt::LoopShared>,
     Vec<HapticSample>,
 ) {

@@ -5,8 +5,8 @@
 
 use capture::Capture;
 use identify::{IdentifyOptions, ModelBody, ModelKind, identify};
-use sim::protocols::Split;
-use sim::protocols::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile, needle_insertion_with};
+use sim::Split;
+use sim::li_bi::{NeedleProtocol, NeedleTissueKind, SpeedProfile, needle_insertion_with};
 
 fn insertion(seed: u64, split: Split, tissue: NeedleTissueKind, speed: SpeedProfile) -> Capture {
     needle_insertion_with(

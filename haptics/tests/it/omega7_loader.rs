@@ -10,9 +10,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use haptics::HapticsError;
-use haptics::device::omega7::{DhdLibrary, Omega7};
-use haptics::device::{ForceCommand, HapticDevice};
 use haptics::rt::{self, LoopConfig, LoopIo, StopReason, ZeroForce};
+use haptics::{DhdLibrary, Omega7};
+use haptics::{ForceCommand, HapticDevice};
 
 fn build(dir: &Path, name: &str, defines: &[&str]) -> PathBuf {
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake_dhd/fake_dhd.c");
@@ -163,7 +163,7 @@ fn a_library_without_a_required_function_is_refused_by_name() {
     let path = build(dir.path(), "libdhd_novelocity.so", &["-DOMIT_VELOCITY"]);
     let e = DhdLibrary::load(Some(&path)).unwrap_err();
     match &e {
-        HapticsError::SymbolMissing { symbol, library } => {
+        HapticsError::SymbolMissing { symbol, library, .. } => {
             assert_eq!(*symbol, "dhdGetLinearVelocity");
             assert!(library.ends_with("libdhd_novelocity.so"));
         }

@@ -12,9 +12,9 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use capture::{CaptureKind, Metadata};
-use haptics::device::sim_omega7::{SimOmega7, SimOmega7Config, SimWorld};
-use haptics::recorder::{RecorderConfig, partial_path, read_recording, record_to_file};
 use haptics::rt::{self, HapticSample, LoopConfig, LoopIo, RtRequest, ZeroForce};
+use haptics::{RecorderConfig, partial_path, read_recording, record_to_file};
+use haptics::{SimOmega7, SimOmega7Config, SimWorld};
 
 const CHILD_ENV: &str = "PALPUS_RECORDER_CHILD";
 

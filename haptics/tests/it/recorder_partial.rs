@@ -10,8 +10,8 @@ use std::time::{Duration, Instant};
 use capture::kind::{AXIAL_FORCE_N, DEPTH_M, TIME_S};
 use capture::{Capture, CaptureErrorKind, CaptureKind, Metadata};
 use haptics::HapticsError;
-use haptics::recorder::{RecorderConfig, partial_path, read_recording, record_to_file};
 use haptics::rt::HapticSample;
+use haptics::{RecorderConfig, partial_path, read_recording, record_to_file};
 
 const COLUMNS: &[&str] = &[TIME_S, DEPTH_M, AXIAL_FORCE_N];
 

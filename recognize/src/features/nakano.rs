@@ -57,7 +57,7 @@
 use std::borrow::Cow;
 
 use capture::Capture;
-use capture::signal::pseudo_differentiate;
+use capture::pseudo_differentiate;
 
 use crate::RecognizeError;
 

@@ -29,9 +29,6 @@ use crate::RecognizeError;
 /// Length of the feature vector: one value per band.
 pub const SPECTRUM_LEN: usize = FREQUENCY_BINS;
 
-/// The shortest window whose DFT resolves the bands: one DFT bin per band, s.
-pub const MIN_WINDOW_S: f64 = FREQUENCY_BINS as f64 / BAND_HZ;
-
 /// The DFT of windows of up to a given length at one rate, and its buffers.
 pub struct WindowSpectrumPlan {
     rate_hz: f64,

@@ -39,10 +39,9 @@ pub use kept::FeatureNeeds;
 pub use labelled::{
     BEHAVIOUR_KEY, LABEL_KEY, LabelledCapture, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SurfaceChange,
 };
-pub use posterior_weight::{HeldOutDecisions, PosteriorWeight, WEIGHT_OCTAVES, WEIGHT_STEPS_PER_OCTAVE};
+pub use posterior_weight::{HeldOutDecisions, PosteriorWeight};
 pub use sequential_eval::{
-    Calibration, FusionMember, RELIABILITY_BINS, ReliabilityBin, SequentialEvaluation, SequentialRow,
-    SurfaceWait,
+    Calibration, FusionMember, ReliabilityBin, SequentialEvaluation, SequentialRow, SurfaceWait,
 };
 pub use train::{
     CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, LEAST_TRAINING_TRAVEL_SHARE, Method,

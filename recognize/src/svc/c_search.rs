@@ -81,7 +81,9 @@ impl CSearch {
 ///
 /// A training fold that lacks some classes is fitted on the classes it has, and the held-out
 /// vectors of the missing ones count as wrong (the classifier cannot name them); a fold with a
-/// single class predicts it. Probabilities are not fitted (only votes are scored).
+/// single class predicts it. Probabilities are not fitted (only votes are scored). The crate
+/// itself scores C through [`select_c_observed`]; the tests call this directly.
+#[cfg(test)]
 pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
     params: SvcParams,
     data: &BehaviourData<'_, V>,
@@ -102,7 +104,8 @@ pub fn cross_validated_accuracy<V: AsRef<[f64]>>(
 }
 
 /// Picks C from `grid` by [`cross_validated_accuracy`] with `params`' other settings: the most
-/// accurate C, ties to the smaller one. [`select_c_observed`] without progress.
+/// accurate C, ties to the smaller one. [`select_c_observed`] without progress, for the tests.
+#[cfg(test)]
 pub fn select_c<V: AsRef<[f64]>>(
     params: SvcParams,
     grid: &[f64],

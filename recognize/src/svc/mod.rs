@@ -39,9 +39,13 @@ use solver::BinarySolution;
 /// keeps every row.
 const CACHE_BYTES: usize = 128 << 20;
 
-pub use c_search::{C_GRID, CSearch, CvPoint, cross_validated_accuracy, select_c, select_c_observed};
+pub use c_search::{C_GRID, CSearch, CvPoint, select_c_observed};
+#[cfg(test)]
+use c_search::{cross_validated_accuracy, select_c};
+#[cfg(test)]
+use probability::pairwise_coupling;
 use probability::{CouplingScratch, pairwise_coupling_into};
-pub use probability::{pairwise_coupling, sigmoid_predict, sigmoid_train};
+pub use probability::{sigmoid_predict, sigmoid_train};
 
 /// Hyperparameters, checked when fitting.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -81,7 +81,9 @@ pub fn sigmoid_predict(dec: f64, a: f64, b: f64) -> f64 {
 
 /// Wu, Lin & Weng's method 2: `p` minimising `Σ_i Σ_{j≠i} (r_ji p_i − r_ij p_j)²` with
 /// `Σ p = 1`, from pairwise probabilities `r[i][j] ≈ P(i | i or j)` (`r[i][j] + r[j][i] = 1`).
-/// libsvm's fixed-point iteration, run to a tight tolerance (see the module doc).
+/// libsvm's fixed-point iteration, run to a tight tolerance (see the module doc). The
+/// classifier calls [`pairwise_coupling_into`] with its own scratch; the tests call this.
+#[cfg(test)]
 pub fn pairwise_coupling(r: &[Vec<f64>]) -> Vec<f64> {
     let k = r.len();
     let flat: Vec<f64> = r.iter().flat_map(|row| row.iter().copied()).collect();

@@ -7,9 +7,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use render::demo::{NeedleState, demo_overlay, tissue_scene, tray_scene};
 use render::golden::{Tolerance, check};
 use render::{Frame, Image, MeshData, Renderer, load_glb};
+use render::{NeedleState, demo_overlay, tissue_scene, tray_scene};
 
 const WIDTH: u32 = 640;
 const HEIGHT: u32 = 480;

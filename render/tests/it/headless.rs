@@ -6,9 +6,9 @@
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
-use render::demo::{NeedleState, demo_overlay, tissue_scene};
 use render::egui;
 use render::{Camera, Frame, Image, Material, Object, RenderError, Renderer, UiAction, shapes};
+use render::{NeedleState, demo_overlay, tissue_scene};
 
 fn plane_frame(color: [f32; 4]) -> Frame {
     let plane = Arc::new(shapes::tissue_box(

@@ -7,8 +7,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::Vec3;
-use render::demo::{NeedleState, tissue_scene};
 use render::{Camera, Frame, MeshData, Renderer, load_glb, shapes};
+use render::{NeedleState, tissue_scene};
 
 fn asset(name: &str) -> Vec<MeshData> {
     load_glb(

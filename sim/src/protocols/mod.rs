@@ -7,7 +7,7 @@
 //! seed: same seed, same bytes.
 
 mod columns;
-pub mod generate;
+mod generate;
 pub mod li_bi;
 pub mod multistream;
 pub mod nakano;

@@ -82,7 +82,6 @@ use rand_chacha::ChaCha8Rng;
 
 pub use contact::{Contact, Texture};
 use path::PathSignals;
-pub use relief::PATCH_WAVELENGTH_M;
 use relief::Relief;
 use simulate::simulate;
 use trial::{TrialSetup, truth};

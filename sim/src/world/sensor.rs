@@ -144,7 +144,7 @@ impl LowPass {
 
 /// Pseudo-differentiation of a measured position (Li & Bi Eq. 13); the identification side
 /// owns it, since captures without a velocity column are differentiated there too.
-pub use capture::signal::PseudoDifferentiator;
+pub use capture::PseudoDifferentiator;
 
 #[cfg(test)]
 mod tests {
