@@ -11,23 +11,28 @@ use faer::{Mat, Side};
 use serde::Serialize;
 
 use crate::RecognizeError;
+use crate::{SettingError, UsageError};
 
 /// Checks that `m` is a non-empty, square, finite, non-negative, symmetric matrix; returns `n`.
 fn check(m: &[Vec<f64>]) -> Result<usize, RecognizeError> {
     let n = m.len();
     if n == 0 {
-        return Err(RecognizeError::EmptyMatrix);
+        return Err(RecognizeError::Usage(UsageError::EmptyMatrix));
     }
     for (row, r) in m.iter().enumerate() {
         if r.len() != n {
-            return Err(RecognizeError::NotSquare { row, len: r.len(), n });
+            return Err(RecognizeError::Usage(UsageError::NotSquare {
+                row,
+                len: r.len(),
+                n,
+            }));
         }
         for (col, &value) in r.iter().enumerate() {
             if !value.is_finite() {
-                return Err(RecognizeError::NonFiniteEntry { row, col });
+                return Err(RecognizeError::Usage(UsageError::NonFiniteEntry { row, col }));
             }
             if value < 0.0 {
-                return Err(RecognizeError::Negative { row, col, value });
+                return Err(RecognizeError::Usage(UsageError::Negative { row, col, value }));
             }
         }
     }
@@ -37,7 +42,7 @@ fn check(m: &[Vec<f64>]) -> Result<usize, RecognizeError> {
             // in the last bits.
             let b = m[j][i];
             if (a - b).abs() > 1e-9 * (1.0 + a.abs().max(b.abs())) {
-                return Err(RecognizeError::Asymmetric { row: i, col: j });
+                return Err(RecognizeError::Usage(UsageError::Asymmetric { row: i, col: j }));
             }
         }
     }
@@ -56,12 +61,16 @@ fn check(m: &[Vec<f64>]) -> Result<usize, RecognizeError> {
 pub fn similarity_from_confusion(counts: &[Vec<u64>]) -> Result<Vec<Vec<f64>>, RecognizeError> {
     let n = counts.len();
     if n == 0 {
-        return Err(RecognizeError::EmptyMatrix);
+        return Err(RecognizeError::Usage(UsageError::EmptyMatrix));
     }
     let mut rates = vec![vec![0.0; n]; n];
     for (row, r) in counts.iter().enumerate() {
         if r.len() != n {
-            return Err(RecognizeError::NotSquare { row, len: r.len(), n });
+            return Err(RecognizeError::Usage(UsageError::NotSquare {
+                row,
+                len: r.len(),
+                n,
+            }));
         }
         let total: u64 = r.iter().sum();
         if total > 0 {
@@ -133,7 +142,7 @@ pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut,
     let mut seen = vec![false; n];
     for &index in indices {
         if index >= n || seen[index] {
-            return Err(RecognizeError::BadIndex { index, n });
+            return Err(RecognizeError::Usage(UsageError::BadIndex { index, n }));
         }
         seen[index] = true;
     }
@@ -172,7 +181,7 @@ pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut,
     let (values, vectors) = symmetric_eigen(&laplacian)?;
     let smallest = (0..m)
         .min_by(|&a, &b| values[a].total_cmp(&values[b]))
-        .ok_or(RecognizeError::EmptyMatrix)?;
+        .ok_or(RecognizeError::Usage(UsageError::EmptyMatrix))?;
     let y: Vec<f64> = (0..m).map(|a| vectors[(a, smallest)] * inv_sqrt[a]).collect();
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| y[a].total_cmp(&y[b]).then(indices[a].cmp(&indices[b])));
@@ -185,7 +194,7 @@ pub fn normalized_cut(similarity: &[Vec<f64>], indices: &[usize]) -> Result<Cut,
             best = Some((value, split));
         }
     }
-    let (ncut, split) = best.ok_or(RecognizeError::EmptyMatrix)?;
+    let (ncut, split) = best.ok_or(RecognizeError::Usage(UsageError::EmptyMatrix))?;
     let mut left: Vec<usize> = order[..split].iter().map(|&a| indices[a]).collect();
     let mut right: Vec<usize> = order[split..].iter().map(|&a| indices[a]).collect();
     left.sort_unstable();
@@ -398,7 +407,11 @@ pub fn geodesic_distances(distances: &[Vec<f64>], k: usize) -> Result<Vec<Vec<f6
     }
     for (from, row) in g.iter().enumerate() {
         if let Some(to) = row.iter().position(|d| d.is_infinite()) {
-            return Err(RecognizeError::Disconnected { k, from, to });
+            return Err(RecognizeError::Setting(SettingError::Disconnected {
+                k,
+                from,
+                to,
+            }));
         }
     }
     Ok(g)
@@ -504,11 +517,11 @@ mod tests {
         check(&s).unwrap();
         assert!(matches!(
             similarity_from_confusion(&[]),
-            Err(RecognizeError::EmptyMatrix)
+            Err(RecognizeError::Usage(UsageError::EmptyMatrix))
         ));
         assert!(matches!(
             similarity_from_confusion(&[vec![1, 2], vec![3]]),
-            Err(RecognizeError::NotSquare { row: 1, .. })
+            Err(RecognizeError::Usage(UsageError::NotSquare { row: 1, .. }))
         ));
     }
 
@@ -581,15 +594,15 @@ mod tests {
         let points = [[0.0, 0.0], [0.1, 0.0], [10.0, 0.0], [10.1, 0.0]];
         assert!(matches!(
             isomap::<2>(&euclid(&points), 1),
-            Err(RecognizeError::Disconnected { k: 1, .. })
+            Err(RecognizeError::Setting(SettingError::Disconnected { k: 1, .. }))
         ));
         assert!(isomap::<2>(&euclid(&points), 2).is_ok());
         assert!(matches!(
             isomap::<2>(&euclid(&points), 0),
-            Err(RecognizeError::Config {
+            Err(RecognizeError::Setting(SettingError::Config {
                 of: "category parameter",
                 ..
-            })
+            }))
         ));
     }
 
@@ -598,51 +611,58 @@ mod tests {
         let empty: Vec<Vec<f64>> = Vec::new();
         assert!(matches!(
             classical_mds::<2>(&empty),
-            Err(RecognizeError::EmptyMatrix)
+            Err(RecognizeError::Usage(UsageError::EmptyMatrix))
         ));
         assert!(matches!(
             recursive_ncut(&empty, StopRule::default()),
-            Err(RecognizeError::EmptyMatrix)
+            Err(RecognizeError::Usage(UsageError::EmptyMatrix))
         ));
         assert!(matches!(
             classical_mds::<2>(&[vec![0.0, 1.0], vec![1.0]]),
-            Err(RecognizeError::NotSquare { row: 1, len: 1, n: 2 })
+            Err(RecognizeError::Usage(UsageError::NotSquare {
+                row: 1,
+                len: 1,
+                n: 2
+            }))
         ));
         assert!(matches!(
             isomap::<2>(&[vec![0.0, f64::NAN], vec![f64::NAN, 0.0]], 1),
-            Err(RecognizeError::NonFiniteEntry { row: 0, col: 1 })
+            Err(RecognizeError::Usage(UsageError::NonFiniteEntry {
+                row: 0,
+                col: 1
+            }))
         ));
         assert!(matches!(
             normalized_cut(&[vec![1.0, -0.5], vec![-0.5, 1.0]], &[0, 1]),
-            Err(RecognizeError::Negative { row: 0, col: 1, .. })
+            Err(RecognizeError::Usage(UsageError::Negative { row: 0, col: 1, .. }))
         ));
         assert!(matches!(
             recursive_ncut(&[vec![1.0, 0.2], vec![0.3, 1.0]], StopRule::default()),
-            Err(RecognizeError::Asymmetric { row: 0, col: 1 })
+            Err(RecognizeError::Usage(UsageError::Asymmetric { row: 0, col: 1 }))
         ));
         let w = vec![vec![1.0, 0.2], vec![0.2, 1.0]];
         assert!(matches!(
             normalized_cut(&w, &[0, 2]),
-            Err(RecognizeError::BadIndex { index: 2, n: 2 })
+            Err(RecognizeError::Usage(UsageError::BadIndex { index: 2, n: 2 }))
         ));
         assert!(matches!(
             normalized_cut(&w, &[0, 0]),
-            Err(RecognizeError::BadIndex { index: 0, .. })
+            Err(RecognizeError::Usage(UsageError::BadIndex { index: 0, .. }))
         ));
         assert!(matches!(
             normalized_cut(&w, &[1]),
-            Err(RecognizeError::Config {
+            Err(RecognizeError::Setting(SettingError::Config {
                 of: "category parameter",
                 ..
-            })
+            }))
         ));
         for (max_ncut, min_size) in [(f64::NAN, 2), (0.5, 1)] {
             assert!(matches!(
                 recursive_ncut(&w, StopRule { max_ncut, min_size }),
-                Err(RecognizeError::Config {
+                Err(RecognizeError::Setting(SettingError::Config {
                     of: "category parameter",
                     ..
-                })
+                }))
             ));
         }
     }

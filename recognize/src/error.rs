@@ -1,7 +1,11 @@
 //! The crate's one error type.
 //!
 //! Every part of the crate (features, classifiers, confusion matrices, protocols, categories,
-//! recognizer files) fails with [`RecognizeError`]. Failures that one part passes up from
+//! recognizer files) fails with [`RecognizeError`], whose variants say what the user can do
+//! about it: [`InputError`] (fix or replace a file or capture), [`SettingError`] (change an
+//! option), [`DataError`] (bring more recordings, classes or windows), [`SolverError`] (let a
+//! solver go further or choose other hyperparameters) and [`UsageError`] (a caller of the
+//! library passed arguments that do not fit together). Failures that one part passes up from
 //! another keep the outer part's context in a wrapping variant whose source is the inner
 //! failure, boxed: one enum cannot hold itself by value, and a box keeps the common variants
 //! small while the chain of `source()`s still reads outer to inner.
@@ -13,103 +17,30 @@ use capture::{CaptureError, CaptureErrorKind};
 
 use crate::features::WindowlessCapture;
 
-/// Why surface recognition failed: features, a classifier, a confusion matrix, a protocol, a
-/// category tree, or a recognizer being trained, stored, loaded or evaluated.
+/// Why surface recognition failed, grouped by what the user can do about it: fix an input,
+/// change a setting, bring more data, let a solver go further, or fix a caller; or one of those
+/// with the context it happened in (which features, classifier or fold), whose source is the
+/// inner failure.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RecognizeError {
-    // --- Files and captures ---
-    /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: io::Error,
-    },
-    /// Not valid JSON for a recognizer.
-    #[error("{}:{line}: {reason}", path.display())]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// Line of the error.
-        line: usize,
-        /// What serde said.
-        reason: String,
-    },
-    /// Parsed, but inconsistent.
-    #[error("{}: field `{field}`: {reason}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// The field.
-        field: String,
-        /// Why.
-        reason: String,
-    },
-    /// A capture could not be read.
-    #[error("reading capture")]
-    Capture(#[from] CaptureError),
-    /// The SVM solvers rejected a problem or a setting.
-    #[error("SVM solver")]
-    Svm(#[from] svm::SvmError),
-    /// A capture cannot be used as it is.
-    #[error("{}: {reason}", path.display())]
-    UnusableCapture {
-        /// The capture.
-        path: PathBuf,
-        /// Why.
-        reason: String,
-    },
-    /// The captures lack columns the chosen features need.
-    #[error("{}: `--features {features}` needs the columns {}, which this capture lacks", path.display(), missing.join(", "))]
-    MissingColumns {
-        /// The capture.
-        path: PathBuf,
-        /// The feature set asked for (`nakano`, `spectral`, `both`).
-        features: &'static str,
-        /// The columns it lacks.
-        missing: Vec<String>,
-    },
-    /// No capture gave a training vector.
-    /// A capture whose samples were dropped ([`crate::LabelledCapture::keep_features`]) was
-    /// asked for features it did not keep.
-    #[error("{}: its samples were dropped after computing its features, and {needed} were not among them", path.display())]
-    FeaturesNotKept {
-        /// The capture.
-        path: PathBuf,
-        /// The features asked for.
-        needed: String,
-    },
-    #[error("no training windows: every capture is shorter than one window after the start travel")]
-    NoTrainingData,
-    /// A class's captures gave no training window, so the recognizer could never answer it.
-    #[error("class `{class}` has no training vector: {}", windowless_list(captures))]
-    ClassWithoutWindows {
-        /// The class.
-        class: String,
-        /// Each of its captures, and why it gave no window.
-        captures: Vec<WindowlessCapture>,
-    },
-    /// Anytime decisions asked of a recognizer that gives no probability per window.
-    #[error(
-        "anytime decisions need each window's probability of every surface, which a k-NN or SVM over \
-         windows gives; this is a {method} recognizer over {features} features"
-    )]
-    NoWindowProbabilities {
-        /// Its method.
-        method: &'static str,
-        /// Its features.
-        features: &'static str,
-    },
-    /// No evaluated capture gave a decision, so there is nothing to score.
-    #[error("no decisions to evaluate: {}", if captures.is_empty() { "no captures given".to_owned() } else { windowless_list(captures) })]
-    NoDecisions {
-        /// Each capture evaluated, and why it gave no window.
-        captures: Vec<WindowlessCapture>,
-    },
-
+    /// A file or capture cannot be used as it is: fix, replace or re-record it.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// An option is out of its range or does not fit the data: change it.
+    #[error(transparent)]
+    Setting(#[from] SettingError),
+    /// The training or test data cannot support what was asked: more recordings, classes,
+    /// windows or travel.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// A solver stopped short of an answer: raise its limit, or choose other hyperparameters.
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+    /// Arguments that do not fit together, passed through the library: a bug in the caller,
+    /// not in the data.
+    #[error(transparent)]
+    Usage(#[from] UsageError),
     // --- Context around an inner failure ---
     /// A feature set failed on a capture.
     #[error("{}: {features} features", path.display())]
@@ -158,8 +89,141 @@ pub enum RecognizeError {
         #[source]
         source: Box<RecognizeError>,
     },
+}
 
-    // --- Settings ---
+/// A file or capture cannot be used as it is: fix, replace or re-record it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum InputError {
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: io::Error,
+    },
+    /// Not valid JSON for a recognizer.
+    #[error("{}:{line}: {reason}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Line of the error.
+        line: usize,
+        /// What serde said.
+        reason: String,
+    },
+    /// Parsed, but inconsistent.
+    #[error("{}: field `{field}`: {reason}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// Why.
+        reason: String,
+    },
+    /// A capture could not be read.
+    #[error("reading capture")]
+    Capture(#[source] Box<CaptureError>),
+    /// A capture cannot be used as it is.
+    #[error("{}: {reason}", path.display())]
+    UnusableCapture {
+        /// The capture.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// The captures lack columns the chosen features need.
+    #[error("{}: `--features {features}` needs the columns {}, which this capture lacks", path.display(), missing.join(", "))]
+    MissingColumns {
+        /// The capture.
+        path: PathBuf,
+        /// The feature set asked for (`nakano`, `spectral`, `both`).
+        features: &'static str,
+        /// The columns it lacks.
+        missing: Vec<String>,
+    },
+    /// The capture lacks a column Nakano's features need.
+    #[error("capture lacks a column Nakano's features need")]
+    NakanoColumn(#[source] Box<CaptureError>),
+    /// A capture's metadata value cannot be used.
+    #[error("metadata `{key}` = {value:?}: {reason}")]
+    Metadata {
+        /// The key.
+        key: &'static str,
+        /// Its value.
+        value: String,
+        /// What it must be.
+        reason: &'static str,
+    },
+    /// The velocity for the reaction-force observer could not be derived from position.
+    #[error("cannot derive velocity for the reaction-force observer")]
+    Velocity(#[source] Box<CaptureError>),
+    /// The capture lacks an accelerometer column.
+    #[error("capture has no accelerometer data")]
+    NoAccelerometer(#[source] Box<CaptureError>),
+    /// Too few samples for one frame per time bin.
+    #[error("recording has {samples} samples; the spectrotemporal histogram needs at least {needed}")]
+    TooShort {
+        /// Samples given.
+        samples: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// A sample is NaN or infinite.
+    #[error("sample {index} is not finite")]
+    NonFiniteSample {
+        /// Index of the first bad sample.
+        index: usize,
+    },
+    /// A feature is NaN or infinite.
+    #[error("vector {index} has a value that is not finite")]
+    NonFinite {
+        /// Index of the vector (0 for a query).
+        index: usize,
+    },
+    /// The three axes do not have the same number of samples.
+    #[error("accelerometer axes differ in length: x {x}, y {y}, z {z} samples")]
+    AxisLengths {
+        /// Samples on x.
+        x: usize,
+        /// Samples on y.
+        y: usize,
+        /// Samples on z.
+        z: usize,
+    },
+    /// A recognizer fused over time carries no measured reliability to weigh its evidence by.
+    #[error(
+        "recognizer {index} ({method} over {features} windows) has no cross-validated accuracy to weigh \
+         its evidence by: train it (a k-NN or SVM over windows) on captures of at least two runs or trials \
+         of every surface (its windows are then cross-validated with whole runs or trials held out)"
+    )]
+    NoReliability {
+        /// Index of the recognizer among those fused.
+        index: usize,
+        /// Its method.
+        method: &'static str,
+        /// Its features.
+        features: &'static str,
+    },
+    /// Recognizers fused over time name different surfaces, or the same in another order.
+    #[error("recognizer {index} names the surfaces {}, the first {}: fused recognizers must be trained on the same surfaces", got.join(", "), expected.join(", "))]
+    FusionSurfaces {
+        /// Index of the recognizer among those fused.
+        index: usize,
+        /// The first recognizer's surfaces.
+        expected: Vec<String>,
+        /// This one's.
+        got: Vec<String>,
+    },
+}
+
+/// An option is out of its range or does not fit the data: change it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SettingError {
     /// A setting or hyperparameter is out of range.
     #[error("invalid {of} {name} = {value}: {reason}")]
     Parameter {
@@ -180,11 +244,109 @@ pub enum RecognizeError {
         /// Why.
         reason: &'static str,
     },
-
-    // --- Training data and queries (k-NN, SVC, SOM) ---
     /// `k` must be at least one.
     #[error("k must be at least 1")]
     ZeroK,
+    /// A window over travel slid so fast that its vibration bands pass the Nyquist frequency.
+    #[error(
+        "a window slid at {speed_mps:.4} m/s: its spectrum's bands over travel pass the Nyquist frequency of {rate_hz} Hz above {max_speed_mps:.4} m/s (train with a higher --fastest-speed-mps, or record at a higher rate)"
+    )]
+    TooFastForBands {
+        /// The window's speed, m/s.
+        speed_mps: f64,
+        /// The fastest window the bands can be read at, at this rate, m/s.
+        max_speed_mps: f64,
+        /// The capture's rate, Hz.
+        rate_hz: f64,
+    },
+    /// A window needs at least two samples (a variance and a travel).
+    #[error("window of {len} samples: at least 2 needed")]
+    WindowTooShort {
+        /// Samples asked for.
+        len: usize,
+    },
+    /// Anytime decisions asked of a recognizer that gives no probability per window.
+    #[error(
+        "anytime decisions need each window's probability of every surface, which a k-NN or SVM over \
+         windows gives; this is a {method} recognizer over {features} features"
+    )]
+    NoWindowProbabilities {
+        /// Its method.
+        method: &'static str,
+        /// Its features.
+        features: &'static str,
+    },
+    /// Probabilities were asked of a classifier fitted without them.
+    #[error("the classifier was fitted without probability estimates")]
+    NoProbability,
+    /// At least one seed is needed.
+    #[error("at least one seed is needed")]
+    NoSeeds,
+    /// The fold asked for alone does not exist.
+    #[error("fold {fold} asked for, but there are {folds} folds (numbered from 1)")]
+    NoSuchFold {
+        /// The fold asked for (from 1).
+        fold: usize,
+        /// Folds in all.
+        folds: usize,
+    },
+    /// The k-nearest-neighbour graph has more than one component, so some geodesic distances
+    /// do not exist.
+    #[error("the {k}-nearest-neighbour graph is disconnected (point {from} cannot reach point {to})")]
+    Disconnected {
+        /// Neighbours per point.
+        k: usize,
+        /// A point.
+        from: usize,
+        /// A point it cannot reach.
+        to: usize,
+    },
+    /// A recognizer fused over time was no better than chance under cross-validation.
+    #[error("recognizer {index} named {:.1} % of its held-out windows right, no better than chance: its evidence would weigh nothing", 100.0 * accuracy)]
+    Unreliable {
+        /// Index of the recognizer among those fused.
+        index: usize,
+        /// Its cross-validated accuracy per window.
+        accuracy: f64,
+    },
+    /// Two recognizers fused over time read the same evidence.
+    #[error(
+        "recognizers {first} and {second} read the same evidence ({} and {} features): fused, it would \
+         count twice; fuse recognizers over different senses, such as nakano and vibration",
+        features[0],
+        features[1]
+    )]
+    FusionOverlap {
+        /// Index of the first of the two among the recognizers fused.
+        first: usize,
+        /// Index of the second.
+        second: usize,
+        /// Their feature sets.
+        features: [&'static str; 2],
+    },
+}
+
+/// The training or test data cannot support what was asked: more recordings, classes,
+/// windows or travel.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DataError {
+    #[error("no training windows: every capture is shorter than one window after the start travel")]
+    NoTrainingData,
+    /// A class's captures gave no training window, so the recognizer could never answer it.
+    #[error("class `{class}` has no training vector: {}", windowless_list(captures))]
+    ClassWithoutWindows {
+        /// The class.
+        class: String,
+        /// Each of its captures, and why it gave no window.
+        captures: Vec<WindowlessCapture>,
+    },
+    /// No evaluated capture gave a decision, so there is nothing to score.
+    #[error("no decisions to evaluate: {}", if captures.is_empty() { "no captures given".to_owned() } else { windowless_list(captures) })]
+    NoDecisions {
+        /// Each capture evaluated, and why it gave no window.
+        captures: Vec<WindowlessCapture>,
+    },
     /// No training points.
     #[error("no training points")]
     Empty,
@@ -196,6 +358,104 @@ pub enum RecognizeError {
         /// Training points available.
         points: usize,
     },
+    /// Cross-validation needs at least two groups (recordings, trials) and two folds.
+    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
+    TooFewGroups {
+        /// Distinct groups.
+        groups: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
+    /// A class has no training vector.
+    #[error("class {class} has no training vector")]
+    EmptyClass {
+        /// The class.
+        class: usize,
+    },
+    /// Fewer recordings than folds, or fewer than two folds.
+    #[error(
+        "{recordings} recordings (distinct `trial` or `run` in the metadata, else captures) cannot \
+         be split into {folds} folds: at least 2 folds, and at least one recording per fold"
+    )]
+    Folds {
+        /// Recordings found.
+        recordings: usize,
+        /// Folds asked for.
+        folds: usize,
+    },
+    /// Leaving one surface out needs at least three (two to train on).
+    #[error("{surfaces} surfaces: leaving one out needs at least 3")]
+    Surfaces {
+        /// Surfaces found.
+        surfaces: usize,
+    },
+    /// The folds' recognizers know different classes (a surface missing from some training
+    /// folds), so their decisions cannot be pooled.
+    #[error(
+        "fold {fold}'s recognizer knows the classes [{}] but fold 1's knows [{}]: every surface \
+         must have recordings in every training fold",
+        got.join(", "),
+        expected.join(", ")
+    )]
+    FoldClasses {
+        /// The fold whose classes differ.
+        fold: usize,
+        /// Its classes.
+        got: Vec<String>,
+        /// The first fold's classes.
+        expected: Vec<String>,
+    },
+    /// All weights are zero: no classifier is reliable, so there is nothing to trust.
+    #[error("all weights are zero")]
+    ZeroTotalWeight,
+}
+
+/// A solver stopped short of an answer: raise its limit, or choose other hyperparameters.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SolverError {
+    /// The SVM solvers rejected a problem or a setting.
+    #[error("SVM solver")]
+    Svm(#[from] svm::SvmError),
+    /// The solver did not converge within its iteration limit.
+    #[error("SMO did not converge in {iterations} iterations at C = {c:e} (classes {first}, {second})")]
+    NotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// The box constraint of the failed fit.
+        c: f64,
+        /// First class of the pair.
+        first: usize,
+        /// Second class of the pair.
+        second: usize,
+    },
+    /// [`SolverError::NotConverged`] with the classes by name, as a recognizer knows them.
+    #[error(
+        "SMO did not converge in {iterations} iterations at C = {c:e} (classes `{first}` and `{second}`)"
+    )]
+    PairNotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// The box constraint of the failed fit.
+        c: f64,
+        /// First class of the pair.
+        first: String,
+        /// Second class of the pair.
+        second: String,
+    },
+    /// No candidate of a C search could be fitted.
+    #[error("every candidate C failed: {}", c_failures(failures))]
+    EveryCFailed {
+        /// Each candidate and why its fit failed.
+        failures: Vec<(f64, RecognizeError)>,
+    },
+}
+
+/// Arguments that do not fit together, passed through the library: a bug in the caller,
+/// not in the data.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum UsageError {
     /// Feature vectors have no values.
     #[error("feature vectors are empty")]
     ZeroDimension,
@@ -227,12 +487,6 @@ pub enum RecognizeError {
         /// Dimension found.
         got: usize,
     },
-    /// A feature is NaN or infinite.
-    #[error("vector {index} has a value that is not finite")]
-    NonFinite {
-        /// Index of the vector (0 for a query).
-        index: usize,
-    },
     /// A label is not below the class count.
     #[error("label {label} of point {index} is not below the class count {classes}")]
     LabelOutOfRange {
@@ -243,57 +497,6 @@ pub enum RecognizeError {
         /// Number of classes.
         classes: usize,
     },
-    /// Cross-validation needs at least two groups (recordings, trials) and two folds.
-    #[error("cross-validation needs at least 2 groups and 2 folds, got {groups} groups, {folds} folds")]
-    TooFewGroups {
-        /// Distinct groups.
-        groups: usize,
-        /// Folds asked for.
-        folds: usize,
-    },
-    /// A class has no training vector.
-    #[error("class {class} has no training vector")]
-    EmptyClass {
-        /// The class.
-        class: usize,
-    },
-    /// Probabilities were asked of a classifier fitted without them.
-    #[error("the classifier was fitted without probability estimates")]
-    NoProbability,
-    /// The solver did not converge within its iteration limit.
-    #[error("SMO did not converge in {iterations} iterations at C = {c:e} (classes {first}, {second})")]
-    NotConverged {
-        /// Iterations run.
-        iterations: usize,
-        /// The box constraint of the failed fit.
-        c: f64,
-        /// First class of the pair.
-        first: usize,
-        /// Second class of the pair.
-        second: usize,
-    },
-    /// [`RecognizeError::NotConverged`] with the classes by name, as a recognizer knows them.
-    #[error(
-        "SMO did not converge in {iterations} iterations at C = {c:e} (classes `{first}` and `{second}`)"
-    )]
-    PairNotConverged {
-        /// Iterations run.
-        iterations: usize,
-        /// The box constraint of the failed fit.
-        c: f64,
-        /// First class of the pair.
-        first: String,
-        /// Second class of the pair.
-        second: String,
-    },
-    /// No candidate of a C search could be fitted.
-    #[error("every candidate C failed: {}", c_failures(failures))]
-    EveryCFailed {
-        /// Each candidate and why its fit failed.
-        failures: Vec<(f64, RecognizeError)>,
-    },
-
-    // --- Fusing classifiers ---
     /// Nothing to fuse.
     #[error("no classifiers to fuse")]
     NothingToFuse,
@@ -323,53 +526,6 @@ pub enum RecognizeError {
         /// Classes of this one.
         got: usize,
     },
-    /// Recognizers fused over time name different surfaces, or the same in another order.
-    #[error("recognizer {index} names the surfaces {}, the first {}: fused recognizers must be trained on the same surfaces", got.join(", "), expected.join(", "))]
-    FusionSurfaces {
-        /// Index of the recognizer among those fused.
-        index: usize,
-        /// The first recognizer's surfaces.
-        expected: Vec<String>,
-        /// This one's.
-        got: Vec<String>,
-    },
-    /// A recognizer fused over time carries no measured reliability to weigh its evidence by.
-    #[error(
-        "recognizer {index} ({method} over {features} windows) has no cross-validated accuracy to weigh \
-         its evidence by: train it (a k-NN or SVM over windows) on captures of at least two runs or trials \
-         of every surface (its windows are then cross-validated with whole runs or trials held out)"
-    )]
-    NoReliability {
-        /// Index of the recognizer among those fused.
-        index: usize,
-        /// Its method.
-        method: &'static str,
-        /// Its features.
-        features: &'static str,
-    },
-    /// Two recognizers fused over time read the same evidence.
-    #[error(
-        "recognizers {first} and {second} read the same evidence ({} and {} features): fused, it would \
-         count twice; fuse recognizers over different senses, such as nakano and vibration",
-        features[0],
-        features[1]
-    )]
-    FusionOverlap {
-        /// Index of the first of the two among the recognizers fused.
-        first: usize,
-        /// Index of the second.
-        second: usize,
-        /// Their feature sets.
-        features: [&'static str; 2],
-    },
-    /// A recognizer fused over time was no better than chance under cross-validation.
-    #[error("recognizer {index} named {:.1} % of its held-out windows right, no better than chance: its evidence would weigh nothing", 100.0 * accuracy)]
-    Unreliable {
-        /// Index of the recognizer among those fused.
-        index: usize,
-        /// Its cross-validated accuracy per window.
-        accuracy: f64,
-    },
     /// A weight is negative or not finite.
     #[error("weight {index} is {weight}; weights must be finite and non-negative")]
     BadWeight {
@@ -378,9 +534,6 @@ pub enum RecognizeError {
         /// The weight.
         weight: f64,
     },
-    /// All weights are zero: no classifier is reliable, so there is nothing to trust.
-    #[error("all weights are zero")]
-    ZeroTotalWeight,
     /// A query gives a feature vector per behaviour; this one has the wrong count.
     #[error("{queries} queries for {behaviours} behaviours")]
     QueryCount {
@@ -388,21 +541,6 @@ pub enum RecognizeError {
         queries: usize,
         /// Behaviours fitted.
         behaviours: usize,
-    },
-
-    // --- Nakano's features ---
-    /// The capture lacks a column Nakano's features need.
-    #[error("capture lacks a column Nakano's features need")]
-    NakanoColumn(#[source] CaptureError),
-    /// A capture's metadata value cannot be used.
-    #[error("metadata `{key}` = {value:?}: {reason}")]
-    Metadata {
-        /// The key.
-        key: &'static str,
-        /// Its value.
-        value: String,
-        /// What it must be.
-        reason: &'static str,
     },
     /// The signals passed in differ in length.
     #[error("signals differ in length: position {position}, height {height}, friction {friction}")]
@@ -429,61 +567,6 @@ pub enum RecognizeError {
         /// Samples available.
         samples: usize,
     },
-    /// A window over travel slid so fast that its vibration bands pass the Nyquist frequency.
-    #[error(
-        "a window slid at {speed_mps:.4} m/s: its spectrum's bands over travel pass the Nyquist frequency of {rate_hz} Hz above {max_speed_mps:.4} m/s (train with a higher --fastest-speed-mps, or record at a higher rate)"
-    )]
-    TooFastForBands {
-        /// The window's speed, m/s.
-        speed_mps: f64,
-        /// The fastest window the bands can be read at, at this rate, m/s.
-        max_speed_mps: f64,
-        /// The capture's rate, Hz.
-        rate_hz: f64,
-    },
-    /// A window needs at least two samples (a variance and a travel).
-    #[error("window of {len} samples: at least 2 needed")]
-    WindowTooShort {
-        /// Samples asked for.
-        len: usize,
-    },
-    /// The velocity for the reaction-force observer could not be derived from position.
-    #[error("cannot derive velocity for the reaction-force observer")]
-    Velocity(#[source] CaptureError),
-
-    // --- Spectrotemporal features ---
-    /// The capture lacks an accelerometer column.
-    #[error("capture has no accelerometer data")]
-    NoAccelerometer(#[source] CaptureError),
-    /// The three axes do not have the same number of samples.
-    #[error("accelerometer axes differ in length: x {x}, y {y}, z {z} samples")]
-    AxisLengths {
-        /// Samples on x.
-        x: usize,
-        /// Samples on y.
-        y: usize,
-        /// Samples on z.
-        z: usize,
-    },
-    /// Too few samples for one frame per time bin.
-    #[error("recording has {samples} samples; the spectrotemporal histogram needs at least {needed}")]
-    TooShort {
-        /// Samples given.
-        samples: usize,
-        /// Samples needed.
-        needed: usize,
-    },
-    /// A sample is NaN or infinite.
-    #[error("sample {index} is not finite")]
-    NonFiniteSample {
-        /// Index of the first bad sample.
-        index: usize,
-    },
-    /// The FFT library rejected a buffer (a bug here, not bad input).
-    #[error("FFT failed")]
-    Fft(#[from] fft::FftError),
-
-    // --- Confusion matrices ---
     /// A label is not one of the confusion matrix's classes.
     #[error("confusion matrix: label {0} is not one of the classes")]
     UnknownLabel(String),
@@ -493,54 +576,6 @@ pub enum RecognizeError {
     /// The same class was given twice to a confusion matrix.
     #[error("confusion matrix: class {0} given twice")]
     DuplicateClass(String),
-
-    // --- Protocols ---
-    /// Fewer recordings than folds, or fewer than two folds.
-    #[error(
-        "{recordings} recordings (distinct `trial` or `run` in the metadata, else captures) cannot \
-         be split into {folds} folds: at least 2 folds, and at least one recording per fold"
-    )]
-    Folds {
-        /// Recordings found.
-        recordings: usize,
-        /// Folds asked for.
-        folds: usize,
-    },
-    /// The fold asked for alone does not exist.
-    #[error("fold {fold} asked for, but there are {folds} folds (numbered from 1)")]
-    NoSuchFold {
-        /// The fold asked for (from 1).
-        fold: usize,
-        /// Folds in all.
-        folds: usize,
-    },
-    /// Leaving one surface out needs at least three (two to train on).
-    #[error("{surfaces} surfaces: leaving one out needs at least 3")]
-    Surfaces {
-        /// Surfaces found.
-        surfaces: usize,
-    },
-    /// At least one seed is needed.
-    #[error("at least one seed is needed")]
-    NoSeeds,
-    /// The folds' recognizers know different classes (a surface missing from some training
-    /// folds), so their decisions cannot be pooled.
-    #[error(
-        "fold {fold}'s recognizer knows the classes [{}] but fold 1's knows [{}]: every surface \
-         must have recordings in every training fold",
-        got.join(", "),
-        expected.join(", ")
-    )]
-    FoldClasses {
-        /// The fold whose classes differ.
-        fold: usize,
-        /// Its classes.
-        got: Vec<String>,
-        /// The first fold's classes.
-        expected: Vec<String>,
-    },
-
-    // --- Categories ---
     /// A matrix has no rows, or there are no indices to cut.
     #[error("empty matrix or index set")]
     EmptyMatrix,
@@ -588,17 +623,19 @@ pub enum RecognizeError {
         /// Rows of the matrix.
         n: usize,
     },
-    /// The k-nearest-neighbour graph has more than one component, so some geodesic distances
-    /// do not exist.
-    #[error("the {k}-nearest-neighbour graph is disconnected (point {from} cannot reach point {to})")]
-    Disconnected {
-        /// Neighbours per point.
-        k: usize,
-        /// A point.
-        from: usize,
-        /// A point it cannot reach.
-        to: usize,
+    /// No capture gave a training vector.
+    /// A capture whose samples were dropped ([`crate::LabelledCapture::keep_features`]) was
+    /// asked for features it did not keep.
+    #[error("{}: its samples were dropped after computing its features, and {needed} were not among them", path.display())]
+    FeaturesNotKept {
+        /// The capture.
+        path: PathBuf,
+        /// The features asked for.
+        needed: String,
     },
+    /// The FFT library rejected a buffer (a bug here, not bad input).
+    #[error("FFT failed")]
+    Fft(#[from] fft::FftError),
 }
 
 /// Each failed C and its reason, one after the other.
@@ -617,6 +654,26 @@ fn windowless_list(captures: &[WindowlessCapture]) -> String {
         .map(ToString::to_string)
         .collect::<Vec<_>>()
         .join("; ")
+}
+
+// The lower crates' errors convert into the group they belong to, so that `?` works on them
+// wherever this crate returns a `RecognizeError`.
+impl From<CaptureError> for RecognizeError {
+    fn from(e: CaptureError) -> Self {
+        Self::Input(InputError::Capture(Box::new(e)))
+    }
+}
+
+impl From<svm::SvmError> for RecognizeError {
+    fn from(e: svm::SvmError) -> Self {
+        Self::Solver(SolverError::Svm(e))
+    }
+}
+
+impl From<fft::FftError> for RecognizeError {
+    fn from(e: fft::FftError) -> Self {
+        Self::Usage(UsageError::Fft(e))
+    }
 }
 
 impl RecognizeError {
@@ -648,23 +705,23 @@ impl RecognizeError {
     pub(crate) fn with_class_names(self, classes: &[String]) -> Self {
         let name = |i: usize| classes.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
         match self {
-            Self::NotConverged {
+            Self::Solver(SolverError::NotConverged {
                 iterations,
                 c,
                 first,
                 second,
-            } => Self::PairNotConverged {
+            }) => Self::Solver(SolverError::PairNotConverged {
                 iterations,
                 c,
                 first: name(first),
                 second: name(second),
-            },
-            Self::EveryCFailed { failures } => Self::EveryCFailed {
+            }),
+            Self::Solver(SolverError::EveryCFailed { failures }) => Self::Solver(SolverError::EveryCFailed {
                 failures: failures
                     .into_iter()
                     .map(|(c, e)| (c, e.with_class_names(classes)))
                     .collect(),
-            },
+            }),
             e => e,
         }
     }
@@ -679,18 +736,18 @@ impl RecognizeError {
 
     /// A Nakano configuration that cannot be used.
     pub(crate) fn nakano_config(reason: &'static str) -> Self {
-        Self::Config {
+        Self::Setting(SettingError::Config {
             of: "Nakano configuration",
             reason,
-        }
+        })
     }
 
     /// A category computation's parameter that cannot be used.
     pub(crate) fn category_config(reason: &'static str) -> Self {
-        Self::Config {
+        Self::Setting(SettingError::Config {
             of: "category parameter",
             reason,
-        }
+        })
     }
 
     /// Wraps the self-organizing map's error.
@@ -703,14 +760,16 @@ impl RecognizeError {
     pub(crate) fn from_json_file(e: CaptureError) -> Self {
         let path = e.file.clone().unwrap_or_default();
         match e.kind {
-            CaptureErrorKind::Io(source) => Self::Io { path, source },
-            CaptureErrorKind::Json(reason) => Self::Parse {
+            CaptureErrorKind::Io(source) => Self::Input(InputError::Io { path, source }),
+            CaptureErrorKind::Json(reason) => Self::Input(InputError::Parse {
                 path,
                 line: e.line.unwrap_or_default(),
                 reason,
-            },
-            CaptureErrorKind::Invalid { field, reason } => Self::Invalid { path, field, reason },
-            kind => Self::Capture(CaptureError { kind, ..e }),
+            }),
+            CaptureErrorKind::Invalid { field, reason } => {
+                Self::Input(InputError::Invalid { path, field, reason })
+            }
+            kind => Self::Input(InputError::Capture(Box::new(CaptureError { kind, ..e }))),
         }
     }
 }

@@ -10,6 +10,7 @@ use std::cmp::Ordering;
 use std::fmt::{Display, Write as _};
 
 use crate::RecognizeError;
+use crate::UsageError;
 
 /// Counts of (true class, predicted class) over a fixed, ordered set of classes.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -24,7 +25,9 @@ impl<L: PartialEq + std::fmt::Debug> ConfusionMatrix<L> {
     pub fn new(classes: Vec<L>) -> Result<Self, RecognizeError> {
         for (i, c) in classes.iter().enumerate() {
             if classes[..i].contains(c) {
-                return Err(RecognizeError::DuplicateClass(format!("{c:?}")));
+                return Err(RecognizeError::Usage(UsageError::DuplicateClass(format!(
+                    "{c:?}"
+                ))));
             }
         }
         let n = classes.len();
@@ -38,7 +41,7 @@ impl<L: PartialEq + std::fmt::Debug> ConfusionMatrix<L> {
         self.classes
             .iter()
             .position(|c| c == label)
-            .ok_or_else(|| RecognizeError::UnknownLabel(format!("{label:?}")))
+            .ok_or_else(|| RecognizeError::Usage(UsageError::UnknownLabel(format!("{label:?}"))))
     }
 
     /// Records one sample of class `truth` predicted as `predicted`.
@@ -51,7 +54,7 @@ impl<L: PartialEq + std::fmt::Debug> ConfusionMatrix<L> {
     /// Adds another matrix's counts (same classes, same order).
     pub fn merge(&mut self, other: &Self) -> Result<(), RecognizeError> {
         if self.classes != other.classes {
-            return Err(RecognizeError::MatrixClasses);
+            return Err(RecognizeError::Usage(UsageError::MatrixClasses));
         }
         for (row, other_row) in self.counts.iter_mut().zip(&other.counts) {
             for (c, o) in row.iter_mut().zip(other_row) {
@@ -342,11 +345,14 @@ mod tests {
     #[test]
     fn bad_labels_are_errors() {
         let mut m = ConfusionMatrix::new(vec![1, 2]).expect("distinct");
-        assert!(matches!(m.add(&1, &3), Err(RecognizeError::UnknownLabel(l)) if l == "3"));
+        assert!(matches!(m.add(&1, &3), Err(RecognizeError::Usage(UsageError::UnknownLabel(l))) if l == "3"));
         assert_eq!(m.accuracy(), None);
         assert_eq!(m.per_class_rates(), vec![None, None]);
         assert!(ConfusionMatrix::new(vec![1, 1]).is_err());
         let other = ConfusionMatrix::new(vec![2, 1]).expect("distinct");
-        assert!(matches!(m.merge(&other), Err(RecognizeError::MatrixClasses)));
+        assert!(matches!(
+            m.merge(&other),
+            Err(RecognizeError::Usage(UsageError::MatrixClasses))
+        ));
     }
 }

@@ -1,6 +1,7 @@
 //! Cross-validation by group: every sample of a recording or trial stays on one side of a
 //! split, so a model is never scored on the recording it learnt from.
 
+use crate::DataError;
 use crate::RecognizeError;
 
 /// Fold of each sample when whole groups (recordings, trials) are dealt out to `folds` folds:
@@ -12,10 +13,10 @@ pub fn group_folds(groups: &[u64], folds: usize) -> Result<(Vec<usize>, usize), 
     distinct.sort_unstable();
     distinct.dedup();
     if distinct.len() < 2 || folds < 2 {
-        return Err(RecognizeError::TooFewGroups {
+        return Err(RecognizeError::Data(DataError::TooFewGroups {
             groups: distinct.len(),
             folds,
-        });
+        }));
     }
     let folds = folds.min(distinct.len());
     let fold = groups
@@ -88,7 +89,10 @@ mod tests {
         assert_eq!(n, 4, "leave-one-group-out when groups < folds");
         assert!(matches!(
             group_folds(&[5, 5], 10),
-            Err(RecognizeError::TooFewGroups { groups: 1, folds: 10 })
+            Err(RecognizeError::Data(DataError::TooFewGroups {
+                groups: 1,
+                folds: 10
+            }))
         ));
     }
 }

@@ -9,6 +9,7 @@ use crate::RecognizeError;
 #[cfg(doc)]
 use crate::folds::group_folds;
 use crate::knn::{Knn, KnnParams, held_out_votes};
+use crate::{DataError, UsageError};
 
 /// The index of the largest probability; ties go to the lowest class index. `None` for an
 /// empty slice.
@@ -67,7 +68,7 @@ impl ReliabilityFusion {
         folds: usize,
     ) -> Result<Self, RecognizeError> {
         if behaviours.is_empty() {
-            return Err(RecognizeError::NothingToFuse);
+            return Err(RecognizeError::Usage(UsageError::NothingToFuse));
         }
         let mut models = Vec::with_capacity(behaviours.len());
         let mut weights = Vec::with_capacity(behaviours.len());
@@ -97,14 +98,14 @@ impl ReliabilityFusion {
 
     /// Fused class probabilities of one surface: `queries[b]` is the feature vector from
     /// behaviour `b`, or `None` where that behaviour was not performed. Fails with
-    /// [`RecognizeError::NothingToFuse`] when no behaviour was, and [`RecognizeError::ZeroTotalWeight`] when
+    /// [`UsageError::NothingToFuse`] when no behaviour was, and [`DataError::ZeroTotalWeight`] when
     /// only behaviours that never classified correctly were.
     pub fn predict_proba(&self, queries: &[Option<&[f64]>]) -> Result<Vec<f64>, RecognizeError> {
         if queries.len() != self.models.len() {
-            return Err(RecognizeError::QueryCount {
+            return Err(RecognizeError::Usage(UsageError::QueryCount {
                 queries: queries.len(),
                 behaviours: self.models.len(),
-            });
+            }));
         }
         let mut probabilities = Vec::new();
         let mut weights = Vec::new();
@@ -130,10 +131,10 @@ impl ReliabilityFusion {
     /// behaviour alone answers exactly as its own [`Knn::predict`].
     pub fn predict(&self, queries: &[Option<&[f64]>]) -> Result<usize, RecognizeError> {
         if queries.len() != self.models.len() {
-            return Err(RecognizeError::QueryCount {
+            return Err(RecognizeError::Usage(UsageError::QueryCount {
                 queries: queries.len(),
                 behaviours: self.models.len(),
-            });
+            }));
         }
         let (mut labels, mut probabilities, mut weights) = (Vec::new(), Vec::new(), Vec::new());
         for (behaviour, (q, (model, &w))) in queries
@@ -170,10 +171,10 @@ pub fn fused_label<P: AsRef<[f64]>>(
     weights: &[f64],
 ) -> Result<usize, RecognizeError> {
     if labels.len() != probabilities.len() {
-        return Err(RecognizeError::LabelCount {
+        return Err(RecognizeError::Usage(UsageError::LabelCount {
             probabilities: probabilities.len(),
             labels: labels.len(),
-        });
+        }));
     }
     let fused = fuse(probabilities, weights)?;
     if let [only] = labels {
@@ -189,7 +190,7 @@ pub fn fused_label<P: AsRef<[f64]>>(
         .map(|i| labels[i])
         .find(|&l| tied(l))
         .or_else(|| argmax(&fused))
-        .ok_or(RecognizeError::NothingToFuse)
+        .ok_or(RecognizeError::Usage(UsageError::NothingToFuse))
 }
 
 /// Reliability-weighted fusion: `Σ_b w_b·p_b / Σ_b w_b`, a probability vector again when the
@@ -198,13 +199,13 @@ pub fn fused_label<P: AsRef<[f64]>>(
 /// different numbers of behaviours without changing its argmax.
 pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec<f64>, RecognizeError> {
     if probabilities.is_empty() {
-        return Err(RecognizeError::NothingToFuse);
+        return Err(RecognizeError::Usage(UsageError::NothingToFuse));
     }
     if probabilities.len() != weights.len() {
-        return Err(RecognizeError::WeightCount {
+        return Err(RecognizeError::Usage(UsageError::WeightCount {
             probabilities: probabilities.len(),
             weights: weights.len(),
-        });
+        }));
     }
     let classes = probabilities[0].as_ref().len();
     let mut out = vec![0.0; classes];
@@ -212,14 +213,14 @@ pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec
     for (index, (p, &w)) in probabilities.iter().zip(weights).enumerate() {
         let p = p.as_ref();
         if p.len() != classes {
-            return Err(RecognizeError::FusionClasses {
+            return Err(RecognizeError::Usage(UsageError::FusionClasses {
                 index,
                 expected: classes,
                 got: p.len(),
-            });
+            }));
         }
         if !(w.is_finite() && w >= 0.0) {
-            return Err(RecognizeError::BadWeight { index, weight: w });
+            return Err(RecognizeError::Usage(UsageError::BadWeight { index, weight: w }));
         }
         total += w;
         for (o, v) in out.iter_mut().zip(p) {
@@ -227,7 +228,7 @@ pub fn fuse<P: AsRef<[f64]>>(probabilities: &[P], weights: &[f64]) -> Result<Vec
         }
     }
     if total <= 0.0 {
-        return Err(RecognizeError::ZeroTotalWeight);
+        return Err(RecognizeError::Data(DataError::ZeroTotalWeight));
     }
     out.iter_mut().for_each(|v| *v /= total);
     Ok(out)
@@ -312,10 +313,10 @@ mod tests {
         assert_eq!(fused_label(&[2, 2], &tie, &[0.8, 0.4]).expect("valid"), 0);
         assert!(matches!(
             fused_label(&[0], &tie, &[1.0, 1.0]),
-            Err(RecognizeError::LabelCount {
+            Err(RecognizeError::Usage(UsageError::LabelCount {
                 probabilities: 2,
                 labels: 1
-            })
+            }))
         ));
     }
 
@@ -347,23 +348,23 @@ mod tests {
         assert_eq!(fusion.predict(&[None, Some(&[0.12])]).expect("valid"), 0);
         assert!(matches!(
             fusion.predict(&[None, None]),
-            Err(RecognizeError::NothingToFuse)
+            Err(RecognizeError::Usage(UsageError::NothingToFuse))
         ));
         assert!(matches!(
             fusion.predict(&[None]),
-            Err(RecognizeError::QueryCount {
+            Err(RecognizeError::Usage(UsageError::QueryCount {
                 queries: 1,
                 behaviours: 2
-            })
+            }))
         ));
         assert!(
             matches!(fusion.predict(&[Some(&[1.0, 2.0]), None]), Err(RecognizeError::FusedBehaviour {
             behaviour: 0,
-            source }) if matches!(*source, RecognizeError::Dimension {
+            source }) if matches!(*source, RecognizeError::Usage(UsageError::Dimension {
                 index: 0,
                 expected: 1,
                 got: 2
-            }))
+            })))
         );
         let one_group = [0, 0, 0, 0, 0, 0];
         let bad = BehaviourData {
@@ -374,7 +375,7 @@ mod tests {
         assert!(
             matches!(ReliabilityFusion::fit(params, &[data(good), bad], 2, 3), Err(RecognizeError::FusedBehaviour {
                 behaviour: 1,
-                source }) if matches!(*source, RecognizeError::TooFewGroups { groups: 1, folds: 3 }))
+                source }) if matches!(*source, RecognizeError::Data(DataError::TooFewGroups { groups: 1, folds: 3 })))
         );
     }
 
@@ -383,33 +384,33 @@ mod tests {
         let a = [0.5, 0.5];
         assert!(matches!(
             fuse::<[f64; 2]>(&[], &[]),
-            Err(RecognizeError::NothingToFuse)
+            Err(RecognizeError::Usage(UsageError::NothingToFuse))
         ));
         assert!(matches!(
             fuse(&[a], &[1.0, 1.0]),
-            Err(RecognizeError::WeightCount {
+            Err(RecognizeError::Usage(UsageError::WeightCount {
                 probabilities: 1,
                 weights: 2
-            })
+            }))
         ));
         assert!(matches!(
             fuse(&[&a[..], &[1.0][..]], &[1.0, 1.0]),
-            Err(RecognizeError::FusionClasses {
+            Err(RecognizeError::Usage(UsageError::FusionClasses {
                 index: 1,
                 expected: 2,
                 got: 1
-            })
+            }))
         ));
         assert!(matches!(
             fuse(&[a], &[-0.1]),
-            Err(RecognizeError::BadWeight {
+            Err(RecognizeError::Usage(UsageError::BadWeight {
                 index: 0,
                 weight: -0.1
-            })
+            }))
         ));
         assert!(matches!(
             fuse(&[a, a], &[0.0, 0.0]),
-            Err(RecognizeError::ZeroTotalWeight)
+            Err(RecognizeError::Data(DataError::ZeroTotalWeight))
         ));
         assert_eq!(argmax(&[]), None);
         assert_eq!(argmax(&[0.2, 0.4, 0.4]), Some(1));

@@ -11,6 +11,7 @@ use std::sync::OnceLock;
 
 use crate::RecognizeError;
 use crate::folds::{group_folds, held_out};
+use crate::{DataError, SettingError, UsageError};
 
 use crate::vectors;
 
@@ -130,26 +131,26 @@ impl Knn {
         classes: usize,
     ) -> Result<Self, RecognizeError> {
         if params.k == 0 {
-            return Err(RecognizeError::ZeroK);
+            return Err(RecognizeError::Setting(SettingError::ZeroK));
         }
         if features.is_empty() {
-            return Err(RecognizeError::Empty);
+            return Err(RecognizeError::Data(DataError::Empty));
         }
         if features.len() != labels.len() {
-            return Err(RecognizeError::Counts {
+            return Err(RecognizeError::Usage(UsageError::Counts {
                 features: features.len(),
                 labels: labels.len(),
-            });
+            }));
         }
         if features.len() < params.k {
-            return Err(RecognizeError::TooFewPoints {
+            return Err(RecognizeError::Data(DataError::TooFewPoints {
                 k: params.k,
                 points: features.len(),
-            });
+            }));
         }
         let dim = features[0].as_ref().len();
         if dim == 0 {
-            return Err(RecognizeError::ZeroDimension);
+            return Err(RecognizeError::Usage(UsageError::ZeroDimension));
         }
         vectors::check_labelled(features, labels, dim, classes)?;
         let scale = params.scaling.fit(features, dim);
@@ -346,10 +347,10 @@ pub fn held_out_votes<V: AsRef<[f64]>>(
 ) -> Result<(Vec<Votes>, usize), RecognizeError> {
     for n in [labels.len(), groups.len()] {
         if n != features.len() {
-            return Err(RecognizeError::Counts {
+            return Err(RecognizeError::Usage(UsageError::Counts {
                 features: features.len(),
                 labels: n,
-            });
+            }));
         }
     }
     let (fold, folds) = group_folds(groups, folds)?;
@@ -369,6 +370,7 @@ pub fn held_out_votes<V: AsRef<[f64]>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::InputError;
     use proptest::strategy::Strategy;
 
     /// Points on a line: class 0 at 0, 1, 2; class 1 at 10, 11; class 2 at 20.
@@ -440,56 +442,59 @@ mod tests {
     fn bad_input_is_a_typed_error() {
         let (x, y) = line();
         let p = KnnParams::default();
-        assert!(matches!(p.k(0).fit(&x, &y, 3), Err(RecognizeError::ZeroK)));
+        assert!(matches!(
+            p.k(0).fit(&x, &y, 3),
+            Err(RecognizeError::Setting(SettingError::ZeroK))
+        ));
         assert!(matches!(
             p.fit::<[f64; 1]>(&[], &[], 3),
-            Err(RecognizeError::Empty)
+            Err(RecognizeError::Data(DataError::Empty))
         ));
         assert!(matches!(
             p.fit(&x, &y[..5], 3),
-            Err(RecognizeError::Counts {
+            Err(RecognizeError::Usage(UsageError::Counts {
                 features: 6,
                 labels: 5
-            })
+            }))
         ));
         assert!(matches!(
             p.k(7).fit(&x, &y, 3),
-            Err(RecognizeError::TooFewPoints { k: 7, points: 6 })
+            Err(RecognizeError::Data(DataError::TooFewPoints { k: 7, points: 6 }))
         ));
         assert!(matches!(
             p.fit(&x, &y, 2),
-            Err(RecognizeError::LabelOutOfRange {
+            Err(RecognizeError::Usage(UsageError::LabelOutOfRange {
                 index: 5,
                 label: 2,
                 classes: 2
-            })
+            }))
         ));
         let ragged: Vec<Vec<f64>> = vec![vec![0.0], vec![1.0, 2.0], vec![3.0]];
         assert!(matches!(
             p.fit(&ragged, &[0, 0, 0], 1),
-            Err(RecognizeError::Dimension {
+            Err(RecognizeError::Usage(UsageError::Dimension {
                 index: 1,
                 expected: 1,
                 got: 2
-            })
+            }))
         ));
         assert!(matches!(
             p.fit(&[[0.0], [f64::NAN], [1.0]], &[0, 0, 0], 1),
-            Err(RecognizeError::NonFinite { index: 1 })
+            Err(RecognizeError::Input(InputError::NonFinite { index: 1 }))
         ));
         let empty: [[f64; 0]; 3] = [[], [], []];
         assert!(matches!(
             p.fit(&empty, &[0, 0, 0], 1),
-            Err(RecognizeError::ZeroDimension)
+            Err(RecognizeError::Usage(UsageError::ZeroDimension))
         ));
         let knn = p.fit(&x, &y, 3).expect("valid");
         assert!(matches!(
             knn.predict(&[1.0, 2.0]),
-            Err(RecognizeError::Dimension { .. })
+            Err(RecognizeError::Usage(UsageError::Dimension { .. }))
         ));
         assert!(matches!(
             knn.predict_proba(&[f64::INFINITY]),
-            Err(RecognizeError::NonFinite { index: 0 })
+            Err(RecognizeError::Input(InputError::NonFinite { index: 0 }))
         ));
     }
 

@@ -31,7 +31,7 @@ pub use category::{
     CategoryTree, StopRule, classical_mds, distances_from_similarity, isomap, recursive_ncut,
     similarity_from_confusion,
 };
-pub use error::RecognizeError;
+pub use error::{DataError, InputError, RecognizeError, SettingError, SolverError, UsageError};
 pub use eval::{ConfusionMatrix, DecisionTiming, NamedDecision, natural_cmp, stable_right_from};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
 pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};

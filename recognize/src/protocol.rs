@@ -21,6 +21,7 @@ use std::collections::BTreeSet;
 use super::eval::ConfusionMatrix;
 use crate::RecognizeError;
 use crate::recognizer::{Evaluation, LabelledCapture, RecognizerFile, recording_groups};
+use crate::{DataError, InputError, SettingError};
 
 /// Folds of Sinapov's cross-validation.
 pub const SINAPOV_FOLDS: usize = 10;
@@ -71,7 +72,7 @@ pub fn fold_of_each(captures: &[LabelledCapture], folds: usize) -> Result<Vec<us
     let groups = recording_groups(captures);
     let recordings = recordings(captures);
     if folds < 2 || recordings < folds {
-        return Err(RecognizeError::Folds { recordings, folds });
+        return Err(RecognizeError::Data(DataError::Folds { recordings, folds }));
     }
     // Groups are numbered densely from 0 in the recordings' order.
     Ok(groups.iter().map(|&g| g as usize % folds).collect())
@@ -181,14 +182,14 @@ where
     F: FnMut(&[LabelledCapture], u64) -> Result<RecognizerFile, Box<RecognizeError>>,
 {
     if seeds == 0 {
-        return Err(RecognizeError::NoSeeds);
+        return Err(RecognizeError::Setting(SettingError::NoSeeds));
     }
     let folds = split.folds();
     let fold_of = fold_of_each(captures, folds)?;
     if let Some(fold) = only
         && !(1..=folds).contains(&fold)
     {
-        return Err(RecognizeError::NoSuchFold { fold, folds });
+        return Err(RecognizeError::Setting(SettingError::NoSuchFold { fold, folds }));
     }
     let mut evaluations = Vec::new();
     let mut per_behaviour: Vec<(Option<String>, ConfusionMatrix<String>)> = Vec::new();
@@ -223,11 +224,11 @@ where
             match &classes {
                 None => classes = Some(model.classes.clone()),
                 Some(expected) if *expected != model.classes => {
-                    return Err(RecognizeError::FoldClasses {
+                    return Err(RecognizeError::Data(DataError::FoldClasses {
                         fold: fold + 1,
                         got: model.classes.clone(),
                         expected: expected.clone(),
-                    });
+                    }));
                 }
                 Some(_) => {}
             }
@@ -246,7 +247,7 @@ where
                 seed: 0,
                 source: Box::new(e),
             })?
-            .ok_or(RecognizeError::NoSeeds)?,
+            .ok_or(RecognizeError::Setting(SettingError::NoSeeds))?,
         per_behaviour,
         combinations,
     })
@@ -271,9 +272,9 @@ where
         .into_iter()
         .collect();
     if surfaces.len() < 3 {
-        return Err(RecognizeError::Surfaces {
+        return Err(RecognizeError::Data(DataError::Surfaces {
             surfaces: surfaces.len(),
-        });
+        }));
     }
     let folds = surfaces.len();
     let mut confusion = ConfusionMatrix::new(surfaces.clone()).map_err(|e| RecognizeError::Fold {
@@ -295,10 +296,10 @@ where
         for c in captures.iter().filter(|c| c.label == *surface) {
             for d in model.decisions(c, None).map_err(|e| at(Box::new(e)))? {
                 let predicted = model.classes.get(d.label).ok_or_else(|| {
-                    at(Box::new(RecognizeError::UnusableCapture {
+                    at(Box::new(RecognizeError::Input(InputError::UnusableCapture {
                         path: c.reference.path.clone(),
                         reason: format!("decision names class {} of {}", d.label, model.classes.len()),
-                    }))
+                    })))
                 })?;
                 confusion.add(surface, predicted).map_err(|e| at(Box::new(e)))?;
             }
@@ -486,14 +487,14 @@ mod tests {
         assert_eq!(fold_of_each(&runs, 3).expect("3 recordings"), [0, 1, 1, 2]);
         assert!(matches!(
             fold_of_each(&runs, 4),
-            Err(RecognizeError::Folds {
+            Err(RecognizeError::Data(DataError::Folds {
                 recordings: 3,
                 folds: 4
-            })
+            }))
         ));
         assert!(matches!(
             fold_of_each(&runs, 1),
-            Err(RecognizeError::Folds { folds: 1, .. })
+            Err(RecognizeError::Data(DataError::Folds { folds: 1, .. }))
         ));
     }
 
@@ -503,13 +504,18 @@ mod tests {
         let mut trained = 0;
         let result = surface_confusion(&two, |_, _| {
             trained += 1;
-            Err(Box::new(RecognizeError::NoTrainingData))
+            Err(Box::new(RecognizeError::Data(DataError::NoTrainingData)))
         });
-        assert!(matches!(result, Err(RecognizeError::Surfaces { surfaces: 2 })));
+        assert!(matches!(
+            result,
+            Err(RecognizeError::Data(DataError::Surfaces { surfaces: 2 }))
+        ));
         assert_eq!(trained, 0);
         // With three, a training failure names its fold.
         let three = [capture("a", None), capture("b", None), capture("c", None)];
-        let result = surface_confusion(&three, |_, _| Err(Box::new(RecognizeError::NoTrainingData)));
+        let result = surface_confusion(&three, |_, _| {
+            Err(Box::new(RecognizeError::Data(DataError::NoTrainingData)))
+        });
         assert!(matches!(
             result,
             Err(RecognizeError::Fold {

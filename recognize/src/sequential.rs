@@ -33,6 +33,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::RecognizeError;
+use crate::{SettingError, UsageError};
 
 /// Settings of [`SequentialState`], checked by [`SequentialParamsBuilder::build`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -219,11 +220,13 @@ impl SequentialParamsBuilder {
     /// Checks every setting.
     pub fn build(self) -> Result<SequentialParams, RecognizeError> {
         let release = self.release.unwrap_or(0.5 * self.threshold);
-        let bad = |name: &'static str, value: f64, reason: &'static str| RecognizeError::Parameter {
-            of: "sequential decision parameter",
-            name,
-            value,
-            reason,
+        let bad = |name: &'static str, value: f64, reason: &'static str| {
+            RecognizeError::Setting(SettingError::Parameter {
+                of: "sequential decision parameter",
+                name,
+                value,
+                reason,
+            })
         };
         if !(self.threshold > 0.0 && self.threshold < 1.0) {
             return Err(bad("threshold", self.threshold, "must be in (0, 1)"));
@@ -312,20 +315,20 @@ impl SequentialState {
     /// An empty stroke over `classes` (at least 2) surfaces.
     pub fn new(params: SequentialParams, classes: usize) -> Result<Self, RecognizeError> {
         if classes < 2 {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "sequential decision",
                 name: "classes",
                 value: classes as f64,
                 reason: "needs at least two surfaces",
-            });
+            }));
         }
         if params.floor * classes as f64 >= 1.0 {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "sequential decision parameter",
                 name: "floor",
                 value: params.floor,
                 reason: "must be below 1 / classes, or every class is floored alike",
-            });
+            }));
         }
         // Settings read back from a file did not pass the builder's checks.
         let params = params.checked()?;
@@ -400,12 +403,12 @@ impl SequentialState {
     ) -> Result<SequentialStep, RecognizeError> {
         for (name, value) in [("evidence scale", scale), ("memory share", share)] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(RecognizeError::Parameter {
+                return Err(RecognizeError::Setting(SettingError::Parameter {
                     of: "window",
                     name,
                     value,
                     reason: "must be finite and not negative",
-                });
+                }));
             }
         }
         if scale == 0.0 {
@@ -420,18 +423,18 @@ impl SequentialState {
         let weight = (self.params.weight * scale).min(1.0);
         let k = self.sum.len();
         if probabilities.len() != k {
-            return Err(RecognizeError::Counts {
+            return Err(RecognizeError::Usage(UsageError::Counts {
                 features: probabilities.len(),
                 labels: k,
-            });
+            }));
         }
         if let Some(&p) = probabilities.iter().find(|p| !(p.is_finite() && **p >= 0.0)) {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "window probability",
                 name: "p",
                 value: p,
                 reason: "must be finite and non-negative",
-            });
+            }));
         }
         self.make_room(share);
         let total: f64 = probabilities.iter().sum();

@@ -42,6 +42,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::RecognizeError;
 use crate::svc::{FitEvent, Progress, no_progress};
+use crate::{DataError, InputError, SettingError, UsageError};
 
 /// How features are scaled before the map sees them (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -92,12 +93,12 @@ impl SomParams {
     /// Checks every parameter's range.
     pub fn check(&self) -> Result<(), RecognizeError> {
         let bad = |name, value, reason| {
-            Err(RecognizeError::Parameter {
+            Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "SOM parameter",
                 name,
                 value,
                 reason,
-            })
+            }))
         };
         if self.nodes == 0 {
             return bad("nodes", 0.0, "at least 1");
@@ -276,25 +277,25 @@ impl<L: Clone + Ord> Som<L> {
     ) -> Result<Self, RecognizeError> {
         params.check()?;
         if data.is_empty() {
-            return Err(RecognizeError::Empty);
+            return Err(RecognizeError::Data(DataError::Empty));
         }
         if data.len() != labels.len() {
-            return Err(RecognizeError::Counts {
+            return Err(RecognizeError::Usage(UsageError::Counts {
                 features: data.len(),
                 labels: labels.len(),
-            });
+            }));
         }
         let dim = data[0].len();
         for (index, v) in data.iter().enumerate() {
             if v.len() != dim {
-                return Err(RecognizeError::Dimension {
+                return Err(RecognizeError::Usage(UsageError::Dimension {
                     index,
                     got: v.len(),
                     expected: dim,
-                });
+                }));
             }
             if v.iter().any(|x| !x.is_finite()) {
-                return Err(RecognizeError::NonFinite { index });
+                return Err(RecognizeError::Input(InputError::NonFinite { index }));
             }
         }
         let scaling = Scaling::fit(params.normalization, data, labels);
@@ -386,14 +387,14 @@ impl<L: Clone + Ord> Som<L> {
     fn check_query(&self, features: &[f64]) -> Result<Vec<f64>, RecognizeError> {
         let expected = self.scaling.offset.len();
         if features.len() != expected {
-            return Err(RecognizeError::Dimension {
+            return Err(RecognizeError::Usage(UsageError::Dimension {
                 index: 0,
                 got: features.len(),
                 expected,
-            });
+            }));
         }
         if features.iter().any(|x| !x.is_finite()) {
-            return Err(RecognizeError::NonFinite { index: 0 });
+            return Err(RecognizeError::Input(InputError::NonFinite { index: 0 }));
         }
         Ok(self.scaling.apply(features))
     }
@@ -411,15 +412,15 @@ impl<L: Clone + Ord> Som<L> {
         let expected = self.scaling.dim();
         for found in [features.len(), scratch.len()] {
             if found != expected {
-                return Err(RecognizeError::Dimension {
+                return Err(RecognizeError::Usage(UsageError::Dimension {
                     index: 0,
                     got: found,
                     expected,
-                });
+                }));
             }
         }
         if features.iter().any(|x| !x.is_finite()) {
-            return Err(RecognizeError::NonFinite { index: 0 });
+            return Err(RecognizeError::Input(InputError::NonFinite { index: 0 }));
         }
         self.scaling.apply_into(features, scratch);
         let node = self.winner_scaled(scratch);
@@ -547,7 +548,7 @@ impl<L: Clone + Ord> Som<L> {
     /// reference vector.
     pub fn quantization_error(&self, data: &[Vec<f64>]) -> Result<f64, RecognizeError> {
         if data.is_empty() {
-            return Err(RecognizeError::Empty);
+            return Err(RecognizeError::Data(DataError::Empty));
         }
         let mut total = 0.0;
         for (index, v) in data.iter().enumerate() {
@@ -562,7 +563,7 @@ impl<L: Clone + Ord> Som<L> {
     /// neighbours on the line.
     pub fn topographic_error(&self, data: &[Vec<f64>]) -> Result<f64, RecognizeError> {
         if data.is_empty() {
-            return Err(RecognizeError::Empty);
+            return Err(RecognizeError::Data(DataError::Empty));
         }
         if self.reference.len() < 2 {
             return Ok(0.0);
@@ -585,8 +586,12 @@ impl<L: Clone + Ord> Som<L> {
 
 fn reindex(e: RecognizeError, index: usize) -> RecognizeError {
     match e {
-        RecognizeError::Dimension { got, expected, .. } => RecognizeError::Dimension { index, got, expected },
-        RecognizeError::NonFinite { .. } => RecognizeError::NonFinite { index },
+        RecognizeError::Usage(UsageError::Dimension { got, expected, .. }) => {
+            RecognizeError::Usage(UsageError::Dimension { index, got, expected })
+        }
+        RecognizeError::Input(InputError::NonFinite { .. }) => {
+            RecognizeError::Input(InputError::NonFinite { index })
+        }
         other => other,
     }
 }
@@ -725,52 +730,52 @@ mod tests {
                 nodes: 0,
                 ..SomParams::default()
             }),
-            Some(RecognizeError::Parameter {
+            Some(RecognizeError::Setting(SettingError::Parameter {
                 of: "SOM parameter",
                 ..
-            })
+            }))
         ));
         assert!(matches!(
             bad(SomParams {
                 sigma: f64::NAN,
                 ..SomParams::default()
             }),
-            Some(RecognizeError::Parameter {
+            Some(RecognizeError::Setting(SettingError::Parameter {
                 of: "SOM parameter",
                 ..
-            })
+            }))
         ));
         assert!(matches!(
             Som::<u8>::train(SomParams::default(), &[], &[]).err(),
-            Some(RecognizeError::Empty)
+            Some(RecognizeError::Data(DataError::Empty))
         ));
         assert!(matches!(
             Som::train(SomParams::default(), &ok, &[0, 1]).err(),
-            Some(RecognizeError::Counts {
+            Some(RecognizeError::Usage(UsageError::Counts {
                 features: 1,
                 labels: 2
-            })
+            }))
         ));
         assert!(matches!(
             Som::train(SomParams::default(), &[vec![1.0], vec![1.0, 2.0]], &[0, 1]).err(),
-            Some(RecognizeError::Dimension { index: 1, .. })
+            Some(RecognizeError::Usage(UsageError::Dimension { index: 1, .. }))
         ));
         assert!(matches!(
             Som::train(SomParams::default(), &[vec![f64::INFINITY]], &[0]).err(),
-            Some(RecognizeError::NonFinite { index: 0 })
+            Some(RecognizeError::Input(InputError::NonFinite { index: 0 }))
         ));
         let som = Som::train(SomParams::default(), &ok, &[0]).expect("valid");
         assert!(matches!(
             som.classify(&[1.0]),
-            Err(RecognizeError::Dimension {
+            Err(RecognizeError::Usage(UsageError::Dimension {
                 got: 1,
                 expected: 2,
                 ..
-            })
+            }))
         ));
         assert!(matches!(
             som.quantization_error(&[vec![1.0, 2.0], vec![f64::NAN, 0.0]]),
-            Err(RecognizeError::NonFinite { index: 1 })
+            Err(RecognizeError::Input(InputError::NonFinite { index: 1 }))
         ));
     }
 }

@@ -3,6 +3,7 @@
 //! features the same way, so that a recognizer's k-NN and SVM see identical inputs.
 
 use crate::RecognizeError;
+use crate::{InputError, UsageError};
 
 /// How features are scaled before distances are taken.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -23,7 +24,7 @@ pub(crate) fn check_buffer(what: &'static str, got: usize, expected: usize) -> R
     if got == expected {
         Ok(())
     } else {
-        Err(RecognizeError::Buffer { what, got, expected })
+        Err(RecognizeError::Usage(UsageError::Buffer { what, got, expected }))
     }
 }
 
@@ -38,11 +39,11 @@ pub(crate) fn check_labelled<V: AsRef<[f64]>>(
     for (index, (f, &label)) in features.iter().zip(labels).enumerate() {
         check_vector(index, f.as_ref(), dim)?;
         if label >= classes {
-            return Err(RecognizeError::LabelOutOfRange {
+            return Err(RecognizeError::Usage(UsageError::LabelOutOfRange {
                 index,
                 label,
                 classes,
-            });
+            }));
         }
     }
     Ok(())
@@ -55,14 +56,14 @@ pub(crate) fn check_query(query: &[f64], dim: usize) -> Result<(), RecognizeErro
 
 fn check_vector(index: usize, f: &[f64], dim: usize) -> Result<(), RecognizeError> {
     if f.len() != dim {
-        return Err(RecognizeError::Dimension {
+        return Err(RecognizeError::Usage(UsageError::Dimension {
             index,
             expected: dim,
             got: f.len(),
-        });
+        }));
     }
     if f.iter().any(|v| !v.is_finite()) {
-        return Err(RecognizeError::NonFinite { index });
+        return Err(RecognizeError::Input(InputError::NonFinite { index }));
     }
     Ok(())
 }

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use recognize::SettingError;
 use recognize::{
     CategoryTree, FeatureNeeds, LabelledCapture, RecognizeError, RecognizerFile, StopRule, classical_mds,
     distances_from_similarity, isomap, recursive_ncut, similarity_from_confusion, surface_confusion,
@@ -122,7 +123,9 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
         0 => ("mds".to_owned(), classical_mds::<2>(&distances)?),
         k => match isomap::<2>(&distances, k) {
             Ok(p) => (format!("isomap k={k}"), p),
-            Err(RecognizeError::Disconnected { .. }) => ("mds".to_owned(), classical_mds::<2>(&distances)?),
+            Err(RecognizeError::Setting(SettingError::Disconnected { .. })) => {
+                ("mds".to_owned(), classical_mds::<2>(&distances)?)
+            }
             Err(other) => return Err(other.into()),
         },
     };

@@ -37,6 +37,7 @@ mod windowing;
 
 use serde::{Deserialize, Serialize};
 
+use crate::InputError;
 use crate::{LabelledCapture, RecognizeError};
 use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLUMN};
 use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION_COLUMN};
@@ -164,11 +165,11 @@ impl FeatureSet {
         for c in captures {
             let missing = self.missing_columns(c);
             if !missing.is_empty() {
-                return Err(RecognizeError::MissingColumns {
+                return Err(RecognizeError::Input(InputError::MissingColumns {
                     path: c.reference.path.clone(),
                     features: self.name(),
                     missing,
-                });
+                }));
             }
         }
         Ok(())

@@ -60,6 +60,7 @@ use capture::Capture;
 use capture::pseudo_differentiate;
 
 use crate::RecognizeError;
+use crate::{InputError, SettingError, UsageError};
 
 /// Number of features in a Nakano feature vector (thesis Eq. 2.23: r = 5).
 pub const FEATURES: usize = 5;
@@ -102,11 +103,11 @@ pub fn observer_cutoff_radps(capture: &Capture) -> Result<Option<f64>, Recognize
     };
     match value.trim().parse::<f64>() {
         Ok(g) if g.is_finite() && g > 0.0 => Ok(Some(g)),
-        _ => Err(RecognizeError::Metadata {
+        _ => Err(RecognizeError::Input(InputError::Metadata {
             key: OBSERVER_CUTOFF_KEY,
             value: value.to_owned(),
             reason: "a positive, finite cut-off in rad/s",
-        }),
+        })),
     }
 }
 
@@ -153,7 +154,7 @@ impl Rfob {
         }
         let command = capture
             .column(COMMAND_FORCE_COLUMN)
-            .map_err(RecognizeError::NakanoColumn)?;
+            .map_err(|e| RecognizeError::Input(InputError::NakanoColumn(Box::new(e))))?;
         let time = capture.time();
         let velocity: Cow<'_, [f64]> = match capture.column(VELOCITY_COLUMN) {
             Ok(v) => Cow::Borrowed(v),
@@ -162,10 +163,10 @@ impl Rfob {
                     time,
                     capture
                         .column(POSITION_COLUMN)
-                        .map_err(RecognizeError::NakanoColumn)?,
+                        .map_err(|e| RecognizeError::Input(InputError::NakanoColumn(Box::new(e))))?,
                     self.velocity_tau_s,
                 )
-                .map_err(RecognizeError::Velocity)?,
+                .map_err(|e| RecognizeError::Input(InputError::Velocity(Box::new(e))))?,
             ),
         };
         let mg = self.nominal_mass_kg * self.cutoff_radps;
@@ -396,10 +397,10 @@ impl<'a> NakanoSignals<'a> {
         Ok(Self {
             position_m: capture
                 .column(POSITION_COLUMN)
-                .map_err(RecognizeError::NakanoColumn)?,
+                .map_err(|e| RecognizeError::Input(InputError::NakanoColumn(Box::new(e))))?,
             height_m: capture
                 .column(HEIGHT_COLUMN)
-                .map_err(RecognizeError::NakanoColumn)?,
+                .map_err(|e| RecognizeError::Input(InputError::NakanoColumn(Box::new(e))))?,
             friction_n,
         })
     }
@@ -411,11 +412,11 @@ impl<'a> NakanoSignals<'a> {
         friction_n: &'a [f64],
     ) -> Result<Self, RecognizeError> {
         if position_m.len() != height_m.len() || position_m.len() != friction_n.len() {
-            return Err(RecognizeError::SignalLengths {
+            return Err(RecognizeError::Usage(UsageError::SignalLengths {
                 position: position_m.len(),
                 height: height_m.len(),
                 friction: friction_n.len(),
-            });
+            }));
         }
         Ok(Self {
             position_m,
@@ -513,15 +514,15 @@ fn window_features(
     buffers: &mut FeatureBuffers,
 ) -> Result<[f64; FEATURES], RecognizeError> {
     if len < 2 {
-        return Err(RecognizeError::WindowTooShort { len });
+        return Err(RecognizeError::Setting(SettingError::WindowTooShort { len }));
     }
     let margin = config.lookahead_samples();
-    let out_of_range = RecognizeError::WindowOutOfRange {
+    let out_of_range = RecognizeError::Usage(UsageError::WindowOutOfRange {
         start,
         len,
         margin,
         samples: position_m.len(),
-    };
+    });
     let (Some(first), Some(end)) = (start.checked_sub(margin), start.checked_add(len)) else {
         return Err(out_of_range);
     };

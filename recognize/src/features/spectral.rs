@@ -38,6 +38,7 @@
 use std::sync::Arc;
 
 use crate::RecognizeError;
+use crate::{InputError, SettingError};
 use fft::RealToComplex;
 
 use capture::Capture;
@@ -95,11 +96,11 @@ pub enum CellScale {
 /// Euclidean norm per sample.
 pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, RecognizeError> {
     if x.len() != y.len() || x.len() != z.len() {
-        return Err(RecognizeError::AxisLengths {
+        return Err(RecognizeError::Input(InputError::AxisLengths {
             x: x.len(),
             y: y.len(),
             z: z.len(),
-        });
+        }));
     }
     x.iter()
         .zip(y)
@@ -110,7 +111,7 @@ pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, RecognizeE
             if m.is_finite() {
                 Ok(m)
             } else {
-                Err(RecognizeError::NonFiniteSample { index })
+                Err(RecognizeError::Input(InputError::NonFiniteSample { index }))
             }
         })
         .collect()
@@ -201,13 +202,13 @@ impl SpectrogramPlan {
     /// the ends) weighs the same and no part of the scratch is missed between frames.
     pub fn at_rate(rate_hz: f64) -> Result<Self, RecognizeError> {
         if !(rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)) {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "setting",
                 name: "rate_hz",
                 value: rate_hz,
                 reason: "75 Hz to 10^6 Hz for the spectrotemporal histogram (at least one DFT bin \
                          per frequency bin)",
-            });
+            }));
         }
         let frame_len = ((FRAME_S * rate_hz).round() as usize).max(2);
         let band_bins = band_bins(rate_hz, frame_len);
@@ -272,7 +273,7 @@ impl SpectrogramPlan {
     pub fn spectrogram(&self, signal: &[f64]) -> Result<Spectrogram, RecognizeError> {
         self.check_length(signal.len())?;
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
-            return Err(RecognizeError::NonFiniteSample { index });
+            return Err(RecognizeError::Input(InputError::NonFiniteSample { index }));
         }
         let frames = (signal.len() - self.frame_len) / self.hop_len + 1;
         let bins = self.frame_len / 2 + 1;
@@ -318,7 +319,7 @@ impl SpectrogramPlan {
     ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
         // Checked before the moving average, which would smear one bad sample over many.
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
-            return Err(RecognizeError::NonFiniteSample { index });
+            return Err(RecognizeError::Input(InputError::NonFiniteSample { index }));
         }
         self.signal_features(signal, scale)
     }
@@ -333,7 +334,7 @@ impl SpectrogramPlan {
     fn check_length(&self, samples: usize) -> Result<(), RecognizeError> {
         let needed = self.min_samples();
         if samples < needed {
-            return Err(RecognizeError::TooShort { samples, needed });
+            return Err(RecognizeError::Input(InputError::TooShort { samples, needed }));
         }
         Ok(())
     }
@@ -349,11 +350,15 @@ impl SpectrogramPlan {
         if !has_axes && capture.has_column(VIBRATION_COLUMN) {
             let signal = capture
                 .column(VIBRATION_COLUMN)
-                .map_err(RecognizeError::NoAccelerometer)?;
+                .map_err(|e| RecognizeError::Input(InputError::NoAccelerometer(Box::new(e))))?;
             return self.single_axis_features(signal, scale);
         }
         let [x, y, z] = ACCEL_COLUMNS;
-        let column = |name| capture.column(name).map_err(RecognizeError::NoAccelerometer);
+        let column = |name| {
+            capture
+                .column(name)
+                .map_err(|e| RecognizeError::Input(InputError::NoAccelerometer(Box::new(e))))
+        };
         self.features(column(x)?, column(y)?, column(z)?, scale)
     }
 
@@ -550,25 +555,25 @@ mod tests {
         let short = vec![0.0; 767];
         assert!(matches!(
             plan.features(&short, &short, &short, CellScale::Mean),
-            Err(RecognizeError::TooShort {
+            Err(RecognizeError::Input(InputError::TooShort {
                 samples: 767,
                 needed: 768
-            })
+            }))
         ));
         let ok = vec![0.0; 768];
         assert!(matches!(
             plan.features(&ok, &short, &ok, CellScale::Mean),
-            Err(RecognizeError::AxisLengths {
+            Err(RecognizeError::Input(InputError::AxisLengths {
                 x: 768,
                 y: 767,
                 z: 768
-            })
+            }))
         ));
         let mut nan = ok.clone();
         nan[5] = f64::NAN;
         assert!(matches!(
             plan.features(&ok, &nan, &ok, CellScale::Mean),
-            Err(RecognizeError::NonFiniteSample { index: 5 })
+            Err(RecognizeError::Input(InputError::NonFiniteSample { index: 5 }))
         ));
         // A still sensor gives an all-zero feature, not a division by zero.
         let still = plan
@@ -602,7 +607,10 @@ mod tests {
         let err = plan()
             .capture_features(&capture, CellScale::Mean)
             .expect_err("no y axis");
-        assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
+        assert!(
+            matches!(err, RecognizeError::Input(InputError::NoAccelerometer(_))),
+            "{err:?}"
+        );
     }
 
     /// A rubbing capture at 400 Hz carrying `accel` as `(column, samples)` pairs.
@@ -658,16 +666,16 @@ mod tests {
         // Length and finiteness are checked as on three axes.
         assert!(matches!(
             plan.single_axis_features(&z[..767], CellScale::Mean),
-            Err(RecognizeError::TooShort {
+            Err(RecognizeError::Input(InputError::TooShort {
                 samples: 767,
                 needed: 768
-            })
+            }))
         ));
         let mut nan = z;
         nan[7] = f64::INFINITY;
         assert!(matches!(
             plan.single_axis_features(&nan, CellScale::Mean),
-            Err(RecognizeError::NonFiniteSample { index: 7 })
+            Err(RecognizeError::Input(InputError::NonFiniteSample { index: 7 }))
         ));
     }
 
@@ -740,7 +748,10 @@ mod tests {
         let err = plan()
             .capture_features(&capture, CellScale::Mean)
             .expect_err("no accelerometer");
-        assert!(matches!(err, RecognizeError::NoAccelerometer(_)), "{err:?}");
+        assert!(
+            matches!(err, RecognizeError::Input(InputError::NoAccelerometer(_))),
+            "{err:?}"
+        );
     }
 
     /// The same vibration recorded at 400 Hz and at 2.2 kHz: the same histogram, because the
@@ -800,7 +811,10 @@ mod tests {
             assert!(
                 matches!(
                     SpectrogramPlan::at_rate(bad),
-                    Err(RecognizeError::Parameter { name: "rate_hz", .. })
+                    Err(RecognizeError::Setting(SettingError::Parameter {
+                        name: "rate_hz",
+                        ..
+                    }))
                 ),
                 "{bad}"
             );

@@ -25,6 +25,7 @@ use super::spectral::{
     BAND_HZ, CellScale, FREQUENCY_BINS, band_bins, band_bins_to, cell_means, frequency_bin,
 };
 use crate::RecognizeError;
+use crate::{InputError, SettingError, UsageError};
 
 /// Length of the feature vector: one value per band.
 pub const SPECTRUM_LEN: usize = FREQUENCY_BINS;
@@ -71,22 +72,22 @@ impl WindowSpectrumPlan {
     /// frequency, as the histogram's does.
     pub fn new(rate_hz: f64, max_samples: usize) -> Result<Self, RecognizeError> {
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "setting",
                 name: "rate_hz",
                 value: rate_hz,
                 reason: "must be positive and finite",
-            });
+            }));
         }
         let fft_len = max_samples.max(2);
         let band_bins = band_bins(rate_hz, fft_len);
         if band_bins < FREQUENCY_BINS {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "vibration spectrum",
                 name: "window_s",
                 value: max_samples as f64 / rate_hz,
                 reason: "too short to resolve 25 bands of 8 Hz: windows of at least 0.125 s",
-            });
+            }));
         }
         let fft = fft::forward_plan(fft_len);
         Ok(Self {
@@ -162,11 +163,13 @@ impl WindowSpectrumPlan {
         scale: CellScale,
         scratch: &mut SpectrumScratch,
     ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
-        let bad = |name, value| RecognizeError::Parameter {
-            of: "vibration spectrum",
-            name,
-            value,
-            reason: "finite and not negative (a reference speed: positive)",
+        let bad = |name, value| {
+            RecognizeError::Setting(SettingError::Parameter {
+                of: "vibration spectrum",
+                name,
+                value,
+                reason: "finite and not negative (a reference speed: positive)",
+            })
         };
         if !(speed_mps.is_finite() && speed_mps >= 0.0) {
             return Err(bad("speed_mps", speed_mps));
@@ -177,11 +180,11 @@ impl WindowSpectrumPlan {
         let band_hz = BAND_HZ * speed_mps / reference_speed_mps;
         let nyquist_hz = self.rate_hz / 2.0;
         if band_hz > nyquist_hz * (1.0 + 1e-9) {
-            return Err(RecognizeError::TooFastForBands {
+            return Err(RecognizeError::Setting(SettingError::TooFastForBands {
                 speed_mps,
                 max_speed_mps: reference_speed_mps * nyquist_hz / BAND_HZ,
                 rate_hz: self.rate_hz,
-            });
+            }));
         }
         self.spectrum(
             signal,
@@ -201,26 +204,26 @@ impl WindowSpectrumPlan {
     ) -> Result<[f64; SPECTRUM_LEN], RecognizeError> {
         let n = signal.len();
         if n < 2 {
-            return Err(RecognizeError::WindowTooShort { len: n });
+            return Err(RecognizeError::Setting(SettingError::WindowTooShort { len: n }));
         }
         if n > self.fft_len {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "vibration spectrum",
                 name: "window samples",
                 value: n as f64,
                 reason: "longer than the longest window the plan was made for",
-            });
+            }));
         }
         if let Some(index) = signal.iter().position(|v| !v.is_finite()) {
-            return Err(RecognizeError::NonFiniteSample { index });
+            return Err(RecognizeError::Input(InputError::NonFiniteSample { index }));
         }
         let SpectrumScratch { input, output, fft } = scratch;
         if input.len() != self.fft_len || output.len() != self.fft_len / 2 + 1 {
-            return Err(RecognizeError::Buffer {
+            return Err(RecognizeError::Usage(UsageError::Buffer {
                 what: "vibration spectrum scratch",
                 got: input.len(),
                 expected: self.fft_len,
-            });
+            }));
         }
         let mean = signal.iter().sum::<f64>() / n as f64;
         let mut window_sum = 0.0;
@@ -307,7 +310,10 @@ mod tests {
         }
         let other = WindowSpectrumPlan::new(RATE_HZ, 300).unwrap().scratch();
         let wrong = plan.features_with(&tone(200, 50.0, 0.2, 0.0), CellScale::Mean, &mut other.clone());
-        assert!(matches!(wrong, Err(RecognizeError::Buffer { .. })), "{wrong:?}");
+        assert!(
+            matches!(wrong, Err(RecognizeError::Usage(UsageError::Buffer { .. }))),
+            "{wrong:?}"
+        );
     }
 
     #[test]
@@ -389,11 +395,11 @@ mod tests {
                 .is_ok()
         );
         match plan.features_over_travel(&signal, 0.14, 0.025, CellScale::Mean) {
-            Err(RecognizeError::TooFastForBands {
+            Err(RecognizeError::Setting(SettingError::TooFastForBands {
                 speed_mps,
                 max_speed_mps,
                 rate_hz,
-            }) => {
+            })) => {
                 assert_eq!((speed_mps, rate_hz), (0.14, 2200.0));
                 assert!((max_speed_mps - 0.1375).abs() < 1e-12);
             }
@@ -435,14 +441,14 @@ mod tests {
         let plan = WindowSpectrumPlan::new(RATE_HZ, 250).unwrap();
         assert!(matches!(
             plan.features(&[1.0], CellScale::Mean),
-            Err(RecognizeError::WindowTooShort { len: 1 })
+            Err(RecognizeError::Setting(SettingError::WindowTooShort { len: 1 }))
         ));
         assert!(plan.features(&vec![0.0; 251], CellScale::Mean).is_err());
         let mut bad = tone(250, 30.0, 1.0, 0.0);
         bad[17] = f64::NAN;
         assert!(matches!(
             plan.features(&bad, CellScale::Mean),
-            Err(RecognizeError::NonFiniteSample { index: 17 })
+            Err(RecognizeError::Input(InputError::NonFiniteSample { index: 17 }))
         ));
     }
 }

@@ -10,6 +10,7 @@ use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSign
 use super::played_path::PlayedPath;
 use super::spectral::{self, ACCEL_COLUMNS, BAND_HZ, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
 use super::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
+use crate::{InputError, SettingError};
 use crate::{LabelledCapture, RecognizeError};
 use capture::Capture;
 
@@ -90,20 +91,22 @@ impl NakanoWindowing {
     /// 5 mm of travel on (thesis Sec. 4.3).
     pub fn new(window_s: f64, hop_s: f64, rate_hz: f64) -> Result<Self, RecognizeError> {
         if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "setting",
                 name: "rate_hz",
                 value: rate_hz,
                 reason: "positive and at most 10^6 Hz",
-            });
+            }));
         }
         let filters = NakanoConfig::at_rate(rate_hz)
             .and_then(|f| f.following_speed(PROTOCOL_SPEED_MPS, PROTOCOL_SPEED_MPS, rate_hz))
-            .map_err(|_| RecognizeError::Parameter {
-                of: "setting",
-                name: "rate_hz",
-                value: rate_hz,
-                reason: "a rate at which Nakano's filters span whole samples",
+            .map_err(|_| {
+                RecognizeError::Setting(SettingError::Parameter {
+                    of: "setting",
+                    name: "rate_hz",
+                    value: rate_hz,
+                    reason: "a rate at which Nakano's filters span whole samples",
+                })
             })?;
         let windowing = Self {
             filters,
@@ -141,11 +144,13 @@ impl NakanoWindowing {
     /// instead of the protocol's 5 mm/s: a slower stroke is filtered over the same travel too,
     /// at the cost of a longer lookahead (the filters' longest spans), so of decision latency.
     pub fn following_speeds_down_to(self, slowest_speed_mps: f64) -> Result<Self, RecognizeError> {
-        let invalid = |_| RecognizeError::Parameter {
-            of: "setting",
-            name: "slowest_speed_mps",
-            value: slowest_speed_mps,
-            reason: "positive, at most the protocol's 5 mm/s, and slow enough for filters of at most 10^6 samples",
+        let invalid = |_| {
+            RecognizeError::Setting(SettingError::Parameter {
+                of: "setting",
+                name: "slowest_speed_mps",
+                value: slowest_speed_mps,
+                reason: "positive, at most the protocol's 5 mm/s, and slow enough for filters of at most 10^6 samples",
+            })
         };
         let nominal = NakanoConfig {
             follow_speed: None,
@@ -216,12 +221,12 @@ impl NakanoWindowing {
     /// vibration bands over travel ([`NakanoWindowing::travel_reference_speed_mps`]).
     pub fn over_travel_at(self, reference_speed_mps: f64) -> Result<Self, RecognizeError> {
         if !(reference_speed_mps.is_finite() && reference_speed_mps > 0.0 && reference_speed_mps <= 10.0) {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "setting",
                 name: "travel_speed_mps",
                 value: reference_speed_mps,
                 reason: "positive and at most 10 m/s",
-            });
+            }));
         }
         let step_m = reference_speed_mps / self.rate_hz;
         let slowest_step_m = match &self.filters.follow_speed {
@@ -452,11 +457,13 @@ impl NakanoWindowing {
     /// (at 1 kHz) cannot be read. A window slid faster than `fastest_speed_mps` is a typed
     /// error. Needs windows over travel.
     pub fn reading_spectra_up_to(self, fastest_speed_mps: f64) -> Result<Self, RecognizeError> {
-        let invalid = |reason| RecognizeError::Parameter {
-            of: "setting",
-            name: "fastest_speed_mps",
-            value: fastest_speed_mps,
-            reason,
+        let invalid = |reason| {
+            RecognizeError::Setting(SettingError::Parameter {
+                of: "setting",
+                name: "fastest_speed_mps",
+                value: fastest_speed_mps,
+                reason,
+            })
         };
         let Some(travel) = self.travel else {
             return Err(invalid("needs windows over travel"));
@@ -530,23 +537,23 @@ impl NakanoWindowing {
 }
 
 fn setting_error((name, value, reason): (&'static str, f64, &'static str)) -> RecognizeError {
-    RecognizeError::Parameter {
+    RecognizeError::Setting(SettingError::Parameter {
         of: "setting",
         name,
         value,
         reason,
-    }
+    })
 }
 
 fn samples(name: &'static str, seconds: f64, rate_hz: f64) -> Result<usize, RecognizeError> {
     let n = (seconds * rate_hz).round();
     if !(seconds.is_finite() && seconds > 0.0 && (1.0..=1e7).contains(&n)) {
-        return Err(RecognizeError::Parameter {
+        return Err(RecognizeError::Setting(SettingError::Parameter {
             of: "setting",
             name,
             value: seconds,
             reason: "positive, at least one sample and at most 10^7 samples",
-        });
+        }));
     }
     Ok(n as usize)
 }
@@ -778,7 +785,7 @@ pub(crate) fn window_vectors(
     let nakano_column = |name| {
         c.capture
             .column(name)
-            .map_err(|e| spectral(RecognizeError::NakanoColumn(e)))
+            .map_err(|e| spectral(RecognizeError::Input(InputError::NakanoColumn(Box::new(e)))))
     };
     if features == FeatureSet::NakanoSpectrum {
         let height_spectrum = |source| features_error("height spectrum", source);
@@ -794,7 +801,7 @@ pub(crate) fn window_vectors(
     let column = |name| {
         c.capture
             .column(name)
-            .map_err(|e| spectral(RecognizeError::NoAccelerometer(e)))
+            .map_err(|e| spectral(RecognizeError::Input(InputError::NoAccelerometer(Box::new(e)))))
     };
     let has_axes = ACCEL_COLUMNS.iter().all(|name| c.capture.has_column(name));
     let axes = if !has_axes && c.capture.has_column(VIBRATION_COLUMN) {
@@ -1059,10 +1066,10 @@ mod tests {
             assert!(
                 matches!(
                     w.over_travel_at(bad),
-                    Err(RecognizeError::Parameter {
+                    Err(RecognizeError::Setting(SettingError::Parameter {
                         name: "travel_speed_mps",
                         ..
-                    })
+                    }))
                 ),
                 "{bad}"
             );
@@ -1110,10 +1117,10 @@ mod tests {
             assert!(
                 matches!(
                     windowing.reading_spectra_up_to(bad),
-                    Err(RecognizeError::Parameter {
+                    Err(RecognizeError::Setting(SettingError::Parameter {
                         name: "fastest_speed_mps",
                         ..
-                    })
+                    }))
                 ),
                 "{bad}"
             );

@@ -20,6 +20,7 @@ use super::Votes;
 #[cfg(doc)]
 use super::held_out_votes;
 use crate::RecognizeError;
+use crate::{SettingError, UsageError};
 
 /// How a k-NN over windows' votes become probabilities, and the cross-validation that chose it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -51,10 +52,10 @@ impl VoteCalibration {
         folds: usize,
     ) -> Result<Self, RecognizeError> {
         if votes.len() != labels.len() {
-            return Err(RecognizeError::Counts {
+            return Err(RecognizeError::Usage(UsageError::Counts {
                 features: votes.len(),
                 labels: labels.len(),
-            });
+            }));
         }
         let (mut correct, mut true_votes) = (0, Vec::with_capacity(votes.len()));
         for (&y, (label, p)) in labels.iter().zip(votes) {
@@ -86,12 +87,12 @@ impl VoteCalibration {
 /// vote fraction for its true class), with `classes` classes.
 pub fn fit_votes_weight(true_votes: &[f64], classes: usize) -> Result<f64, RecognizeError> {
     if classes < 2 || true_votes.is_empty() || true_votes.iter().any(|a| !(0.0..=1.0).contains(a)) {
-        return Err(RecognizeError::Parameter {
+        return Err(RecognizeError::Setting(SettingError::Parameter {
             of: "vote calibration",
             name: "held-out votes",
             value: true_votes.len() as f64,
             reason: "needs at least one held-out window, two classes and vote fractions in [0, 1]",
-        });
+        }));
     }
     let even = 1.0 / classes as f64;
     // f′(λ) = −mean (aᵢ − 1/K) / (λ·aᵢ + (1 − λ)/K); increasing, since f is convex.

@@ -4,6 +4,7 @@
 use super::LabelledCapture;
 use super::file::{BehaviourKnn, BehaviourSom, BehaviourSvc, RecognizerBody, RecognizerFile};
 use super::labelled::check_rate;
+use crate::InputError;
 use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
 use crate::features::spectral::CellScale;
@@ -230,10 +231,10 @@ impl RecognizerFile {
             RecognizerBody::Som { .. }
             | RecognizerBody::SomWindows { .. }
             | RecognizerBody::KnnWindows { .. }
-            | RecognizerBody::SvmWindows { .. } => Err(RecognizeError::UnusableCapture {
+            | RecognizerBody::SvmWindows { .. } => Err(RecognizeError::Input(InputError::UnusableCapture {
                 path: capture.reference.path.clone(),
                 reason: "a recognizer over rubbing windows does not classify whole scratches".into(),
-            }),
+            })),
             RecognizerBody::SomScratches {
                 cell_scale,
                 behaviours,
@@ -419,16 +420,18 @@ fn behaviour_index(
     behaviours
         .iter()
         .position(|b| *b.behaviour() == capture.behaviour)
-        .ok_or_else(|| RecognizeError::UnusableCapture {
-            path: capture.reference.path.clone(),
-            reason: format!(
-                "behaviour {:?}: the recognizer was trained on {:?}",
-                capture.behaviour,
-                behaviours
-                    .iter()
-                    .map(BehaviourClassifier::behaviour)
-                    .collect::<Vec<_>>()
-            ),
+        .ok_or_else(|| {
+            RecognizeError::Input(InputError::UnusableCapture {
+                path: capture.reference.path.clone(),
+                reason: format!(
+                    "behaviour {:?}: the recognizer was trained on {:?}",
+                    capture.behaviour,
+                    behaviours
+                        .iter()
+                        .map(BehaviourClassifier::behaviour)
+                        .collect::<Vec<_>>()
+                ),
+            })
         })
 }
 

@@ -16,6 +16,7 @@ use crate::features::{WindowlessCapture, windows};
 #[cfg(doc)]
 use crate::fusion::fuse;
 use crate::fusion::fused_label;
+use crate::{DataError, InputError};
 
 /// One behaviour's scratches classified alone, in a [`FusedEvaluation`].
 #[derive(Debug, Clone)]
@@ -152,12 +153,16 @@ impl RecognizerFile {
             let p: Vec<&[f64]> = members.iter().map(|(_, _, p)| p.as_slice()).collect();
             let w: Vec<f64> = members.iter().map(|(b, _, _)| weights[*b]).collect();
             let label = match fused_label(&l, &p, &w) {
-                Err(RecognizeError::ZeroTotalWeight) => fused_label(&l, &p, &vec![1.0; p.len()]),
+                Err(RecognizeError::Data(DataError::ZeroTotalWeight)) => {
+                    fused_label(&l, &p, &vec![1.0; p.len()])
+                }
                 other => other,
             }
-            .map_err(|e| RecognizeError::UnusableCapture {
-                path: PathBuf::from(&self.classes[*truth]),
-                reason: format!("fusing a trial's behaviours: {e}"),
+            .map_err(|e| {
+                RecognizeError::Input(InputError::UnusableCapture {
+                    path: PathBuf::from(&self.classes[*truth]),
+                    reason: format!("fusing a trial's behaviours: {e}"),
+                })
             })?;
             confusion.add(&self.classes[*truth], &self.classes[label])?;
         }
@@ -185,7 +190,7 @@ impl RecognizerFile {
     /// A capture that gives no decision window does not fail the evaluation: it is listed in
     /// [`Evaluation::windowless`] (the CLI warns about each), since the other captures are
     /// still scored. When no capture gives a decision there is nothing to score, and the
-    /// evaluation is refused with [`RecognizeError::NoDecisions`] naming every capture and why,
+    /// evaluation is refused with [`DataError::NoDecisions`] naming every capture and why,
     /// rather than reporting an accuracy over zero decisions.
     pub fn evaluate<C: Borrow<LabelledCapture>>(
         &self,
@@ -231,7 +236,9 @@ impl RecognizerFile {
             }
         }
         if confusion.total() == 0 {
-            return Err(RecognizeError::NoDecisions { captures: windowless });
+            return Err(RecognizeError::Data(DataError::NoDecisions {
+                captures: windowless,
+            }));
         }
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         let (window_s, decision_latency_s) = match &windowing {

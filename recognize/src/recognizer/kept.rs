@@ -16,6 +16,7 @@ use super::labelled::{KeptFeatures, KeptWindows, LabelledCapture, check_rate};
 use crate::RecognizeError;
 use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, PlayedPath, Travel, capture_histogram, window_vectors};
+use crate::{InputError, SettingError, UsageError};
 use capture::Capture;
 
 /// The features a training or an evaluation reads from each capture: window vectors (of a
@@ -79,10 +80,10 @@ impl FeatureNeeds {
             (Some(windowing), Some((_, features, cell_scale))) => {
                 Ok(Self::new().with_windows(windowing, features, cell_scale))
             }
-            _ => Err(RecognizeError::NoWindowProbabilities {
+            _ => Err(RecognizeError::Setting(SettingError::NoWindowProbabilities {
                 method: model.method(),
                 features: model.feature_set().name(),
-            }),
+            })),
         }
     }
 
@@ -146,15 +147,15 @@ impl LabelledCapture {
     /// Computes the features `needs` lists and drops the samples: `capture` keeps its header
     /// and columns but only its first sample, and the recognizers read the kept features
     /// instead (bit-identical to computing them then). A recognizer that asks for features
-    /// not kept gets [`RecognizeError::FeaturesNotKept`]. Errors are those computing the
+    /// not kept gets [`UsageError::FeaturesNotKept`]. Errors are those computing the
     /// features raises (a capture at another rate than a windowing's, a missing column, too
     /// short a capture for a histogram).
     pub fn keep_features(self, needs: &FeatureNeeds) -> Result<Self, RecognizeError> {
         if !self.has_samples() {
-            return Err(RecognizeError::FeaturesNotKept {
+            return Err(RecognizeError::Usage(UsageError::FeaturesNotKept {
                 path: self.reference.path.clone(),
                 needed: "new features (its samples were already dropped)".to_owned(),
-            });
+            }));
         }
         // The columns first, so that a capture lacking one is refused as training refuses it.
         let feature_sets = needs.windows.iter().map(|(_, features, _)| *features);
@@ -205,7 +206,8 @@ impl LabelledCapture {
             windows,
             histograms,
         };
-        let first = first_sample(&self.capture).map_err(RecognizeError::Capture)?;
+        let first = first_sample(&self.capture)
+            .map_err(|e| RecognizeError::Input(InputError::Capture(Box::new(e))))?;
         Ok(Self {
             capture: first,
             kept: Some(Arc::new(kept)),
@@ -245,10 +247,10 @@ impl LabelledCapture {
 
     /// The error for features `needed` that a capture without samples did not keep.
     pub(crate) fn not_kept(&self, needed: String) -> RecognizeError {
-        RecognizeError::FeaturesNotKept {
+        RecognizeError::Usage(UsageError::FeaturesNotKept {
             path: self.reference.path.clone(),
             needed,
-        }
+        })
     }
 }
 

@@ -5,6 +5,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::InputError;
 use crate::RecognizeError;
 use crate::features::spectral::{CellScale, FEATURE_LEN};
 use crate::features::{FeatureSet, NakanoWindowing, Travel, WindowSpan};
@@ -57,9 +58,11 @@ impl LabelledCapture {
     /// Reads a `rubbing` capture and its label; a capture without a `surface` in its metadata
     /// is an error naming the file.
     pub fn read(path: &Path) -> Result<Self, RecognizeError> {
-        let bytes = std::fs::read(path).map_err(|source| RecognizeError::Io {
-            path: path.to_owned(),
-            source,
+        let bytes = std::fs::read(path).map_err(|source| {
+            RecognizeError::Input(InputError::Io {
+                path: path.to_owned(),
+                source,
+            })
         })?;
         let capture = Capture::read_from(bytes.as_slice(), path, Some(CaptureKind::Rubbing))?;
         Self::new(capture, path, sha256_hex(&bytes))
@@ -71,15 +74,19 @@ impl LabelledCapture {
         let label = meta
             .get(LABEL_KEY)
             .filter(|l| !l.is_empty())
-            .ok_or_else(|| RecognizeError::UnusableCapture {
-                path: path.to_owned(),
-                reason: format!("metadata has no `{LABEL_KEY}`: the class of a capture comes from it"),
+            .ok_or_else(|| {
+                RecognizeError::Input(InputError::UnusableCapture {
+                    path: path.to_owned(),
+                    reason: format!("metadata has no `{LABEL_KEY}`: the class of a capture comes from it"),
+                })
             })?
             .to_owned();
         let behaviour = meta.get(BEHAVIOUR_KEY).map(str::to_owned);
-        let unusable = |reason: String| RecognizeError::UnusableCapture {
-            path: path.to_owned(),
-            reason,
+        let unusable = |reason: String| {
+            RecognizeError::Input(InputError::UnusableCapture {
+                path: path.to_owned(),
+                reason,
+            })
         };
         let change = match (meta.get(SURFACE_AFTER_KEY), meta.get(SURFACE_CHANGE_S_KEY)) {
             (None, None) => None,
@@ -207,23 +214,22 @@ fn class_position(
     c: &LabelledCapture,
     what: &str,
 ) -> Result<usize, RecognizeError> {
-    classes
-        .iter()
-        .position(|l| l == name)
-        .ok_or_else(|| RecognizeError::UnusableCapture {
+    classes.iter().position(|l| l == name).ok_or_else(|| {
+        RecognizeError::Input(InputError::UnusableCapture {
             path: c.reference.path.clone(),
             reason: format!("{what} `{name}` is not one the recognizer was trained on"),
         })
+    })
 }
 
 /// A capture must be sampled at the rate the windows are counted at.
 pub(crate) fn check_rate(c: &LabelledCapture, rate_hz: f64) -> Result<(), RecognizeError> {
     let found = c.capture.metadata().rate_hz();
     if (found - rate_hz).abs() > 1e-9 * rate_hz {
-        return Err(RecognizeError::UnusableCapture {
+        return Err(RecognizeError::Input(InputError::UnusableCapture {
             path: c.reference.path.clone(),
             reason: format!("sampled at {found} Hz; the recognizer's windows are counted at {rate_hz} Hz"),
-        });
+        }));
     }
     Ok(())
 }

@@ -32,6 +32,7 @@ use crate::RecognizeError;
 use crate::eval::{DecisionTiming, NamedDecision, stable_right_from};
 use crate::features::{FeatureSet, NakanoWindowing, WindowlessCapture};
 use crate::sequential::{SequentialParams, SequentialParamsBuilder, SequentialState};
+use crate::{DataError, InputError, SettingError};
 
 /// Bins of the reliability diagram.
 pub const RELIABILITY_BINS: usize = 10;
@@ -283,10 +284,10 @@ impl RecognizerFile {
     /// window probabilities.
     pub(super) fn windowing_with_probabilities(&self) -> Result<NakanoWindowing, RecognizeError> {
         self.sequential_windowing()
-            .ok_or(RecognizeError::NoWindowProbabilities {
+            .ok_or(RecognizeError::Setting(SettingError::NoWindowProbabilities {
                 method: self.method(),
                 features: self.feature_set().name(),
-            })
+            }))
     }
 
     /// A k-NN's or SVM's accuracy per window under the cross-validation by run or trial
@@ -336,22 +337,25 @@ impl RecognizerFile {
         for (index, model) in std::iter::once(self).chain(others.iter().copied()).enumerate() {
             let windowing = model.windowing_with_probabilities()?;
             if model.classes != self.classes {
-                return Err(RecognizeError::FusionSurfaces {
+                return Err(RecognizeError::Input(InputError::FusionSurfaces {
                     index,
                     expected: self.classes.clone(),
                     got: model.classes.clone(),
-                });
+                }));
             }
             let accuracy = model
                 .cross_validated_window_accuracy()
-                .ok_or(RecognizeError::NoReliability {
+                .ok_or(RecognizeError::Input(InputError::NoReliability {
                     index,
                     method: model.method(),
                     features: model.feature_set().name(),
-                })?;
+                }))?;
             let reliability = (accuracy - 1.0 / k) / (1.0 - 1.0 / k);
             if reliability.is_nan() || reliability <= 0.0 {
-                return Err(RecognizeError::Unreliable { index, accuracy });
+                return Err(RecognizeError::Setting(SettingError::Unreliable {
+                    index,
+                    accuracy,
+                }));
             }
             members.push(FusionMember {
                 method: model.method(),
@@ -380,11 +384,11 @@ impl RecognizerFile {
         };
         for (j, &b) in sets.iter().enumerate() {
             if let Some(i) = sets[..j].iter().position(|&a| overlap(a, b)) {
-                return Err(RecognizeError::FusionOverlap {
+                return Err(RecognizeError::Setting(SettingError::FusionOverlap {
                     first: i,
                     second: j,
                     features: [sets[i].name(), b.name()],
-                });
+                }));
             }
         }
         // A fitted weight has measured how much a recognizer's windows say, its reliability
@@ -456,7 +460,7 @@ impl RecognizerFile {
                 .iter()
                 .map(|c| WindowlessCapture::of(c.borrow(), &windowing, "decision"))
                 .collect();
-            return Err(RecognizeError::NoDecisions { captures });
+            return Err(RecognizeError::Data(DataError::NoDecisions { captures }));
         }
         let base = match thresholds.first() {
             Some(&t) => params.threshold(t).build()?,

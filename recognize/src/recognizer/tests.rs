@@ -11,6 +11,7 @@ use crate::recognizer::sequential_eval::{Stroke, StrokeWindow};
 use crate::recognizer::train::training_windows;
 use crate::som::SomParams;
 use crate::svc::{CSearch, Svc, SvcParams};
+use crate::{DataError, InputError, SettingError, UsageError};
 use capture::kind::{FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S};
 use capture::{Capture, CaptureKind, Metadata};
 
@@ -123,7 +124,10 @@ fn a_som_recognizer_round_trips_and_recognizes_distinct_surfaces() {
     assert!(
         matches!(
             refused,
-            Err(RecognizeError::NoWindowProbabilities { method: "som", .. })
+            Err(RecognizeError::Setting(SettingError::NoWindowProbabilities {
+                method: "som",
+                ..
+            }))
         ),
         "{refused:?}"
     );
@@ -335,17 +339,20 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
             assert!(
                 matches!(
                     short,
-                    Err(RecognizeError::Dimension {
+                    Err(RecognizeError::Usage(UsageError::Dimension {
                         got: 4,
                         expected: 5,
                         ..
-                    })
+                    }))
                 ),
                 "{short:?}"
             );
             let mut wrong = vec![0.0; live.classes() + 1];
             let wrong = live.probabilities_into(&vectors[0].2, &mut wrong);
-            assert!(matches!(wrong, Err(RecognizeError::Buffer { .. })), "{wrong:?}");
+            assert!(
+                matches!(wrong, Err(RecognizeError::Usage(UsageError::Buffer { .. }))),
+                "{wrong:?}"
+            );
         }
         // Anytime decisions run from contact: windows before the 5 mm start travel count too.
         let params = back.sequential_params(3.0).expect("window probabilities");
@@ -386,7 +393,7 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
     let err = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Both, 3, CellScale::Mean)
         .expect_err("no accelerometer");
     assert!(
-        matches!(&err, RecognizeError::MissingColumns { missing, .. } if missing.len() == 3),
+        matches!(&err, RecognizeError::Input(InputError::MissingColumns { missing, .. }) if missing.len() == 3),
         "{err}"
     );
     assert!(
@@ -449,7 +456,10 @@ fn a_bad_file_names_the_field() {
         "{err}"
     );
     let err = RecognizerFile::from_json("{\"format\": 1", Path::new("r.json")).expect_err("parse");
-    assert!(matches!(err, RecognizeError::Parse { line: 1, .. }), "{err}");
+    assert!(
+        matches!(err, RecognizeError::Input(InputError::Parse { line: 1, .. })),
+        "{err}"
+    );
     // A capture of a surface the map does not know.
     let unknown = rubbing("glass", 1e-6, 1e-3, 0.1, 3.0);
     let err = model.evaluate(&[unknown], None).expect_err("unknown surface");
@@ -480,7 +490,10 @@ fn train_picks_the_trainer_of_the_method_and_features() {
     // The method's own features by default; columns are checked before any trainer runs.
     assert_eq!(TrainSettings::new(Method::Knn).features, FeatureSet::Spectral);
     let err = train(&captures, &TrainSettings::new(Method::Svm)).expect_err("no accelerometer");
-    assert!(matches!(err, RecognizeError::MissingColumns { .. }), "{err}");
+    assert!(
+        matches!(err, RecognizeError::Input(InputError::MissingColumns { .. })),
+        "{err}"
+    );
 }
 
 #[test]
@@ -565,7 +578,7 @@ fn training_refuses_a_class_whose_captures_give_no_window() {
             ..TrainSettings::new(method)
         };
         let err = train(&captures, &settings).expect_err("cork has no window");
-        let RecognizeError::ClassWithoutWindows { class, captures: why } = &err else {
+        let RecognizeError::Data(DataError::ClassWithoutWindows { class, captures: why }) = &err else {
             panic!("{method:?}: {err}");
         };
         assert_eq!(class, "cork");
@@ -610,7 +623,7 @@ fn training_says_when_a_class_lost_every_window_to_a_tool_too_slow() {
         ..TrainSettings::new(Method::Knn)
     };
     let err = train(&captures, &settings).expect_err("cork has no window kept");
-    let RecognizeError::ClassWithoutWindows { class, captures: why } = &err else {
+    let RecognizeError::Data(DataError::ClassWithoutWindows { class, captures: why }) = &err else {
         panic!("{err}");
     };
     assert_eq!(class, "cork");
@@ -642,7 +655,7 @@ fn evaluation_refuses_no_decisions_and_lists_captures_without_one() {
         from(rubbing("coarse", 30e-6, 1.5e-3, 0.20, 0.3), "coarse-short.csv"),
     ];
     let err = model.evaluate(&short, None).expect_err("no decisions");
-    let RecognizeError::NoDecisions { captures } = &err else {
+    let RecognizeError::Data(DataError::NoDecisions { captures }) = &err else {
         panic!("{err}");
     };
     let paths: Vec<&Path> = captures.iter().map(|w| w.path.as_path()).collect();
@@ -920,7 +933,7 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
                 .evaluate(&kept, Some(w.window_s() / 2.0))
                 .expect_err("not kept");
             assert!(
-                matches!(err, RecognizeError::FeaturesNotKept { .. }),
+                matches!(err, RecognizeError::Usage(UsageError::FeaturesNotKept { .. })),
                 "{what}: {err}"
             );
             assert!(err.to_string().contains("were not among them"), "{err}");
@@ -929,7 +942,10 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
     let needs = FeatureNeeds::new().with_histogram(CellScale::Mean);
     let kept = train_set[0].clone().keep_features(&needs).expect("keeps");
     let err = kept.keep_features(&needs).expect_err("no samples left");
-    assert!(matches!(err, RecognizeError::FeaturesNotKept { .. }), "{err}");
+    assert!(
+        matches!(err, RecognizeError::Usage(UsageError::FeaturesNotKept { .. })),
+        "{err}"
+    );
 }
 
 /// [`three_surfaces`] as trials `trials`, each with a vibration tone: `fine` and `coarse` share
@@ -1029,13 +1045,19 @@ fn nakano_spectrum_windows_read_the_heights_spectrum_after_nakanos_features() {
     );
     assert!(evaluation.rows[0].decided > 0, "{evaluation:?}");
     let err = train(&train_set, &settings(Method::Som, FeatureSet::NakanoSpectrum)).expect_err("a SOM");
-    assert!(matches!(err, RecognizeError::Config { .. }), "{err}");
+    assert!(
+        matches!(err, RecognizeError::Setting(SettingError::Config { .. })),
+        "{err}"
+    );
 
     let nakano = train(&train_set, &settings(Method::Svm, FeatureSet::Nakano)).expect("nakano");
     let vibration = train(&train_set, &settings(Method::Svm, FeatureSet::Vibration)).expect("vibration");
     for (a, b) in [(&nakano, &spectrum), (&spectrum, &nakano)] {
         let err = a.fusion_members(&[b]).expect_err("the height twice");
-        assert!(matches!(err, RecognizeError::FusionOverlap { .. }), "{err}");
+        assert!(
+            matches!(err, RecognizeError::Setting(SettingError::FusionOverlap { .. })),
+            "{err}"
+        );
     }
     assert_eq!(
         spectrum
@@ -1120,14 +1142,20 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
         .fusion_members(&[&other_surfaces])
         .expect_err("other surfaces");
     assert!(
-        matches!(err, RecognizeError::FusionSurfaces { index: 1, .. }),
+        matches!(
+            err,
+            RecognizeError::Input(InputError::FusionSurfaces { index: 1, .. })
+        ),
         "{err}"
     );
     let one_trial: Vec<LabelledCapture> = train_set[..3].to_vec();
     let uncrossed = train(&one_trial, &settings(FeatureSet::Vibration)).expect("one trial");
     let err = nakano.fusion_members(&[&uncrossed]).expect_err("no reliability");
     assert!(
-        matches!(err, RecognizeError::NoReliability { index: 1, .. }),
+        matches!(
+            err,
+            RecognizeError::Input(InputError::NoReliability { index: 1, .. })
+        ),
         "{err}"
     );
     assert!(err.to_string().contains("cross-validated accuracy"), "{err}");
@@ -1141,7 +1169,10 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
     .expect("SOM");
     let err = nakano.fusion_members(&[&som]).expect_err("a SOM");
     assert!(
-        matches!(err, RecognizeError::NoWindowProbabilities { .. }),
+        matches!(
+            err,
+            RecognizeError::Setting(SettingError::NoWindowProbabilities { .. })
+        ),
         "{err}"
     );
     // The same evidence twice would be counted twice.
@@ -1149,11 +1180,11 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
     assert!(
         matches!(
             err,
-            RecognizeError::FusionOverlap {
+            RecognizeError::Setting(SettingError::FusionOverlap {
                 first: 0,
                 second: 1,
                 ..
-            }
+            })
         ),
         "{err}"
     );
@@ -1167,7 +1198,10 @@ fn friction_and_vibration_fuse_over_time_weighted_by_reliability() {
     }
     let err = guess.fusion_members(&[&nakano]).expect_err("a guess");
     assert!(
-        matches!(err, RecognizeError::Unreliable { index: 0, .. }),
+        matches!(
+            err,
+            RecognizeError::Setting(SettingError::Unreliable { index: 0, .. })
+        ),
         "{err}"
     );
     assert!(err.to_string().contains("33.3 %"), "{err}");
@@ -1893,7 +1927,10 @@ fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
     assert_eq!(calibration(&wide), None::<VoteCalibration>);
     let err = nakano.fusion_members(&[&uncrossed]).expect_err("no reliability");
     assert!(
-        matches!(err, RecognizeError::NoReliability { index: 1, .. }),
+        matches!(
+            err,
+            RecognizeError::Input(InputError::NoReliability { index: 1, .. })
+        ),
         "{err}"
     );
 }

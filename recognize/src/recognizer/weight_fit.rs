@@ -24,6 +24,7 @@ use super::sequential_eval::{SequentialRow, Stroke};
 use super::train::every_class_in_two_groups;
 use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
+use crate::SettingError;
 use crate::folds::group_folds;
 #[cfg(doc)]
 use crate::sequential::DEFAULT_MEMORY_S;
@@ -47,12 +48,12 @@ impl RecognizerFile {
         progress: Progress<'_>,
     ) -> Result<Option<PosteriorWeight>, RecognizeError> {
         if !(memory_s.is_finite() && memory_s > 0.0) {
-            return Err(RecognizeError::Parameter {
+            return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "setting",
                 name: "the memory the posterior's weight is fitted at, s",
                 value: memory_s,
                 reason: "must be positive and finite",
-            });
+            }));
         }
         let (Some(params), Some(hop_weight)) = (self.sequential_params(memory_s), self.hop_weight()) else {
             return Ok(None);

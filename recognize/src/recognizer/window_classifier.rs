@@ -10,6 +10,7 @@ use crate::features::spectral::CellScale;
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
 use crate::knn::{Knn, KnnScratch, VoteCalibration};
 use crate::svc::{Svc, SvcScratch};
+use crate::{SettingError, UsageError};
 
 /// A classifier and the buffers it works on.
 #[derive(Debug)]
@@ -95,18 +96,18 @@ impl WindowClassifier {
                 (Scratched::Svc(svc, scratch), scaling, *features, dim, *cell_scale)
             }
             body => {
-                return Err(RecognizeError::NoWindowProbabilities {
+                return Err(RecognizeError::Setting(SettingError::NoWindowProbabilities {
                     method: body.method(),
                     features: body.feature_set().name(),
-                });
+                }));
             }
         };
-        let windowing = model
-            .sequential_windowing()
-            .ok_or(RecognizeError::NoWindowProbabilities {
+        let windowing = model.sequential_windowing().ok_or(RecognizeError::Setting(
+            SettingError::NoWindowProbabilities {
                 method: model.method(),
                 features: features.name(),
-            })?;
+            },
+        ))?;
         Ok(Self {
             classifier,
             scaling: scaling.clone(),
@@ -142,11 +143,11 @@ impl WindowClassifier {
     /// Every class's probability for one window's raw features, into `p`: no allocation.
     pub fn probabilities_into(&mut self, features: &[f64], p: &mut [f64]) -> Result<(), RecognizeError> {
         if features.len() != self.scaled.len() {
-            return Err(RecognizeError::Dimension {
+            return Err(RecognizeError::Usage(UsageError::Dimension {
                 index: 0,
                 got: features.len(),
                 expected: self.scaled.len(),
-            });
+            }));
         }
         self.scaling.apply_into(features, &mut self.scaled);
         match &mut self.classifier {

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::fusion::BehaviourData;
+use crate::{DataError, SettingError, SolverError, UsageError};
 
 /// The values of C that [`select_c`] tries by default: 1 to 10⁵ in decades.
 pub const C_GRID: [f64; 6] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
@@ -122,7 +123,7 @@ pub fn select_c<V: AsRef<[f64]>>(
 /// A candidate whose fit does not converge (or fails numerically) in some fold is left out of
 /// the search with a [`FitEvent::SkippedC`]: one C at which SMO cannot finish says nothing
 /// about the others. Only when every candidate fails is it an error
-/// ([`RecognizeError::EveryCFailed`], listing them); the result lists the candidates that
+/// ([`SolverError::EveryCFailed`], listing them); the result lists the candidates that
 /// could be cross-validated.
 ///
 /// Once a candidate's machines have no multiplier at the bound in any fold, the larger
@@ -145,12 +146,12 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
     order.sort_by(f64::total_cmp);
     order.dedup();
     if order.is_empty() {
-        return Err(RecognizeError::Parameter {
+        return Err(RecognizeError::Setting(SettingError::Parameter {
             of: "SVC parameter",
             name: "c",
             value: f64::NAN,
             reason: "an empty grid of C values",
-        });
+        }));
     }
     let machines: usize = (0..used)
         .map(|f| {
@@ -202,12 +203,12 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
                     correct += score.correct;
                     at_bound |= score.at_bound;
                 }
-                Err(RecognizeError::NotConverged {
+                Err(RecognizeError::Solver(SolverError::NotConverged {
                     iterations,
                     c: _,
                     first,
                     second,
-                }) => {
+                })) => {
                     failed = Some((iterations, first, second));
                     break;
                 }
@@ -226,11 +227,13 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
                 }
             }
             Some((iterations, first, second)) => {
-                let error = || RecognizeError::NotConverged {
-                    iterations,
-                    c,
-                    first,
-                    second,
+                let error = || {
+                    RecognizeError::Solver(SolverError::NotConverged {
+                        iterations,
+                        c,
+                        first,
+                        second,
+                    })
                 };
                 progress(FitEvent::SkippedC { c, error: error() });
                 failures.push((c, error()));
@@ -239,7 +242,7 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
     }
     // Ascending C, so a strict improvement is needed to move to a larger one.
     let Some(&first) = points.first() else {
-        return Err(RecognizeError::EveryCFailed { failures });
+        return Err(RecognizeError::Solver(SolverError::EveryCFailed { failures }));
     };
     let best = points.iter().fold(
         first,
@@ -261,19 +264,19 @@ pub(super) fn cv_folds(
     folds: usize,
 ) -> Result<(Vec<usize>, usize), RecognizeError> {
     if features == 0 || features != labels || groups.len() != features {
-        return Err(RecognizeError::Counts {
+        return Err(RecognizeError::Usage(UsageError::Counts {
             features,
             labels: if labels == features { groups.len() } else { labels },
-        });
+        }));
     }
     crate::folds::group_folds(groups, folds).map_err(|_| {
         let mut distinct = groups.to_vec();
         distinct.sort_unstable();
         distinct.dedup();
-        RecognizeError::TooFewGroups {
+        RecognizeError::Data(DataError::TooFewGroups {
             groups: distinct.len(),
             folds,
-        }
+        })
     })
 }
 
@@ -307,11 +310,11 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     present.sort_unstable();
     present.dedup();
     if let Some(&label) = present.iter().find(|&&l| l >= classes) {
-        return Err(RecognizeError::LabelOutOfRange {
+        return Err(RecognizeError::Usage(UsageError::LabelOutOfRange {
             index: labels.iter().position(|&l| l == label).unwrap_or(0),
             label,
             classes,
-        });
+        }));
     }
     let held_out = features
         .iter()
@@ -333,18 +336,20 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
     // The fit sees the fold's classes as 0..m; its errors name the caller's classes.
     let global = |i: usize| present.get(i).copied().unwrap_or(i);
     let svc = Svc::fit_pairs(params, &train_x, &compact, present.len(), tick).map_err(|e| match e {
-        RecognizeError::NotConverged {
+        RecognizeError::Solver(SolverError::NotConverged {
             iterations,
             c,
             first,
             second,
-        } => RecognizeError::NotConverged {
+        }) => RecognizeError::Solver(SolverError::NotConverged {
             iterations,
             c,
             first: global(first),
             second: global(second),
-        },
-        RecognizeError::EmptyClass { class } => RecognizeError::EmptyClass { class: global(class) },
+        }),
+        RecognizeError::Data(DataError::EmptyClass { class }) => {
+            RecognizeError::Data(DataError::EmptyClass { class: global(class) })
+        }
         e => e,
     })?;
     let mut correct = 0;

@@ -19,6 +19,7 @@
 //! is the minimiser itself, which is what the reference fixture computes by a direct solve.
 
 use crate::RecognizeError;
+use crate::{DataError, SettingError, SolverError, UsageError};
 use serde::{Deserialize, Serialize};
 
 use crate::vectors;
@@ -142,29 +143,31 @@ impl SvcParams {
             .max_iterations(self.max_iterations)
             .build()
             .map_err(|e| match e {
-                svm::SvmError::InvalidHyperparameter { name, value, reason } => RecognizeError::Parameter {
-                    of: "SVC parameter",
-                    name,
-                    value,
-                    reason,
-                },
-                _ => RecognizeError::Parameter {
+                svm::SvmError::InvalidHyperparameter { name, value, reason } => {
+                    RecognizeError::Setting(SettingError::Parameter {
+                        of: "SVC parameter",
+                        name,
+                        value,
+                        reason,
+                    })
+                }
+                _ => RecognizeError::Setting(SettingError::Parameter {
                     of: "SVC parameter",
                     name: "c",
                     value: self.c,
                     reason: "positive and finite",
-                },
+                }),
             })
     }
 
     fn check(&self) -> Result<(), RecognizeError> {
         let bad = |name, value, reason| {
-            Err(RecognizeError::Parameter {
+            Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "SVC parameter",
                 name,
                 value,
                 reason,
-            })
+            }))
         };
         if !(self.c.is_finite() && self.c > 0.0) {
             return bad("c", self.c, "positive and finite");
@@ -283,15 +286,15 @@ impl Svc {
     ) -> Result<Self, RecognizeError> {
         let settings = params.smo_settings()?;
         if features.is_empty() || features.len() != labels.len() {
-            return Err(RecognizeError::Counts {
+            return Err(RecognizeError::Usage(UsageError::Counts {
                 features: features.len(),
                 labels: labels.len(),
-            });
+            }));
         }
         let dim = features[0].as_ref().len();
         vectors::check_labelled(features, labels, dim, classes)?;
         if let Some(class) = (0..classes).find(|c| !labels.contains(c)) {
-            return Err(RecognizeError::EmptyClass { class });
+            return Err(RecognizeError::Data(DataError::EmptyClass { class }));
         }
         let scale = params.scaling.fit(features, dim);
         let points = vectors::scaled_rows(features, &scale);
@@ -563,7 +566,9 @@ impl Svc {
         } = scratch;
         r.fill(0.0);
         for (m, d) in self.machines.iter().zip(decision.iter()) {
-            let (a, b) = m.sigmoid.ok_or(RecognizeError::NoProbability)?;
+            let (a, b) = m
+                .sigmoid
+                .ok_or(RecognizeError::Setting(SettingError::NoProbability))?;
             let p = sigmoid_predict(*d, a, b).clamp(1e-7, 1.0 - 1e-7);
             r[m.classes.0 * k + m.classes.1] = p;
             r[m.classes.1 * k + m.classes.0] = 1.0 - p;
@@ -609,12 +614,12 @@ enum Solved {
 
 impl Pair {
     fn not_converged(&self, settings: &SmoSettings, c: f64) -> RecognizeError {
-        RecognizeError::NotConverged {
+        RecognizeError::Solver(SolverError::NotConverged {
             iterations: settings.iteration_budget(self.members.len()),
             c,
             first: self.classes.0,
             second: self.classes.1,
-        }
+        })
     }
 
     /// The pair's machine on all its members.

@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::fusion::BehaviourData;
+use crate::{DataError, InputError, SettingError, SolverError, UsageError};
 
 /// The triple the cross-validations take, named.
 fn data<'a, V>(x: &'a [V], y: &'a [usize], groups: &'a [u64]) -> BehaviourData<'a, V> {
@@ -256,7 +257,10 @@ fn inner_cross_validation_picks_the_c_of_a_brute_force_search() {
     // once with no training vector of its own and counts as wrong.
     assert!(matches!(
         select_c(params, &grid, &data(&x, &y, &[0; 72]), 3, 4),
-        Err(RecognizeError::TooFewGroups { groups: 1, folds: 4 })
+        Err(RecognizeError::Data(DataError::TooFewGroups {
+            groups: 1,
+            folds: 4
+        }))
     ));
     // Class 2 of group 0 relabelled as a class 3 found nowhere else.
     let lonely: Vec<usize> = (0..x.len())
@@ -358,7 +362,7 @@ fn a_candidate_that_does_not_converge_is_skipped_with_a_warning() {
 
     // Every candidate failing is an error that lists each.
     match select_c(params, &[1e2, 1e4], &data(&x, &y, &groups), 3, 4) {
-        Err(e @ RecognizeError::EveryCFailed { .. }) => {
+        Err(e @ RecognizeError::Solver(SolverError::EveryCFailed { .. })) => {
             let text = e.to_string();
             assert!(
                 text.starts_with("every candidate C failed: C = 1e2: SMO did not converge")
@@ -384,12 +388,12 @@ fn a_fold_without_a_class_names_the_callers_classes() {
     };
     assert!(matches!(
         c_search::fold_correct(params, &x, &y, &fold, 0, 3, &|| {}),
-        Err(RecognizeError::NotConverged {
+        Err(RecognizeError::Solver(SolverError::NotConverged {
             iterations: 5,
             first: 1,
             second: 2,
             ..
-        })
+        }))
     ));
 }
 
@@ -406,27 +410,27 @@ fn bad_input_is_an_error() {
             &[0, 1],
             2
         ),
-        Some(RecognizeError::Parameter {
+        Some(RecognizeError::Setting(SettingError::Parameter {
             of: "SVC parameter",
             name: "c",
             ..
-        })
+        }))
     ));
     assert!(matches!(
         fit(SvcParams::default(), &[0, 2], 2),
-        Some(RecognizeError::LabelOutOfRange {
+        Some(RecognizeError::Usage(UsageError::LabelOutOfRange {
             index: 1,
             label: 2,
             classes: 2
-        })
+        }))
     ));
     assert!(matches!(
         fit(SvcParams::default(), &[0, 0], 2),
-        Some(RecognizeError::EmptyClass { class: 1 })
+        Some(RecognizeError::Data(DataError::EmptyClass { class: 1 }))
     ));
     assert!(matches!(
         fit(SvcParams::default(), &[0], 2),
-        Some(RecognizeError::Counts { .. })
+        Some(RecognizeError::Usage(UsageError::Counts { .. }))
     ));
     let svc = Svc::fit(
         SvcParams {
@@ -440,15 +444,15 @@ fn bad_input_is_an_error() {
     .expect("fit");
     assert!(matches!(
         svc.predict_proba(&[0.0, 1.0]),
-        Err(RecognizeError::NoProbability)
+        Err(RecognizeError::Setting(SettingError::NoProbability))
     ));
     assert!(matches!(
         svc.predict(&[0.0]),
-        Err(RecognizeError::Dimension { got: 1, .. })
+        Err(RecognizeError::Usage(UsageError::Dimension { got: 1, .. }))
     ));
     assert!(matches!(
         svc.predict(&[f64::NAN, 0.0]),
-        Err(RecognizeError::NonFinite { index: 0 })
+        Err(RecognizeError::Input(InputError::NonFinite { index: 0 }))
     ));
     assert_eq!(svc.predict(&[0.0, 1.0]).ok(), Some(0));
 }

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use capture::kind::{NORMAL_FORCE_N, TANGENTIAL_POSITION_M, TIME_S, VIBRATION_MPS2};
 use capture::{Capture, CaptureKind, Metadata};
+use recognize::InputError;
 use recognize::{
     BEHAVIOUR_KEY, FeatureSet, LABEL_KEY, LabelledCapture, Method, RecognizeError, TRIAL_KEY, TrainSettings,
     train,
@@ -96,7 +97,7 @@ fn missing_columns_name_both_accelerometer_options() {
     assert!(missing.iter().all(|m| !m.contains("accel")), "{missing:?}");
     let err = FeatureSet::Both.check_columns(&[bare]).expect_err("no vibration");
     assert!(
-        matches!(&err, RecognizeError::MissingColumns { missing, .. }
+        matches!(&err, RecognizeError::Input(InputError::MissingColumns { missing, .. })
             if missing.last().is_some_and(|m| m.ends_with("(or, instead of the three axes, vibration_mps2)"))),
         "{err}"
     );

@@ -2,6 +2,7 @@
 
 use super::{FEATURES, FeatureBuffers, NakanoConfig, window_features};
 use crate::RecognizeError;
+use crate::{SettingError, UsageError};
 
 /// Nakano's features of the window that ends at the latest sample, as known at that sample:
 /// the filters' lookahead past it is the signals' mirror image through it, so the window is
@@ -34,7 +35,7 @@ impl EdgeWindow {
     pub fn new(config: NakanoConfig, len: usize) -> Result<Self, RecognizeError> {
         config.check()?;
         if len < 2 {
-            return Err(RecognizeError::WindowTooShort { len });
+            return Err(RecognizeError::Setting(SettingError::WindowTooShort { len }));
         }
         Ok(Self::with_room(config, len))
     }
@@ -93,22 +94,24 @@ impl EdgeWindow {
         friction_n: &[f64],
     ) -> Result<[f64; FEATURES], RecognizeError> {
         if len < 2 {
-            return Err(RecognizeError::WindowTooShort { len });
+            return Err(RecognizeError::Setting(SettingError::WindowTooShort { len }));
         }
         let n = position_m.len();
         if height_m.len() != n || friction_n.len() != n {
-            return Err(RecognizeError::SignalLengths {
+            return Err(RecognizeError::Usage(UsageError::SignalLengths {
                 position: n,
                 height: height_m.len(),
                 friction: friction_n.len(),
-            });
+            }));
         }
         let margin = self.margin;
-        let too_short = || RecognizeError::WindowOutOfRange {
-            start: window_start,
-            len,
-            margin,
-            samples: n,
+        let too_short = || {
+            RecognizeError::Usage(UsageError::WindowOutOfRange {
+                start: window_start,
+                len,
+                margin,
+                samples: n,
+            })
         };
         // The samples from the history's start to the window's end are known; before the
         // stroke's first sample nothing is.

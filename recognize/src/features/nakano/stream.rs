@@ -2,6 +2,7 @@
 //! [`NakanoStream`]), agreeing with the batch ones to ~1e-9.
 
 use super::*;
+use crate::SettingError;
 
 /// A fixed-capacity ring: pushing into a full ring evicts and returns the oldest value.
 #[derive(Debug)]
@@ -219,7 +220,9 @@ impl NakanoStream {
     /// A stream over windows of `window_len` samples.
     pub fn new(config: NakanoConfig, window_len: usize) -> Result<Self, RecognizeError> {
         if window_len < 2 {
-            return Err(RecognizeError::WindowTooShort { len: window_len });
+            return Err(RecognizeError::Setting(SettingError::WindowTooShort {
+                len: window_len,
+            }));
         }
         config.check()?;
         let (h, s) = config.max_half_widths();

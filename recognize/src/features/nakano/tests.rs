@@ -2,6 +2,7 @@
 //! first sample and with the mirrored start), the reaction-force observer, and bad input.
 
 use super::*;
+use crate::{InputError, SettingError, UsageError};
 
 /// A rough, wavy, tilted profile with noisy friction, sampled like the thesis's rubbing.
 fn signals(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -161,24 +162,30 @@ fn bad_windows_and_signals_are_errors() {
     let config = NakanoConfig::default();
     assert!(matches!(
         sig.features(100, 200, &config),
-        Err(RecognizeError::WindowOutOfRange { margin: 270, .. })
+        Err(RecognizeError::Usage(UsageError::WindowOutOfRange {
+            margin: 270,
+            ..
+        }))
     ));
     assert!(matches!(
         sig.features(600, 200, &config),
-        Err(RecognizeError::WindowOutOfRange { .. })
+        Err(RecognizeError::Usage(UsageError::WindowOutOfRange { .. }))
     ));
     assert!(sig.features(270, 460, &config).is_ok());
     assert!(matches!(
         sig.features(300, 1, &config),
-        Err(RecognizeError::WindowTooShort { len: 1 })
+        Err(RecognizeError::Setting(SettingError::WindowTooShort { len: 1 }))
     ));
     assert!(matches!(
         sig.features(usize::MAX, 2, &config),
-        Err(RecognizeError::WindowOutOfRange { .. })
+        Err(RecognizeError::Usage(UsageError::WindowOutOfRange { .. }))
     ));
     assert!(matches!(
         NakanoSignals::new(&x, &z[1..], &f),
-        Err(RecognizeError::SignalLengths { height: 999, .. })
+        Err(RecognizeError::Usage(UsageError::SignalLengths {
+            height: 999,
+            ..
+        }))
     ));
     assert!(NakanoStream::new(config, 1).is_err());
     assert!(NakanoConfig::from_wavelengths(0.0, 1e-4, 5e-3, 1e3).is_err());
@@ -223,7 +230,7 @@ fn the_rfob_recovers_friction_from_the_commanded_force() {
     let no_command = Capture::new(meta.clone(), columns.clone(), data.clone()).expect("valid");
     assert!(matches!(
         NakanoSignals::from_capture(&no_command),
-        Err(RecognizeError::NakanoColumn(_))
+        Err(RecognizeError::Input(InputError::NakanoColumn(_)))
     ));
     let mut columns = columns;
     columns.push("tangential_command_force_n".into());
@@ -336,19 +343,19 @@ fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
             &z[..len + pad - 1],
             &f[..len + pad - 1]
         ),
-        Err(RecognizeError::WindowOutOfRange { .. })
+        Err(RecognizeError::Usage(UsageError::WindowOutOfRange { .. }))
     ));
     assert!(matches!(
         edge.features(0, &x[..len - 1], &z[..len - 1], &f[..len - 1]),
-        Err(RecognizeError::WindowOutOfRange { .. })
+        Err(RecognizeError::Usage(UsageError::WindowOutOfRange { .. }))
     ));
     assert!(matches!(
         edge.features(0, &x[..len], &z[..len], &f[..len - 1]),
-        Err(RecognizeError::SignalLengths { .. })
+        Err(RecognizeError::Usage(UsageError::SignalLengths { .. }))
     ));
     assert!(matches!(
         EdgeWindow::new(config, 1),
-        Err(RecognizeError::WindowTooShort { len: 1 })
+        Err(RecognizeError::Setting(SettingError::WindowTooShort { len: 1 }))
     ));
 }
 

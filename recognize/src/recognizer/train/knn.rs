@@ -5,6 +5,7 @@ use super::{
     CV_FOLDS, Method, ScaledWindows, TrainJob, Trainer, every_class_in_two_groups, histograms_by_behaviour,
     scaled_training_windows,
 };
+use crate::DataError;
 use crate::RecognizeError;
 #[cfg(doc)]
 use crate::features::WindowScaling;
@@ -116,7 +117,7 @@ impl RecognizerFile {
             .then(|| held_out_votes(params, &x, &y, &groups, classes.len(), CV_FOLDS))
         {
             Some(Ok((votes, folds))) => Some(VoteCalibration::fit(&votes, &y, classes.len(), folds)?),
-            None | Some(Err(RecognizeError::TooFewPoints { .. })) => None,
+            None | Some(Err(RecognizeError::Data(DataError::TooFewPoints { .. }))) => None,
             Some(Err(e)) => return Err(e),
         };
         Ok(Self::assemble(

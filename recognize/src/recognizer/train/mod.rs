@@ -37,6 +37,7 @@ use crate::som::Normalization;
 #[cfg(doc)]
 use crate::svc::SvcParams;
 use crate::svc::{CSearch, Progress, no_progress};
+use crate::{DataError, SettingError};
 
 /// Which classifier a recognizer trains.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -222,7 +223,7 @@ impl TrainSettings {
         let rate_hz = captures
             .first()
             .map(|c| c.capture.metadata().rate_hz())
-            .ok_or(RecognizeError::NoTrainingData)?;
+            .ok_or(RecognizeError::Data(DataError::NoTrainingData))?;
         self.windowing_at(rate_hz)
     }
 
@@ -250,12 +251,12 @@ impl TrainSettings {
         };
         match self.fastest_speed_mps {
             Some(fastest) if !matches!(self.features, FeatureSet::Vibration | FeatureSet::NakanoSpectrum) => {
-                Err(RecognizeError::Parameter {
+                Err(RecognizeError::Setting(SettingError::Parameter {
                     of: "setting",
                     name: "fastest_speed_mps",
                     value: fastest,
                     reason: "only a spectrum reads it: --features vibration or nakano-spectrum",
-                })
+                }))
             }
             Some(fastest) => windowing.reading_spectra_up_to(fastest),
             None => Ok(windowing),
@@ -396,7 +397,7 @@ impl SvmC {
         };
         let search = match search(&grid) {
             Some(Ok(search)) => Some(search),
-            Some(Err(RecognizeError::TooFewGroups { .. })) | None => None,
+            Some(Err(RecognizeError::Data(DataError::TooFewGroups { .. }))) | None => None,
             Some(Err(e)) => return Err(e),
         };
         let c = match (&search, self) {
@@ -493,7 +494,7 @@ pub(crate) fn training_windows_left_out(
     }
     every_class_has_windows(captures, classes, &y, &training, &left_out)?;
     if x.is_empty() {
-        return Err(RecognizeError::NoTrainingData);
+        return Err(RecognizeError::Data(DataError::NoTrainingData));
     }
     Ok(((x, y, g), left_out.iter().sum(), of))
 }
@@ -529,7 +530,10 @@ pub(crate) fn every_class_has_windows(
             n => all_short_of_travel(c, training, n),
         })
         .collect();
-    Err(RecognizeError::ClassWithoutWindows { class, captures })
+    Err(RecognizeError::Data(DataError::ClassWithoutWindows {
+        class,
+        captures,
+    }))
 }
 
 /// Why capture `c`, whose `left_out` training windows were all left out for covering less than
@@ -605,7 +609,7 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
     ) -> Result<Self, RecognizeError> {
         if behaviours == 0 {
-            return Err(RecognizeError::NoTrainingData);
+            return Err(RecognizeError::Data(DataError::NoTrainingData));
         }
         Ok(Self::assemble(
             classes,
@@ -630,12 +634,12 @@ pub(crate) fn every_class_in_two_groups(labels: &[usize], groups: &[u64]) -> boo
 /// Windows carry `nakano` or `both` features, not `spectral`.
 pub(crate) fn window_check(features: FeatureSet) -> Result<(), RecognizeError> {
     if features == FeatureSet::Spectral {
-        return Err(RecognizeError::Parameter {
+        return Err(RecognizeError::Setting(SettingError::Parameter {
             of: "setting",
             name: "features",
             value: f64::NAN,
             reason: "windows carry `nakano` or `both` features; `spectral` is one histogram per scratch",
-        });
+        }));
     }
     Ok(())
 }

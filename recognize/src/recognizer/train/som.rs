@@ -16,6 +16,7 @@ use crate::recognizer::labelled::{check_rate, class_index, class_list};
 use crate::recognizer::{BehaviourSom, LabelledCapture, RecognizerBody, RecognizerFile};
 use crate::som::{Normalization, Som, SomParams};
 use crate::svc::{Progress, no_progress};
+use crate::{DataError, SettingError};
 
 /// Trains SOM recognizers: over Nakano's windows ([`RecognizerFile::train_som`]), over windows
 /// of both feature sets ([`RecognizerFile::train_som_windows`]), or one map per behaviour over
@@ -61,18 +62,18 @@ impl Trainer for SomTrainer {
                 };
                 RecognizerFile::train_som_scratches(captures, params, settings.cell_scale)
             }
-            FeatureSet::Vibration => Err(RecognizeError::Config {
+            FeatureSet::Vibration => Err(RecognizeError::Setting(SettingError::Config {
                 of: "training",
                 reason: "`--features vibration` trains a k-NN or an SVM (whose window \
                          probabilities are fused with a Nakano classifier's); a SOM names a node, \
                          not a distribution over the surfaces",
-            }),
-            FeatureSet::NakanoSpectrum => Err(RecognizeError::Config {
+            })),
+            FeatureSet::NakanoSpectrum => Err(RecognizeError::Setting(SettingError::Config {
                 of: "training",
                 reason: "`--features nakano-spectrum` trains a k-NN or an SVM over windows, whose \
                          probabilities accumulate into the anytime posterior; a SOM over windows \
                          reads `nakano` or `both`",
-            }),
+            })),
         }
     }
 }
@@ -217,7 +218,7 @@ impl RecognizerFile {
         }
         every_class_has_windows(captures, &classes, &labels, &training, &[])?;
         if data.is_empty() {
-            return Err(RecognizeError::NoTrainingData);
+            return Err(RecognizeError::Data(DataError::NoTrainingData));
         }
         let som =
             Som::train_observed(params(data.len()), &data, &labels, progress).map_err(RecognizeError::som)?;

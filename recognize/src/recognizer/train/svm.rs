@@ -370,17 +370,20 @@ fn search_c<V: AsRef<[f64]>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SolverError;
 
     #[test]
     fn errors_and_warnings_name_the_classes_and_the_behaviour() {
         let classes: Vec<String> = ["felt", "sandpaper_80", "styrol_rough"]
             .map(String::from)
             .to_vec();
-        let failed = |c| RecognizeError::NotConverged {
-            iterations: 10_000_000,
-            c,
-            first: 1,
-            second: 2,
+        let failed = |c| {
+            RecognizeError::Solver(SolverError::NotConverged {
+                iterations: 10_000_000,
+                c,
+                first: 1,
+                second: 2,
+            })
         };
         let e = svc_error("lateral scratch", &classes)(failed(1e5));
         assert_eq!(
@@ -390,9 +393,9 @@ mod tests {
         );
         // Every candidate failed: each listed, by class name.
         let label = windows_label(FeatureSet::Nakano);
-        let e = svc_error(&label, &classes)(RecognizeError::EveryCFailed {
+        let e = svc_error(&label, &classes)(RecognizeError::Solver(SolverError::EveryCFailed {
             failures: vec![(1e4, failed(1e4)), (1e5, failed(1e5))],
-        });
+        }));
         let text = e.chain();
         assert!(
             text.starts_with("SVC of behaviour `nakano windows`: every candidate C failed: C = 1e4: ")
