@@ -322,6 +322,11 @@ impl<L: Clone + Ord> Som<L> {
         let z = params.iterations as f64;
         let two_sigma2 = 2.0 * params.sigma * params.sigma;
         let mut moved = vec![0.0; dim];
+        // The neighbourhood is Gaussian, and nodes farther from the winner than `reach` would
+        // move by h < α·2⁻⁵³, less than double precision resolves on a unit vector: they are
+        // left out of the update. On a map sized by its data (246 nodes for 1,300 windows)
+        // that is all but 27 of them, and most of the training's time.
+        let reach = (two_sigma2 * 53.0 * std::f64::consts::LN_2).sqrt().floor() as usize;
         let every = params.iterations.div_ceil(100).max(1);
         progress(FitEvent::Step {
             what: "training the map",
@@ -334,7 +339,14 @@ impl<L: Clone + Ord> Som<L> {
             let alpha = params.initial_learning_rate * (1.0 - i as f64 / z);
             let p = &inputs[rng.below(inputs.len())];
             let winner = som.winner_scaled(p);
-            for (q, m) in som.reference.iter_mut().enumerate() {
+            let near = winner.saturating_sub(reach)..=winner.saturating_add(reach).min(params.nodes - 1);
+            for (q, m) in som
+                .reference
+                .iter_mut()
+                .enumerate()
+                .take(*near.end() + 1)
+                .skip(*near.start())
+            {
                 let d = q as f64 - winner as f64;
                 let h = alpha * (-d * d / two_sigma2).exp();
                 for ((out, mi), pi) in moved.iter_mut().zip(m.iter()).zip(p) {
