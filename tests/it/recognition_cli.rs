@@ -3,6 +3,7 @@
 //! written through the library, and the errors a user meets with a bad model or capture.
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use crate::common::{self, fails, json, nakano_captures, succeeds, text};
 use capture::kind::{FRICTION_FORCE_N, NORMAL_FORCE_N, NORMAL_POSITION_M, TANGENTIAL_POSITION_M, TIME_S};
@@ -306,24 +307,34 @@ fn trial_of(path: &Path) -> u32 {
         .expect("a trial number in the name")
 }
 
-/// `palpus gen --only sinapov` into `dir`: every scratch capture, sorted.
-fn generated_scratches(dir: &Path) -> Vec<PathBuf> {
-    succeeds(&[
-        "gen",
-        "--out",
-        &dir.to_string_lossy(),
-        "--only",
-        "sinapov",
-        "--quiet",
-    ]);
-    let mut paths = Vec::new();
-    for surface in std::fs::read_dir(dir.join("sinapov")).expect("sinapov folder") {
-        for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
-            paths.push(capture.expect("entry").path());
-        }
-    }
-    paths.sort();
-    paths
+/// `palpus gen --only sinapov`: every scratch capture, sorted. Generated once per test run
+/// (two tests read the same 1,050 captures, 6 s of generation each), afresh, in cargo's
+/// scratch folder for integration tests; no test writes into it.
+fn generated_scratches() -> Vec<PathBuf> {
+    static SCRATCHES: OnceLock<Vec<PathBuf>> = OnceLock::new();
+    SCRATCHES
+        .get_or_init(|| {
+            let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("recognition_cli_sinapov");
+            // A folder left by an earlier run may hold another version's captures.
+            let _ = std::fs::remove_dir_all(&dir);
+            succeeds(&[
+                "gen",
+                "--out",
+                &dir.to_string_lossy(),
+                "--only",
+                "sinapov",
+                "--quiet",
+            ]);
+            let mut paths = Vec::new();
+            for surface in std::fs::read_dir(dir.join("sinapov")).expect("sinapov folder") {
+                for capture in std::fs::read_dir(surface.expect("entry").path()).expect("surface folder") {
+                    paths.push(capture.expect("entry").path());
+                }
+            }
+            paths.sort();
+            paths
+        })
+        .clone()
 }
 
 /// Sinapov's split of generated scratches: trials 0–6 train, 7–9 test.
@@ -341,7 +352,7 @@ fn sinapov_split(paths: Vec<PathBuf>) -> (Vec<String>, Vec<String>) {
 fn knn_and_svm_fuse_behaviours_of_generated_scratch_trials() {
     let start = std::time::Instant::now();
     let dir = tempfile::tempdir().expect("tempdir");
-    let paths = generated_scratches(dir.path());
+    let paths = generated_scratches();
     assert_eq!(paths.len(), 21 * 5 * 10);
     let (train_s, test_s) = sinapov_split(paths);
     let grid = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
@@ -921,7 +932,7 @@ fn knn_and_svm_over_nakano_windows_on_generated_rubbing_runs() {
 fn som_over_spectral_histograms_of_generated_scratch_trials() {
     let start = std::time::Instant::now();
     let dir = tempfile::tempdir().expect("tempdir");
-    let (train_s, test_s) = sinapov_split(generated_scratches(dir.path()));
+    let (train_s, test_s) = sinapov_split(generated_scratches());
     let model = dir.path().join("som_spectral.json");
     let model_s = model.to_string_lossy().into_owned();
     let (summary, file) = train_model("som", &["--features", "spectral"], &model, &train_s);

@@ -159,7 +159,8 @@ fn dragging_and_scrolling_in_the_window_punctures_the_liver() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
     let mut app = Command::new(env!("CARGO_BIN_EXE_palpus"))
-        .args(["run", "--duration", "12", "--report", out.to_str().unwrap()])
+        // The input below takes about 6.5 s from the window's opening.
+        .args(["run", "--duration", "9", "--report", out.to_str().unwrap()])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .env("DISPLAY", format!(":{display}"))
         .env("PALPUS_CACHE_DIR", dir.path().join("cache"))
