@@ -10,12 +10,20 @@ use common::text;
 use identify::ModelFile;
 use serde_json::Value;
 
-/// The tests here run real-time haptic loops and renderers: one at a time, so that the 1 %
-/// rate check measures the loop and not a neighbouring test hogging the cores.
-static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+/// The tests here run haptic loops and renderers. Those that time something (a loop's rate
+/// in real time, a watchdog's stall) run alone, so that the 1 % rate check measures the loop
+/// and not a neighbouring test hogging the cores; those that run unpaced may share the cores
+/// with each other.
+static CORES: std::sync::RwLock<()> = std::sync::RwLock::new(());
 
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+/// The cores to this test alone.
+fn serial() -> std::sync::RwLockWriteGuard<'static, ()> {
+    CORES.write().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The cores shared with other untimed tests, never with a timed one.
+fn untimed() -> std::sync::RwLockReadGuard<'static, ()> {
+    CORES.read().unwrap_or_else(|e| e.into_inner())
 }
 
 fn root() -> PathBuf {
@@ -198,7 +206,7 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
 
 #[test]
 fn the_default_scene_feels_both_layers_where_and_as_hard_as_the_tissue_gives() {
-    let _serial = serial();
+    let _shared = untimed();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
     let r = run_unpaced(&[], &out, &dir.path().join("cache"));
@@ -235,7 +243,7 @@ fn the_default_scene_feels_both_layers_where_and_as_hard_as_the_tissue_gives() {
 
 #[test]
 fn a_recorded_session_re_identifies_to_the_same_model() {
-    let _serial = serial();
+    let _shared = untimed();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let session = dir.path().join("session.csv");
@@ -296,7 +304,7 @@ fn a_recorded_session_re_identifies_to_the_same_model() {
 
 #[test]
 fn scenes_on_models_from_real_world_shaped_records_render_every_layer_bounded() {
-    let _serial = serial();
+    let _shared = untimed();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     // One speed with no withdrawal, a digitized curve, layers 2 mm apart, a wall opening into
@@ -336,7 +344,7 @@ fn scenes_on_models_from_real_world_shaped_records_render_every_layer_bounded() 
 
 #[test]
 fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
-    let _serial = serial();
+    let _shared = untimed();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let out = dir.path().join("friction");
@@ -421,7 +429,7 @@ fn rubbing_scenes_render_their_friction_and_recognize_their_surfaces() {
 
 #[test]
 fn a_bad_scene_is_a_clear_error() {
-    let _serial = serial();
+    let _shared = untimed();
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("bad.toml");
     let text_ = std::fs::read_to_string(root().join("scenes/needle_liver.toml"))
@@ -496,7 +504,7 @@ fn the_window_opens_under_xvfb_and_shows_the_needle() {
 
 #[test]
 fn palpus_render_draws_each_default_scene_and_the_dimple() {
-    let _serial = serial();
+    let _shared = untimed();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let render_ = |args: &[&str]| palpus_at_root("render", args, &cache).output().unwrap();
