@@ -6,7 +6,7 @@
 //! * `exact_f64`: `ExactSvr<2>` (folded scaling, SoA blocks, libm `exp`);
 //! * `fast_f32`: `FastSvr<2>` (the same in `f32` with the polynomial `fast_exp2`).
 //!
-//! Run with `cargo bench -p svm --bench predict`. After criterion's own report, the
+//! Run with `cargo bench -p benchmarks --bench svr_predict`. After criterion's own report, the
 //! median time per evaluation of each variant and its speed-up over `plain_f64` are printed,
 //! read back from criterion's estimates of this run.
 
