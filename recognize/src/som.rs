@@ -339,14 +339,11 @@ impl<L: Clone + Ord> Som<L> {
             let alpha = params.initial_learning_rate * (1.0 - i as f64 / z);
             let p = &inputs[rng.below(inputs.len())];
             let winner = som.winner_scaled(p);
-            let near = winner.saturating_sub(reach)..=winner.saturating_add(reach).min(params.nodes - 1);
-            for (q, m) in som
-                .reference
-                .iter_mut()
-                .enumerate()
-                .take(*near.end() + 1)
-                .skip(*near.start())
-            {
+            let (first, last) = (
+                winner.saturating_sub(reach),
+                winner.saturating_add(reach).min(params.nodes - 1),
+            );
+            for (q, m) in (first..=last).zip(&mut som.reference[first..=last]) {
                 let d = q as f64 - winner as f64;
                 let h = alpha * (-d * d / two_sigma2).exp();
                 for ((out, mi), pi) in moved.iter_mut().zip(m.iter()).zip(p) {
