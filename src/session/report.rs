@@ -403,8 +403,8 @@ impl SessionReport {
         if self.recognition_unread_windows > 0 {
             let _ = writeln!(
                 t,
-                "  {} windows could not be read: slid faster than the recognizer's spectra reach \
-                 (train it with a higher --fastest-speed-mps); they added no evidence",
+                "  {} windows could not be read and added no evidence (such as windows slid faster \
+                 than the recognizer's spectra reach: train it with a higher --fastest-speed-mps)",
                 self.recognition_unread_windows
             );
         }

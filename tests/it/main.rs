@@ -27,6 +27,7 @@ mod recognition_sequential;
 mod recognition_sinapov;
 mod recognition_single_axis;
 mod recognition_speed;
+mod recognizer_rules;
 mod recording_kill;
 mod scene_budget;
 mod window_xvfb;

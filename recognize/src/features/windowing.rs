@@ -182,6 +182,13 @@ impl NakanoWindowing {
         Ok(windowing)
     }
 
+    /// The same windowing, its settings checked ([`NakanoWindowing::check`]) after they were
+    /// set field by field.
+    pub(crate) fn checked(self) -> Result<Self, RecognizeError> {
+        self.check().map_err(setting_error)?;
+        Ok(self)
+    }
+
     /// The windowing the map was trained with.
     pub fn training(&self) -> Self {
         Self {
@@ -401,6 +408,21 @@ impl NakanoWindowing {
                     follow.reference_step_m,
                     "positive and finite, with maximum half-widths at least the nominal ones",
                 ));
+            }
+        }
+        if self.mirrored_end {
+            let margin = self.filters.lookahead_samples();
+            for (name, n) in windows {
+                if let Some(n) = n
+                    && !nakano::EdgeWindow::mirror_reaches(n, margin)
+                {
+                    return Err((
+                        name,
+                        n as f64,
+                        "long enough to be decided at its last sample: at least a seventh of the \
+                         filters' margin (their longest half-widths together) plus one sample",
+                    ));
+                }
             }
         }
         if let Some(travel) = &self.friction_over_travel

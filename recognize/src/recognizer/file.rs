@@ -320,6 +320,10 @@ impl RecognizerFile {
         if self.classes.is_empty() {
             return bad("classes", "no classes".into());
         }
+        // A surface is named by its class in every report and overlay.
+        if let Some(i) = self.classes.iter().position(|c| c.trim().is_empty()) {
+            return bad(&format!("classes[{i}]"), "an empty name".into());
+        }
         if let Some(i) = (1..self.classes.len()).find(|&i| self.classes[..i].contains(&self.classes[i])) {
             return bad("classes", format!("`{}` given twice", self.classes[i]));
         }
@@ -449,6 +453,7 @@ impl RecognizerFile {
             } => {
                 check_window_body(*features, windowing, scaling)?;
                 svc.check_shape().map_err(|(f, r)| (format!("body.svc.{f}"), r))?;
+                check_probabilities(svc).map_err(|r| ("body.svc.params.probability".to_owned(), r))?;
                 if svc.classes() != self.classes.len() || svc.dim() != features.dim() {
                     return bad(
                         "body.svc",
@@ -566,6 +571,16 @@ fn check_reliability(r: Option<f64>) -> Result<(), String> {
         }
         _ => Ok(()),
     }
+}
+
+/// An SVM over windows decides by class probabilities in every reader (evaluation, anytime
+/// posteriors, the live recognizer), so one fitted without them is refused on reading rather
+/// than by whichever reader first asks. (A whole-scratch SVM without them votes instead.)
+fn check_probabilities(svc: &Svc) -> Result<(), String> {
+    if svc.params().probability || svc.classes() < 2 {
+        return Ok(());
+    }
+    Err("false: an SVM over windows decides by class probabilities; train it again".into())
 }
 
 /// The search of a window SVM must name its C, from its grid.

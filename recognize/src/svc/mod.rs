@@ -458,6 +458,19 @@ impl Svc {
             if m.sigmoid.is_some_and(|(a, b)| !(a.is_finite() && b.is_finite())) {
                 return Err(("machines", format!("pair {:?}: non-finite sigmoid", m.classes)));
             }
+            // Probabilities couple every pair's sigmoid: one missing would make every query
+            // fail where the file promised probabilities.
+            if m.sigmoid.is_some() != self.params.probability {
+                return Err((
+                    "machines",
+                    format!(
+                        "pair {:?}: {} sigmoid where params.probability is {}",
+                        m.classes,
+                        if m.sigmoid.is_some() { "a" } else { "no" },
+                        self.params.probability
+                    ),
+                ));
+            }
         }
         let finite = self.points.iter().all(|v| v.is_finite())
             && self.scale.iter().all(|(o, s)| o.is_finite() && s.is_finite());

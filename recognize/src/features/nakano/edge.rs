@@ -29,7 +29,19 @@ pub struct EdgeWindow {
     buffers: FeatureBuffers,
 }
 
+/// Reflections [`reflected`] makes at most before it gives up: each reaches one window's
+/// length further past an edge.
+const MAX_REFLECTIONS: usize = 7;
+
 impl EdgeWindow {
+    /// Whether a window of `len` samples can be decided at a stroke's first window, where
+    /// nothing before it is known: the mirror has to reach the filters' `margin` past both of
+    /// its edges within [`MAX_REFLECTIONS`]. Recognizer settings are checked against this, so
+    /// that no reader meets a window it cannot read.
+    pub fn mirror_reaches(len: usize, margin: usize) -> bool {
+        len >= 2 && margin as u128 <= MAX_REFLECTIONS as u128 * (len as u128 - 1)
+    }
+
     /// Windows of `len` samples (at least 2) under `config`'s filters; all memory is taken
     /// here.
     pub fn new(config: NakanoConfig, len: usize) -> Result<Self, RecognizeError> {
@@ -179,7 +191,7 @@ fn reflected(v: &[f64], odd: bool, mut i: i64) -> Option<f64> {
     }
     // value = offset + sign · v[i]
     let (mut offset, mut sign) = (0.0, 1.0);
-    for _ in 0..8 {
+    for _ in 0..=MAX_REFLECTIONS {
         let end = if i > last {
             i = 2 * last - i;
             v[last as usize]

@@ -359,6 +359,32 @@ fn an_edge_window_is_the_batch_window_of_the_mirrored_known_signals() {
     ));
 }
 
+#[test]
+fn a_strokes_first_window_reads_exactly_when_its_mirror_reaches_the_margin() {
+    let (x, z, f) = signals(3000);
+    let config = NakanoConfig::default();
+    let margin = config.lookahead_samples();
+    // Around the boundary 7·(len − 1) = margin, and far on each side of it.
+    let boundary = margin.div_ceil(7) + 1;
+    let mut reached = (0, 0);
+    for len in (2..=8).chain(boundary - 3..=boundary + 3).chain([250, 1000]) {
+        let mut edge = EdgeWindow::new(config, len).expect("valid");
+        let first = edge.features(0, &x[..len], &z[..len], &f[..len]);
+        let reaches = EdgeWindow::mirror_reaches(len, margin);
+        assert_eq!(
+            first.is_ok(),
+            reaches,
+            "a window of {len} samples, margin {margin}: {first:?}"
+        );
+        if reaches {
+            reached.0 += 1;
+        } else {
+            reached.1 += 1;
+        }
+    }
+    assert!(reached.0 > 3 && reached.1 > 3, "both sides tried: {reached:?}");
+}
+
 /// The signals known at sample `e` (exclusive) continued by definition: past sample `e − 1`
 /// as `g(e − 1 + k) = 2·v(e − 1) − g(e − 1 − k)`, before sample 0 as `g(−k) = 2·v(0) − g(k)`
 /// (plain mirrors for friction), from `before` samples before the start to `pad` after the end.

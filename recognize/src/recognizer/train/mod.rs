@@ -243,7 +243,8 @@ impl TrainSettings {
                 || matches!(self.features, FeatureSet::Vibration | FeatureSet::NakanoSpectrum),
             friction_over_travel: self.friction_over_travel.then(FrictionOverTravel::protocol),
             ..windowing
-        };
+        }
+        .checked()?;
         let windowing = match (self.windows_over_travel, self.travel_speed_mps) {
             (true, Some(speed_mps)) => windowing.over_travel_at(speed_mps)?,
             (true, None) => windowing.over_travel()?,
