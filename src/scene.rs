@@ -143,13 +143,18 @@ fn default_fov() -> f64 {
     40.0
 }
 
+fn unit_scale() -> f64 {
+    1.0
+}
+
 /// One `[[objects]]` entry.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Object {
     /// Name, unique in the scene.
     pub name: String,
-    /// A glTF binary, optionally `#node` to take one node of it.
+    /// A glTF file (`.glb`, or `.gltf` with its buffers beside it or embedded), optionally
+    /// `#node` to take one node of it.
     pub mesh: String,
     /// Position, m.
     #[serde(default)]
@@ -157,6 +162,10 @@ pub struct Object {
     /// Rotation about x, y, z (applied in that order), degrees.
     #[serde(default)]
     pub rotation_deg: [f64; 3],
+    /// A factor on the mesh's own units, applied before the rotation: glTF says metres, but
+    /// many anatomy meshes are in millimetres (0.001) or centimetres (0.01).
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
     /// A key of `[materials]`.
     pub material: String,
     /// The object is the tool the device moves (at most one per scene).
@@ -554,8 +563,24 @@ impl Scene {
                 return Err(self.invalid(key("name"), format!("`{}` is used twice", o.name)));
             }
             let (file, node) = o.mesh_parts();
-            if !file.ends_with(".glb") {
-                return Err(self.invalid(key("mesh"), format!("`{}`: expected a .glb file", o.mesh)));
+            let extension = Path::new(file)
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(str::to_ascii_lowercase);
+            if !matches!(extension.as_deref(), Some("glb" | "gltf")) {
+                return Err(self.invalid(
+                    key("mesh"),
+                    format!("`{}`: expected a glTF file (.glb or .gltf)", o.mesh),
+                ));
+            }
+            if !(o.scale.is_finite() && (1e-6..=1e6).contains(&o.scale)) {
+                return Err(self.invalid(
+                    key("scale"),
+                    format!(
+                        "{}: expected a factor from 1e-6 to 1e6 on the mesh's units",
+                        o.scale
+                    ),
+                ));
             }
             if node.is_some_and(str::is_empty) {
                 return Err(self.invalid(key("mesh"), "empty node name after `#`"));

@@ -111,7 +111,7 @@ impl SceneView {
             let (file, node) = o.mesh_parts();
             let path = scene.resolve(Path::new(file));
             if !files.contains_key(&path) {
-                let meshes = render::load_glb(&path).map_err(|source| ViewError::Mesh {
+                let meshes = render::load_gltf(&path).map_err(|source| ViewError::Mesh {
                     object: o.name.clone(),
                     source,
                 })?;
@@ -139,7 +139,11 @@ impl SceneView {
                 o.position_m[1] as f32,
                 o.position_m[2] as f32,
             );
-            let transform = Mat4::from_rotation_translation(rotation(o.rotation_deg), position);
+            let transform = Mat4::from_scale_rotation_translation(
+                Vec3::splat(o.scale as f32),
+                rotation(o.rotation_deg),
+                position,
+            );
             let deformable = {
                 let m = &scene.materials[&o.material];
                 m.puncture.is_some() || m.friction.is_some()

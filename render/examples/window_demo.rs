@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use render::window::{Input, Key, WindowApp, WindowConfig};
-use render::{Frame, MeshData, UiAction, load_glb, shapes};
+use render::{Frame, MeshData, UiAction, load_gltf, shapes};
 use render::{NeedleState, demo_overlay, tissue_scene};
 
 /// Depth at which the simulated skin gives way, m.
@@ -33,7 +33,7 @@ fn load(file: &str, fallback: fn() -> Vec<MeshData>) -> Vec<Arc<MeshData>> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../assets/meshes")
         .join(file);
-    let meshes = load_glb(&path).unwrap_or_else(|e| {
+    let meshes = load_gltf(&path).unwrap_or_else(|e| {
         eprintln!("{e}; using procedural {file}");
         fallback()
     });

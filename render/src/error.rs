@@ -107,18 +107,22 @@ pub enum RenderError {
         /// What the parser or validator reported.
         reason: String,
     },
-    /// A buffer lives in an external file or data URI; only self-contained `.glb` is supported.
-    #[error("{path}: buffer {buffer} is external ({uri}); only self-contained .glb files are supported")]
-    ExternalBuffer {
+    /// A buffer's URI cannot be read: not a relative file path or a base64 `data:` URI, its
+    /// file is missing or unreadable, or its data does not decode.
+    #[error("{path}: buffer {buffer} ({uri}): {reason}")]
+    BufferUri {
         /// The file.
         path: PathBuf,
         /// The buffer's index.
         buffer: usize,
-        /// The buffer's URI.
+        /// The buffer's URI (a `data:` URI cut after its header).
         uri: String,
+        /// Why it cannot be read.
+        reason: String,
     },
-    /// The binary chunk is missing or shorter than the buffer it must hold.
-    #[error("{path}: binary chunk holds {actual} bytes, buffer {buffer} needs {expected}")]
+    /// The binary chunk (or the buffer's file or data) is missing or shorter than the buffer
+    /// it must hold.
+    #[error("{path}: buffer {buffer} holds {actual} bytes, it declares {expected}")]
     TruncatedBuffer {
         /// The file.
         path: PathBuf,

@@ -1,4 +1,5 @@
-//! Reads and writes binary glTF 2.0 (`.glb`) as lists of [`MeshData`].
+//! Reads glTF 2.0 (`.glb`, or `.gltf` with its buffers in files beside it or embedded as
+//! `data:` URIs) and writes `.glb`, as lists of [`MeshData`].
 //!
 //! Loading flattens the scene: every node that carries a mesh becomes one `MeshData` in world
 //! coordinates, its primitives merged. Writing produces one node and one mesh per `MeshData`,
@@ -19,40 +20,44 @@ use serde_json::{Value, json};
 use crate::error::RenderError;
 use crate::mesh::MeshData;
 
-/// Loads every node that has a mesh from a `.glb` (or self-contained `.gltf` without external
-/// buffers), in scene order, with the node's world transform applied.
+/// Loads every node that has a mesh from a `.glb` or a `.gltf` (its buffers in files beside it
+/// or embedded as base64 `data:` URIs), in scene order, with the node's world transform
+/// applied (TRS or matrix, through its parents).
 ///
 /// Missing normals are computed (area-weighted, smooth); a missing COLOR_0 reads as opaque white;
-/// a primitive without indices reads as a plain triangle list.
-pub fn load_glb(path: &Path) -> Result<Vec<MeshData>, RenderError> {
+/// a primitive without indices reads as a plain triangle list. Texture coordinates, tangents and
+/// materials are not read: the scene's material colours the mesh.
+pub fn load_gltf(path: &Path) -> Result<Vec<MeshData>, RenderError> {
     let bytes = fs::read(path).map_err(|e| io_error(path, e))?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| explain_invalid(path, &bytes, e))?;
     let document = &gltf.document;
 
-    let mut buffers: Vec<&[u8]> = Vec::new();
+    let mut owned: Vec<Vec<u8>> = Vec::new();
+    let mut sources: Vec<Option<usize>> = Vec::new();
     for buffer in document.buffers() {
-        match buffer.source() {
-            Source::Bin => {
-                let blob = gltf.blob.as_deref().unwrap_or(&[]);
-                if blob.len() < buffer.length() {
-                    return Err(RenderError::TruncatedBuffer {
-                        path: path.to_path_buf(),
-                        buffer: buffer.index(),
-                        expected: buffer.length(),
-                        actual: blob.len(),
-                    });
-                }
-                buffers.push(blob);
-            }
+        let (data, source) = match buffer.source() {
+            Source::Bin => (None, gltf.blob.as_deref().unwrap_or(&[])),
             Source::Uri(uri) => {
-                return Err(RenderError::ExternalBuffer {
-                    path: path.to_path_buf(),
-                    buffer: buffer.index(),
-                    uri: uri.to_string(),
-                });
+                let data = buffer_from_uri(path, buffer.index(), uri)?;
+                owned.push(data);
+                (Some(owned.len() - 1), owned[owned.len() - 1].as_slice())
             }
+        };
+        if source.len() < buffer.length() {
+            return Err(RenderError::TruncatedBuffer {
+                path: path.to_path_buf(),
+                buffer: buffer.index(),
+                expected: buffer.length(),
+                actual: source.len(),
+            });
         }
+        sources.push(data);
     }
+    let blob = gltf.blob.as_deref().unwrap_or(&[]);
+    let buffers: Vec<&[u8]> = sources
+        .iter()
+        .map(|s| s.map_or(blob, |i| owned[i].as_slice()))
+        .collect();
 
     let mut out = Vec::new();
     for (node, world) in nodes_in_scene_order(document) {
@@ -377,6 +382,55 @@ const COMPONENT_UNSIGNED_INT: u32 = 5125;
 const MODE_TRIANGLES: u32 = 4;
 /// The key in a primitive's `extras` that marks its triangles interior.
 const INTERIOR_EXTRA: &str = "interior";
+
+/// The bytes of buffer `index` of the `.gltf` at `path`, from its URI: a base64 `data:` URI, or
+/// a file path relative to the `.gltf`'s folder (percent-encoded, as URIs are). URIs with a
+/// scheme (`http:`, `file:`) and absolute paths are refused: an asset reads only what travels
+/// with it.
+// By hand rather than through the gltf crate's `import` feature, which also brings image
+// decoders for textures that are never read here.
+fn buffer_from_uri(path: &Path, index: usize, uri: &str) -> Result<Vec<u8>, RenderError> {
+    use base64::Engine as _;
+    let refuse = |reason: String| RenderError::BufferUri {
+        path: path.to_path_buf(),
+        buffer: index,
+        uri: uri
+            .split_once(',')
+            .map_or(uri, |(head, _)| head)
+            .chars()
+            .take(200)
+            .collect(),
+        reason,
+    };
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (header, data) = rest
+            .split_once(',')
+            .ok_or_else(|| refuse("a data URI without a comma before its data".into()))?;
+        if !header.ends_with(";base64") {
+            return Err(refuse("a data URI that is not base64".into()));
+        }
+        return base64::engine::general_purpose::STANDARD
+            .decode(data.trim())
+            .map_err(|e| refuse(format!("its base64 data does not decode: {e}")));
+    }
+    let has_scheme = uri.split_once(':').is_some_and(|(scheme, _)| {
+        scheme.len() > 1
+            && scheme
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+    });
+    let decoded = percent_encoding::percent_decode_str(uri)
+        .decode_utf8()
+        .map_err(|_| refuse("not UTF-8 once percent-decoded".into()))?;
+    let relative = Path::new(decoded.as_ref());
+    if has_scheme || relative.is_absolute() || decoded.is_empty() {
+        return Err(refuse(
+            "only a file path relative to the .gltf, or a base64 data: URI, is read".into(),
+        ));
+    }
+    let file = path.parent().unwrap_or(Path::new(".")).join(relative);
+    fs::read(&file).map_err(|e| refuse(format!("reading {}: {e}", file.display())))
+}
 
 /// Builds the whole `.glb` in memory.
 ///

@@ -44,7 +44,7 @@ pub use frame::{
     Camera, Dimple, Frame, MAX_DIMPLES, Material, Object, Overlay, Param, Recognition, TissueState, Tool,
     UiAction,
 };
-pub use gltf_io::{compute_normals, load_glb, write_glb};
+pub use gltf_io::{compute_normals, load_gltf, write_glb};
 pub use gpu::{Backend, GpuOptions};
 pub use image::Image;
 pub use mesh::MeshData;

@@ -30,4 +30,5 @@ mod recognition_speed;
 mod recognizer_rules;
 mod recording_kill;
 mod scene_budget;
+mod scene_meshes;
 mod window_xvfb;

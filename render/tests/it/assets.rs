@@ -10,7 +10,7 @@ use render::assets_gen::{
     SKIN_THICKNESS_M, VESSEL_RADIUS_M, VESSEL_WALL_DEPTH_M, default_assets, patch_centre_m,
     write_default_assets,
 };
-use render::{MeshData, RenderError, load_glb, write_glb};
+use render::{MeshData, RenderError, load_gltf, write_glb};
 
 fn committed_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/meshes")
@@ -178,7 +178,7 @@ fn write_then_load_is_bit_exact() {
     for (n, meshes) in cases.iter().enumerate() {
         let path = dir.path().join(format!("case_{n}.glb"));
         write_glb(&path, meshes).unwrap();
-        let loaded = load_glb(&path).unwrap();
+        let loaded = load_gltf(&path).unwrap();
         assert_eq!(loaded.len(), meshes.len());
         for (a, b) in meshes.iter().zip(&loaded) {
             assert_eq!(a.name, b.name);
@@ -497,7 +497,7 @@ fn patches_lie_side_by_side_on_y0_and_rank_by_roughness() {
 #[test]
 fn missing_file_is_not_found() {
     let path = Path::new("/nonexistent/dir/liver.glb");
-    match load_glb(path) {
+    match load_gltf(path) {
         Err(RenderError::NotFound { path: p }) => assert_eq!(p, path),
         other => panic!("{other:?}"),
     }
@@ -523,7 +523,7 @@ fn garbage_bytes_are_not_gltf() {
 /// Writes `bytes` to `path` and returns why loading them fails; a successful load fails the test.
 fn load_error(path: &Path, bytes: &[u8]) -> RenderError {
     std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    match load_glb(path) {
+    match load_gltf(path) {
         Err(e) => e,
         Ok(meshes) => panic!("{} loaded: {meshes:?}", path.display()),
     }
@@ -615,7 +615,7 @@ fn loader_applies_transforms_fills_defaults_and_rejects_bad_primitives() {
     };
     let path = dir.path().join("nested.glb");
     std::fs::write(&path, doc(2, 4)).unwrap();
-    let loaded = load_glb(&path).unwrap();
+    let loaded = load_gltf(&path).unwrap();
     assert_eq!(loaded.len(), 1);
     let m = &loaded[0];
     assert_eq!(m.name, "child");

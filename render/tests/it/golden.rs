@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use render::golden::{Tolerance, check};
-use render::{Frame, Image, MeshData, Renderer, load_glb};
+use render::{Frame, Image, MeshData, Renderer, load_gltf};
 use render::{NeedleState, demo_overlay, tissue_scene, tray_scene};
 
 const WIDTH: u32 = 640;
@@ -19,7 +19,7 @@ fn root() -> PathBuf {
 }
 
 fn meshes(file: &str) -> Vec<Arc<MeshData>> {
-    load_glb(&root().join("assets/meshes").join(file))
+    load_gltf(&root().join("assets/meshes").join(file))
         .unwrap()
         .into_iter()
         .map(Arc::new)

@@ -7,11 +7,11 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::Vec3;
-use render::{Camera, Frame, MeshData, Renderer, load_glb, shapes};
+use render::{Camera, Frame, MeshData, Renderer, load_gltf, shapes};
 use render::{NeedleState, tissue_scene};
 
 fn asset(name: &str) -> Vec<MeshData> {
-    load_glb(
+    load_gltf(
         &Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../assets/meshes")
             .join(name),

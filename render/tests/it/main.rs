@@ -4,6 +4,7 @@
 #![allow(clippy::unwrap_used)]
 
 mod assets;
+mod gltf_files;
 mod golden;
 mod headless;
 mod interior;
