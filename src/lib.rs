@@ -9,6 +9,7 @@
 pub mod cli;
 pub mod exit;
 pub mod fit_files;
+pub mod history;
 pub mod models;
 pub mod plots;
 pub mod recognizer;

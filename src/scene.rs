@@ -297,11 +297,14 @@ fn default_method() -> String {
 }
 
 /// `[task]`: what the scripted trainee does.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Task {
     /// Insert the needle straight down at the entry point, hold, withdraw.
     Insertion {
+        /// What an attempt must achieve (`[task.goal]`), scored after each attempt.
+        #[serde(default)]
+        goal: Option<Goal>,
         /// Start this far above the surface, m.
         start_above_m: f64,
         /// Insertion depth of the hand's target below the surface, m.
@@ -326,7 +329,61 @@ pub enum Task {
     },
 }
 
+/// `[task.goal]`: what an insertion attempt must achieve, in the tissue's terms: the layers the
+/// needle meets, in order, named as the scene names them; the one after whose giving the tip
+/// must stop, and how far past where it gave; what fails the attempt.
+///
+/// ```toml
+/// [task.goal]
+/// layers = ["capsule", "vessel_wall"]   # the model's membranes, shallowest first
+/// stop_after = "vessel_wall"             # stop after this one gives ...
+/// within_m = 0.003                       # ... no deeper than 3 mm past where it gave
+/// must_not_puncture = []                 # layers whose giving fails the attempt
+/// max_force_n = 4.0                      # an axial force over this fails it
+/// time_limit_s = 20.0                    # from first contact to the target giving
+/// reference = "expert.csv"               # an expert's recorded attempt, drawn under each
+/// ```
+#[derive(Debug, Clone, Deserialize, PartialEq, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Goal {
+    /// The layers (membranes) the needle meets, shallowest first: the n-th to give is
+    /// `layers[n]`.
+    pub layers: Vec<String>,
+    /// The layer after whose giving the tip must stop.
+    pub stop_after: String,
+    /// How far past the depth where `stop_after` gave the tip may go, m.
+    pub within_m: f64,
+    /// Layers whose giving fails the attempt (all deeper than `stop_after`).
+    #[serde(default)]
+    pub must_not_puncture: Vec<String>,
+    /// An axial force over this fails the attempt, N.
+    #[serde(default)]
+    pub max_force_n: Option<f64>,
+    /// The target must give within this long of first contact, s.
+    #[serde(default)]
+    pub time_limit_s: Option<f64>,
+    /// An expert's attempt (an insertion capture, as `palpus run --record` writes one), drawn
+    /// under each attempt's force against depth.
+    #[serde(default)]
+    pub reference: Option<PathBuf>,
+}
+
+impl Goal {
+    /// The index of `layer` in [`Goal::layers`].
+    pub fn layer_index(&self, layer: &str) -> Option<usize> {
+        self.layers.iter().position(|l| l == layer)
+    }
+}
+
 impl Task {
+    /// The insertion's goal, if the scene states one.
+    pub fn goal(&self) -> Option<&Goal> {
+        match self {
+            Task::Insertion { goal, .. } => goal.as_ref(),
+            Task::Rub { .. } => None,
+        }
+    }
+
     /// Short name for reports.
     pub fn name(&self) -> &'static str {
         match self {
@@ -416,6 +473,61 @@ pub enum SceneError {
     },
 }
 
+/// One `KEY=VALUE` replacing a value of a scene file (`task.depth_m=0.026`): a dotted key
+/// into its tables and a TOML value (strings quoted).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneOverride {
+    /// The dotted key.
+    pub key: String,
+    /// The value it takes.
+    pub value: toml::Value,
+}
+
+impl std::str::FromStr for SceneOverride {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        let (key, value) = text
+            .split_once('=')
+            .ok_or_else(|| format!("`{text}`: expected KEY=VALUE, such as task.depth_m=0.026"))?;
+        let key = key.trim();
+        if key.is_empty() || key.split('.').any(str::is_empty) {
+            return Err(format!(
+                "`{text}`: the key must be dotted names, such as task.depth_m"
+            ));
+        }
+        let value = toml::from_str::<toml::Table>(&format!("value = {}", value.trim()))
+            .ok()
+            .and_then(|mut t| t.remove("value"))
+            .ok_or_else(|| {
+                format!("`{text}`: the value is not a TOML value (quote a string: key=\"text\")")
+            })?;
+        Ok(Self {
+            key: key.to_owned(),
+            value,
+        })
+    }
+}
+
+impl SceneOverride {
+    /// Sets the value in `table`, making the tables on its way where missing.
+    fn apply(&self, table: &mut toml::Table) -> Result<(), String> {
+        let mut names: Vec<&str> = self.key.split('.').collect();
+        let last = names.pop().unwrap_or_default();
+        let mut at = table;
+        for (i, name) in names.iter().enumerate() {
+            let entry = at
+                .entry((*name).to_owned())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            at = entry
+                .as_table_mut()
+                .ok_or_else(|| format!("`{}` is not a table", names[..=i].join(".")))?;
+        }
+        at.insert(last.to_owned(), self.value.clone());
+        Ok(())
+    }
+}
+
 impl Scene {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
@@ -426,12 +538,40 @@ impl Scene {
         Self::parse(&text, path)
     }
 
+    /// Reads a scene file with some of its values replaced (`palpus run --set`), then
+    /// validates it as if the file said them.
+    pub fn load_with(path: &Path, overrides: &[SceneOverride]) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            file: path.to_owned(),
+            source,
+        })?;
+        Self::parse_with(&text, path, overrides)
+    }
+
     /// Parses and validates scene text; `path` names it and anchors its relative paths.
     pub fn parse(text: &str, path: &Path) -> Result<Self, SceneError> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+        Self::parse_with(text, path, &[])
+    }
+
+    /// [`Scene::parse`] with `overrides` applied to the text's values first.
+    pub fn parse_with(text: &str, path: &Path, overrides: &[SceneOverride]) -> Result<Self, SceneError> {
+        let parse_error = |e: toml::de::Error| SceneError::Parse {
             file: path.to_owned(),
             message: e.to_string().trim_end().replace('\n', " | "),
-        })?;
+        };
+        let mut scene: Scene = if overrides.is_empty() {
+            toml::from_str(text).map_err(parse_error)?
+        } else {
+            let mut table: toml::Table = toml::from_str(text).map_err(parse_error)?;
+            for o in overrides {
+                o.apply(&mut table).map_err(|reason| SceneError::Invalid {
+                    file: path.to_owned(),
+                    key: o.key.clone(),
+                    reason,
+                })?;
+            }
+            toml::Value::Table(table).try_into().map_err(parse_error)?
+        };
         scene.path = path.to_owned();
         scene.validate()?;
         Ok(scene)
@@ -802,6 +942,68 @@ impl Scene {
         Ok(())
     }
 
+    fn validate_goal(&self, goal: &Goal) -> Result<(), SceneError> {
+        let key = |field: &str| format!("task.goal.{field}");
+        if goal.layers.is_empty() {
+            return Err(self.invalid(
+                key("layers"),
+                "name the layers the needle meets, shallowest first",
+            ));
+        }
+        for (i, layer) in goal.layers.iter().enumerate() {
+            if layer.trim().is_empty() {
+                return Err(self.invalid(format!("task.goal.layers[{i}]"), "an empty name"));
+            }
+            if goal.layers[..i].contains(layer) {
+                return Err(self.invalid(
+                    format!("task.goal.layers[{i}]"),
+                    format!("`{layer}` is named twice"),
+                ));
+            }
+        }
+        let known = |field: &str, layer: &str| {
+            goal.layer_index(layer).ok_or_else(|| {
+                self.invalid(
+                    key(field),
+                    format!(
+                        "`{layer}` is not one of task.goal.layers ({})",
+                        goal.layers.join(", ")
+                    ),
+                )
+            })
+        };
+        let target = known("stop_after", &goal.stop_after)?;
+        for layer in &goal.must_not_puncture {
+            if known("must_not_puncture", layer)? <= target {
+                return Err(self.invalid(
+                    key("must_not_puncture"),
+                    format!(
+                        "`{layer}` lies no deeper than `{}`, which must give: no attempt could pass",
+                        goal.stop_after
+                    ),
+                ));
+            }
+        }
+        if !(goal.within_m.is_finite() && goal.within_m > 0.0 && goal.within_m <= 0.05) {
+            return Err(self.invalid(
+                key("within_m"),
+                format!("{}: expected more than 0 and at most 0.05 m", goal.within_m),
+            ));
+        }
+        if let Some(f) = goal.max_force_n {
+            self.in_range(
+                &key("max_force_n"),
+                f,
+                self.device_choice()?.backend().specs.max_force_n,
+                "the device's largest force",
+            )?;
+        }
+        if let Some(t) = goal.time_limit_s {
+            self.in_range(&key("time_limit_s"), t, MAX_TASK_S, "the longest task")?;
+        }
+        Ok(())
+    }
+
     fn validate_task(&self) -> Result<(), SceneError> {
         let speed = |key: &str, v: f64| {
             self.in_range(
@@ -819,7 +1021,11 @@ impl Scene {
                 speed_mps,
                 hold_s,
                 withdraw_speed_mps,
+                ref goal,
             } => {
+                if let Some(goal) = goal {
+                    self.validate_goal(goal)?;
+                }
                 positive("start_above_m", start_above_m)?;
                 positive("depth_m", depth_m)?;
                 speed("speed_mps", speed_mps)?;
@@ -929,6 +1135,94 @@ mod tests {
             (refs[0].0.as_str(), refs[0].1),
             ("needle_liver", ModelRole::Puncture)
         );
+    }
+
+    #[test]
+    fn a_goal_names_its_layers_and_every_error_names_its_key() {
+        let text = default_text();
+        let scene = Scene::parse(&text, Path::new("scenes/x.toml")).unwrap();
+        let goal = scene.task.goal().expect("the default scene states a goal");
+        assert_eq!(
+            (goal.stop_after.as_str(), goal.layer_index("vessel_wall")),
+            ("vessel_wall", Some(1))
+        );
+        let with = |old: &str, new: &str| {
+            assert!(text.contains(old), "{old}");
+            error(&text.replace(old, new))
+        };
+        for (old, new, key, says) in [
+            (
+                "stop_after = \"vessel_wall\"",
+                "stop_after = \"kidney\"",
+                "task.goal.stop_after",
+                "not one of",
+            ),
+            (
+                "layers = [\"capsule\", \"vessel_wall\"]",
+                "layers = []",
+                "task.goal.layers",
+                "name the layers",
+            ),
+            (
+                "layers = [\"capsule\", \"vessel_wall\"]",
+                "layers = [\"capsule\", \"capsule\", \"vessel_wall\"]",
+                "task.goal.layers[1]",
+                "twice",
+            ),
+            (
+                "within_m = 0.003",
+                "within_m = 0.0",
+                "task.goal.within_m",
+                "more than 0",
+            ),
+            (
+                "within_m = 0.003",
+                "within_m = 0.003\nmust_not_puncture = [\"capsule\"]",
+                "task.goal.must_not_puncture",
+                "no attempt could pass",
+            ),
+            (
+                "max_force_n = 4.0",
+                "max_force_n = 40.0",
+                "task.goal.max_force_n",
+                "device's largest force",
+            ),
+            (
+                "time_limit_s = 20.0",
+                "time_limit_s = -1.0",
+                "task.goal.time_limit_s",
+                "positive",
+            ),
+            (
+                "time_limit_s = 20.0",
+                "time_limit_s = 20.0\nmode = \"exam\"",
+                "mode",
+                "unknown field",
+            ),
+        ] {
+            let e = with(old, new);
+            assert!(e.contains(key) && e.contains(says), "{new}: {e}");
+        }
+        // `--set` replaces values as if the file said them, and is validated the same way.
+        let set = |s: &str| s.parse::<SceneOverride>().unwrap();
+        let scene =
+            Scene::parse_with(&text, Path::new("scenes/x.toml"), &[set("task.depth_m=0.026")]).unwrap();
+        assert!(matches!(scene.task, Task::Insertion { depth_m, .. } if depth_m == 0.026));
+        let e = Scene::parse_with(
+            &text,
+            Path::new("scenes/x.toml"),
+            &[set("task.goal.stop_after=\"liver\"")],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("task.goal.stop_after"), "{e}");
+        let e = Scene::parse_with(&text, Path::new("scenes/x.toml"), &[set("name.first=1")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`name` is not a table"), "{e}");
+        for bad in ["depth_m", "=1", "task..depth_m=1", "task.depth_m=nope"] {
+            assert!(bad.parse::<SceneOverride>().is_err(), "{bad}");
+        }
     }
 
     #[test]

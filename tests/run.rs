@@ -32,7 +32,7 @@ fn root() -> PathBuf {
 
 /// `palpus SUBCOMMAND ARGS` in the repository root, with a private model cache.
 fn palpus_at_root(subcommand: &str, args: &[&str], cache: &Path) -> std::process::Command {
-    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_palpus"));
+    let mut command = common::palpus_command();
     command
         .arg(subcommand)
         .args(args)
@@ -664,7 +664,7 @@ fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
 #[test]
 fn a_loop_benchmark_the_watchdog_ended_exits_3() {
     let _one = serial();
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_palpus"))
+    let child = common::palpus_command()
         .args(["bench", "loop", "--seconds", "4", "--no-realtime"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -679,4 +679,109 @@ fn a_loop_benchmark_the_watchdog_ended_exits_3() {
         printed.contains("ended early") && printed.contains("stalled"),
         "{printed}"
     );
+}
+
+/// The default scene's goal (stop within 3 mm of where the vessel wall gives): the scripted
+/// trainee stopping at 26 mm passes, the one pushing on to 30 mm overshoots; a forbidden layer
+/// and a force limit fail it for their own reasons. Each attempt is scored in the report and
+/// drawn over the expert reference; the two trainees' attempts are rows of the history, which
+/// `palpus history` prints and draws.
+#[test]
+fn scored_attempts_pass_or_fail_for_their_reasons_and_are_kept_in_the_history() {
+    let _shared = untimed();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let history = dir.path().join("history.sqlite");
+    let attempt = |name: &str, trainee: &str, sets: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["--trainee", trainee, "--history", history.to_str().unwrap()];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let r = run_unpaced(&args, &out, &cache);
+        assert!(out.join("attempt.png").exists(), "{name}: no attempt.png");
+        let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
+        (r["score"].clone(), summary)
+    };
+    let (pass, summary) = attempt("pass", "ana", &["task.depth_m=0.026"]);
+    assert_eq!(pass["passed"], true, "{pass}");
+    let overshoot = pass["overshoot_m"].as_f64().unwrap();
+    assert!(overshoot > 0.0 && overshoot < 0.003, "{pass}");
+    assert_eq!(
+        pass["layers_given"],
+        serde_json::json!(["capsule", "vessel_wall"])
+    );
+    assert!(summary.contains("attempt PASSED: stopped"), "{summary}");
+    let (fail, summary) = attempt("fail", "ben", &[]);
+    assert_eq!(fail["passed"], false, "{fail}");
+    assert!(fail["overshoot_m"].as_f64().unwrap() > 0.003, "{fail}");
+    assert!(summary.contains("attempt FAILED: went"), "{summary}");
+    // Where the wall gave does not depend on how deep the hand goes afterwards.
+    let gave = |s: &Value| s["target_depth_m"].as_f64().unwrap();
+    assert!((gave(&pass) - gave(&fail)).abs() < 2e-4, "{pass} {fail}");
+
+    let (forbidden, _) = attempt(
+        "forbidden",
+        "carl",
+        &[
+            "task.goal.stop_after=\"capsule\"",
+            "task.goal.within_m=0.02",
+            "task.goal.must_not_puncture=[\"vessel_wall\"]",
+        ],
+    );
+    assert_eq!(forbidden["passed"], false);
+    assert_eq!(forbidden["verdict"], "punctured the vessel wall", "{forbidden}");
+    let (forceful, _) = attempt(
+        "forceful",
+        "carl",
+        &["task.depth_m=0.026", "task.goal.max_force_n=1.0"],
+    );
+    assert_eq!(forceful["passed"], false);
+    assert!(
+        forceful["verdict"]
+            .as_str()
+            .unwrap()
+            .starts_with("the axial force reached 1.5"),
+        "{forceful}"
+    );
+
+    let rows = palpus::history::History::open(&history)
+        .unwrap()
+        .attempts(None, None)
+        .unwrap();
+    let who: Vec<(&str, bool)> = rows
+        .iter()
+        .map(|a| (a.trainee.as_str(), a.score.passed))
+        .collect();
+    assert_eq!(
+        who,
+        [("ana", true), ("ben", false), ("carl", false), ("carl", false)]
+    );
+    assert!(
+        rows.iter()
+            .all(|a| a.scene == "needle_liver" && a.model_sha256.len() == 64)
+    );
+    let plot = dir.path().join("curve.png");
+    let o = palpus_at_root(
+        "history",
+        &[
+            "--history",
+            history.to_str().unwrap(),
+            "--trainee",
+            "carl",
+            "--plot",
+            plot.to_str().unwrap(),
+        ],
+        &cache,
+    )
+    .output()
+    .unwrap();
+    let printed = text(&o);
+    assert!(o.status.success(), "{printed}");
+    assert!(
+        printed.contains("2 attempts") && printed.contains("passed 0 of 2"),
+        "{printed}"
+    );
+    let image = render::Image::load_png(&plot).unwrap();
+    assert!(image.width >= 800 && image.height >= 600);
 }

@@ -12,6 +12,7 @@ mod categorize_cmd;
 mod device_arg;
 mod devices_cmd;
 mod gen_cmd;
+mod history_cmd;
 mod identify_cmd;
 mod import_cmd;
 mod kept_reading;
@@ -52,6 +53,7 @@ enum Command {
     Recognize(RecognizeArgs),
     // `palpus import`: its help is `ImportArgs`' doc comment (a `///` here would replace it).
     Import(import_cmd::ImportArgs),
+    History(history_cmd::HistoryArgs),
 }
 
 /// Measure performance.
@@ -157,6 +159,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             RecognizeWhat::Categorize(args) => categorize_cmd::run(args),
         },
         Command::Import(args) => import_cmd::run(&args),
+        Command::History(args) => history_cmd::run(&args),
     }
 }
 

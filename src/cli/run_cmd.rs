@@ -9,7 +9,8 @@ use clap::Args;
 use super::device_arg::parse_device;
 use crate::exit::EndedEarly;
 use crate::models;
-use crate::scene::{DEFAULT_SCENE, Scene};
+use crate::plots::ForceDepth;
+use crate::scene::{DEFAULT_SCENE, Scene, SceneOverride};
 use crate::session::report::{self, ModelLine, SessionReport};
 use crate::session::{self, SessionOptions, analysis};
 use haptics::DeviceChoice;
@@ -50,6 +51,19 @@ pub(crate) struct RunArgs {
     /// it recorded in FILE.partial.
     #[arg(long, value_name = "FILE")]
     record: Option<PathBuf>,
+    /// Replace a value of the scene file for this run (repeatable): a dotted key and a TOML
+    /// value, such as `--set task.depth_m=0.026` or `--set 'task.goal.stop_after="capsule"'`.
+    /// The scene is validated with it as if the file said it.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<SceneOverride>,
+    /// Who is training: each scored attempt (a scene with a `[task.goal]`) is stored in the
+    /// history under this name (default: $USER).
+    #[arg(long, value_name = "NAME")]
+    trainee: Option<String>,
+    /// The history database scored attempts are added to (default: $PALPUS_HISTORY, else
+    /// history.sqlite under $XDG_DATA_HOME/palpus or ~/.local/share/palpus).
+    #[arg(long, value_name = "FILE")]
+    history: Option<PathBuf>,
     /// Where the report goes (default: out/run/SCENE).
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
@@ -65,6 +79,27 @@ pub(crate) struct RunArgs {
     autopilot: bool,
 }
 
+/// SHA-256 of the models a session rendered, as stored: attempts on different models are
+/// told apart in the history.
+fn models_sha256(resolved: &[models::ResolvedModel]) -> String {
+    use sha2::{Digest, Sha256};
+    let mut hash = Sha256::new();
+    for m in resolved {
+        hash.update(m.name.as_bytes());
+        hash.update(serde_json::to_vec(&m.model).unwrap_or_default());
+    }
+    hash.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The force against depth of an insertion capture (an expert's recorded attempt).
+fn read_reference(path: &Path) -> anyhow::Result<ForceDepth> {
+    let capture = capture::Capture::read_file(path, capture::CaptureKind::Insertion)?;
+    Ok(ForceDepth {
+        depth_m: capture.column(capture::kind::DEPTH_M)?.to_vec(),
+        force_n: capture.column(capture::kind::AXIAL_FORCE_N)?.to_vec(),
+    })
+}
+
 /// Whether a window can be opened here.
 pub(crate) fn has_display() -> bool {
     ["DISPLAY", "WAYLAND_DISPLAY"]
@@ -74,7 +109,7 @@ pub(crate) fn has_display() -> bool {
 
 pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     let started = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    let scene = Scene::load_with(&args.scene, &args.set)?;
     if let Some(d) = args.duration
         && !(d.is_finite() && d > 0.0)
     {
@@ -87,6 +122,14 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     if args.unpaced && !device.backend().simulated {
         anyhow::bail!("--unpaced is for the simulator only: a real device runs in real time");
     }
+    // Read before the session, so that a bad reference is reported before anyone practises.
+    let reference = match scene.task.goal().and_then(|g| g.reference.as_ref()) {
+        Some(file) => Some(
+            read_reference(&scene.resolve(file))
+                .with_context(|| format!("{}: task.goal.reference", scene.path.display()))?,
+        ),
+        None => None,
+    };
     let cache_dir = args.cache_dir.clone().unwrap_or_else(models::default_cache_dir);
     let resolved = models::resolve_with_progress(&scene, &cache_dir)?;
     let options = SessionOptions {
@@ -190,6 +233,46 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             / named as f64
     });
     let timing = crate::recognizer::timings(&runs, &recognition);
+    let segments: Vec<analysis::SegmentSummary> = runs.iter().map(analysis::summarize).collect();
+    let score = scene.task.goal().and_then(|goal| {
+        let (run, summary) = runs
+            .iter()
+            .zip(&segments)
+            .find(|(r, _)| matches!(r.segment.kind, session::SegmentKind::Needle { .. }))?;
+        Some(session::score::score(
+            &run.samples,
+            &summary.punctures,
+            goal,
+            analysis::surface_z_m(run),
+            scene.device.rate_hz,
+        ))
+    });
+    let attempt_plot = dir.join("attempt.png");
+    match (
+        &score,
+        runs.iter()
+            .find(|r| matches!(r.segment.kind, session::SegmentKind::Needle { .. })),
+    ) {
+        (Some(score), Some(run)) => {
+            let surface_z_m = analysis::surface_z_m(run);
+            let attempt = ForceDepth {
+                depth_m: run
+                    .samples
+                    .iter()
+                    .map(|s| surface_z_m - s.channels[haptics::admittance_channel::VIRTUAL_Z_M])
+                    .collect(),
+                force_n: run
+                    .samples
+                    .iter()
+                    .map(|s| s.channels[haptics::admittance_channel::MODEL_FORCE_Z_N])
+                    .collect(),
+            };
+            crate::plots::write_attempt_plot(&attempt_plot, &attempt, reference.as_ref(), score)?;
+        }
+        _ => {
+            let _ = std::fs::remove_file(&attempt_plot);
+        }
+    }
     let report = SessionReport {
         scene: scene.name.clone(),
         scene_file: scene.path.clone(),
@@ -197,7 +280,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             .first()
             .map_or_else(|| options.device.label(), |r| r.device.clone()),
         models: resolved.iter().map(ModelLine::new).collect(),
-        segments: runs.iter().map(analysis::summarize).collect(),
+        segments,
         recognizer: recognizer_line,
         recognition,
         recognition_accuracy: accuracy,
@@ -209,11 +292,34 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             .count(),
         frame,
         recorded: runs.iter().filter_map(|r| r.recorded.clone()).collect(),
+        score,
         wall_s: started.elapsed().as_secs_f64(),
     };
     report::write_summary(&dir, &report)?;
     print!("{}", report.to_text());
     println!("report in {}", dir.display());
+    let ended_early = runs.iter().any(|r| r.outcome.is_err());
+    // An attempt the session cut short (a stall, a device fault) says nothing of the trainee.
+    if let (Some(score), false) = (&report.score, ended_early) {
+        let trainee = args
+            .trainee
+            .clone()
+            .or_else(|| std::env::var("USER").ok().filter(|u| !u.is_empty()))
+            .unwrap_or_else(|| "trainee".to_owned());
+        let path = args.history.clone().unwrap_or_else(crate::history::default_path);
+        let history = crate::history::History::open_or_create(&path)?;
+        let number = history.add(
+            &trainee,
+            &scene.name,
+            &models_sha256(&resolved),
+            &report.device,
+            score,
+        )?;
+        println!(
+            "attempt {number} stored for {trainee} in {} (palpus history --trainee {trainee})",
+            path.display()
+        );
+    }
     match runs
         .iter()
         .find_map(|r| r.outcome.as_ref().err().map(|end| (r, end)))

@@ -6,8 +6,10 @@
 //! The shared primitives live here: the bundled font ([`font`]), drawing into an RGB buffer
 //! and writing it as PNG ([`render()`], [`write_png_rgb`]), and [`PlotError`].
 
+pub mod attempt;
 pub mod categories;
 pub mod fit;
+pub mod history;
 pub mod recognition;
 pub mod sequential;
 pub mod session;
@@ -22,8 +24,10 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
+pub use attempt::{ATTEMPT_SIZE, ForceDepth, write_attempt_plot};
 pub use categories::write_scatter;
 pub use fit::{FitSet, write_fit_plot};
+pub use history::write_learning_curve;
 pub use recognition::{
     confusion_size, som_components_size, som_density_size, som_map_size, write_confusion, write_eval_plots,
     write_som_components, write_som_density, write_som_map,

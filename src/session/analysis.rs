@@ -201,6 +201,16 @@ fn out_of_domain(s: &[HapticSample], surface_z_m: f64) -> Vec<OutOfDomainTicks> 
         .collect()
 }
 
+/// Where the tissue's surface is in `run`'s device coordinates: a replayed capture's depths
+/// are measured from it already.
+pub fn surface_z_m(run: &SegmentRun) -> f64 {
+    if run.device.starts_with("replay") {
+        0.0
+    } else {
+        SURFACE_Z_M
+    }
+}
+
 /// Summarises a segment.
 pub fn summarize(run: &SegmentRun) -> SegmentSummary {
     let s = &run.samples;
@@ -219,11 +229,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
     let mut truth_along = None;
     let (kind, punctures, max_depth_m, max_model_force_n, ratio) = match &run.segment.kind {
         SegmentKind::Needle { .. } => {
-            let surface_z_m = if matches!(run.device.as_str(), d if d.starts_with("replay")) {
-                0.0
-            } else {
-                SURFACE_Z_M
-            };
+            let surface_z_m = surface_z_m(run);
             let punctures = punctures(s);
             layers = layer_fidelity(s, surface_z_m);
             if !run.device.starts_with("replay") {

@@ -9,7 +9,9 @@
 
 pub mod analysis;
 pub mod report;
+pub mod score;
 pub mod script;
+pub mod smoothness;
 pub mod truth_along;
 
 use std::path::{Path, PathBuf};
@@ -151,7 +153,7 @@ pub fn segments(scene: &Scene, models: &[ResolvedModel]) -> Result<Vec<Segment>,
             })
     };
     let mut out = Vec::new();
-    match scene.task {
+    match &scene.task {
         Task::Insertion { .. } => {
             for object in &scene.objects {
                 if object.tool {

@@ -206,6 +206,9 @@ pub struct SessionReport {
     pub frame: Result<PathBuf, String>,
     /// Captures recorded.
     pub recorded: Vec<(PathBuf, u64)>,
+    /// The attempt scored against the scene's goal, when it states one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub score: Option<super::score::Score>,
     /// Wall-clock time from start to report, s.
     pub wall_s: f64,
 }
@@ -400,6 +403,9 @@ impl SessionReport {
                 self.recognition.len() - named
             );
         }
+        if let Some(score) = &self.score {
+            let _ = writeln!(t, "{}", score_text(score));
+        }
         if self.recognition_unread_windows > 0 {
             let _ = writeln!(
                 t,
@@ -444,6 +450,31 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
         path: path.to_owned(),
         source,
     }
+}
+
+/// The lines of the run summary that score the attempt.
+pub fn score_text(score: &super::score::Score) -> String {
+    let or_none = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map_or("—".to_owned(), f);
+    format!(
+        "  attempt {}: {}\n    overshoot {} (allowed {:.1} mm), peak force {:.2} N, time to target {}, \
+         {} withdrawal{}, {} re-insertion{}, smoothness (SPARC) {}; layers given: {}",
+        if score.passed { "PASSED" } else { "FAILED" },
+        score.verdict,
+        or_none(score.overshoot_m, &|m| format!("{:.1} mm", m * 1e3)),
+        score.allowed_overshoot_m * 1e3,
+        score.peak_force_n,
+        or_none(score.time_to_target_s, &|s| format!("{s:.2} s")),
+        score.withdrawals,
+        if score.withdrawals == 1 { "" } else { "s" },
+        score.reinsertions,
+        if score.reinsertions == 1 { "" } else { "s" },
+        or_none(score.smoothness_sparc, &|v| format!("{v:.2}")),
+        if score.layers_given.is_empty() {
+            "none".to_owned()
+        } else {
+            score.layers_given.join(", ")
+        }
+    )
 }
 
 /// Writes `summary.txt`, `report.json` and, if there are decisions, `timeline.csv`.

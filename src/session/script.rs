@@ -18,6 +18,7 @@ pub fn trainee(task: &Task, surface_z_m: f64, grip_npm: f64) -> Waypoints {
             speed_mps,
             hold_s,
             withdraw_speed_mps,
+            ..
         } => {
             let top = DVec3::new(0.0, 0.0, surface_z_m + start_above_m);
             let bottom = DVec3::new(0.0, 0.0, surface_z_m - depth_m);
@@ -75,6 +76,7 @@ mod tests {
             speed_mps: 0.01,
             hold_s: 1.0,
             withdraw_speed_mps: 0.02,
+            goal: None,
         };
         let mut w = trainee(&task, -0.02, 300.0);
         assert!((w.end_s() - (0.3 + 3.2 + 1.0 + 1.6 + 0.3)).abs() < 1e-9);

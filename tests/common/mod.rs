@@ -7,9 +7,20 @@ use std::process::{Command, Output};
 
 use recognize::{LabelledCapture, RecognizerFile, SequentialParams, SequentialState, SequentialStep};
 
+/// The trainees' history every test's `palpus run` adds its scored attempts to, instead of
+/// the user's own.
+pub const HISTORY: &str = concat!(env!("CARGO_TARGET_TMPDIR"), "/history.sqlite");
+
+/// The `palpus` binary, its scored attempts going to [`HISTORY`].
+pub fn palpus_command() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_palpus"));
+    command.env("PALPUS_HISTORY", HISTORY);
+    command
+}
+
 /// Runs `palpus ARGS` without a vendor library configured in the environment.
 pub fn palpus(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_palpus"))
+    palpus_command()
         .args(args)
         .env_remove("PALPUS_DHD_LIBRARY")
         .output()

@@ -304,9 +304,9 @@ fn bench_trade_writes_every_point_and_the_front_nothing_beats() {
 #[test]
 fn a_closed_output_pipe_ends_the_process_without_a_panic() {
     use std::os::unix::process::ExitStatusExt;
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     let dir = tempfile::tempdir().unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
+    let mut child = crate::common::palpus_command()
         .args(["gen", "--out"])
         .arg(dir.path())
         .args(["--only", "nakano"])

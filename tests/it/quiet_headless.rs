@@ -3,7 +3,6 @@
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
 use std::path::PathBuf;
-use std::process::Command;
 
 #[test]
 fn headless_render_without_a_session_is_quiet() {
@@ -12,7 +11,7 @@ fn headless_render_without_a_session_is_quiet() {
     let tmp = dir.path().join("tmp");
     std::fs::create_dir(&tmp).unwrap();
     let out = dir.path().join("frame.png");
-    let o = Command::new(env!("CARGO_BIN_EXE_palpus"))
+    let o = crate::common::palpus_command()
         .args([
             "render",
             "scenes/needle_liver.toml",
@@ -57,7 +56,7 @@ fn runtime_directories_are_not_left_behind() {
     let dir = tempfile::tempdir().unwrap();
     let tmp = dir.path();
     let palpus = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_palpus"))
+        crate::common::palpus_command()
             .args(args)
             .env("TMPDIR", tmp)
             .env("PALPUS_CACHE_DIR", tmp.join("cache"))
@@ -80,10 +79,7 @@ fn runtime_directories_are_not_left_behind() {
     assert_eq!(left(), Vec::<String>::new());
 
     // One left by a process that died without cleaning up, one of a live process (this one).
-    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
-        .arg("--version")
-        .spawn()
-        .unwrap();
+    let mut child = crate::common::palpus_command().arg("--version").spawn().unwrap();
     let dead_pid = child.id();
     child.wait().unwrap();
     let dead = format!("palpus-runtime-{dead_pid}-0");

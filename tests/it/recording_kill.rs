@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)] // A failed unwrap is a failed test.
 
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use crate::common::{succeeds, text};
@@ -73,7 +73,7 @@ fn a_killed_capture_keeps_the_old_file_and_leaves_a_readable_partial_one() {
 fn record_then_kill(capture: &[&str], partial: &std::path::Path) -> Result<(), String> {
     // A stalled attempt's partial file would show rows before this run has recorded any.
     let _ = std::fs::remove_file(partial);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_palpus"))
+    let mut child = crate::common::palpus_command()
         .args(capture)
         .arg("--quiet")
         .env_remove("PALPUS_DHD_LIBRARY")

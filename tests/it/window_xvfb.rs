@@ -158,7 +158,7 @@ fn dragging_and_scrolling_in_the_window_punctures_the_liver() {
     };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
-    let mut app = Command::new(env!("CARGO_BIN_EXE_palpus"))
+    let mut app = crate::common::palpus_command()
         // The input below takes about 6.5 s from the window's opening.
         .args(["run", "--duration", "9", "--report", out.to_str().unwrap()])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
