@@ -6,6 +6,7 @@
 //! the models a scene needs, [`session`] runs them on the haptic thread and reports, and
 //! [`plots`] draws every figure.
 
+pub mod attempt;
 pub mod cli;
 pub mod exit;
 pub mod fit_files;

@@ -342,6 +342,7 @@ pub enum Task {
 /// max_force_n = 4.0                      # an axial force over this fails it
 /// time_limit_s = 20.0                    # from first contact to the target giving
 /// reference = "expert.csv"               # an expert's recorded attempt, drawn under each
+/// mode = "guided"                        # or "exam": no guidance in the window until the end
 /// ```
 #[derive(Debug, Clone, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
@@ -366,6 +367,36 @@ pub struct Goal {
     /// under each attempt's force against depth.
     #[serde(default)]
     pub reference: Option<PathBuf>,
+    /// What the window's overlay shows during an attempt.
+    #[serde(default)]
+    pub mode: GoalMode,
+}
+
+/// `task.goal.mode`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case", try_from = "String")]
+pub enum GoalMode {
+    /// The phase the tip is in and the distance to the target, live.
+    #[default]
+    Guided,
+    /// Nothing (not even the force plots) until the attempt ends, then its score.
+    Exam,
+}
+
+impl TryFrom<String> for GoalMode {
+    type Error = String;
+
+    // By hand so that the message names the key: inside `[task]` the parser's own points at
+    // the table, not the line.
+    fn try_from(name: String) -> Result<Self, String> {
+        match name.as_str() {
+            "guided" => Ok(Self::Guided),
+            "exam" => Ok(Self::Exam),
+            other => Err(format!(
+                "task.goal.mode: `{other}` is neither `guided` nor `exam`"
+            )),
+        }
+    }
 }
 
 impl Goal {
@@ -1195,8 +1226,14 @@ mod tests {
             ),
             (
                 "time_limit_s = 20.0",
-                "time_limit_s = 20.0\nmode = \"exam\"",
-                "mode",
+                "time_limit_s = 20.0\nmode = \"quiz\"",
+                "task.goal.mode",
+                "neither `guided` nor `exam`",
+            ),
+            (
+                "time_limit_s = 20.0",
+                "time_limit_s = 20.0\nlimit = 1",
+                "limit",
                 "unknown field",
             ),
         ] {

@@ -377,6 +377,13 @@ pub fn render_session_frame(
                 confidence: r.confidence as f32,
                 decided: r.label.is_some(),
             });
+        // What the trainee's overlay said at that moment.
+        let mut guide = crate::session::guide::LiveGuide::new();
+        let surface_z_m = crate::session::analysis::surface_z_m(run);
+        for s in &run.samples[..=*i] {
+            guide.push(s, surface_z_m);
+        }
+        overlay.task = crate::session::guide::task_panel(scene.task.goal(), Some(&run.segment.kind), &guide);
         frame.overlay = Some(overlay);
         let image = renderer.render(&frame).map_err(|e| e.to_string())?;
         image.save_png(path).map_err(|e| e.to_string())?;

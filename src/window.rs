@@ -21,6 +21,7 @@ use sim::LiveHand;
 
 use crate::recognizer::SceneRecognizer;
 use crate::scene::Scene;
+use crate::session::guide::{LiveGuide, task_panel};
 use crate::session::report::Recognition as Decision;
 use crate::session::{
     self, LiveLink, Segment, SegmentKind, SegmentRun, SessionError, SessionOptions, start_position_m,
@@ -82,6 +83,8 @@ struct Session {
     last_wall: Instant,
     last_ticks: u64,
     rate_hz: f32,
+    /// The running attempt, as the overlay's task panel tells it.
+    guide: LiveGuide,
 }
 
 /// The live view of a segment at `rate_hz`, and the window's buffer for its plots.
@@ -129,6 +132,7 @@ impl Session {
             last_wall: Instant::now(),
             last_ticks: 0,
             rate_hz: 0.0,
+            guide: LiveGuide::new(),
         };
         s.start();
         Ok(s)
@@ -146,6 +150,7 @@ impl Session {
         self.live = live;
         self.recent = recent;
         self.last_ticks = 0;
+        self.guide = LiveGuide::new();
         self.recognized = None;
         self.decisions_seen = 0.0;
         let (scene, options, n, recognizer) = (
@@ -228,13 +233,24 @@ impl WindowApp for Session {
             (Some(r), Some(SegmentKind::Surface { surface })) => Some((r, surface)),
             _ => None,
         };
-        let (recent, recognized, decisions_seen, recognition) = (
+        let (recent, recognized, decisions_seen, recognition, guide) = (
             &mut self.recent,
             &mut self.recognized,
             &mut self.decisions_seen,
             &mut self.outcome.recognition,
+            &mut self.guide,
         );
+        let needle = matches!(kind, Some(SegmentKind::Needle { .. }));
+        // A replayed capture's depths are measured from the surface already.
+        let surface_z_m = if self.options.device.label().starts_with("replay") {
+            0.0
+        } else {
+            session::SURFACE_Z_M
+        };
         self.live.drain(|s| {
+            if needle {
+                guide.push(s, surface_z_m);
+            }
             recent.push(s);
             let Some((r, truth)) = surface else {
                 return;
@@ -286,6 +302,7 @@ impl WindowApp for Session {
             }
         );
         overlay.recognized = self.recognized.clone();
+        overlay.task = task_panel(self.scene.task.goal(), kind, &self.guide);
         overlay.scenes = self
             .scenes
             .iter()

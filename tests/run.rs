@@ -65,10 +65,12 @@ fn printed_layers(dir: &Path) -> String {
 }
 
 /// The default scene, its paths absolute and without budgets, with `model_source` (a
-/// `capture = …` or `file = …` line) in place of its model's capture.
+/// `capture = …` or `file = …` line) in place of its model's capture, and without its goal: the
+/// goal names the two membranes of the default model, and another model may find more.
 fn needle_scene_with(model_source: &str) -> String {
     let text = std::fs::read_to_string(root().join("scenes/needle_liver.toml")).unwrap();
-    common::without_budgets(&text)
+    let text = text.split("\n[task.goal]").next().unwrap_or_default();
+    common::without_budgets(text)
         .replace("../", &format!("{}/", root().display()))
         .lines()
         .map(|l| {
@@ -743,6 +745,22 @@ fn scored_attempts_pass_or_fail_for_their_reasons_and_are_kept_in_the_history() 
             .unwrap()
             .starts_with("the axial force reached 1.5"),
         "{forceful}"
+    );
+
+    // A goal naming more layers than the model renders is refused before anyone practises.
+    let o = run(
+        &[
+            "--headless",
+            "--unpaced",
+            "--set",
+            "task.goal.layers=[\"capsule\", \"vessel_wall\", \"back\"]",
+        ],
+        &cache,
+    );
+    let printed = text(&o);
+    assert!(
+        !o.status.success() && printed.contains("renders 2 membranes"),
+        "{printed}"
     );
 
     let rows = palpus::history::History::open(&history)

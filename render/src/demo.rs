@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use crate::assets_gen::PATCH_RQ_M;
-use crate::frame::{Camera, Dimple, Frame, Material, Object, Overlay, Param, Recognition, Tool};
+use crate::frame::{Camera, Dimple, Frame, Material, Object, Overlay, Param, Recognition, TaskPanel, Tool};
 use crate::mesh::MeshData;
 
 /// Where the needle is in a tissue scene.
@@ -201,5 +201,6 @@ pub fn demo_overlay() -> Overlay {
                 unit: "N".into(),
             },
         ],
+        task: TaskPanel::None,
     }
 }

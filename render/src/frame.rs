@@ -243,6 +243,21 @@ pub struct Overlay {
     /// Index into `scenes` of the scene being shown.
     pub current_scene: Option<usize>,
     pub params: Vec<Param>,
+    /// The task's panel: guidance, or an exam's silence.
+    pub task: TaskPanel,
+}
+
+/// What the overlay says of the task in progress.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum TaskPanel {
+    /// No task with a goal.
+    #[default]
+    None,
+    /// Guidance lines, each `(text, warning)`.
+    Guided(Vec<(String, bool)>),
+    /// An exam: the force plots and every reading of the attempt are hidden until it ends;
+    /// the line says so.
+    Exam(String),
 }
 
 /// A surface the recognizer names, with its confidence 0..1.

@@ -41,8 +41,8 @@ pub use demo::{NeedleState, demo_overlay, tissue_scene, tray_scene};
 pub use egui;
 pub use error::RenderError;
 pub use frame::{
-    Camera, Dimple, Frame, MAX_DIMPLES, Material, Object, Overlay, Param, Recognition, TissueState, Tool,
-    UiAction,
+    Camera, Dimple, Frame, MAX_DIMPLES, Material, Object, Overlay, Param, Recognition, TaskPanel,
+    TissueState, Tool, UiAction,
 };
 pub use gltf_io::{compute_normals, load_gltf, write_glb};
 pub use gpu::{Backend, GpuOptions};

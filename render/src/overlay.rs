@@ -8,7 +8,7 @@
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, StrokeKind, Vec2};
 
-use crate::frame::{Overlay, UiAction};
+use crate::frame::{Overlay, TaskPanel, UiAction};
 use crate::offscreen::texture_2d;
 
 /// Width of the overlay's side panel, points.
@@ -371,6 +371,27 @@ fn build(ui: &mut egui::Ui, o: &Overlay, actions: &mut Vec<UiAction>) {
         .show(ui, |ui| {
             status(ui, o);
             ui.separator();
+            match &o.task {
+                TaskPanel::None => {}
+                TaskPanel::Guided(lines) => {
+                    for (text, warning) in lines {
+                        let colour = if *warning {
+                            Color32::from_rgb(255, 110, 90)
+                        } else {
+                            Color32::from_rgb(150, 230, 150)
+                        };
+                        ui.label(egui::RichText::new(text).color(colour));
+                    }
+                    ui.separator();
+                }
+                TaskPanel::Exam(line) => {
+                    // An exam shows no reading of the attempt: neither guidance nor the forces.
+                    ui.label(egui::RichText::new(line).color(Color32::from_rgb(230, 200, 120)));
+                    ui.separator();
+                    controls(ui, o, actions);
+                    return;
+                }
+            }
             let quantity = o.depth_label.as_deref().unwrap_or("depth");
             plot(
                 ui,

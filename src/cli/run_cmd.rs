@@ -7,9 +7,9 @@ use anyhow::Context;
 use clap::Args;
 
 use super::device_arg::parse_device;
+use crate::attempt;
 use crate::exit::EndedEarly;
 use crate::models;
-use crate::plots::ForceDepth;
 use crate::scene::{DEFAULT_SCENE, Scene, SceneOverride};
 use crate::session::report::{self, ModelLine, SessionReport};
 use crate::session::{self, SessionOptions, analysis};
@@ -79,27 +79,6 @@ pub(crate) struct RunArgs {
     autopilot: bool,
 }
 
-/// SHA-256 of the models a session rendered, as stored: attempts on different models are
-/// told apart in the history.
-fn models_sha256(resolved: &[models::ResolvedModel]) -> String {
-    use sha2::{Digest, Sha256};
-    let mut hash = Sha256::new();
-    for m in resolved {
-        hash.update(m.name.as_bytes());
-        hash.update(serde_json::to_vec(&m.model).unwrap_or_default());
-    }
-    hash.finalize().iter().map(|b| format!("{b:02x}")).collect()
-}
-
-/// The force against depth of an insertion capture (an expert's recorded attempt).
-fn read_reference(path: &Path) -> anyhow::Result<ForceDepth> {
-    let capture = capture::Capture::read_file(path, capture::CaptureKind::Insertion)?;
-    Ok(ForceDepth {
-        depth_m: capture.column(capture::kind::DEPTH_M)?.to_vec(),
-        force_n: capture.column(capture::kind::AXIAL_FORCE_N)?.to_vec(),
-    })
-}
-
 /// Whether a window can be opened here.
 pub(crate) fn has_display() -> bool {
     ["DISPLAY", "WAYLAND_DISPLAY"]
@@ -125,7 +104,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     // Read before the session, so that a bad reference is reported before anyone practises.
     let reference = match scene.task.goal().and_then(|g| g.reference.as_ref()) {
         Some(file) => Some(
-            read_reference(&scene.resolve(file))
+            attempt::read_reference(&scene.resolve(file))
                 .with_context(|| format!("{}: task.goal.reference", scene.path.display()))?,
         ),
         None => None,
@@ -144,6 +123,7 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
         autopilot: args.autopilot,
     };
     let segments = session::segments(&scene, &resolved)?;
+    attempt::check_goal_layers(&scene, &segments)?;
     let segment_count = segments.len();
     let headless = args.headless || !has_display();
     let dir = |scene: &Scene| {
@@ -234,45 +214,13 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     });
     let timing = crate::recognizer::timings(&runs, &recognition);
     let segments: Vec<analysis::SegmentSummary> = runs.iter().map(analysis::summarize).collect();
-    let score = scene.task.goal().and_then(|goal| {
-        let (run, summary) = runs
-            .iter()
-            .zip(&segments)
-            .find(|(r, _)| matches!(r.segment.kind, session::SegmentKind::Needle { .. }))?;
-        Some(session::score::score(
-            &run.samples,
-            &summary.punctures,
-            goal,
-            analysis::surface_z_m(run),
-            scene.device.rate_hz,
-        ))
-    });
-    let attempt_plot = dir.join("attempt.png");
-    match (
-        &score,
-        runs.iter()
-            .find(|r| matches!(r.segment.kind, session::SegmentKind::Needle { .. })),
-    ) {
-        (Some(score), Some(run)) => {
-            let surface_z_m = analysis::surface_z_m(run);
-            let attempt = ForceDepth {
-                depth_m: run
-                    .samples
-                    .iter()
-                    .map(|s| surface_z_m - s.channels[haptics::admittance_channel::VIRTUAL_Z_M])
-                    .collect(),
-                force_n: run
-                    .samples
-                    .iter()
-                    .map(|s| s.channels[haptics::admittance_channel::MODEL_FORCE_Z_N])
-                    .collect(),
-            };
-            crate::plots::write_attempt_plot(&attempt_plot, &attempt, reference.as_ref(), score)?;
-        }
-        _ => {
-            let _ = std::fs::remove_file(&attempt_plot);
-        }
-    }
+    let score = attempt::score(&scene, &runs, &segments);
+    attempt::write_plot(
+        &dir.join("attempt.png"),
+        &runs,
+        score.as_ref(),
+        reference.as_ref(),
+    )?;
     let report = SessionReport {
         scene: scene.name.clone(),
         scene_file: scene.path.clone(),
@@ -298,23 +246,11 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     report::write_summary(&dir, &report)?;
     print!("{}", report.to_text());
     println!("report in {}", dir.display());
-    let ended_early = runs.iter().any(|r| r.outcome.is_err());
     // An attempt the session cut short (a stall, a device fault) says nothing of the trainee.
-    if let (Some(score), false) = (&report.score, ended_early) {
-        let trainee = args
-            .trainee
-            .clone()
-            .or_else(|| std::env::var("USER").ok().filter(|u| !u.is_empty()))
-            .unwrap_or_else(|| "trainee".to_owned());
+    if let (Some(score), false) = (&report.score, runs.iter().any(|r| r.outcome.is_err())) {
         let path = args.history.clone().unwrap_or_else(crate::history::default_path);
-        let history = crate::history::History::open_or_create(&path)?;
-        let number = history.add(
-            &trainee,
-            &scene.name,
-            &models_sha256(&resolved),
-            &report.device,
-            score,
-        )?;
+        let trainee = attempt::trainee(args.trainee.as_deref());
+        let number = attempt::store(&path, &trainee, &scene, &resolved, &report.device, score)?;
         println!(
             "attempt {number} stored for {trainee} in {} (palpus history --trainee {trainee})",
             path.display()

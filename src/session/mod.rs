@@ -8,6 +8,7 @@
 //! workspace.
 
 pub mod analysis;
+pub mod guide;
 pub mod report;
 pub mod score;
 pub mod script;

@@ -32,6 +32,7 @@ const LAYERS: [(&str, &str, &[&str]); 9] = [
         ".",
         &[
             "capture",
+            "fft",
             "svm",
             "identify",
             "recognize",

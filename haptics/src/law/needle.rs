@@ -53,6 +53,19 @@ impl PunctureState {
             Self::Withdrawal => 4.0,
         }
     }
+
+    /// The state a recorded [`PunctureState::code`] stands for; `None` for any other number.
+    pub fn from_code(code: f64) -> Option<Self> {
+        [
+            Self::Approach,
+            Self::CapsuleLoading,
+            Self::Puncture,
+            Self::Insertion,
+            Self::Withdrawal,
+        ]
+        .into_iter()
+        .find(|s| s.code() == code)
+    }
 }
 
 /// Tuning of the state machine.
