@@ -247,8 +247,9 @@ pub enum CaptureErrorKind {
     /// are the largest kinds, and `Vec`/`String` would make every `Result<_, CaptureError>`
     /// of the crate bigger to return (clippy's `result_large_err`).
     #[error(
-        "--map entry `{entry}`: the input has no column `{column}` (its columns: {})",
-        bounded_list(available)
+        "--map entry `{entry}`: the input has no column `{column}` (its columns: {}){}",
+        bounded_list(available),
+        packed_hint(column, available.iter())
     )]
     UnknownSource {
         /// The map entry.
@@ -346,8 +347,9 @@ pub enum CaptureErrorKind {
     TooManyRows(Box<OutputBudget>),
     /// Of several inputs, none has an unqualified `--map` source column.
     #[error(
-        "--map entry `{entry}`: no input has a column `{column}` ({})",
-        describe_inputs(inputs)
+        "--map entry `{entry}`: no input has a column `{column}` ({}){}",
+        describe_inputs(inputs),
+        packed_hint(column, inputs.iter().flat_map(|i| i.columns.iter()))
     )]
     SourceInNoInput {
         /// The map entry.
@@ -573,6 +575,30 @@ mod tests {
 const LIST_CHARS: usize = 300;
 
 /// `names` comma-separated, cut after [`LIST_CHARS`] characters with how many were left out.
+/// When the missing source `column` is a packed channel the inputs spread over numbered
+/// columns (`pac_0` … `pac_21`), the `--unroll` that makes it one: without it the map finds no
+/// column `pac` and would not say why. Empty otherwise.
+fn packed_hint<'a>(column: &str, names: impl Iterator<Item = &'a String>) -> String {
+    let mut numbered: Vec<(u64, &str)> = names
+        .filter_map(|name| {
+            let rest = name.strip_prefix(column)?;
+            let digits = rest.strip_prefix(['_', '-', '.']).unwrap_or(rest);
+            let index = (!digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
+                .then(|| digits.parse::<u64>().ok())??;
+            Some((index, name.as_str()))
+        })
+        .collect();
+    numbered.sort_unstable();
+    match (numbered.first(), numbered.last()) {
+        (Some((_, first)), Some((_, last))) if numbered.len() >= 2 => format!(
+            "; {} numbered columns {first} … {last} look like packed samples of it: unroll them \
+             into one with --unroll '{column}={first}..{last}'",
+            numbered.len()
+        ),
+        _ => String::new(),
+    }
+}
+
 pub(crate) fn bounded_list(names: &[String]) -> String {
     let mut out = String::new();
     for (i, name) in names.iter().enumerate() {
@@ -589,7 +615,27 @@ pub(crate) fn bounded_list(names: &[String]) -> String {
 
 #[cfg(test)]
 mod bounded_tests {
-    use super::bounded_list;
+    use super::{bounded_list, packed_hint};
+
+    #[test]
+    fn a_missing_column_spread_over_numbered_ones_points_at_unroll() {
+        let names: Vec<String> = ["t", "pac_0", "pac_2", "pac_1", "pdc", "pac_x", "pac"]
+            .iter()
+            .map(|s| (*s).to_owned())
+            .collect();
+        assert_eq!(
+            packed_hint("pac", names.iter()),
+            "; 3 numbered columns pac_0 … pac_2 look like packed samples of it: unroll them into \
+             one with --unroll 'pac=pac_0..pac_2'"
+        );
+        let plain: Vec<String> = ["acc0", "acc1", "acc10"]
+            .iter()
+            .map(|s| (*s).to_owned())
+            .collect();
+        assert!(packed_hint("acc", plain.iter()).contains("--unroll 'acc=acc0..acc10'"));
+        assert_eq!(packed_hint("pdc", names.iter()), "");
+        assert_eq!(packed_hint("force", names.iter()), "");
+    }
 
     #[test]
     fn a_long_list_is_cut_with_the_count_left_out() {

@@ -1130,6 +1130,34 @@ fn joining_errors_name_the_files() {
         t.contains("no input has a column `pos`") && t.contains("multistream_position.csv has t, x, valid"),
         "{t}"
     );
+    // Packed samples mapped without --unroll: the error says which --unroll makes the column.
+    let (force, position, vib) = (
+        fixture("multistream_force.csv"),
+        fixture("multistream_position.csv"),
+        fixture("multistream_vib_packed.csv"),
+    );
+    let o = palpus(&[
+        "import",
+        force.to_str().unwrap(),
+        position.to_str().unwrap(),
+        vib.to_str().unwrap(),
+        "--kind",
+        "rubbing",
+        "--rate-hz",
+        "1000",
+        "--map",
+        MULTISTREAM_MAP,
+        "--repeated-time",
+        "mean",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("no input has a column `acc`") && t.contains("--unroll 'acc=acc_0..acc_21'"),
+        "{t}"
+    );
     // A clock offset that moves the position log past the others' end.
     let o = import_multistream(
         &out,
