@@ -763,6 +763,36 @@ fn scored_attempts_pass_or_fail_for_their_reasons_and_are_kept_in_the_history() 
         "{printed}"
     );
 
+    // Sessions running at once, each adding its attempt to the same history: none is lost.
+    let children: Vec<_> = ["dora", "emil", "finn"]
+        .iter()
+        .map(|trainee| {
+            let out = dir.path().join(format!("at_once_{trainee}"));
+            palpus_at_root(
+                "run",
+                &[
+                    "--headless",
+                    "--unpaced",
+                    "--trainee",
+                    trainee,
+                    "--history",
+                    history.to_str().unwrap(),
+                    "--report",
+                    out.to_str().unwrap(),
+                ],
+                &cache,
+            )
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+        })
+        .collect();
+    for mut child in children {
+        assert!(child.wait().unwrap().success());
+    }
+
     let rows = palpus::history::History::open(&history)
         .unwrap()
         .attempts(None, None)
@@ -772,9 +802,12 @@ fn scored_attempts_pass_or_fail_for_their_reasons_and_are_kept_in_the_history() 
         .map(|a| (a.trainee.as_str(), a.score.passed))
         .collect();
     assert_eq!(
-        who,
+        who[..4],
         [("ana", true), ("ben", false), ("carl", false), ("carl", false)]
     );
+    let mut at_once: Vec<&str> = who[4..].iter().map(|(t, _)| *t).collect();
+    at_once.sort_unstable();
+    assert_eq!(at_once, ["dora", "emil", "finn"]);
     assert!(
         rows.iter()
             .all(|a| a.scene == "needle_liver" && a.model_sha256.len() == 64)
