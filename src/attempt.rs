@@ -20,7 +20,7 @@ pub fn check_goal_layers(scene: &Scene, segments: &[Segment]) -> anyhow::Result<
         return Ok(());
     };
     for segment in segments {
-        if let SegmentKind::Needle { model } = &segment.kind
+        if let SegmentKind::Needle { model, .. } = &segment.kind
             && let identify::ModelBody::Phases(phases) = &model.body
             && phases.layers.len() != goal.layers.len()
         {

@@ -156,7 +156,9 @@ fn the_default_scene_punctures_at_the_truth_depth_in_real_time() {
     // Forces within the device's limits, never NaN.
     assert!(f(&seg["max_command_n"]) <= f(&seg["device_limit_n"]), "{seg}");
     assert_eq!(f(&seg["non_finite_commands"]), 0.0);
-    // The capsule gives where the simulated liver the model was identified from gives.
+    // The capsule gives where the simulated liver the model was identified from gives (the
+    // committed capture's header names the generator and its tissue).
+    assert_eq!(seg["truth_tissue"], "liver", "{seg}");
     let p = &seg["punctures"][0];
     let (depth, truth) = (f(&p["depth_m"]), f(&p["truth_depth_m"]));
     assert!(
@@ -321,6 +323,21 @@ fn scenes_on_models_from_real_world_shaped_records_render_every_layer_bounded() 
         assert_eq!(f(&seg["non_finite_commands"]), 0.0, "{record}: {seg}");
         assert!(
             f(&seg["max_command_n"]) <= f(&seg["device_limit_n"]) + 1e-9,
+            "{record}: {seg}"
+        );
+        // The corpus is not the simulator's tissue (whatever tissue its header names): the
+        // report compares these models with no simulated tissue.
+        assert!(
+            seg["truth_tissue"].is_null() && seg["truth_along"].is_null(),
+            "{record}: {seg}"
+        );
+        assert!(seg["layers"].as_array().unwrap().is_empty(), "{record}: {seg}");
+        assert!(
+            seg["punctures"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|p| p["truth_depth_m"].is_null()),
             "{record}: {seg}"
         );
         // Every layer of the model the trainee's stroke reaches gives, once.

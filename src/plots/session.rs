@@ -25,35 +25,36 @@ pub fn write_force_plot(path: &Path, runs: &[SegmentRun]) -> Result<(), PlotErro
             let ys: Vec<f64> = run.samples.iter().map(force).collect();
             let title = format!("{}: {what} vs {quantity}", run.segment.object);
             let ts: Vec<f64> = run.samples.iter().map(|s| s.time_s).collect();
-            // A needle on the simulator: the simulated liver's own force along the same
-            // trajectory beside the rendered one.
-            let tissue = (matches!(run.segment.kind, SegmentKind::Needle { .. })
-                && !run.device.starts_with("replay"))
-            .then(|| crate::session::truth_along::tissue_force(&run.samples, SURFACE_Z_M));
-            line_chart(&rows[2 * i], &title, &x_label, &xs, &ys, tissue.as_deref())?;
+            // A needle model of a simulated tissue, on the simulator: that tissue's own force
+            // along the same trajectory beside the rendered one.
+            let truth = match &run.segment.kind {
+                SegmentKind::Needle { truth: Some(t), .. } if !run.device.starts_with("replay") => Some(*t),
+                _ => None,
+            };
+            let tissue = truth.map(|t| {
+                (
+                    crate::session::truth_along::tissue_force(&run.samples, SURFACE_Z_M, &t.tissue()),
+                    format!("simulated {}", t.words()),
+                )
+            });
+            let tissue = tissue.as_ref().map(|(f, label)| (f.as_slice(), label.as_str()));
+            line_chart(&rows[2 * i], &title, &x_label, &xs, &ys, tissue)?;
             let title_t = format!("{}: force vs time", run.segment.object);
-            line_chart(
-                &rows[2 * i + 1],
-                &title_t,
-                "time [s]",
-                &ts,
-                &ys,
-                tissue.as_deref(),
-            )?;
+            line_chart(&rows[2 * i + 1], &title_t, "time [s]", &ts, &ys, tissue)?;
         }
         Ok(())
     })
 }
 
-/// `ys` against `xs` in red, and `tissue` (the simulated tissue's force at the same samples)
-/// in grey behind it, with a legend, when given.
+/// `ys` against `xs` in red, and `tissue` (a simulated tissue's force at the same samples, and
+/// its legend) in grey behind it, with a legend, when given.
 fn line_chart(
     area: &Area<'_>,
     title: &str,
     x_label: &str,
     xs: &[f64],
     ys: &[f64],
-    tissue: Option<&[f64]>,
+    tissue: Option<(&[f64], &str)>,
 ) -> Result<(), String> {
     let range = |v: &[f64]| {
         let (lo, hi) = v
@@ -73,7 +74,11 @@ fn line_chart(
         title_px: 20,
         margin_px: 12,
     };
-    let all: Vec<f64> = ys.iter().chain(tissue.unwrap_or(&[])).copied().collect();
+    let all: Vec<f64> = ys
+        .iter()
+        .chain(tissue.map_or(&[][..], |(f, _)| f))
+        .copied()
+        .collect();
     let mut chart = axes(
         area,
         title,
@@ -85,14 +90,14 @@ fn line_chart(
     let step = (xs.len() / 4000).max(1);
     let grey = RGBColor(120, 120, 120);
     let red = RGBColor(180, 40, 40);
-    if let Some(tissue) = tissue {
+    if let Some((tissue, label)) = tissue {
         chart
             .draw_series(LineSeries::new(
                 xs.iter().zip(tissue).step_by(step).map(|(&x, &y)| (x, y)),
                 grey.stroke_width(2),
             ))
             .map_err(|e| e.to_string())?
-            .label("simulated liver")
+            .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], grey.stroke_width(2)));
     }
     let rendered = chart

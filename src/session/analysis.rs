@@ -142,6 +142,11 @@ pub struct SegmentSummary {
     /// simulator): RMSE, the largest error and where, false and missed pops.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth_along: Option<super::truth_along::TruthAlong>,
+    /// The simulated tissue the needle model renders (`liver`), which the punctures,
+    /// layers and `truth_along` are compared with; `None` for a model of anything else (a
+    /// rig's logs), compared with nothing ([`super::truth_tissue`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth_tissue: Option<String>,
     /// Deepest tool depth (needle), m.
     pub max_depth_m: Option<f64>,
     /// Largest model force (needle: axial; friction: normal), N.
@@ -227,14 +232,19 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
     let mut layers = Vec::new();
     let mut outside = Vec::new();
     let mut truth_along = None;
+    let mut truth_tissue = None;
     let (kind, punctures, max_depth_m, max_model_force_n, ratio) = match &run.segment.kind {
-        SegmentKind::Needle { .. } => {
+        SegmentKind::Needle { truth, .. } => {
             let surface_z_m = surface_z_m(run);
-            let punctures = punctures(s);
-            layers = layer_fidelity(s, surface_z_m);
-            if !run.device.starts_with("replay") {
-                truth_along = Some(super::truth_along::along(s, surface_z_m));
+            let tissue = truth.map(sim::li_bi::NeedleTissueKind::tissue);
+            let punctures = punctures(s, tissue.as_ref());
+            if let Some(tissue) = &tissue {
+                layers = layer_fidelity(s, surface_z_m, tissue);
+                if !run.device.starts_with("replay") {
+                    truth_along = Some(super::truth_along::along(s, surface_z_m, tissue));
+                }
             }
+            truth_tissue = truth.map(|t| t.words().to_owned());
             outside = out_of_domain(s, surface_z_m);
             let depth = s
                 .iter()
@@ -317,6 +327,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         punctures,
         layers,
         truth_along,
+        truth_tissue,
         max_depth_m,
         max_model_force_n,
         mean_friction_ratio: ratio,
@@ -329,10 +340,9 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
 }
 
 /// Ruptures: the law's state entering `Puncture`.
-fn punctures(s: &[HapticSample]) -> Vec<Puncture> {
+fn punctures(s: &[HapticSample], tissue: Option<&NeedleTissue>) -> Vec<Puncture> {
     let loading = PunctureState::CapsuleLoading.code();
     let puncture = PunctureState::Puncture.code();
-    let tissue = NeedleTissue::bovine_liver();
     let mut out: Vec<Puncture> = Vec::new();
     let mut peak: f64 = 0.0;
     // The loading speed at the peak: after it the tool surges forward as the force gives.
@@ -354,8 +364,8 @@ fn punctures(s: &[HapticSample]) -> Vec<Puncture> {
                 depth_m: b.channels[c::ENV_INPUT],
                 speed_mps,
                 peak_force_n: peak,
-                truth_depth_m: tissue.puncture_depth_m(index, speed_mps.max(0.0)),
-                truth_peak_force_n: tissue.puncture_peak_force_n(index, speed_mps.max(0.0)),
+                truth_depth_m: tissue.and_then(|t| t.puncture_depth_m(index, speed_mps.max(0.0))),
+                truth_peak_force_n: tissue.and_then(|t| t.puncture_peak_force_n(index, speed_mps.max(0.0))),
             });
             peak = 0.0;
         }
@@ -366,8 +376,7 @@ fn punctures(s: &[HapticSample]) -> Vec<Puncture> {
 /// Every membrane of the simulated liver against the drops of the rendered axial force (see
 /// [`LayerFidelity`]). A detected drop belongs to the membrane whose rupture depth at the
 /// drop's speed is nearest, within the detector's layer gap.
-fn layer_fidelity(s: &[HapticSample], surface_z_m: f64) -> Vec<LayerFidelity> {
-    let tissue = NeedleTissue::bovine_liver();
+fn layer_fidelity(s: &[HapticSample], surface_z_m: f64, tissue: &NeedleTissue) -> Vec<LayerFidelity> {
     let time: Vec<f64> = s.iter().map(|x| x.time_s).collect();
     let depth: Vec<f64> = s
         .iter()

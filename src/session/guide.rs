@@ -123,7 +123,7 @@ impl LiveGuide {
 /// from a needle): the guide's lines, or an exam's one line.
 pub fn task_panel(goal: Option<&Goal>, kind: Option<&SegmentKind>, guide: &LiveGuide) -> TaskPanel {
     match (goal, kind) {
-        (Some(goal), Some(SegmentKind::Needle { model })) => {
+        (Some(goal), Some(SegmentKind::Needle { model, .. })) => {
             let phases = match &model.body {
                 ModelBody::Phases(p) => Some(p.as_ref()),
                 _ => None,

@@ -14,6 +14,7 @@ pub mod score;
 pub mod script;
 pub mod smoothness;
 pub mod truth_along;
+pub mod truth_tissue;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -77,6 +78,9 @@ pub enum SegmentKind {
     Needle {
         /// The model.
         model: Box<ModelFile>,
+        /// The simulated tissue it renders, when it renders one
+        /// ([`truth_tissue`]): the report compares the session with it.
+        truth: Option<sim::li_bi::NeedleTissueKind>,
     },
     /// Rubbing a surface rendered from a friction model.
     Friction {
@@ -164,8 +168,16 @@ pub fn segments(scene: &Scene, models: &[ResolvedModel]) -> Result<Vec<Segment>,
                 if material.puncture.is_some() {
                     out.push(Segment {
                         object: object.name.clone(),
-                        kind: SegmentKind::Needle {
-                            model: model(&object.material, ModelRole::Puncture, &material.puncture)?,
+                        kind: {
+                            let model = model(&object.material, ModelRole::Puncture, &material.puncture)?;
+                            let capture = material
+                                .puncture
+                                .as_ref()
+                                .and_then(|name| scene.models.get(name))
+                                .and_then(|source| source.capture.as_ref())
+                                .map(|c| scene.resolve(Path::new(c)));
+                            let truth = truth_tissue::of_model(&model, capture.as_deref());
+                            SegmentKind::Needle { model, truth }
                         },
                     });
                     break;
@@ -308,7 +320,7 @@ fn controller(
         source: Box::new(source),
     };
     Ok(match &segment.kind {
-        SegmentKind::Needle { model } => {
+        SegmentKind::Needle { model, .. } => {
             let config = NeedleLawConfig {
                 min_peak_n: scene.haptics.rupture_min_peak_n,
                 ..NeedleLawConfig::default()
@@ -537,6 +549,11 @@ pub fn run_segment(
     };
     meta.insert("scene", &scene.name);
     meta.insert("object", &segment.object);
+    // A model of a simulated tissue renders that tissue: a model identified from this
+    // recording is compared with it too.
+    if let SegmentKind::Needle { truth: Some(t), .. } = &segment.kind {
+        meta.insert(truth_tissue::TRUTH_KEY, t.name());
+    }
     // The recorder thread sees every sample, in order: the recognizer decides on them there,
     // then it hands them on to the window's ring (never waiting: a window that falls behind
     // misses samples for its plots, not the report) and keeps them for the report.

@@ -278,6 +278,8 @@ impl SessionReport {
                     o.velocity_mps[1] * 1e3
                 );
             }
+            // A model of no simulated tissue is compared with none.
+            let tissue = s.truth_tissue.as_deref().unwrap_or_default();
             for (i, p) in s.punctures.iter().enumerate() {
                 let truth = p
                     .truth_depth_m
@@ -285,21 +287,30 @@ impl SessionReport {
                 let truth_peak = p.truth_peak_force_n.map_or("-".to_owned(), |f| {
                     format!("{f:.2} N, {:+.0} %", 100.0 * (p.peak_force_n - f) / f)
                 });
+                let compared = if s.truth_tissue.is_some() {
+                    (
+                        format!(" (simulated {tissue} at {:.1} mm/s: {truth})", p.speed_mps * 1e3),
+                        format!(" (simulated {tissue}: {truth_peak})"),
+                    )
+                } else {
+                    (format!(" at {:.1} mm/s", p.speed_mps * 1e3), String::new())
+                };
                 let _ = writeln!(
                     t,
-                    "    puncture {} at {:.2} s: depth {:.1} mm (simulated liver at {:.1} mm/s: {truth}), peak {:.2} N (simulated liver: {truth_peak})",
+                    "    puncture {} at {:.2} s: depth {:.1} mm{}, peak {:.2} N{}",
                     i + 1,
                     p.time_s,
                     p.depth_m * 1e3,
-                    p.speed_mps * 1e3,
-                    p.peak_force_n
+                    compared.0,
+                    p.peak_force_n,
+                    compared.1
                 );
             }
             for l in &s.layers {
                 let mm = |m: Option<f64>| m.map_or("-".to_owned(), |m| format!("{:.1} mm", m * 1e3));
                 let n = |f: Option<f64>| f.map_or("-".to_owned(), |f| format!("{f:.2} N"));
                 let truth = format!(
-                    "simulated liver at {}: {}, {}",
+                    "simulated {tissue} at {}: {}, {}",
                     l.speed_mps
                         .map_or("-".to_owned(), |v| format!("{:.1} mm/s", v * 1e3)),
                     mm(l.truth_depth_m),
@@ -316,7 +327,7 @@ impl SessionReport {
             if let Some(a) = &s.truth_along {
                 let _ = writeln!(
                     t,
-                    "    along the run against the simulated liver: RMSE {:.3} N over {} ticks, largest error {:.3} N at {:.1} mm ({:.2} s)",
+                    "    along the run against the simulated {tissue}: RMSE {:.3} N over {} ticks, largest error {:.3} N at {:.1} mm ({:.2} s)",
                     a.rmse_n,
                     a.ticks,
                     a.max_error_n,
@@ -335,7 +346,7 @@ impl SessionReport {
                 };
                 let _ = writeln!(
                     t,
-                    "    pops the liver does not have: {}; its pops not rendered: {}; held {} ticks, the rendered force went back and forth by at most {:.4} N over 0.2 s",
+                    "    pops the {tissue} does not have: {}; its pops not rendered: {}; held {} ticks, the rendered force went back and forth by at most {:.4} N over 0.2 s",
                     list(&a.false_pops),
                     list(&a.missed_pops),
                     a.held_ticks,

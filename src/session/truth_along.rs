@@ -3,8 +3,8 @@
 //! between two membranes, a drop it has that the render smooths away, an offset during the
 //! hold).
 //!
-//! The simulated liver ([`NeedleTissue::bovine_liver`], the tissue the default capture was
-//! recorded from) is stepped at every tick's depth and velocity of the virtual tool, from a
+//! The simulated tissue the model renders (the bovine liver for the default capture; see
+//! [`super::truth_tissue`]) is stepped at every tick's depth and velocity of the virtual tool, from a
 //! fresh site, exactly as the simulated rig stepped it when it recorded; its force is then the
 //! force the tissue would have given the trainee. A drop is a fall of more than [`POP_N`]
 //! within [`POP_TRAVEL_M`] of travel while the needle is not withdrawn (the detector's travel,
@@ -73,9 +73,9 @@ pub const HELD_SPAN_M: f64 = 0.1e-3;
 /// Ticks (centred) over which a held force's chatter is measured: 0.2 s at 1 kHz.
 pub const RIPPLE_WINDOW: usize = 201;
 
-/// The simulated liver's force at every sample, the tool at `surface_z_m − z`.
-pub fn tissue_force(samples: &[HapticSample], surface_z_m: f64) -> Vec<f64> {
-    let mut site = NeedleSite::new(NeedleTissue::bovine_liver());
+/// `tissue`'s force at every sample, the tool at `surface_z_m − z`.
+pub fn tissue_force(samples: &[HapticSample], surface_z_m: f64, tissue: &NeedleTissue) -> Vec<f64> {
+    let mut site = NeedleSite::new(tissue.clone());
     let mut previous_s: Option<f64> = None;
     samples
         .iter()
@@ -85,7 +85,7 @@ pub fn tissue_force(samples: &[HapticSample], surface_z_m: f64) -> Vec<f64> {
             let dt_s = previous_s.map_or(1e-3, |p| (s.time_s - p).max(0.0));
             previous_s = Some(s.time_s);
             if depth_m <= 0.0 {
-                site = NeedleSite::new(NeedleTissue::bovine_liver());
+                site = NeedleSite::new(tissue.clone());
                 return 0.0;
             }
             site.step(depth_m, velocity_mps, dt_s).axial_force_n
@@ -143,9 +143,9 @@ fn pops(time_s: &[f64], depth_m: &[f64], velocity_mps: &[f64], force_n: &[f64]) 
     out
 }
 
-/// The run's rendered force (`MODEL_FORCE_Z_N`) against the tissue's along its samples.
-pub fn along(samples: &[HapticSample], surface_z_m: f64) -> TruthAlong {
-    let tissue = tissue_force(samples, surface_z_m);
+/// The run's rendered force (`MODEL_FORCE_Z_N`) against `tissue`'s along its samples.
+pub fn along(samples: &[HapticSample], surface_z_m: f64, tissue: &NeedleTissue) -> TruthAlong {
+    let tissue = tissue_force(samples, surface_z_m, tissue);
     let time: Vec<f64> = samples.iter().map(|s| s.time_s).collect();
     let depth: Vec<f64> = samples
         .iter()

@@ -268,6 +268,22 @@ impl NeedleTissueKind {
             Self::LayeredPhantom => "layered_phantom",
         }
     }
+
+    /// How a report names it ("the simulated liver").
+    pub fn words(self) -> &'static str {
+        match self {
+            Self::BovineLiver => "liver",
+            Self::LayeredPhantom => "layered phantom",
+        }
+    }
+
+    /// The tissue a capture's metadata names ([`NeedleTissueKind::name`]); `None` for any
+    /// other name.
+    pub fn named(name: &str) -> Option<Self> {
+        [Self::BovineLiver, Self::LayeredPhantom]
+            .into_iter()
+            .find(|k| k.name() == name)
+    }
 }
 
 /// How the insertion speed behaves within one stroke.
