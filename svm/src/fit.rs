@@ -75,6 +75,9 @@ impl SvrFit {
     }
 }
 
+/// How a fit the interior point handed back at its iteration limit, certified, names its solver.
+const IPM_AT_LIMIT: &str = "interior point (at its iteration limit, certified)";
+
 /// A solved dual, before its certificate: what the solvers hand to [`fit`]'s final check.
 #[derive(Debug, Clone)]
 struct DualSolution {
@@ -88,6 +91,10 @@ struct DualSolution {
     iterations: usize,
     /// Whether the exact active-set polish produced it.
     polished: bool,
+    /// The tolerance the interior point aimed for and stopped short of, at its iteration
+    /// limit: a kept fit is named [`IPM_AT_LIMIT`], a refused one is
+    /// [`SvmError::NotConverged`].
+    short_of: Option<f64>,
     /// The dense kernel matrix, where the solver built one.
     kernel_matrix: Option<Mat<f64>>,
     /// Exact primal weights (linear kernel, polished).
@@ -123,6 +130,7 @@ pub fn fit_observed(
             solver: linear_exact::NAME,
             iterations: sol.iterations,
             polished: true,
+            short_of: None,
             kernel_matrix: None,
             weights: Some(sol.weights),
         };
@@ -174,6 +182,7 @@ pub fn fit_observed(
             },
             iterations: sol.iterations,
             polished: sol.polished,
+            short_of: None,
             kernel_matrix: None,
             weights: None,
         }
@@ -266,56 +275,29 @@ fn solve_dense(
             solver: "interior point + polish",
             iterations,
             polished: true,
+            short_of: None,
             kernel_matrix: Some(k),
             weights: p.weights,
         }),
-        // Short of its own tolerance at its iteration limit: the last iterate is returned when
-        // its certificate meets ACCEPT_GAP, as every solver's is; refused, the error names that
-        // certified gap, not the iterate's own complementarity (which at C = 1e11 read 7e-9
-        // where the certificate of the same point read 4e-4).
-        None if !sol.converged => {
-            let beta: Vec<f64> = sol
+        // Converged or at its iteration limit, the last iterate goes to `certify` like every
+        // solver's: kept when its certificate meets ACCEPT_GAP; refused at the limit, the error
+        // names that certified gap, not the iterate's own complementarity (which at C = 1e11
+        // read 7e-9 where the certificate of the same point read 4e-4).
+        None => Ok(DualSolution {
+            beta: sol
                 .alpha
                 .iter()
                 .zip(&sol.alpha_star)
                 .map(|(a, s)| a - s)
-                .collect();
-            let cert = certificate_of(kernel, data, settings, &beta, sol.bias, Some(&k), None);
-            if !cert.accepted() {
-                return Err(SvmError::NotConverged {
-                    solver: "interior point",
-                    iterations,
-                    gap: cert.relative_gap,
-                    tolerance: settings.tolerance,
-                });
-            }
-            Ok(DualSolution {
-                beta,
-                bias: sol.bias,
-                solver: "interior point (at its iteration limit, certified)",
-                iterations,
-                polished: false,
-                kernel_matrix: Some(k),
-                weights: None,
-            })
-        }
-        None => {
-            let beta = sol
-                .alpha
-                .iter()
-                .zip(&sol.alpha_star)
-                .map(|(a, s)| a - s)
-                .collect();
-            Ok(DualSolution {
-                beta,
-                bias: sol.bias,
-                solver: "interior point",
-                iterations,
-                polished: false,
-                kernel_matrix: Some(k),
-                weights: None,
-            })
-        }
+                .collect(),
+            bias: sol.bias,
+            solver: "interior point",
+            iterations,
+            polished: false,
+            short_of: (!sol.converged).then_some(settings.tolerance),
+            kernel_matrix: Some(k),
+            weights: None,
+        }),
     }
 }
 
@@ -419,6 +401,7 @@ fn solve_on_factor(
         solver: low_rank::NAME,
         iterations: sol.iterations,
         polished: true,
+        short_of: None,
         kernel_matrix: None,
         weights: None,
     }))
@@ -476,6 +459,7 @@ fn certify(
         solver,
         iterations,
         polished,
+        short_of,
         kernel_matrix: k,
         weights,
     } = solution;
@@ -489,6 +473,14 @@ fn certify(
         k.as_ref(),
         weights.as_deref(),
     );
+    if let (false, Some(tolerance)) = (cert.accepted(), short_of) {
+        return Err(SvmError::NotConverged {
+            solver,
+            iterations,
+            gap: cert.relative_gap,
+            tolerance,
+        });
+    }
     if !cert.accepted() {
         return Err(SvmError::Uncertified {
             solver,
@@ -520,7 +512,7 @@ fn certify(
         model,
         dual_objective: cert.dual,
         primal_objective: cert.primal,
-        solver,
+        solver: if short_of.is_some() { IPM_AT_LIMIT } else { solver },
         iterations,
         polished,
         fit_seconds: 0.0,
