@@ -100,6 +100,22 @@ pub enum HistoryError {
     },
 }
 
+impl HistoryError {
+    fn sqlite(path: &Path) -> impl Fn(rusqlite::Error) -> Self + Copy + '_ {
+        move |source| Self::Sqlite {
+            path: path.to_owned(),
+            source,
+        }
+    }
+
+    fn unusable(path: &Path) -> impl Fn(String) -> Self + Copy + '_ {
+        move |reason| Self::Unusable {
+            path: path.to_owned(),
+            reason,
+        }
+    }
+}
+
 /// One stored attempt.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Attempt {
@@ -166,14 +182,8 @@ impl History {
     }
 
     fn open_with(path: &Path, flags: OpenFlags) -> Result<Self, HistoryError> {
-        let sqlite = |source| HistoryError::Sqlite {
-            path: path.to_owned(),
-            source,
-        };
-        let unusable = |reason: String| HistoryError::Unusable {
-            path: path.to_owned(),
-            reason,
-        };
+        let sqlite = HistoryError::sqlite(path);
+        let unusable = HistoryError::unusable(path);
         let db =
             Connection::open_with_flags(path, flags | OpenFlags::SQLITE_OPEN_NO_MUTEX).map_err(sqlite)?;
         db.busy_timeout(BUSY_TIMEOUT).map_err(sqlite)?;
@@ -210,10 +220,7 @@ impl History {
     /// Makes the table in an empty database, in one transaction with its version, so that two
     /// sessions creating it at once leave one table.
     fn create(&self) -> Result<(), HistoryError> {
-        let sqlite = |source| HistoryError::Sqlite {
-            path: self.path.clone(),
-            source,
-        };
+        let sqlite = HistoryError::sqlite(&self.path);
         self.db.execute_batch("BEGIN IMMEDIATE").map_err(sqlite)?;
         let made = (|| {
             let version: i64 = self.db.query_row("PRAGMA user_version", [], |r| r.get(0))?;
@@ -232,10 +239,7 @@ impl History {
     }
 
     fn check_columns(&self) -> Result<(), HistoryError> {
-        let unusable = |reason: String| HistoryError::Unusable {
-            path: self.path.clone(),
-            reason,
-        };
+        let unusable = HistoryError::unusable(&self.path);
         let mut statement = self
             .db
             .prepare("SELECT name FROM pragma_table_info('attempts')")
@@ -293,19 +297,13 @@ impl History {
                     score.deepest_m,
                 ],
             )
-            .map_err(|source| HistoryError::Sqlite {
-                path: self.path.clone(),
-                source,
-            })?;
+            .map_err(HistoryError::sqlite(&self.path))?;
         Ok(self.db.last_insert_rowid())
     }
 
     /// The attempts of `trainee` and `scene` (each when given), oldest first.
     pub fn attempts(&self, trainee: Option<&str>, scene: Option<&str>) -> Result<Vec<Attempt>, HistoryError> {
-        let sqlite = |source| HistoryError::Sqlite {
-            path: self.path.clone(),
-            source,
-        };
+        let sqlite = HistoryError::sqlite(&self.path);
         let mut statement = self
             .db
             .prepare(

@@ -241,12 +241,7 @@ impl WindowApp for Session {
             &mut self.guide,
         );
         let needle = matches!(kind, Some(SegmentKind::Needle { .. }));
-        // A replayed capture's depths are measured from the surface already.
-        let surface_z_m = if self.options.device.label().starts_with("replay") {
-            0.0
-        } else {
-            session::SURFACE_Z_M
-        };
+        let surface_z_m = session::analysis::surface_z_on(&self.options.device.label());
         self.live.drain(|s| {
             if needle {
                 guide.push(s, surface_z_m);

@@ -82,7 +82,7 @@ pub fn write_attempt_plot(
                 .map_err(|e| e.to_string())?
                 .label(format!(
                     "{} gave; allowed past it",
-                    score.target.replace('_', " ")
+                    crate::scene::in_words(&score.target)
                 ))
                 .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], green.mix(0.3).filled()));
         }

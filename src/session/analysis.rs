@@ -206,10 +206,15 @@ fn out_of_domain(s: &[HapticSample], surface_z_m: f64) -> Vec<OutOfDomainTicks> 
         .collect()
 }
 
-/// Where the tissue's surface is in `run`'s device coordinates: a replayed capture's depths
-/// are measured from it already.
+/// Where the tissue's surface is in `run`'s device coordinates ([`surface_z_on`]).
 pub fn surface_z_m(run: &SegmentRun) -> f64 {
-    if run.device.starts_with("replay") {
+    surface_z_on(&run.device)
+}
+
+/// Where the tissue's surface is on the device named `device`: a replayed capture's depths
+/// are measured from it already.
+pub fn surface_z_on(device: &str) -> f64 {
+    if device.starts_with("replay") {
         0.0
     } else {
         SURFACE_Z_M

@@ -9,7 +9,7 @@ use identify::{ModelBody, PhaseModel};
 use render::TaskPanel;
 
 use super::SegmentKind;
-use crate::scene::{Goal, GoalMode};
+use crate::scene::{Goal, GoalMode, in_words};
 
 /// One line of guidance, and whether it warns (the tip past the allowance, a forbidden layer
 /// given).
@@ -58,7 +58,7 @@ impl LiveGuide {
         let layer = |k: usize| {
             goal.layers
                 .get(k)
-                .map_or_else(|| format!("layer {}", k + 1), |l| l.replace('_', " "))
+                .map_or_else(|| format!("layer {}", k + 1), |l| in_words(l))
         };
         let given = self.given_m.len();
         let mm = |m: f64| m * 1e3;
@@ -110,7 +110,7 @@ impl LiveGuide {
         for forbidden in &goal.must_not_puncture {
             if goal.layer_index(forbidden).is_some_and(|k| k < given) {
                 out.push(GuideLine {
-                    text: format!("The {} was punctured", forbidden.replace('_', " ")),
+                    text: format!("The {} was punctured", in_words(forbidden)),
                     warning: true,
                 });
             }
@@ -140,7 +140,7 @@ fn needle_panel(goal: &Goal, phases: Option<&PhaseModel>, guide: &LiveGuide) -> 
         GoalMode::Exam => TaskPanel::Exam(format!(
             "Exam: no readings until the attempt ends. Stop within {:.1} mm past the {}.",
             goal.within_m * 1e3,
-            goal.stop_after.replace('_', " ")
+            in_words(&goal.stop_after)
         )),
         GoalMode::Guided => TaskPanel::Guided(
             guide

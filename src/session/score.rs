@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::analysis::Puncture;
 use super::smoothness::sparc;
-use crate::scene::Goal;
+use crate::scene::{Goal, in_words};
 
 /// Backing off or advancing again by less than this inside the tissue is a tremor, not a
 /// withdrawal or a re-insertion, m.
@@ -104,7 +104,7 @@ pub fn score(
     let mut failures = Vec::new();
     for layer in &goal.must_not_puncture {
         if layers_given.contains(layer) {
-            failures.push(format!("punctured the {}", words(layer)));
+            failures.push(format!("punctured the {}", in_words(layer)));
         }
     }
     if let Some(limit) = goal.max_force_n
@@ -117,7 +117,7 @@ pub fn score(
     match (gave, overshoot_m) {
         (None, _) => failures.push(format!(
             "the {} never gave (deepest {:.1} mm, {} layer{} gave)",
-            words(&goal.stop_after),
+            in_words(&goal.stop_after),
             mm(deepest_m),
             layers_given.len(),
             if layers_given.len() == 1 { "" } else { "s" }
@@ -125,7 +125,7 @@ pub fn score(
         (Some(p), Some(over)) if over > goal.within_m => failures.push(format!(
             "went {:.1} mm past where the {} gave at {:.1} mm (allowed {:.1} mm)",
             mm(over),
-            words(&goal.stop_after),
+            in_words(&goal.stop_after),
             mm(p.depth_m),
             mm(goal.within_m)
         )),
@@ -136,7 +136,7 @@ pub fn score(
     {
         failures.push(format!(
             "the {} gave after {t:.1} s, over the limit of {limit:.1} s",
-            words(&goal.stop_after)
+            in_words(&goal.stop_after)
         ));
     }
     let passed = failures.is_empty();
@@ -144,7 +144,7 @@ pub fn score(
         format!(
             "stopped {:.1} mm past where the {} gave at {:.1} mm (allowed {:.1} mm)",
             mm(overshoot_m.unwrap_or(0.0)),
-            words(&goal.stop_after),
+            in_words(&goal.stop_after),
             mm(gave.map_or(0.0, |p| p.depth_m)),
             mm(goal.within_m)
         )
@@ -166,11 +166,6 @@ pub fn score(
         smoothness_sparc,
         deepest_m,
     }
-}
-
-/// A layer's name as words (`vessel_wall` → `vessel wall`).
-fn words(layer: &str) -> String {
-    layer.replace('_', " ")
 }
 
 /// Withdrawals and re-insertions of a depth trace: reversals of at least [`REVERSAL_M`] while

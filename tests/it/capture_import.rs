@@ -968,6 +968,12 @@ const MULTISTREAM_MAP: &str = "time_s=t[ms],normal_force_n=Fz,friction_force_n=F
 
 /// `palpus import` of the three multistream fixtures (force, position, packed vibration).
 fn import_multistream(out: &Path, map: &str, args: &[&str]) -> std::process::Output {
+    let unroll = ["--unroll", "acc=acc_0..acc_21"];
+    import_multistream_with(out, map, &[&unroll[..], args].concat())
+}
+
+/// [`import_multistream`] without its `--unroll`: `args` say everything else.
+fn import_multistream_with(out: &Path, map: &str, args: &[&str]) -> std::process::Output {
     let (force, position, vib) = (
         fixture("multistream_force.csv"),
         fixture("multistream_position.csv"),
@@ -984,8 +990,6 @@ fn import_multistream(out: &Path, map: &str, args: &[&str]) -> std::process::Out
         "1000",
         "--map",
         map,
-        "--unroll",
-        "acc=acc_0..acc_21",
         "--out",
         out.to_str().unwrap(),
     ];
@@ -1131,27 +1135,7 @@ fn joining_errors_name_the_files() {
         "{t}"
     );
     // Packed samples mapped without --unroll: the error says which --unroll makes the column.
-    let (force, position, vib) = (
-        fixture("multistream_force.csv"),
-        fixture("multistream_position.csv"),
-        fixture("multistream_vib_packed.csv"),
-    );
-    let o = palpus(&[
-        "import",
-        force.to_str().unwrap(),
-        position.to_str().unwrap(),
-        vib.to_str().unwrap(),
-        "--kind",
-        "rubbing",
-        "--rate-hz",
-        "1000",
-        "--map",
-        MULTISTREAM_MAP,
-        "--repeated-time",
-        "mean",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = import_multistream_with(&out, MULTISTREAM_MAP, &["--repeated-time", "mean"]);
     let t = text(&o);
     assert!(!o.status.success(), "{t}");
     assert!(
