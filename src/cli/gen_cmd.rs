@@ -44,8 +44,9 @@ pub(crate) struct GenArgs {
     #[arg(long, default_value_t = 1, requires = "needle_rate_hz")]
     needle_rounds: u32,
     /// Write only needle captures, into this tissue: `liver` (the paper's, capsule and vessel
-    /// wall) or `phantom` (three membranes at other depths, with other parameters: a second
-    /// tissue for held-out tests).
+    /// wall), `phantom` (three membranes at other depths, with other parameters: a second
+    /// tissue for held-out tests) or `epidural` (a lumbar epidural approach, skin to dura,
+    /// inserted to 55 mm).
     #[arg(long, value_enum, value_name = "TISSUE")]
     needle_tissue: Option<NeedleTissueArg>,
     /// Write only needle captures, each stroke at `constant` speed (the paper's) or at a
@@ -75,6 +76,7 @@ pub(crate) struct GenArgs {
 enum NeedleTissueArg {
     Liver,
     Phantom,
+    Epidural,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -92,7 +94,8 @@ fn variant(args: &GenArgs) -> Option<Variant> {
             rounds: args.needle_rounds,
             tissue: match args.needle_tissue {
                 Some(NeedleTissueArg::Phantom) => NeedleTissueKind::LayeredPhantom,
-                _ => NeedleTissueKind::BovineLiver,
+                Some(NeedleTissueArg::Epidural) => NeedleTissueKind::LumbarEpidural,
+                Some(NeedleTissueArg::Liver) | None => NeedleTissueKind::BovineLiver,
             },
             speed: match args.needle_speed {
                 Some(NeedleSpeedArg::Varying) => SpeedProfile::Varying,

@@ -83,24 +83,53 @@ fn gen_reproduces_the_committed_li_bi_set() {
         } else {
             CaptureKind::Rubbing
         };
-        let fresh = Capture::read_file(dir.path().join(format!("li_bi/{name}.csv")), kind).unwrap();
-        let kept = Capture::read_file(committed.join(format!("{name}.csv")), kind).unwrap();
-        assert_eq!(fresh.columns(), kept.columns(), "{name}");
-        assert_eq!(fresh.len(), kept.len(), "{name}");
-        let keys = |c: &Capture| {
-            c.metadata()
-                .extra()
-                .iter()
-                .map(|(k, _)| k.clone())
-                .collect::<Vec<_>>()
-        };
-        assert_eq!(keys(&fresh), keys(&kept), "{name}");
-        for (a, b) in fresh.data().iter().zip(kept.data()) {
-            for (x, y) in a.iter().zip(b) {
-                assert!((x - y).abs() <= 1e-9 * x.abs().max(1e-3), "{name}: {x} vs {y}");
-            }
+        same_capture(
+            &dir.path().join(format!("li_bi/{name}.csv")),
+            &committed.join(format!("{name}.csv")),
+            kind,
+        );
+    }
+}
+
+/// `fresh` holds what `kept` holds: the same columns, metadata keys and values to 1e-9.
+fn same_capture(fresh: &Path, kept: &Path, kind: CaptureKind) {
+    let name = kept.display();
+    let fresh = Capture::read_file(fresh, kind).unwrap();
+    let kept = Capture::read_file(kept, kind).unwrap();
+    assert_eq!(fresh.columns(), kept.columns(), "{name}");
+    assert_eq!(fresh.len(), kept.len(), "{name}");
+    let keys = |c: &Capture| {
+        c.metadata()
+            .extra()
+            .iter()
+            .map(|(k, _)| k.clone())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(keys(&fresh), keys(&kept), "{name}");
+    for (a, b) in fresh.data().iter().zip(kept.data()) {
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= 1e-9 * x.abs().max(1e-3), "{name}: {x} vs {y}");
         }
     }
+}
+
+/// The epidural scene's capture is `palpus gen --needle-tissue epidural`'s, seed 1.
+#[test]
+fn gen_reproduces_the_committed_epidural_capture() {
+    let dir = tempfile::tempdir().unwrap();
+    let t = text(&succeeds(&[
+        "gen",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--needle-tissue",
+        "epidural",
+    ]));
+    assert!(t.contains("needle_train.csv"), "{t}");
+    same_capture(
+        &dir.path().join("li_bi/needle_train.csv"),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/captures/epidural/needle_train.csv"),
+        CaptureKind::Insertion,
+    );
 }
 
 #[test]

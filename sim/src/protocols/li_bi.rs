@@ -250,6 +250,8 @@ pub enum NeedleTissueKind {
     BovineLiver,
     /// [`NeedleTissue::layered_phantom`]: three membranes, other parameters.
     LayeredPhantom,
+    /// [`NeedleTissue::lumbar_epidural`]: skin to dura along a lumbar epidural approach.
+    LumbarEpidural,
 }
 
 impl NeedleTissueKind {
@@ -258,6 +260,7 @@ impl NeedleTissueKind {
         match self {
             Self::BovineLiver => NeedleTissue::bovine_liver(),
             Self::LayeredPhantom => NeedleTissue::layered_phantom(),
+            Self::LumbarEpidural => NeedleTissue::lumbar_epidural(),
         }
     }
 
@@ -266,6 +269,7 @@ impl NeedleTissueKind {
         match self {
             Self::BovineLiver => "bovine_liver",
             Self::LayeredPhantom => "layered_phantom",
+            Self::LumbarEpidural => "lumbar_epidural",
         }
     }
 
@@ -274,15 +278,25 @@ impl NeedleTissueKind {
         match self {
             Self::BovineLiver => "liver",
             Self::LayeredPhantom => "layered phantom",
+            Self::LumbarEpidural => "lumbar spine",
         }
     }
 
     /// The tissue a capture's metadata names ([`NeedleTissueKind::name`]); `None` for any
     /// other name.
     pub fn named(name: &str) -> Option<Self> {
-        [Self::BovineLiver, Self::LayeredPhantom]
+        [Self::BovineLiver, Self::LayeredPhantom, Self::LumbarEpidural]
             .into_iter()
             .find(|k| k.name() == name)
+    }
+
+    /// How deep the protocol inserts, m: 30 mm into the liver and the phantom (the paper's), 55
+    /// mm into the lumbar spine, past the dura, so that a capture shows every layer give.
+    pub fn insertion_depth_m(self) -> f64 {
+        match self {
+            Self::BovineLiver | Self::LayeredPhantom => 0.030,
+            Self::LumbarEpidural => 0.055,
+        }
     }
 }
 
@@ -343,7 +357,8 @@ impl NeedleProtocol {
 }
 
 /// Needle puncture (Sec. III-D, fresh liver): for each speed, a fresh insertion site; the tip
-/// starts 2 mm above the surface, accelerates over 50 ms, inserts to 30 mm, holds 1 s and
+/// starts 2 mm above the surface, accelerates over 50 ms, inserts to 30 mm (the tissue's
+/// [`NeedleTissueKind::insertion_depth_m`] for another tissue), holds 1 s and
 /// withdraws at 10 mm/s to where it started. Logged at 100 Hz.
 pub fn needle_insertion(seed: u64, split: Split) -> Result<Capture, CaptureError> {
     needle_insertion_with(seed, split, NeedleProtocol::default())
@@ -371,7 +386,8 @@ pub fn needle_insertion_with(
             ),
         )));
     };
-    let (start_m, target_m, withdraw_mps, ramp_s, hold_s, rest_s) = (-0.002, 0.030, 0.010, 0.05, 1.0, 0.3);
+    let target_m = protocol.tissue.insertion_depth_m();
+    let (start_m, withdraw_mps, ramp_s, hold_s, rest_s) = (-0.002, 0.010, 0.05, 1.0, 0.3);
     let mut cols = Columns::new(&[
         TIME_S,
         DEPTH_M,
