@@ -1,5 +1,6 @@
-//! Writes the procedurally generated meshes (liver, tissue block, needle, surface tray) as `.glb`
-//! files into the directory given as the first argument (default `assets/meshes`).
+//! Writes the procedurally generated meshes (liver, tissue block, needle, lumbar block, surface
+//! tray) as `.glb` files into the directory given as the first argument (default
+//! `assets/meshes`).
 //!
 //! `cargo run -p render --example make_assets -- assets/meshes`
 

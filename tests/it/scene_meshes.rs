@@ -85,3 +85,23 @@ fn a_gltf_in_millimetres_loads_at_its_stated_scale() {
         assert!(err.contains("objects[0].scale"), "{bad}: {err}");
     }
 }
+
+/// The lumbar block draws each membrane where the simulated spine has it, so the needle's tip
+/// is drawn meeting a layer where the trainee feels it.
+#[test]
+fn the_lumbar_mesh_and_the_simulated_spine_agree_on_every_membrane() {
+    let tissue = sim::NeedleTissue::lumbar_epidural();
+    let drawn = render::assets_gen::LUMBAR_LAYER_TOPS_M;
+    for m in &tissue.membranes {
+        let (_, top) = drawn
+            .iter()
+            .find(|(name, _)| *name == m.name)
+            .unwrap_or_else(|| panic!("{} is not drawn", m.name));
+        assert!(
+            (f64::from(*top) - m.depth_m).abs() < 1e-7,
+            "{}: {top} vs {}",
+            m.name,
+            m.depth_m
+        );
+    }
+}

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use render::assets_gen::{
     BLOCK_DEPTH_M, BLOCK_SIZE_M, BUMP_HEIGHT_EXAGGERATION, FAT_THICKNESS_M, HUB_LENGTH_M, HUB_RADIUS_M,
-    NEEDLE_LENGTH_M, NEEDLE_RADIUS_M, PATCH_CENTRES_M, PATCH_NAMES, PATCH_RQ_M, PATCH_SIZE_M,
-    SKIN_THICKNESS_M, VESSEL_RADIUS_M, VESSEL_WALL_DEPTH_M, default_assets, patch_centre_m,
+    LUMBAR_LAYER_TOPS_M, NEEDLE_LENGTH_M, NEEDLE_RADIUS_M, PATCH_CENTRES_M, PATCH_NAMES, PATCH_RQ_M,
+    PATCH_SIZE_M, SKIN_THICKNESS_M, VESSEL_RADIUS_M, VESSEL_WALL_DEPTH_M, default_assets, patch_centre_m,
     write_default_assets,
 };
 use render::{MeshData, RenderError, load_gltf, write_glb};
@@ -232,7 +232,7 @@ fn written_file_is_a_valid_glb_with_position_bounds() {
 fn regenerated_assets_match_committed_files() {
     let dir = tempfile::tempdir().unwrap();
     let written = write_default_assets(dir.path()).unwrap();
-    assert_eq!(written.len(), 4);
+    assert_eq!(written.len(), 5);
     let mut total = 0;
     for path in written {
         let name = path.file_name().unwrap();
@@ -282,6 +282,20 @@ fn closed_meshes_are_watertight_and_outward() {
         ("liver.glb", vec!["liver", "vessel"]),
         ("tissue_block.glb", vec!["skin", "fat", "muscle"]),
         ("needle.glb", vec!["shaft", "hub"]),
+        (
+            "lumbar.glb",
+            vec![
+                "skin",
+                "subcutaneous_fat",
+                "supraspinous_ligament",
+                "interspinous_ligament",
+                "spinous_process_upper",
+                "muscle_left",
+                "ligamentum_flavum",
+                "epidural_space",
+                "dural_sac",
+            ],
+        ),
         ("surface_tray.glb", vec!["tray", "patch_1", "patch_4", "patch_7"]),
     ];
     for (file, names) in closed {
@@ -316,6 +330,51 @@ fn layer_volumes_match_their_dimensions() {
         let v = signed_volume(mesh(&meshes, name));
         assert!((v / (area * thickness) - 1.0).abs() < 1e-4, "{name}: {v}");
     }
+}
+
+#[test]
+fn the_lumbar_layers_lie_where_the_simulated_spine_has_them() {
+    let meshes = asset("lumbar.glb");
+    let top_of = |name: &str| bbox(mesh(&meshes, name)).1[1];
+    for (name, depth) in LUMBAR_LAYER_TOPS_M {
+        // The dura is the dural sac's top.
+        let name = if name == "dura" { "dural_sac" } else { name };
+        assert!(
+            (top_of(name) + depth).abs() < 1e-7,
+            "{name}: top {} for {depth}",
+            top_of(name)
+        );
+    }
+    // Straight down the entry point the needle meets skin, fat, the supraspinous and the
+    // interspinous ligament, the flavum, the epidural fat and the sac, in that order.
+    let entry: Vec<(&str, f64)> = meshes
+        .iter()
+        .filter_map(|m| {
+            let hits = vertical_hits(m, 0.0, 0.0);
+            hits.last().map(|&y| (m.name.as_str(), y))
+        })
+        .collect();
+    let mut order = entry.clone();
+    order.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let names: Vec<&str> = order.iter().map(|e| e.0).collect();
+    assert_eq!(
+        names,
+        [
+            "skin",
+            "subcutaneous_fat",
+            "supraspinous_ligament",
+            "interspinous_ligament",
+            "ligamentum_flavum",
+            "epidural_space",
+            "dural_sac"
+        ],
+        "{entry:?}"
+    );
+    let (longest, count) = max_edge_near(mesh(&meshes, "skin"), [0.0; 3], 0.020);
+    assert!(
+        count > 1000 && longest <= 1.5e-3,
+        "{count} triangles, edge {longest} m"
+    );
 }
 
 #[test]

@@ -57,6 +57,7 @@ fn tissues() -> Vec<(&'static str, Vec<MeshData>)> {
         ("procedural block", shapes::tissue_block()),
         ("tissue_block.glb", asset("tissue_block.glb")),
         ("liver.glb", asset("liver.glb")),
+        ("lumbar.glb", asset("lumbar.glb")),
     ]
 }
 
