@@ -1,6 +1,7 @@
 //! What becomes of an insertion attempt at a scene with a goal: its score, its force against
 //! depth drawn over the expert's, and its row in the trainees' history.
 
+use std::ops::Range;
 use std::path::Path;
 
 use haptics::admittance_channel as c;
@@ -9,8 +10,9 @@ use crate::history::{History, HistoryError};
 use crate::models::ResolvedModel;
 use crate::plots::{ForceDepth, PlotError};
 use crate::scene::Scene;
-use crate::session::analysis::{self, SegmentSummary};
+use crate::session::analysis;
 use crate::session::score::Score;
+use crate::session::strokes::{score_stroke, strokes};
 use crate::session::{Segment, SegmentKind, SegmentRun};
 
 /// A goal names the layers of a phase model one by one: as many names as the model renders
@@ -40,52 +42,68 @@ pub fn check_goal_layers(scene: &Scene, segments: &[Segment]) -> anyhow::Result<
     Ok(())
 }
 
-/// The needle segment's score against the scene's goal (`summaries` the runs' summaries, in
-/// order); `None` without a goal or a needle segment.
-pub fn score(scene: &Scene, runs: &[SegmentRun], summaries: &[SegmentSummary]) -> Option<Score> {
-    let goal = scene.task.goal()?;
-    let (run, summary) = runs
-        .iter()
-        .zip(summaries)
-        .find(|(r, _)| matches!(r.segment.kind, SegmentKind::Needle { .. }))?;
-    Some(crate::session::score::score(
-        &run.samples,
-        &summary.punctures,
-        goal,
-        analysis::surface_z_m(run),
-        scene.device.rate_hz,
-    ))
+/// One scored stroke of the needle segment.
+#[derive(Debug, Clone)]
+pub struct Attempt {
+    /// Its samples in the needle segment's run.
+    pub samples: Range<usize>,
+    /// Its score.
+    pub score: Score,
 }
 
-/// Draws `path` (`attempt.png`) for a scored attempt, over `reference`; without a score, removes
-/// one an earlier session left, since a report folder holds one session.
+/// The needle segment's attempts, each stroke into the tissue and out scored against the
+/// scene's goal ([`crate::session::strokes`]); none without a goal or a needle segment.
+pub fn attempts(scene: &Scene, runs: &[SegmentRun]) -> Vec<Attempt> {
+    let (Some(goal), Some(run)) = (scene.task.goal(), needle_run(runs)) else {
+        return Vec::new();
+    };
+    let surface_z_m = analysis::surface_z_m(run);
+    strokes(&run.samples, surface_z_m)
+        .into_iter()
+        .map(|range| Attempt {
+            score: score_stroke(
+                &run.samples[range.clone()],
+                goal,
+                surface_z_m,
+                scene.device.rate_hz,
+            ),
+            samples: range,
+        })
+        .collect()
+}
+
+fn needle_run(runs: &[SegmentRun]) -> Option<&SegmentRun> {
+    runs.iter()
+        .find(|r| matches!(r.segment.kind, SegmentKind::Needle { .. }))
+}
+
+/// Draws `path` (`attempt.png`) for the last scored attempt, over `reference`; without one,
+/// removes one an earlier session left, since a report folder holds one session.
 pub fn write_plot(
     path: &Path,
     runs: &[SegmentRun],
-    score: Option<&Score>,
+    last: Option<&Attempt>,
     reference: Option<&ForceDepth>,
 ) -> Result<(), PlotError> {
-    let needle = runs
-        .iter()
-        .find(|r| matches!(r.segment.kind, SegmentKind::Needle { .. }));
-    let (Some(score), Some(run)) = (score, needle) else {
+    let (Some(last), Some(run)) = (last, needle_run(runs)) else {
         let _ = std::fs::remove_file(path);
         return Ok(());
     };
     let surface_z_m = analysis::surface_z_m(run);
+    // The approach before it and the air after it belong to no stroke but draw the full motion.
+    let from = run.samples[..last.samples.start]
+        .iter()
+        .rposition(|s| surface_z_m - s.channels[c::VIRTUAL_Z_M] > 0.0)
+        .map_or(0, |i| i + 1);
+    let samples = &run.samples[from..];
     let attempt = ForceDepth {
-        depth_m: run
-            .samples
+        depth_m: samples
             .iter()
             .map(|s| surface_z_m - s.channels[c::VIRTUAL_Z_M])
             .collect(),
-        force_n: run
-            .samples
-            .iter()
-            .map(|s| s.channels[c::MODEL_FORCE_Z_N])
-            .collect(),
+        force_n: samples.iter().map(|s| s.channels[c::MODEL_FORCE_Z_N]).collect(),
     };
-    crate::plots::write_attempt_plot(path, &attempt, reference, score)
+    crate::plots::write_attempt_plot(path, &attempt, reference, &last.score)
 }
 
 /// Who the history stores an attempt under: `named`, else `$USER`, else `trainee`.

@@ -75,6 +75,9 @@ pub struct ViewState<'a> {
     pub kind: Option<&'a SegmentKind>,
     /// The newest sample.
     pub sample: Option<&'a HapticSample>,
+    /// Whether the tissue's surface has given in this stroke: a needle pressing a deeper layer
+    /// then no longer dimples the surface.
+    pub surface_given: bool,
 }
 
 fn rotation(deg: [f64; 3]) -> Quat {
@@ -234,7 +237,7 @@ impl SceneView {
         match state.kind {
             Some(SegmentKind::Needle { .. }) => {
                 let code = s.channels[c::ENV_STATE];
-                if code == PunctureState::CapsuleLoading.code() && depth_m > 0.0 {
+                if code == PunctureState::CapsuleLoading.code() && depth_m > 0.0 && !state.surface_given {
                     frame.tissue.dimples.push(Dimple {
                         centre_m: Vec3::new(tip.x, surface.y, tip.z),
                         normal: Vec3::Y,
@@ -359,10 +362,17 @@ pub fn render_session_frame(
     };
     for (i, path) in &moments {
         let sample = &run.samples[*i];
+        // What the trainee's overlay said at that moment.
+        let mut guide = crate::session::guide::LiveGuide::new();
+        let surface_z_m = crate::session::analysis::surface_z_m(run);
+        for s in &run.samples[..=*i] {
+            guide.push(s, surface_z_m);
+        }
         let state = ViewState {
             object: Some(&run.segment.object),
             kind: Some(&run.segment.kind),
             sample: Some(sample),
+            surface_given: guide.layers_given() > 0,
         };
         let mut frame = view.frame(&state);
         let mut overlay = overlay_plots(&run.samples[..=*i], Some(&run.segment.kind), 10.0, 800);
@@ -377,12 +387,6 @@ pub fn render_session_frame(
                 confidence: r.confidence as f32,
                 decided: r.label.is_some(),
             });
-        // What the trainee's overlay said at that moment.
-        let mut guide = crate::session::guide::LiveGuide::new();
-        let surface_z_m = crate::session::analysis::surface_z_m(run);
-        for s in &run.samples[..=*i] {
-            guide.push(s, surface_z_m);
-        }
         overlay.task = crate::session::guide::task_panel(scene.task.goal(), Some(&run.segment.kind), &guide);
         frame.overlay = Some(overlay);
         let image = renderer.render(&frame).map_err(|e| e.to_string())?;

@@ -23,6 +23,7 @@ use crate::recognizer::SceneRecognizer;
 use crate::scene::Scene;
 use crate::session::guide::{LiveGuide, task_panel};
 use crate::session::report::Recognition as Decision;
+use crate::session::strokes::LiveAttempts;
 use crate::session::{
     self, LiveLink, Segment, SegmentKind, SegmentRun, SessionError, SessionOptions, start_position_m,
 };
@@ -85,6 +86,8 @@ struct Session {
     rate_hz: f32,
     /// The running attempt, as the overlay's task panel tells it.
     guide: LiveGuide,
+    /// The segment's attempts, scored as each ends.
+    attempts: LiveAttempts,
 }
 
 /// The live view of a segment at `rate_hz`, and the window's buffer for its plots.
@@ -133,6 +136,7 @@ impl Session {
             last_ticks: 0,
             rate_hz: 0.0,
             guide: LiveGuide::new(),
+            attempts: LiveAttempts::new(),
         };
         s.start();
         Ok(s)
@@ -151,6 +155,7 @@ impl Session {
         self.recent = recent;
         self.last_ticks = 0;
         self.guide = LiveGuide::new();
+        self.attempts = LiveAttempts::new();
         self.recognized = None;
         self.decisions_seen = 0.0;
         let (scene, options, n, recognizer) = (
@@ -233,18 +238,25 @@ impl WindowApp for Session {
             (Some(r), Some(SegmentKind::Surface { surface })) => Some((r, surface)),
             _ => None,
         };
-        let (recent, recognized, decisions_seen, recognition, guide) = (
+        let (recent, recognized, decisions_seen, recognition, guide, attempts) = (
             &mut self.recent,
             &mut self.recognized,
             &mut self.decisions_seen,
             &mut self.outcome.recognition,
             &mut self.guide,
+            &mut self.attempts,
         );
         let needle = matches!(kind, Some(SegmentKind::Needle { .. }));
         let surface_z_m = session::analysis::surface_z_on(&self.options.device.label());
+        let (goal, rate_hz) = (self.scene.task.goal(), self.scene.device.rate_hz);
         self.live.drain(|s| {
             if needle {
                 guide.push(s, surface_z_m);
+                if let Some(goal) = goal
+                    && let Some(score) = attempts.push(s, goal, surface_z_m, rate_hz).cloned()
+                {
+                    guide.attempt_ended(attempts.scored().len(), score);
+                }
             }
             recent.push(s);
             let Some((r, truth)) = surface else {
@@ -280,6 +292,7 @@ impl WindowApp for Session {
             object,
             kind,
             sample: last.as_ref(),
+            surface_given: self.guide.layers_given() > 0,
         };
         let mut frame = self.view.frame(&state);
         overlay.haptic_rate_hz = Some(self.rate_hz);

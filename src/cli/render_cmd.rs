@@ -116,10 +116,12 @@ pub(crate) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     sample.channels[channel::VIRTUAL_Z_M] = position.z;
     sample.channels[channel::ENV_STATE] = code;
     let kind: Option<&SegmentKind> = segment.map(|s| &s.kind);
+    // A still frame shows one moment: a loading needle is pressing the intact surface.
     let state = ViewState {
         object: object.as_deref(),
         kind,
         sample: Some(&sample),
+        surface_given: false,
     };
     let mut frame = view.frame(&state);
     if args.overlay {

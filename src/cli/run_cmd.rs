@@ -214,11 +214,11 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
     });
     let timing = crate::recognizer::timings(&runs, &recognition);
     let segments: Vec<analysis::SegmentSummary> = runs.iter().map(analysis::summarize).collect();
-    let score = attempt::score(&scene, &runs, &segments);
+    let attempts = attempt::attempts(&scene, &runs);
     attempt::write_plot(
         &dir.join("attempt.png"),
         &runs,
-        score.as_ref(),
+        attempts.last(),
         reference.as_ref(),
     )?;
     let report = SessionReport {
@@ -240,21 +240,24 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             .count(),
         frame,
         recorded: runs.iter().filter_map(|r| r.recorded.clone()).collect(),
-        score,
+        score: attempts.last().map(|a| a.score.clone()),
+        attempts: attempts.into_iter().map(|a| a.score).collect(),
         wall_s: started.elapsed().as_secs_f64(),
     };
     report::write_summary(&dir, &report)?;
     print!("{}", report.to_text());
     println!("report in {}", dir.display());
     // An attempt the session cut short (a stall, a device fault) says nothing of the trainee.
-    if let (Some(score), false) = (&report.score, runs.iter().any(|r| r.outcome.is_err())) {
+    if !runs.iter().any(|r| r.outcome.is_err()) {
         let path = args.history.clone().unwrap_or_else(crate::history::default_path);
         let trainee = attempt::trainee(args.trainee.as_deref());
-        let number = attempt::store(&path, &trainee, &scene, &resolved, &report.device, score)?;
-        println!(
-            "attempt {number} stored for {trainee} in {} (palpus history --trainee {trainee})",
-            path.display()
-        );
+        for score in &report.attempts {
+            let number = attempt::store(&path, &trainee, &scene, &resolved, &report.device, score)?;
+            println!(
+                "attempt {number} stored for {trainee} in {} (palpus history --trainee {trainee})",
+                path.display()
+            );
+        }
     }
     match runs
         .iter()

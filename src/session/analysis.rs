@@ -345,7 +345,7 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
 }
 
 /// Ruptures: the law's state entering `Puncture`.
-fn punctures(s: &[HapticSample], tissue: Option<&NeedleTissue>) -> Vec<Puncture> {
+pub(crate) fn punctures(s: &[HapticSample], tissue: Option<&NeedleTissue>) -> Vec<Puncture> {
     let loading = PunctureState::CapsuleLoading.code();
     let puncture = PunctureState::Puncture.code();
     let mut out: Vec<Puncture> = Vec::new();

@@ -1,7 +1,8 @@
 //! What a guided attempt's overlay says while the needle goes in: the phase the tip is in, in
 //! the tissue's terms, and how far the target is (before it gives: to where the model makes it
 //! give at the tip's speed; after: how far past it the tip is against the allowance). An exam
-//! shows none of it until the attempt ends.
+//! shows none of it until the attempt ends. Once the tip is out of the tissue, both tell how
+//! the attempt did, until the next one starts.
 
 use haptics::admittance_channel as c;
 use haptics::{HapticSample, PunctureState};
@@ -9,6 +10,7 @@ use identify::{ModelBody, PhaseModel};
 use render::TaskPanel;
 
 use super::SegmentKind;
+use super::score::Score;
 use crate::scene::{Goal, GoalMode, in_words};
 
 /// One line of guidance, and whether it warns (the tip past the allowance, a forbidden layer
@@ -31,6 +33,8 @@ pub struct LiveGuide {
     depth_m: f64,
     speed_mps: f64,
     deepest_m: f64,
+    /// The last finished attempt's number and score.
+    last: Option<(usize, Score)>,
 }
 
 impl LiveGuide {
@@ -50,6 +54,33 @@ impl LiveGuide {
         self.depth_m = depth_m;
         self.speed_mps = -sample.channels[c::VIRTUAL_VZ_MPS];
         self.deepest_m = self.deepest_m.max(depth_m);
+    }
+
+    /// Attempt `number` has ended with `score` (the tip left the tissue): the next stroke is a
+    /// new attempt, and the overlay tells how this one did.
+    pub fn attempt_ended(&mut self, number: usize, score: Score) {
+        *self = Self {
+            last: Some((number, score)),
+            ..Self::default()
+        };
+    }
+
+    /// The last finished attempt's line, while no other is under way.
+    fn last_line(&self) -> Option<GuideLine> {
+        let (number, score) = self.last.as_ref().filter(|_| self.depth_m <= 0.0)?;
+        Some(GuideLine {
+            text: format!(
+                "Attempt {number}: {} — {}",
+                if score.passed { "passed" } else { "failed" },
+                score.verdict
+            ),
+            warning: !score.passed,
+        })
+    }
+
+    /// How many layers have given in this attempt.
+    pub fn layers_given(&self) -> usize {
+        self.given_m.len()
     }
 
     /// The overlay's lines for `goal`, with the phase model's layers (when the scene renders
@@ -115,6 +146,7 @@ impl LiveGuide {
                 });
             }
         }
+        out.extend(self.last_line());
         out
     }
 }
@@ -137,10 +169,15 @@ pub fn task_panel(goal: Option<&Goal>, kind: Option<&SegmentKind>, guide: &LiveG
 /// [`task_panel`] of a needle segment rendering `phases` (when a phase model).
 fn needle_panel(goal: &Goal, phases: Option<&PhaseModel>, guide: &LiveGuide) -> TaskPanel {
     match goal.mode {
-        GoalMode::Exam => TaskPanel::Exam(format!(
-            "Exam: no readings until the attempt ends. Stop within {:.1} mm past the {}.",
-            goal.within_m * 1e3,
-            in_words(&goal.stop_after)
+        GoalMode::Exam => TaskPanel::Exam(guide.last_line().map_or_else(
+            || {
+                format!(
+                    "Exam: no readings until the attempt ends. Stop within {:.1} mm past the {}.",
+                    goal.within_m * 1e3,
+                    in_words(&goal.stop_after)
+                )
+            },
+            |l| l.text,
         )),
         GoalMode::Guided => TaskPanel::Guided(
             guide
@@ -285,5 +322,42 @@ mod tests {
         };
         assert_eq!(task_panel(Some(&goal), Some(&rub), &guide), TaskPanel::None);
         assert_eq!(task_panel(None, None, &guide), TaskPanel::None);
+    }
+
+    #[test]
+    fn a_finished_attempt_is_told_until_the_next_one_starts_even_in_an_exam() {
+        let mut goal = goal();
+        goal.mode = GoalMode::Exam;
+        let mut guide = LiveGuide::new();
+        guide.push(&at(24.0, PunctureState::Insertion), 0.0);
+        let failed = Score {
+            passed: false,
+            verdict: "went 5.0 mm past where the vessel wall gave at 23.0 mm (allowed 3.0 mm)".into(),
+            target: "vessel_wall".into(),
+            layers_given: vec!["capsule".into(), "vessel_wall".into()],
+            target_depth_m: Some(0.023),
+            overshoot_m: Some(0.005),
+            allowed_overshoot_m: 0.003,
+            peak_force_n: 1.5,
+            time_to_target_s: Some(2.0),
+            withdrawals: 0,
+            reinsertions: 0,
+            smoothness_sparc: None,
+            deepest_m: 0.028,
+        };
+        guide.attempt_ended(1, failed);
+        guide.push(&at(-1.0, PunctureState::Approach), 0.0);
+        assert_eq!(guide.layers_given(), 0, "the next stroke starts afresh");
+        let told =
+            "Attempt 1: failed — went 5.0 mm past where the vessel wall gave at 23.0 mm (allowed 3.0 mm)";
+        assert_eq!(needle_panel(&goal, None, &guide), TaskPanel::Exam(told.into()));
+        goal.mode = GoalMode::Guided;
+        assert!(
+            matches!(needle_panel(&goal, None, &guide), TaskPanel::Guided(l) if l.last() == Some(&(told.to_owned(), true)))
+        );
+        // Back in the tissue: the exam hides everything again.
+        goal.mode = GoalMode::Exam;
+        guide.push(&at(2.0, PunctureState::CapsuleLoading), 0.0);
+        assert!(matches!(needle_panel(&goal, None, &guide), TaskPanel::Exam(l) if l.starts_with("Exam:")));
     }
 }

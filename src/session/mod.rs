@@ -13,6 +13,7 @@ pub mod report;
 pub mod score;
 pub mod script;
 pub mod smoothness;
+pub mod strokes;
 pub mod truth_along;
 pub mod truth_tissue;
 

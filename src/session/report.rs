@@ -206,9 +206,13 @@ pub struct SessionReport {
     pub frame: Result<PathBuf, String>,
     /// Captures recorded.
     pub recorded: Vec<(PathBuf, u64)>,
-    /// The attempt scored against the scene's goal, when it states one.
+    /// The last attempt scored against the scene's goal, when it states one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub score: Option<super::score::Score>,
+    /// Every attempt (each stroke into the tissue and out), in order; a headless session makes
+    /// one.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub attempts: Vec<super::score::Score>,
     /// Wall-clock time from start to report, s.
     pub wall_s: f64,
 }
@@ -414,8 +418,9 @@ impl SessionReport {
                 self.recognition.len() - named
             );
         }
-        if let Some(score) = &self.score {
-            let _ = writeln!(t, "{}", score_text(score));
+        for (k, score) in self.attempts.iter().enumerate() {
+            let number = (self.attempts.len() > 1).then_some(k + 1);
+            let _ = writeln!(t, "{}", score_text(score, number));
         }
         if self.recognition_unread_windows > 0 {
             let _ = writeln!(
@@ -463,12 +468,13 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
     }
 }
 
-/// The lines of the run summary that score the attempt.
-pub fn score_text(score: &super::score::Score) -> String {
+/// The lines of the run summary that score an attempt (`number`ed when a session made several).
+pub fn score_text(score: &super::score::Score, number: Option<usize>) -> String {
     let or_none = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map_or("—".to_owned(), f);
     format!(
-        "  attempt {}: {}\n    overshoot {} (allowed {:.1} mm), peak force {:.2} N, time to target {}, \
+        "  attempt {}{}: {}\n    overshoot {} (allowed {:.1} mm), peak force {:.2} N, time to target {}, \
          {} withdrawal{}, {} re-insertion{}, smoothness (SPARC) {}; layers given: {}",
+        number.map_or_else(String::new, |n| format!("{n} ")),
         if score.passed { "PASSED" } else { "FAILED" },
         score.verdict,
         or_none(score.overshoot_m, &|m| format!("{:.1} mm", m * 1e3)),
