@@ -1,6 +1,7 @@
-"""Runs the default scene's scripted trainee at several stopping depths, each attempt scored against the scene's goal and stored in a fresh history, and prints the Markdown table of docs/training.md; then `palpus history` draws their learning curve into out/training/learning_curve.png.
+"""Runs a needle scene's scripted trainee at several stopping depths, each attempt scored against the scene's goal and stored in a fresh history, and prints the Markdown table of docs/training.md; then `palpus history` draws their learning curve into out/training/SCENE_learning_curve.png.
 
-    python3 scripts/training_table.py
+    python3 scripts/training_table.py                    # the liver (the default scene)
+    python3 scripts/training_table.py --scene epidural_lumbar
 """
 
 import json
@@ -9,26 +10,41 @@ from pathlib import Path
 
 from palpus_cli import palpus, parser
 
-ATTEMPTS = [
-    ("ana", "0.030", []),
-    ("ana", "0.028", []),
-    ("ana", "0.026", []),
-    ("ana", "0.026", ["task.goal.max_force_n=1.5"]),
-    ("ana", "0.024", []),
-]
+# Per scene: (hand stops at, extra --set values) for each attempt.
+ATTEMPTS = {
+    "needle_liver": [
+        ("0.030", []),
+        ("0.028", []),
+        ("0.026", []),
+        ("0.026", ["task.goal.max_force_n=1.5"]),
+        ("0.024", []),
+    ],
+    "epidural_lumbar": [
+        ("0.042", []),
+        ("0.043", []),
+        ("0.044", []),
+        ("0.045", []),
+        ("0.046", []),
+        ("0.048", []),
+        ("0.052", []),
+    ],
+}
 
 
 def main():
-    args = parser(__doc__).parse_args()
+    p = parser(__doc__)
+    p.add_argument("--scene", default="needle_liver", choices=sorted(ATTEMPTS))
+    args = p.parse_args()
+    scene = Path(__file__).resolve().parent.parent / "scenes" / f"{args.scene}.toml"
     with tempfile.TemporaryDirectory() as tmp:
         history = Path(tmp) / "history.sqlite"
         print("| attempt | hand stops at | result | why | overshoot | peak force | time to target | SPARC |")
         print("|---|---|---|---|---|---|---|---|")
-        for n, (trainee, depth, extra) in enumerate(ATTEMPTS, 1):
+        for n, (depth, extra) in enumerate(ATTEMPTS[args.scene], 1):
             report = Path(tmp) / f"report{n}"
             sets = [a for s in [f"task.depth_m={depth}", *extra] for a in ("--set", s)]
-            palpus(args.palpus, "run", "--headless", "--unpaced", "--trainee", trainee, "--history", str(history),
-                   *sets, "--report", str(report))
+            palpus(args.palpus, "run", str(scene), "--headless", "--unpaced", "--trainee", "ana", "--history",
+                   str(history), *sets, "--report", str(report))
             s = json.loads((report / "report.json").read_text())["score"]
             over = "—" if s["overshoot_m"] is None else f"{s['overshoot_m'] * 1e3:.1f} mm"
             to_target = "—" if s["time_to_target_s"] is None else f"{s['time_to_target_s']:.2f} s"
@@ -37,7 +53,8 @@ def main():
             print(f"| {n} | {float(depth) * 1e3:.0f} mm{limit} | {'passed' if s['passed'] else 'failed'} | "
                   f"{s['verdict']} | {over} | {s['peak_force_n']:.2f} N | {to_target} | {sparc} |")
         Path("out/training").mkdir(parents=True, exist_ok=True)
-        palpus(args.palpus, "history", "--history", str(history), "--plot", "out/training/learning_curve.png")
+        palpus(args.palpus, "history", "--history", str(history), "--plot",
+               f"out/training/{args.scene}_learning_curve.png")
 
 
 if __name__ == "__main__":
