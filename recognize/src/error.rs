@@ -418,7 +418,9 @@ pub enum SolverError {
     #[error("SVM solver")]
     Svm(#[from] svm::SvmError),
     /// The solver did not converge within its iteration limit.
-    #[error("SMO did not converge in {iterations} iterations at C = {c:e} (classes {first}, {second})")]
+    #[error(
+        "SMO did not converge in {iterations} iterations at C = {c:e} (classes {first}, {second}): its largest KKT violation was {violation:.3e}, over its stop {stop:.1e}"
+    )]
     NotConverged {
         /// Iterations run.
         iterations: usize,
@@ -428,10 +430,14 @@ pub enum SolverError {
         first: usize,
         /// Second class of the pair.
         second: usize,
+        /// The largest KKT violation over the variables still active at the last selection.
+        violation: f64,
+        /// The violation it had to get below.
+        stop: f64,
     },
     /// [`SolverError::NotConverged`] with the classes by name, as a recognizer knows them.
     #[error(
-        "SMO did not converge in {iterations} iterations at C = {c:e} (classes `{first}` and `{second}`)"
+        "SMO did not converge in {iterations} iterations at C = {c:e} (classes `{first}` and `{second}`): its largest KKT violation was {violation:.3e}, over its stop {stop:.1e}"
     )]
     PairNotConverged {
         /// Iterations run.
@@ -442,6 +448,10 @@ pub enum SolverError {
         first: String,
         /// Second class of the pair.
         second: String,
+        /// The largest KKT violation over the variables still active at the last selection.
+        violation: f64,
+        /// The violation it had to get below.
+        stop: f64,
     },
     /// No candidate of a C search could be fitted.
     #[error("every candidate C failed: {}", c_failures(failures))]
@@ -710,11 +720,15 @@ impl RecognizeError {
                 c,
                 first,
                 second,
+                violation,
+                stop,
             }) => Self::Solver(SolverError::PairNotConverged {
                 iterations,
                 c,
                 first: name(first),
                 second: name(second),
+                violation,
+                stop,
             }),
             Self::Solver(SolverError::EveryCFailed { failures }) => Self::Solver(SolverError::EveryCFailed {
                 failures: failures

@@ -2,6 +2,14 @@
 
 use std::io;
 
+/// [`SvmError::NotConverged`]'s measure for an ε-SVR solver's last iterate.
+pub(crate) const CERTIFIED_MISS: &str =
+    "its last iterate misses the acceptance threshold (1e-6) at a certified relative gap of";
+/// [`SvmError::NotConverged`]'s measure for a bare SMO (no certificate).
+pub(crate) const KKT_VIOLATION: &str = "its largest KKT violation is";
+/// [`SvmError::NotConverged`]'s measure when no iterate was left to certify.
+pub(crate) const NOTHING_TO_CERTIFY: &str = "no iterate was left to certify; gap";
+
 /// Errors of the crate: bad hyperparameters or data are rejected before a fit starts, a solve
 /// that cannot reach its tolerance within its budgets says so instead of returning a model, a
 /// libsvm model file that cannot be written or read names the line and what is wrong with it,
@@ -65,18 +73,23 @@ pub enum SvmError {
         /// Why.
         reason: &'static str,
     },
-    /// The iteration budget ran out before the tolerance was met.
+    /// The iteration budget ran out before the tolerance was met, and where it stopped is not
+    /// good enough to return.
     #[error(
-        "{solver} did not converge in {iterations} iterations (relative gap {gap:.3e}, tolerance {tolerance:.1e})"
+        "{solver} did not converge in {iterations} iterations, aiming for {tolerance:.1e}: {measure} {gap:.3e}"
     )]
     NotConverged {
         /// Which solver.
         solver: &'static str,
         /// Iterations done.
         iterations: usize,
-        /// Relative optimality gap reached.
+        /// What it reached: an ε-SVR's certified relative duality gap of its last iterate
+        /// (above [`crate::ACCEPT_GAP`], or the iterate would have been returned); a bare SMO's
+        /// ([`crate::solve_smo`], no certificate) largest KKT violation.
         gap: f64,
-        /// Tolerance asked for.
+        /// What `gap` measures, in words.
+        measure: &'static str,
+        /// The tolerance it aimed for (a relative gap; SMO's, a KKT violation).
         tolerance: f64,
     },
     /// The solver stopped (at its own tolerance or at a limit) with a solution whose certified
@@ -321,5 +334,15 @@ pub(crate) fn check_time_budget(budget: std::time::Duration) -> Result<(), SvmEr
         Err(SvmError::hyperparameter("time_budget", 0.0, "must be > 0"))
     } else {
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refusal_states_the_acceptance_threshold_the_certificate_is_held_to() {
+        assert!(CERTIFIED_MISS.contains(&format!("({:e})", crate::ACCEPT_GAP)));
     }
 }

@@ -77,6 +77,8 @@ impl SvrFit {
 
 /// How a fit the interior point handed back at its iteration limit, certified, names its solver.
 const IPM_AT_LIMIT: &str = "interior point (at its iteration limit, certified)";
+/// The ε-SVR's SMO stopped by its iteration limit, its last iterate certified.
+const SMO_AT_LIMIT: &str = "SMO (at its iteration limit, certified)";
 
 /// A solved dual, before its certificate: what the solvers hand to [`fit`]'s final check.
 #[derive(Debug, Clone)]
@@ -91,9 +93,9 @@ struct DualSolution {
     iterations: usize,
     /// Whether the exact active-set polish produced it.
     polished: bool,
-    /// The tolerance the interior point aimed for and stopped short of, at its iteration
-    /// limit: a kept fit is named [`IPM_AT_LIMIT`], a refused one is
-    /// [`SvmError::NotConverged`].
+    /// The tolerance the interior point or SMO aimed for and stopped short of, at its
+    /// iteration limit: a kept fit is named [`IPM_AT_LIMIT`] or [`SMO_AT_LIMIT`], a refused
+    /// one is [`SvmError::NotConverged`] with its certified gap.
     short_of: Option<f64>,
     /// The dense kernel matrix, where the solver built one.
     kernel_matrix: Option<Mat<f64>>,
@@ -182,7 +184,7 @@ pub fn fit_observed(
             },
             iterations: sol.iterations,
             polished: sol.polished,
-            short_of: None,
+            short_of: sol.short_of,
             kernel_matrix: None,
             weights: None,
         }
@@ -478,6 +480,7 @@ fn certify(
             solver,
             iterations,
             gap: cert.relative_gap,
+            measure: crate::error::CERTIFIED_MISS,
             tolerance,
         });
     }
@@ -512,7 +515,11 @@ fn certify(
         model,
         dual_objective: cert.dual,
         primal_objective: cert.primal,
-        solver: if short_of.is_some() { IPM_AT_LIMIT } else { solver },
+        solver: match short_of {
+            Some(_) if solver == smo::NAME => SMO_AT_LIMIT,
+            Some(_) => IPM_AT_LIMIT,
+            None => solver,
+        },
         iterations,
         polished,
         fit_seconds: 0.0,
@@ -564,6 +571,7 @@ fn with_certified_gap(
             solver,
             iterations,
             gap: reached,
+            measure: crate::error::CERTIFIED_MISS,
             tolerance,
         },
         other => other,

@@ -350,6 +350,7 @@ pub(crate) fn solve(
             solver: NAME,
             iterations: max_iterations,
             gap: f64::INFINITY,
+            measure: crate::error::NOTHING_TO_CERTIFY,
             tolerance: settings.tolerance,
         },
         last: Some(Box::new(finish(

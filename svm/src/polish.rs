@@ -8,6 +8,9 @@
 //! the optimum to rounding error; a violated condition moves that sample to the right set and
 //! the system is solved again (a few rounds of a primal active-set method).
 
+use std::collections::HashSet;
+use std::hash::{Hash, Hasher};
+
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
@@ -16,7 +19,7 @@ use super::data::SvrData;
 use super::params::DualSettings;
 
 /// Where a sample sits at the optimum.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(crate) enum Side {
     /// Inside the tube: β = 0.
     Inside,
@@ -39,6 +42,22 @@ pub(crate) struct Polished {
     pub weights: Option<Vec<f64>>,
 }
 
+/// The active sets a polish has tried. One move per round can cycle on a degenerate problem
+/// (at C = 1e11 on the needle capture a sample went Above, then UpperFree, then Above, for all
+/// 720 rounds of the final polish: 12 s of dense solves that could never settle); a set met
+/// again means it will not settle, and the polish gives up at once.
+#[derive(Debug, Default)]
+struct Tried(HashSet<u64>);
+
+impl Tried {
+    /// Whether `sides` was tried before (and now it is).
+    fn again(&mut self, sides: &[Side]) -> bool {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        sides.hash(&mut h);
+        !self.0.insert(h.finish())
+    }
+}
+
 /// Tries to turn `sides` into an exact optimum; `None` if the active set does not settle.
 pub(crate) fn polish(
     k: &Mat<f64>,
@@ -50,7 +69,11 @@ pub(crate) fn polish(
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let y_scale = super::data::target_scale(y);
+    let mut tried = Tried::default();
     for _ in 0..max_rounds.min(2 * n + 20) {
+        if tried.again(&sides) {
+            return None;
+        }
         let free: Vec<usize> = (0..n)
             .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
             .collect();
@@ -243,8 +266,9 @@ pub(crate) fn polish_linear(
     let d = dim;
     let y_scale = super::data::target_scale(y);
     let row = |i: usize| &x[i * d..(i + 1) * d];
+    let mut tried = Tried::default();
     for round in 0..max_rounds.min(2 * n + 20) {
-        if round > 0 && settings.over_budget() {
+        if (round > 0 && settings.over_budget()) || tried.again(&sides) {
             return None;
         }
         let free: Vec<usize> = (0..n)
@@ -460,4 +484,19 @@ fn pivot<'a>(
 /// How far a bounded sample's residual sits on the wrong side of its tube boundary.
 fn margin(y: &[f64], g: &[f64], i: usize, epsilon: f64) -> f64 {
     (y[i] - g[i]).abs() - epsilon
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_active_set_met_again_is_told_apart_from_a_new_one() {
+        let mut tried = Tried::default();
+        let a = [Side::Inside, Side::UpperFree, Side::Above];
+        let b = [Side::Inside, Side::Above, Side::Above];
+        assert!(!tried.again(&a) && !tried.again(&b));
+        assert!(tried.again(&a) && tried.again(&b));
+        assert!(!tried.again(&[Side::Inside, Side::LowerFree, Side::Above]));
+    }
 }

@@ -198,6 +198,11 @@ pub struct SmoSolution {
     pub iterations: usize,
     /// The maximal KKT violation at the last selection (below the stop value when converged).
     pub violation: f64,
+    /// Whether it met its stop value; `false`: it stopped at its iteration limit, and this is
+    /// its last iterate (only [`solve_svr`]'s caller sees one, to certify it).
+    pub converged: bool,
+    /// The stop value it was aiming for at the end.
+    pub stop: f64,
 }
 
 /// The labels `yₜ = ±1` of a dual's variables.
@@ -366,7 +371,18 @@ pub fn solve_smo<R: KernelRows>(
         linear,
         n,
     };
-    solve(&mut Copied::new(rows), &vars, settings, &mut |_, _, _| None)
+    let sol = solve(&mut Copied::new(rows), &vars, settings, &mut |_, _, _| None)?;
+    if !sol.converged {
+        // No certificate here (a C-SVC has none): the KKT violation is what it reached.
+        return Err(SvmError::NotConverged {
+            solver: NAME,
+            iterations: sol.iterations,
+            gap: sol.violation,
+            measure: crate::error::KKT_VIOLATION,
+            tolerance: sol.stop,
+        });
+    }
+    Ok(sol)
 }
 
 /// What a solve asks, each time it has converged on every variable, of whoever called it:
@@ -582,20 +598,14 @@ fn solve_with<R: PairRows, L: Labels, const NON_POSITIVE_TO_TAU: bool>(
         }
         iterations += 1;
     }
-    if violation >= stop && iterations >= max_iterations {
-        return Err(SvmError::NotConverged {
-            solver: NAME,
-            iterations,
-            gap: violation,
-            tolerance: stop,
-        });
-    }
     let rho = rho(&alpha, &grad, labels, c);
     Ok(SmoSolution {
         alpha,
         rho,
         iterations,
         violation,
+        converged: !(violation >= stop && iterations >= max_iterations),
+        stop,
     })
 }
 
@@ -806,6 +816,9 @@ pub(crate) struct SvrSmoSolution {
     pub iterations: usize,
     /// Whether the exact finish on SMO's partition produced it.
     pub polished: bool,
+    /// The stop value (a KKT violation) it was aiming for when its iteration limit stopped
+    /// it; `None` when it converged.
+    pub short_of: Option<f64>,
 }
 
 /// libsvm's default stop (its `-e`, scikit-learn's `tol`): the first pass ends at this maximal
@@ -896,6 +909,7 @@ pub(crate) fn solve_svr(
             bias: f.bias,
             iterations: sol.iterations,
             polished: true,
+            short_of: None,
         });
     }
     let beta = (0..n).map(|i| sol.alpha[i] - sol.alpha[i + n]).collect();
@@ -904,6 +918,7 @@ pub(crate) fn solve_svr(
         bias: -sol.rho,
         iterations: sol.iterations,
         polished: false,
+        short_of: (!sol.converged).then_some(sol.stop),
     })
 }
 

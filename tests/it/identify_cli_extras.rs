@@ -353,3 +353,34 @@ fn a_gel_without_a_membrane_and_a_truncated_log_are_refused_with_what_would_make
     let tiny = common::fails(&["identify", &corpus("tiny_train.csv"), "--model", "needle-phases"]);
     assert!(tiny.contains("record the insertion"), "{tiny}");
 }
+
+/// The needle model at the extreme the acceptance rule was written for (C = 1e11, γ = 10,
+/// ε = 1e-6 on the committed capture): the interior point stops at its iteration limit, the
+/// exact polish of its active set cycles (a sample moving back and forth between two sets) and
+/// gives up on meeting a set again, and the error names the certified gap of the last iterate
+/// against the acceptance threshold. The polish once spent 720 rounds of dense solves on that
+/// cycle, 25 s in all.
+#[test]
+fn the_needle_extreme_is_refused_with_its_certified_gap() {
+    let train = li_bi("needle_train");
+    let args = [
+        "identify",
+        &train,
+        "--model",
+        "needle",
+        "--c",
+        "1e11",
+        "--gamma",
+        "10",
+        "--epsilon",
+        "1e-6",
+    ];
+    let o = common::palpus(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("did not converge in 200 iterations")
+            && stderr.contains("misses the acceptance threshold (1e-6) at a certified relative gap of"),
+        "{stderr}"
+    );
+}

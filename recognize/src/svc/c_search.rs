@@ -208,8 +208,10 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
                     c: _,
                     first,
                     second,
+                    violation,
+                    stop,
                 })) => {
-                    failed = Some((iterations, first, second));
+                    failed = Some((iterations, first, second, violation, stop));
                     break;
                 }
                 Err(e) => return Err(e),
@@ -226,13 +228,15 @@ pub fn select_c_observed<V: AsRef<[f64]>>(
                     separable_from = Some(point);
                 }
             }
-            Some((iterations, first, second)) => {
+            Some((iterations, first, second, violation, stop)) => {
                 let error = || {
                     RecognizeError::Solver(SolverError::NotConverged {
                         iterations,
                         c,
                         first,
                         second,
+                        violation,
+                        stop,
                     })
                 };
                 progress(FitEvent::SkippedC { c, error: error() });
@@ -341,11 +345,15 @@ pub(super) fn fold_correct<V: AsRef<[f64]>>(
             c,
             first,
             second,
+            violation,
+            stop,
         }) => RecognizeError::Solver(SolverError::NotConverged {
             iterations,
             c,
             first: global(first),
             second: global(second),
+            violation,
+            stop,
         }),
         RecognizeError::Data(DataError::EmptyClass { class }) => {
             RecognizeError::Data(DataError::EmptyClass { class: global(class) })

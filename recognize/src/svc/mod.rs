@@ -334,7 +334,7 @@ impl Svc {
             .collect();
         // Once a solve has failed the fit fails: the tasks not yet started are not run.
         let failed = AtomicBool::new(false);
-        let outcomes: Vec<Option<Result<Solved, RecognizeError>>> = tasks
+        let mut outcomes: Vec<Option<Result<Solved, RecognizeError>>> = tasks
             .par_iter()
             .map(|&(p, fold)| {
                 if failed.load(Ordering::Relaxed) {
@@ -357,12 +357,9 @@ impl Svc {
         // The first failure in pair order is reported (one of them, if several pairs fail).
         let mut machines: Vec<BinarySvc> = Vec::with_capacity(pairs.len());
         let mut decisions: Vec<Vec<f64>> = pairs.iter().map(|p| vec![0.0; p.members.len()]).collect();
-        if let Some(e) = outcomes
-            .iter()
-            .zip(&tasks)
-            .find_map(|(o, &(p, _))| matches!(o, Some(Err(_))).then_some(p))
-        {
-            return Err(pairs[e].not_converged(&settings, params.c));
+        let first_failure = outcomes.iter().position(|o| matches!(o, Some(Err(_))));
+        if let Some(Some(Err(e))) = first_failure.map(|at| outcomes.swap_remove(at)) {
+            return Err(e);
         }
         for (outcome, &(p, _)) in outcomes.into_iter().zip(&tasks) {
             match outcome {
@@ -372,7 +369,8 @@ impl Svc {
                         decisions[p][s] = d;
                     }
                 }
-                _ => return Err(pairs[p].not_converged(&settings, params.c)),
+                // Not run: only after a failure, which returned above.
+                _ => return Err(pairs[p].not_converged(&settings, &params, f64::INFINITY)),
             }
         }
         if params.probability {
@@ -626,12 +624,14 @@ enum Solved {
 }
 
 impl Pair {
-    fn not_converged(&self, settings: &SmoSettings, c: f64) -> RecognizeError {
+    fn not_converged(&self, settings: &SmoSettings, params: &SvcParams, violation: f64) -> RecognizeError {
         RecognizeError::Solver(SolverError::NotConverged {
             iterations: settings.iteration_budget(self.members.len()),
-            c,
+            c: params.c,
             first: self.classes.0,
             second: self.classes.1,
+            violation,
+            stop: params.tolerance,
         })
     }
 
@@ -644,7 +644,7 @@ impl Pair {
         settings: &SmoSettings,
     ) -> Result<BinarySvc, RecognizeError> {
         let BinarySolution { alpha, rho, .. } = solve(&self.members, &self.y, points, dim, params, settings)
-            .ok_or_else(|| self.not_converged(settings, params.c))?;
+            .map_err(|violation| self.not_converged(settings, params, violation))?;
         let support = self
             .members
             .iter()
@@ -693,7 +693,7 @@ impl Pair {
         let ty: Vec<f64> = train.iter().map(|&t| self.y[t]).collect();
         let subset: Vec<usize> = train.iter().map(|&t| self.members[t]).collect();
         let BinarySolution { alpha, rho, .. } = solve(&subset, &ty, points, dim, params, settings)
-            .ok_or_else(|| self.not_converged(settings, params.c))?;
+            .map_err(|violation| self.not_converged(settings, params, violation))?;
         let support: Vec<(&[f64], f64)> = subset
             .iter()
             .zip(alpha.iter().zip(&ty))
@@ -716,7 +716,8 @@ impl Pair {
 }
 
 /// The binary C-SVC on the points `subset` with labels `y` (±1), with `params`' C and
-/// tolerance and `settings`' iteration budget; `None` if it did not converge.
+/// tolerance and `settings`' iteration budget; the KKT violation it reached if it did not
+/// converge.
 fn solve(
     subset: &[usize],
     y: &[f64],
@@ -724,7 +725,7 @@ fn solve(
     dim: usize,
     params: &SvcParams,
     settings: &SmoSettings,
-) -> Option<BinarySolution> {
+) -> Result<BinarySolution, f64> {
     solver::solve_binary(
         params.kernel,
         points,

@@ -6,7 +6,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-mod ipm_limit;
+mod at_limit;
 mod linear_extremes;
 mod svr_exact;
 mod svr_extremes;

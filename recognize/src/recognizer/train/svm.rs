@@ -383,13 +383,16 @@ mod tests {
                 c,
                 first: 1,
                 second: 2,
+                violation: 0.25,
+                stop: 1e-3,
             })
         };
         let e = svc_error("lateral scratch", &classes)(failed(1e5));
         assert_eq!(
             e.chain(),
             "SVC of behaviour `lateral scratch`: SMO did not converge in 10000000 iterations at C = 1e5 \
-             (classes `sandpaper_80` and `styrol_rough`)"
+             (classes `sandpaper_80` and `styrol_rough`): its largest KKT violation was 2.500e-1, over \
+             its stop 1.0e-3"
         );
         // Every candidate failed: each listed, by class name.
         let label = windows_label(FeatureSet::Nakano);
@@ -435,8 +438,8 @@ mod tests {
             lines,
             [
                 "C = 1e5 skipped for the SVC of behaviour `poke`: SMO did not converge in 10000000 \
-                 iterations at C = 1e5 (classes `sandpaper_80` and `styrol_rough`); searching the other \
-                 candidates"
+                 iterations at C = 1e5 (classes `sandpaper_80` and `styrol_rough`): its largest KKT \
+                 violation was 2.500e-1, over its stop 1.0e-3; searching the other candidates"
             ]
         );
     }
