@@ -10,7 +10,7 @@ use super::kernel::Kernel;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Solver {
     /// A linear kernel in few dimensions exactly in the primal; other kernels on the low-rank
-    /// interior point from 1,000 samples on where the kernel matrix is
+    /// interior point from 500 samples on where the kernel matrix is
     /// numerically low-rank; otherwise the dense interior point for up to
     /// [`SvrParams::DENSE_LIMIT`] samples, SMO beyond.
     #[default]

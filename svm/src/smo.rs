@@ -894,7 +894,8 @@ pub(crate) fn solve_svr(
         }
         let beta: Vec<f64> = (0..n).map(|i| alpha[i] - alpha[i + n]).collect();
         let k_beta: Vec<f64> = (0..n).map(|i| grad[i] - (epsilon - y[i])).collect();
-        if let Some(f) = super::smo_finish::finish(kernel, data, settings, &beta, &k_beta, TARGET_GAP)
+        if let Some(f) =
+            super::smo_finish::finish(kernel, data, settings, &beta, &k_beta, TARGET_GAP, usize::MAX)
             && f.gap <= TARGET_GAP
         {
             finished = Some(f);

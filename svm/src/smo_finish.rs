@@ -59,7 +59,8 @@ const MAX_ROUNDS: usize = 20;
 /// whose coefficient left its box or whose residual left its side of the tube, repeat) for at
 /// most [`MAX_ROUNDS`] rounds, each begun only if it can end within the fit's time budget.
 /// `None` when no round gave a dual-feasible point whose gap is at most `target_gap`, the free
-/// samples grow beyond [`MAX_FREE`], or the budget left is too short for the next round.
+/// samples grow beyond `max_free` (or [`MAX_FREE`]), or the budget left is too short for the
+/// next round.
 pub(crate) fn finish(
     kernel: &Kernel,
     data: &SvrData<'_>,
@@ -67,6 +68,7 @@ pub(crate) fn finish(
     beta: &[f64],
     k_beta: &[f64],
     target_gap: f64,
+    max_free: usize,
 ) -> Option<Finished> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let (c, epsilon) = (settings.c, settings.epsilon);
@@ -97,7 +99,7 @@ pub(crate) fn finish(
             .filter(|&i| matches!(sides[i], Side::Upper | Side::Lower))
             .collect();
         let m = free.len();
-        if m == 0 || m > MAX_FREE {
+        if m == 0 || m > MAX_FREE.min(max_free) {
             return None;
         }
         // A round factorises an (m + 1)² system, which cannot be interrupted: one that would
@@ -249,4 +251,37 @@ pub(crate) fn gap(beta: &[f64], k_beta: &[f64], bias: f64, y: &[f64], c: f64, ep
     let dual = 0.5 * quad + linear;
     let gap = (primal + dual).abs() / primal.abs().max(1.0);
     if gap.is_finite() { gap } else { f64::INFINITY }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Instant;
+
+    use super::*;
+
+    #[test]
+    fn a_partition_with_more_free_samples_than_allowed_is_not_solved() {
+        // Samples far apart for the kernel's width (a well-conditioned K) at moderate C: the
+        // exact optimum has free samples.
+        let n = 30;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+        let y: Vec<f64> = x.iter().map(|v| (5.0 * v).sin()).collect();
+        let data = SvrData::new(&x, 1, &y).unwrap();
+        let params = crate::SvrParams::builder()
+            .c(10.0)
+            .epsilon(0.01)
+            .kernel(Kernel::Rbf { gamma: 1000.0 })
+            .build()
+            .unwrap();
+        let settings = params.dual_settings(Instant::now());
+        let kernel = params.kernel();
+        // Every sample starts free, a little off zero: the first round solves for all 30.
+        let beta = vec![1e-3; n];
+        let k_beta: Vec<f64> = (0..n)
+            .map(|i| (0..n).map(|j| beta[j] * kernel.eval(&x[i..=i], &x[j..=j])).sum())
+            .collect();
+        assert!(finish(&kernel, &data, &settings, &beta, &k_beta, 1e-7, n - 1).is_none());
+        let done = finish(&kernel, &data, &settings, &beta, &k_beta, 1e-7, n).expect("finishes");
+        assert!(done.gap <= 1e-7, "{}", done.gap);
+    }
 }
