@@ -6,6 +6,11 @@ scikit-learn; the project's tests do not):
 
     python3 scripts/bench_svr_scale.py                       # n = 350 … 30000
     python3 scripts/bench_svr_scale.py --sizes 100000 --libsvm-max 30000
+    python3 scripts/bench_svr_scale.py --threads 1 --capture assets/captures/li_bi/needle_train.csv \
+        --sizes 350,500,1000 --csv out/svr_scale_li_bi.csv
+
+`--capture` sweeps another insertion capture instead of the generated one; `--threads 1` runs
+our solvers on one thread, as libsvm runs; `--csv` also writes the table's rows as CSV.
 
 It writes a needle capture logged at 1 kHz with the speeds inserted twice
 (`palpus gen --seed 7 --needle-rate-hz 1000 --needle-rounds 2`, ~150 000 samples in tissue), then
@@ -42,19 +47,20 @@ REPEAT_BELOW_S = 1.0
 REPEATS = 5
 
 
-def ours(palpus, capture, n, dump, budget_s):
-    first = ours_run(palpus, capture, [n], dump, budget_s)[0]
+def ours(palpus, capture, n, dump, budget_s, threads):
+    first = ours_run(palpus, capture, [n], dump, budget_s, threads)[0]
     if "error" in first or first["s"] >= REPEAT_BELOW_S:
         return first
     # As on libsvm's side: the same fit repeated in one process, the fastest kept.
     # The memory column stays the single fit's own process peak.
-    runs = [r for r in ours_run(palpus, capture, [n] * REPEATS, dump, budget_s) if "error" not in r]
+    runs = [r for r in ours_run(palpus, capture, [n] * REPEATS, dump, budget_s, threads) if "error" not in r]
     return dict(min(runs, key=lambda r: r["s"]), mb=first["mb"]) if runs else first
 
 
-def ours_run(palpus, capture, sizes, dump, budget_s):
+def ours_run(palpus, capture, sizes, dump, budget_s, threads):
+    pool = ["--threads", str(threads)] if threads else []
     run = subprocess.run(
-        [palpus, "bench", "svr-scale", "--capture", str(capture), "--sizes", ",".join(map(str, sizes)),
+        [palpus, *pool, "bench", "svr-scale", "--capture", str(capture), "--sizes", ",".join(map(str, sizes)),
          "--dump", str(dump), "--budget-s", str(budget_s)],
         capture_output=True, text=True,
     )
@@ -92,20 +98,25 @@ def main():
     ap.add_argument("--palpus", default=str(ROOT / "target/release/palpus"))
     ap.add_argument("--work", default=None, help="folder for the capture and dumps (default: temporary)")
     ap.add_argument("--budget-s", type=float, default=600.0)
+    ap.add_argument("--capture", default=None, help="insertion capture to sweep (default: the generated 1 kHz log)")
+    ap.add_argument("--threads", type=int, default=None, help="our solvers' threads (default: one per core)")
+    ap.add_argument("--csv", default=None, help="also write the rows here")
     a = ap.parse_args()
     work = Path(a.work or tempfile.mkdtemp(prefix="svr_scale_"))
-    capture = work / "li_bi/needle_train.csv"
+    capture = Path(a.capture) if a.capture else work / "li_bi/needle_train.csv"
+    rows = []
     if not capture.exists():
         subprocess.run([a.palpus, "gen", "--seed", "7", "--out", str(work), "--needle-rate-hz", "1000",
                         "--needle-rounds", "2", "-q"], check=True)
     print(f"{'n':>7} {'ours s':>9} {'libsvm s':>9} {'ratio':>7} {'peak MB':>8} {'SVs':>13} "
           f"{'our gap':>8} {'max |Δf| N':>11}  solver")
     for n in [int(s) for s in a.sizes.split(",")]:
-        o = ours(a.palpus, capture, n, work, a.budget_s)
+        o = ours(a.palpus, capture, n, work, a.budget_s, a.threads)
         if "error" in o:
             print(f"{n:>7} ours failed: {o['error']}", flush=True)
             continue
         dump = work / f"svr_scale_n{o['n']}.csv"
+        lib = None
         if o["n"] <= a.libsvm_max:
             lib = libsvm(dump, 100.0, 30.0, 0.02)
             row = (f"{lib['s']:>9.3f} {lib['s'] / o['s']:>6.2f}× {o['mb']:>8.0f} "
@@ -113,6 +124,14 @@ def main():
         else:
             row = f"{'skipped':>9} {'':>7} {o['mb']:>8.0f} {o['svs']:>6}/{'':<6} {o['gap']:>8.0e} {'':>11}"
         print(f"{o['n']:>7} {o['s']:>9.3f} {row}  {o['solver']}", flush=True)
+        rows.append([o["n"], o["s"], lib["s"] if lib else "", o["mb"], o["svs"], lib["svs"] if lib else "",
+                     o["gap"], lib["diff"] if lib else "", o["solver"]])
+    if a.csv:
+        Path(a.csv).parent.mkdir(parents=True, exist_ok=True)
+        with open(a.csv, "w") as out:
+            out.write("n,ours_s,libsvm_s,our_peak_mb,our_svs,libsvm_svs,our_gap,max_abs_diff_n,our_solver\n")
+            for r in rows:
+                out.write(",".join(str(v) for v in r) + "\n")
 
 
 if __name__ == "__main__":

@@ -233,6 +233,8 @@ pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.dump {
         std::fs::create_dir_all(dir)?;
     }
+    let threads = rayon::current_num_threads();
+    println!("{threads} solver thread{}", if threads == 1 { "" } else { "s" });
     println!(
         "{:>7} {:>9} {:>24} {:>10} {:>7} {:>9} {:>9}",
         "n", "ours [s]", "solver", "iterations", "SVs", "rel. gap", "peak MB"

@@ -37,6 +37,11 @@ use clap::{Args, Parser, Subcommand};
 #[derive(Debug, Parser)]
 #[command(name = "palpus", version, about, long_about)]
 pub struct Cli {
+    /// Worker threads for the solvers' parallel parts (kernel rows, the low-rank factor, the
+    /// certificate, the exact finish, the C-SVC's pairs and cross-validation folds); default:
+    /// one per core. `--threads 1` times them beside single-threaded libraries such as libsvm.
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<std::num::NonZeroUsize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -137,6 +142,12 @@ fn parse_size(s: &str) -> Result<[u32; 2], String> {
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    if let Some(threads) = cli.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.get())
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("--threads {threads}: {e}"))?;
+    }
     match cli.command {
         Command::Run(args) => run_cmd::run(&args),
         Command::Render(args) => render_cmd::run(&args),

@@ -353,3 +353,29 @@ fn a_closed_output_pipe_ends_the_process_without_a_panic() {
     let captures = std::fs::read_dir(dir.path().join("nakano")).unwrap().count();
     assert_eq!(captures, 21);
 }
+
+/// `--threads N` sets the solvers' worker threads for any command; 0 is refused.
+#[test]
+fn threads_sets_the_solvers_workers_and_refuses_zero() {
+    let capture = li_bi_dir().join("needle_train.csv");
+    let t = text(&succeeds(&[
+        "--threads",
+        "1",
+        "bench",
+        "svr-scale",
+        "--capture",
+        capture.to_str().unwrap(),
+        "--sizes",
+        "350",
+    ]));
+    assert!(t.starts_with("1 solver thread\n"), "{t}");
+    let e = crate::common::fails(&[
+        "identify",
+        capture.to_str().unwrap(),
+        "--model",
+        "needle",
+        "--threads",
+        "0",
+    ]);
+    assert!(e.contains("--threads"), "{e}");
+}
