@@ -9,7 +9,8 @@ scikit-learn; the project's tests do not):
     python3 scripts/bench_svr_scale.py --threads 1 --capture assets/captures/li_bi/needle_train.csv \
         --sizes 350,500,1000 --csv out/svr_scale_li_bi.csv
 
-`--capture` sweeps another insertion capture instead of the generated one; `--threads 1` runs
+`--capture` sweeps another insertion capture instead of the generated one, `--data` a regression
+table (`scripts/friedman1.py`) with `--c`, `--gamma` and `--epsilon`; `--threads 1` runs
 our solvers on one thread, as libsvm runs; `--csv` also writes the table's rows as CSV.
 
 It writes a needle capture logged at 1 kHz with the speeds inserted twice
@@ -43,6 +44,9 @@ from sklearn.svm import SVR  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 
 
+# Our fits' --c, --gamma, --epsilon, as main() reads them (libsvm gets the same).
+HYPER = []
+
 REPEAT_BELOW_S = 1.0
 REPEATS = 5
 
@@ -57,11 +61,11 @@ def ours(palpus, capture, n, dump, budget_s, threads):
     return dict(min(runs, key=lambda r: r["s"]), mb=first["mb"]) if runs else first
 
 
-def ours_run(palpus, capture, sizes, dump, budget_s, threads):
+def ours_run(palpus, source, sizes, dump, budget_s, threads):
     pool = ["--threads", str(threads)] if threads else []
     run = subprocess.run(
-        [palpus, *pool, "bench", "svr-scale", "--capture", str(capture), "--sizes", ",".join(map(str, sizes)),
-         "--dump", str(dump), "--budget-s", str(budget_s)],
+        [palpus, *pool, "bench", "svr-scale", *source, "--sizes", ",".join(map(str, sizes)),
+         "--dump", str(dump), "--budget-s", str(budget_s), *HYPER],
         capture_output=True, text=True,
     )
     if run.returncode != 0:
@@ -77,7 +81,7 @@ def ours_run(palpus, capture, sizes, dump, budget_s, threads):
 
 def libsvm(path, c, gamma, eps):
     d = np.loadtxt(path, delimiter=",", skiprows=1)
-    x, y = d[:, :2], d[:, 2]
+    x, y = d[:, :-2], d[:, -2]
     m = SVR(kernel="rbf", C=c, gamma=gamma, epsilon=eps, tol=1e-3)
     t = time.perf_counter()
     m.fit(x, y)
@@ -87,7 +91,7 @@ def libsvm(path, c, gamma, eps):
             t = time.perf_counter()
             m.fit(x, y)
             dt = min(dt, time.perf_counter() - t)
-    diff = float(np.abs(m.predict(x) - d[:, 3]).max())
+    diff = float(np.abs(m.predict(x) - d[:, -1]).max())
     return {"s": dt, "svs": len(m.support_), "diff": diff}
 
 
@@ -99,26 +103,32 @@ def main():
     ap.add_argument("--work", default=None, help="folder for the capture and dumps (default: temporary)")
     ap.add_argument("--budget-s", type=float, default=600.0)
     ap.add_argument("--capture", default=None, help="insertion capture to sweep (default: the generated 1 kHz log)")
+    ap.add_argument("--data", default=None, help="a regression table instead (scripts/friedman1.py)")
+    ap.add_argument("--c", type=float, default=100.0)
+    ap.add_argument("--gamma", type=float, default=30.0)
+    ap.add_argument("--epsilon", type=float, default=0.02)
     ap.add_argument("--threads", type=int, default=None, help="our solvers' threads (default: one per core)")
     ap.add_argument("--csv", default=None, help="also write the rows here")
     a = ap.parse_args()
     work = Path(a.work or tempfile.mkdtemp(prefix="svr_scale_"))
     capture = Path(a.capture) if a.capture else work / "li_bi/needle_train.csv"
+    source = ["--data", a.data] if a.data else ["--capture", str(capture)]
+    HYPER[:] = ["--c", str(a.c), "--gamma", str(a.gamma), "--epsilon", str(a.epsilon)]
     rows = []
-    if not capture.exists():
+    if not a.data and not capture.exists():
         subprocess.run([a.palpus, "gen", "--seed", "7", "--out", str(work), "--needle-rate-hz", "1000",
                         "--needle-rounds", "2", "-q"], check=True)
     print(f"{'n':>7} {'ours s':>9} {'libsvm s':>9} {'ratio':>7} {'peak MB':>8} {'SVs':>13} "
           f"{'our gap':>8} {'max |Δf| N':>11}  solver")
     for n in [int(s) for s in a.sizes.split(",")]:
-        o = ours(a.palpus, capture, n, work, a.budget_s, a.threads)
+        o = ours(a.palpus, source, n, work, a.budget_s, a.threads)
         if "error" in o:
             print(f"{n:>7} ours failed: {o['error']}", flush=True)
             continue
         dump = work / f"svr_scale_n{o['n']}.csv"
         lib = None
         if o["n"] <= a.libsvm_max:
-            lib = libsvm(dump, 100.0, 30.0, 0.02)
+            lib = libsvm(dump, a.c, a.gamma, a.epsilon)
             row = (f"{lib['s']:>9.3f} {lib['s'] / o['s']:>6.2f}× {o['mb']:>8.0f} "
                    f"{o['svs']:>6}/{lib['svs']:<6} {o['gap']:>8.0e} {lib['diff']:>11.1e}")
         else:

@@ -14,6 +14,7 @@ pub mod history;
 pub mod models;
 pub mod plots;
 pub mod recognizer;
+mod scale_sets;
 pub mod scene;
 pub mod session;
 mod tables;

@@ -6,6 +6,8 @@ use clap::Args;
 use serde_json::Value;
 use svm::{Kernel, Solver, SvrParams, fit};
 
+use crate::scale_sets::{ScaleSource, Table};
+
 /// The fixtures with libsvm timings (made by svm/fixtures/make_svr_fixtures.py on this
 /// project's development machine: scikit-learn's libsvm at tol 1e-3, its default, and 1e-9).
 const FIXTURES: [&str; 3] = [
@@ -141,20 +143,31 @@ pub(crate) fn run(args: &SvrArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Time the needle's ε-SVR fit at growing n on one insertion capture.
+/// Time the needle's ε-SVR fit at growing n on one insertion capture (or a regression table).
 ///
 /// Picks `n` in-tissue samples spread evenly over the capture and scales them to the unit box,
 /// as `palpus identify --model needle --max-samples n` does, then fits with the needle's
-/// defaults (C = 100, γ = 30, ε = 0.02 N unless given). Prints, per size: the fit's seconds,
-/// solver, iterations, support vectors, relative duality gap and the process's peak resident
-/// memory so far. With `--dump DIR` it also writes each training set and our predictions on
-/// it (`DIR/svr_scale_n{n}.csv`: x0, x1, y, ours), from which scripts/bench_svr_scale.py fits
-/// scikit-learn's libsvm on the same samples. Run one size per process for per-size memory.
+/// defaults (C = 100, γ = 30, ε = 0.02 N unless given); with `--data`, the table's first n rows.
+/// Prints, per size: the fit's seconds, solver, iterations, support vectors, relative duality
+/// gap and the process's peak resident memory so far. With `--dump DIR` it also writes each
+/// training set and our predictions on it (`DIR/svr_scale_n{n}.csv`: x0, x1, …, y, ours), from
+/// which scripts/bench_svr_scale.py fits scikit-learn's libsvm on the same samples. Run one size
+/// per process for per-size memory.
 #[derive(Debug, Args)]
 pub(crate) struct SvrScaleArgs {
     /// Insertion capture to train on (e.g. li_bi/needle_train.csv from `palpus gen`).
+    #[arg(
+        long,
+        value_name = "CSV",
+        required_unless_present = "data",
+        conflicts_with = "data"
+    )]
+    capture: Option<std::path::PathBuf>,
+    /// A regression problem instead of a capture: a CSV with a header, the inputs in every
+    /// column but the last and the target in the last (e.g. Friedman #1 from
+    /// scripts/friedman1.py). Its first n rows are fitted, inputs min-max scaled.
     #[arg(long, value_name = "CSV")]
-    capture: std::path::PathBuf,
+    data: Option<std::path::PathBuf>,
     /// Training-set sizes (comma-separated; a size above the capture's in-tissue samples takes
     /// them all).
     #[arg(long, value_delimiter = ',', default_value = "350,1000,3000")]
@@ -187,33 +200,6 @@ fn peak_rss_bytes() -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// `n` in-tissue samples of `capture` spread evenly (first and last included), inputs
-/// (depth, velocity) row-major and min-max scaled, and the axial force: the needle's training
-/// set as identification picks it.
-fn needle_training_set(capture: &capture::Capture, n: usize) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
-    use capture::kind;
-    use identify::{ModelKind, model_column, model_rows};
-    let rows = model_rows(ModelKind::NeedlePuncture, capture)?;
-    anyhow::ensure!(
-        rows.len() >= 2,
-        "{}: fewer than 2 samples in tissue",
-        capture.source().display()
-    );
-    let depth = model_column(capture, kind::DEPTH_M)?;
-    let velocity = model_column(capture, kind::VELOCITY_MPS)?;
-    let force = model_column(capture, kind::AXIAL_FORCE_N)?;
-    let n_all = rows.len();
-    let n = n.clamp(2, n_all);
-    let pick = (0..n).map(|k| rows[((k as f64) * (n_all - 1) as f64 / (n - 1) as f64).round() as usize]);
-    let (mut x, mut y) = (Vec::with_capacity(2 * n), Vec::with_capacity(n));
-    for i in pick {
-        x.extend([depth[i], velocity[i]]);
-        y.push(force[i]);
-    }
-    let scaled = svm::InputScaling::min_max(&x, 2).apply(&x);
-    Ok((scaled, y))
-}
-
 pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
     let solver = match args.solver.as_str() {
         "auto" => Solver::Auto,
@@ -222,7 +208,14 @@ pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
         "low-rank" => Solver::LowRank,
         other => anyhow::bail!("--solver {other}: expected auto, smo, ipm or low-rank"),
     };
-    let capture = capture::Capture::read_file(&args.capture, capture::CaptureKind::Insertion)?;
+    let source = match (&args.capture, &args.data) {
+        (Some(path), _) => ScaleSource::Capture(capture::Capture::read_file(
+            path,
+            capture::CaptureKind::Insertion,
+        )?),
+        (None, Some(path)) => ScaleSource::Table(Table::read(path)?),
+        (None, None) => anyhow::bail!("give --capture or --data"),
+    };
     let params = SvrParams::builder()
         .c(args.c)
         .epsilon(args.epsilon)
@@ -240,8 +233,8 @@ pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
         "n", "ours [s]", "solver", "iterations", "SVs", "rel. gap", "peak MB"
     );
     for &n in &args.sizes {
-        let (x, y) = needle_training_set(&capture, n)?;
-        let f = fit(&params, &x, 2, &y)?;
+        let (x, dim, y) = source.first(n)?;
+        let f = fit(&params, &x, dim, &y)?;
         let peak = peak_rss_bytes().map_or(f64::NAN, |b| b as f64 / 1e6);
         println!(
             "{:>7} {:>9.4} {:>24} {:>10} {:>7} {:>9.2e} {:>9.1}",
@@ -257,9 +250,11 @@ pub(crate) fn run_scale(args: &SvrScaleArgs) -> anyhow::Result<()> {
             use std::io::Write;
             let path = dir.join(format!("svr_scale_n{}.csv", y.len()));
             let mut out = std::io::BufWriter::new(std::fs::File::create(&path)?);
-            writeln!(out, "x0,x1,y,ours")?;
-            for (r, yi) in x.chunks_exact(2).zip(&y) {
-                writeln!(out, "{:?},{:?},{yi:?},{:?}", r[0], r[1], f.model.predict(r))?;
+            let names: Vec<String> = (0..dim).map(|k| format!("x{k}")).collect();
+            writeln!(out, "{},y,ours", names.join(","))?;
+            for (r, yi) in x.chunks_exact(dim).zip(&y) {
+                let inputs: Vec<String> = r.iter().map(|v| format!("{v:?}")).collect();
+                writeln!(out, "{},{yi:?},{:?}", inputs.join(","), f.model.predict(r))?;
             }
             out.flush()?;
         }

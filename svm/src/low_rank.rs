@@ -107,6 +107,8 @@ pub(crate) fn pivoted_cholesky(
     let scale = diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
     let stop = tolerance * scale.max(f64::MIN_POSITIVE);
     let mut columns: Vec<Vec<f64>> = Vec::new();
+    // The largest residual at the checkpoint ranks (16, 32, 64, …) so far.
+    let mut checkpoints: Vec<(usize, f64)> = Vec::new();
     loop {
         let (pivot, largest) =
             diag.iter().enumerate().fold(
@@ -116,8 +118,15 @@ pub(crate) fn pivoted_cholesky(
         if largest <= stop {
             return Some(LowRank { columns, n });
         }
-        if columns.len() >= max_rank {
+        let rank = columns.len();
+        if rank >= max_rank {
             return None;
+        }
+        if rank >= 16 && rank.is_power_of_two() {
+            checkpoints.push((rank, largest));
+            if out_of_reach(&checkpoints, max_rank, stop) {
+                return None;
+            }
         }
         let pivot_row: Vec<f64> = columns.iter().map(|g| g[pivot]).collect();
         let xp = row(pivot);
@@ -149,6 +158,39 @@ pub(crate) fn pivoted_cholesky(
         diag[pivot] = 0.0;
         columns.push(column);
     }
+}
+
+/// Whether a factor whose largest residual was `checkpoints` (rank, residual) at ranks 16, 32,
+/// 64, … cannot reach `stop` by `max_rank`: its kernel is not low-rank enough, and the columns
+/// it would add before giving up at its limit cost n·rank² for nothing. The residual's log falls
+/// at a rate per column that changes from one doubling of the rank to the next; while the rate
+/// grows the factor goes on, and where it shrinks, the rate is projected to go on shrinking by
+/// the same ratio each doubling, and the factor gives up if even twice that projected fall
+/// misses `stop`. On the needle's 2-D inputs the rate grows (the residual fell by 28 from rank
+/// 32 to 64 and by 1.5e5 from 64 to 128 at n = 3,000); on Friedman #1's five uniform inputs it
+/// shrinks (by 0.6 per doubling at n = 4,000), and the factor went to its limit of 1,000
+/// columns, 1.3 s, before it failed.
+fn out_of_reach(checkpoints: &[(usize, f64)], max_rank: usize, stop: f64) -> bool {
+    let [.., (r0, l0), (r1, l1), (r2, l2)] = *checkpoints else {
+        return false;
+    };
+    if !(l0 > 0.0 && l1 > 0.0 && l2 > 0.0 && stop > 0.0) {
+        return false;
+    }
+    let rate_before = (l0 / l1).ln() / (r1 - r0) as f64;
+    let rate = (l1 / l2).ln() / (r2 - r1) as f64;
+    if !(rate_before > 0.0 && rate > 0.0) || rate >= rate_before {
+        return false;
+    }
+    let shrink = rate / rate_before;
+    let (mut at, mut step_rate, mut fall) = (r2, rate, 0.0);
+    while at < max_rank {
+        step_rate *= shrink;
+        let next = (2 * at).min(max_rank);
+        fall += step_rate * (next - at) as f64;
+        at = next;
+    }
+    2.0 * fall < (l2 / stop).ln()
 }
 
 /// `K + diag(h)` for `K = GGᵀ`, by the Woodbury identity: `D⁻¹ − D⁻¹G (I + GᵀD⁻¹G)⁻¹ GᵀD⁻¹`.
@@ -295,6 +337,24 @@ pub(crate) fn kernel_times(kernel: &Kernel, x: &[f64], dim: usize, beta: &[f64])
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_factor_gives_up_early_only_where_its_residual_falls_ever_slower() {
+        // The needle's residuals at ranks 16, 32, 64, 128 (n = 3,000): the fall quickens.
+        let needle = [(16, 0.796), (32, 0.277), (64, 9.93e-3), (128, 6.41e-8)];
+        for k in 1..=needle.len() {
+            assert!(!out_of_reach(&needle[..k], 750, 9.1e-10), "needle at {k}");
+        }
+        // Friedman #1's (n = 4,000): the fall slows by about 0.6 each doubling.
+        let friedman = [(16, 0.506), (32, 0.178), (64, 5.13e-2), (128, 8.69e-3)];
+        assert!(
+            !out_of_reach(&friedman[..2], 1000, 1e-9),
+            "two points say nothing of a trend"
+        );
+        assert!(out_of_reach(&friedman[..3], 1000, 1e-9));
+        // The same slowing fall, but a target it reaches in time.
+        assert!(!out_of_reach(&friedman[..3], 1000, 1e-3));
+    }
 
     fn inputs(n: usize) -> Vec<f64> {
         // Deterministic points filling the unit square.

@@ -860,6 +860,7 @@ pub(crate) fn solve_svr(
     data: &super::data::SvrData<'_>,
     settings: &super::params::DualSettings,
     cache_bytes: usize,
+    max_iterations: usize,
 ) -> Result<SvrSmoSolution, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
     let n = y.len();
@@ -869,7 +870,7 @@ pub(crate) fn solve_svr(
     let smo = SmoSettings::builder()
         .c(c)
         .stop(LIBSVM_STOP.max(floor))
-        .max_iterations(settings.max_iterations)
+        .max_iterations(max_iterations)
         .shrinking(true)
         .time_budget(settings.started, settings.time_budget)
         .selection(SelectionCurvature::Clamped)
@@ -983,8 +984,15 @@ mod tests {
             .unwrap();
         let settings = params.dual_settings(Instant::now());
         let kernel = params.kernel();
-        let big = solve_svr(&kernel, &data, &settings, CACHE_BYTES).unwrap();
-        let small = solve_svr(&kernel, &data, &settings, 3 * n * size_of::<f64>()).unwrap();
+        let big = solve_svr(&kernel, &data, &settings, CACHE_BYTES, settings.max_iterations).unwrap();
+        let small = solve_svr(
+            &kernel,
+            &data,
+            &settings,
+            3 * n * size_of::<f64>(),
+            settings.max_iterations,
+        )
+        .unwrap();
         let largest = big.beta.iter().fold(0.0f64, |m, b| m.max(b.abs()));
         assert!(largest > 1.0, "a trivial solution tests nothing");
         for (a, b) in big.beta.iter().zip(&small.beta) {

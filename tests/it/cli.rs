@@ -379,3 +379,48 @@ fn threads_sets_the_solvers_workers_and_refuses_zero() {
     ]);
     assert!(e.contains("--threads"), "{e}");
 }
+
+/// `bench svr-scale --data` fits a regression table; a cell that is not a number is named by
+/// file, line and column.
+#[test]
+fn svr_scale_fits_a_table_and_names_a_bad_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("table.csv");
+    let mut text = String::from("x0,x1,x2,y\n");
+    for i in 0..60 {
+        let (a, b, c) = (
+            f64::from(i) / 60.0,
+            f64::from(i * 7 % 13) / 13.0,
+            f64::from(i * 3 % 11) / 11.0,
+        );
+        text.push_str(&format!("{a},{b},{c},{}\n", (3.0 * a).sin() + b * c));
+    }
+    std::fs::write(&table, &text).unwrap();
+    let t = text_of(&[
+        "bench",
+        "svr-scale",
+        "--data",
+        table.to_str().unwrap(),
+        "--sizes",
+        "40",
+        "--c",
+        "10",
+        "--gamma",
+        "1",
+        "--epsilon",
+        "0.05",
+    ]);
+    let row = t.lines().last().unwrap();
+    assert!(row.trim_start().starts_with("40 "), "{t}");
+    text.push_str("0.5,half,0.1,1.0\n");
+    std::fs::write(&table, &text).unwrap();
+    let e = crate::common::fails(&["bench", "svr-scale", "--data", table.to_str().unwrap()]);
+    assert!(
+        e.contains("table.csv:62: column 2: `half` is not a finite number"),
+        "{e}"
+    );
+}
+
+fn text_of(args: &[&str]) -> String {
+    text(&succeeds(args))
+}
