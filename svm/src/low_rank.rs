@@ -87,22 +87,36 @@ impl LowRank {
     }
 }
 
+/// Why [`pivoted_cholesky`] gave no factor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum FactorMiss {
+    /// It reached `max_rank` columns with its residual still falling fast enough to reach the
+    /// tolerance later: the kernel is low-rank, just not within the rank allowed at this n.
+    RankLimit,
+    /// Its residual's fall slowed too much to reach the tolerance by `max_rank`
+    /// ([`out_of_reach`]): the kernel is far from low-rank.
+    SlowFall,
+    /// A kernel value was not finite.
+    NotFinite,
+}
+
 /// Pivoted incomplete Cholesky of the kernel matrix of the `n = x.len() / dim` inputs: greedy
 /// pivots on the largest residual diagonal until every residual diagonal entry is at most
-/// `tolerance` times the largest kernel diagonal. `None` when that takes more than `max_rank`
-/// columns (the matrix is not low-rank enough for the factor to pay) or a value is not finite.
+/// `tolerance` times the largest kernel diagonal; a [`FactorMiss`] when that would take more
+/// than `max_rank` columns (the matrix is not low-rank enough for the factor to pay) or a value
+/// is not finite.
 pub(crate) fn pivoted_cholesky(
     kernel: &Kernel,
     x: &[f64],
     dim: usize,
     tolerance: f64,
     max_rank: usize,
-) -> Option<LowRank> {
+) -> Result<LowRank, FactorMiss> {
     let n = x.len() / dim;
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
     let mut diag: Vec<f64> = (0..n).map(|i| kernel.eval(row(i), row(i))).collect();
     if diag.iter().any(|d| !d.is_finite()) {
-        return None;
+        return Err(FactorMiss::NotFinite);
     }
     let scale = diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
     let stop = tolerance * scale.max(f64::MIN_POSITIVE);
@@ -116,16 +130,16 @@ pub(crate) fn pivoted_cholesky(
                 |best, (i, &d)| if d > best.1 { (i, d) } else { best },
             );
         if largest <= stop {
-            return Some(LowRank { columns, n });
+            return Ok(LowRank { columns, n });
         }
         let rank = columns.len();
         if rank >= max_rank {
-            return None;
+            return Err(FactorMiss::RankLimit);
         }
         if rank >= 16 && rank.is_power_of_two() {
             checkpoints.push((rank, largest));
             if out_of_reach(&checkpoints, max_rank, stop) {
-                return None;
+                return Err(FactorMiss::SlowFall);
             }
         }
         let pivot_row: Vec<f64> = columns.iter().map(|g| g[pivot]).collect();
@@ -148,7 +162,7 @@ pub(crate) fn pivoted_cholesky(
             }
         });
         if column.iter().any(|v| !v.is_finite()) {
-            return None;
+            return Err(FactorMiss::NotFinite);
         }
         for (d, v) in diag.iter_mut().zip(&column) {
             *d -= v * v;
@@ -400,7 +414,7 @@ mod tests {
     #[test]
     fn a_rank_budget_too_small_is_refused() {
         let x = inputs(300);
-        assert!(pivoted_cholesky(&Kernel::Rbf { gamma: 1e4 }, &x, 2, 1e-12, 50).is_none());
+        assert!(pivoted_cholesky(&Kernel::Rbf { gamma: 1e4 }, &x, 2, 1e-12, 50).is_err());
     }
 
     #[test]
