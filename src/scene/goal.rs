@@ -81,6 +81,24 @@ pub fn in_words(layer: &str) -> String {
     layer.replace('_', " ")
 }
 
+#[cfg(test)]
+impl Goal {
+    /// A guided goal over `layers`, stopping within `within_m` after the last, with no limits:
+    /// what the session tests score against.
+    pub(crate) fn guided_through(layers: &[&str], within_m: f64) -> Self {
+        Self {
+            layers: layers.iter().map(|l| (*l).to_owned()).collect(),
+            stop_after: layers.last().map_or_else(String::new, |l| (*l).to_owned()),
+            within_m,
+            must_not_puncture: Vec::new(),
+            max_force_n: None,
+            time_limit_s: None,
+            reference: None,
+            mode: GoalMode::Guided,
+        }
+    }
+}
+
 impl Goal {
     /// The index of `layer` in [`Goal::layers`].
     pub fn layer_index(&self, layer: &str) -> Option<usize> {

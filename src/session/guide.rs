@@ -194,16 +194,7 @@ mod tests {
     use super::*;
 
     fn goal() -> Goal {
-        Goal {
-            layers: vec!["capsule".into(), "vessel_wall".into()],
-            stop_after: "vessel_wall".into(),
-            within_m: 0.003,
-            must_not_puncture: Vec::new(),
-            max_force_n: None,
-            time_limit_s: None,
-            reference: None,
-            mode: GoalMode::Guided,
-        }
+        Goal::guided_through(&["capsule", "vessel_wall"], 0.003)
     }
 
     /// A sample with the tip `depth_mm` below a surface at z = 0, advancing at 10 mm/s, in

@@ -119,20 +119,10 @@ impl LiveAttempts {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::GoalMode;
     use haptics::PunctureState;
 
     fn goal() -> Goal {
-        Goal {
-            layers: vec!["capsule".into()],
-            stop_after: "capsule".into(),
-            within_m: 0.003,
-            must_not_puncture: Vec::new(),
-            max_force_n: None,
-            time_limit_s: None,
-            reference: None,
-            mode: GoalMode::Guided,
-        }
+        Goal::guided_through(&["capsule"], 0.003)
     }
 
     /// A trace through `depths_mm`, 1 ms apart; the capsule gives where the depth first passes
