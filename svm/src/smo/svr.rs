@@ -1,0 +1,330 @@
+//! The ε-SVR on [`super`]'s SMO: the split dual's variables, kernel rows cached within a
+//! memory budget, and the refinement to the certificate's gap with the exact finish.
+
+use super::{PairRows, SelectionCurvature, SmoSettings, Split, Variables, rho, solve};
+use crate::error::SvmError;
+use crate::kernel::Kernel;
+
+/// Memory for cached kernel rows of the ε-SVR (libsvm's `-m`; scikit-learn's default is 200 MB).
+pub(crate) const CACHE_BYTES: usize = 256 << 20;
+/// Kernel rows computed on demand and cached: least recently used rows are evicted so that the
+/// rows held never take more than the byte budget given (at least two rows, the pair's).
+pub(crate) struct RowCache<'a> {
+    kernel: &'a Kernel,
+    x: &'a [f64],
+    dim: usize,
+    n: usize,
+    diag: Vec<f64>,
+    slot_of: Vec<Option<usize>>,
+    owner: Vec<usize>,
+    last_used: Vec<u64>,
+    rows: Vec<f64>,
+    clock: u64,
+    /// Rows computed (cache misses), for the tests and the benchmark.
+    computed: usize,
+}
+
+/// Samples above which a kernel row is computed on all cores: below, a thread hand-off costs
+/// more than the row (measured with `palpus bench svr-scale`).
+const PARALLEL_ROW: usize = 4096;
+
+impl<'a> RowCache<'a> {
+    /// A cache of rows of `kernel` over the `n` samples in `x` (`n × dim`, row-major) holding
+    /// at most `budget_bytes` of rows (but always two).
+    pub(crate) fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize, budget_bytes: usize) -> Self {
+        let slots = (budget_bytes / (size_of::<f64>() * n.max(1))).clamp(2, n.max(2));
+        Self {
+            kernel,
+            x,
+            dim,
+            n,
+            diag: (0..n)
+                .map(|i| kernel.eval(&x[i * dim..(i + 1) * dim], &x[i * dim..(i + 1) * dim]))
+                .collect(),
+            slot_of: vec![None; n],
+            owner: vec![usize::MAX; slots],
+            last_used: vec![0; slots],
+            rows: Vec::new(),
+            clock: 0,
+            computed: 0,
+        }
+    }
+
+    /// Bytes of row storage allocated so far.
+    #[cfg(test)]
+    pub(crate) fn row_bytes(&self) -> usize {
+        self.rows.capacity() * size_of::<f64>()
+    }
+
+    /// Rows computed so far.
+    #[cfg(test)]
+    pub(crate) fn computed(&self) -> usize {
+        self.computed
+    }
+
+    /// Computes row `i` into `out`.
+    fn compute(kernel: &Kernel, x: &[f64], dim: usize, i: usize, out: &mut [f64]) {
+        let xi = &x[i * dim..(i + 1) * dim];
+        let fill = |start: usize, out: &mut [f64]| {
+            for (j, o) in out.iter_mut().enumerate() {
+                let r = start + j;
+                *o = kernel.eval(xi, &x[r * dim..(r + 1) * dim]);
+            }
+        };
+        if out.len() >= PARALLEL_ROW {
+            let half = out.len() / 2;
+            let (a, b) = out.split_at_mut(half);
+            rayon::join(|| fill(0, a), || fill(half, b));
+        } else {
+            fill(0, out);
+        }
+    }
+}
+
+impl PairRows for RowCache<'_> {
+    fn diagonal(&self, s: usize) -> f64 {
+        self.diag[s]
+    }
+
+    fn fetch(&mut self, i: usize) -> usize {
+        self.clock += 1;
+        let n = self.n;
+        let slot = match self.slot_of[i] {
+            Some(s) => s,
+            None => {
+                // Slots are filled in order before any is reused, so the storage grows only
+                // as far as the rows asked for.
+                let used = self.rows.len() / n.max(1);
+                let s = if used < self.owner.len() {
+                    // Exactly one row more: a doubling growth would overshoot the budget.
+                    self.rows.reserve_exact(n);
+                    self.rows.resize((used + 1) * n, 0.0);
+                    used
+                } else {
+                    (0..self.owner.len())
+                        .min_by_key(|&s| self.last_used[s])
+                        .unwrap_or(0)
+                };
+                if self.owner[s] != usize::MAX {
+                    self.slot_of[self.owner[s]] = None;
+                }
+                self.owner[s] = i;
+                self.slot_of[i] = Some(s);
+                Self::compute(
+                    self.kernel,
+                    self.x,
+                    self.dim,
+                    i,
+                    &mut self.rows[s * n..(s + 1) * n],
+                );
+                self.computed += 1;
+                s
+            }
+        };
+        self.last_used[slot] = self.clock;
+        slot
+    }
+
+    fn get(&self, slot: usize) -> &[f64] {
+        &self.rows[slot * self.n..(slot + 1) * self.n]
+    }
+}
+
+/// An ε-SVR solved by SMO.
+#[derive(Debug, Clone)]
+pub(crate) struct SvrSmoSolution {
+    /// `β = α − α*`, one per sample.
+    pub beta: Vec<f64>,
+    /// The bias b = −ρ.
+    pub bias: f64,
+    /// Pair updates made.
+    pub iterations: usize,
+    /// Whether the exact finish on SMO's partition produced it.
+    pub polished: bool,
+    /// The stop value (a KKT violation) it was aiming for when its iteration limit stopped
+    /// it; `None` when it converged.
+    pub short_of: Option<f64>,
+}
+
+/// libsvm's default stop (its `-e`, scikit-learn's `tol`): the first pass ends at this maximal
+/// KKT violation, in the units of the targets.
+pub(crate) const LIBSVM_STOP: f64 = 1e-3;
+
+/// The relative duality gap the ε-SVR's SMO aims for before it hands its answer to the fit's
+/// certificate: a tenth of what the certificate accepts, so that the certificate's own,
+/// independent evaluation (with its rounding bounds) passes.
+pub(crate) const TARGET_GAP: f64 = 0.1 * crate::ACCEPT_GAP;
+
+/// Relative duality gap `|P + D| / max(1, |P|)` of the split dual's α, read off its gradient:
+/// for the first n variables `∇ₜ = ε − yₜ + (Kβ)ₜ`, so no kernel value is needed.
+fn svr_gap(alpha: &[f64], grad: &[f64], y: &[f64], c: f64, epsilon: f64) -> f64 {
+    let n = y.len();
+    let bias = -rho(alpha, grad, Split { n }, c);
+    let (mut quad, mut linear, mut loss) = (0.0, 0.0, 0.0);
+    for i in 0..n {
+        let beta = alpha[i] - alpha[i + n];
+        let k_beta = grad[i] - (epsilon - y[i]);
+        quad += beta * k_beta;
+        linear += epsilon * beta.abs() - beta * y[i];
+        loss += crate::slack(y[i], k_beta + bias, epsilon);
+    }
+    let primal = 0.5 * quad + c * loss;
+    let dual = 0.5 * quad + linear;
+    let gap = (primal + dual).abs() / primal.abs().max(1.0);
+    if gap.is_finite() { gap } else { f64::INFINITY }
+}
+
+/// Solves the ε-SVR dual of `data` by SMO with shrinking, rows from a [`RowCache`] of
+/// `cache_bytes`: first to libsvm's stop ([`LIBSVM_STOP`]); each time it has converged, the
+/// answer is its own if the duality gap read off the gradient is at most a tenth of
+/// [`crate::ACCEPT_GAP`], else the exact finish on its partition if that one's gap is
+/// (`smo_finish`), else SMO goes on from where it stopped with a stop ten times smaller (down to
+/// `1e2 · tolerance · (1 + max|y|)`). The fit's certificate still decides acceptance.
+pub(crate) fn solve_svr(
+    kernel: &Kernel,
+    data: &crate::data::SvrData<'_>,
+    settings: &crate::params::DualSettings,
+    cache_bytes: usize,
+    max_iterations: usize,
+) -> Result<SvrSmoSolution, SvmError> {
+    let (x, dim, y) = (data.x, data.dim, data.y);
+    let n = y.len();
+    let (c, epsilon) = (settings.c, settings.epsilon);
+    let y_scale = crate::data::target_scale(y);
+    let floor = 1e2 * settings.tolerance * y_scale;
+    let smo = SmoSettings::builder()
+        .c(c)
+        .stop(LIBSVM_STOP.max(floor))
+        .max_iterations(max_iterations)
+        .shrinking(true)
+        .time_budget(settings.started, settings.time_budget)
+        .selection(SelectionCurvature::Clamped)
+        .build()?;
+    // Variable t < n is αₜ (label +1, p = ε − y), t ≥ n is α*ₜ₋ₙ (label −1, p = ε + y).
+    let linear: Vec<f64> = (0..2 * n)
+        .map(|t| if t < n { epsilon - y[t] } else { epsilon + y[t - n] })
+        .collect();
+    let vars = Variables {
+        labels: Split { n },
+        linear: &linear,
+        n,
+    };
+    let mut cache = RowCache::new(kernel, x, dim, n, cache_bytes);
+    // Each time SMO converges: done if its own gap is small enough; else try the exact finish
+    // on the partition it has found; else go on with a tighter stop.
+    let mut finished: Option<crate::smo_finish::Finished> = None;
+    let mut refine = |alpha: &[f64], grad: &[f64], stop: f64| {
+        let gap = svr_gap(alpha, grad, y, c, epsilon);
+        if gap <= TARGET_GAP {
+            return None;
+        }
+        let beta: Vec<f64> = (0..n).map(|i| alpha[i] - alpha[i + n]).collect();
+        let k_beta: Vec<f64> = (0..n).map(|i| grad[i] - (epsilon - y[i])).collect();
+        if let Some(f) =
+            crate::smo_finish::finish(kernel, data, settings, &beta, &k_beta, TARGET_GAP, usize::MAX)
+            && f.gap <= TARGET_GAP
+        {
+            finished = Some(f);
+            return None;
+        }
+        (stop > floor).then_some((0.1 * stop).max(floor))
+    };
+    let sol = solve(&mut cache, &vars, &smo, &mut refine)?;
+    if let Some(f) = finished {
+        return Ok(SvrSmoSolution {
+            beta: f.beta,
+            bias: f.bias,
+            iterations: sol.iterations,
+            polished: true,
+            short_of: None,
+        });
+    }
+    let beta = (0..n).map(|i| sol.alpha[i] - sol.alpha[i + n]).collect();
+    Ok(SvrSmoSolution {
+        beta,
+        bias: -sol.rho,
+        iterations: sol.iterations,
+        polished: false,
+        short_of: (!sol.converged).then_some(sol.stop),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Instant;
+
+    use super::*;
+
+    /// Inputs on a 1-D grid with a repeated row, so rows are distinguishable and one pair of
+    /// rows is identical.
+    fn grid(n: usize) -> Vec<f64> {
+        (0..n).map(|i| (i.min(n - 2)) as f64 / n as f64).collect()
+    }
+
+    #[test]
+    fn the_row_cache_stays_within_its_budget_and_returns_exact_rows() {
+        let kernel = Kernel::Rbf { gamma: 3.0 };
+        let n = 50;
+        let x = grid(n);
+        // Room for 5 rows of 50 doubles, and a little over.
+        let budget = 5 * n * size_of::<f64>() + 7;
+        let mut cache = RowCache::new(&kernel, &x, 1, n, budget);
+        // Cycle through more rows than fit, twice, checking every value.
+        for round in 0..2 {
+            for i in (0..n).step_by(3) {
+                let h = cache.fetch(i);
+                let row = cache.get(h);
+                for (j, &v) in row.iter().enumerate() {
+                    assert_eq!(
+                        v,
+                        kernel.eval(&x[i..=i], &x[j..=j]),
+                        "row {i} col {j} round {round}"
+                    );
+                }
+                assert!(cache.row_bytes() <= budget, "{} > {budget}", cache.row_bytes());
+            }
+        }
+        // Every fetch of a row not held computes it: 17 distinct rows > 5 slots, so the second
+        // round recomputes them all.
+        assert_eq!(cache.computed(), 2 * n.div_ceil(3));
+        // A pair stays readable together whatever the budget.
+        let mut tiny = RowCache::new(&kernel, &x, 1, n, 0);
+        let (a, b) = (tiny.fetch(3), tiny.fetch(40));
+        assert_eq!(tiny.get(a)[40], tiny.get(b)[3]);
+        assert!(tiny.row_bytes() <= 2 * n * size_of::<f64>());
+    }
+
+    #[test]
+    fn a_small_cache_gives_the_same_svr_solution_as_a_large_one() {
+        let n = 120;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|v| (6.0 * v).sin() + 0.3 * (37.0 * v).cos())
+            .collect();
+        let data = crate::data::SvrData::new(&x, 1, &y).unwrap();
+        let params = crate::SvrParams::builder()
+            .c(10.0)
+            .epsilon(0.05)
+            .kernel(Kernel::Rbf { gamma: 20.0 })
+            .build()
+            .unwrap();
+        let settings = params.dual_settings(Instant::now());
+        let kernel = params.kernel();
+        let big = solve_svr(&kernel, &data, &settings, CACHE_BYTES, settings.max_iterations).unwrap();
+        let small = solve_svr(
+            &kernel,
+            &data,
+            &settings,
+            3 * n * size_of::<f64>(),
+            settings.max_iterations,
+        )
+        .unwrap();
+        let largest = big.beta.iter().fold(0.0f64, |m, b| m.max(b.abs()));
+        assert!(largest > 1.0, "a trivial solution tests nothing");
+        for (a, b) in big.beta.iter().zip(&small.beta) {
+            assert!((a - b).abs() <= 1e-6 * 10.0, "{a} vs {b}");
+        }
+        assert!((big.bias - small.bias).abs() <= 1e-6);
+    }
+}
