@@ -4,9 +4,9 @@
 //! Dual (what is solved): `min ½ βᵀKβ + ε Σ|βᵢ| − yᵀβ` subject to `Σ βᵢ = 0`, `−C ≤ βᵢ ≤ C`,
 //! with `f(x) = Σ βᵢ K(xᵢ, x) + b`.
 //!
-//! [`solve_smo`] is the ε-SVR's SMO core. `recognize`'s C-SVC runs the same algorithm in its own
-//! solver laid out as libsvm's (active variables at the front of every array and cached row),
-//! which this crate's row interface cannot express yet; folding the two into one is open work.
+//! One SMO (libsvm's solver and memory layout) serves the ε-SVR beyond the interior point's
+//! reach and `recognize`'s pairwise C-SVCs ([`solve_svc`]); [`solve_smo`] runs it over any
+//! [`KernelRows`].
 //!
 //! Every fallible function of the crate (fits, libsvm model files, the fast evaluators) returns
 //! the one error type [`SvmError`].
@@ -48,5 +48,5 @@ pub use reduce::{Reduction, reduce_support};
 pub use sample::needle_like_model;
 pub use smo::{
     GramRows, KernelRows, PairStep, SelectionCurvature, SmoSettings, SmoSettingsBuilder, SmoSolution,
-    libsvm_rho, solve_smo,
+    libsvm_rho, solve_smo, solve_svc,
 };

@@ -6,9 +6,9 @@
 //! **Solver.** The C-SVC dual `min ½ αᵀQα − eᵀα, yᵀα = 0, 0 ≤ α ≤ C`, `Q_ij = y_i y_j K_ij`, is
 //! solved by SMO with the second-order working-set selection of Fan, Chen & Lin (2005), the
 //! pair update and the bias (`ρ`, averaged over free vectors) of libsvm's `Solver`, so decision
-//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. The solver
-//! (`solver.rs`) is [`svm::solve_smo`]'s algorithm in libsvm's memory layout, with its
-//! shrinking and kernel rows computed as the solver first asks for them and cached.
+//! values agree with libsvm (and scikit-learn's `SVC`) to the stopping tolerance. Each pair is
+//! solved by the svm crate's one SMO ([`svm::solve_svc`]: libsvm's memory layout, its
+//! shrinking, kernel rows computed as the solver first asks for them and cached).
 //! The pairs' machines and their probability folds are independent solves, run on all cores.
 //!
 //! **Probabilities.** For each pair, decision values from a 5-fold cross-validation on that
@@ -27,13 +27,10 @@ use crate::vectors::FeatureScaling;
 use capture::rng::SplitMix64;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
-use svm::{Kernel, SelectionCurvature, SmoSettings};
+use svm::{Kernel, SelectionCurvature, SmoSettings, SmoSolution};
 
 mod c_search;
 mod probability;
-mod solver;
-
-use solver::BinarySolution;
 
 /// Memory for one solve's cached kernel rows (scikit-learn's `cache_size` is 200 MB); with
 /// every core solving, that many times this is held. A pair of up to 4,096 training vectors
@@ -635,6 +632,15 @@ impl Pair {
         })
     }
 
+    /// The pair's own error for the solver's: at the iteration limit, which classes and C, and
+    /// the KKT violation it reached.
+    fn failed(&self, settings: &SmoSettings, params: &SvcParams, error: svm::SvmError) -> RecognizeError {
+        match error {
+            svm::SvmError::NotConverged { gap, .. } => self.not_converged(settings, params, gap),
+            other => other.into(),
+        }
+    }
+
     /// The pair's machine on all its members.
     fn solve(
         &self,
@@ -643,8 +649,8 @@ impl Pair {
         params: &SvcParams,
         settings: &SmoSettings,
     ) -> Result<BinarySvc, RecognizeError> {
-        let BinarySolution { alpha, rho, .. } = solve(&self.members, &self.y, points, dim, params, settings)
-            .map_err(|violation| self.not_converged(settings, params, violation))?;
+        let SmoSolution { alpha, rho, .. } = solve(&self.members, &self.y, points, dim, params, settings)
+            .map_err(|e| self.failed(settings, params, e))?;
         let support = self
             .members
             .iter()
@@ -692,8 +698,8 @@ impl Pair {
         }
         let ty: Vec<f64> = train.iter().map(|&t| self.y[t]).collect();
         let subset: Vec<usize> = train.iter().map(|&t| self.members[t]).collect();
-        let BinarySolution { alpha, rho, .. } = solve(&subset, &ty, points, dim, params, settings)
-            .map_err(|violation| self.not_converged(settings, params, violation))?;
+        let SmoSolution { alpha, rho, .. } = solve(&subset, &ty, points, dim, params, settings)
+            .map_err(|e| self.failed(settings, params, e))?;
         let support: Vec<(&[f64], f64)> = subset
             .iter()
             .zip(alpha.iter().zip(&ty))
@@ -715,9 +721,8 @@ impl Pair {
     }
 }
 
-/// The binary C-SVC on the points `subset` with labels `y` (±1), with `params`' C and
-/// tolerance and `settings`' iteration budget; the KKT violation it reached if it did not
-/// converge.
+/// The binary C-SVC on the points `subset` with labels `y` (±1), with `settings`' C,
+/// tolerance and iteration budget.
 fn solve(
     subset: &[usize],
     y: &[f64],
@@ -725,18 +730,8 @@ fn solve(
     dim: usize,
     params: &SvcParams,
     settings: &SmoSettings,
-) -> Result<BinarySolution, f64> {
-    solver::solve_binary(
-        params.kernel,
-        points,
-        dim,
-        subset,
-        y,
-        params.c,
-        params.tolerance,
-        settings.iteration_budget(subset.len()),
-        CACHE_BYTES,
-    )
+) -> Result<SmoSolution, svm::SvmError> {
+    svm::solve_svc(params.kernel, points, dim, subset, y, settings, CACHE_BYTES)
 }
 
 /// The training points some machine uses, in training order, with every machine's support

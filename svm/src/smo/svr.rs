@@ -1,7 +1,9 @@
 //! The ε-SVR on [`super`]'s SMO: the split dual's variables, kernel rows cached within a
 //! memory budget, and the refinement to the certificate's gap with the exact finish.
 
-use super::{PairRows, SelectionCurvature, SmoSettings, Split, Variables, rho, solve};
+use super::rows::{KernelRows, SampleQ};
+use super::solver::solve;
+use super::{SelectionCurvature, SmoSettings, libsvm_rho};
 use crate::error::SvmError;
 use crate::kernel::Kernel;
 
@@ -81,11 +83,8 @@ impl<'a> RowCache<'a> {
     }
 }
 
-impl PairRows for RowCache<'_> {
-    fn diagonal(&self, s: usize) -> f64 {
-        self.diag[s]
-    }
-
+impl RowCache<'_> {
+    /// Makes row `i` held and returns its slot.
     fn fetch(&mut self, i: usize) -> usize {
         self.clock += 1;
         let n = self.n;
@@ -125,8 +124,24 @@ impl PairRows for RowCache<'_> {
         slot
     }
 
+    /// The row held in `slot`.
     fn get(&self, slot: usize) -> &[f64] {
         &self.rows[slot * self.n..(slot + 1) * self.n]
+    }
+}
+
+impl KernelRows for RowCache<'_> {
+    fn samples(&self) -> usize {
+        self.n
+    }
+
+    fn diagonal(&self, s: usize) -> f64 {
+        self.diag[s]
+    }
+
+    fn row(&mut self, s: usize) -> &[f64] {
+        let slot = self.fetch(s);
+        self.get(slot)
     }
 }
 
@@ -159,7 +174,8 @@ pub(crate) const TARGET_GAP: f64 = 0.1 * crate::ACCEPT_GAP;
 /// for the first n variables `∇ₜ = ε − yₜ + (Kβ)ₜ`, so no kernel value is needed.
 fn svr_gap(alpha: &[f64], grad: &[f64], y: &[f64], c: f64, epsilon: f64) -> f64 {
     let n = y.len();
-    let bias = -rho(alpha, grad, Split { n }, c);
+    let labels: Vec<f64> = (0..2 * n).map(|t| if t < n { 1.0 } else { -1.0 }).collect();
+    let bias = -libsvm_rho(alpha, grad, &labels, c);
     let (mut quad, mut linear, mut loss) = (0.0, 0.0, 0.0);
     for i in 0..n {
         let beta = alpha[i] - alpha[i + n];
@@ -204,11 +220,7 @@ pub(crate) fn solve_svr(
     let linear: Vec<f64> = (0..2 * n)
         .map(|t| if t < n { epsilon - y[t] } else { epsilon + y[t - n] })
         .collect();
-    let vars = Variables {
-        labels: Split { n },
-        linear: &linear,
-        n,
-    };
+    let labels: Vec<f64> = (0..2 * n).map(|t| if t < n { 1.0 } else { -1.0 }).collect();
     let mut cache = RowCache::new(kernel, x, dim, n, cache_bytes);
     // Each time SMO converges: done if its own gap is small enough; else try the exact finish
     // on the partition it has found; else go on with a tighter stop.
@@ -229,7 +241,13 @@ pub(crate) fn solve_svr(
         }
         (stop > floor).then_some((0.1 * stop).max(floor))
     };
-    let sol = solve(&mut cache, &vars, &smo, &mut refine)?;
+    let sol = solve(
+        &mut SampleQ::new(&mut cache, &labels),
+        &labels,
+        &linear,
+        &smo,
+        &mut refine,
+    )?;
     if let Some(f) = finished {
         return Ok(SvrSmoSolution {
             beta: f.beta,
