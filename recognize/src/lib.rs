@@ -38,7 +38,7 @@ pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
 pub use features::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 pub use features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, PlayedPath, TRAINING_WINDOW_S, TRAVEL_PLAY_M,
-    TravelWindows, WindowScaling, WindowSpan, WindowlessCapture,
+    TooFastWindows, TravelWindows, WindowScaling, WindowSpan, WindowlessCapture,
 };
 pub use fusion::{BehaviourData, ReliabilityFusion, argmax, fuse, fused_label};
 pub use knn::{FeatureScaling, Knn, KnnParams};

@@ -46,10 +46,10 @@ use window_spectrum::SPECTRUM_LEN;
 pub use played_path::{PlayedPath, TRAVEL_PLAY_M};
 pub use scaling::WindowScaling;
 pub use windowing::{
-    DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TravelWindows, WindowSpan,
+    DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TooFastWindows, TravelWindows, WindowSpan,
     WindowlessCapture,
 };
-pub(crate) use windowing::{Travel, window_vectors, windows};
+pub(crate) use windowing::{Travel, WindowVectors, window_vectors, windows};
 
 /// Which features a recognizer computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

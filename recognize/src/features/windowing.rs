@@ -697,6 +697,7 @@ pub(crate) fn windows(
             .windows(windowing, FeatureSet::Nakano, CellScale::Mean)
             .ok_or_else(|| c.not_kept(format!("Nakano's features of {}", describe(windowing))))?;
         return Ok(vectors
+            .vectors
             .iter()
             .map(|(s, span, v)| {
                 let mut f = [0.0; FEATURES];
@@ -784,19 +785,29 @@ pub(crate) fn window_vectors(
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
+) -> Result<WindowVectors, RecognizeError> {
     if let Some(kept) = c.kept() {
-        let vectors = kept
+        let kept = kept
             .windows(windowing, features, cell_scale)
             .ok_or_else(|| c.not_kept(format!("{features} features of {}", describe(windowing))))?;
-        return Ok(vectors
-            .iter()
-            .map(|(s, span, v)| (*s, *span, v[..features.dim()].to_vec()))
-            .collect());
+        return Ok(WindowVectors {
+            vectors: kept
+                .vectors
+                .iter()
+                .map(|(s, span, v)| (*s, *span, v[..features.dim()].to_vec()))
+                .collect(),
+            too_fast: kept.too_fast,
+        });
     }
     let nakano = windows(c, windowing)?;
+    let all = |vectors| {
+        Ok(WindowVectors {
+            vectors,
+            too_fast: TooFastWindows::default(),
+        })
+    };
     if features == FeatureSet::Nakano {
-        return Ok(nakano.into_iter().map(|(s, n, f)| (s, n, f.to_vec())).collect());
+        return all(nakano.into_iter().map(|(s, n, f)| (s, n, f.to_vec())).collect());
     }
     let features_error = |features, source| RecognizeError::Features {
         path: c.reference.path.clone(),
@@ -813,12 +824,17 @@ pub(crate) fn window_vectors(
         let height_spectrum = |source| features_error("height spectrum", source);
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
         let height = Axes::One(nakano_column(nakano::HEIGHT_COLUMN)?);
-        let spectra =
+        let (spectra, too_fast) =
             window_spectra(nakano, windowing, height, &path_m, cell_scale).map_err(height_spectrum)?;
-        return Ok(spectra
-            .into_iter()
-            .map(|(s, span, nakano, spectrum)| (s, span, nakano.iter().chain(&spectrum).copied().collect()))
-            .collect());
+        return Ok(WindowVectors {
+            vectors: spectra
+                .into_iter()
+                .map(|(s, span, nakano, spectrum)| {
+                    (s, span, nakano.iter().chain(&spectrum).copied().collect())
+                })
+                .collect(),
+            too_fast,
+        });
     }
     let column = |name| {
         c.capture
@@ -834,15 +850,19 @@ pub(crate) fn window_vectors(
     };
     if features == FeatureSet::Vibration {
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
-        let spectra = window_spectra(nakano, windowing, axes, &path_m, cell_scale).map_err(spectral)?;
-        return Ok(spectra
-            .into_iter()
-            .map(|(s, span, _, spectrum)| (s, span, spectrum.to_vec()))
-            .collect());
+        let (spectra, too_fast) =
+            window_spectra(nakano, windowing, axes, &path_m, cell_scale).map_err(spectral)?;
+        return Ok(WindowVectors {
+            vectors: spectra
+                .into_iter()
+                .map(|(s, span, _, spectrum)| (s, span, spectrum.to_vec()))
+                .collect(),
+            too_fast,
+        });
     }
     let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
     let len = windowing.window_samples;
-    nakano
+    let vectors = nakano
         .into_iter()
         .map(|(s, span, f)| {
             let h = match axes {
@@ -855,7 +875,54 @@ pub(crate) fn window_vectors(
             .map_err(spectral)?;
             Ok((s, span, f.iter().copied().chain(h).collect()))
         })
-        .collect()
+        .collect::<Result<_, RecognizeError>>()?;
+    all(vectors)
+}
+
+/// A capture's windows as a windowing picks them: each readable window's first sample, span
+/// and feature vector, and the windows left out because they slid too fast to be read.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct WindowVectors {
+    pub vectors: Vec<(usize, WindowSpan, Vec<f64>)>,
+    pub too_fast: TooFastWindows,
+}
+
+/// Windows over travel left out because they slid faster than their bands can be read at the
+/// capture's rate (their top band would pass the Nyquist frequency).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TooFastWindows {
+    /// How many.
+    pub count: usize,
+    /// The fastest of them, m/s.
+    pub fastest_mps: f64,
+    /// The fastest speed the bands read at, m/s (the slowest such limit where captures differ
+    /// in rate).
+    pub readable_up_to_mps: f64,
+}
+
+impl TooFastWindows {
+    /// Counts one window slid at `speed_mps` where `readable_up_to_mps` is the limit.
+    pub(crate) fn add(&mut self, speed_mps: f64, readable_up_to_mps: f64) {
+        self.merge(Self {
+            count: 1,
+            fastest_mps: speed_mps,
+            readable_up_to_mps,
+        });
+    }
+
+    /// Both counts together.
+    pub(crate) fn merge(&mut self, other: Self) {
+        if other.count == 0 {
+            return;
+        }
+        self.readable_up_to_mps = if self.count == 0 {
+            other.readable_up_to_mps
+        } else {
+            self.readable_up_to_mps.min(other.readable_up_to_mps)
+        };
+        self.count += other.count;
+        self.fastest_mps = self.fastest_mps.max(other.fastest_mps);
+    }
 }
 
 /// A window's first sample, span, Nakano features and spectrum.
@@ -866,36 +933,45 @@ type SpectrumWindow = (usize, WindowSpan, [f64; FEATURES], [f64; SPECTRUM_LEN]);
 /// samples of `axes` (the `len` that end where the window ends, so that a window over travel
 /// reads the same stretch as its Nakano features), all before its decision. Over travel, the
 /// bands are too ([`WindowSpectrumPlan::features_over_travel`]), at the window's path
-/// (`path_m`, the capture's [`PlayedPath`]) over its duration.
+/// (`path_m`, the capture's [`PlayedPath`]) over its duration; a window slid too fast for
+/// them is left out and counted.
 fn window_spectra(
     nakano: Vec<(usize, WindowSpan, [f64; FEATURES])>,
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
     path_m: &[f64],
     cell_scale: CellScale,
-) -> Result<Vec<SpectrumWindow>, RecognizeError> {
+) -> Result<(Vec<SpectrumWindow>, TooFastWindows), RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
     let mut scratch = plan.scratch();
     let samples = match axes {
         Axes::Three(x, ..) => x.len(),
         Axes::One(v) => v.len(),
     };
-    nakano
-        .into_iter()
-        .map(|(s, span, nakano)| {
-            let end = (s + windowing.window_samples).min(samples);
-            let r = end.saturating_sub(span.len)..end;
-            let signal = match axes {
-                Axes::Three(x, y, z) => {
-                    Cow::Owned(spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r.clone()])?)
-                }
-                Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
-            };
-            let spectrum =
-                windowing.spectrum_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch)?;
-            Ok((s, span, nakano, spectrum))
-        })
-        .collect()
+    let mut too_fast = TooFastWindows::default();
+    let mut out = Vec::with_capacity(nakano.len());
+    for (s, span, nakano) in nakano {
+        let end = (s + windowing.window_samples).min(samples);
+        let r = end.saturating_sub(span.len)..end;
+        let signal = match axes {
+            Axes::Three(x, y, z) => {
+                Cow::Owned(spectral::magnitude(&x[r.clone()], &y[r.clone()], &z[r.clone()])?)
+            }
+            Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
+        };
+        match windowing.spectrum_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch) {
+            Ok(spectrum) => out.push((s, span, nakano, spectrum)),
+            // A window the bands cannot read at this rate is left out and counted, not fatal:
+            // a rig's position stream can read a burst of speed over a few slow samples.
+            Err(RecognizeError::Setting(SettingError::TooFastForBands {
+                speed_mps,
+                max_speed_mps,
+                ..
+            })) => too_fast.add(speed_mps, max_speed_mps),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok((out, too_fast))
 }
 
 impl NakanoWindowing {

@@ -174,7 +174,7 @@ impl RecognizerFile {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         let mut out = Vec::new();
-        for (start, span, v) in window_vectors(capture, windowing, features, cell_scale)? {
+        for (start, span, v) in window_vectors(capture, windowing, features, cell_scale)?.vectors {
             let (label, mut p) = classifier.classify(&scaling.apply(&v), None)?;
             if let Some(c) = calibration {
                 c.apply(&mut p);
@@ -208,6 +208,7 @@ impl RecognizerFile {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         window_vectors(capture, windowing, features, cell_scale)?
+            .vectors
             .into_iter()
             .map(|(start, _, v)| {
                 let (label, confidence) = classify(&v)?;

@@ -186,7 +186,12 @@ impl LabelledCapture {
             .map_or_else(|_| Vec::new(), PlayedPath::series);
         let mut decided: Vec<usize> = windows
             .iter()
-            .flat_map(|k| k.vectors.iter().map(|(start, ..)| k.windowing.decided_at(*start)))
+            .flat_map(|k| {
+                k.vectors
+                    .vectors
+                    .iter()
+                    .map(|(start, ..)| k.windowing.decided_at(*start))
+            })
             .chain(
                 self.change
                     .as_ref()

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use crate::InputError;
 use crate::RecognizeError;
 use crate::features::spectral::{CellScale, FEATURE_LEN};
-use crate::features::{FeatureSet, NakanoWindowing, Travel, WindowSpan};
+use crate::features::{FeatureSet, NakanoWindowing, Travel, WindowVectors};
 use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
 
 /// Metadata key of a capture's class.
@@ -127,8 +127,8 @@ pub(crate) struct KeptWindows {
     pub(super) windowing: NakanoWindowing,
     pub(super) features: FeatureSet,
     pub(super) cell_scale: CellScale,
-    /// Start, span and feature vector of each window.
-    pub(super) vectors: Vec<(usize, WindowSpan, Vec<f64>)>,
+    /// Start, span and feature vector of each readable window, and those left out.
+    pub(super) vectors: WindowVectors,
 }
 
 /// The features a capture kept when its samples were dropped.
@@ -165,7 +165,7 @@ impl KeptFeatures {
         windowing: &NakanoWindowing,
         features: FeatureSet,
         cell_scale: CellScale,
-    ) -> Option<&[(usize, WindowSpan, Vec<f64>)]> {
+    ) -> Option<&WindowVectors> {
         self.windows
             .iter()
             .find(|k| {
@@ -175,7 +175,7 @@ impl KeptFeatures {
                         _ => k.features == features && k.cell_scale == cell_scale,
                     }
             })
-            .map(|k| k.vectors.as_slice())
+            .map(|k| &k.vectors)
     }
 
     /// The kept histogram of cells scaled by `cell_scale`.

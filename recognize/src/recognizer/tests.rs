@@ -328,8 +328,9 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
             // buffers it keeps from one window to the next.
             let mut live = WindowClassifier::new(&back).expect("window classifier");
             let mut p = vec![0.0; live.classes()];
-            let vectors =
-                window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean).expect("windows");
+            let vectors = window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean)
+                .expect("windows")
+                .vectors;
             assert_eq!(vectors.len(), probabilities.len());
             for ((_, _, v), w) in vectors.iter().zip(&probabilities) {
                 live.probabilities_into(v, &mut p).expect("classified");
@@ -997,9 +998,12 @@ fn nakano_spectrum_windows_read_the_heights_spectrum_after_nakanos_features() {
         .iter()
         .zip([Some(5e-3 / 0.3e-3), Some(5e-3 / 1.5e-3), None])
     {
-        let both =
-            window_vectors(c, &windowing, FeatureSet::NakanoSpectrum, CellScale::Mean).expect("windows");
-        let nakano = window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean).expect("windows");
+        let both = window_vectors(c, &windowing, FeatureSet::NakanoSpectrum, CellScale::Mean)
+            .expect("windows")
+            .vectors;
+        let nakano = window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean)
+            .expect("windows")
+            .vectors;
         assert_eq!(both.len(), nakano.len());
         assert!(both.len() > 20, "{}", both.len());
         for ((s, span, v), (s_n, span_n, n)) in both.iter().zip(&nakano) {
@@ -1613,7 +1617,9 @@ fn data_warnings_name_classes_with_few_vectors_and_constant_features() {
             vectors,
             ..
         } => Some((features.len(), *of, *vectors)),
-        TrainingWarning::FewVectors { .. } | TrainingWarning::ShortOfTravel { .. } => None,
+        TrainingWarning::FewVectors { .. }
+        | TrainingWarning::ShortOfTravel { .. }
+        | TrainingWarning::TooFast(_) => None,
     });
     assert_eq!(constant, Some((125, 125, 6)), "{warnings:?}");
 }
@@ -1872,8 +1878,9 @@ fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
             assert_eq!(b.decision.confidence, expected[b.decision.label]);
             assert!(v.probabilities.iter().all(|&q| q == 0.0 || q == 1.0));
         }
-        let vectors =
-            window_vectors(capture, &sequential, FeatureSet::Vibration, CellScale::Mean).expect("windows");
+        let vectors = window_vectors(capture, &sequential, FeatureSet::Vibration, CellScale::Mean)
+            .expect("windows")
+            .vectors;
         let offline = vibration
             .window_probabilities(capture, Some(&sequential))
             .expect("probabilities")
@@ -1968,4 +1975,56 @@ fn each_threshold_has_its_own_calibration() {
         .evaluate_sequential(&test_set, &[crate::sequential::DEFAULT_THRESHOLD], params)
         .expect("evaluated");
     assert_eq!(none.calibration, default.calibration);
+}
+
+/// Windows over travel slid too fast for their bands are left out of training and counted in
+/// a warning that names the speeds, not fatal: a rig's slow position stream can read a burst
+/// of speed over a few samples, and one such window stopped the whole training.
+#[test]
+fn windows_too_fast_for_their_bands_are_left_out_and_counted() {
+    use crate::recognizer::train::TrainingWarning;
+
+    let mut captures = with_tones(0..2, 4.0);
+    // A third trial of `fine` rubbed at 20 mm/s: past the 12.5 mm/s its bands read at 1 kHz.
+    let mut fast = with_vibration(rubbing_at("fine", 5e-6, 0.3e-3, 0.10, 4.0, 0.02), 60.0);
+    let meta = fast.capture.metadata().clone().with(TRIAL_KEY, 2);
+    fast.capture = Capture::new(
+        meta,
+        fast.capture.columns().to_vec(),
+        fast.capture.data().to_vec(),
+    )
+    .expect("valid");
+    fast.reference.path = "fine_2.csv".into();
+    captures.push(fast.clone());
+    let settings = TrainSettings {
+        windows_over_travel: true,
+        ..short_windows(Method::Knn, FeatureSet::Vibration)
+    };
+    let model = train(&captures, &settings).expect("trains on the windows it can read");
+    let training = model.windowing().expect("windows").training();
+    let skipped = window_vectors(&fast, &training, FeatureSet::Vibration, CellScale::Mean).expect("windows");
+    assert!(skipped.vectors.is_empty());
+    assert!(skipped.too_fast.count > 10, "{:?}", skipped.too_fast);
+    let warnings = settings.data_warnings(&captures).expect("warnings");
+    let counted = warnings
+        .iter()
+        .find_map(|w| match w {
+            TrainingWarning::TooFast(t) => Some(*t),
+            _ => None,
+        })
+        .expect("a warning counts them");
+    assert_eq!(counted, skipped.too_fast);
+    assert!((counted.fastest_mps - 0.02).abs() < 1e-3, "{counted:?}");
+    assert!((counted.readable_up_to_mps - 0.0125).abs() < 1e-9, "{counted:?}");
+    let text = TrainingWarning::TooFast(counted).to_string();
+    assert!(
+        text.contains("--fastest-speed-mps") && text.contains("12.5 mm/s"),
+        "{text}"
+    );
+    // The other captures' windows are all read.
+    for c in &captures[..6] {
+        let w = window_vectors(c, &training, FeatureSet::Vibration, CellScale::Mean).expect("windows");
+        assert_eq!(w.too_fast.count, 0);
+        assert!(!w.vectors.is_empty());
+    }
 }

@@ -28,7 +28,7 @@ use crate::RecognizeError;
 use crate::features::nakano::FrictionOverTravel;
 use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
 use crate::features::{
-    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, WindowScaling, WindowlessCapture,
+    DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TooFastWindows, WindowScaling, WindowlessCapture,
     capture_histogram, histogram_names, window_vectors,
 };
 use crate::knn::PAPER_K;
@@ -465,24 +465,28 @@ pub(crate) fn training_windows(
 pub const LEAST_TRAINING_TRAVEL_SHARE: f64 = 0.5;
 
 /// [`training_windows`], and how many windows were left out for covering less than
-/// [`LEAST_TRAINING_TRAVEL_SHARE`] of their travel, of how many.
+/// [`LEAST_TRAINING_TRAVEL_SHARE`] of their travel, of how many, and those left out because
+/// they slid too fast for their bands (not counted in the "of how many").
 pub(crate) fn training_windows_left_out(
     captures: &[LabelledCapture],
     classes: &[String],
     windowing: &NakanoWindowing,
     features: FeatureSet,
     cell_scale: CellScale,
-) -> Result<(WindowData, usize, usize), RecognizeError> {
+) -> Result<(WindowData, usize, usize, TooFastWindows), RecognizeError> {
     features.check_columns(captures)?;
     let groups = recording_groups(captures);
     let training = windowing.training();
     let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
     let mut left_out = vec![0; captures.len()];
     let mut of = 0;
+    let mut too_fast = TooFastWindows::default();
     for ((c, &group), left_out) in captures.iter().zip(&groups).zip(&mut left_out) {
         check_rate(c, windowing.rate_hz)?;
         let label = class_index(classes, c)?;
-        for (_, span, v) in window_vectors(c, &training, features, cell_scale)? {
+        let windows = window_vectors(c, &training, features, cell_scale)?;
+        too_fast.merge(windows.too_fast);
+        for (_, span, v) in windows.vectors {
             of += 1;
             if training.travel_share(span) < LEAST_TRAINING_TRAVEL_SHARE {
                 *left_out += 1;
@@ -497,7 +501,7 @@ pub(crate) fn training_windows_left_out(
     if x.is_empty() {
         return Err(RecognizeError::Data(DataError::NoTrainingData));
     }
-    Ok(((x, y, g), left_out.iter().sum(), of))
+    Ok(((x, y, g), left_out.iter().sum(), of, too_fast))
 }
 
 /// Refuses training when a class of `classes` has no vector among `labels` (the class index of

@@ -9,7 +9,7 @@ use super::{
 };
 use crate::RecognizeError;
 use crate::TRAVEL_PLAY_M;
-use crate::features::FeatureSet;
+use crate::features::{FeatureSet, TooFastWindows};
 use crate::recognizer::LabelledCapture;
 use crate::recognizer::labelled::class_list;
 
@@ -58,6 +58,10 @@ pub enum TrainingWarning {
         /// length, which leave out only a tool at rest.
         slowest_speed_mps: Option<f64>,
     },
+    /// Training windows over travel left out because they slid faster than their bands can be
+    /// read at the captures' rate (a rig's position stream at a low rate can read a burst of
+    /// speed); training goes on without them.
+    TooFast(TooFastWindows),
 }
 
 impl std::fmt::Display for TrainingWarning {
@@ -110,6 +114,14 @@ impl std::fmt::Display for TrainingWarning {
                 "{left_out} of {of} training windows were left out: each covered less than {:.0} % of its travel, rubbed well below the slowest speed the windows read ({:.1} mm/s), so it holds mostly the tool at rest; if the rig rubs that slowly, a lower --slowest-speed-mps reads it",
                 100.0 * LEAST_TRAINING_TRAVEL_SHARE,
                 1e3 * slowest_speed_mps
+            ),
+            Self::TooFast(t) => write!(
+                f,
+                "{} training window{} left out: slid at up to {:.1} mm/s, faster than the bands over travel can be read at this rate ({:.1} mm/s); if the rig rubs that fast, a higher --fastest-speed-mps reads it with narrower bands",
+                t.count,
+                if t.count == 1 { " was" } else { "s were" },
+                1e3 * t.fastest_mps,
+                1e3 * t.readable_up_to_mps
             ),
             Self::ShortOfTravel {
                 left_out,
@@ -178,10 +190,13 @@ impl TrainSettings {
             }
             windowed => {
                 let windowing = self.windowing(captures)?;
-                let ((x, y, _), left_out, of) =
+                let ((x, y, _), left_out, of, too_fast) =
                     training_windows_left_out(captures, &classes, &windowing, windowed, self.cell_scale)?;
                 let x: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
                 check(None, &x, &y);
+                if too_fast.count > 0 {
+                    warnings.push(TrainingWarning::TooFast(too_fast));
+                }
                 if left_out > 0 {
                     warnings.push(TrainingWarning::ShortOfTravel {
                         left_out,
