@@ -10,11 +10,12 @@
 use std::sync::OnceLock;
 
 use crate::RecognizeError;
-use crate::folds::{group_folds, held_out};
+use crate::folds::group_folds;
 use crate::{DataError, SettingError, UsageError};
 
 use crate::vectors;
 
+mod batch;
 mod calibration;
 mod tree;
 
@@ -301,6 +302,30 @@ impl Knn {
         Ok(self.votes(&self.neighbours(query)?))
     }
 
+    /// [`Knn::predict_with_proba`] of every query, to the bit, on all cores: by the tree per
+    /// query below [`TREE_MAX_DIM`] dimensions, else screened by a matrix product (`batch`).
+    pub fn predict_with_proba_many<V: AsRef<[f64]> + Sync>(
+        &self,
+        queries: &[V],
+    ) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
+        use rayon::prelude::*;
+        if self.dim < TREE_MAX_DIM {
+            return queries
+                .par_iter()
+                .map(|q| self.predict_with_proba(q.as_ref()))
+                .collect();
+        }
+        let mut scaled = Vec::with_capacity(queries.len() * self.dim);
+        for q in queries {
+            vectors::check_query(q.as_ref(), self.dim)?;
+            scaled.extend(vectors::scaled(q.as_ref(), &self.scale));
+        }
+        Ok(batch::neighbours(&self.points, self.dim, self.k, &scaled)
+            .iter()
+            .map(|n| self.votes(n))
+            .collect())
+    }
+
     /// The label and the class probabilities the `neighbours` of a query vote for.
     fn votes(&self, neighbours: &[usize]) -> (usize, Vec<f64>) {
         let mut votes = vec![0usize; self.classes];
@@ -354,14 +379,22 @@ pub fn held_out_votes<V: AsRef<[f64]>>(
         }
     }
     let (fold, folds) = group_folds(groups, folds)?;
-    let votes = held_out(
-        features,
-        labels,
-        &fold,
-        folds,
-        |x, y| Knn::fit(params, x, y, classes),
-        |model, x| model.predict_with_proba(x.as_ref()),
-    )?;
+    let mut votes: Vec<Option<Votes>> = vec![None; features.len()];
+    for f in 0..folds {
+        let (train_x, train_y): (Vec<&[f64]>, Vec<usize>) = features
+            .iter()
+            .zip(labels)
+            .zip(&fold)
+            .filter(|&(_, &g)| g != f)
+            .map(|((x, &y), _)| (x.as_ref(), y))
+            .unzip();
+        let held: Vec<usize> = (0..features.len()).filter(|&i| fold[i] == f).collect();
+        let queries: Vec<&[f64]> = held.iter().map(|&i| features[i].as_ref()).collect();
+        let knn = Knn::fit(params, &train_x, &train_y, classes)?;
+        for (i, v) in held.into_iter().zip(knn.predict_with_proba_many(&queries)?) {
+            votes[i] = Some(v);
+        }
+    }
     // `group_folds` puts every sample in a fold below `folds`: each was held out once.
     let votes: Vec<_> = votes.into_iter().flatten().collect();
     Ok((votes, folds))
@@ -498,14 +531,15 @@ mod tests {
         ));
     }
 
-    /// The search as it was first written: every distance, sorted by (distance, index).
+    /// The search as it was first written: every distance (the one expression), sorted by
+    /// (distance, index).
     fn sorted_reference(knn: &Knn, query: &[f64]) -> Vec<usize> {
         let q: Vec<f64> = vectors::scaled(query, &knn.scale).collect();
         let mut dist: Vec<(f64, usize)> = knn
             .points
             .chunks_exact(knn.dim)
             .enumerate()
-            .map(|(i, p)| (p.iter().zip(&q).map(|(a, b)| (a - b) * (a - b)).sum::<f64>(), i))
+            .map(|(i, p)| (squared_distance(p, &q), i))
             .collect();
         dist.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         dist.into_iter().take(knn.k).map(|(_, i)| i).collect()

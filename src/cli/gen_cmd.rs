@@ -70,6 +70,14 @@ pub(crate) struct GenArgs {
     /// 0.025 m/s (strip, load, placement, noise), only faster or slower.
     #[arg(long, value_name = "M/S", conflicts_with_all = ["rub_speed_mps", "two_patch"])]
     slide_speed_mps: Option<f64>,
+    /// Write only the multi-stream sliding study with this many trials of each surface (1-99;
+    /// default 10): a study of a real one's size, e.g. 25 to train and 25 to test.
+    #[arg(long, value_name = "N", conflicts_with_all = ["rub_speed_mps", "two_patch"])]
+    slide_trials: Option<u32>,
+    /// Write only the multi-stream sliding study, each trial sliding this long at its steady
+    /// speed (default 4 s; at most 60).
+    #[arg(long, value_name = "S", conflicts_with_all = ["rub_speed_mps", "two_patch"])]
+    slide_s: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -110,8 +118,15 @@ fn variant(args: &GenArgs) -> Option<Variant> {
     if let Some(speed_mps) = args.rub_speed_mps {
         return Some(Variant::Rubbing { speed_mps });
     }
-    args.slide_speed_mps
-        .map(|speed_mps| Variant::Sliding { speed_mps })
+    if args.slide_speed_mps.is_none() && args.slide_trials.is_none() && args.slide_s.is_none() {
+        return None;
+    }
+    let default = sim::multistream::SlidingStudy::default();
+    Some(Variant::Sliding(sim::multistream::SlidingStudy {
+        trials: args.slide_trials.unwrap_or(default.trials),
+        speed_mps: args.slide_speed_mps.unwrap_or(default.speed_mps),
+        slide_s: args.slide_s.unwrap_or(default.slide_s),
+    }))
 }
 
 pub(crate) fn run(args: &GenArgs) -> anyhow::Result<()> {

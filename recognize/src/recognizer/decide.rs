@@ -173,9 +173,11 @@ impl RecognizerFile {
         };
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
-        let mut out = Vec::new();
-        for (start, span, v) in window_vectors(capture, windowing, features, cell_scale)?.vectors {
-            let (label, mut p) = classifier.classify(&scaling.apply(&v), None)?;
+        let windows = window_vectors(capture, windowing, features, cell_scale)?.vectors;
+        let scaled: Vec<Vec<f64>> = windows.iter().map(|(_, _, v)| scaling.apply(v)).collect();
+        let classified = classifier.classify_many(&scaled)?;
+        let mut out = Vec::with_capacity(windows.len());
+        for ((start, span, _), (label, mut p)) in windows.into_iter().zip(classified) {
             if let Some(c) = calibration {
                 c.apply(&mut p);
             }
@@ -312,11 +314,21 @@ trait Classifier {
     /// The label of `v` and every class's probability; a failure names `behaviour` (none for
     /// a classifier over windows).
     fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizeError>;
+
+    /// [`Classifier::classify`] of each of a classifier over windows' vectors, in order.
+    fn classify_many(&self, vs: &[Vec<f64>]) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
+        vs.iter().map(|v| self.classify(v, None)).collect()
+    }
 }
 
 impl Classifier for Knn {
     fn classify(&self, v: &[f64], behaviour: Option<&str>) -> Result<(usize, Vec<f64>), RecognizeError> {
         self.predict_with_proba(v).map_err(RecognizeError::knn(behaviour))
+    }
+
+    /// All at once: the same answers, screened by one matrix product ([`Knn::predict_with_proba_many`]).
+    fn classify_many(&self, vs: &[Vec<f64>]) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
+        self.predict_with_proba_many(vs).map_err(RecognizeError::knn(None))
     }
 }
 

@@ -26,6 +26,7 @@ use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
 use crate::SettingError;
 use crate::folds::group_folds;
+use rayon::prelude::*;
 #[cfg(doc)]
 use crate::sequential::DEFAULT_MEMORY_S;
 use crate::sequential::SequentialParamsBuilder;
@@ -68,20 +69,40 @@ impl RecognizerFile {
             return Ok(None);
         }
         let (fold, folds) = group_folds(&groups, WEIGHT_FIT_FOLDS)?;
-        let mut strokes = Vec::with_capacity(captures.len());
         progress(FitEvent::Step {
             what: "fitting the posterior's weight on held-out recordings",
             total: folds,
         });
-        for f in 0..folds {
-            let kept: Vec<LabelledCapture> = captures
-                .iter()
-                .zip(&fold)
-                .filter(|(_, g)| **g != f)
-                .map(|(c, _)| c.clone())
-                .collect();
-            let model = match self.refit(&kept) {
-                Ok(model) => model,
+        // The folds' refits on all cores (each also uses them where it can).
+        let refits: Vec<Result<Result<Vec<Stroke>, String>, RecognizeError>> = (0..folds)
+            .into_par_iter()
+            .map(|f| {
+                let kept: Vec<LabelledCapture> = captures
+                    .iter()
+                    .zip(&fold)
+                    .filter(|(_, g)| **g != f)
+                    .map(|(c, _)| c.clone())
+                    .collect();
+                let model = match self.refit(&kept) {
+                    Ok(model) => model,
+                    Err(why) => return Ok(Err(why)),
+                };
+                let sources = [(&model, model.windowing_with_probabilities()?, 1.0)];
+                let mut short_of_travel = 0;
+                let strokes = captures
+                    .iter()
+                    .zip(&fold)
+                    .filter(|(_, g)| **g == f)
+                    .map(|(c, _)| self.stroke(&sources, c, &mut short_of_travel))
+                    .collect::<Result<Vec<_>, _>>()?;
+                progress(FitEvent::Advance);
+                Ok(Ok(strokes))
+            })
+            .collect();
+        let mut strokes = Vec::with_capacity(captures.len());
+        for (f, refit) in refits.into_iter().enumerate() {
+            match refit? {
+                Ok(fold_strokes) => strokes.extend(fold_strokes),
                 Err(why) => {
                     progress(FitEvent::Warning(format!(
                         "the posterior's weight stays hop / window: the refit without fold {} of {folds} \
@@ -90,13 +111,7 @@ impl RecognizerFile {
                     )));
                     return Ok(None);
                 }
-            };
-            let sources = [(&model, model.windowing_with_probabilities()?, 1.0)];
-            let mut short_of_travel = 0;
-            for (c, _) in captures.iter().zip(&fold).filter(|(_, g)| **g == f) {
-                strokes.push(self.stroke(&sources, c, &mut short_of_travel)?);
             }
-            progress(FitEvent::Advance);
         }
         let windows = strokes.iter().map(|s| s.windows.len()).sum();
         if windows == 0 {

@@ -208,11 +208,8 @@ pub enum Variant {
         /// The tip's speed, m/s.
         speed_mps: f64,
     },
-    /// The multi-stream sliding study at about this speed, m/s (`multistream/`).
-    Sliding {
-        /// The arm's speed, m/s.
-        speed_mps: f64,
-    },
+    /// The multi-stream sliding study of this shape, speed and slide time (`multistream/`).
+    Sliding(multistream::SlidingStudy),
 }
 
 /// Writes `variant` under `out` (see [`Variant`]); `progress` is called after each file.
@@ -270,8 +267,9 @@ pub fn generate_variant(
                 }
             }
         }
-        Variant::Sliding { speed_mps } => {
-            writer.logs(seed, multistream::SlidingStudy::default().at_speed(speed_mps)?)?;
+        Variant::Sliding(study) => {
+            study.check()?;
+            writer.logs(seed, study)?;
         }
     }
     Ok(writer.summary)

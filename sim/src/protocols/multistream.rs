@@ -277,6 +277,8 @@ pub struct TrialTruth {
     pub track_start_m: f64,
     /// Contact mode on this placement, Hz.
     pub normal_mode_hz: f64,
+    /// How long the arm slid at its steady speed, s (the study's).
+    pub slide_s: f64,
 }
 
 /// The internal state sampled by every stream at [`SIM_RATE_HZ`].
@@ -292,11 +294,12 @@ struct Trace {
     vibration_mps2: Vec<f64>,
 }
 
-/// Simulates and logs trial `trial` of `surface`, the arm sliding at about `speed_mps`
-/// ([`SPEED_MPS`] in the study): deterministic in `(surface, trial, seed, speed_mps)`. The
-/// speed changes nothing else a trial draws (its strip, load, placement, noise), so a trial
-/// slid at two speeds crosses the same stretch of the same surface.
-pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, speed_mps: f64) -> TrialLogs {
+/// Simulates and logs trial `trial` of `surface` in `study`, the arm sliding at about its
+/// speed for its slide time: deterministic in `(surface, trial, seed, study)`. The speed and
+/// the slide time change nothing else a trial draws (its strip, load, placement, noise), so a
+/// trial slid at two speeds crosses the same stretch of the same surface.
+pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, study: SlidingStudy) -> TrialLogs {
+    let speed_mps = study.speed_mps;
     let id = u64::from(surface.surface.id);
     let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, &[tag::MULTISTREAM, id, u64::from(trial)]));
     let contact = &surface.contact;
@@ -312,6 +315,7 @@ pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, speed_mps: f6
         normal_force_n: force_n,
         track_start_m,
         normal_mode_hz,
+        slide_s: study.slide_s,
     };
     let trace = simulate(
         surface,
@@ -443,7 +447,7 @@ fn simulate(
     tilt_rad: f64,
 ) -> Trace {
     let dt = 1.0 / SIM_RATE_HZ;
-    let duration_s = 2.0 * DWELL_S + 2.0 * RAMP_S + SLIDE_S;
+    let duration_s = 2.0 * DWELL_S + 2.0 * RAMP_S + truth.slide_s;
     let steps = (duration_s * SIM_RATE_HZ).round() as usize + 1;
     let mut trace = Trace {
         x_m: Vec::with_capacity(steps),
@@ -462,7 +466,7 @@ fn simulate(
     let mut vibration_filter = LowPass::new(TAU * VIBRATION_BANDWIDTH_HZ, dt);
     let mut friction_mean = LowPass::new(FRICTION_MEAN_CUTOFF_RADPS, dt);
     let mut arm_follow = LowPass::new(TAU * FORCE_LOOP_HZ, dt);
-    let travel_m = truth.speed_mps * (SLIDE_S + RAMP_S) * (1.0 + 1e-6);
+    let travel_m = truth.speed_mps * (truth.slide_s + RAMP_S) * (1.0 + 1e-6);
     let track = surface.track(truth.track_start_m, travel_m, contact_width_m);
     let (height0, _, _) = track.at(0.0);
     // Fingertip at rest on the surface; shear mode relaxed.
@@ -471,7 +475,7 @@ fn simulate(
     let mut s = 0.0;
     for k in 0..steps {
         let t = k as f64 * dt;
-        let v = speed_at(t, truth.speed_mps);
+        let v = speed_at(t, truth.speed_mps, truth.slide_s);
         s += v * dt;
         let (height, slope, mu) = track.at(s);
         // Normal: base excitation through the contact spring and damper; the contact never pulls.
@@ -506,10 +510,10 @@ fn simulate(
 }
 
 /// The arm's commanded speed: still, a raised-cosine ramp up, the slide, a ramp down, still.
-fn speed_at(t_s: f64, speed_mps: f64) -> f64 {
+fn speed_at(t_s: f64, speed_mps: f64, slide_s: f64) -> f64 {
     let ramp = |u: f64| speed_mps * 0.5 * (1.0 - (PI * u.clamp(0.0, 1.0)).cos());
     let up = t_s - DWELL_S;
-    let down = t_s - DWELL_S - RAMP_S - SLIDE_S;
+    let down = t_s - DWELL_S - RAMP_S - slide_s;
     if up <= 0.0 || down >= RAMP_S {
         0.0
     } else if up < RAMP_S {
@@ -521,21 +525,24 @@ fn speed_at(t_s: f64, speed_mps: f64) -> f64 {
     }
 }
 
-/// How many trials of each surface the study slides, and how fast.
+/// How many trials of each surface the study slides, how fast and for how long.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlidingStudy {
     /// Trials per surface.
     pub trials: u32,
     /// Nominal sliding speed, m/s (each trial within ±10 % of it).
     pub speed_mps: f64,
+    /// Time at the steady speed, s (plus a dwell and a ramp at either end).
+    pub slide_s: f64,
 }
 
 impl Default for SlidingStudy {
-    /// [`TRIALS`] trials at [`SPEED_MPS`].
+    /// [`TRIALS`] trials at [`SPEED_MPS`] for [`SLIDE_S`].
     fn default() -> Self {
         Self {
             trials: TRIALS,
             speed_mps: SPEED_MPS,
+            slide_s: SLIDE_S,
         }
     }
 }
@@ -553,7 +560,26 @@ impl SlidingStudy {
         Ok(study)
     }
 
-    /// Its speed out of range, as a typed error.
+    /// The longest slide simulated, s: a trial's trace is held in memory at [`SIM_RATE_HZ`].
+    pub const MAX_SLIDE_S: f64 = 60.0;
+
+    /// The most trials per surface (two digits in a trial's file name).
+    pub const MAX_TRIALS: u32 = 99;
+
+    /// The same study with `trials` trials of each surface, each slid for `slide_s` (1 to
+    /// [`SlidingStudy::MAX_TRIALS`], and over 0 up to [`SlidingStudy::MAX_SLIDE_S`]), or a
+    /// typed error.
+    pub fn with_shape(self, trials: u32, slide_s: f64) -> Result<Self, SimError> {
+        let study = Self {
+            trials,
+            slide_s,
+            ..self
+        };
+        study.check()?;
+        Ok(study)
+    }
+
+    /// Its speed, trials or slide time out of range, as a typed error.
     pub fn check(&self) -> Result<(), SimError> {
         let v = self.speed_mps;
         if !(v.is_finite() && v > 0.0 && v <= Self::MAX_SPEED_MPS) {
@@ -561,6 +587,21 @@ impl SlidingStudy {
                 name: "slide_speed_mps",
                 value: v,
                 reason: "positive and at most 0.5 m/s",
+            });
+        }
+        if !(1..=Self::MAX_TRIALS).contains(&self.trials) {
+            return Err(SimError::Setting {
+                name: "slide_trials",
+                value: f64::from(self.trials),
+                reason: "1 to 99 trials per surface",
+            });
+        }
+        let s = self.slide_s;
+        if !(s.is_finite() && s > 0.0 && s <= Self::MAX_SLIDE_S) {
+            return Err(SimError::Setting {
+                name: "slide_s",
+                value: s,
+                reason: "positive and at most 60 s",
             });
         }
         Ok(())
@@ -577,7 +618,11 @@ pub fn write_logs(
     written: &mut dyn FnMut(LogFile),
 ) -> Result<(), SimError> {
     study.check()?;
-    let SlidingStudy { trials, speed_mps } = study;
+    let SlidingStudy {
+        trials,
+        speed_mps,
+        slide_s,
+    } = study;
     let folder = out.join(FOLDER);
     fs::create_dir_all(&folder).map_err(|source| SimError::Io {
         action: "create",
@@ -597,7 +642,7 @@ pub fn write_logs(
             s.id, s.name, c.friction, c.roughness.rms_m, c.roughness.wavelength_m, c.normal_mode_hz
         );
         for trial in 0..trials {
-            let logs = trial_logs(&surface, trial, seed, speed_mps);
+            let logs = trial_logs(&surface, trial, seed, study);
             let stem = trial_stem(s.id, trial);
             let t = logs.truth;
             let _ = writeln!(
@@ -628,7 +673,7 @@ pub fn write_logs(
     write_text(
         out,
         &PathBuf::from(FOLDER).join("README.md"),
-        &readme(trials, speed_mps),
+        &readme(trials, speed_mps, slide_s),
     )?;
     Ok(())
 }
@@ -673,14 +718,15 @@ pub const IMPORT_UNROLL: &str = "acc=acc_0..acc_21";
 pub const IMPORT_RATE_HZ: f64 = VIBRATION_RATE_HZ;
 
 /// How to read the set: layout, units, and the import of every trial.
-fn readme(trials: u32, speed_mps: f64) -> String {
+fn readme(trials: u32, speed_mps: f64, slide_s: f64) -> String {
     // To a tenth of a millimetre per second, so that 0.035 reads 35, not 35.00000000000001.
     let speed_mm_s = (speed_mps * 1e4).round() / 10.0;
     format!(
         "# Sliding study: 20 surfaces x {trials} trials, one CSV per stream\n\
          \n\
          Simulated by `palpus gen --only multistream` (see sim::protocols::multistream).\n\
-         A robot arm slides a tactile fingertip left to right at about {speed_mm_s} mm/s under about 1.5 N.\n\
+         A robot arm slides a tactile fingertip left to right at about {speed_mm_s} mm/s under about 1.5 N\n\
+         for {slide_s} s.\n\
          Surface numbers and names: materials.csv; what each trial drew: trials.csv.\n\
          \n\
          Per trial `matNN_trialTT_*.csv`:\n\
@@ -729,7 +775,7 @@ mod tests {
             .iter()
             .find(|s| s.surface.name == "corduroy")
             .expect("corduroy");
-        let logs = trial_logs(corduroy, 0, 1, SPEED_MPS);
+        let logs = trial_logs(corduroy, 0, 1, SlidingStudy::default());
         let names: Vec<&str> = logs.files.iter().map(|f| f.0).collect();
         assert_eq!(names, STREAMS);
         let mut starts = Vec::new();
@@ -773,7 +819,7 @@ mod tests {
         let surfaces = sliding_surfaces();
         for name in ["table", "thin_floor_mat_back"] {
             let s = surfaces.iter().find(|s| s.surface.name == name).expect("surface");
-            let logs = trial_logs(s, 2, 9, SPEED_MPS);
+            let logs = trial_logs(s, 2, 9, SlidingStudy::default());
             let mu = s.surface.contact.as_ref().expect("contact").friction;
             let force = rows(&logs.files[0].1);
             let velocity = rows(&logs.files[2].1);
@@ -808,9 +854,9 @@ mod tests {
     #[test]
     fn same_seed_same_bytes_other_trial_other_bytes() {
         let surfaces = sliding_surfaces();
-        let a = trial_logs(&surfaces[4], 1, 3, SPEED_MPS);
-        let b = trial_logs(&surfaces[4], 1, 3, SPEED_MPS);
-        let c = trial_logs(&surfaces[4], 2, 3, SPEED_MPS);
+        let a = trial_logs(&surfaces[4], 1, 3, SlidingStudy::default());
+        let b = trial_logs(&surfaces[4], 1, 3, SlidingStudy::default());
+        let c = trial_logs(&surfaces[4], 2, 3, SlidingStudy::default());
         for i in 0..STREAMS.len() {
             assert_eq!(a.files[i].1, b.files[i].1);
             assert_ne!(a.files[i].1, c.files[i].1);
@@ -820,8 +866,14 @@ mod tests {
     #[test]
     fn a_trial_slid_faster_crosses_the_same_strip_faster() {
         let surfaces = sliding_surfaces();
-        let slow = trial_logs(&surfaces[4], 1, 3, SPEED_MPS).truth;
-        let fast = trial_logs(&surfaces[4], 1, 3, 2.0 * SPEED_MPS).truth;
+        let slow = trial_logs(&surfaces[4], 1, 3, SlidingStudy::default()).truth;
+        let fast = trial_logs(
+            &surfaces[4],
+            1,
+            3,
+            SlidingStudy::default().at_speed(2.0 * SPEED_MPS).expect("valid"),
+        )
+        .truth;
         assert!((fast.speed_mps - 2.0 * slow.speed_mps).abs() < 1e-15);
         assert_eq!(
             (fast.track_start_m, fast.normal_force_n, fast.normal_mode_hz),
@@ -843,7 +895,7 @@ mod tests {
         let surfaces = sliding_surfaces();
         let rms = |name: &str| {
             let s = surfaces.iter().find(|s| s.surface.name == name).expect("surface");
-            let r = rows(&trial_logs(s, 0, 5, SPEED_MPS).files[3].1);
+            let r = rows(&trial_logs(s, 0, 5, SlidingStudy::default()).files[3].1);
             let v: Vec<f64> = r.iter().flat_map(|row| row[1..].to_vec()).collect();
             let mean = v.iter().sum::<f64>() / v.len() as f64;
             (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
