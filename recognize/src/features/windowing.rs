@@ -887,6 +887,35 @@ pub(crate) struct WindowVectors {
     pub too_fast: TooFastWindows,
 }
 
+impl WindowVectors {
+    /// The windows read, for deciding on capture `c`: none read because every one slid too
+    /// fast is the typed error a single window would be (named as `window_vectors` names a
+    /// feature set's errors), since nothing can be said of that capture; some read, the rest
+    /// are left out.
+    pub(crate) fn decidable(
+        self,
+        c: &LabelledCapture,
+        features: FeatureSet,
+    ) -> Result<Vec<(usize, WindowSpan, Vec<f64>)>, RecognizeError> {
+        let t = self.too_fast;
+        if !self.vectors.is_empty() || t.count == 0 {
+            return Ok(self.vectors);
+        }
+        Err(RecognizeError::Features {
+            path: c.reference.path.clone(),
+            features: match features {
+                FeatureSet::NakanoSpectrum => "height spectrum",
+                _ => "spectrotemporal",
+            },
+            source: Box::new(RecognizeError::Setting(SettingError::TooFastForBands {
+                speed_mps: t.fastest_mps,
+                max_speed_mps: t.readable_up_to_mps,
+                rate_hz: t.rate_hz,
+            })),
+        })
+    }
+}
+
 /// Windows over travel left out because they slid faster than their bands can be read at the
 /// capture's rate (their top band would pass the Nyquist frequency).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -898,15 +927,19 @@ pub struct TooFastWindows {
     /// The fastest speed the bands read at, m/s (the slowest such limit where captures differ
     /// in rate).
     pub readable_up_to_mps: f64,
+    /// The rate that limit is at, Hz.
+    pub rate_hz: f64,
 }
 
 impl TooFastWindows {
-    /// Counts one window slid at `speed_mps` where `readable_up_to_mps` is the limit.
-    pub(crate) fn add(&mut self, speed_mps: f64, readable_up_to_mps: f64) {
+    /// Counts one window slid at `speed_mps` where `readable_up_to_mps` is the limit at
+    /// `rate_hz`.
+    pub(crate) fn add(&mut self, speed_mps: f64, readable_up_to_mps: f64, rate_hz: f64) {
         self.merge(Self {
             count: 1,
             fastest_mps: speed_mps,
             readable_up_to_mps,
+            rate_hz,
         });
     }
 
@@ -915,11 +948,10 @@ impl TooFastWindows {
         if other.count == 0 {
             return;
         }
-        self.readable_up_to_mps = if self.count == 0 {
-            other.readable_up_to_mps
-        } else {
-            self.readable_up_to_mps.min(other.readable_up_to_mps)
-        };
+        if self.count == 0 || other.readable_up_to_mps < self.readable_up_to_mps {
+            self.readable_up_to_mps = other.readable_up_to_mps;
+            self.rate_hz = other.rate_hz;
+        }
         self.count += other.count;
         self.fastest_mps = self.fastest_mps.max(other.fastest_mps);
     }
@@ -966,8 +998,8 @@ fn window_spectra(
             Err(RecognizeError::Setting(SettingError::TooFastForBands {
                 speed_mps,
                 max_speed_mps,
-                ..
-            })) => too_fast.add(speed_mps, max_speed_mps),
+                rate_hz,
+            })) => too_fast.add(speed_mps, max_speed_mps, rate_hz),
             Err(e) => return Err(e),
         }
     }

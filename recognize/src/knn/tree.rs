@@ -31,7 +31,7 @@ const LANES: usize = 4;
 /// histograms' 130 features that latency was most of a k-NN's training time.
 #[inline(always)]
 fn lane_sum(len: usize, term: impl Fn(usize) -> f64) -> f64 {
-    let mut lanes = [0.0; LANES];
+    let mut lanes = [-0.0; LANES];
     let whole = len - len % LANES;
     for base in (0..whole).step_by(LANES) {
         for (k, lane) in lanes.iter_mut().enumerate() {

@@ -173,7 +173,8 @@ impl RecognizerFile {
         };
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
-        let windows = window_vectors(capture, windowing, features, cell_scale)?.vectors;
+        let windows =
+            window_vectors(capture, windowing, features, cell_scale)?.decidable(capture, features)?;
         let scaled: Vec<Vec<f64>> = windows.iter().map(|(_, _, v)| scaling.apply(v)).collect();
         let classified = classifier.classify_many(&scaled)?;
         let mut out = Vec::with_capacity(windows.len());
@@ -210,7 +211,7 @@ impl RecognizerFile {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         window_vectors(capture, windowing, features, cell_scale)?
-            .vectors
+            .decidable(capture, features)?
             .into_iter()
             .map(|(start, _, v)| {
                 let (label, confidence) = classify(&v)?;
@@ -328,7 +329,8 @@ impl Classifier for Knn {
 
     /// All at once: the same answers, screened by one matrix product ([`Knn::predict_with_proba_many`]).
     fn classify_many(&self, vs: &[Vec<f64>]) -> Result<Vec<(usize, Vec<f64>)>, RecognizeError> {
-        self.predict_with_proba_many(vs).map_err(RecognizeError::knn(None))
+        self.predict_with_proba_many(vs)
+            .map_err(RecognizeError::knn(None))
     }
 }
 

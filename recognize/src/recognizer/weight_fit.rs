@@ -26,11 +26,11 @@ use super::{LabelledCapture, recording_groups};
 use crate::RecognizeError;
 use crate::SettingError;
 use crate::folds::group_folds;
-use rayon::prelude::*;
 #[cfg(doc)]
 use crate::sequential::DEFAULT_MEMORY_S;
 use crate::sequential::SequentialParamsBuilder;
 use crate::svc::{FitEvent, Progress};
+use rayon::prelude::*;
 
 impl RecognizerFile {
     /// The weight of a window in this recognizer's anytime decisions, fitted on `captures`,

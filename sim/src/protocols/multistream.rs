@@ -887,7 +887,54 @@ mod tests {
                 "{bad}"
             );
         }
-        assert!(readme(10, 0.05).contains("at about 50 mm/s"));
+        assert!(readme(10, 0.05, 4.0).contains("at about 50 mm/s"));
+    }
+
+    /// A study of a real one's shape: more trials, each slid longer; a trial draws the same
+    /// strip, load and placement whatever the slide time, and only the slide lasts longer.
+    #[test]
+    fn a_longer_slide_lasts_longer_on_the_same_strip() {
+        let surfaces = sliding_surfaces();
+        let study = SlidingStudy::default().with_shape(25, 7.0).expect("valid");
+        assert_eq!((study.trials, study.slide_s), (25, 7.0));
+        let short = trial_logs(&surfaces[2], 3, 1, SlidingStudy::default());
+        let long = trial_logs(&surfaces[2], 3, 1, study);
+        assert_eq!(long.truth.slide_s, 7.0);
+        assert_eq!(
+            (
+                long.truth.speed_mps,
+                long.truth.track_start_m,
+                long.truth.normal_force_n
+            ),
+            (
+                short.truth.speed_mps,
+                short.truth.track_start_m,
+                short.truth.normal_force_n
+            )
+        );
+        // The packed vibration rows at 100 Hz: 3 s more, 300 rows more (within a row of jitter).
+        let (a, b) = (rows(&short.files[3].1).len(), rows(&long.files[3].1).len());
+        assert!((b as i64 - a as i64 - 300).abs() <= 1, "{a} → {b}");
+        assert!(
+            readme(25, SPEED_MPS, 7.0).contains("20 surfaces x 25 trials")
+                && readme(25, SPEED_MPS, 7.0).contains("for 7 s")
+        );
+        for (trials, slide_s) in [
+            (0, 4.0),
+            (100, 4.0),
+            (10, 0.0),
+            (10, -1.0),
+            (10, f64::NAN),
+            (10, 61.0),
+        ] {
+            assert!(
+                matches!(
+                    SlidingStudy::default().with_shape(trials, slide_s),
+                    Err(SimError::Setting { .. })
+                ),
+                "{trials} trials of {slide_s} s"
+            );
+        }
     }
 
     #[test]
