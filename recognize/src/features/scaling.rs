@@ -1,7 +1,5 @@
 //! The feature scaling of the k-NN and SVM over windows.
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Serialize};
 
 #[cfg(doc)]
@@ -55,22 +53,30 @@ impl WindowScaling {
         };
         let mut offset = vec![0.0; dim];
         let mut scale = vec![1.0; dim];
+        // Each value (a logarithm, often) once per feature, and the classes' sums by index:
+        // the same sums in the same order as over a map of classes, at a fraction of the cost
+        // (a k-NN's weight fit refits this scaling for every fold).
+        let classes = labels.iter().max().map_or(0, |&l| l + 1);
+        let mut x = vec![0.0; data.len()];
+        let mut by_class = vec![(0.0, 0.0); classes];
         for j in 0..dim {
-            let mut by_class: BTreeMap<usize, (f64, f64)> = BTreeMap::new();
-            let mut total = 0.0;
-            for (v, &l) in data.iter().zip(labels) {
-                let x = value(j, v[j]);
-                total += x;
-                let e = by_class.entry(l).or_default();
-                e.0 += 1.0;
-                e.1 += x;
+            for (xi, v) in x.iter_mut().zip(data) {
+                *xi = value(j, v[j]);
             }
-            let within: f64 = data
+            by_class.fill((0.0, 0.0));
+            let mut total = 0.0;
+            for (&xi, &l) in x.iter().zip(labels) {
+                total += xi;
+                let e = &mut by_class[l];
+                e.0 += 1.0;
+                e.1 += xi;
+            }
+            let within: f64 = x
                 .iter()
                 .zip(labels)
-                .map(|(v, l)| {
+                .map(|(&xi, &l)| {
                     let (count, sum) = by_class[l];
-                    (value(j, v[j]) - sum / count).powi(2)
+                    (xi - sum / count).powi(2)
                 })
                 .sum();
             let s = (within / n).sqrt();

@@ -63,10 +63,13 @@ pub(super) fn neighbours(points: &[f64], dim: usize, k: usize, queries: &[f64]) 
             let mut found = Vec::with_capacity(m);
             for (j, query) in block.chunks_exact(dim).enumerate() {
                 let qn: f64 = query.iter().map(|v| v * v).sum();
+                // The screened distances and their k smallest in one pass.
+                let mut smallest = KSmallest::new(k);
                 for ((s, &pn), &dot) in screened.iter_mut().zip(&norms).zip(dots.col_as_slice(j)) {
                     *s = pn + qn - 2.0 * dot;
+                    smallest.offer(*s);
                 }
-                let kth = kth_smallest(&screened, k);
+                let kth = smallest.kth();
                 let reach = kth + 2.0 * factor * (largest_norm + qn);
                 let mut best = Best::new(k);
                 for (i, (&s, p)) in screened.iter().zip(points.chunks_exact(dim)).enumerate() {
@@ -81,18 +84,42 @@ pub(super) fn neighbours(points: &[f64], dim: usize, k: usize, queries: &[f64]) 
         .collect()
 }
 
-/// The `k`-th smallest value (1-based; the largest if there are fewer), or +∞ for none.
-fn kth_smallest(values: &[f64], k: usize) -> f64 {
-    let mut smallest: Vec<f64> = Vec::with_capacity(k + 1);
-    for &v in values {
-        if smallest.len() == k && smallest.last().is_some_and(|&w| v >= w) {
-            continue;
+/// The `k` smallest values offered so far, in order.
+struct KSmallest {
+    k: usize,
+    values: Vec<f64>,
+}
+
+impl KSmallest {
+    fn new(k: usize) -> Self {
+        Self {
+            k,
+            values: Vec::with_capacity(k + 1),
         }
-        let at = smallest.partition_point(|&w| w <= v);
-        smallest.insert(at, v);
-        smallest.truncate(k);
     }
-    smallest.last().copied().unwrap_or(f64::INFINITY)
+
+    #[inline]
+    fn offer(&mut self, v: f64) {
+        if self.values.len() == self.k && self.values.last().is_some_and(|&w| v >= w) {
+            return;
+        }
+        let at = self.values.partition_point(|&w| w <= v);
+        self.values.insert(at, v);
+        self.values.truncate(self.k);
+    }
+
+    /// The `k`-th smallest (the largest if fewer were offered), or +∞ for none.
+    fn kth(&self) -> f64 {
+        self.values.last().copied().unwrap_or(f64::INFINITY)
+    }
+}
+
+/// The `k`-th smallest of `values` ([`KSmallest::kth`]).
+#[cfg(test)]
+fn kth_smallest(values: &[f64], k: usize) -> f64 {
+    let mut smallest = KSmallest::new(k);
+    values.iter().for_each(|&v| smallest.offer(v));
+    smallest.kth()
 }
 
 #[cfg(test)]
