@@ -150,7 +150,7 @@ pub(crate) fn run(args: &SvrArgs) -> anyhow::Result<()> {
 /// defaults (C = 100, γ = 30, ε = 0.02 N unless given); with `--data`, the table's first n rows.
 /// Prints, per size: the fit's seconds, solver, iterations, support vectors, relative duality
 /// gap and the process's peak resident memory so far. With `--dump DIR` it also writes each
-/// training set and our predictions on it (`DIR/svr_scale_n{n}.csv`: x0, x1, …, y, ours), from
+/// training set and our predictions on it (`DIR/svr_scale_nN.csv` for size N: x0, x1, …, y, ours), from
 /// which scripts/bench_svr_scale.py fits scikit-learn's libsvm on the same samples. Run one size
 /// per process for per-size memory.
 #[derive(Debug, Args)]
