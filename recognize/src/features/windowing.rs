@@ -814,14 +814,14 @@ pub(crate) fn window_vectors(
         features,
         source: Box::new(source),
     };
-    let spectral = |source| features_error("spectrotemporal", source);
+    let spectral = |source| features_error(spectrum_name(FeatureSet::Vibration), source);
     let nakano_column = |name| {
         c.capture
             .column(name)
             .map_err(|e| spectral(RecognizeError::Input(InputError::NakanoColumn(Box::new(e)))))
     };
     if features == FeatureSet::NakanoSpectrum {
-        let height_spectrum = |source| features_error("height spectrum", source);
+        let height_spectrum = |source| features_error(spectrum_name(FeatureSet::NakanoSpectrum), source);
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
         let height = Axes::One(nakano_column(nakano::HEIGHT_COLUMN)?);
         let (spectra, too_fast) =
@@ -887,6 +887,15 @@ pub(crate) struct WindowVectors {
     pub too_fast: TooFastWindows,
 }
 
+/// How an error names the spectrum a feature set reads: the tip height's for
+/// [`FeatureSet::NakanoSpectrum`], the accelerometer's otherwise.
+fn spectrum_name(features: FeatureSet) -> &'static str {
+    match features {
+        FeatureSet::NakanoSpectrum => "height spectrum",
+        _ => "spectrotemporal",
+    }
+}
+
 impl WindowVectors {
     /// The windows read, for deciding on capture `c`: none read because every one slid too
     /// fast is the typed error a single window would be (named as `window_vectors` names a
@@ -903,10 +912,7 @@ impl WindowVectors {
         }
         Err(RecognizeError::Features {
             path: c.reference.path.clone(),
-            features: match features {
-                FeatureSet::NakanoSpectrum => "height spectrum",
-                _ => "spectrotemporal",
-            },
+            features: spectrum_name(features),
             source: Box::new(RecognizeError::Setting(SettingError::TooFastForBands {
                 speed_mps: t.fastest_mps,
                 max_speed_mps: t.readable_up_to_mps,

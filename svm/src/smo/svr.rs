@@ -171,11 +171,11 @@ pub(crate) const LIBSVM_STOP: f64 = 1e-3;
 pub(crate) const TARGET_GAP: f64 = 0.1 * crate::ACCEPT_GAP;
 
 /// Relative duality gap `|P + D| / max(1, |P|)` of the split dual's α, read off its gradient:
-/// for the first n variables `∇ₜ = ε − yₜ + (Kβ)ₜ`, so no kernel value is needed.
-fn svr_gap(alpha: &[f64], grad: &[f64], y: &[f64], c: f64, epsilon: f64) -> f64 {
+/// for the first n variables `∇ₜ = ε − yₜ + (Kβ)ₜ`, so no kernel value is needed. `labels` are
+/// the split dual's (+1 for α, −1 for α*).
+fn svr_gap(alpha: &[f64], grad: &[f64], labels: &[f64], y: &[f64], c: f64, epsilon: f64) -> f64 {
     let n = y.len();
-    let labels: Vec<f64> = (0..2 * n).map(|t| if t < n { 1.0 } else { -1.0 }).collect();
-    let bias = -libsvm_rho(alpha, grad, &labels, c);
+    let bias = -libsvm_rho(alpha, grad, labels, c);
     let (mut quad, mut linear, mut loss) = (0.0, 0.0, 0.0);
     for i in 0..n {
         let beta = alpha[i] - alpha[i + n];
@@ -226,7 +226,7 @@ pub(crate) fn solve_svr(
     // on the partition it has found; else go on with a tighter stop.
     let mut finished: Option<crate::smo_finish::Finished> = None;
     let mut refine = |alpha: &[f64], grad: &[f64], stop: f64| {
-        let gap = svr_gap(alpha, grad, y, c, epsilon);
+        let gap = svr_gap(alpha, grad, &labels, y, c, epsilon);
         if gap <= TARGET_GAP {
             return None;
         }
