@@ -34,7 +34,7 @@ pub use category::{
 pub use error::{DataError, InputError, RecognizeError, SettingError, SolverError, UsageError};
 pub use eval::{ConfusionMatrix, DecisionTiming, NamedDecision, natural_cmp, stable_right_from};
 pub use features::nakano::{self, FEATURES, NakanoConfig, NakanoSignals, NakanoStream};
-pub use features::spectral::{self, CellScale, FEATURE_LEN, SpectrogramPlan};
+pub use features::spectral::{self, CellScale, FEATURE_LEN, Histogram, HistogramBand, SpectrogramPlan};
 pub use features::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 pub use features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, PlayedPath, TRAINING_WINDOW_S, TRAVEL_PLAY_M,

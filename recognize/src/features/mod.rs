@@ -40,7 +40,7 @@ use serde::{Deserialize, Serialize};
 use crate::InputError;
 use crate::{LabelledCapture, RecognizeError};
 use nakano::{COMMAND_FORCE_COLUMN, FRICTION_COLUMN, HEIGHT_COLUMN, POSITION_COLUMN};
-use spectral::{ACCEL_COLUMNS, CellScale, FEATURE_LEN, SpectrogramPlan, VIBRATION_COLUMN};
+use spectral::{ACCEL_COLUMNS, FEATURE_LEN, Histogram, SpectrogramPlan, VIBRATION_COLUMN};
 use window_spectrum::SPECTRUM_LEN;
 
 pub use played_path::{PlayedPath, TRAVEL_PLAY_M};
@@ -198,16 +198,16 @@ pub(crate) fn histogram_names() -> Vec<String> {
 /// Sinapov's histogram of a whole capture, at the capture's rate.
 pub(crate) fn capture_histogram(
     c: &LabelledCapture,
-    scale: CellScale,
+    histogram: Histogram,
 ) -> Result<[f64; FEATURE_LEN], RecognizeError> {
     if let Some(kept) = c.kept() {
         return kept
-            .histogram(scale)
+            .histogram(histogram)
             .copied()
-            .ok_or_else(|| c.not_kept(format!("the histogram of the whole capture ({scale:?} cells)")));
+            .ok_or_else(|| c.not_kept(format!("the histogram of the whole capture ({histogram})")));
     }
-    SpectrogramPlan::at_rate(c.capture.metadata().rate_hz())
-        .and_then(|plan| plan.capture_features(&c.capture, scale))
+    SpectrogramPlan::over_band(c.capture.metadata().rate_hz(), histogram.band)
+        .and_then(|plan| plan.capture_features(&c.capture, histogram.cells))
         .map_err(|source| RecognizeError::Features {
             path: c.reference.path.clone(),
             features: "spectrotemporal",

@@ -93,6 +93,91 @@ pub enum CellScale {
     UnitSum,
 }
 
+/// The top of the histogram's frequency band.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HistogramBand {
+    /// 0 … [`BAND_HZ`] (or Nyquist, if lower): the band of Sinapov's 400 Hz sensor, in 25 bins
+    /// of 8 Hz at any rate. A texture slid at a few centimetres per second rings there.
+    #[default]
+    Paper,
+    /// 0 … the capture's Nyquist frequency, in 25 bins of `rate / 50` Hz (44 Hz at 2.2 kHz):
+    /// everything a faster sensor hears, for a rig whose surfaces differ above 200 Hz (a
+    /// fingertip sensor's own resonances, fast strokes). At 400 Hz it is [`Self::Paper`].
+    Nyquist,
+}
+
+impl HistogramBand {
+    /// Both bands, the paper's first.
+    pub const ALL: [Self; 2] = [Self::Paper, Self::Nyquist];
+
+    /// `paper` or `nyquist`, as files and `--bands` spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Nyquist => "nyquist",
+        }
+    }
+
+    /// Whether it is the paper's (which files leave unsaid).
+    pub fn is_paper(&self) -> bool {
+        *self == Self::Paper
+    }
+
+    /// The band's top at `rate_hz`, Hz.
+    pub fn top_hz(self, rate_hz: f64) -> f64 {
+        match self {
+            Self::Paper => BAND_HZ.min(rate_hz / 2.0),
+            Self::Nyquist => rate_hz / 2.0,
+        }
+    }
+}
+
+/// How a spectrotemporal histogram is defined beyond the paper's fixed frames: which band its
+/// frequency bins cover and how its cells are scaled. Stored in a recognizer file as
+/// `cell_scale` and (when not the paper's) `band`, so files written before the band could be
+/// chosen read as they did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub struct Histogram {
+    /// How its cells are scaled.
+    #[serde(rename = "cell_scale", default)]
+    pub cells: CellScale,
+    /// Which band its frequency bins cover.
+    #[serde(default, skip_serializing_if = "HistogramBand::is_paper")]
+    pub band: HistogramBand,
+}
+
+impl Histogram {
+    /// The paper's band, cells scaled by `cells`.
+    pub fn new(cells: CellScale) -> Self {
+        Self {
+            cells,
+            band: HistogramBand::Paper,
+        }
+    }
+
+    /// The same cells over `band`.
+    pub fn over(self, band: HistogramBand) -> Self {
+        Self { band, ..self }
+    }
+}
+
+impl From<CellScale> for Histogram {
+    fn from(cells: CellScale) -> Self {
+        Self::new(cells)
+    }
+}
+
+impl std::fmt::Display for Histogram {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let cells = match self.cells {
+            CellScale::Mean => "mean",
+            CellScale::UnitSum => "unit-sum",
+        };
+        write!(f, "{cells} cells, {} band", self.band.name())
+    }
+}
+
 /// Euclidean norm per sample.
 pub fn magnitude(x: &[f64], y: &[f64], z: &[f64]) -> Result<Vec<f64>, RecognizeError> {
     if x.len() != y.len() || x.len() != z.len() {
@@ -201,6 +286,12 @@ impl SpectrogramPlan {
     /// bins), and at the 50 % overlap its copies sum to a constant, so every sample (away from
     /// the ends) weighs the same and no part of the scratch is missed between frames.
     pub fn at_rate(rate_hz: f64) -> Result<Self, RecognizeError> {
+        Self::over_band(rate_hz, HistogramBand::Paper)
+    }
+
+    /// As [`SpectrogramPlan::at_rate`], its 25 frequency bins over `band` instead of the
+    /// paper's.
+    pub fn over_band(rate_hz: f64, band: HistogramBand) -> Result<Self, RecognizeError> {
         if !(rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)) {
             return Err(RecognizeError::Setting(SettingError::Parameter {
                 of: "setting",
@@ -211,7 +302,7 @@ impl SpectrogramPlan {
             }));
         }
         let frame_len = ((FRAME_S * rate_hz).round() as usize).max(2);
-        let band_bins = band_bins(rate_hz, frame_len);
+        let band_bins = band_bins_to(band.top_hz(rate_hz), rate_hz, frame_len);
         let fft = fft::forward_plan(frame_len);
         let window = (0..frame_len)
             .map(|i| {
@@ -799,6 +890,49 @@ mod tests {
             assert_eq!(top(&a), [4, 18]);
             assert_eq!(top(&b), [4, 18]);
         }
+    }
+
+    /// The Nyquist band reads what the paper's band cannot: at 2.2 kHz a 600 Hz ring lands in
+    /// bin ⌊600 / 44⌋ = 13 of 25 and leaves the paper's 0–200 Hz bins as they were without it;
+    /// at 400 Hz both bands are the same plan.
+    #[test]
+    fn the_nyquist_band_reads_a_fast_sensor_up_to_its_nyquist_frequency() {
+        let rate_hz = 2200.0;
+        let n = (6.0 * rate_hz) as usize;
+        let tau = 2.0 * std::f64::consts::PI;
+        let with_ring: Vec<f64> = (0..n)
+            .map(|i| G + 0.5 * (tau * 600.0 * i as f64 / rate_hz).sin())
+            .collect();
+        let paper = SpectrogramPlan::at_rate(rate_hz).expect("a valid rate");
+        let nyquist = SpectrogramPlan::over_band(rate_hz, HistogramBand::Nyquist).expect("a valid rate");
+        assert_eq!(paper.band_bins(), 129);
+        assert_eq!(nyquist.band_bins(), 705);
+        let wide = nyquist
+            .single_axis_features(&with_ring, CellScale::Mean)
+            .expect("long");
+        let narrow = paper
+            .single_axis_features(&with_ring, CellScale::Mean)
+            .expect("long");
+        for t in 0..TIME_BINS {
+            let loudest = (0..FREQUENCY_BINS)
+                .max_by(|&i, &j| cell(&wide, t, i).total_cmp(&cell(&wide, t, j)))
+                .expect("bins");
+            assert_eq!(loudest, 13, "time bin {t}");
+            // A cell is the mean of its 28 DFT bins, the tone's ~0.5 shared by about two.
+            assert!(cell(&wide, t, 13) > 0.02, "time bin {t}: {}", cell(&wide, t, 13));
+            // Below 200 Hz only the tone's leakage and the moving average's edges remain.
+            let narrow_max = (0..FREQUENCY_BINS)
+                .map(|b| cell(&narrow, t, b))
+                .fold(0.0, f64::max);
+            assert!(
+                narrow_max < 0.01 * cell(&wide, t, 13),
+                "time bin {t}: {narrow_max}"
+            );
+        }
+        let slow = SpectrogramPlan::over_band(400.0, HistogramBand::Nyquist).expect("a valid rate");
+        assert_eq!(slow.band_bins(), plan().band_bins());
+        let h = Histogram::new(CellScale::UnitSum).over(HistogramBand::Nyquist);
+        assert_eq!(h.to_string(), "unit-sum cells, nyquist band");
     }
 
     #[test]

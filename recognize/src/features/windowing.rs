@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 use super::FeatureSet;
 use super::nakano::{self, FEATURES, FrictionOverTravel, NakanoConfig, NakanoSignals, PROTOCOL_SPEED_MPS};
 use super::played_path::PlayedPath;
-use super::spectral::{self, ACCEL_COLUMNS, BAND_HZ, CellScale, SpectrogramPlan, VIBRATION_COLUMN};
+use super::spectral::{
+    self, ACCEL_COLUMNS, BAND_HZ, CellScale, Histogram, SpectrogramPlan, VIBRATION_COLUMN,
+};
 use super::window_spectrum::{SPECTRUM_LEN, SpectrumScratch, WindowSpectrumPlan};
 use crate::{InputError, SettingError};
 use crate::{LabelledCapture, RecognizeError};
@@ -694,7 +696,7 @@ pub(crate) fn windows(
 ) -> Result<Vec<(usize, WindowSpan, [f64; FEATURES])>, RecognizeError> {
     if let Some(kept) = c.kept() {
         let vectors = kept
-            .windows(windowing, FeatureSet::Nakano, CellScale::Mean)
+            .windows(windowing, FeatureSet::Nakano, Histogram::default())
             .ok_or_else(|| c.not_kept(format!("Nakano's features of {}", describe(windowing))))?;
         return Ok(vectors
             .vectors
@@ -784,11 +786,11 @@ pub(crate) fn window_vectors(
     c: &LabelledCapture,
     windowing: &NakanoWindowing,
     features: FeatureSet,
-    cell_scale: CellScale,
+    histogram: Histogram,
 ) -> Result<WindowVectors, RecognizeError> {
     if let Some(kept) = c.kept() {
         let kept = kept
-            .windows(windowing, features, cell_scale)
+            .windows(windowing, features, histogram)
             .ok_or_else(|| c.not_kept(format!("{features} features of {}", describe(windowing))))?;
         return Ok(WindowVectors {
             vectors: kept
@@ -825,7 +827,7 @@ pub(crate) fn window_vectors(
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
         let height = Axes::One(nakano_column(nakano::HEIGHT_COLUMN)?);
         let (spectra, too_fast) =
-            window_spectra(nakano, windowing, height, &path_m, cell_scale).map_err(height_spectrum)?;
+            window_spectra(nakano, windowing, height, &path_m, histogram).map_err(height_spectrum)?;
         return Ok(WindowVectors {
             vectors: spectra
                 .into_iter()
@@ -851,7 +853,7 @@ pub(crate) fn window_vectors(
     if features == FeatureSet::Vibration {
         let path_m = PlayedPath::series(nakano_column(nakano::POSITION_COLUMN)?);
         let (spectra, too_fast) =
-            window_spectra(nakano, windowing, axes, &path_m, cell_scale).map_err(spectral)?;
+            window_spectra(nakano, windowing, axes, &path_m, histogram).map_err(spectral)?;
         return Ok(WindowVectors {
             vectors: spectra
                 .into_iter()
@@ -860,7 +862,7 @@ pub(crate) fn window_vectors(
             too_fast,
         });
     }
-    let plan = SpectrogramPlan::at_rate(windowing.rate_hz).map_err(spectral)?;
+    let plan = SpectrogramPlan::over_band(windowing.rate_hz, histogram.band).map_err(spectral)?;
     let len = windowing.window_samples;
     let vectors = nakano
         .into_iter()
@@ -868,9 +870,9 @@ pub(crate) fn window_vectors(
             let h = match axes {
                 Axes::Three(x, y, z) => {
                     let range = s..(s + len).min(x.len());
-                    plan.features(&x[range.clone()], &y[range.clone()], &z[range], cell_scale)
+                    plan.features(&x[range.clone()], &y[range.clone()], &z[range], histogram.cells)
                 }
-                Axes::One(v) => plan.single_axis_features(&v[s..(s + len).min(v.len())], cell_scale),
+                Axes::One(v) => plan.single_axis_features(&v[s..(s + len).min(v.len())], histogram.cells),
             }
             .map_err(spectral)?;
             Ok((s, span, f.iter().copied().chain(h).collect()))
@@ -978,7 +980,7 @@ fn window_spectra(
     windowing: &NakanoWindowing,
     axes: Axes<'_>,
     path_m: &[f64],
-    cell_scale: CellScale,
+    histogram: Histogram,
 ) -> Result<(Vec<SpectrumWindow>, TooFastWindows), RecognizeError> {
     let plan = WindowSpectrumPlan::new(windowing.rate_hz, windowing.max_window_samples())?;
     let mut scratch = plan.scratch();
@@ -997,7 +999,8 @@ fn window_spectra(
             }
             Axes::One(v) => Cow::Borrowed(&v[r.clone()]),
         };
-        match windowing.spectrum_features(&plan, &signal, &path_m[r], cell_scale, &mut scratch) {
+        // The window spectrum's own bands: a histogram's band does not apply to it.
+        match windowing.spectrum_features(&plan, &signal, &path_m[r], histogram.cells, &mut scratch) {
             Ok(spectrum) => out.push((s, span, nakano, spectrum)),
             // A window the bands cannot read at this rate is left out and counted, not fatal:
             // a rig's position stream can read a burst of speed over a few slow samples.

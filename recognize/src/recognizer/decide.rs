@@ -7,7 +7,7 @@ use super::labelled::check_rate;
 use crate::InputError;
 use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::Histogram;
 use crate::features::{FeatureSet, NakanoWindowing, capture_histogram, window_vectors, windows};
 use crate::knn::Knn;
 use crate::som::{Som, SomDecision};
@@ -106,12 +106,12 @@ impl RecognizerFile {
                 .collect()),
             RecognizerBody::SomWindows {
                 windowing: own,
-                cell_scale,
+                histogram,
                 som,
             } => {
                 let windowing = windowing.unwrap_or(own);
                 let mut scratch = vec![0.0; som.dim()];
-                self.window_decisions(capture, windowing, FeatureSet::Both, *cell_scale, |v| {
+                self.window_decisions(capture, windowing, FeatureSet::Both, *histogram, |v| {
                     let d = som.decide_into(v, &mut scratch).map_err(RecognizeError::som)?;
                     Ok((som.node_labels().get(d.node).copied().unwrap_or(0), d.confidence))
                 })
@@ -132,11 +132,11 @@ impl RecognizerFile {
         capture: &LabelledCapture,
         windowing: Option<&NakanoWindowing>,
     ) -> Result<Option<Vec<WindowProbabilities>>, RecognizeError> {
-        let (windowing, features, cell_scale, scaling, classifier, calibration) = match &self.body {
+        let (windowing, features, histogram, scaling, classifier, calibration) = match &self.body {
             RecognizerBody::KnnWindows {
                 features,
                 windowing: own,
-                cell_scale,
+                histogram,
                 scaling,
                 knn,
                 calibration,
@@ -145,7 +145,7 @@ impl RecognizerFile {
                 (
                     windowing.unwrap_or(own),
                     *features,
-                    *cell_scale,
+                    *histogram,
                     scaling,
                     knn,
                     *calibration,
@@ -154,7 +154,7 @@ impl RecognizerFile {
             RecognizerBody::SvmWindows {
                 features,
                 windowing: own,
-                cell_scale,
+                histogram,
                 scaling,
                 svc,
                 ..
@@ -163,7 +163,7 @@ impl RecognizerFile {
                 (
                     windowing.unwrap_or(own),
                     *features,
-                    *cell_scale,
+                    *histogram,
                     scaling,
                     svc,
                     None,
@@ -174,7 +174,7 @@ impl RecognizerFile {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
         let windows =
-            window_vectors(capture, windowing, features, cell_scale)?.decidable(capture, features)?;
+            window_vectors(capture, windowing, features, histogram)?.decidable(capture, features)?;
         let scaled: Vec<Vec<f64>> = windows.iter().map(|(_, _, v)| scaling.apply(v)).collect();
         let classified = classifier.classify_many(&scaled)?;
         let mut out = Vec::with_capacity(windows.len());
@@ -205,12 +205,12 @@ impl RecognizerFile {
         capture: &LabelledCapture,
         windowing: &NakanoWindowing,
         features: FeatureSet,
-        cell_scale: CellScale,
+        histogram: Histogram,
         mut classify: impl FnMut(&[f64]) -> Result<(usize, f64), RecognizeError>,
     ) -> Result<Vec<Decision>, RecognizeError> {
         features.check_columns(std::slice::from_ref(capture))?;
         check_rate(capture, windowing.rate_hz)?;
-        window_vectors(capture, windowing, features, cell_scale)?
+        window_vectors(capture, windowing, features, histogram)?
             .decidable(capture, features)?
             .into_iter()
             .map(|(start, _, v)| {
@@ -240,17 +240,17 @@ impl RecognizerFile {
                 reason: "a recognizer over rubbing windows does not classify whole scratches".into(),
             })),
             RecognizerBody::SomScratches {
-                cell_scale,
+                histogram,
                 behaviours,
-            } => self.scratch_prediction_by(behaviours, capture, *cell_scale),
+            } => self.scratch_prediction_by(behaviours, capture, *histogram),
             RecognizerBody::Knn {
-                cell_scale,
+                histogram,
                 behaviours,
-            } => self.scratch_prediction_by(behaviours, capture, *cell_scale),
+            } => self.scratch_prediction_by(behaviours, capture, *histogram),
             RecognizerBody::Svm {
-                cell_scale,
+                histogram,
                 behaviours,
-            } => self.scratch_prediction_by(behaviours, capture, *cell_scale),
+            } => self.scratch_prediction_by(behaviours, capture, *histogram),
         }
     }
 
@@ -260,10 +260,10 @@ impl RecognizerFile {
         &self,
         behaviours: &[impl BehaviourClassifier],
         capture: &LabelledCapture,
-        cell_scale: CellScale,
+        histogram: Histogram,
     ) -> Result<(usize, usize, Vec<f64>), RecognizeError> {
         let b = behaviour_index(behaviours, capture)?;
-        let features = capture_histogram(capture, cell_scale)?;
+        let features = capture_histogram(capture, histogram)?;
         let (label, p) = behaviours[b].classify(&features, self.classes.len())?;
         Ok((b, label, p))
     }

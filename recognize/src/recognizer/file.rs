@@ -12,7 +12,7 @@ use super::posterior_weight::PosteriorWeight;
 use super::{SvmC, trial_groups};
 use crate::RecognizeError;
 use crate::features::nakano::FEATURES;
-use crate::features::spectral::{CellScale, FEATURE_LEN};
+use crate::features::spectral::{FEATURE_LEN, Histogram};
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
 use crate::knn::{Knn, VoteCalibration};
 use crate::som::Som;
@@ -96,16 +96,20 @@ pub enum RecognizerBody {
     },
     /// Sinapov: one spectrotemporal histogram per scratch, one k-NN per behaviour.
     Knn {
-        /// The histogram's cell scaling.
-        cell_scale: CellScale,
+        /// The histogram's definition: its cell scaling (`cell_scale`) and band
+        /// (`band`, absent for the paper's).
+        #[serde(flatten)]
+        histogram: Histogram,
         /// One classifier per behaviour seen in training.
         behaviours: Vec<BehaviourKnn>,
     },
     /// Sinapov: one spectrotemporal histogram per scratch, one SVC (degree-2 polynomial
     /// kernel, pairwise-coupled probabilities) per behaviour.
     Svm {
-        /// The histogram's cell scaling.
-        cell_scale: CellScale,
+        /// The histogram's definition: its cell scaling (`cell_scale`) and band
+        /// (`band`, absent for the paper's).
+        #[serde(flatten)]
+        histogram: Histogram,
         /// One classifier per behaviour seen in training.
         behaviours: Vec<BehaviourSvc>,
     },
@@ -115,9 +119,10 @@ pub enum RecognizerBody {
         features: FeatureSet,
         /// The windows.
         windowing: NakanoWindowing,
-        /// For `both`: the window histogram's cell scaling.
-        #[serde(default)]
-        cell_scale: CellScale,
+        /// For `both`: the window histogram's definition: its cell scaling (`cell_scale`) and band
+        /// (`band`, absent for the paper's).
+        #[serde(flatten)]
+        histogram: Histogram,
         /// The feature scaling learned from the training windows.
         scaling: WindowScaling,
         /// The classifier over scaled windows.
@@ -134,9 +139,10 @@ pub enum RecognizerBody {
         features: FeatureSet,
         /// The windows.
         windowing: NakanoWindowing,
-        /// For `both`: the window histogram's cell scaling.
-        #[serde(default)]
-        cell_scale: CellScale,
+        /// For `both`: the window histogram's definition: its cell scaling (`cell_scale`) and band
+        /// (`band`, absent for the paper's).
+        #[serde(flatten)]
+        histogram: Histogram,
         /// The feature scaling learned from the training windows.
         scaling: WindowScaling,
         /// The classifier over scaled windows.
@@ -150,16 +156,19 @@ pub enum RecognizerBody {
     SomWindows {
         /// The windows.
         windowing: NakanoWindowing,
-        /// The window histogram's cell scaling.
-        #[serde(default)]
-        cell_scale: CellScale,
+        /// The window histogram's definition: its cell scaling (`cell_scale`) and band
+        /// (`band`, absent for the paper's).
+        #[serde(flatten)]
+        histogram: Histogram,
         /// The map, with its feature scaling.
         som: Som<usize>,
     },
     /// One SOM per behaviour over the histograms of whole scratches (`--features spectral`).
     SomScratches {
-        /// The histogram's cell scaling.
-        cell_scale: CellScale,
+        /// The histogram's definition: its cell scaling (`cell_scale`) and band
+        /// (`band`, absent for the paper's).
+        #[serde(flatten)]
+        histogram: Histogram,
         /// One map per behaviour seen in training.
         behaviours: Vec<BehaviourSom>,
     },

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use super::file::{RecognizerBody, RecognizerFile};
 use super::labelled::{KeptFeatures, KeptWindows, LabelledCapture, check_rate};
 use crate::RecognizeError;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::Histogram;
 use crate::features::{FeatureSet, NakanoWindowing, PlayedPath, Travel, capture_histogram, window_vectors};
 use crate::{InputError, SettingError, UsageError};
 use capture::Capture;
@@ -24,8 +24,8 @@ use capture::Capture;
 /// histograms (of a cell scaling).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FeatureNeeds {
-    pub(super) windows: Vec<(NakanoWindowing, FeatureSet, CellScale)>,
-    pub(super) histograms: Vec<CellScale>,
+    pub(super) windows: Vec<(NakanoWindowing, FeatureSet, Histogram)>,
+    pub(super) histograms: Vec<Histogram>,
 }
 
 impl FeatureNeeds {
@@ -35,24 +35,24 @@ impl FeatureNeeds {
     }
 
     /// Also the vectors of the windows `windowing` picks, of `features` ([`FeatureSet::Nakano`]
-    /// or [`FeatureSet::Both`]; `cell_scale` scales the latter's histograms).
+    /// or [`FeatureSet::Both`]; `histogram` scales the latter's histograms).
     pub fn with_windows(
         mut self,
         windowing: NakanoWindowing,
         features: FeatureSet,
-        cell_scale: CellScale,
+        histogram: Histogram,
     ) -> Self {
-        let need = (windowing, features, cell_scale);
+        let need = (windowing, features, histogram);
         if !self.windows.contains(&need) {
             self.windows.push(need);
         }
         self
     }
 
-    /// Also the spectrotemporal histogram of the whole capture, cells scaled by `cell_scale`.
-    pub fn with_histogram(mut self, cell_scale: CellScale) -> Self {
-        if !self.histograms.contains(&cell_scale) {
-            self.histograms.push(cell_scale);
+    /// Also the spectrotemporal histogram of the whole capture, cells scaled by `histogram`.
+    pub fn with_histogram(mut self, histogram: Histogram) -> Self {
+        if !self.histograms.contains(&histogram) {
+            self.histograms.push(histogram);
         }
         self
     }
@@ -61,14 +61,14 @@ impl FeatureNeeds {
     /// recognizer's own), [`RecognizerFile::evaluate_fused`] and, for a decision window,
     /// [`RecognizerFile::som_quality`] read with `model`.
     pub fn evaluation(model: &RecognizerFile, window_s: &[f64]) -> Result<Self, RecognizeError> {
-        let Some((windowing, features, cell_scale)) = window_features(&model.body) else {
-            return Ok(Self::new().with_histogram(scratch_cell_scale(&model.body)));
+        let Some((windowing, features, histogram)) = window_features(&model.body) else {
+            return Ok(Self::new().with_histogram(scratch_histogram(&model.body)));
         };
         if window_s.is_empty() {
-            return Ok(Self::new().with_windows(*windowing, features, cell_scale));
+            return Ok(Self::new().with_windows(*windowing, features, histogram));
         }
         window_s.iter().try_fold(Self::new(), |needs, &s| {
-            Ok(needs.with_windows(windowing.with_window_s(s)?, features, cell_scale))
+            Ok(needs.with_windows(windowing.with_window_s(s)?, features, histogram))
         })
     }
 
@@ -77,8 +77,8 @@ impl FeatureNeeds {
     /// probabilities.
     pub fn sequential(model: &RecognizerFile) -> Result<Self, RecognizeError> {
         match (model.sequential_windowing(), window_features(&model.body)) {
-            (Some(windowing), Some((_, features, cell_scale))) => {
-                Ok(Self::new().with_windows(windowing, features, cell_scale))
+            (Some(windowing), Some((_, features, histogram))) => {
+                Ok(Self::new().with_windows(windowing, features, histogram))
             }
             _ => Err(RecognizeError::Setting(SettingError::NoWindowProbabilities {
                 method: model.method(),
@@ -109,37 +109,35 @@ impl FeatureNeeds {
 
 /// The windowing, features and histogram cell scale of a recognizer over rubbing windows;
 /// `None` for one over whole scratches.
-fn window_features(body: &RecognizerBody) -> Option<(&NakanoWindowing, FeatureSet, CellScale)> {
+fn window_features(body: &RecognizerBody) -> Option<(&NakanoWindowing, FeatureSet, Histogram)> {
     match body {
-        RecognizerBody::Som { windowing, .. } => Some((windowing, FeatureSet::Nakano, CellScale::Mean)),
+        RecognizerBody::Som { windowing, .. } => Some((windowing, FeatureSet::Nakano, Histogram::default())),
         RecognizerBody::SomWindows {
-            windowing,
-            cell_scale,
-            ..
-        } => Some((windowing, FeatureSet::Both, *cell_scale)),
+            windowing, histogram, ..
+        } => Some((windowing, FeatureSet::Both, *histogram)),
         RecognizerBody::KnnWindows {
             features,
             windowing,
-            cell_scale,
+            histogram,
             ..
         }
         | RecognizerBody::SvmWindows {
             features,
             windowing,
-            cell_scale,
+            histogram,
             ..
-        } => Some((windowing, *features, *cell_scale)),
+        } => Some((windowing, *features, *histogram)),
         RecognizerBody::Knn { .. } | RecognizerBody::Svm { .. } | RecognizerBody::SomScratches { .. } => None,
     }
 }
 
 /// The histogram cell scale of a recognizer over whole scratches (the mean for any other).
-fn scratch_cell_scale(body: &RecognizerBody) -> CellScale {
+fn scratch_histogram(body: &RecognizerBody) -> Histogram {
     match body {
-        RecognizerBody::Knn { cell_scale, .. }
-        | RecognizerBody::Svm { cell_scale, .. }
-        | RecognizerBody::SomScratches { cell_scale, .. } => *cell_scale,
-        _ => CellScale::Mean,
+        RecognizerBody::Knn { histogram, .. }
+        | RecognizerBody::Svm { histogram, .. }
+        | RecognizerBody::SomScratches { histogram, .. } => *histogram,
+        _ => Histogram::default(),
     }
 }
 
@@ -164,13 +162,13 @@ impl LabelledCapture {
             features.check_columns(std::slice::from_ref(&self))?;
         }
         let mut windows = Vec::with_capacity(needs.windows.len());
-        for &(windowing, features, cell_scale) in &needs.windows {
+        for &(windowing, features, histogram) in &needs.windows {
             check_rate(&self, windowing.rate_hz)?;
-            let vectors = window_vectors(&self, &windowing, features, cell_scale)?;
+            let vectors = window_vectors(&self, &windowing, features, histogram)?;
             windows.push(KeptWindows {
                 windowing,
                 features,
-                cell_scale,
+                histogram,
                 vectors,
             });
         }

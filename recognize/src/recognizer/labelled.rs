@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use crate::InputError;
 use crate::RecognizeError;
-use crate::features::spectral::{CellScale, FEATURE_LEN};
+use crate::features::spectral::{FEATURE_LEN, Histogram};
 use crate::features::{FeatureSet, NakanoWindowing, Travel, WindowVectors};
 use capture::{Capture, CaptureKind, CaptureRef, sha256_hex};
 
@@ -126,7 +126,7 @@ impl LabelledCapture {
 pub(crate) struct KeptWindows {
     pub(super) windowing: NakanoWindowing,
     pub(super) features: FeatureSet,
-    pub(super) cell_scale: CellScale,
+    pub(super) histogram: Histogram,
     /// Start, span and feature vector of each readable window, and those left out.
     pub(super) vectors: WindowVectors,
 }
@@ -143,7 +143,7 @@ pub(crate) struct KeptFeatures {
     /// into a stroke.
     pub(super) path_m: Vec<(usize, f64)>,
     pub(super) windows: Vec<KeptWindows>,
-    pub(super) histograms: Vec<(CellScale, [f64; FEATURE_LEN])>,
+    pub(super) histograms: Vec<(Histogram, [f64; FEATURE_LEN])>,
 }
 
 impl KeptFeatures {
@@ -157,14 +157,14 @@ impl KeptFeatures {
         &self.travel
     }
 
-    /// The kept vectors of the windows `windowing` picks, of `features` (`cell_scale` matters
+    /// The kept vectors of the windows `windowing` picks, of `features` (`histogram` matters
     /// for [`FeatureSet::Both`] only). Nakano's five features are also the first five of
     /// `both`'s vectors, so either serves a request for them.
     pub(crate) fn windows(
         &self,
         windowing: &NakanoWindowing,
         features: FeatureSet,
-        cell_scale: CellScale,
+        histogram: Histogram,
     ) -> Option<&WindowVectors> {
         self.windows
             .iter()
@@ -172,17 +172,17 @@ impl KeptFeatures {
                 k.windowing == *windowing
                     && match features {
                         FeatureSet::Nakano => matches!(k.features, FeatureSet::Nakano | FeatureSet::Both),
-                        _ => k.features == features && k.cell_scale == cell_scale,
+                        _ => k.features == features && k.histogram == histogram,
                     }
             })
             .map(|k| &k.vectors)
     }
 
-    /// The kept histogram of cells scaled by `cell_scale`.
-    pub(crate) fn histogram(&self, cell_scale: CellScale) -> Option<&[f64; FEATURE_LEN]> {
+    /// The kept histogram of cells scaled by `histogram`.
+    pub(crate) fn histogram(&self, histogram: Histogram) -> Option<&[f64; FEATURE_LEN]> {
         self.histograms
             .iter()
-            .find(|(s, _)| *s == cell_scale)
+            .find(|(s, _)| *s == histogram)
             .map(|(_, h)| h)
     }
 }

@@ -3,7 +3,7 @@ use std::path::Path;
 use super::*;
 use crate::RecognizeError;
 use crate::features::histogram_names;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::Histogram;
 use crate::features::{FeatureSet, NakanoWindowing, window_vectors};
 use crate::knn::KnnParams;
 use crate::recognizer::labelled::class_list;
@@ -163,7 +163,7 @@ fn sinapov_recognizers() -> [RecognizerFile; 2] {
     let svc = Svc::fit(params, &x, &y, 3).expect("SVC");
     let classes: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
     let knn_body = RecognizerBody::Knn {
-        cell_scale: CellScale::Mean,
+        histogram: Histogram::default(),
         behaviours: poke_and_rub(|behaviour, weighted| BehaviourKnn {
             behaviour,
             knn: knn.clone(),
@@ -187,7 +187,7 @@ fn sinapov_recognizers() -> [RecognizerFile; 2] {
         separable_from: None,
     };
     let svm_body = RecognizerBody::Svm {
-        cell_scale: CellScale::Mean,
+        histogram: Histogram::default(),
         behaviours: poke_and_rub(|behaviour, weighted| BehaviourSvc {
             behaviour,
             svc: svc.clone(),
@@ -197,6 +197,34 @@ fn sinapov_recognizers() -> [RecognizerFile; 2] {
     };
     [knn_body, svm_body]
         .map(|body| RecognizerFile::assemble(classes.clone(), histogram_names(), body, &[], 6))
+}
+
+/// The histogram's band is kept beside its cell scaling, left out of the file when it is the
+/// paper's (so files written before it could be chosen read as they did), and a band the
+/// build does not know is refused, not read as the paper's.
+#[test]
+fn the_histogram_band_is_kept_in_the_file_and_an_unknown_one_is_refused() {
+    for model in sinapov_recognizers() {
+        let method = model.method();
+        let json = serde_json::to_value(&model).expect("serialize");
+        assert_eq!(json["body"]["cell_scale"], "mean", "{method}");
+        assert!(json["body"].get("band").is_none(), "{method}");
+        let mut wide = json.clone();
+        wide["body"]["band"] = "nyquist".into();
+        let back = RecognizerFile::from_json(&wide.to_string(), Path::new("m.json")).expect("valid");
+        let needs = FeatureNeeds::evaluation(&back, &[]).expect("needs");
+        assert_eq!(
+            needs.histograms,
+            [Histogram::default().over(crate::HistogramBand::Nyquist)],
+            "{method}"
+        );
+        assert_eq!(
+            serde_json::to_value(&back).expect("serialize")["body"]["band"],
+            "nyquist"
+        );
+        wide["body"]["band"] = "wide".into();
+        RecognizerFile::from_json(&wide.to_string(), Path::new("m.json")).expect_err("unknown band");
+    }
 }
 
 #[test]
@@ -288,14 +316,15 @@ fn trials_group_captures_in_numeric_order_and_trial_less_captures_stand_alone() 
 fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
     let train = three_surfaces(4.0);
     let windowing = NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid");
-    let knn = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 3, CellScale::Mean)
-        .expect("k-NN");
+    let knn =
+        RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Nakano, 3, Histogram::default())
+            .expect("k-NN");
     let svm = RecognizerFile::train_svm_windows(
         &train,
         windowing,
         FeatureSet::Nakano,
         &SvmC::auto(),
-        CellScale::Mean,
+        Histogram::default(),
     )
     .expect("SVM");
     for model in [knn, svm] {
@@ -328,7 +357,7 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
             // buffers it keeps from one window to the next.
             let mut live = WindowClassifier::new(&back).expect("window classifier");
             let mut p = vec![0.0; live.classes()];
-            let vectors = window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean)
+            let vectors = window_vectors(c, &windowing, FeatureSet::Nakano, Histogram::default())
                 .expect("windows")
                 .vectors;
             assert_eq!(vectors.len(), probabilities.len());
@@ -391,7 +420,7 @@ fn window_classifiers_round_trip_and_recognize_distinct_surfaces() {
         assert!(err.to_string().contains("field `features`"), "{err}");
     }
     // No accelerometer in these captures: `both` names the capture and the columns.
-    let err = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Both, 3, CellScale::Mean)
+    let err = RecognizerFile::train_knn_windows(&train, windowing, FeatureSet::Both, 3, Histogram::default())
         .expect_err("no accelerometer");
     assert!(
         matches!(&err, RecognizeError::Input(InputError::MissingColumns { missing, .. }) if missing.len() == 3),
@@ -940,7 +969,7 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
             assert!(err.to_string().contains("were not among them"), "{err}");
         }
     }
-    let needs = FeatureNeeds::new().with_histogram(CellScale::Mean);
+    let needs = FeatureNeeds::new().with_histogram(Histogram::default());
     let kept = train_set[0].clone().keep_features(&needs).expect("keeps");
     let err = kept.keep_features(&needs).expect_err("no samples left");
     assert!(
@@ -998,10 +1027,10 @@ fn nakano_spectrum_windows_read_the_heights_spectrum_after_nakanos_features() {
         .iter()
         .zip([Some(5e-3 / 0.3e-3), Some(5e-3 / 1.5e-3), None])
     {
-        let both = window_vectors(c, &windowing, FeatureSet::NakanoSpectrum, CellScale::Mean)
+        let both = window_vectors(c, &windowing, FeatureSet::NakanoSpectrum, Histogram::default())
             .expect("windows")
             .vectors;
-        let nakano = window_vectors(c, &windowing, FeatureSet::Nakano, CellScale::Mean)
+        let nakano = window_vectors(c, &windowing, FeatureSet::Nakano, Histogram::default())
             .expect("windows")
             .vectors;
         assert_eq!(both.len(), nakano.len());
@@ -1533,7 +1562,7 @@ fn data_warnings_name_classes_with_few_vectors_and_constant_features() {
         &class_list(&captures),
         &settings(Method::Som).windowing(&captures).expect("windowing"),
         FeatureSet::Nakano,
-        CellScale::Mean,
+        Histogram::default(),
     )
     .expect("windows");
     let cork_index = class_list(&captures)
@@ -1701,7 +1730,7 @@ fn a_change_of_surface_is_read_from_the_metadata_and_checked() {
         windowing,
         FeatureSet::Nakano,
         3,
-        CellScale::Mean,
+        Histogram::default(),
     )
     .expect("k-NN");
     let params = knn.sequential_params(3.0).expect("window probabilities");
@@ -1751,7 +1780,7 @@ fn anytime_decisions_say_how_far_into_the_stroke_they_came() {
         NakanoWindowing::new(0.5, 0.1, 1000.0).expect("valid"),
         FeatureSet::Nakano,
         3,
-        CellScale::Mean,
+        Histogram::default(),
     )
     .expect("k-NN");
     let params = knn.sequential_params(3.0).expect("window probabilities");
@@ -1843,8 +1872,13 @@ fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
     );
     // Its accuracy is the k-NN's under the same folds, counted by the fusion's own function.
     let windowing = *vibration.windowing().expect("windows");
-    let w = scaled_training_windows(&train_set, &windowing, FeatureSet::Vibration, CellScale::Mean)
-        .expect("windows");
+    let w = scaled_training_windows(
+        &train_set,
+        &windowing,
+        FeatureSet::Vibration,
+        Histogram::default(),
+    )
+    .expect("windows");
     let params = KnnParams::default().k(1).scaling(FeatureScaling::None);
     let accuracy = cross_validated_accuracy(params, &w.x, &w.y, &w.groups, 3, CV_FOLDS).expect("cv");
     assert_eq!(c.accuracy, accuracy);
@@ -1878,7 +1912,7 @@ fn a_knn_over_windows_calibrates_its_votes_and_can_be_fused() {
             assert_eq!(b.decision.confidence, expected[b.decision.label]);
             assert!(v.probabilities.iter().all(|&q| q == 0.0 || q == 1.0));
         }
-        let vectors = window_vectors(capture, &sequential, FeatureSet::Vibration, CellScale::Mean)
+        let vectors = window_vectors(capture, &sequential, FeatureSet::Vibration, Histogram::default())
             .expect("windows")
             .vectors;
         let offline = vibration
@@ -2002,7 +2036,8 @@ fn windows_too_fast_for_their_bands_are_left_out_and_counted() {
     };
     let model = train(&captures, &settings).expect("trains on the windows it can read");
     let training = model.windowing().expect("windows").training();
-    let skipped = window_vectors(&fast, &training, FeatureSet::Vibration, CellScale::Mean).expect("windows");
+    let skipped =
+        window_vectors(&fast, &training, FeatureSet::Vibration, Histogram::default()).expect("windows");
     assert!(skipped.vectors.is_empty());
     assert!(skipped.too_fast.count > 10, "{:?}", skipped.too_fast);
     let warnings = settings.data_warnings(&captures).expect("warnings");
@@ -2023,7 +2058,7 @@ fn windows_too_fast_for_their_bands_are_left_out_and_counted() {
     );
     // The other captures' windows are all read.
     for c in &captures[..6] {
-        let w = window_vectors(c, &training, FeatureSet::Vibration, CellScale::Mean).expect("windows");
+        let w = window_vectors(c, &training, FeatureSet::Vibration, Histogram::default()).expect("windows");
         assert_eq!(w.too_fast.count, 0);
         assert!(!w.vectors.is_empty());
     }

@@ -138,17 +138,17 @@ impl RecognizerFile {
             RecognizerBody::SvmWindows {
                 features,
                 windowing,
-                cell_scale,
+                histogram,
                 svc,
                 ..
-            } => Self::refit_svm_windows(captures, *windowing, *features, svc.params().c, *cell_scale),
+            } => Self::refit_svm_windows(captures, *windowing, *features, svc.params().c, *histogram),
             RecognizerBody::KnnWindows {
                 features,
                 windowing,
-                cell_scale,
+                histogram,
                 knn,
                 ..
-            } => Self::train_knn_windows(captures, *windowing, *features, knn.k(), *cell_scale),
+            } => Self::train_knn_windows(captures, *windowing, *features, knn.k(), *histogram),
             _ => return Err(format!("a {} gives no window probabilities", self.method())),
         }
         .map_err(|e| e.chain())?;

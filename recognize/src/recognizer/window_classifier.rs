@@ -6,7 +6,7 @@
 
 use super::file::{RecognizerBody, RecognizerFile};
 use crate::RecognizeError;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::{CellScale, Histogram};
 use crate::features::{FeatureSet, NakanoWindowing, WindowScaling};
 use crate::knn::{Knn, KnnScratch, VoteCalibration};
 use crate::svc::{Svc, SvcScratch};
@@ -29,7 +29,7 @@ pub struct WindowClassifier {
     windowing: NakanoWindowing,
     scaled: Vec<f64>,
     classes: usize,
-    cell_scale: CellScale,
+    histogram: Histogram,
 }
 
 impl Clone for WindowClassifier {
@@ -54,7 +54,7 @@ impl Clone for WindowClassifier {
             windowing: self.windowing,
             scaled: vec![0.0; self.scaled.len()],
             classes: self.classes,
-            cell_scale: self.cell_scale,
+            histogram: self.histogram,
         }
     }
 }
@@ -63,13 +63,13 @@ impl WindowClassifier {
     /// The classifier of `model`, which must be a k-NN or SVM over windows (any other gives no
     /// per-window probabilities, and is refused saying so).
     pub fn new(model: &RecognizerFile) -> Result<Self, RecognizeError> {
-        let (classifier, scaling, features, dim, cell_scale) = match &model.body {
+        let (classifier, scaling, features, dim, histogram) = match &model.body {
             RecognizerBody::KnnWindows {
                 knn,
                 scaling,
                 features,
                 calibration,
-                cell_scale,
+                histogram,
                 ..
             } => {
                 let knn = Box::new(knn.clone());
@@ -80,20 +80,20 @@ impl WindowClassifier {
                     scaling,
                     *features,
                     dim,
-                    *cell_scale,
+                    *histogram,
                 )
             }
             RecognizerBody::SvmWindows {
                 svc,
                 scaling,
                 features,
-                cell_scale,
+                histogram,
                 ..
             } => {
                 let svc = Box::new(svc.clone());
                 let scratch = svc.scratch();
                 let dim = svc.dim();
-                (Scratched::Svc(svc, scratch), scaling, *features, dim, *cell_scale)
+                (Scratched::Svc(svc, scratch), scaling, *features, dim, *histogram)
             }
             body => {
                 return Err(RecognizeError::Setting(SettingError::NoWindowProbabilities {
@@ -115,7 +115,7 @@ impl WindowClassifier {
             windowing,
             scaled: vec![0.0; dim],
             classes: model.classes.len(),
-            cell_scale,
+            histogram,
         })
     }
 
@@ -126,7 +126,7 @@ impl WindowClassifier {
 
     /// How its windows' histogram or spectrum cells are scaled.
     pub fn cell_scale(&self) -> CellScale {
-        self.cell_scale
+        self.histogram.cells
     }
 
     /// The windows it classifies, from contact on

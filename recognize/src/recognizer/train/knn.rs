@@ -9,7 +9,7 @@ use crate::DataError;
 use crate::RecognizeError;
 #[cfg(doc)]
 use crate::features::WindowScaling;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::Histogram;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::folds::group_folds;
 use crate::fusion::cross_validated_accuracy;
@@ -36,14 +36,14 @@ impl Trainer for KnnTrainer {
         } = job;
         match settings.features {
             FeatureSet::Spectral => {
-                RecognizerFile::train_knn(captures, KnnParams::default().k(settings.k), settings.cell_scale)
+                RecognizerFile::train_knn(captures, KnnParams::default().k(settings.k), settings.histogram)
             }
             windowed => RecognizerFile::train_knn_windows(
                 captures,
                 settings.windowing(captures)?,
                 windowed,
                 settings.k,
-                settings.cell_scale,
+                settings.histogram,
             ),
         }
     }
@@ -54,11 +54,12 @@ impl RecognizerFile {
     pub fn train_knn(
         captures: &[LabelledCapture],
         params: KnnParams,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
+        let histogram = histogram.into();
         let classes = class_list(captures);
         let mut behaviours = Vec::new();
-        for (name, x, y, groups) in histograms_by_behaviour(captures, &classes, cell_scale)? {
+        for (name, x, y, groups) in histograms_by_behaviour(captures, &classes, histogram)? {
             let knn = params
                 .fit(&x, &y, classes.len())
                 .map_err(RecognizeError::knn(name))?;
@@ -81,7 +82,7 @@ impl RecognizerFile {
             classes,
             behaviours.len(),
             RecognizerBody::Knn {
-                cell_scale,
+                histogram,
                 behaviours,
             },
             captures,
@@ -98,15 +99,16 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         features: FeatureSet,
         k: usize,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
+        let histogram = histogram.into();
         let ScaledWindows {
             classes,
             scaling,
             x,
             y,
             groups,
-        } = scaled_training_windows(captures, &windowing, features, cell_scale)?;
+        } = scaled_training_windows(captures, &windowing, features, histogram)?;
         let params = KnnParams::default().k(k).scaling(FeatureScaling::None);
         let knn = params
             .fit(&x, &y, classes.len())
@@ -126,7 +128,7 @@ impl RecognizerFile {
             RecognizerBody::KnnWindows {
                 features,
                 windowing,
-                cell_scale,
+                histogram,
                 scaling,
                 knn,
                 calibration,

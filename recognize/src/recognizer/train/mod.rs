@@ -26,7 +26,7 @@ use super::labelled::{check_rate, class_index, class_list};
 use super::{LabelledCapture, RecognizerBody, RecognizerFile, recording_groups, trial_groups};
 use crate::RecognizeError;
 use crate::features::nakano::FrictionOverTravel;
-use crate::features::spectral::{CellScale, FEATURE_LEN, SpectrogramPlan};
+use crate::features::spectral::{FEATURE_LEN, Histogram, SpectrogramPlan};
 use crate::features::{
     DECISION_WINDOW_S, FeatureSet, HOP_S, NakanoWindowing, TooFastWindows, WindowScaling, WindowlessCapture,
     capture_histogram, histogram_names, window_vectors,
@@ -164,7 +164,7 @@ pub struct TrainSettings {
     /// SVM: how C is set.
     pub c: SvmC,
     /// The histogram's cell scaling.
-    pub cell_scale: CellScale,
+    pub histogram: Histogram,
     /// SOM: nodes of each map; `None` for as many as the classes need ([`window_som_nodes`]
     /// over windows, [`som_nodes`] over whole scratches).
     pub som_nodes: Option<usize>,
@@ -199,7 +199,7 @@ impl TrainSettings {
             normalization: Normalization::LogWithinClass,
             k: PAPER_K,
             c: SvmC::auto(),
-            cell_scale: CellScale::Mean,
+            histogram: Histogram::default(),
             som_nodes: None,
             fit_posterior_weight: true,
             weight_fit_memory_s: DEFAULT_MEMORY_S,
@@ -272,13 +272,13 @@ impl FeatureNeeds {
     pub fn training(settings: &TrainSettings, rate_hz: f64) -> Result<Self, RecognizeError> {
         let needs = Self::new();
         Ok(match settings.features {
-            FeatureSet::Spectral => needs.with_histogram(settings.cell_scale),
+            FeatureSet::Spectral => needs.with_histogram(settings.histogram),
             windowed => {
                 let windowing = settings.windowing_at(rate_hz)?;
-                let needs = needs.with_windows(windowing.training(), windowed, settings.cell_scale);
+                let needs = needs.with_windows(windowing.training(), windowed, settings.histogram);
                 // Fitting the posterior's weight runs anytime decisions on held-out captures.
                 if settings.fit_posterior_weight && settings.method != Method::Som {
-                    needs.with_windows(windowing.from_contact(), windowed, settings.cell_scale)
+                    needs.with_windows(windowing.from_contact(), windowed, settings.histogram)
                 } else {
                     needs
                 }
@@ -292,7 +292,7 @@ impl FeatureNeeds {
         let needs = Self::training(settings, rate_hz)?;
         Ok(match settings.features {
             FeatureSet::Spectral => needs,
-            windowed => needs.with_windows(settings.windowing_at(rate_hz)?, windowed, settings.cell_scale),
+            windowed => needs.with_windows(settings.windowing_at(rate_hz)?, windowed, settings.histogram),
         })
     }
 }
@@ -427,14 +427,14 @@ pub(crate) type BehaviourHistograms<'a> = (Option<&'a str>, Vec<[f64; FEATURE_LE
 pub(crate) fn histograms_by_behaviour<'a>(
     captures: &'a [LabelledCapture],
     classes: &[String],
-    cell_scale: CellScale,
+    histogram: Histogram,
 ) -> Result<Vec<BehaviourHistograms<'a>>, RecognizeError> {
     let names: BTreeSet<Option<&str>> = captures.iter().map(|c| c.behaviour.as_deref()).collect();
     let mut out = Vec::new();
     for name in names {
         let (mut x, mut y, mut members) = (Vec::new(), Vec::new(), Vec::new());
         for c in captures.iter().filter(|c| c.behaviour.as_deref() == name) {
-            x.push(capture_histogram(c, cell_scale)?);
+            x.push(capture_histogram(c, histogram)?);
             y.push(class_index(classes, c)?);
             members.push(c);
         }
@@ -452,9 +452,9 @@ pub(crate) fn training_windows(
     classes: &[String],
     windowing: &NakanoWindowing,
     features: FeatureSet,
-    cell_scale: CellScale,
+    histogram: Histogram,
 ) -> Result<WindowData, RecognizeError> {
-    training_windows_left_out(captures, classes, windowing, features, cell_scale).map(|(data, ..)| data)
+    training_windows_left_out(captures, classes, windowing, features, histogram).map(|(data, ..)| data)
 }
 
 /// A training window that covers less than this share of its travel
@@ -472,7 +472,7 @@ pub(crate) fn training_windows_left_out(
     classes: &[String],
     windowing: &NakanoWindowing,
     features: FeatureSet,
-    cell_scale: CellScale,
+    histogram: Histogram,
 ) -> Result<(WindowData, usize, usize, TooFastWindows), RecognizeError> {
     features.check_columns(captures)?;
     let groups = recording_groups(captures);
@@ -484,7 +484,7 @@ pub(crate) fn training_windows_left_out(
     for ((c, &group), left_out) in captures.iter().zip(&groups).zip(&mut left_out) {
         check_rate(c, windowing.rate_hz)?;
         let label = class_index(classes, c)?;
-        let windows = window_vectors(c, &training, features, cell_scale)?;
+        let windows = window_vectors(c, &training, features, histogram)?;
         too_fast.merge(windows.too_fast);
         for (_, span, v) in windows.vectors {
             of += 1;
@@ -588,11 +588,11 @@ pub(crate) fn scaled_training_windows(
     captures: &[LabelledCapture],
     windowing: &NakanoWindowing,
     features: FeatureSet,
-    cell_scale: CellScale,
+    histogram: Histogram,
 ) -> Result<ScaledWindows, RecognizeError> {
     window_check(features)?;
     let classes = class_list(captures);
-    let (x, y, groups) = training_windows(captures, &classes, windowing, features, cell_scale)?;
+    let (x, y, groups) = training_windows(captures, &classes, windowing, features, histogram)?;
     let scaling = WindowScaling::fit(&x, &y, features.blocks());
     let x = x.iter().map(|v| scaling.apply(v)).collect();
     Ok(ScaledWindows {

@@ -9,7 +9,7 @@ use super::{
 };
 use crate::RecognizeError;
 use crate::features::nakano::FEATURE_NAMES;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::Histogram;
 use crate::features::{FeatureSet, NakanoWindowing, windows};
 use crate::folds::{group_folds, held_out_correct};
 use crate::recognizer::labelled::{check_rate, class_index, class_list};
@@ -51,7 +51,7 @@ impl Trainer for SomTrainer {
                 captures,
                 settings.windowing(captures)?,
                 params,
-                settings.cell_scale,
+                settings.histogram,
                 progress,
             ),
             FeatureSet::Spectral => {
@@ -60,7 +60,7 @@ impl Trainer for SomTrainer {
                     normalization: SCRATCH_SOM_NORMALIZATION,
                     ..som_params(classes, settings.seed)
                 };
-                RecognizerFile::train_som_scratches(captures, params, settings.cell_scale)
+                RecognizerFile::train_som_scratches(captures, params, settings.histogram)
             }
             FeatureSet::Vibration => Err(RecognizeError::Setting(SettingError::Config {
                 of: "training",
@@ -238,9 +238,10 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         params: SomParams,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
-        Self::train_som_windows_sized(captures, windowing, |_| params, cell_scale, &no_progress)
+        let histogram = histogram.into();
+        Self::train_som_windows_sized(captures, windowing, |_| params, histogram, &no_progress)
     }
 
     /// [`RecognizerFile::train_som_windows`] with the parameters chosen once the number of
@@ -249,18 +250,19 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         params: impl FnOnce(usize) -> SomParams,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
+        let histogram = histogram.into();
         let classes = class_list(captures);
-        let (x, y, _) = training_windows(captures, &classes, &windowing, FeatureSet::Both, cell_scale)?;
+        let (x, y, _) = training_windows(captures, &classes, &windowing, FeatureSet::Both, histogram)?;
         let som = Som::train_observed(params(x.len()), &x, &y, progress)?;
         Ok(Self::assemble(
             classes,
             FeatureSet::Both.feature_names(),
             RecognizerBody::SomWindows {
                 windowing,
-                cell_scale,
+                histogram,
                 som,
             },
             captures,
@@ -274,11 +276,12 @@ impl RecognizerFile {
     pub fn train_som_scratches(
         captures: &[LabelledCapture],
         params: SomParams,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
+        let histogram = histogram.into();
         FeatureSet::Spectral.check_columns(captures)?;
         let classes = class_list(captures);
-        let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
+        let data = histograms_by_behaviour(captures, &classes, histogram)?;
         let fit_one =
             |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSom, RecognizeError> {
                 let x: Vec<Vec<f64>> = x.iter().map(|v| v.to_vec()).collect();
@@ -313,7 +316,7 @@ impl RecognizerFile {
             classes,
             behaviours.len(),
             RecognizerBody::SomScratches {
-                cell_scale,
+                histogram,
                 behaviours,
             },
             captures,

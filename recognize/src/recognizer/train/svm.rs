@@ -10,7 +10,7 @@ use super::{
 use crate::RecognizeError;
 #[cfg(doc)]
 use crate::features::WindowScaling;
-use crate::features::spectral::CellScale;
+use crate::features::spectral::Histogram;
 use crate::features::{FeatureSet, NakanoWindowing};
 use crate::fusion::BehaviourData;
 use crate::knn::FeatureScaling;
@@ -41,7 +41,7 @@ impl Trainer for SvmTrainer {
                 captures,
                 SvcParams::default(),
                 &settings.c,
-                settings.cell_scale,
+                settings.histogram,
                 progress,
             ),
             windowed => RecognizerFile::train_svm_windows_observed(
@@ -49,7 +49,7 @@ impl Trainer for SvmTrainer {
                 settings.windowing(captures)?,
                 windowed,
                 &settings.c,
-                settings.cell_scale,
+                settings.histogram,
                 progress,
             ),
         }
@@ -77,7 +77,7 @@ impl SvmTrainer {
             captures,
             &settings.windowing(captures)?,
             settings.features,
-            settings.cell_scale,
+            settings.histogram,
         )?;
         let params = SvcParams {
             c,
@@ -172,9 +172,10 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         params: SvcParams,
         c: &SvmC,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
-        Self::train_svm_observed(captures, params, c, cell_scale, &no_progress)
+        let histogram = histogram.into();
+        Self::train_svm_observed(captures, params, c, histogram, &no_progress)
     }
 
     /// [`RecognizerFile::train_svm`], telling `progress` of each behaviour's C search and
@@ -183,11 +184,12 @@ impl RecognizerFile {
         captures: &[LabelledCapture],
         params: SvcParams,
         c: &SvmC,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
+        let histogram = histogram.into();
         let classes = class_list(captures);
-        let data = histograms_by_behaviour(captures, &classes, cell_scale)?;
+        let data = histograms_by_behaviour(captures, &classes, histogram)?;
         let fit_one =
             |(name, x, y, groups): &BehaviourHistograms<'_>| -> Result<BehaviourSvc, RecognizeError> {
                 let label = behaviour_label(*name);
@@ -222,7 +224,7 @@ impl RecognizerFile {
             classes,
             behaviours.len(),
             RecognizerBody::Svm {
-                cell_scale,
+                histogram,
                 behaviours,
             },
             captures,
@@ -238,9 +240,10 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         features: FeatureSet,
         c: &SvmC,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
-        Self::train_svm_windows_observed(captures, windowing, features, c, cell_scale, &no_progress)
+        let histogram = histogram.into();
+        Self::train_svm_windows_observed(captures, windowing, features, c, histogram, &no_progress)
     }
 
     /// [`RecognizerFile::train_svm_windows`], telling `progress` of the C search and the
@@ -250,15 +253,16 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         features: FeatureSet,
         c: &SvmC,
-        cell_scale: CellScale,
+        histogram: impl Into<Histogram>,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
+        let histogram = histogram.into();
         Self::svm_windows(
             captures,
             windowing,
             features,
             WindowC::Choose(c),
-            cell_scale,
+            histogram,
             progress,
         )
     }
@@ -270,14 +274,14 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         features: FeatureSet,
         c: f64,
-        cell_scale: CellScale,
+        histogram: Histogram,
     ) -> Result<Self, RecognizeError> {
         Self::svm_windows(
             captures,
             windowing,
             features,
             WindowC::Known(c),
-            cell_scale,
+            histogram,
             &no_progress,
         )
     }
@@ -288,10 +292,10 @@ impl RecognizerFile {
         windowing: NakanoWindowing,
         features: FeatureSet,
         c: WindowC<'_>,
-        cell_scale: CellScale,
+        histogram: Histogram,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
-        let windows = scaled_training_windows(captures, &windowing, features, cell_scale)?;
+        let windows = scaled_training_windows(captures, &windowing, features, histogram)?;
         let (x, y, groups) = (&windows.x, &windows.y, &windows.groups);
         let params = window_svc_params(features.dim());
         let label = windows_label(features);
@@ -326,7 +330,7 @@ impl RecognizerFile {
             RecognizerBody::SvmWindows {
                 features,
                 windowing,
-                cell_scale,
+                histogram,
                 scaling: windows.scaling,
                 svc,
                 c_search: chosen.search,

@@ -183,7 +183,7 @@ impl TrainSettings {
         };
         match self.features {
             FeatureSet::Spectral => {
-                for (behaviour, x, y, _) in histograms_by_behaviour(captures, &classes, self.cell_scale)? {
+                for (behaviour, x, y, _) in histograms_by_behaviour(captures, &classes, self.histogram)? {
                     let x: Vec<&[f64]> = x.iter().map(|v| v.as_slice()).collect();
                     check(behaviour, &x, &y);
                 }
@@ -191,7 +191,7 @@ impl TrainSettings {
             windowed => {
                 let windowing = self.windowing(captures)?;
                 let ((x, y, _), left_out, of, too_fast) =
-                    training_windows_left_out(captures, &classes, &windowing, windowed, self.cell_scale)?;
+                    training_windows_left_out(captures, &classes, &windowing, windowed, self.histogram)?;
                 let x: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
                 check(None, &x, &y);
                 if too_fast.count > 0 {
