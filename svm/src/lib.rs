@@ -40,7 +40,7 @@ pub use error::SvmError;
 pub use export::{read_libsvm_model, read_libsvm_model_with_dim, to_libsvm_string, write_libsvm_model};
 pub use fast::{ExactSvr, FAST_EXP2_MAX_REL_ERROR, FastSvr, LANES, fast_exp2};
 pub use fit::{ReductionReport, SvrFit, fit, fit_observed, slack};
-pub use kernel::Kernel;
+pub use kernel::{Kernel, dot};
 pub use model::{InputScaling, SvrModel};
 pub use params::{FitProgress, Solver, SvrParams, SvrParamsBuilder};
 pub use reduce::{Reduction, reduce_support};
