@@ -12,6 +12,14 @@ pub fn train_with_progress(
     settings: &TrainSettings,
     captures: &[LabelledCapture],
 ) -> anyhow::Result<RecognizerFile> {
+    Ok(with_fit_progress(|progress| {
+        settings.train_observed(captures, progress)
+    })?)
+}
+
+/// Runs `work` with a progress bar on stderr that counts the units of the steps it reports
+/// (shown only on a terminal), and prints its warnings above the bar as they happen.
+pub fn with_fit_progress<T>(work: impl FnOnce(recognize::Progress<'_>) -> T) -> T {
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} {elapsed} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -28,9 +36,9 @@ pub fn train_with_progress(
         }
         FitEvent::Warning(line) => bar.suspend(|| eprintln!("warning: {line}")),
     };
-    let trained = settings.train_observed(captures, &progress);
+    let done = work(&progress);
     bar.finish_and_clear();
-    Ok(trained?)
+    done
 }
 
 /// What is doubtful in `settings` for captures shaped like `first`, one line each.

@@ -53,6 +53,10 @@ pub use recognizer::{
     window_som_nodes, window_svc_params,
 };
 pub use recognizer::{
+    CLEAR_MARGIN_Z, Candidate, CandidateScore, DefaultChoice, DefaultSearch, Named, Outcome, SEARCH_BUDGET_S,
+    SEARCH_FOLDS, SEARCH_HOP_S, SHORT_WINDOW_S,
+};
+pub use recognizer::{
     Calibration, FusionMember, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,
     SequentialRow, SurfaceChange, SurfaceWait, WindowClassifier,
 };
@@ -61,4 +65,4 @@ pub use sequential::{
     SequentialParamsBuilder, SequentialState, SequentialStep,
 };
 pub use som::{Normalization, Som, SomParams};
-pub use svc::{CSearch, CvPoint, FitEvent, Svc, SvcParams, TrainingVectors};
+pub use svc::{CSearch, CvPoint, FitEvent, Progress, Svc, SvcParams, TrainingVectors};

@@ -11,6 +11,7 @@ use recognize::{
     distances_from_similarity, isomap, recursive_ncut, similarity_from_confusion, surface_confusion,
 };
 
+use super::chosen_training::{ChosenTraining, read_and_choose};
 use super::kept_reading::keeping_each;
 use super::train_args::{Method, TrainOptions};
 
@@ -30,8 +31,9 @@ pub(crate) struct CategorizeArgs {
     #[arg(required = true, value_name = "MODEL.json] [CAPTURES")]
     inputs: Vec<PathBuf>,
     /// Sinapov's similarity: for each surface, train on every other surface (with --method
-    /// and the other training options of `recognize train`) and classify each scratch of the
-    /// one left out, so every decision names the known surface it resembles most.
+    /// and the other training options of `recognize train`, what they leave unnamed chosen
+    /// first on all the captures as `train` chooses it) and classify each scratch of the one
+    /// left out, so every decision names the known surface it resembles most.
     #[arg(long, requires = "method")]
     leave_surface_out: bool,
     /// With --leave-surface-out: which recognizer to train (the training options below apply
@@ -71,20 +73,21 @@ pub(crate) fn run(args: &CategorizeArgs) -> anyhow::Result<()> {
     };
     let (method, confusion) = match args.method {
         Some(method) => {
-            // One recognizer per surface, each with the given seed.
-            let mut settings = None;
-            let captures = read(&args.inputs, &mut |first| {
+            // One recognizer per surface, each with the given seed; what the options leave
+            // unnamed is chosen on all the captures, by recording, before any is left out.
+            let ChosenTraining {
+                settings, captures, ..
+            } = read_and_choose(
+                &args.training,
+                method,
+                &|needs| read(&args.inputs, needs),
                 // Confusions are counted window by window: no posterior, no weight to fit.
-                let settings = settings.insert(recognize::TrainSettings {
+                &|settings| recognize::TrainSettings {
                     fit_posterior_weight: false,
-                    ..args.training.settings(method, first)
-                });
-                Ok(FeatureNeeds::training_and_decisions(
-                    settings,
-                    first.capture.metadata().rate_hz(),
-                )?)
-            })?;
-            let settings = settings.context("no captures to train on")?;
+                    ..settings
+                },
+                &FeatureNeeds::training_and_decisions,
+            )?;
             let confusion = surface_confusion(&captures, |train, _| {
                 recognize::train(train, &settings).map_err(Box::new)
             })?;

@@ -9,6 +9,7 @@ mod bench_svr;
 mod bench_trade;
 mod capture_cmd;
 mod categorize_cmd;
+mod chosen_training;
 mod device_arg;
 mod devices_cmd;
 mod gen_cmd;
@@ -25,6 +26,7 @@ mod recognize_train_cmd;
 mod render_cmd;
 mod run_cmd;
 mod train_args;
+mod train_values;
 
 use clap::{Args, Parser, Subcommand};
 

@@ -4,8 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use recognize::FeatureNeeds;
+use recognize::{FeatureNeeds, LabelledCapture};
 
+use super::chosen_training::{ChosenTraining, read_and_choose};
 use super::kept_reading::read_keeping;
 use super::mapped_captures::MappedCaptures;
 use super::train_args::Training;
@@ -29,9 +30,18 @@ use crate::tables::recognition::{
 /// `trial`; at most 5 folds, trial t of every surface held out together) on the training
 /// captures: its reliability weight when `eval` fuses the behaviours of a trial.
 ///
-/// --features crosses methods and features. Default: both when the first capture carries the
-/// columns of both and the windows hold a histogram (1.92 s), else the method's own, as above,
-/// else the set the captures carry; a default other than the method's own is said on stderr.
+/// Defaults chosen on the training captures: what --features, --cells, --bands and --window-s
+/// leave unnamed is chosen by cross-validation by recording on the captures themselves (see
+/// --search-budget-s), among the feature sets the captures carry that decide as the documented
+/// default does (windows, or whole captures), each histogram's cell scaling and band, and
+/// windows of 3 s and 2 s. The documented default stands unless another candidate is more
+/// accurate by two standard errors of the difference (windows counted by how much they
+/// overlap); the table is printed and kept in the model file (`default_choice`). An option
+/// given is never varied.
+///
+/// --features crosses methods and features. The documented default: both when the first
+/// capture carries the columns of both and the windows hold a histogram (1.92 s), else the
+/// method's own, as above, else the set the captures carry.
 /// nakano with knn/svm: windowed like the SOM (--window-s, --hop-s, training windows of the
 /// decision length unless --train-window-s says otherwise), one classifier over all windows,
 /// each feature log-scaled where positive, centred and divided by its pooled within-surface
@@ -64,20 +74,26 @@ pub(crate) struct TrainArgs {
 }
 
 pub(crate) fn run(args: &TrainArgs) -> anyhow::Result<()> {
-    let mut settings = None;
-    let captures = read_keeping(&args.input, &args.captures, None, |first| {
-        let settings = settings.insert(args.training.settings(first));
-        Ok(FeatureNeeds::training(
-            settings,
-            first.capture.metadata().rate_hz(),
-        )?)
-    })?;
-    let settings = settings.context("no captures to train on")?;
+    let read = |needs: &mut dyn FnMut(&LabelledCapture) -> anyhow::Result<FeatureNeeds>| {
+        read_keeping(&args.input, &args.captures, None, needs)
+    };
+    let ChosenTraining {
+        settings,
+        captures,
+        choice,
+    } = read_and_choose(
+        &args.training.options,
+        args.training.method,
+        &read,
+        &|settings| settings,
+        &FeatureNeeds::training,
+    )?;
     for warning in settings.data_warnings(&captures)? {
         eprintln!("warning: {warning}");
     }
     let start = std::time::Instant::now();
-    let model = crate::training::train_with_progress(&settings, &captures)?;
+    let mut model = crate::training::train_with_progress(&settings, &captures)?;
+    model.default_choice = choice;
     let trained_s = start.elapsed().as_secs_f64();
     // The model keeps its classes in label order; people read them in natural order.
     let mut class_names: Vec<&str> = model.classes.iter().map(String::as_str).collect();

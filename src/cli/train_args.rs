@@ -3,9 +3,10 @@
 //! [`recognize::TrainSettings`].
 
 use clap::{Args, ValueEnum};
+
+use super::train_values::{CArg, parse_c, parse_nodes};
 use recognize::{
-    CellScale, DECISION_WINDOW_S, FeatureSet, HOP_S, Histogram, HistogramBand, LabelledCapture,
-    Normalization, SvmC, TrainSettings,
+    DECISION_WINDOW_S, FeatureSet, HOP_S, Histogram, LabelledCapture, Normalization, SvmC, TrainSettings,
 };
 
 /// A recognizer to train: its method and how (`train` and `cv`).
@@ -15,7 +16,7 @@ pub(crate) struct Training {
     #[arg(long, value_enum)]
     pub(crate) method: Method,
     #[command(flatten)]
-    options: TrainOptions,
+    pub(crate) options: TrainOptions,
 }
 
 impl Training {
@@ -37,27 +38,26 @@ pub(crate) struct TrainOptions {
     /// --sequential --fuse`; with --windows-over-travel the bands are over travel too, see
     /// --travel-speed-mps) or nakano-spectrum (knn, svm: each rubbing window's nakano
     /// features followed by the same window's spectrum of the tip's height, which every device
-    /// measures; decided at the window's last sample). Default: both when the first capture
-    /// carries the columns of both and the windows are long enough for a histogram (1.92 s);
-    /// else the method's own (som nakano, knn and svm spectral), else the set the capture
-    /// carries.
+    /// measures; decided at the window's last sample). Default: chosen by `train`; else both
+    /// when the captures carry both and a window holds a histogram (1.92 s), else the method's
+    /// own (som nakano, knn and svm spectral), else the set the capture carries.
     #[arg(
         long,
         value_enum,
         value_name = "nakano|spectral|both|vibration|nakano-spectrum"
     )]
-    features: Option<Features>,
+    pub(super) features: Option<Features>,
     /// Windowed features (nakano, both): decision window, s (a decision is this old plus the
-    /// filters' 0.27 s lookahead, none with --mirrored-end).
-    #[arg(long, default_value_t = DECISION_WINDOW_S, value_name = "S")]
-    window_s: f64,
+    /// filters' 0.27 s lookahead, none with --mirrored-end). Default: chosen by `train`, else 3.
+    #[arg(long, value_name = "S")]
+    pub(super) window_s: Option<f64>,
     /// Windowed features (nakano, both): window of the training vectors, s. Default: the
     /// decision window (--window-s), for every method, since a decision window is compared
     /// with what was learnt from training vectors and features of another length sit elsewhere.
     /// Nakano's thesis trains its map on 1 s windows (more of them from one short run per
     /// surface). Set apart from the decision window, training warns.
     #[arg(long, value_name = "S")]
-    train_window_s: Option<f64>,
+    pub(super) train_window_s: Option<f64>,
     /// Windowed features (nakano, both): time between decisions (and between training
     /// windows), s.
     #[arg(long, default_value_t = HOP_S, value_name = "S")]
@@ -90,22 +90,30 @@ pub(crate) struct TrainOptions {
     /// With --windows-over-travel and --features vibration or nakano-spectrum: the fastest
     /// stroke the spectra read, m/s. Their 25 bands over travel end at the Nyquist frequency
     /// at this speed (at 1 kHz and 0.025 m/s: wavelengths down to 50 µm), so every wavelength
-    /// such a stroke still samples is read; a faster window is an error. Default: bands of
+    /// such a stroke still samples is read; a faster window is left out and counted. Default: bands of
     /// 0–200 Hz at the travel speed, readable up to 2.5 times it at 1 kHz.
     #[arg(long, requires = "windows_over_travel", value_name = "MPS")]
     fastest_speed_mps: Option<f64>,
     /// The vibration features' scaling (--features spectral|both|vibration): mean (each
-    /// cell's or band's mean magnitude, the default) or unit-sum (divided by their total: the
-    /// spectrum's shape alone, whatever the vibration's level, e.g. a sensor's gain or the
-    /// sliding speed).
-    #[arg(long, value_enum, default_value = "mean", value_name = "mean|unit-sum")]
-    cells: CellsArg,
-    /// The band the spectrotemporal histogram's 25 frequency bins cover (--features
-    /// spectral|both): paper (0–200 Hz, 8 Hz bins, the band of Sinapov's 400 Hz sensor; the
-    /// default) or nyquist (0 to the captures' Nyquist frequency: 44 Hz bins at 2.2 kHz, for a
-    /// rig whose surfaces differ above 200 Hz). At 400 Hz the two are the same.
-    #[arg(long, value_enum, default_value = "paper", value_name = "paper|nyquist")]
-    bands: BandsArg,
+    /// cell's or band's mean magnitude) or unit-sum (divided by their total: the spectrum's
+    /// shape alone, whatever a sensor's gain or the sliding speed). Default: chosen by `train`
+    /// (--search-budget-s), else mean.
+    #[arg(long, value_enum, value_name = "mean|unit-sum")]
+    pub(super) cells: Option<CellsArg>,
+    /// The band of the histogram's 25 frequency bins (--features spectral|both): paper (0–200
+    /// Hz, Sinapov's 400 Hz sensor) or nyquist (to the captures' Nyquist frequency: 44 Hz bins
+    /// at 2.2 kHz, for surfaces that differ above 200 Hz). Default: chosen by `train`, else paper.
+    #[arg(long, value_enum, value_name = "paper|nyquist")]
+    pub(super) bands: Option<BandsArg>,
+    /// `train`, `categorize --leave-surface-out`: what --features, --cells, --bands and
+    /// --window-s leave unnamed is chosen by cross-validation by recording on the training
+    /// captures (at most 5 folds; windows every 0.5 s, no posterior weight, an SVM over windows
+    /// at C = 10) among every set the captures carry, each cell scaling and band, windows of 3
+    /// and 2 s, skipping a candidate that would overrun this budget. The documented defaults
+    /// stand unless beaten by two standard errors; the table is kept in the model file. 0: no
+    /// search.
+    #[arg(long, default_value_t = recognize::SEARCH_BUDGET_S, value_name = "S")]
+    pub(super) search_budget_s: f64,
     /// som: nodes of each map (also --som-nodes). Default: over windows (nakano, both) the
     /// thesis's 12 for up to its 7 surfaces; beyond, the SOM Toolbox's 5·N^0.54321 for N
     /// training windows, at least two per class (presentations: 10 000, at least 500 per node);
@@ -154,42 +162,15 @@ pub(crate) struct TrainOptions {
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
-enum CellsArg {
+pub(super) enum CellsArg {
     Mean,
     UnitSum,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
-enum BandsArg {
+pub(super) enum BandsArg {
     Paper,
     Nyquist,
-}
-
-#[derive(Debug, Clone, Copy)]
-enum CArg {
-    Auto,
-    Fixed(f64),
-}
-
-fn parse_c(text: &str) -> Result<CArg, String> {
-    if text == "auto" {
-        return Ok(CArg::Auto);
-    }
-    match text.parse::<f64>() {
-        Ok(c) if c.is_finite() && c > 0.0 => Ok(CArg::Fixed(c)),
-        _ => Err(format!("`{text}` is neither `auto` nor a positive number")),
-    }
-}
-
-/// `--nodes`: a positive count. The error names the old spelling too, since clap names the
-/// option by its new one whichever was typed.
-fn parse_nodes(text: &str) -> Result<usize, String> {
-    match text.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!(
-            "`{text}` is not a node count: a map needs at least one node (--som-nodes is the same option)"
-        )),
-    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -218,7 +199,7 @@ impl From<Method> for recognize::Method {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum Features {
+pub(super) enum Features {
     Nakano,
     Spectral,
     Both,
@@ -244,27 +225,26 @@ impl TrainOptions {
     /// ([`recognize::Method::features_for`], said on stderr when it is not the method's own).
     /// Warns on stderr when training and decision windows were set apart.
     pub(crate) fn settings(&self, method: Method, first: &LabelledCapture) -> TrainSettings {
+        let settings = self.settings_quietly(method, first);
+        self.say_default_features(&settings, first);
+        settings
+    }
+
+    /// [`TrainOptions::settings`] without saying which features were taken by default (a
+    /// search that will choose them prints its own table); settings warnings are still said.
+    pub(crate) fn settings_quietly(&self, method: Method, first: &LabelledCapture) -> TrainSettings {
         let method = recognize::Method::from(method);
+        let window_s = self.window_s.unwrap_or(DECISION_WINDOW_S);
         let features = self.features.map_or_else(
             || {
-                let shortest_s = self
-                    .train_window_s
-                    .map_or(self.window_s, |t| t.min(self.window_s));
-                let chosen = method.features_for(first, shortest_s);
-                if chosen != method.default_features() {
-                    eprintln!(
-                        "{} over {chosen} features: {} has the columns of both sets (--features picks one)",
-                        method.name(),
-                        first.reference.path.display()
-                    );
-                }
-                chosen
+                let shortest_s = self.train_window_s.map_or(window_s, |t| t.min(window_s));
+                method.features_for(first, shortest_s)
             },
             FeatureSet::from,
         );
         let settings = TrainSettings {
             features,
-            window_s: self.window_s,
+            window_s,
             train_window_s: self.train_window_s,
             som_nodes: self.som_nodes,
             hop_s: self.hop_s,
@@ -274,14 +254,8 @@ impl TrainOptions {
             windows_over_travel: self.windows_over_travel,
             travel_speed_mps: self.travel_speed_mps,
             fastest_speed_mps: self.fastest_speed_mps,
-            histogram: Histogram::new(match self.cells {
-                CellsArg::Mean => CellScale::Mean,
-                CellsArg::UnitSum => CellScale::UnitSum,
-            })
-            .over(match self.bands {
-                BandsArg::Paper => HistogramBand::Paper,
-                BandsArg::Nyquist => HistogramBand::Nyquist,
-            }),
+            histogram: Histogram::new(self.named().cells.unwrap_or_default())
+                .over(self.named().band.unwrap_or_default()),
             seed: self.seed,
             normalization: match self.scaling {
                 ScalingArg::LogWithinClass => Normalization::LogWithinClass,

@@ -2,8 +2,8 @@
 //! the tables of an evaluation, and their JSON objects.
 
 use recognize::{
-    CV_FOLDS, ConfusionMatrix, Evaluation, FusedEvaluation, RecognizerBody, RecognizerFile,
-    WINDOW_SVM_FALLBACK_C,
+    CLEAR_MARGIN_Z, CV_FOLDS, ConfusionMatrix, DefaultChoice, Evaluation, FusedEvaluation, Outcome,
+    RecognizerBody, RecognizerFile, WINDOW_SVM_FALLBACK_C,
 };
 
 /// Warns on stderr about each SOM whose nodes leave classes unnamed, naming them.
@@ -19,6 +19,48 @@ pub(crate) fn warn_unmapped(model: &RecognizerFile) {
             m.nodes,
             m.classes.join(", ")
         );
+    }
+}
+
+/// The table the defaults were chosen from, one candidate a line, the chosen one marked.
+pub(crate) fn print_default_choice(choice: &DefaultChoice) {
+    let spent_s: f64 = choice
+        .rows
+        .iter()
+        .map(|r| match r.outcome {
+            Outcome::Scored { seconds, .. } => seconds,
+            _ => 0.0,
+        })
+        .sum();
+    println!(
+        "chosen by {}-fold cross-validation by recording on the training captures (windows every {} s; {spent_s:.1} s, \
+         budget {} s; a later candidate must be more accurate by {CLEAR_MARGIN_Z} standard errors):",
+        choice.folds, choice.hop_s, choice.budget_s
+    );
+    println!(
+        "  {:>8} {:>9} {:>7}  candidate",
+        "accuracy", "decisions", "seconds"
+    );
+    for (i, row) in choice.rows.iter().enumerate() {
+        let mark = if i == choice.chosen { "  <- chosen" } else { "" };
+        let what = row.candidate.describe();
+        match &row.outcome {
+            Outcome::Scored {
+                accuracy,
+                decisions,
+                seconds,
+            } => println!(
+                "  {:>7.1}% {decisions:>9} {seconds:>7.1}  {what}{mark}",
+                100.0 * accuracy
+            ),
+            Outcome::Failed { reason } => {
+                println!("  {:>8} {:>9} {:>7}  {what}{mark}: {reason}", "failed", "", "")
+            }
+            Outcome::NotTried => println!(
+                "  {:>8} {:>9} {:>7}  {what}{mark} (the budget was spent)",
+                "not tried", "", ""
+            ),
+        }
     }
 }
 

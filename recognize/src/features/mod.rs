@@ -49,7 +49,9 @@ pub use windowing::{
     DECISION_WINDOW_S, HOP_S, NakanoWindowing, TRAINING_WINDOW_S, TooFastWindows, TravelWindows, WindowSpan,
     WindowlessCapture,
 };
-pub(crate) use windowing::{Travel, WindowVectors, window_vectors, windows};
+pub(crate) use windowing::{
+    NakanoWindows, Travel, WindowVectors, window_vectors, window_vectors_from, windows,
+};
 
 /// Which features a recognizer computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -801,7 +801,21 @@ pub(crate) fn window_vectors(
             too_fast: kept.too_fast,
         });
     }
-    let nakano = windows(c, windowing)?;
+    window_vectors_from(c, windowing, features, histogram, windows(c, windowing)?)
+}
+
+/// Nakano's features of a capture's windows, as [`windows`] gives them.
+pub(crate) type NakanoWindows = Vec<(usize, WindowSpan, [f64; FEATURES])>;
+
+/// [`window_vectors`] of a capture with samples, from its Nakano windows (`nakano`, the
+/// [`windows`] of `windowing`), so that feature sets over the same windows compute them once.
+pub(crate) fn window_vectors_from(
+    c: &LabelledCapture,
+    windowing: &NakanoWindowing,
+    features: FeatureSet,
+    histogram: Histogram,
+    nakano: NakanoWindows,
+) -> Result<WindowVectors, RecognizeError> {
     let all = |vectors| {
         Ok(WindowVectors {
             vectors,

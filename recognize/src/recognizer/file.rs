@@ -7,6 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::LabelledCapture;
+use super::choice_table::DefaultChoice;
 use super::posterior_weight::PosteriorWeight;
 #[cfg(doc)]
 use super::{SvmC, trial_groups};
@@ -231,6 +232,11 @@ pub struct RecognizerFile {
     /// cross-validated, or the file predates the fit: then windows weigh `hop / window`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub posterior_weight: Option<PosteriorWeight>,
+    /// The table its features, histogram and window were chosen from by cross-validation on
+    /// its training captures ([`super::DefaultSearch`]); `None` when the user named them all,
+    /// or the file predates the search.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default_choice: Option<DefaultChoice>,
 }
 
 impl RecognizerFile {
@@ -255,6 +261,7 @@ impl RecognizerFile {
             training_sha256: sha256_hex(joined.as_bytes()),
             n_train,
             posterior_weight: None,
+            default_choice: None,
         }
     }
 
@@ -547,6 +554,9 @@ impl RecognizerFile {
                 );
             }
             p.check().map_err(|(f, r)| (format!("posterior_weight.{f}"), r))?;
+        }
+        if let Some(choice) = &self.default_choice {
+            choice.validate()?;
         }
         Ok(())
     }

@@ -14,8 +14,11 @@ use std::sync::Arc;
 use super::file::{RecognizerBody, RecognizerFile};
 use super::labelled::{KeptFeatures, KeptWindows, LabelledCapture, check_rate};
 use crate::RecognizeError;
-use crate::features::spectral::Histogram;
-use crate::features::{FeatureSet, NakanoWindowing, PlayedPath, Travel, capture_histogram, window_vectors};
+use crate::features::spectral::{CellScale, Histogram};
+use crate::features::{
+    FeatureSet, NakanoWindowing, NakanoWindows, PlayedPath, Travel, WindowVectors, capture_histogram,
+    window_vectors_from, windows as windows_of,
+};
 use crate::{InputError, SettingError, UsageError};
 use capture::Capture;
 
@@ -101,9 +104,43 @@ impl FeatureNeeds {
         })
     }
 
+    /// Everything either needs.
+    pub fn merged(self, other: Self) -> Self {
+        let needs = other
+            .windows
+            .into_iter()
+            .fold(self, |needs, (w, f, h)| needs.with_windows(w, f, h));
+        other.histograms.into_iter().fold(needs, Self::with_histogram)
+    }
+
     /// Whether nothing is needed.
     pub fn is_empty(&self) -> bool {
         self.windows.is_empty() && self.histograms.is_empty()
+    }
+}
+
+/// The vectors of `mean` (windows of `features` with mean cells) with unit-sum cells: the last
+/// block (the histogram or spectrum) divided by its total, summed in the order
+/// [`crate::features::spectral::cell_means`] sums it, so the result is the same to the bit.
+fn unit_sum_of(mean: &WindowVectors, features: FeatureSet) -> WindowVectors {
+    let cells = features.blocks().last().copied().unwrap_or(0);
+    let vectors = mean
+        .vectors
+        .iter()
+        .map(|(start, span, v)| {
+            let mut v = v.clone();
+            let at = v.len() - cells;
+            let tail = &mut v[at..];
+            let total: f64 = tail.iter().sum();
+            if total > 0.0 {
+                tail.iter_mut().for_each(|x| *x /= total);
+            }
+            (*start, *span, v)
+        })
+        .collect();
+    WindowVectors {
+        vectors,
+        too_fast: mean.too_fast,
     }
 }
 
@@ -161,10 +198,34 @@ impl LabelledCapture {
         for features in feature_sets.chain(histograms) {
             features.check_columns(std::slice::from_ref(&self))?;
         }
-        let mut windows = Vec::with_capacity(needs.windows.len());
+        let mut windows: Vec<KeptWindows> = Vec::with_capacity(needs.windows.len());
+        // Feature sets over the same windows share their Nakano features, and a histogram's
+        // unit-sum cells are its mean cells over their total: each is computed once.
+        let mut nakano: Vec<(NakanoWindowing, NakanoWindows)> = Vec::new();
         for &(windowing, features, histogram) in &needs.windows {
             check_rate(&self, windowing.rate_hz)?;
-            let vectors = window_vectors(&self, &windowing, features, histogram)?;
+            let as_mean = Histogram {
+                cells: CellScale::Mean,
+                ..histogram
+            };
+            let mean = windows
+                .iter()
+                .find(|k| k.windowing == windowing && k.features == features && k.histogram == as_mean);
+            let vectors = match mean {
+                Some(mean) if histogram.cells == CellScale::UnitSum && features != FeatureSet::Nakano => {
+                    unit_sum_of(&mean.vectors, features)
+                }
+                _ => {
+                    let memo = match nakano.iter().position(|(w, _)| *w == windowing) {
+                        Some(i) => i,
+                        None => {
+                            nakano.push((windowing, windows_of(&self, &windowing)?));
+                            nakano.len() - 1
+                        }
+                    };
+                    window_vectors_from(&self, &windowing, features, histogram, nakano[memo].1.clone())?
+                }
+            };
             windows.push(KeptWindows {
                 windowing,
                 features,

@@ -16,6 +16,8 @@
 //! first sample, as the thesis starts recognising after 5 mm; a live recognizer fed the same
 //! samples makes its decisions on exactly these windows.
 
+mod choice;
+mod choice_table;
 mod decide;
 mod evaluate;
 mod file;
@@ -28,6 +30,10 @@ mod train;
 mod weight_fit;
 mod window_classifier;
 
+pub use choice::{
+    CLEAR_MARGIN_Z, DefaultSearch, Named, SEARCH_BUDGET_S, SEARCH_FOLDS, SEARCH_HOP_S, SHORT_WINDOW_S,
+};
+pub use choice_table::{Candidate, CandidateScore, DefaultChoice, Outcome};
 pub use decide::{BehaviourReliability, Decision, WindowProbabilities};
 pub use evaluate::{BehaviourScore, Evaluation, FusedEvaluation, SomQuality};
 pub use file::{

@@ -2063,3 +2063,106 @@ fn windows_too_fast_for_their_bands_are_left_out_and_counted() {
         assert!(!w.vectors.is_empty());
     }
 }
+
+/// Unit-sum cells kept beside mean ones are derived from them, and equal those computed from
+/// the samples to the bit, for every windowed set with cells; a set over the same windows
+/// reuses their Nakano features and still matches.
+#[test]
+fn unit_sum_cells_derived_from_mean_ones_are_those_of_the_samples() {
+    let captures = vibrating_surfaces(5.0, 0..1);
+    let windowing = NakanoWindowing::new(2.0, 0.2, 1000.0).expect("valid");
+    let mirrored = NakanoWindowing {
+        mirrored_end: true,
+        ..windowing
+    };
+    let mean = Histogram::default();
+    let unit = Histogram::new(crate::CellScale::UnitSum);
+    let mut needs = FeatureNeeds::new();
+    for (w, f) in [
+        (windowing, FeatureSet::Both),
+        (windowing, FeatureSet::Nakano),
+        (mirrored, FeatureSet::Vibration),
+        (mirrored, FeatureSet::NakanoSpectrum),
+    ] {
+        needs = needs.with_windows(w, f, mean).with_windows(w, f, unit);
+    }
+    for c in &captures {
+        let kept = c.clone().keep_features(&needs).expect("keeps");
+        for &(w, f, h) in &needs.windows {
+            let direct = window_vectors(c, &w, f, h).expect("windows");
+            assert!(!direct.vectors.is_empty());
+            assert_eq!(window_vectors(&kept, &w, f, h).expect("kept"), direct, "{f} {h}");
+        }
+    }
+}
+
+/// With nothing named, the search scores every set the captures carry by cross-validation by
+/// recording, keeps the documented default unless another is clearly better, and its table
+/// survives the model file; what is named is not varied.
+#[test]
+fn the_search_scores_the_candidates_by_recording_and_keeps_its_table() {
+    let captures = vibrating_surfaces(5.0, 0..3);
+    let base = TrainSettings {
+        window_s: 2.0,
+        hop_s: 0.2,
+        fit_posterior_weight: false,
+        ..TrainSettings::new(Method::Knn)
+    };
+    let named = Named {
+        window_s: Some(2.0),
+        band: Some(crate::HistogramBand::Paper),
+        ..Default::default()
+    };
+    let search = DefaultSearch::new(base.clone(), named, &captures[0], 60.0);
+    let sets: Vec<FeatureSet> = search.candidates().iter().map(|c| c.features).collect();
+    assert_eq!(sets[0], FeatureSet::Both, "the documented default first");
+    for f in [
+        FeatureSet::Nakano,
+        FeatureSet::Vibration,
+        FeatureSet::NakanoSpectrum,
+    ] {
+        assert!(sets.contains(&f), "{f}");
+    }
+    // Windows are not weighed against whole captures.
+    assert!(!sets.contains(&FeatureSet::Spectral));
+    // Named: one window, one band; free: two cell scalings of each set with cells.
+    assert!(search.candidates().iter().all(|c| c.window_s == Some(2.0)));
+    assert_eq!(search.candidates().len(), 1 + 2 + 2 + 2);
+    let needs = search.needs(1000.0);
+    let kept: Vec<LabelledCapture> = captures
+        .iter()
+        .map(|c| c.clone().keep_features(&needs).expect("keeps"))
+        .collect();
+    let choice = search.run(&kept, &|_| {});
+    assert_eq!(choice.folds, 3, "one fold per trial");
+    assert_eq!(choice.hop_s, SEARCH_HOP_S);
+    for row in &choice.rows {
+        match &row.outcome {
+            Outcome::Scored {
+                accuracy, decisions, ..
+            } => {
+                assert!((0.0..=1.0).contains(accuracy));
+                assert!(*decisions > 0);
+            }
+            other => panic!("{row:?}: {other:?}"),
+        }
+    }
+    // The default stands, or was beaten.
+    let first = choice.rows[0].accuracy().expect("scored");
+    let chosen = choice.rows[choice.chosen].accuracy().expect("scored");
+    assert!(
+        choice.chosen == 0 || chosen > first,
+        "{chosen} vs the default's {first}"
+    );
+    // The chosen settings train on the samples, and the table round-trips in the file.
+    let mut model = train(&captures, &choice.chosen().settings(&base)).expect("trains");
+    assert_eq!(model.feature_set(), choice.chosen().features);
+    model.default_choice = Some(choice);
+    let json = serde_json::to_string(&model).expect("serialize");
+    let back = RecognizerFile::from_json(&json, Path::new("m.json")).expect("valid");
+    assert_eq!(back, model);
+    let mut edited = serde_json::to_value(&model).expect("json");
+    edited["default_choice"]["chosen"] = 99.into();
+    let err = RecognizerFile::from_json(&edited.to_string(), Path::new("m.json")).expect_err("row");
+    assert!(err.to_string().contains("default_choice.chosen"), "{err}");
+}
