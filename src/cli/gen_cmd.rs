@@ -78,6 +78,19 @@ pub(crate) struct GenArgs {
     /// speed (default 4 s; at most 60).
     #[arg(long, value_name = "S", conflicts_with_all = ["rub_speed_mps", "two_patch"])]
     slide_s: Option<f64>,
+    /// Write only the multi-stream sliding study on a rig with this fault: resonance (the
+    /// vibration sensor's mount rings at about 160 Hz whatever the speed), drift (the force
+    /// sensor's offset starts up to 0.1 N off and drifts up to 0.03 N/s) or noise-only (the
+    /// vibration channel carries noise only). Everything else each trial draws is unchanged.
+    #[arg(long, value_enum, conflicts_with_all = ["rub_speed_mps", "two_patch"])]
+    rig_effect: Option<RigEffectArg>,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum RigEffectArg {
+    Resonance,
+    Drift,
+    NoiseOnly,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -118,14 +131,25 @@ fn variant(args: &GenArgs) -> Option<Variant> {
     if let Some(speed_mps) = args.rub_speed_mps {
         return Some(Variant::Rubbing { speed_mps });
     }
-    if args.slide_speed_mps.is_none() && args.slide_trials.is_none() && args.slide_s.is_none() {
+    if args.slide_speed_mps.is_none()
+        && args.slide_trials.is_none()
+        && args.slide_s.is_none()
+        && args.rig_effect.is_none()
+    {
         return None;
     }
-    let default = sim::multistream::SlidingStudy::default();
-    Some(Variant::Sliding(sim::multistream::SlidingStudy {
+    use sim::multistream::{RigEffect, SlidingStudy};
+    let default = SlidingStudy::default();
+    Some(Variant::Sliding(SlidingStudy {
         trials: args.slide_trials.unwrap_or(default.trials),
         speed_mps: args.slide_speed_mps.unwrap_or(default.speed_mps),
         slide_s: args.slide_s.unwrap_or(default.slide_s),
+        rig: match args.rig_effect {
+            None => RigEffect::None,
+            Some(RigEffectArg::Resonance) => RigEffect::Resonance,
+            Some(RigEffectArg::Drift) => RigEffect::Drift,
+            Some(RigEffectArg::NoiseOnly) => RigEffect::NoiseOnly,
+        },
     }))
 }
 

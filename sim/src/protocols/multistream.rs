@@ -317,12 +317,20 @@ pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, study: Slidin
         normal_mode_hz,
         slide_s: study.slide_s,
     };
+    let rig = RigDraw::new(
+        study.rig,
+        &mut ChaCha8Rng::seed_from_u64(derive_seed(
+            seed,
+            &[tag::MULTISTREAM, id, u64::from(trial), tag::RIG_EFFECT],
+        )),
+    );
     let trace = simulate(
         surface,
         &truth,
         contact.damping_ratio,
         contact.contact_width_m,
         tilt_rad,
+        &rig,
     );
     let duration_s = (trace.x_m.len() - 1) as f64 / SIM_RATE_HZ;
     let sample = |v: &[f64], t: f64| v[((t * SIM_RATE_HZ).round().max(0.0) as usize).min(v.len() - 1)];
@@ -341,7 +349,7 @@ pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, study: Slidin
     let mut text = String::from("t_ms,Fx,Fy,Fz\n");
     for &t in &instants {
         let friction = sample(&trace.friction_n, t);
-        let fx = ft.read(-friction, &mut rng) + 0.0;
+        let fx = ft.read(-friction + rig.offset_n(t), &mut rng) + 0.0;
         let fy = ft.read(FT_CROSSTALK * friction, &mut rng) + 0.0;
         let fz = ft.read(sample(&trace.normal_n, t), &mut rng);
         let _ = writeln!(text, "{:.3},{fx},{fy},{fz}", t * 1e3);
@@ -402,7 +410,11 @@ pub fn trial_logs(surface: &SlidingSurface, trial: u32, seed: u64, study: Slidin
         let _ = write!(text, "{:.6},", start_s + first as f64 * period_s);
         for k in 0..VIBRATION_PER_ROW {
             let t = start_s + (first + k) as f64 * period_s;
-            let g = sample(&trace.vibration_mps2, t) / STANDARD_GRAVITY_MPS2 + noise.sample(&mut rng);
+            let signal = match rig.effect {
+                RigEffect::NoiseOnly => 0.0,
+                _ => sample(&trace.vibration_mps2, t) / STANDARD_GRAVITY_MPS2,
+            };
+            let g = signal + noise.sample(&mut rng);
             let _ = write!(text, "{},", decimal(g, VIBRATION_QUANTUM_G));
         }
         text.push('\n');
@@ -445,6 +457,7 @@ fn simulate(
     damping: f64,
     contact_width_m: f64,
     tilt_rad: f64,
+    rig: &RigDraw,
 ) -> Trace {
     let dt = 1.0 / SIM_RATE_HZ;
     let duration_s = 2.0 * DWELL_S + 2.0 * RAMP_S + truth.slide_s;
@@ -466,6 +479,9 @@ fn simulate(
     let mut vibration_filter = LowPass::new(TAU * VIBRATION_BANDWIDTH_HZ, dt);
     let mut friction_mean = LowPass::new(FRICTION_MEAN_CUTOFF_RADPS, dt);
     let mut arm_follow = LowPass::new(TAU * FORCE_LOOP_HZ, dt);
+    // The sensor on its mount: unit gain below the mount's mode, Q at it.
+    let omega_r = TAU * rig.resonance_hz;
+    let (mut mount, mut mount_dot) = (0.0, 0.0);
     let travel_m = truth.speed_mps * (truth.slide_s + RAMP_S) * (1.0 + 1e-6);
     let track = surface.track(truth.track_start_m, travel_m, contact_width_m);
     let (height0, _, _) = track.at(0.0);
@@ -502,9 +518,16 @@ fn simulate(
         trace
             .z_arm_m
             .push(arm_follow.update(z) + normal / FINGERTIP_STIFFNESS_N_PER_M);
-        trace
-            .vibration_mps2
-            .push(vibration_filter.update(cos_tilt * a_n + sin_tilt * a_t));
+        let felt = cos_tilt * a_n + sin_tilt * a_t;
+        let felt = if rig.effect == RigEffect::Resonance {
+            let mount_ddot = omega_r * omega_r * (felt - mount) - omega_r / RESONANCE_Q * mount_dot;
+            mount_dot += mount_ddot * dt;
+            mount += mount_dot * dt;
+            mount
+        } else {
+            felt
+        };
+        trace.vibration_mps2.push(vibration_filter.update(felt));
     }
     trace
 }
@@ -525,7 +548,97 @@ fn speed_at(t_s: f64, speed_mps: f64, slide_s: f64) -> f64 {
     }
 }
 
-/// How many trials of each surface the study slides, how fast and for how long.
+/// A fault of a real rig that a recognizer has to see past, applied to every trial of a study.
+/// Each trial draws its own (from a stream of its own, so that a study without one writes the
+/// bytes it always did).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RigEffect {
+    /// None: the rig as modelled.
+    #[default]
+    None,
+    /// The vibration sensor's mount rings at its own frequency, [`RESONANCE_HZ`] (±5 % per
+    /// trial), whatever the sliding speed: a lightly damped mode (Q = [`RESONANCE_Q`]) between
+    /// fingertip and sensor, so every surface's vibration is amplified there.
+    Resonance,
+    /// The force sensor's offset drifts: each trial starts up to ±[`DRIFT_OFFSET_N`] off and
+    /// drifts by up to ±[`DRIFT_RATE_N_PER_S`], as a strain gauge warming up does. The friction
+    /// read is off by as much.
+    Drift,
+    /// The vibration channel carries the sensor's noise only (a loose connector): nothing of
+    /// the surface.
+    NoiseOnly,
+}
+
+impl RigEffect {
+    /// Every effect besides none.
+    pub const ALL: [Self; 3] = [Self::Resonance, Self::Drift, Self::NoiseOnly];
+
+    /// `resonance`, `drift` or `noise-only` (`none` for none), as `palpus gen --rig-effect`
+    /// spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Resonance => "resonance",
+            Self::Drift => "drift",
+            Self::NoiseOnly => "noise-only",
+        }
+    }
+
+    /// One line for the set's README.
+    fn describe(self) -> &'static str {
+        match self {
+            Self::None => "",
+            Self::Resonance => {
+                "Rig effect: the vibration sensor's mount rings at about 160 Hz (Q 8) whatever the speed.\n"
+            }
+            Self::Drift => {
+                "Rig effect: the force sensor's offset starts up to 0.1 N off and drifts up to 0.03 N/s.\n"
+            }
+            Self::NoiseOnly => "Rig effect: the vibration channel carries the sensor's noise only.\n",
+        }
+    }
+}
+
+/// [`RigEffect::Resonance`]: the mount's natural frequency, Hz (inside the spectrotemporal
+/// histogram's 0–200 Hz, where it weighs on every surface's cells).
+pub const RESONANCE_HZ: f64 = 160.0;
+/// [`RigEffect::Resonance`]: its quality factor (its gain at resonance).
+pub const RESONANCE_Q: f64 = 8.0;
+/// [`RigEffect::Drift`]: the largest offset a trial starts with, N.
+pub const DRIFT_OFFSET_N: f64 = 0.1;
+/// [`RigEffect::Drift`]: the fastest drift, N/s.
+pub const DRIFT_RATE_N_PER_S: f64 = 0.03;
+
+/// What a trial's rig effect drew.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct RigDraw {
+    effect: RigEffect,
+    resonance_hz: f64,
+    offset_n: f64,
+    drift_n_per_s: f64,
+}
+
+impl RigDraw {
+    fn new(effect: RigEffect, rng: &mut ChaCha8Rng) -> Self {
+        let mut within = |limit: f64| rng.random_range(-limit..=limit);
+        Self {
+            effect,
+            resonance_hz: RESONANCE_HZ * (1.0 + within(0.05)),
+            offset_n: within(DRIFT_OFFSET_N),
+            drift_n_per_s: within(DRIFT_RATE_N_PER_S),
+        }
+    }
+
+    /// The force sensor's offset at `t_s`, N.
+    fn offset_n(&self, t_s: f64) -> f64 {
+        match self.effect {
+            RigEffect::Drift => self.offset_n + self.drift_n_per_s * t_s,
+            _ => 0.0,
+        }
+    }
+}
+
+/// How many trials of each surface the study slides, how fast and for how long, and on which rig.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlidingStudy {
     /// Trials per surface.
@@ -534,15 +647,18 @@ pub struct SlidingStudy {
     pub speed_mps: f64,
     /// Time at the steady speed, s (plus a dwell and a ramp at either end).
     pub slide_s: f64,
+    /// A fault of the rig every trial shows.
+    pub rig: RigEffect,
 }
 
 impl Default for SlidingStudy {
-    /// [`TRIALS`] trials at [`SPEED_MPS`] for [`SLIDE_S`].
+    /// [`TRIALS`] trials at [`SPEED_MPS`] for [`SLIDE_S`], on the rig as modelled.
     fn default() -> Self {
         Self {
             trials: TRIALS,
             speed_mps: SPEED_MPS,
             slide_s: SLIDE_S,
+            rig: RigEffect::None,
         }
     }
 }
@@ -622,6 +738,7 @@ pub fn write_logs(
         trials,
         speed_mps,
         slide_s,
+        rig,
     } = study;
     let folder = out.join(FOLDER);
     fs::create_dir_all(&folder).map_err(|source| SimError::Io {
@@ -673,7 +790,7 @@ pub fn write_logs(
     write_text(
         out,
         &PathBuf::from(FOLDER).join("README.md"),
-        &readme(trials, speed_mps, slide_s),
+        &format!("{}{}", readme(trials, speed_mps, slide_s), rig.describe()),
     )?;
     Ok(())
 }
@@ -953,6 +1070,103 @@ mod tests {
         assert!(
             pattern > 2.0 * table,
             "plastic pattern {pattern} g, table {table} g"
+        );
+    }
+
+    /// Each rig effect shows where it should and nowhere else: the drift in the force log
+    /// alone, the resonance and the noise in the vibration log alone; a study without one
+    /// draws exactly what it did.
+    #[test]
+    fn rig_effects_show_in_their_own_log_and_leave_the_others_as_drawn() {
+        let surfaces = sliding_surfaces();
+        let surface = surfaces
+            .iter()
+            .find(|s| s.surface.name == "plastic_pattern")
+            .expect("surface");
+        let on = |rig| {
+            trial_logs(
+                surface,
+                2,
+                1,
+                SlidingStudy {
+                    rig,
+                    ..SlidingStudy::default()
+                },
+            )
+        };
+        let plain = on(RigEffect::None);
+        let column = |logs: &TrialLogs, file: usize, col: usize| -> Vec<f64> {
+            rows(&logs.files[file].1).iter().map(|r| r[col]).collect()
+        };
+        let vibration = |logs: &TrialLogs| -> Vec<f64> {
+            rows(&logs.files[3].1)
+                .iter()
+                .flat_map(|r| r[1..].to_vec())
+                .collect()
+        };
+        // Power of `v` (g, at 2.2 kHz) between `lo` and `hi` Hz, by a direct DFT over 1 s.
+        let power = |v: &[f64], lo: f64, hi: f64| -> f64 {
+            let n = 2200.min(v.len());
+            let v = &v[v.len() / 2 - n / 2..][..n];
+            let mean = v.iter().sum::<f64>() / n as f64;
+            (lo as usize..hi as usize)
+                .map(|f| {
+                    let (mut re, mut im) = (0.0, 0.0);
+                    for (k, x) in v.iter().enumerate() {
+                        let phase = TAU * f as f64 * k as f64 / 2200.0;
+                        re += (x - mean) * phase.cos();
+                        im -= (x - mean) * phase.sin();
+                    }
+                    re * re + im * im
+                })
+                .sum()
+        };
+
+        let drift = on(RigEffect::Drift);
+        for file in [1, 2, 3] {
+            assert_eq!(drift.files[file], plain.files[file], "only the force log drifts");
+        }
+        let (fx, fx0) = (column(&drift, 0, 1), column(&plain, 0, 1));
+        let offsets: Vec<f64> = fx.iter().zip(&fx0).map(|(a, b)| a - b).collect();
+        assert!(offsets.iter().any(|d| d.abs() > 1e-3), "the offset shows");
+        assert!(
+            offsets
+                .iter()
+                .all(|d| d.abs() <= DRIFT_OFFSET_N + 0.5 * DRIFT_RATE_N_PER_S * 12.0)
+        );
+        // Crosstalk and the normal force are the sensor's other axes: untouched.
+        assert_eq!(column(&drift, 0, 3), column(&plain, 0, 3));
+
+        let quiet = on(RigEffect::NoiseOnly);
+        for file in [0, 1, 2] {
+            assert_eq!(
+                quiet.files[file], plain.files[file],
+                "only the vibration log is quiet"
+            );
+        }
+        let rms = |v: &[f64]| {
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+        };
+        let (q, p) = (rms(&vibration(&quiet)), rms(&vibration(&plain)));
+        assert!(
+            q < 1.5 * VIBRATION_NOISE_G && p > 5.0 * q,
+            "noise only {q} g, the surface {p} g"
+        );
+
+        let ringing = on(RigEffect::Resonance);
+        for file in [0, 1, 2] {
+            assert_eq!(
+                ringing.files[file], plain.files[file],
+                "only the vibration log rings"
+            );
+        }
+        let share = |v: &[f64]| power(v, 150.0, 171.0) / power(v, 20.0, 400.0);
+        let (r, p) = (share(&vibration(&ringing)), share(&vibration(&plain)));
+        assert!(r > 3.0 * p, "near 160 Hz: {r} of the power ringing, {p} without");
+        assert_eq!(
+            RigEffect::ALL.map(RigEffect::name),
+            ["resonance", "drift", "noise-only"]
         );
     }
 }

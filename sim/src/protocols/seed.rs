@@ -9,6 +9,8 @@ pub(crate) mod tag {
     pub const NEEDLE: u64 = 3;
     pub const NAKANO: u64 = 4;
     pub const MULTISTREAM: u64 = 5;
+    /// A multi-stream trial's rig effect, drawn apart from the trial's own stream.
+    pub const RIG_EFFECT: u64 = 6;
 }
 
 #[cfg(test)]
