@@ -89,11 +89,16 @@ impl RecognizerFile {
                 };
                 let sources = [(&model, model.windowing_with_probabilities()?, 1.0)];
                 let mut short_of_travel = 0;
+                // A held-out capture none of whose windows could be read (each slid too fast
+                // for its bands) says nothing of the weight, as training left it out.
                 let strokes = captures
                     .iter()
                     .zip(&fold)
                     .filter(|(_, g)| **g == f)
-                    .map(|(c, _)| self.stroke(&sources, c, &mut short_of_travel))
+                    .filter_map(|(c, _)| match self.stroke(&sources, c, &mut short_of_travel) {
+                        Err(e) if every_window_too_fast(&e) => None,
+                        other => Some(other),
+                    })
                     .collect::<Result<Vec<_>, _>>()?;
                 progress(FitEvent::Advance);
                 Ok(Ok(strokes))
@@ -131,9 +136,11 @@ impl RecognizerFile {
     }
 
     /// The same recognizer trained on `captures` with this one's settings (an SVM's C as
-    /// chosen, no search), or why its probabilities would not stand for this recognizer's: the
+    /// chosen and its sigmoids, a k-NN's vote calibration; no search), or why its
+    /// probabilities would not stand for this recognizer's: the
     /// refit failed, lost a surface, or lost (or gained) a k-NN's vote calibration.
     fn refit(&self, captures: &[LabelledCapture]) -> Result<RecognizerFile, String> {
+        let chain = |e: RecognizeError| e.chain();
         let model = match &self.body {
             RecognizerBody::SvmWindows {
                 features,
@@ -141,17 +148,29 @@ impl RecognizerFile {
                 histogram,
                 svc,
                 ..
-            } => Self::refit_svm_windows(captures, *windowing, *features, svc.params().c, *histogram),
+            } => Self::refit_svm_windows(captures, *windowing, *features, svc, *histogram)
+                .map_err(chain)?
+                .ok_or("its machines' pairs are not the recognizer's")?,
             RecognizerBody::KnnWindows {
                 features,
                 windowing,
                 histogram,
                 knn,
+                calibration: Some(calibration),
                 ..
-            } => Self::train_knn_windows(captures, *windowing, *features, knn.k(), *histogram),
+            } => Self::refit_knn_windows(captures, *windowing, *features, knn.k(), *histogram, *calibration)
+                .map_err(chain)?,
+            RecognizerBody::KnnWindows {
+                features,
+                windowing,
+                histogram,
+                knn,
+                calibration: None,
+                ..
+            } => Self::train_knn_windows(captures, *windowing, *features, knn.k(), *histogram)
+                .map_err(chain)?,
             _ => return Err(format!("a {} gives no window probabilities", self.method())),
-        }
-        .map_err(|e| e.chain())?;
+        };
         let calibrated = |m: &RecognizerFile| {
             matches!(
                 m.body,
@@ -200,6 +219,16 @@ impl RecognizerFile {
         }
         Ok((best.0, best.1, hop_brier))
     }
+}
+
+/// Whether `e` says that none of a capture's windows could be read, every one having slid too
+/// fast for its bands ([`crate::features::WindowVectors::decidable`]).
+fn every_window_too_fast(e: &RecognizeError) -> bool {
+    matches!(
+        e,
+        RecognizeError::Features { source, .. }
+            if matches!(**source, RecognizeError::Setting(SettingError::TooFastForBands { .. }))
+    )
 }
 
 /// What the anytime decisions of `row`, over the strokes held out of the weight's fit, needed;

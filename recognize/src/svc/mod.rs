@@ -233,6 +233,26 @@ pub struct Svc {
 }
 
 impl Svc {
+    /// This classifier with the Platt sigmoids of `other`, a fit with probabilities of the same
+    /// classes (a refit on part of its data, whose own sigmoids would cost five more fits a
+    /// pair); `None` when `other` has none or other pairs.
+    pub(crate) fn with_sigmoids_of(mut self, other: &Svc) -> Option<Self> {
+        if other.classes != self.classes
+            || !other.params.probability
+            || other.machines.len() != self.machines.len()
+        {
+            return None;
+        }
+        for (m, o) in self.machines.iter_mut().zip(&other.machines) {
+            if m.classes != o.classes || o.sigmoid.is_none() {
+                return None;
+            }
+            m.sigmoid = o.sigmoid;
+        }
+        self.params.probability = true;
+        Some(self)
+    }
+
     /// Fits on `features` with `labels` in `0..classes`; every class needs a vector.
     pub fn fit<V: AsRef<[f64]>>(
         params: SvcParams,

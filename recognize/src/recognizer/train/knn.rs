@@ -101,7 +101,34 @@ impl RecognizerFile {
         k: usize,
         histogram: impl Into<Histogram>,
     ) -> Result<Self, RecognizeError> {
-        let histogram = histogram.into();
+        Self::knn_windows(captures, windowing, features, k, histogram.into(), None)
+    }
+
+    /// [`RecognizerFile::train_knn_windows`] with its votes calibrated by `calibration`
+    /// instead of a cross-validation of its own: the posterior weight's refits. The
+    /// calibration is one blend weight, fitted by cross-validation on all the training
+    /// captures; fitting it again in each of twenty refits took five k-NN cross-validations a
+    /// refit, most of a default training.
+    pub(crate) fn refit_knn_windows(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        k: usize,
+        histogram: Histogram,
+        calibration: VoteCalibration,
+    ) -> Result<Self, RecognizeError> {
+        Self::knn_windows(captures, windowing, features, k, histogram, Some(calibration))
+    }
+
+    /// A k-NN over windows, its votes calibrated by `calibration`, else by cross-validation.
+    fn knn_windows(
+        captures: &[LabelledCapture],
+        windowing: NakanoWindowing,
+        features: FeatureSet,
+        k: usize,
+        histogram: Histogram,
+        calibration: Option<VoteCalibration>,
+    ) -> Result<Self, RecognizeError> {
         let ScaledWindows {
             classes,
             scaling,
@@ -113,14 +140,17 @@ impl RecognizerFile {
         let knn = params
             .fit(&x, &y, classes.len())
             .map_err(RecognizeError::knn(None))?;
-        // A fold's training windows can be fewer than k where all of them are not: then
-        // nothing can be held out, as with a single run, and the votes stay raw.
-        let calibration = match every_class_in_two_groups(&y, &groups)
-            .then(|| held_out_votes(params, &x, &y, &groups, classes.len(), CV_FOLDS))
-        {
-            Some(Ok((votes, folds))) => Some(VoteCalibration::fit(&votes, &y, classes.len(), folds)?),
-            None | Some(Err(RecognizeError::Data(DataError::TooFewPoints { .. }))) => None,
-            Some(Err(e)) => return Err(e),
+        let calibration = match calibration {
+            Some(given) => Some(given),
+            // A fold's training windows can be fewer than k where all of them are not: then
+            // nothing can be held out, as with a single run, and the votes stay raw.
+            None => match every_class_in_two_groups(&y, &groups)
+                .then(|| held_out_votes(params, &x, &y, &groups, classes.len(), CV_FOLDS))
+            {
+                Some(Ok((votes, folds))) => Some(VoteCalibration::fit(&votes, &y, classes.len(), folds)?),
+                None | Some(Err(RecognizeError::Data(DataError::TooFewPoints { .. }))) => None,
+                Some(Err(e)) => return Err(e),
+            },
         };
         Ok(Self::assemble(
             classes,

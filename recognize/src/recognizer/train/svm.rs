@@ -268,22 +268,33 @@ impl RecognizerFile {
     }
 
     /// The SVM over windows of this recognizer's settings, refitted on `captures` with its own
-    /// C and no search for one: a fold's model in [`RecognizerFile::fit_posterior_weight`].
+    /// C and no search for one, and the Platt sigmoids of `probabilities` (the recognizer's
+    /// own SVC, whose sigmoids were cross-validated on all its training windows; fitting them
+    /// again cost five more fits a pair in each of twenty refits): a fold's model in
+    /// [`RecognizerFile::fit_posterior_weight`]. `None` inside when the refit's pairs are not
+    /// the recognizer's.
     pub(crate) fn refit_svm_windows(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         features: FeatureSet,
-        c: f64,
+        probabilities: &Svc,
         histogram: Histogram,
-    ) -> Result<Self, RecognizeError> {
-        Self::svm_windows(
+    ) -> Result<Option<Self>, RecognizeError> {
+        let mut model = Self::svm_windows(
             captures,
             windowing,
             features,
-            WindowC::Known(c),
+            WindowC::Refit(probabilities.params().c),
             histogram,
             &no_progress,
-        )
+        )?;
+        if let RecognizerBody::SvmWindows { svc, .. } = &mut model.body {
+            match svc.clone().with_sigmoids_of(probabilities) {
+                Some(with) => *svc = with,
+                None => return Ok(None),
+            }
+        }
+        Ok(Some(model))
     }
 
     /// [`RecognizerFile::train_svm_windows_observed`], with its C come by as `c` says.
@@ -310,11 +321,12 @@ impl RecognizerFile {
                         .then(|| search_c(params, grid, x, y, groups, names.len(), &progress))
                 })
                 .map_err(&svc_error)?,
-            WindowC::Known(c) => ChosenC { c, search: None },
+            WindowC::Refit(c) => ChosenC { c, search: None },
         };
         let svc = Svc::fit_observed(
             SvcParams {
                 c: chosen.c,
+                probability: !matches!(c, WindowC::Refit(_)),
                 ..params
             },
             x,
@@ -347,8 +359,9 @@ enum WindowC<'a> {
     /// where the captures allow one (even a single C given is cross-validated, as the file
     /// keeps that accuracy for the fusion's reliability weighting).
     Choose(&'a SvmC),
-    /// This C, chosen already: a fold's refit needs no cross-validation of its own.
-    Known(f64),
+    /// This C, chosen already, and no sigmoids: a fold's refit needs no cross-validation of
+    /// its own and takes the recognizer's sigmoids.
+    Refit(f64),
 }
 
 /// The C of `grid` that classifies `x` best under cross-validation over [`CV_FOLDS`] folds
