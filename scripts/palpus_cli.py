@@ -3,6 +3,8 @@
 import argparse
 import re
 import subprocess
+import sys
+import time
 from pathlib import Path
 
 
@@ -152,3 +154,50 @@ def sequential_table(runs, first, not_ending="trials not ending right", scores=F
                   f"| {'-' if stable is None else f'{stable:.2f} s'} "
                   f"| {f'{worst[1]:.2f} s ({worst[0]})' if worst else '-'} "
                   f"| {r['not_stable']} of {e['captures']} |{cells} {100 * r['calibration']['ece']:.1f} % |")
+
+
+# Runs a command and reports on stderr's last line its own children's peak resident memory
+# (KiB): this script's children include the generator and the imports, the wrapper's only the
+# one command.
+PEAK_WRAPPER = (
+    "import resource, subprocess, sys\n"
+    "r = subprocess.run(sys.argv[1:])\n"
+    "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr)\n"
+    "sys.exit(r.returncode)\n"
+)
+
+
+def timed(binary, args):
+    """Runs `binary args`, returning (stdout + stderr, wall seconds, its peak resident MB)."""
+    start = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", PEAK_WRAPPER, binary, *args], capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if out.returncode != 0:
+        raise SystemExit(f"{binary} {' '.join(args)} exited with {out.returncode}:\n{out.stderr}")
+    said, _, peak_kib = out.stderr.rstrip("\n").rpartition("\n")
+    return out.stdout + said, seconds, int(peak_kib) / 1024
+
+
+# Hand-picked choices: every option the search varies, named (window 3 s unless said).
+FIXED = ["--cells", "mean", "--bands", "paper", "--window-s", "3", "--search-budget-s", "0", "--no-weight-fit"]
+HAND_PICKED = {
+    "nakano": ["--features", "nakano", *FIXED],
+    "both": ["--features", "both", *FIXED],
+    "both, unit-sum": ["--features", "both", *FIXED[2:], "--cells", "unit-sum"],
+    "both, nyquist": ["--features", "both", "--cells", "mean", "--bands", "nyquist", *FIXED[4:]],
+    "vibration": ["--features", "vibration", *FIXED],
+    "nakano-spectrum": ["--features", "nakano-spectrum", *FIXED],
+    "spectral (whole trials)": ["--features", "spectral", *FIXED],
+}
+# The SOM takes neither spectrum alone.
+SOM_TAKES = ("nakano", "both", "both, unit-sum", "both, nyquist", "spectral (whole trials)")
+
+
+def accuracy(binary, model, test):
+    """`palpus recognize eval MODEL TEST`: (accuracy in %, decisions, what they are)."""
+    evaluated = palpus(binary, "recognize", "eval", str(model), *test)
+    found = re.search(r"accuracy ([\d.]+) % over (\d+) decisions", evaluated)
+    if not found:
+        raise SystemExit(f"no accuracy in:\n{evaluated}")
+    decisions = int(found.group(2))
+    return float(found.group(1)), decisions, ("trials" if decisions == len(test) else "windows")

@@ -39,8 +39,7 @@ from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
-from palpus_cli import import_sliding_study, palpus, parser as cli_parser
-from study_training_time import HAND_PICKED, SOM_TAKES, accuracy, timed
+from palpus_cli import HAND_PICKED, SOM_TAKES, accuracy, import_sliding_study, palpus, parser as cli_parser, timed
 
 TRIALS = 35
 SLIDE_S = 7
@@ -50,8 +49,7 @@ UNEQUAL_FROM = 11
 FEW = 8
 RIGS = ("none", "resonance", "drift", "noise-only", "unequal")
 METHODS = ("som", "knn", "svm")
-# The hand-picked choices tried on every rig (the study_training_time.py ones that decide on
-# windows, and the whole trial).
+# The hand-picked choices tried on every rig (palpus_cli.HAND_PICKED but nakano-spectrum).
 PICKED = ("nakano", "both", "both, unit-sum", "both, nyquist", "vibration", "spectral (whole trials)")
 
 
