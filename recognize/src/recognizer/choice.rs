@@ -31,7 +31,6 @@ use super::choice_table::{Candidate, CandidateScore, DefaultChoice, Outcome};
 use super::train::WINDOW_SVM_FALLBACK_C;
 use super::{LabelledCapture, Method, SvmC, TrainSettings};
 use crate::RecognizeError;
-use crate::eval::ConfusionMatrix;
 use crate::features::spectral::{CellScale, Histogram, HistogramBand, SpectrogramPlan};
 use crate::features::{DECISION_WINDOW_S, FeatureSet};
 use crate::protocol::{self, Split};
@@ -309,36 +308,26 @@ impl DefaultSearch {
                 })
             })
             .collect();
-        let mut pooled: Option<ConfusionMatrix<String>> = None;
-        for round in rounds {
-            let confusion = match round {
-                Ok(r) => r.evaluation.confusion,
-                Err(e) => {
-                    return Outcome::Failed {
-                        reason: error_chain(&e),
-                    };
-                }
-            };
-            match &mut pooled {
-                None => pooled = Some(confusion),
-                Some(p) => {
-                    if let Err(e) = p.merge(&confusion) {
-                        return Outcome::Failed {
-                            reason: error_chain(&e),
-                        };
-                    }
-                }
-            }
-        }
-        match pooled.as_ref().and_then(|p| Some((p.accuracy()?, p.total()))) {
-            Some((accuracy, decisions)) => Outcome::Scored {
-                accuracy,
-                decisions,
-                seconds: start.elapsed().as_secs_f64(),
+        let pooled = rounds
+            .into_iter()
+            .map(|round| round.map(|r| r.evaluation))
+            .collect::<Result<Vec<_>, _>>()
+            .and_then(|evaluations| protocol::pool(&evaluations));
+        match pooled {
+            Ok(Some(e)) => match e.confusion.accuracy() {
+                Some(accuracy) => Outcome::Scored {
+                    accuracy,
+                    decisions: e.confusion.total(),
+                    seconds: start.elapsed().as_secs_f64(),
+                },
+                None => Outcome::Failed {
+                    reason: "no held-out decision".to_owned(),
+                },
             },
-            None => Outcome::Failed {
+            Ok(None) => Outcome::Failed {
                 reason: "no held-out decision".to_owned(),
             },
+            Err(e) => Outcome::Failed { reason: e.chain() },
         }
     }
 }
@@ -407,18 +396,6 @@ impl Score {
 /// the most accurate of twenty is flattered by its luck; the documented default is then kept.
 fn clearly_better(new: Score, old: Score) -> bool {
     new.accuracy - old.accuracy > CLEAR_MARGIN_Z * (new.variance() + old.variance()).sqrt()
-}
-
-/// An error and its sources on one line.
-fn error_chain(e: &RecognizeError) -> String {
-    let mut text = e.to_string();
-    let mut source = std::error::Error::source(e);
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
 }
 
 #[cfg(test)]
