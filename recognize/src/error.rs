@@ -700,6 +700,19 @@ impl RecognizeError {
         text
     }
 
+    /// Whether it is, or was caused by, a solver's time budget running out
+    /// ([`svm::SvmError::Budget`]).
+    pub fn ran_out_of_time(&self) -> bool {
+        let mut source: Option<&(dyn std::error::Error + 'static)> = Some(self);
+        while let Some(s) = source {
+            if let Some(svm::SvmError::Budget { .. }) = s.downcast_ref::<svm::SvmError>() {
+                return true;
+            }
+            source = s.source();
+        }
+        false
+    }
+
     /// Wraps a k-NN's error, naming the classifier's behaviour (none for one over windows).
     pub(crate) fn knn(behaviour: Option<&str>) -> impl Fn(Self) -> Self + '_ {
         Self::classifier("k-NN", behaviour)

@@ -54,7 +54,7 @@ pub use recognizer::{
 };
 pub use recognizer::{
     CLEAR_MARGIN_Z, Candidate, CandidateScore, DefaultChoice, DefaultSearch, Named, Outcome, SEARCH_BUDGET_S,
-    SEARCH_FOLDS, SEARCH_HOP_S, SHORT_WINDOW_S,
+    SEARCH_FOLDS, SHORT_WINDOW_S, SPARSE_HOP_S,
 };
 pub use recognizer::{
     Calibration, FusionMember, ReliabilityBin, SURFACE_AFTER_KEY, SURFACE_CHANGE_S_KEY, SequentialEvaluation,

@@ -47,8 +47,8 @@ use crate::tables::recognition::{
 /// each feature log-scaled where positive, centred and divided by its pooled within-surface
 /// standard deviation (the SOM's scaling, without unit length);
 /// k-NN k = 3, or a C-SVC (degree-2 polynomial, γ = 1/5; 1/130 for both) whose C is
-/// cross-validated with whole runs held out (metadata `trial` or `run`) when every surface has
-/// two runs, else 10.
+/// cross-validated with whole runs held out (metadata `trial` or `run`) on windows 0.5 s apart
+/// when every surface has two runs, else 10.
 /// spectral with som: one map per behaviour over whole-scratch histograms (3 nodes per class,
 /// at least 12; cells scaled like the rubbing map's features), one decision per scratch, fused
 /// over a trial's behaviours (one-hot votes weighted by cross-validated reliability).

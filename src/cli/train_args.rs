@@ -109,7 +109,8 @@ pub(crate) struct TrainOptions {
     /// --window-s leave unnamed is chosen by cross-validation by recording on the training
     /// captures (at most 5 folds; windows every 0.5 s, no posterior weight, an SVM over windows
     /// at C = 10) among every set the captures carry, each cell scaling and band, windows of 3
-    /// and 2 s, skipping a candidate that would overrun this budget. The documented defaults
+    /// and 2 s, skipping a candidate that would overrun this budget and stopping an SVM still
+    /// solving when it runs out. The documented defaults
     /// stand unless beaten by two standard errors; the table is kept in the model file. 0: no
     /// search.
     #[arg(long, default_value_t = recognize::SEARCH_BUDGET_S, value_name = "S")]
@@ -144,8 +145,10 @@ pub(crate) struct TrainOptions {
     k: usize,
     /// svm: the box constraint C, or `auto`: per behaviour, the most accurate of 1, 10, …, 10⁵
     /// under cross-validation by trial on the training captures (ties to the smaller C; a
-    /// behaviour with fewer than two trials gets 10⁴). With --features nakano|both: one C, by
-    /// cross-validation by run, or 10 when a surface has a single run.
+    /// behaviour with fewer than two trials gets 10⁴). Over windows (--features nakano|both|…):
+    /// one C, by cross-validation by run on windows 0.5 s apart, each candidate fitted at C
+    /// times the windows each stands for (duplicated vectors weigh the loss as a larger C
+    /// does), or 10 when a surface has a single run.
     #[arg(long, default_value = "auto", value_parser = parse_c, value_name = "auto|C")]
     c: CArg,
     /// knn, svm over windows: keep each window's weight in anytime decisions at hop / window

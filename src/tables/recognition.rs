@@ -28,7 +28,7 @@ pub(crate) fn print_default_choice(choice: &DefaultChoice) {
         .rows
         .iter()
         .map(|r| match r.outcome {
-            Outcome::Scored { seconds, .. } => seconds,
+            Outcome::Scored { seconds, .. } | Outcome::Stopped { seconds } => seconds,
             _ => 0.0,
         })
         .sum();
@@ -60,6 +60,10 @@ pub(crate) fn print_default_choice(choice: &DefaultChoice) {
                 "  {:>8} {:>9} {:>7}  {what}{mark} (the budget was spent)",
                 "not tried", "", ""
             ),
+            Outcome::Stopped { seconds } => println!(
+                "  {:>8} {:>9} {seconds:>7.1}  {what}{mark} (stopped when the budget ran out)",
+                "stopped", ""
+            ),
         }
     }
 }
@@ -75,8 +79,12 @@ pub(crate) fn print_window_c(model: &RecognizerFile) {
                     .iter()
                     .map(|p| format!("{:e}: {:.3}", p.c, p.accuracy))
                     .collect();
+                let over = match search.vector_weight {
+                    Some(w) => format!(" (on 1 window in {w:.1}, each at C × {w:.1})"),
+                    None => String::new(),
+                };
                 println!(
-                    "C = {c:e} chosen by {}-fold cross-validation by run from {}",
+                    "C = {c:e} chosen by {}-fold cross-validation by run{over} from {}",
                     search.folds,
                     grid.join(", ")
                 );

@@ -8,10 +8,11 @@
 //! search measures it instead, on exactly the recognizer `train` would fit: each candidate is
 //! the same [`TrainSettings`] with only the searched fields changed, trained and evaluated by
 //! [`protocol::run`] (k-fold by recording) — with three shortcuts that change the recognizer's
-//! cost, not what it is: training and decision windows every [`SEARCH_HOP_S`] instead of every
+//! cost, not what it is: training and decision windows every [`SPARSE_HOP_S`] instead of every
 //! hop (neighbouring windows 0.1 s apart share 97 % of their samples), the posterior's weight
 //! not fitted (it does not change a window's decision), and an SVM over windows at
-//! C = [`WINDOW_SVM_FALLBACK_C`](super::WINDOW_SVM_FALLBACK_C) instead of a search over C.
+//! C = [`WINDOW_SVM_FALLBACK_C`](super::WINDOW_SVM_FALLBACK_C) instead of a search over C, not
+//! cross-validated for a reliability ([`SvmC::Unscored`]).
 //!
 //! **Order and ties.** Candidates are tried in a fixed order: first each feature set with the
 //! documented defaults ([`Method::features_for`]'s choice first), then the other cell scalings
@@ -19,16 +20,18 @@
 //! is more accurate by more than [`CLEAR_MARGIN_Z`] standard errors of the difference (windows
 //! counted by how much they overlap): the documented default stands unless the captures say
 //! clearly otherwise. A candidate that would overrun the budget (at what the last of its
-//! feature set took) is listed as not tried, and cheaper ones after it still are; a
+//! feature set took) is listed as not tried, and cheaper ones after it still are; an SVM
+//! still solving when the budget runs out is stopped and listed so (one over a channel of
+//! noise alone can take minutes to separate nothing); a
 //! candidate that cannot be trained or evaluated on these captures (no window holds its
 //! histogram, every window slid too fast for its bands) is listed with the reason.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
 use super::choice_table::{Candidate, CandidateScore, DefaultChoice, Outcome};
-use super::train::WINDOW_SVM_FALLBACK_C;
+use super::train::{SPARSE_HOP_S, WINDOW_SVM_FALLBACK_C};
 use super::{LabelledCapture, Method, SvmC, TrainSettings};
 use crate::RecognizeError;
 use crate::features::spectral::{CellScale, Histogram, HistogramBand, SpectrogramPlan};
@@ -37,12 +40,11 @@ use crate::protocol::{self, Split};
 use crate::svc::{FitEvent, Progress};
 use crate::{FeatureNeeds, SettingError};
 
-/// Windows of the search's candidates are this far apart, s (or the hop asked for, if longer).
-pub const SEARCH_HOP_S: f64 = 0.5;
 /// Folds of the search's cross-validation (fewer when there are fewer recordings).
 pub const SEARCH_FOLDS: usize = 5;
 /// The search's default time budget, s: a candidate is not tried when the time spent and what
-/// the last candidate of its set took would exceed it.
+/// the last candidate of its set took would exceed it, and an SVM's solves stop when it runs
+/// out.
 pub const SEARCH_BUDGET_S: f64 = 20.0;
 /// How many standard errors of the difference a later candidate must be more accurate by to
 /// be chosen over an earlier one (see [`clearly_better`]).
@@ -98,7 +100,7 @@ impl DefaultSearch {
     /// each histogram's cell scaling and band (the Nyquist band only where the
     /// rate puts it above the paper's 200 Hz), and windows of [`DECISION_WINDOW_S`] and
     /// [`SHORT_WINDOW_S`] (a window shorter than a histogram's five frames is left out for
-    /// `both`). `budget_s` bounds the time the search takes to begin candidates.
+    /// `both`). `budget_s` bounds the search's time (see [`SEARCH_BUDGET_S`]).
     pub fn new(base: TrainSettings, named: Named, first: &LabelledCapture, budget_s: f64) -> Self {
         let rate_hz = first.capture.metadata().rate_hz();
         let method = base.method;
@@ -209,15 +211,15 @@ impl DefaultSearch {
     }
 
     /// The settings a candidate is cross-validated with: its own, with windows every
-    /// [`SEARCH_HOP_S`], no posterior weight fitted and, for an SVM over windows, C fixed.
+    /// [`SPARSE_HOP_S`], no posterior weight fitted and, for an SVM over windows, C fixed.
     pub fn scored_settings(&self, candidate: &Candidate) -> TrainSettings {
         let full = candidate.settings(&self.base);
         let windowed_svm = full.method == Method::Svm && full.features != FeatureSet::Spectral;
         TrainSettings {
-            hop_s: full.hop_s.max(SEARCH_HOP_S),
+            hop_s: full.hop_s.max(SPARSE_HOP_S),
             fit_posterior_weight: false,
             c: if windowed_svm {
-                SvmC::Fixed(WINDOW_SVM_FALLBACK_C)
+                SvmC::Unscored(WINDOW_SVM_FALLBACK_C)
             } else {
                 full.c.clone()
             },
@@ -266,7 +268,7 @@ impl DefaultSearch {
             let outcome = if start.elapsed().as_secs_f64() + expected_s > self.budget_s {
                 Outcome::NotTried
             } else {
-                self.score(candidate, captures, folds)
+                self.score(candidate, captures, folds, start)
             };
             progress(FitEvent::Advance);
             rows.push(CandidateScore {
@@ -274,7 +276,7 @@ impl DefaultSearch {
                 outcome,
             });
         }
-        let hop_s = self.base.hop_s.max(SEARCH_HOP_S);
+        let hop_s = self.base.hop_s.max(SPARSE_HOP_S);
         let chosen = choose(&rows, hop_s);
         DefaultChoice {
             folds,
@@ -285,9 +287,22 @@ impl DefaultSearch {
         }
     }
 
-    fn score(&self, candidate: &Candidate, captures: &[LabelledCapture], folds: usize) -> Outcome {
+    /// Cross-validates `candidate`; an SVM still solving when the search's budget (from
+    /// `search_start`) runs out is stopped.
+    fn score(
+        &self,
+        candidate: &Candidate,
+        captures: &[LabelledCapture],
+        folds: usize,
+        search_start: Instant,
+    ) -> Outcome {
         let start = Instant::now();
-        let settings = self.scored_settings(candidate);
+        let settings = TrainSettings {
+            time_budget: Duration::try_from_secs_f64(self.budget_s)
+                .ok()
+                .map(|budget| (search_start, budget)),
+            ..self.scored_settings(candidate)
+        };
         if folds < 2 {
             return Outcome::Failed {
                 reason: RecognizeError::Setting(SettingError::Parameter {
@@ -327,6 +342,9 @@ impl DefaultSearch {
             Ok(None) => Outcome::Failed {
                 reason: "no held-out decision".to_owned(),
             },
+            Err(e) if e.ran_out_of_time() => Outcome::Stopped {
+                seconds: start.elapsed().as_secs_f64(),
+            },
             Err(e) => Outcome::Failed { reason: e.chain() },
         }
     }
@@ -336,7 +354,7 @@ impl DefaultSearch {
 /// captures. The search keeps the documented default's: a whole capture is decided once, at
 /// its end, where windows are decided every hop from the first seconds on (and live), so
 /// their accuracies count different things; and the search's sparser windows (every
-/// [`SEARCH_HOP_S`]) cost a windowed candidate training vectors that a whole capture's one
+/// [`SPARSE_HOP_S`]) cost a windowed candidate training vectors that a whole capture's one
 /// histogram does not lose, which would tilt the comparison.
 fn same_decisions(a: FeatureSet, b: FeatureSet) -> bool {
     (a == FeatureSet::Spectral) == (b == FeatureSet::Spectral)
@@ -401,6 +419,45 @@ fn clearly_better(new: Score, old: Score) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An SVM candidate still solving when the search's budget runs out is stopped and listed
+    /// as such, not as failed; with time left the same candidate is scored.
+    #[test]
+    fn a_candidate_still_solving_when_the_budget_runs_out_is_stopped() {
+        let captures = super::super::tests::vibrating_surfaces(5.0, 0..3);
+        let base = TrainSettings {
+            window_s: 2.0,
+            hop_s: 0.2,
+            ..TrainSettings::new(Method::Svm)
+        };
+        let named = Named {
+            features: Some(FeatureSet::Vibration),
+            cells: Some(CellScale::Mean),
+            band: Some(HistogramBand::Paper),
+            window_s: Some(2.0),
+        };
+        let score = |budget_s: f64, start: Instant| {
+            let search = DefaultSearch::new(base.clone(), named, &captures[0], budget_s);
+            let needs = search.needs(1000.0);
+            let kept: Vec<LabelledCapture> = captures
+                .iter()
+                .map(|c| c.clone().keep_features(&needs).expect("keeps"))
+                .collect();
+            search.score(&search.candidates()[0], &kept, 3, start)
+        };
+        let start = Instant::now();
+        std::thread::sleep(Duration::from_millis(20));
+        assert!(
+            matches!(score(0.01, start), Outcome::Stopped { seconds } if seconds >= 0.0),
+            "{:?}",
+            score(0.01, start)
+        );
+        assert!(
+            matches!(score(60.0, Instant::now()), Outcome::Scored { .. }),
+            "{:?}",
+            score(60.0, Instant::now())
+        );
+    }
 
     fn row(accuracy: Option<f64>, decisions: u64) -> CandidateScore {
         CandidateScore {

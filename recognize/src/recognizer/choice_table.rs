@@ -62,6 +62,11 @@ pub enum Outcome {
     },
     /// The budget was spent before its turn.
     NotTried,
+    /// Still being cross-validated when the budget ran out: stopped, not scored.
+    Stopped {
+        /// Wall-clock time it ran, s.
+        seconds: f64,
+    },
 }
 
 /// One row of the table.

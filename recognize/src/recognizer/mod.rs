@@ -30,9 +30,7 @@ mod train;
 mod weight_fit;
 mod window_classifier;
 
-pub use choice::{
-    CLEAR_MARGIN_Z, DefaultSearch, Named, SEARCH_BUDGET_S, SEARCH_FOLDS, SEARCH_HOP_S, SHORT_WINDOW_S,
-};
+pub use choice::{CLEAR_MARGIN_Z, DefaultSearch, Named, SEARCH_BUDGET_S, SEARCH_FOLDS, SHORT_WINDOW_S};
 pub use choice_table::{Candidate, CandidateScore, DefaultChoice, Outcome};
 pub use decide::{BehaviourReliability, Decision, WindowProbabilities};
 pub use evaluate::{BehaviourScore, Evaluation, FusedEvaluation, SomQuality};
@@ -51,7 +49,7 @@ pub use sequential_eval::{
 };
 pub use train::{
     CV_FOLDS, FEW_TRAINING_VECTORS, KnnTrainer, LEAST_TRAINING_TRAVEL_SHARE, Method,
-    SCRATCH_SOM_NORMALIZATION, SomTrainer, SvmC, SvmTrainer, TrainJob, TrainSettings, Trainer,
+    SCRATCH_SOM_NORMALIZATION, SPARSE_HOP_S, SomTrainer, SvmC, SvmTrainer, TrainJob, TrainSettings, Trainer,
     TrainingWarning, UnmappedClasses, WINDOW_SVM_FALLBACK_C, som_nodes, som_params, train, window_som_nodes,
     window_svc_params,
 };

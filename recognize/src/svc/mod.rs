@@ -27,6 +27,7 @@ use crate::vectors::FeatureScaling;
 use capture::rng::SplitMix64;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 use svm::{Kernel, SelectionCurvature, SmoSettings, SmoSolution};
 
 mod c_search;
@@ -37,7 +38,7 @@ mod probability;
 /// keeps every row.
 const CACHE_BYTES: usize = 128 << 20;
 
-pub use c_search::{C_GRID, CSearch, CvPoint, select_c_observed};
+pub use c_search::{C_GRID, CSearch, CvPoint, select_c_observed, select_c_sparse};
 #[cfg(test)]
 use c_search::{cross_validated_accuracy, select_c};
 #[cfg(test)]
@@ -64,6 +65,11 @@ pub struct SvcParams {
     /// Recognizer files written before it existed read as 0.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub max_iterations: usize,
+    /// Wall-clock budget of each binary machine's solve, counted from the instant given: a
+    /// fit still running past it ends with the solver's [`svm::SvmError::Budget`]. For a caller
+    /// that must end by a time (the default search's candidates); not kept in files.
+    #[serde(skip)]
+    pub time_budget: Option<(Instant, Duration)>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -123,6 +129,7 @@ impl Default for SvcParams {
             probability: true,
             seed: 0,
             max_iterations: 0,
+            time_budget: None,
         }
     }
 }
@@ -132,29 +139,33 @@ impl SvcParams {
     /// iteration budget), stopping at [`SvcParams::tolerance`].
     fn smo_settings(&self) -> Result<SmoSettings, RecognizeError> {
         self.check()?;
-        SmoSettings::builder()
+        let settings = SmoSettings::builder()
             .c(self.c)
             .stop(self.tolerance)
             .selection(SelectionCurvature::NonPositiveToTau)
             .shrinking(true)
-            .max_iterations(self.max_iterations)
-            .build()
-            .map_err(|e| match e {
-                svm::SvmError::InvalidHyperparameter { name, value, reason } => {
-                    RecognizeError::Setting(SettingError::Parameter {
-                        of: "SVC parameter",
-                        name,
-                        value,
-                        reason,
-                    })
-                }
-                _ => RecognizeError::Setting(SettingError::Parameter {
+            .max_iterations(self.max_iterations);
+        match self.time_budget {
+            Some((started, budget)) => settings.time_budget(started, budget),
+            None => settings,
+        }
+        .build()
+        .map_err(|e| match e {
+            svm::SvmError::InvalidHyperparameter { name, value, reason } => {
+                RecognizeError::Setting(SettingError::Parameter {
                     of: "SVC parameter",
-                    name: "c",
-                    value: self.c,
-                    reason: "positive and finite",
-                }),
-            })
+                    name,
+                    value,
+                    reason,
+                })
+            }
+            _ => RecognizeError::Setting(SettingError::Parameter {
+                of: "SVC parameter",
+                name: "c",
+                value: self.c,
+                reason: "positive and finite",
+            }),
+        })
     }
 
     fn check(&self) -> Result<(), RecognizeError> {

@@ -55,6 +55,7 @@ fn decision_values_and_predictions_match_scikit_learn() {
         probability: false,
         seed: 0,
         max_iterations: 0,
+        time_budget: None,
     };
     let svc = Svc::fit(params, &f.x_train, &f.y_train, f.classes).expect("fit");
     let mut worst: f64 = 0.0;
@@ -204,6 +205,60 @@ fn blobs(groups: u64, per_group: usize, spread: f64) -> (Vec<[f64; 2]>, Vec<usiz
         }
     }
     (x, y, g)
+}
+
+fn triple<T: Copy>(v: &[T]) -> Vec<T> {
+    v.iter().flat_map(|e| [*e; 3]).collect()
+}
+
+/// Every vector repeated three times is the same problem as each once at three times C: a
+/// search trained on one of each three at C × 3 scores every held-out vector as the search
+/// over all of them does, and says what it weighed.
+#[test]
+fn a_search_trained_on_one_of_each_repeat_scores_as_one_over_all() {
+    let (x, y, groups) = overlapping_blobs(4, 6);
+    let (x3, y3, g3): (Vec<[f64; 2]>, Vec<usize>, Vec<u64>) = (triple(&x), triple(&y), triple(&groups));
+    let trains: Vec<bool> = (0..x3.len()).map(|i| i % 3 == 0).collect();
+    let params = SvcParams {
+        tolerance: 1e-6,
+        ..blob_params()
+    };
+    let grid = [1e-1, 1.0, 10.0, 100.0];
+    let full = select_c(params, &grid, &data(&x3, &y3, &g3), 3, 4).expect("all");
+    let sparse = select_c_sparse(params, &grid, &data(&x3, &y3, &g3), &trains, 3, 4, &no_progress)
+        .expect("one of three");
+    assert_eq!(full.vector_weight, None);
+    assert_eq!(sparse.vector_weight, Some(3.0));
+    sparse.check().expect("valid");
+    for (a, b) in full.grid.iter().zip(&sparse.grid) {
+        assert_eq!(a.c, b.c);
+        assert!((a.accuracy - b.accuracy).abs() < 1e-12, "{full:?} vs {sparse:?}");
+    }
+    assert_eq!(full.chosen_c, sparse.chosen_c);
+    // Every vector marked: the plain search.
+    let all = select_c_sparse(
+        params,
+        &grid,
+        &data(&x3, &y3, &g3),
+        &vec![true; x3.len()],
+        3,
+        4,
+        &no_progress,
+    )
+    .expect("all marked");
+    assert_eq!(all, full);
+    assert!(
+        select_c_sparse(
+            params,
+            &grid,
+            &data(&x3, &y3, &g3),
+            &trains[1..],
+            3,
+            4,
+            &no_progress
+        )
+        .is_err()
+    );
 }
 
 #[test]
@@ -387,7 +442,7 @@ fn a_fold_without_a_class_names_the_callers_classes() {
         ..SvcParams::default()
     };
     assert!(matches!(
-        c_search::fold_correct(params, &x, &y, &fold, 0, 3, &|| {}),
+        c_search::fold_correct(params, &x, &y, None, &fold, 0, 3, &|| {}),
         Err(RecognizeError::Solver(SolverError::NotConverged {
             iterations: 5,
             first: 1,

@@ -135,6 +135,7 @@ impl RecognizerFile {
             x,
             y,
             groups,
+            ..
         } = scaled_training_windows(captures, &windowing, features, histogram)?;
         let params = KnnParams::default().k(k).scaling(FeatureScaling::None);
         let knn = params

@@ -13,6 +13,7 @@ mod svm;
 mod warnings;
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::time::{Duration, Instant};
 
 pub use knn::KnnTrainer;
 pub use som::{
@@ -174,6 +175,10 @@ pub struct TrainSettings {
     /// The posterior's memory that weight is fitted at, s: the one the recognizer will decide
     /// with (a scene's `memory_s`, `eval --memory-s`).
     pub weight_fit_memory_s: f64,
+    /// SVM: wall-clock budget of its solves, counted from the instant given
+    /// ([`crate::SvcParams::time_budget`]); a fit still running past it fails. The k-NN's and
+    /// the SOM's fits are bounded by their sizes and take no budget. `None`: no limit.
+    pub time_budget: Option<(Instant, Duration)>,
 }
 
 impl TrainSettings {
@@ -203,6 +208,7 @@ impl TrainSettings {
             som_nodes: None,
             fit_posterior_weight: true,
             weight_fit_memory_s: DEFAULT_MEMORY_S,
+            time_budget: None,
         }
     }
 
@@ -363,6 +369,24 @@ impl TrainSettings {
 /// recognizer (reliability weights, the SVM's C); fewer when there are fewer trials.
 pub const CV_FOLDS: usize = 5;
 
+/// Windows this far apart, s, stand for all of a recording's windows where a fit is only a
+/// means of choosing: the default search's candidates ([`DefaultSearch`](super::DefaultSearch)),
+/// the SVM's C and the refits that fit the posterior's weight. Windows every 0.1 s over 3 s
+/// share 97 % of their samples, so the windows between these add little the fit does not
+/// have; dropping them makes a fifth of the vectors, and an SVM's solves on them ten times
+/// faster or more.
+pub const SPARSE_HOP_S: f64 = 0.5;
+
+/// Of windows every `hop_s`, every how many are [`SPARSE_HOP_S`] apart (at least 1).
+pub(crate) fn sparse_every(hop_s: f64) -> usize {
+    let every = (SPARSE_HOP_S / hop_s).round();
+    if every.is_finite() && every >= 1.0 {
+        every as usize
+    } else {
+        1
+    }
+}
+
 /// How an SVM recognizer's C is set.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SvmC {
@@ -371,6 +395,10 @@ pub enum SvmC {
     Auto(Vec<f64>),
     /// This C for every behaviour.
     Fixed(f64),
+    /// This C, not cross-validated: the recognizer keeps no reliability for `eval --fuse` to
+    /// weigh it by. For a caller that measures the recognizer's accuracy itself (the default
+    /// search's candidates), to whom that cross-validation would be five fits more a fold.
+    Unscored(f64),
 }
 
 impl SvmC {
@@ -395,6 +423,7 @@ impl SvmC {
         let grid = match self {
             Self::Auto(grid) => grid.clone(),
             Self::Fixed(c) => vec![*c],
+            Self::Unscored(c) => return Ok(ChosenC { c: *c, search: None }),
         };
         let search = match search(&grid) {
             Some(Ok(search)) => Some(search),
@@ -403,7 +432,7 @@ impl SvmC {
         };
         let c = match (&search, self) {
             (Some(s), _) => s.chosen_c,
-            (None, Self::Fixed(c)) => *c,
+            (None, Self::Fixed(c) | Self::Unscored(c)) => *c,
             (None, Self::Auto(_)) => fallback,
         };
         Ok(ChosenC { c, search })
@@ -474,10 +503,34 @@ pub(crate) fn training_windows_left_out(
     features: FeatureSet,
     histogram: Histogram,
 ) -> Result<(WindowData, usize, usize, TooFastWindows), RecognizeError> {
+    let w = read_training_windows(captures, classes, windowing, features, histogram)?;
+    Ok(((w.x, w.y, w.groups), w.left_out, w.of, w.too_fast))
+}
+
+/// What [`read_training_windows`] read.
+struct TrainingWindowRead {
+    x: Vec<Vec<f64>>,
+    y: Vec<usize>,
+    groups: Vec<u64>,
+    /// Each window's place among its capture's windows (those left out counted), so that
+    /// windows `k` places apart are `k` hops apart.
+    place: Vec<usize>,
+    left_out: usize,
+    of: usize,
+    too_fast: TooFastWindows,
+}
+
+fn read_training_windows(
+    captures: &[LabelledCapture],
+    classes: &[String],
+    windowing: &NakanoWindowing,
+    features: FeatureSet,
+    histogram: Histogram,
+) -> Result<TrainingWindowRead, RecognizeError> {
     features.check_columns(captures)?;
     let groups = recording_groups(captures);
     let training = windowing.training();
-    let (mut x, mut y, mut g) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut x, mut y, mut g, mut place) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut left_out = vec![0; captures.len()];
     let mut of = 0;
     let mut too_fast = TooFastWindows::default();
@@ -486,7 +539,7 @@ pub(crate) fn training_windows_left_out(
         let label = class_index(classes, c)?;
         let windows = window_vectors(c, &training, features, histogram)?;
         too_fast.merge(windows.too_fast);
-        for (_, span, v) in windows.vectors {
+        for (i, (_, span, v)) in windows.vectors.into_iter().enumerate() {
             of += 1;
             if training.travel_share(span) < LEAST_TRAINING_TRAVEL_SHARE {
                 *left_out += 1;
@@ -495,13 +548,22 @@ pub(crate) fn training_windows_left_out(
             x.push(v);
             y.push(label);
             g.push(group);
+            place.push(i);
         }
     }
     every_class_has_windows(captures, classes, &y, &training, &left_out)?;
     if x.is_empty() {
         return Err(RecognizeError::Data(DataError::NoTrainingData));
     }
-    Ok(((x, y, g), left_out.iter().sum(), of, too_fast))
+    Ok(TrainingWindowRead {
+        x,
+        y,
+        groups: g,
+        place,
+        left_out: left_out.iter().sum(),
+        of,
+        too_fast,
+    })
 }
 
 /// Refuses training when a class of `classes` has no vector among `labels` (the class index of
@@ -580,6 +642,31 @@ pub(crate) struct ScaledWindows {
     pub y: Vec<usize>,
     /// Their cross-validation groups (see [`training_windows`]).
     pub groups: Vec<u64>,
+    /// Each one's place among its capture's windows: windows `k` places apart are `k` hops
+    /// apart ([`ScaledWindows::sparse`]).
+    pub place: Vec<usize>,
+}
+
+impl ScaledWindows {
+    /// Which windows are every `every`-th of their capture (from its first): windows
+    /// [`SPARSE_HOP_S`] apart stand for all of a recording's where a fit is only a means of
+    /// choosing (C, the posterior's weight). All of them when `every` is 1, or when one of the
+    /// `classes` classes would be left without a window.
+    pub fn sparse(&self, every: usize, classes: usize) -> Vec<bool> {
+        let every = every.max(1);
+        let kept: Vec<bool> = self.place.iter().map(|p| p.is_multiple_of(every)).collect();
+        let mut seen = vec![false; classes];
+        for (&y, _) in self.y.iter().zip(&kept).filter(|(_, k)| **k) {
+            if let Some(s) = seen.get_mut(y) {
+                *s = true;
+            }
+        }
+        if seen.iter().all(|&s| s) {
+            kept
+        } else {
+            vec![true; self.x.len()]
+        }
+    }
 }
 
 /// The scaled training windows of `captures` (`features` [`FeatureSet::Nakano`] or
@@ -592,7 +679,9 @@ pub(crate) fn scaled_training_windows(
 ) -> Result<ScaledWindows, RecognizeError> {
     window_check(features)?;
     let classes = class_list(captures);
-    let (x, y, groups) = training_windows(captures, &classes, windowing, features, histogram)?;
+    let TrainingWindowRead {
+        x, y, groups, place, ..
+    } = read_training_windows(captures, &classes, windowing, features, histogram)?;
     let scaling = WindowScaling::fit(&x, &y, features.blocks());
     let x = x.iter().map(|v| scaling.apply(v)).collect();
     Ok(ScaledWindows {
@@ -601,6 +690,7 @@ pub(crate) fn scaled_training_windows(
         x,
         y,
         groups,
+        place,
     })
 }
 

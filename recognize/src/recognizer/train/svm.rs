@@ -3,9 +3,11 @@
 
 use rayon::prelude::*;
 
+use std::time::{Duration, Instant};
+
 use super::{
     BehaviourHistograms, CV_FOLDS, ChosenC, Method, ScaledWindows, SvmC, TrainJob, TrainSettings, Trainer,
-    every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows,
+    every_class_in_two_groups, histograms_by_behaviour, scaled_training_windows, sparse_every,
 };
 use crate::RecognizeError;
 #[cfg(doc)]
@@ -20,6 +22,7 @@ use crate::recognizer::trial_groups;
 use crate::recognizer::{BehaviourSvc, LabelledCapture, RecognizerBody, RecognizerFile};
 use crate::svc::{
     CSearch, FitEvent, Progress, Svc, SvcParams, TrainingVectors, no_progress, select_c_observed,
+    select_c_sparse,
 };
 use svm::Kernel;
 
@@ -39,17 +42,21 @@ impl Trainer for SvmTrainer {
         match settings.features {
             FeatureSet::Spectral => RecognizerFile::train_svm_observed(
                 captures,
-                SvcParams::default(),
+                SvcParams {
+                    time_budget: settings.time_budget,
+                    ..SvcParams::default()
+                },
                 &settings.c,
                 settings.histogram,
                 progress,
             ),
-            windowed => RecognizerFile::train_svm_windows_observed(
+            windowed => RecognizerFile::svm_windows(
                 captures,
                 settings.windowing(captures)?,
                 windowed,
-                &settings.c,
+                WindowC::Choose(&settings.c),
                 settings.histogram,
+                settings.time_budget,
                 progress,
             ),
         }
@@ -263,6 +270,7 @@ impl RecognizerFile {
             features,
             WindowC::Choose(c),
             histogram,
+            None,
             progress,
         )
     }
@@ -271,8 +279,10 @@ impl RecognizerFile {
     /// C and no search for one, and the Platt sigmoids of `probabilities` (the recognizer's
     /// own SVC, whose sigmoids were cross-validated on all its training windows; fitting them
     /// again cost five more fits a pair in each of twenty refits): a fold's model in
-    /// [`RecognizerFile::fit_posterior_weight`]. `None` inside when the refit's pairs are not
-    /// the recognizer's.
+    /// [`RecognizerFile::fit_posterior_weight`]. The refit is over windows [`SPARSE_HOP_S`](super::SPARSE_HOP_S)
+    /// apart, at the C that weighs their hinge loss as all the windows weigh it at the
+    /// recognizer's C, so that its decision values are on the scale the sigmoids were fitted
+    /// to. `None` inside when the refit's pairs are not the recognizer's.
     pub(crate) fn refit_svm_windows(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
@@ -286,6 +296,7 @@ impl RecognizerFile {
             features,
             WindowC::Refit(probabilities.params().c),
             histogram,
+            None,
             &no_progress,
         )?;
         if let RecognizerBody::SvmWindows { svc, .. } = &mut model.body {
@@ -297,43 +308,87 @@ impl RecognizerFile {
         Ok(Some(model))
     }
 
-    /// [`RecognizerFile::train_svm_windows_observed`], with its C come by as `c` says.
+    /// [`RecognizerFile::train_svm_windows_observed`], with its C come by as `c` says and its
+    /// solves within `time_budget` ([`SvcParams::time_budget`]).
+    ///
+    /// C is cross-validated on windows [`SPARSE_HOP_S`](super::SPARSE_HOP_S) apart, each candidate fitted at C
+    /// times all the windows over those: duplicating every vector k times weighs the hinge
+    /// loss as multiplying C by k does, so windows that nearly repeat their neighbours are
+    /// stood for by fewer at a larger C, and the C chosen is the one for all the windows.
     fn svm_windows(
         captures: &[LabelledCapture],
         windowing: NakanoWindowing,
         features: FeatureSet,
         c: WindowC<'_>,
         histogram: Histogram,
+        time_budget: Option<(Instant, Duration)>,
         progress: Progress<'_>,
     ) -> Result<Self, RecognizeError> {
         let windows = scaled_training_windows(captures, &windowing, features, histogram)?;
         let (x, y, groups) = (&windows.x, &windows.y, &windows.groups);
-        let params = window_svc_params(features.dim());
+        let params = SvcParams {
+            time_budget,
+            ..window_svc_params(features.dim())
+        };
         let label = windows_label(features);
         // The recognizer takes `classes`; errors and warnings borrow their names meanwhile.
         let names = windows.classes.clone();
         let svc_error = svc_error(&label, &names);
         let progress = naming_progress(progress, &names, &label);
+        let sparse = windows.sparse(
+            sparse_every(windowing.hop_samples as f64 / windowing.rate_hz),
+            names.len(),
+        );
         let chosen = match c {
             WindowC::Choose(c) => c
                 .choose(WINDOW_SVM_FALLBACK_C, |grid| {
-                    every_class_in_two_groups(y, groups)
-                        .then(|| search_c(params, grid, x, y, groups, names.len(), &progress))
+                    every_class_in_two_groups(y, groups).then(|| {
+                        let data = BehaviourData {
+                            features: x,
+                            labels: y,
+                            groups,
+                        };
+                        select_c_sparse(params, grid, &data, &sparse, names.len(), CV_FOLDS, &progress)
+                    })
                 })
                 .map_err(&svc_error)?,
             WindowC::Refit(c) => ChosenC { c, search: None },
         };
-        let svc = Svc::fit_observed(
-            SvcParams {
-                c: chosen.c,
-                probability: !matches!(c, WindowC::Refit(_)),
-                ..params
-            },
-            x,
-            y,
-            names.len(),
-            &progress,
-        )
+        let svc = match c {
+            WindowC::Refit(c) => {
+                let (sparse_x, sparse_y): (Vec<&[f64]>, Vec<usize>) = x
+                    .iter()
+                    .zip(y)
+                    .zip(&sparse)
+                    .filter(|(_, kept)| **kept)
+                    .map(|((x, &y), _)| (x.as_slice(), y))
+                    .unzip();
+                // The C that weighs the hinge loss of the windows kept as all of them at C.
+                let weight = x.len() as f64 / sparse_x.len().max(1) as f64;
+                Svc::fit_observed(
+                    SvcParams {
+                        c: c * weight,
+                        probability: false,
+                        ..params
+                    },
+                    &sparse_x,
+                    &sparse_y,
+                    names.len(),
+                    &progress,
+                )
+            }
+            WindowC::Choose(_) => Svc::fit_observed(
+                SvcParams {
+                    c: chosen.c,
+                    probability: true,
+                    ..params
+                },
+                x,
+                y,
+                names.len(),
+                &progress,
+            ),
+        }
         .map_err(&svc_error)?;
         let n_vectors = x.len();
         Ok(Self::assemble(
@@ -354,13 +409,14 @@ impl RecognizerFile {
 }
 
 /// How [`RecognizerFile`]'s SVM over windows comes by its C.
+#[derive(Clone, Copy)]
 enum WindowC<'a> {
     /// As the settings say: the best of the candidates under cross-validation by recording
     /// where the captures allow one (even a single C given is cross-validated, as the file
     /// keeps that accuracy for the fusion's reliability weighting).
     Choose(&'a SvmC),
     /// This C, chosen already, and no sigmoids: a fold's refit needs no cross-validation of
-    /// its own and takes the recognizer's sigmoids.
+    /// its own and takes the recognizer's sigmoids. Fitted on windows [`SPARSE_HOP_S`](super::SPARSE_HOP_S) apart.
     Refit(f64),
 }
 
