@@ -6,6 +6,7 @@
 mod bench_cmd;
 mod bench_needle;
 mod bench_svr;
+mod bench_svr_plot;
 mod bench_trade;
 mod capture_cmd;
 mod categorize_cmd;
@@ -75,6 +76,7 @@ enum BenchWhat {
     Loop(bench_cmd::LoopArgs),
     Svr(bench_svr::SvrArgs),
     SvrScale(bench_svr::SvrScaleArgs),
+    SvrScalePlot(bench_svr_plot::SvrScalePlotArgs),
     Trade(bench_trade::TradeArgs),
     NeedleLaw(bench_needle::NeedleLawArgs),
     Render(bench_cmd::RenderArgs),
@@ -161,6 +163,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             BenchWhat::Loop(args) => bench_cmd::run_loop(args),
             BenchWhat::Svr(args) => bench_svr::run(args),
             BenchWhat::SvrScale(args) => bench_svr::run_scale(args),
+            BenchWhat::SvrScalePlot(args) => bench_svr_plot::run(args),
             BenchWhat::Trade(args) => bench_trade::run(args),
             BenchWhat::NeedleLaw(args) => bench_needle::run(args),
             BenchWhat::Render(args) => bench_cmd::run_render(args),

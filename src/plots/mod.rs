@@ -1,7 +1,8 @@
 //! Every figure palpus draws, with plotters on a bitmap: a session's forces ([`session`]), a
 //! recognizer's evaluation ([`recognition`]) and its anytime decisions ([`sequential`]), the
 //! surfaces' categories ([`categories`]), an identified model against its data ([`fit`]) and
-//! the speed/accuracy trade of its fits ([`trade`]).
+//! the speed/accuracy trade of its fits ([`trade`]) and the ε-SVR's fit time against n
+//! ([`scaling`]).
 //!
 //! The shared primitives live here: the bundled font ([`font`]), drawing into an RGB buffer
 //! and writing it as PNG ([`render()`], [`write_png_rgb`]), and [`PlotError`].
@@ -11,6 +12,7 @@ pub mod categories;
 pub mod fit;
 pub mod history;
 pub mod recognition;
+pub mod scaling;
 pub mod sequential;
 pub mod session;
 pub mod trade;
@@ -32,6 +34,7 @@ pub use recognition::{
     confusion_size, som_components_size, som_density_size, som_map_size, write_confusion, write_eval_plots,
     write_som_components, write_som_density, write_som_map,
 };
+pub use scaling::{ScalingSeries, write_scaling_plot};
 pub use sequential::{SEQUENTIAL_SIZE, write_sequential_plot};
 pub use session::write_force_plot;
 pub use trade::{TRADE_SIZE, write_trade_plot};

@@ -424,3 +424,47 @@ fn svr_scale_fits_a_table_and_names_a_bad_cell() {
 fn text_of(args: &[&str]) -> String {
     text(&succeeds(args))
 }
+
+/// A sweep's CSV becomes a PNG and a per-problem summary: the worst and median of libsvm's
+/// seconds over ours, and the fit slowest against its slower neighbour; a row without our
+/// seconds is refused naming its line.
+#[test]
+fn a_sweep_is_drawn_and_summed_up_per_problem() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("svr_scale_plot");
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("sweep.csv");
+    std::fs::write(
+        &csv,
+        "problem,n,ours_s,libsvm_s,our_solver\n\
+         \"a b\",350,0.01,0.04,interior point\n\
+         \"a b\",700,0.05,0.2,low-rank\n\
+         \"a b\",1400,0.06,0.6,low-rank\n\
+         c,350,0.02,0.01,smo\n",
+    )
+    .unwrap();
+    let png = dir.join("sweep.png");
+    let _ = std::fs::remove_file(&png);
+    let said = text(&succeeds(&[
+        "bench",
+        "svr-scale-plot",
+        csv.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]));
+    // Ratios 4, 4, 10: worst 4, median 4; 0.05 s is 0.05 / 0.06 of its slower neighbour, the
+    // first 0.01 / 0.05, the last 0.06 / 0.05 = 1.2.
+    let a = said.lines().find(|l| l.starts_with("a b")).expect(&said);
+    assert!(a.contains("4.00×") && a.contains("1.20× at n = 1400"), "{a}");
+    let c = said.lines().find(|l| l.starts_with("c ")).expect(&said);
+    assert!(c.contains("0.50×") && c.contains('–'), "{c}");
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    std::fs::write(&csv, "problem,n,ours_s,libsvm_s,our_solver\nx,350,,1,smo\n").unwrap();
+    let err = crate::common::fails(&[
+        "bench",
+        "svr-scale-plot",
+        csv.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(err.contains("line 2"), "{err}");
+}
