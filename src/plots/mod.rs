@@ -151,12 +151,49 @@ pub fn write_png_rgb(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), Plot
 
 /// The chart's series labels, upper left, in the plots' font.
 pub(crate) fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), String> {
+    legend_at(chart, SeriesLabelPosition::UpperLeft)
+}
+
+/// The chart's series labels at `position`, in the plots' font.
+pub(crate) fn legend_at<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font((FAMILY, 15))
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(position)
         .draw()
         .map_err(|e| e.to_string())
 }
+
+/// The range from the least to the largest of `values`, widened on each side by `share` of
+/// its span (at least `least_pad`); `0..1` when there is none.
+pub(crate) fn padded_range(values: impl Iterator<Item = f64>, share: f64, least_pad: f64) -> Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    if lo.is_finite() {
+        let pad = ((hi - lo) * share).max(least_pad);
+        (lo - pad)..(hi + pad)
+    } else {
+        0.0..1.0
+    }
+}
+
+/// Colours (Tableau 10), distinguishable on screen and in print; a figure with more than ten
+/// series reuses them.
+pub(crate) const PALETTE: [RGBColor; 10] = [
+    RGBColor(78, 121, 167),
+    RGBColor(242, 142, 43),
+    RGBColor(225, 87, 89),
+    RGBColor(118, 183, 178),
+    RGBColor(89, 161, 79),
+    RGBColor(237, 201, 72),
+    RGBColor(176, 122, 161),
+    RGBColor(255, 157, 167),
+    RGBColor(156, 117, 95),
+    RGBColor(186, 176, 172),
+];

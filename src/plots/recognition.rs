@@ -21,23 +21,9 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use recognize::{LabelledCapture, RecognizerBody, RecognizerFile};
 
-use super::{Area, FAMILY, PlotError, render};
+use super::{Area, FAMILY, PALETTE, PlotError, render};
 
-/// Class colours (Tableau 10), distinguishable on screen and in print; classes beyond ten
-/// reuse them, which the names in the cells disambiguate.
-const PALETTE: [RGBColor; 10] = [
-    RGBColor(78, 121, 167),
-    RGBColor(242, 142, 43),
-    RGBColor(225, 87, 89),
-    RGBColor(118, 183, 178),
-    RGBColor(89, 161, 79),
-    RGBColor(237, 201, 72),
-    RGBColor(176, 122, 161),
-    RGBColor(255, 157, 167),
-    RGBColor(156, 117, 95),
-    RGBColor(186, 176, 172),
-];
-
+/// A class's colour; classes beyond ten reuse them, which the names in the cells disambiguate.
 fn class_colour(class: usize) -> RGBColor {
     PALETTE[class % PALETTE.len()]
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{Area, FAMILY, Frame, PlotError, axes, render};
+use super::{Area, Frame, PALETTE, PlotError, axes, legend_at, padded_range, render};
 
 /// One problem's sweep: our fits (n, seconds, solver path) and libsvm's (n, seconds).
 #[derive(Debug, Clone, PartialEq)]
@@ -24,16 +24,6 @@ const FRAME: Frame = Frame {
     margin_px: 10,
 };
 const LIBSVM: RGBColor = RGBColor(120, 120, 120);
-/// Our solver paths' colours, in the order a path is first met.
-const PATHS: [RGBColor; 6] = [
-    RGBColor(200, 30, 40),
-    RGBColor(30, 90, 200),
-    RGBColor(20, 150, 60),
-    RGBColor(200, 120, 0),
-    RGBColor(140, 40, 170),
-    RGBColor(0, 150, 160),
-];
-
 /// Draws every series into a PNG at `path`, two panels a row. Points not positive and finite
 /// have no place on log scales and are left out.
 pub fn write_scaling_plot(path: &Path, series: &[ScalingSeries]) -> Result<(), PlotError> {
@@ -66,19 +56,7 @@ fn panel(area: &Area<'_>, s: &ScalingSeries, paths: &[&str]) -> Result<(), Strin
     let ours = logged(s.ours.iter().map(|(n, t, _)| (*n, *t)));
     let libsvm = logged(s.libsvm.iter().copied());
     let all = || ours.iter().chain(&libsvm);
-    let span = |get: fn(&(f64, f64)) -> f64| {
-        let (lo, hi) = all()
-            .map(get)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(v), b.max(v))
-            });
-        if lo.is_finite() {
-            let pad = ((hi - lo) * 0.06).max(0.1);
-            (lo - pad)..(hi + pad)
-        } else {
-            0.0..1.0
-        }
-    };
+    let span = |get: fn(&(f64, f64)) -> f64| padded_range(all().map(get), 0.06, 0.1);
     let mut chart = axes(
         area,
         &s.name,
@@ -95,7 +73,7 @@ fn panel(area: &Area<'_>, s: &ScalingSeries, paths: &[&str]) -> Result<(), Strin
         .draw_series(LineSeries::new(ours.iter().copied(), BLACK.stroke_width(1)))
         .map_err(|e| e.to_string())?;
     for (k, name) in paths.iter().enumerate() {
-        let colour = PATHS[k % PATHS.len()];
+        let colour = PALETTE[k % PALETTE.len()];
         let points: Vec<(f64, f64)> = logged(
             s.ours
                 .iter()
@@ -112,12 +90,5 @@ fn panel(area: &Area<'_>, s: &ScalingSeries, paths: &[&str]) -> Result<(), Strin
             .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
     }
     // Time grows with n: the lower right is where the curves are not.
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FAMILY, 14))
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()
-        .map_err(|e| e.to_string())
+    legend_at(&mut chart, SeriesLabelPosition::LowerRight)
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{Frame, PlotError, axes, render};
+use super::{Frame, PlotError, axes, padded_range, render};
 
 /// Size of the figure, px.
 pub const TRADE_SIZE: (u32, u32) = (900, 600);
@@ -27,19 +27,8 @@ pub fn write_trade_plot(path: &Path, points: &[(f64, f64, bool)], error_desc: &s
         .filter(|(x, y, _)| x.is_finite() && *x > 0.0 && y.is_finite() && *y > 0.0)
         .map(|&(x, y, on)| (x.log10(), y.log10(), on))
         .collect();
-    let range = |values: &mut dyn Iterator<Item = f64>| {
-        let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        });
-        if lo.is_finite() {
-            let pad = ((hi - lo) * 0.08).max(0.1);
-            (lo - pad)..(hi + pad)
-        } else {
-            0.0..1.0
-        }
-    };
-    let x = range(&mut logged.iter().map(|p| p.0));
-    let y = range(&mut logged.iter().map(|p| p.1));
+    let x = padded_range(logged.iter().map(|p| p.0), 0.08, 0.1);
+    let y = padded_range(logged.iter().map(|p| p.1), 0.08, 0.1);
     let y_desc = format!("log10 {error_desc}");
     render(path, TRADE_SIZE, |root| {
         let mut chart = axes(
