@@ -981,7 +981,7 @@ fn kept_features_train_and_evaluate_bit_identically_to_the_samples() {
 
 /// [`three_surfaces`] as trials `trials`, each with a vibration tone: `fine` and `coarse` share
 /// theirs (60 Hz), so the vibration cannot tell them apart; the friction can.
-fn with_tones(trials: std::ops::Range<u32>, seconds: f64) -> Vec<LabelledCapture> {
+pub(super) fn with_tones(trials: std::ops::Range<u32>, seconds: f64) -> Vec<LabelledCapture> {
     trials
         .flat_map(|t| {
             three_surfaces(seconds)
@@ -1000,7 +1000,7 @@ fn with_tones(trials: std::ops::Range<u32>, seconds: f64) -> Vec<LabelledCapture
 }
 
 /// `method` over `features` in 0.25 s windows every 0.1 s, trained on windows of that length.
-fn short_windows(method: Method, features: FeatureSet) -> TrainSettings {
+pub(super) fn short_windows(method: Method, features: FeatureSet) -> TrainSettings {
     TrainSettings {
         features,
         window_s: 0.25,
@@ -2166,106 +2166,4 @@ fn the_search_scores_the_candidates_by_recording_and_keeps_its_table() {
     edited["default_choice"]["chosen"] = 99.into();
     let err = RecognizerFile::from_json(&edited.to_string(), Path::new("m.json")).expect_err("row");
     assert!(err.to_string().contains("default_choice.chosen"), "{err}");
-}
-
-/// The windows that stand for all of a recording's are every k-th of each capture, from its
-/// first; where one class would be left without any, all of them.
-#[test]
-fn sparse_windows_are_every_kth_of_each_capture_and_keep_every_class() {
-    use crate::recognizer::train::{scaled_training_windows, sparse_every};
-
-    assert_eq!(sparse_every(0.1), 5);
-    assert_eq!(sparse_every(0.25), 2);
-    assert_eq!(sparse_every(0.5), 1);
-    assert_eq!(sparse_every(2.0), 1);
-    let captures = with_tones(0..2, 3.0);
-    let settings = short_windows(Method::Svm, FeatureSet::Vibration);
-    let windowing = settings.windowing(&captures).expect("windowing");
-    let w = scaled_training_windows(&captures, &windowing, FeatureSet::Vibration, Histogram::default())
-        .expect("windows");
-    let kept = w.sparse(5, 3);
-    let count = kept.iter().filter(|&&k| k).count();
-    assert!(
-        count * 4 < w.x.len() && count * 6 > w.x.len(),
-        "{count} of {}",
-        w.x.len()
-    );
-    for (i, &k) in kept.iter().enumerate() {
-        assert_eq!(k, w.place[i].is_multiple_of(5));
-    }
-    // Each capture's places run 0, 1, 2, …: its first window is kept.
-    assert_eq!(w.place.iter().filter(|&&p| p == 0).count(), captures.len());
-    for pair in w.place.windows(2) {
-        assert!(pair[1] == pair[0] + 1 || pair[1] == 0, "{pair:?}");
-    }
-    // A fourth class no window belongs to cannot be kept: every window is.
-    assert!(w.sparse(5, 4).iter().all(|&k| k));
-}
-
-/// The SVM over windows cross-validates C on windows 0.5 s apart, each candidate at C times
-/// the windows it stands for, and reports the grid in the Cs of the full fit; the fit itself
-/// is at the C chosen, on every window.
-#[test]
-fn the_svms_c_is_searched_on_sparse_windows_at_the_weight_they_stand_for() {
-    let captures = with_tones(0..3, 3.0);
-    let settings = TrainSettings {
-        c: SvmC::Auto(vec![1.0, 10.0, 100.0]),
-        fit_posterior_weight: false,
-        ..short_windows(Method::Svm, FeatureSet::Vibration)
-    };
-    let model = train(&captures, &settings).expect("trains");
-    let RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body else {
-        panic!("an SVM over windows");
-    };
-    let search = c_search.as_ref().expect("three trials: searched");
-    let weight = search.vector_weight.expect("windows every 0.1 s: sparse");
-    assert!(weight > 4.0 && weight <= 5.0, "{weight}");
-    let cs: Vec<f64> = search.grid.iter().map(|p| p.c).collect();
-    assert_eq!(cs, [1.0, 10.0, 100.0]);
-    assert_eq!(svc.params().c, search.chosen_c);
-    assert!(svc.params().probability);
-    search.check().expect("valid");
-    // A stored weight below 1 cannot be.
-    let mut bad = search.clone();
-    bad.vector_weight = Some(0.5);
-    assert_eq!(bad.check().expect_err("bad").0, "vector_weight");
-}
-
-/// An SVM given a time budget that has run out fails with an error that says so; the search
-/// tells such a candidate from one that cannot be trained.
-#[test]
-fn an_svm_past_its_time_budget_fails_with_the_budget_error() {
-    let captures = with_tones(0..3, 3.0);
-    let settings = TrainSettings {
-        c: SvmC::Unscored(10.0),
-        fit_posterior_weight: false,
-        time_budget: Some((std::time::Instant::now(), std::time::Duration::from_nanos(1))),
-        ..short_windows(Method::Svm, FeatureSet::Vibration)
-    };
-    let err = train(&captures, &settings).expect_err("out of time");
-    assert!(err.ran_out_of_time(), "{}", err.chain());
-    // Unscored: no cross-validation, so no C search is kept.
-    let model = train(
-        &captures,
-        &TrainSettings {
-            time_budget: None,
-            ..settings.clone()
-        },
-    )
-    .expect("no budget");
-    let RecognizerBody::SvmWindows { svc, c_search, .. } = &model.body else {
-        panic!("an SVM over windows");
-    };
-    assert_eq!((svc.params().c, c_search.is_none()), (10.0, true));
-    let other = train(
-        &captures,
-        &TrainSettings {
-            window_s: 100.0,
-            train_window_s: None,
-            time_budget: None,
-            ..settings
-        },
-    )
-    .expect_err("no window");
-    assert!(!other.ran_out_of_time(), "{}", other.chain());
 }

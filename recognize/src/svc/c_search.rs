@@ -189,8 +189,7 @@ fn select_c_trained_on<V: AsRef<[f64]>>(
     let (features, labels, groups) = (data.features, data.labels, data.groups);
     let (fold, used) = cv_folds(features.len(), labels.len(), groups, folds)?;
     let marked = trains.map_or(features.len(), |t| t.iter().filter(|&&t| t).count());
-    // Duplicating each vector k times weighs the hinge loss as multiplying C by k does.
-    let weight = features.len() as f64 / marked.max(1) as f64;
+    let weight = repeat_weight(features.len(), marked);
     let mut order: Vec<f64> = grid.to_vec();
     order.sort_by(f64::total_cmp);
     order.dedup();
@@ -313,6 +312,12 @@ fn select_c_trained_on<V: AsRef<[f64]>>(
         separable_from: separable_from.map(|p| p.c),
         vector_weight: (marked < features.len()).then_some(weight),
     })
+}
+
+/// The factor on C at which `kept` of `all` near-repeating vectors weigh the hinge loss as all
+/// of them do at C: repeating each vector k times weighs it as multiplying C by k does.
+pub(crate) fn repeat_weight(all: usize, kept: usize) -> f64 {
+    all as f64 / kept.max(1) as f64
 }
 
 /// Fold of each vector and the number of folds, after checking the counts.

@@ -38,6 +38,7 @@ mod probability;
 /// keeps every row.
 const CACHE_BYTES: usize = 128 << 20;
 
+pub(crate) use c_search::repeat_weight;
 pub use c_search::{C_GRID, CSearch, CvPoint, select_c_observed, select_c_sparse};
 #[cfg(test)]
 use c_search::{cross_validated_accuracy, select_c};
