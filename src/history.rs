@@ -194,11 +194,14 @@ impl History {
         if check != "ok" {
             return Err(unusable(format!("integrity check: {check}")));
         }
-        let version: i64 = db
-            .query_row("PRAGMA user_version", [], |r| r.get(0))
-            .map_err(|e| unusable(e.to_string()))?;
-        let tables: i64 = db
-            .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
+        // One statement, one snapshot: read apart, another session's creation could commit
+        // between them and show its table without its version.
+        let (version, tables): (i64, i64) = db
+            .query_row(
+                "SELECT (SELECT user_version FROM pragma_user_version), (SELECT count(*) FROM sqlite_master)",
+                [],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
             .map_err(|e| unusable(e.to_string()))?;
         let history = Self {
             path: path.to_owned(),
