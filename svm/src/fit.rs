@@ -662,19 +662,35 @@ fn certificate_of(
         return solution(&parts.fitted, parts.primal_quad, parts.dual_quad, &parts.norms);
     }
     let support: Vec<usize> = (0..n).filter(|&j| beta[j] != 0.0).collect();
+    // Without the matrix, an RBF's values come a row over the support at a time (the same
+    // bits as one by one, in a vector loop).
+    let columns = k
+        .is_none()
+        .then(|| crate::kernel::RbfColumns::of(kernel, x, dim, support.iter().copied()))
+        .flatten();
     let k_beta: Vec<Accumulator> = (0..n)
         .into_par_iter()
-        .map(|i| {
-            let mut acc = Accumulator::new();
-            for &j in &support {
-                let kij = match k {
-                    Some(k) => k[(i, j)],
-                    None => kernel.eval(row(j), row(i)),
-                };
-                acc.add_product(kij, beta[j]);
-            }
-            acc
-        })
+        .map_init(
+            || vec![0.0; support.len()],
+            |values, i| {
+                let mut acc = Accumulator::new();
+                if let Some(columns) = &columns {
+                    columns.row(row(i), 0, values);
+                    for (&kij, &j) in values.iter().zip(&support) {
+                        acc.add_product(kij, beta[j]);
+                    }
+                    return acc;
+                }
+                for &j in &support {
+                    let kij = match k {
+                        Some(k) => k[(i, j)],
+                        None => kernel.eval(row(j), row(i)),
+                    };
+                    acc.add_product(kij, beta[j]);
+                }
+                acc
+            },
+        )
         .collect();
     let norms: Vec<f64> = (0..n)
         .map(|i| {

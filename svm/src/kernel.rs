@@ -34,10 +34,7 @@ impl Kernel {
     pub fn eval(&self, a: &[f64], b: &[f64]) -> f64 {
         match *self {
             Self::Linear => dot(a, b),
-            Self::Rbf { gamma } => {
-                clear_upper_simd_state();
-                (-gamma * squared_distance(a, b)).exp()
-            }
+            Self::Rbf { gamma } => crate::exp::exp(-gamma * squared_distance(a, b)),
             Self::Polynomial { gamma, coef0, degree } => powi(gamma * dot(a, b) + coef0, degree),
         }
     }
@@ -50,29 +47,6 @@ impl Kernel {
             Self::Polynomial { .. } => "polynomial",
         }
     }
-}
-
-/// Clears the upper halves of the AVX registers before a call into the C math library.
-///
-/// The solvers' dense algebra (faer's AVX kernels) can return with those halves in use, and
-/// this crate's own code is built for baseline x86-64 (SSE). A thread left in that state pays
-/// a transition on every switch between SSE code and the math library's AVX `exp`: the
-/// certificate's `Kβ` at n = 1,000 took 71 ms on two threads against 7.5 ms on one (AMD
-/// EPYC), and 4 ms once cleared. `vzeroupper` costs about a cycle; the feature check is a
-/// cached load.
-#[inline]
-fn clear_upper_simd_state() {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        // SAFETY: the CPU supports AVX, checked just above.
-        unsafe { zero_upper() }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn zero_upper() {
-    std::arch::x86_64::_mm256_zeroupper();
 }
 
 /// Inputs from which a kernel's sum is kept in four partial sums ([`lane_sum`]); below, one
@@ -118,6 +92,86 @@ pub(crate) fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
     lane_sum(a, b, |x, y| (x - y) * (x - y))
 }
 
+/// The samples of an RBF kernel laid out by feature (`dim × n`), from which whole rows are
+/// computed a feature at a time: each pass over the samples is one vector loop, where a row
+/// sample by sample is a short loop per value. Only for inputs whose squared distance
+/// [`Kernel::eval`] sums in one running sum (fewer than [`LANE_SUM_MIN`] features), so the rows
+/// are its values to the bit.
+#[derive(Debug, Clone)]
+pub(crate) struct RbfColumns {
+    gamma: f64,
+    columns: Vec<f64>,
+    n: usize,
+}
+
+impl RbfColumns {
+    /// `x` (`n × dim`, row-major) by feature, when `kernel` is an RBF over fewer than
+    /// [`LANE_SUM_MIN`] features; `None` otherwise.
+    pub(crate) fn new(kernel: &Kernel, x: &[f64], dim: usize) -> Option<Self> {
+        let n = x.len().checked_div(dim)?;
+        Self::of(kernel, x, dim, 0..n)
+    }
+
+    /// As [`RbfColumns::new`], over the samples `samples` of `x` only, in their order: row
+    /// entry `r` is then the kernel with `samples[r]`.
+    pub(crate) fn of(
+        kernel: &Kernel,
+        x: &[f64],
+        dim: usize,
+        samples: impl ExactSizeIterator<Item = usize>,
+    ) -> Option<Self> {
+        let Kernel::Rbf { gamma } = *kernel else {
+            return None;
+        };
+        if dim == 0 || dim >= LANE_SUM_MIN {
+            return None;
+        }
+        let n = samples.len();
+        let mut columns = vec![0.0; dim * n];
+        for (r, i) in samples.enumerate() {
+            for (k, &v) in x[i * dim..(i + 1) * dim].iter().enumerate() {
+                columns[k * n + r] = v;
+            }
+        }
+        Some(Self { gamma, columns, n })
+    }
+
+    /// `K(xi, x_r)` for `r` in `start..start + out.len()`, into `out`: the values of
+    /// [`Kernel::eval`], summed in the same order.
+    pub(crate) fn row(&self, xi: &[f64], start: usize, out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            return unsafe { self.row_avx2(xi, start, out) };
+        }
+        self.row_portable(xi, start, out);
+    }
+
+    /// [`RbfColumns::row`] in four-wide vectors. Without fused multiply-adds (Rust never
+    /// contracts), every operation rounds as the two-wide build's does: the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn row_avx2(&self, xi: &[f64], start: usize, out: &mut [f64]) {
+        self.row_portable(xi, start, out);
+    }
+
+    #[inline(always)]
+    fn row_portable(&self, xi: &[f64], start: usize, out: &mut [f64]) {
+        let end = start + out.len();
+        let column = |k: usize| &self.columns[k * self.n + start..k * self.n + end];
+        // The first feature's term is the sum so far (0 + t is t for t ≥ 0).
+        for (o, &b) in out.iter_mut().zip(column(0)) {
+            *o = (xi[0] - b) * (xi[0] - b);
+        }
+        for (k, &a) in xi.iter().enumerate().skip(1) {
+            for (o, &b) in out.iter_mut().zip(column(k)) {
+                *o += (a - b) * (a - b);
+            }
+        }
+        crate::exp::exp_scaled_in_place(out, -self.gamma);
+    }
+}
+
 fn powi(x: f64, degree: u32) -> f64 {
     x.powi(i32::try_from(degree).unwrap_or(i32::MAX))
 }
@@ -140,6 +194,33 @@ mod tests {
         }
         .eval(&a, &b);
         assert!((p - (2.0f64 * -1.5 + 1.0).powi(2)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn rbf_rows_by_feature_are_the_kernels_values_to_the_bit() {
+        for dim in 1..LANE_SUM_MIN {
+            let n = 37;
+            let x: Vec<f64> = (0..n * dim)
+                .map(|i| ((i * 7919) % 1000) as f64 / 997.0 - 0.3)
+                .collect();
+            let kernel = Kernel::Rbf { gamma: 2.7 };
+            let columns = RbfColumns::new(&kernel, &x, dim).unwrap();
+            let mut out = vec![0.0; n - 5];
+            for i in [0, 11, n - 1] {
+                let xi = &x[i * dim..(i + 1) * dim];
+                columns.row(xi, 5, &mut out);
+                for (o, r) in out.iter().zip(5..) {
+                    assert_eq!(
+                        *o,
+                        kernel.eval(xi, &x[r * dim..(r + 1) * dim]),
+                        "dim {dim} ({i}, {r})"
+                    );
+                }
+            }
+        }
+        let wide = vec![0.5; 4 * LANE_SUM_MIN];
+        assert!(RbfColumns::new(&Kernel::Rbf { gamma: 1.0 }, &wide, LANE_SUM_MIN).is_none());
+        assert!(RbfColumns::new(&Kernel::Linear, &wide, 2).is_none());
     }
 
     #[test]

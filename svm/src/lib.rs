@@ -19,6 +19,7 @@ mod certificate;
 mod compensated;
 mod data;
 mod error;
+mod exp;
 mod export;
 mod fast;
 mod fit;

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::bordered::{Singular, solve_bordered};
 use super::data::SvrData;
-use super::kernel::Kernel;
+use super::kernel::{Kernel, RbfColumns};
 use super::params::DualSettings;
 
 /// Free samples above which no finish is tried: the system's matrix takes `m²` doubles
@@ -118,11 +118,26 @@ pub(crate) fn finish(
             })
             .collect();
         // Bordered system [K_FF 1; 1ᵀ 0] [β_F; b] = [y_F ∓ ε − (Kβ_bounded)_F; −Σβ_bounded].
-        let a = Mat::<f64>::from_fn(m + 1, m + 1, |r, s| match (r < m, s < m) {
-            (true, true) => kernel.eval(row(free[r]), row(free[s])),
+        let mut a = Mat::<f64>::from_fn(m + 1, m + 1, |r, s| match (r < m, s < m) {
+            (true, true) => 0.0,
             (true, false) | (false, true) => 1.0,
             (false, false) => 0.0,
         });
+        let free_columns = RbfColumns::of(kernel, x, dim, free.iter().copied());
+        let mut values = vec![0.0; m];
+        for (s, &j) in free.iter().enumerate() {
+            match &free_columns {
+                Some(columns) => columns.row(row(j), 0, &mut values),
+                None => {
+                    for (v, &i) in values.iter_mut().zip(&free) {
+                        *v = kernel.eval(row(i), row(j));
+                    }
+                }
+            }
+            for (r, &v) in values.iter().enumerate() {
+                a[(r, s)] = v;
+            }
+        }
         // (Kβ)_F at the bounded samples' new values and the free ones' old: K β_old plus the
         // bounded samples' changes.
         let moved: Vec<(usize, f64)> = (0..n)
@@ -169,15 +184,24 @@ pub(crate) fn finish(
             .filter(|&i| new_beta[i] != beta[i])
             .map(|i| (i, new_beta[i] - beta[i]))
             .collect();
-        k_beta.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
-            for (o, kb) in out.iter_mut().enumerate() {
-                let xi = row(chunk * CHUNK + o);
-                *kb += delta
-                    .iter()
-                    .map(|&(j, d)| d * kernel.eval(xi, row(j)))
-                    .sum::<f64>();
-            }
-        });
+        let delta_columns = RbfColumns::of(kernel, x, dim, delta.iter().map(|&(j, _)| j));
+        k_beta.par_chunks_mut(CHUNK).enumerate().for_each_init(
+            || vec![0.0; delta.len()],
+            |values, (chunk, out)| {
+                for (o, kb) in out.iter_mut().enumerate() {
+                    let xi = row(chunk * CHUNK + o);
+                    match &delta_columns {
+                        Some(columns) => columns.row(xi, 0, values),
+                        None => {
+                            for (v, &(j, _)) in values.iter_mut().zip(&delta) {
+                                *v = kernel.eval(xi, row(j));
+                            }
+                        }
+                    }
+                    *kb += values.iter().zip(&delta).map(|(&v, &(_, d))| d * v).sum::<f64>();
+                }
+            },
+        );
         beta = new_beta;
         // Move the samples on the wrong side (a primal–dual active-set step). A free
         // coefficient out of its box goes to the bound it crossed first, alone: moving the

@@ -5,7 +5,7 @@ use super::rows::{KernelRows, SampleQ};
 use super::solver::solve;
 use super::{SelectionCurvature, SmoSettings, libsvm_rho};
 use crate::error::SvmError;
-use crate::kernel::Kernel;
+use crate::kernel::{Kernel, RbfColumns};
 
 /// Memory for cached kernel rows of the ε-SVR (libsvm's `-m`; scikit-learn's default is 200 MB).
 pub(crate) const CACHE_BYTES: usize = 256 << 20;
@@ -16,6 +16,8 @@ pub(crate) struct RowCache<'a> {
     x: &'a [f64],
     dim: usize,
     n: usize,
+    /// The inputs by feature, when the kernel's rows can be computed from them.
+    columns: Option<RbfColumns>,
     diag: Vec<f64>,
     slot_of: Vec<Option<usize>>,
     owner: Vec<usize>,
@@ -40,6 +42,7 @@ impl<'a> RowCache<'a> {
             x,
             dim,
             n,
+            columns: RbfColumns::new(kernel, &x[..n * dim], dim),
             diag: (0..n)
                 .map(|i| kernel.eval(&x[i * dim..(i + 1) * dim], &x[i * dim..(i + 1) * dim]))
                 .collect(),
@@ -65,12 +68,16 @@ impl<'a> RowCache<'a> {
     }
 
     /// Computes row `i` into `out`.
-    fn compute(kernel: &Kernel, x: &[f64], dim: usize, i: usize, out: &mut [f64]) {
+    fn compute(&self, i: usize, out: &mut [f64]) {
+        let (kernel, x, dim) = (self.kernel, self.x, self.dim);
         let xi = &x[i * dim..(i + 1) * dim];
-        let fill = |start: usize, out: &mut [f64]| {
-            for (j, o) in out.iter_mut().enumerate() {
-                let r = start + j;
-                *o = kernel.eval(xi, &x[r * dim..(r + 1) * dim]);
+        let fill = |start: usize, out: &mut [f64]| match &self.columns {
+            Some(columns) => columns.row(xi, start, out),
+            None => {
+                for (j, o) in out.iter_mut().enumerate() {
+                    let r = start + j;
+                    *o = kernel.eval(xi, &x[r * dim..(r + 1) * dim]);
+                }
             }
         };
         if out.len() >= PARALLEL_ROW {
@@ -95,9 +102,16 @@ impl RowCache<'_> {
                 // as far as the rows asked for.
                 let used = self.rows.len() / n.max(1);
                 let s = if used < self.owner.len() {
-                    // Exactly one row more: a doubling growth would overshoot the budget.
-                    self.rows.reserve_exact(n);
-                    self.rows.resize((used + 1) * n, 0.0);
+                    // Capacity doubles, capped at the budget's rows: growing by exactly one
+                    // row moved the whole store on every new row (a tenth of a fit's time in
+                    // the kernel's page remapping at n = 3,000), and doubling past the cap
+                    // would overshoot the budget.
+                    let (want, cap) = ((used + 1) * n, self.owner.len() * n);
+                    if self.rows.capacity() < want {
+                        let grown = (2 * self.rows.capacity()).clamp(want, cap.max(want));
+                        self.rows.reserve_exact(grown - self.rows.len());
+                    }
+                    self.rows.resize(want, 0.0);
                     used
                 } else {
                     (0..self.owner.len())
@@ -109,13 +123,9 @@ impl RowCache<'_> {
                 }
                 self.owner[s] = i;
                 self.slot_of[i] = Some(s);
-                Self::compute(
-                    self.kernel,
-                    self.x,
-                    self.dim,
-                    i,
-                    &mut self.rows[s * n..(s + 1) * n],
-                );
+                let mut row = std::mem::take(&mut self.rows);
+                self.compute(i, &mut row[s * n..(s + 1) * n]);
+                self.rows = row;
                 self.computed += 1;
                 s
             }
