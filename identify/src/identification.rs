@@ -451,8 +451,9 @@ pub struct FitLimits<'a> {
     /// Support-vector budget of each kernel SVR ([`svm::SvrParamsBuilder::max_sv`]): a larger
     /// solution is reduced, and the report says how far the reduced model is from it.
     pub max_sv: Option<usize>,
-    /// Called as each fit advances.
-    pub observer: &'a dyn Fn(&str, &FitProgress),
+    /// Called as each fit advances, from whichever thread runs the fit (cross-validation
+    /// folds run side by side).
+    pub observer: &'a (dyn Fn(&str, &FitProgress) + Sync),
 }
 
 fn ignore_progress(_: &str, _: &FitProgress) {}

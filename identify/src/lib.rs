@@ -1,6 +1,7 @@
 //! Identification of haptic dynamics from captures.
 //!
-//! This crate is pure computation on data: it knows nothing of threads, devices or rendering.
+//! This crate is pure computation on data: it knows nothing of devices or rendering, and its
+//! only concurrency is rayon's pool (cross-validation folds side by side).
 //! It may import `capture` (the data contract) and `svm` (the solvers), no other palpus crate.
 //! Top-down: `baselines` and `metrics` (what a model is compared with, and how),
 //! `identification` (what Li & Bi's three models share), `contact_identification` and

@@ -5,9 +5,14 @@
 //! between them. The soft contact's second stage is validated leave-one-speed-out, on the
 //! held-out segment's raw samples. Each explored point reports what a user trades: held-out
 //! AISE, support vectors (the cost of every haptic evaluation), fit time and predict time.
+//!
+//! A point's folds are fitted side by side on rayon's pool (`palpus --threads`): each fold's
+//! times are its own wall-clock, taken while the other folds share the machine, so they are
+//! the times of a loaded machine; `--threads 1` times each fit alone.
 
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::contact_identification::stage_one;
@@ -260,6 +265,7 @@ impl Data {
                 let (n, dim) = (y.len(), *dim);
                 let folds = folds.clamp(2, n);
                 (0..folds)
+                    .into_par_iter()
                     .map(|k| {
                         let (tr, va) = split(n, folds, k);
                         let x_tr: Vec<f64> = tr
@@ -312,6 +318,7 @@ impl Data {
                 points,
                 segments,
             } => (0..points.len())
+                .into_par_iter()
                 .map(|k| {
                     let keep: Vec<&[f64; 3]> = points
                         .iter()

@@ -182,12 +182,12 @@ pub(crate) fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         ProgressStyle::with_template("{spinner} {msg} {elapsed}")
             .unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
-    let shown = std::cell::Cell::new(false);
+    let shown = std::sync::atomic::AtomicBool::new(false);
     let observer = |what: &str, p: &svm::FitProgress| {
         if args.quiet || p.elapsed_s < 1.0 {
             return;
         }
-        if !shown.replace(true) {
+        if !shown.swap(true, std::sync::atomic::Ordering::Relaxed) {
             bar.set_draw_target(ProgressDrawTarget::stderr());
             bar.enable_steady_tick(Duration::from_millis(200));
         }
