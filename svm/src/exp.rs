@@ -4,8 +4,10 @@
 //! library's `exp` is one call per value: on Friedman #1 at n = 30,000 it and the distance
 //! loop around it were 45 % of an ε-SVR fit. This one is a Cody–Waite reduction and a Taylor
 //! polynomial, branch-free, so a loop over a row compiles to vector code. It uses no fused
-//! multiply-add and no table, so it gives the same bits on every x86-64 and every build, and
-//! every kernel value of the crate (rows, certificate, model evaluation) comes from it.
+//! multiply-add and no table, so it gives the same bits on every x86-64 and every build.
+//! Kernel rows (the solvers' matrices and the certificate) come from it; a single kernel value
+//! ([`crate::Kernel::eval`], e.g. a model's prediction) still calls the C library, whose
+//! table-driven `exp` is twice as fast one value at a time. The two agree to two ulps.
 
 /// `round(x · log₂e)` by the shift trick: adding 1.5 · 2⁵² rounds to an integer held in the
 /// low mantissa bits (exact for |x · log₂e| < 2⁵¹, far beyond the clamp below).

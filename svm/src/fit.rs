@@ -746,9 +746,20 @@ pub(crate) fn kernel_matrix(kernel: &Kernel, x: &[f64], dim: usize) -> Option<Ma
     let n = x.len() / dim;
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
     let mut k = Mat::<f64>::zeros(n, n);
+    // An RBF's columns come a feature at a time, in vector loops (the same bits).
+    let by_feature = crate::kernel::RbfColumns::new(kernel, x, dim);
+    let mut column = vec![0.0; n];
     for j in 0..n {
-        for i in j..n {
-            let v = kernel.eval(row(i), row(j));
+        let below = &mut column[..n - j];
+        match &by_feature {
+            Some(by_feature) => by_feature.row(row(j), j, below),
+            None => {
+                for (v, i) in below.iter_mut().zip(j..) {
+                    *v = kernel.eval(row(i), row(j));
+                }
+            }
+        }
+        for (&v, i) in below.iter().zip(j..) {
             if !v.is_finite() {
                 return None;
             }

@@ -19,7 +19,7 @@ use faer::{Accum, Mat, Par, Side};
 use rayon::prelude::*;
 
 use super::ipm::NewtonOperator;
-use super::kernel::Kernel;
+use super::kernel::{Kernel, RbfColumns};
 
 /// Rows per parallel task.
 const CHUNK: usize = 2048;
@@ -121,6 +121,8 @@ pub(crate) fn pivoted_cholesky(
     let scale = diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
     let stop = tolerance * scale.max(f64::MIN_POSITIVE);
     let mut columns: Vec<Vec<f64>> = Vec::new();
+    // Each new column is a kernel row: an RBF's come a feature at a time, in vector loops.
+    let by_feature = RbfColumns::new(kernel, x, dim);
     // The largest residual at the checkpoint ranks (16, 32, 64, …) so far.
     let mut checkpoints: Vec<(usize, f64)> = Vec::new();
     loop {
@@ -149,8 +151,13 @@ pub(crate) fn pivoted_cholesky(
         column.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
             let start = chunk * CHUNK;
             let end = start + out.len();
-            for (o, v) in out.iter_mut().enumerate() {
-                *v = kernel.eval(row(start + o), xp);
+            match &by_feature {
+                Some(by_feature) => by_feature.row(xp, start, out),
+                None => {
+                    for (o, v) in out.iter_mut().enumerate() {
+                        *v = kernel.eval(row(start + o), xp);
+                    }
+                }
             }
             for (g, &gp) in columns.iter().zip(&pivot_row) {
                 for (v, gi) in out.iter_mut().zip(&g[start..end]) {
@@ -336,16 +343,26 @@ pub(crate) fn kernel_times(kernel: &Kernel, x: &[f64], dim: usize, beta: &[f64])
     let n = beta.len();
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
     let support: Vec<(usize, f64)> = (0..n).filter(|&j| beta[j] != 0.0).map(|j| (j, beta[j])).collect();
+    let by_feature = RbfColumns::of(kernel, x, dim, support.iter().map(|&(j, _)| j));
     let mut out = vec![0.0; n];
-    out.par_chunks_mut(CHUNK / 8)
-        .enumerate()
-        .for_each(|(chunk, out)| {
+    out.par_chunks_mut(CHUNK / 8).enumerate().for_each_init(
+        || vec![0.0; support.len()],
+        |values, (chunk, out)| {
             let start = chunk * (CHUNK / 8);
             for (o, v) in out.iter_mut().enumerate() {
                 let xi = row(start + o);
-                *v = support.iter().map(|&(j, b)| b * kernel.eval(xi, row(j))).sum();
+                match &by_feature {
+                    Some(by_feature) => by_feature.row(xi, 0, values),
+                    None => {
+                        for (value, &(j, _)) in values.iter_mut().zip(&support) {
+                            *value = kernel.eval(xi, row(j));
+                        }
+                    }
+                }
+                *v = values.iter().zip(&support).map(|(&k, &(_, b))| b * k).sum();
             }
-        });
+        },
+    );
     out
 }
 
