@@ -233,7 +233,7 @@ fn solve_dense(
     observer: &dyn Fn(&FitProgress),
 ) -> Result<DualSolution, SvmError> {
     let (x, dim, y) = (data.x, data.dim, data.y);
-    let k = kernel_matrix(kernel, x, dim).ok_or_else(|| SvmError::Numerical {
+    let k = crate::kernel::kernel_matrix(kernel, x, dim).ok_or_else(|| SvmError::Numerical {
         solver: "kernel",
         reason: "kernel values overflow; scale the inputs or lower gamma/degree".into(),
     })?;
@@ -736,42 +736,6 @@ pub fn slack(y: f64, f: f64, epsilon: f64) -> f64 {
     let excess = (y - f).abs() - epsilon;
     let rounding = 8.0 * f64::EPSILON * (y.abs() + f.abs() + epsilon);
     if excess <= rounding { 0.0 } else { excess }
-}
-
-/// The dense kernel matrix, or `None` if a value overflows. The lower triangle is filled down
-/// each column (contiguous in faer's column-major storage), then mirrored. One core: at the
-/// sizes this matrix is built for, waking a second one cost more than it saved (measured at
-/// n = 350: 2.1 ms on two threads, 1.3 ms on one).
-pub(crate) fn kernel_matrix(kernel: &Kernel, x: &[f64], dim: usize) -> Option<Mat<f64>> {
-    let n = x.len() / dim;
-    let row = |i: usize| &x[i * dim..(i + 1) * dim];
-    let mut k = Mat::<f64>::zeros(n, n);
-    // An RBF's columns come a feature at a time, in vector loops (the same bits).
-    let by_feature = crate::kernel::RbfColumns::new(kernel, x, dim);
-    let mut column = vec![0.0; n];
-    for j in 0..n {
-        let below = &mut column[..n - j];
-        match &by_feature {
-            Some(by_feature) => by_feature.row(row(j), j, below),
-            None => {
-                for (v, i) in below.iter_mut().zip(j..) {
-                    *v = kernel.eval(row(i), row(j));
-                }
-            }
-        }
-        for (&v, i) in below.iter().zip(j..) {
-            if !v.is_finite() {
-                return None;
-            }
-            k[(i, j)] = v;
-        }
-    }
-    for j in 1..n {
-        for i in 0..j {
-            k[(i, j)] = k[(j, i)];
-        }
-    }
-    Some(k)
 }
 
 /// Reads the active set off the interior point's last iterate: a bound is active when its
