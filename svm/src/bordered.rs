@@ -1,11 +1,12 @@
 //! Dense solves of the bordered KKT system `[K_FF 1; 1ᵀ 0] [β_F; b] = rhs` over the free
 //! samples, which both exact finishes (the dense polish and the low-rank interior point's
-//! finish) factorise: LU with full pivoting, and the thin SVD's minimum-norm least squares
-//! when the system is singular (more free samples than the kernel's rank plus one, as with a
-//! linear kernel or repeated input rows).
+//! finish) factorise: Cholesky of `K_FF` with the border eliminated, LU with full pivoting
+//! where that does not solve, and the thin SVD's minimum-norm least squares when the system is
+//! singular (more free samples than the kernel's rank plus one, as with a linear kernel or
+//! repeated input rows).
 
-use faer::Mat;
 use faer::linalg::solvers::Solve;
+use faer::{Mat, Side};
 
 /// What to do with a singular system's least-squares solution.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,6 +37,11 @@ pub(crate) fn solve_bordered(
                 (ax - b[r]).abs() <= tolerance * scale
             })
     };
+    if let Some(x) = border_eliminated(a, &b)
+        && solves(&x)
+    {
+        return Some(x);
+    }
     let lu = a.full_piv_lu().solve(rhs);
     let x: Vec<f64> = (0..m).map(|r| lu[(r, 0)]).collect();
     if solves(&x) {
@@ -46,6 +52,28 @@ pub(crate) fn solve_bordered(
         Singular::LeastSquares => x.iter().all(|v| v.is_finite()).then_some(x),
         Singular::MustSolve => solves(&x).then_some(x),
     }
+}
+
+/// `[A u; uᵀ d] [z; b] = [r; rₘ]` by a Cholesky factor of `A` (positive definite for an RBF
+/// kernel's distinct samples): `z = A⁻¹r − b A⁻¹u` with `b` from the last row. Half the flops of
+/// an LU and blocked where full pivoting is not: at 2,456 free samples of Friedman #1 one
+/// solve took 2.3 s by full-pivot LU. `None` when `A` has no Cholesky factor or the border is
+/// not symmetric; the caller checks the residual of what it returns.
+fn border_eliminated(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let m = a.nrows().checked_sub(1)?;
+    if (0..m).any(|s| a[(m, s)] != a[(s, m)]) {
+        return None;
+    }
+    let llt = a.as_ref().submatrix(0, 0, m, m).llt(Side::Lower).ok()?;
+    let both = Mat::<f64>::from_fn(m, 2, |r, k| if k == 0 { b[r] } else { a[(r, m)] });
+    let z = llt.solve(&both);
+    let (u_r, u_u): (f64, f64) = (0..m).fold((0.0, 0.0), |(p, q), r| {
+        (p + a[(m, r)] * z[(r, 0)], q + a[(m, r)] * z[(r, 1)])
+    });
+    let bias = (b[m] - u_r) / (a[(m, m)] - u_u);
+    let mut x: Vec<f64> = (0..m).map(|r| z[(r, 0)] - bias * z[(r, 1)]).collect();
+    x.push(bias);
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Minimum-norm least-squares solution of `a x = b` by the thin SVD, singular values up to
