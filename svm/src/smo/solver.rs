@@ -30,8 +30,9 @@ pub(super) trait QMatrix {
 
 /// What a solve asks, each time it has converged on every variable, of whoever called it:
 /// `(α, ∇, stop)` in the caller's order → a smaller stop value to go on to, or `None` to
-/// finish.
-pub(super) type Refine<'a> = dyn FnMut(&[f64], &[f64], f64) -> Option<f64> + 'a;
+/// finish. The caller may correct ∇ (e.g. recompute it where Q's rows were rounded); the solve
+/// goes on, and computes ρ, from the gradient it leaves.
+pub(super) type Refine<'a> = dyn FnMut(&[f64], &mut [f64], f64) -> Option<f64> + 'a;
 
 /// Solver state by position (libsvm's arrays; positions below `active` are the active set).
 struct State<'q, Q> {
@@ -646,8 +647,12 @@ fn solve_with<Q: QMatrix, const NON_POSITIVE_TO_TAU: bool>(
                 if pair.is_none() {
                     break;
                 }
-                let (alpha, grad) = (s.in_caller_order(&s.alpha), s.in_caller_order(&s.grad));
-                match refine(&alpha, &grad, stop) {
+                let (alpha, mut grad) = (s.in_caller_order(&s.alpha), s.in_caller_order(&s.grad));
+                let tighter = refine(&alpha, &mut grad, stop);
+                for (g, &t) in s.grad.iter_mut().zip(&s.original) {
+                    *g = grad[t];
+                }
+                match tighter {
                     Some(tighter) if tighter < stop => {
                         stop = tighter;
                         unshrunk = false;
