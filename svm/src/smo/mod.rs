@@ -183,7 +183,8 @@ pub struct SmoSolution {
 /// or twice as many (a split dual: variable t is sample `t mod n`).
 ///
 /// # Panics
-/// If `labels` and `linear` differ in length or do not cover the samples once or twice.
+/// If `labels` and `linear` differ in length or do not cover the samples once or twice, or a
+/// label is not ±1.
 pub fn solve_smo<R: KernelRows>(
     rows: &mut R,
     labels: &[f64],

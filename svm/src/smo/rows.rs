@@ -17,23 +17,41 @@ pub trait KernelRows {
 
 /// A kernel value as a row holds it: `f64`, or `f32` where a store of rows gains twice the rows
 /// for a rounding of 2⁻²⁴ (libsvm holds its rows so). The solver reads every value as `f64`.
-pub trait RowValue: Copy + Default + Send + Sync + 'static {
+pub trait RowValue: sealed::Sealed + Copy + Default + Into<f64> + Send + Sync + 'static {
     /// Whether holding a value rounds it, so that a gradient built from rows is the gradient of
     /// a neighbouring problem, not of the one asked.
     const ROUNDS: bool;
-    /// `out[t] = st · sign[t] · row[sample[t]]`.
-    fn gather_signed(row: &[Self], sample: &[usize], sign: &[f64], st: f64, out: &mut [f64]);
+    /// `out[t] = st · sign[t] · row[sample[t]]` for every `t < out.len()`.
+    ///
+    /// # Safety
+    /// `sample` and `sign` are at least as long as `out`, and each of the first `out.len()`
+    /// samples is below `row.len()`: the gathers read `row` without bounds checks.
+    unsafe fn gather_signed(row: &[Self], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]);
     /// The row's own storage when it is `f64`, so that a row is computed in place.
     fn as_f64_mut(row: &mut [Self]) -> Option<&mut [f64]>;
     /// Holds `values` in `out`.
     fn store(values: &[f64], out: &mut [Self]);
 }
 
+mod sealed {
+    /// Only the row values the gathers are written for.
+    pub trait Sealed {}
+    impl Sealed for f64 {}
+    impl Sealed for f32 {}
+}
+
 impl RowValue for f64 {
     const ROUNDS: bool = false;
 
-    fn gather_signed(row: &[Self], sample: &[usize], sign: &[f64], st: f64, out: &mut [f64]) {
-        gather_signed(row, sample, sign, st, out);
+    unsafe fn gather_signed(row: &[Self], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above; the indices as the caller
+            // promised.
+            unsafe { gather_signed_avx2(row, sample, sign, st, out) };
+            return;
+        }
+        gather_signed_from(row, sample, sign, st, out, 0);
     }
 
     fn as_f64_mut(row: &mut [Self]) -> Option<&mut [f64]> {
@@ -48,10 +66,10 @@ impl RowValue for f64 {
 impl RowValue for f32 {
     const ROUNDS: bool = true;
 
-    fn gather_signed(row: &[Self], sample: &[usize], sign: &[f64], st: f64, out: &mut [f64]) {
+    unsafe fn gather_signed(row: &[Self], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && row.len() <= i64::MAX as usize {
-            // SAFETY: the CPU supports AVX2, checked just above.
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: as for `f64`.
             unsafe { gather_signed_f32_avx2(row, sample, sign, st, out) };
             return;
         }
@@ -100,26 +118,46 @@ impl KernelRows for GramRows<'_> {
 /// The dual's matrix over variables that each stand for a sample with a sign: a row of Q is
 /// gathered, over the positions asked for, from the sample's kernel row (which `R` may cache),
 /// into one of two buffers in turn, so the last two stay readable together. Two variables of a
-/// split dual share their sample's kernel row; libsvm's `SVR_Q` does the same.
+/// split dual share their sample's kernel row; libsvm's `SVR_Q` does the same, and as libsvm's,
+/// the sample and sign of a position take 5 bytes, which the gather reads for every position of
+/// every row (with 16 bytes it was a quarter of a Friedman fit at n = 2,208).
 pub(super) struct SampleQ<'r, R> {
     rows: &'r mut R,
+    /// Samples; every entry of `sample` is below it.
+    n: usize,
     /// Sample of the variable at each position.
-    sample: Vec<usize>,
+    sample: Vec<u32>,
     /// Sign (label) of the variable at each position.
-    sign: Vec<f64>,
+    sign: Vec<i8>,
     buffers: [Vec<f64>; 2],
     next: usize,
 }
 
 impl<'r, R: KernelRows> SampleQ<'r, R> {
     /// Variable t is sample `t mod n` with sign `labels[t]`.
+    ///
+    /// # Panics
+    /// If a label is not ±1, or there are 2³¹ samples or more (the gathers' indices are 32-bit).
     pub(super) fn new(rows: &'r mut R, labels: &[f64]) -> Self {
         let n = rows.samples();
         let m = labels.len();
+        assert!(
+            i32::try_from(n).is_ok(),
+            "SMO: {n} samples; at most 2³¹ − 1 are indexed"
+        );
+        let sign = labels
+            .iter()
+            .map(|&l| match l {
+                1.0 => 1,
+                -1.0 => -1,
+                _ => panic!("SMO: a label {l}, not ±1"),
+            })
+            .collect();
         Self {
             rows,
-            sample: (0..m).map(|t| t % n.max(1)).collect(),
-            sign: labels.to_vec(),
+            n,
+            sample: (0..m).map(|t| (t % n.max(1)) as u32).collect(),
+            sign,
             buffers: [vec![0.0; m], vec![0.0; m]],
             next: 0,
         }
@@ -128,16 +166,19 @@ impl<'r, R: KernelRows> SampleQ<'r, R> {
 
 impl<R: KernelRows> QMatrix for SampleQ<'_, R> {
     fn diagonal(&self, t: usize) -> f64 {
-        self.rows.diagonal(self.sample[t])
+        self.rows.diagonal(self.sample[t] as usize)
     }
 
     fn fetch(&mut self, t: usize, len: usize) -> usize {
         let h = self.next;
         self.next = 1 - h;
-        let (s, st) = (self.sample[t], self.sign[t]);
+        let (s, st) = (self.sample[t] as usize, f64::from(self.sign[t]));
         let row = self.rows.row(s);
+        assert!(row.len() >= self.n, "a kernel row shorter than its samples");
         let out = &mut self.buffers[h][..len];
-        R::Value::gather_signed(row, &self.sample[..len], &self.sign[..len], st, out);
+        // SAFETY: `sample` and `sign` hold a position per variable, as many as `out` at most;
+        // every sample is below `n` (made so, then only swapped), and `n ≤ row.len()`.
+        unsafe { R::Value::gather_signed(row, &self.sample[..len], &self.sign[..len], st, out) };
         h
     }
 
@@ -151,85 +192,84 @@ impl<R: KernelRows> QMatrix for SampleQ<'_, R> {
     }
 }
 
-/// `out[t] = st · sign[t] · row[sample[t]]`: a row of Q from its sample's kernel row, in AVX2
-/// gathers where the CPU has them (a fifth of a Friedman fit's time at n = 3,000 was this loop;
-/// the products by ±1 are exact, so both ways give the same bits).
-fn gather_signed(row: &[f64], sample: &[usize], sign: &[f64], st: f64, out: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && row.len() <= i64::MAX as usize {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        unsafe { gather_signed_avx2(row, sample, sign, st, out) };
-        return;
-    }
-    gather_signed_from(row, sample, sign, st, out, 0);
-}
-
-fn gather_signed_from<T: Copy + Into<f64>>(
+fn gather_signed_from<T: RowValue>(
     row: &[T],
-    sample: &[usize],
-    sign: &[f64],
+    sample: &[u32],
+    sign: &[i8],
     st: f64,
     out: &mut [f64],
     from: usize,
 ) {
     for ((o, &r), &sr) in out[from..].iter_mut().zip(&sample[from..]).zip(&sign[from..]) {
-        *o = st * sr * row[r].into();
+        *o = st * f64::from(sr) * row[r as usize].into();
     }
 }
 
+/// Four signs (±1 bytes) from `sign[start..start + 4]` as doubles.
+///
+/// # Safety
+/// `start + 4 ≤ sign.len()`, and the CPU supports AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn gather_signed_avx2(row: &[f64], sample: &[usize], sign: &[f64], st: f64, out: &mut [f64]) {
+unsafe fn four_signs(sign: &[i8], start: usize) -> std::arch::x86_64::__m256d {
     use std::arch::x86_64::*;
-    let n = out.len().min(sample.len()).min(sign.len());
-    // Every index is checked once, up front: the gathers below read without bounds checks.
-    assert!(
-        sample[..n].iter().all(|&r| r < row.len()),
-        "a sample outside its kernel row"
-    );
+    // SAFETY: four bytes inside `sign`, as the caller promised.
+    let bytes = unsafe { sign.as_ptr().add(start).cast::<i32>().read_unaligned() };
+    _mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(bytes)))
+}
+
+/// `out[t] = st · sign[t] · row[sample[t]]` in AVX2 gathers (a fifth of a Friedman fit's time at
+/// n = 3,000 was this loop; the products by ±1 are exact, so both ways give the same bits).
+///
+/// # Safety
+/// As [`RowValue::gather_signed`], on a CPU with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gather_signed_avx2(row: &[f64], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
+    use std::arch::x86_64::*;
+    let n = out.len();
     let whole = n / 4 * 4;
     let stv = _mm256_set1_pd(st);
     for start in (0..whole).step_by(4) {
-        // SAFETY: start + 4 ≤ n ≤ each slice's length, and every index is below row.len()
-        // (checked above), so the gather reads inside `row`.
+        // SAFETY: start + 4 ≤ n ≤ each slice's length; every index is below row.len() (the
+        // caller's promise) and below 2³¹, so the signed 32-bit gather reads inside `row`.
         unsafe {
-            let index = _mm256_loadu_si256(sample.as_ptr().add(start).cast());
-            let values = _mm256_i64gather_pd::<8>(row.as_ptr(), index);
-            let signs = _mm256_loadu_pd(sign.as_ptr().add(start));
+            let index = _mm_loadu_si128(sample.as_ptr().add(start).cast());
+            let values = _mm256_i32gather_pd::<8>(row.as_ptr(), index);
+            let signs = four_signs(sign, start);
             _mm256_storeu_pd(
                 out.as_mut_ptr().add(start),
                 _mm256_mul_pd(_mm256_mul_pd(stv, signs), values),
             );
         }
     }
-    gather_signed_from(row, sample, sign, st, &mut out[..n], whole);
+    gather_signed_from(row, sample, sign, st, out, whole);
 }
 
 /// [`gather_signed_avx2`] from a row of `f32`, each value widened exactly.
+///
+/// # Safety
+/// As [`RowValue::gather_signed`], on a CPU with AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn gather_signed_f32_avx2(row: &[f32], sample: &[usize], sign: &[f64], st: f64, out: &mut [f64]) {
+unsafe fn gather_signed_f32_avx2(row: &[f32], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
     use std::arch::x86_64::*;
-    let n = out.len().min(sample.len()).min(sign.len());
-    assert!(
-        sample[..n].iter().all(|&r| r < row.len()),
-        "a sample outside its kernel row"
-    );
+    let n = out.len();
     let whole = n / 4 * 4;
     let stv = _mm256_set1_pd(st);
     for start in (0..whole).step_by(4) {
         // SAFETY: as in `gather_signed_avx2`, with 4-byte values.
         unsafe {
-            let index = _mm256_loadu_si256(sample.as_ptr().add(start).cast());
-            let values = _mm256_cvtps_pd(_mm256_i64gather_ps::<4>(row.as_ptr(), index));
-            let signs = _mm256_loadu_pd(sign.as_ptr().add(start));
+            let index = _mm_loadu_si128(sample.as_ptr().add(start).cast());
+            let values = _mm256_cvtps_pd(_mm_i32gather_ps::<4>(row.as_ptr(), index));
+            let signs = four_signs(sign, start);
             _mm256_storeu_pd(
                 out.as_mut_ptr().add(start),
                 _mm256_mul_pd(_mm256_mul_pd(stv, signs), values),
             );
         }
     }
-    gather_signed_from(row, sample, sign, st, &mut out[..n], whole);
+    gather_signed_from(row, sample, sign, st, out, whole);
 }
 
 #[cfg(test)]
@@ -240,18 +280,22 @@ mod tests {
     fn the_gathered_row_is_the_signed_kernel_row_whatever_the_length() {
         let row: Vec<f64> = (0..37).map(|r| (r as f64 * 0.71).sin()).collect();
         for len in [0, 1, 3, 4, 5, 8, 74] {
-            let sample: Vec<usize> = (0..len).map(|t| (t * 13 + 5) % 37).collect();
-            let sign: Vec<f64> = (0..len).map(|t| if t % 3 == 0 { -1.0 } else { 1.0 }).collect();
+            let sample: Vec<u32> = (0..len).map(|t| ((t * 13 + 5) % 37) as u32).collect();
+            let sign: Vec<i8> = (0..len).map(|t| if t % 3 == 0 { -1 } else { 1 }).collect();
             let narrow: Vec<f32> = row.iter().map(|&v| v as f32).collect();
             for st in [1.0, -1.0] {
                 let mut out = vec![f64::NAN; len];
-                f64::gather_signed(&row, &sample, &sign, st, &mut out);
                 let mut out_f32 = vec![f64::NAN; len];
-                f32::gather_signed(&narrow, &sample, &sign, st, &mut out_f32);
+                // SAFETY: every sample is below 37, the rows' length.
+                unsafe {
+                    f64::gather_signed(&row, &sample, &sign, st, &mut out);
+                    f32::gather_signed(&narrow, &sample, &sign, st, &mut out_f32);
+                }
                 for t in 0..len {
-                    assert_eq!(out[t], st * sign[t] * row[sample[t]], "len {len} t {t}");
-                    let widened = f64::from(narrow[sample[t]]);
-                    assert_eq!(out_f32[t], st * sign[t] * widened, "f32, len {len} t {t}");
+                    let (r, sr) = (sample[t] as usize, f64::from(sign[t]));
+                    assert_eq!(out[t], st * sr * row[r], "len {len} t {t}");
+                    let widened = f64::from(narrow[r]);
+                    assert_eq!(out_f32[t], st * sr * widened, "f32, len {len} t {t}");
                 }
             }
         }
