@@ -7,6 +7,10 @@ pub(crate) const CERTIFIED_MISS: &str =
     "its last iterate misses the acceptance threshold (1e-6) at a certified relative gap of";
 /// [`SvmError::NotConverged`]'s measure for a bare SMO (no certificate).
 pub(crate) const KKT_VIOLATION: &str = "its largest KKT violation is";
+/// [`SvmError::Budget`]'s measure for the interior point's own iterate.
+pub(crate) const RELATIVE_GAP: &str = "its relative duality gap is";
+/// [`SvmError::Budget`]'s measure once the last iterate has been certified.
+pub(crate) const CERTIFIED_GAP: &str = "its last iterate's certified relative gap is";
 /// [`SvmError::NotConverged`]'s measure when no iterate was left to certify.
 pub(crate) const NOTHING_TO_CERTIFY: &str = "no iterate was left to certify; gap";
 
@@ -112,7 +116,7 @@ pub enum SvmError {
     },
     /// The time budget ran out.
     #[error(
-        "{solver} exceeded its time budget of {budget_s} s after {iterations} iterations (relative gap {gap:.3e})"
+        "{solver} exceeded its time budget of {budget_s} s after {iterations} iterations: {measure} {gap:.3e}"
     )]
     Budget {
         /// Which solver.
@@ -121,8 +125,11 @@ pub enum SvmError {
         budget_s: f64,
         /// Iterations done.
         iterations: usize,
-        /// Relative gap reached.
+        /// What it reached: a relative duality gap (certified where `measure` says so), or
+        /// SMO's largest KKT violation.
         gap: f64,
+        /// What `gap` measures, in words.
+        measure: &'static str,
     },
     /// The problem is numerically beyond the solver (e.g. a kernel matrix that is not positive
     /// semi-definite to working precision).

@@ -447,10 +447,12 @@ fn smo_iterations_for_dense_cost(n: usize, dim: usize) -> usize {
 }
 
 /// The most free samples an exact finish after `iterations` of the interior point on a rank-`rank`
-/// factor of `n` samples may solve for: a round factorises an `m × m` system by LU with full
-/// pivoting, which should cost no more than the interior point did (about n·rank² flops per
-/// iteration, at BLAS speed). Measured on the needle capture, the LU runs about 8 times slower
-/// per m³ than the interior point per n·rank², hence half the cube root. There, at n = 3,000 the
+/// factor of `n` samples may solve for: a round factorises an `m × m` system, which should cost
+/// no more than the interior point did (about n·rank² flops per iteration, at BLAS speed).
+/// Measured on the needle capture when a round's only factorisation was LU with full pivoting,
+/// which ran about 8 times slower per m³ than the interior point per n·rank², hence half the
+/// cube root. A round now tries a Cholesky factor first (`bordered.rs`), about 13 times faster
+/// where it solves, so the limit errs on the side of leaving a partition to the next iterate. There, at n = 3,000 the
 /// finish's partition went from 28 free samples to 2,160 in one active-set step after a poor
 /// iterate, and that round spent 6.9 s on a system it could not solve (at n = 2,750: 817 free,
 /// 0.24 s), where the interior point had taken 0.1 s; the next iterate's partition finished in
@@ -612,6 +614,7 @@ fn with_certified_gap(
             budget_s,
             iterations,
             gap: reached,
+            measure: crate::error::CERTIFIED_GAP,
         },
         SvmError::NotConverged {
             solver,

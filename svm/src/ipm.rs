@@ -312,6 +312,7 @@ pub(crate) fn solve<K: NewtonOperator>(
                 budget_s: settings.budget_s(),
                 iterations: iteration,
                 gap,
+                measure: crate::error::RELATIVE_GAP,
             });
         }
 

@@ -186,6 +186,7 @@ pub(crate) fn solve(
                     budget_s: settings.budget_s(),
                     iterations: iteration,
                     gap: f64::INFINITY,
+                    measure: crate::error::NOTHING_TO_CERTIFY,
                 },
                 last: Some(Box::new(finish(
                     &rows, x, d, y, c, epsilon, &labels, &held, &h, iteration,

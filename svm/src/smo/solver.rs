@@ -625,6 +625,7 @@ fn solve_with<Q: QMatrix, const NON_POSITIVE_TO_TAU: bool>(
                 budget_s,
                 iterations,
                 gap: s.violation,
+                measure: crate::error::KKT_VIOLATION,
             });
         }
         if settings.shrinking {

@@ -384,6 +384,36 @@ mod tests {
     }
 
     #[test]
+    fn smo_past_its_budget_says_it_reached_a_kkt_violation_not_a_gap() {
+        let n = 60;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+        let y: Vec<f64> = x.iter().map(|v| (6.0 * v).sin()).collect();
+        let data = crate::data::SvrData::new(&x, 1, &y).unwrap();
+        let params = crate::SvrParams::builder()
+            .c(10.0)
+            .epsilon(0.05)
+            .kernel(Kernel::Rbf { gamma: 20.0 })
+            .time_budget(std::time::Duration::from_nanos(1))
+            .build()
+            .unwrap();
+        let settings = params.dual_settings(Instant::now());
+        let err = solve_svr(
+            &params.kernel(),
+            &data,
+            &settings,
+            CACHE_BYTES,
+            settings.max_iterations,
+        )
+        .expect_err("a budget of a nanosecond runs out");
+        let SvmError::Budget { measure, gap, .. } = &err else {
+            panic!("{err}");
+        };
+        assert_eq!(*measure, crate::error::KKT_VIOLATION);
+        assert!(gap.is_infinite() || *gap > 0.0, "{gap}");
+        assert!(err.to_string().contains("KKT violation"), "{err}");
+    }
+
+    #[test]
     fn a_small_cache_gives_the_same_svr_solution_as_a_large_one() {
         let n = 120;
         let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
