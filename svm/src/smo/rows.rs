@@ -21,12 +21,6 @@ pub trait RowValue: sealed::Sealed + Copy + Default + Into<f64> + Send + Sync + 
     /// Whether holding a value rounds it, so that a gradient built from rows is the gradient of
     /// a neighbouring problem, not of the one asked.
     const ROUNDS: bool;
-    /// `out[t] = st · sign[t] · row[sample[t]]` for every `t < out.len()`.
-    ///
-    /// # Safety
-    /// `sample` and `sign` are at least as long as `out`, and each of the first `out.len()`
-    /// samples is below `row.len()`: the gathers read `row` without bounds checks.
-    unsafe fn gather_signed(row: &[Self], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]);
     /// The row's own storage when it is `f64`, so that a row is computed in place.
     fn as_f64_mut(row: &mut [Self]) -> Option<&mut [f64]>;
     /// Holds `values` in `out`.
@@ -34,25 +28,39 @@ pub trait RowValue: sealed::Sealed + Copy + Default + Into<f64> + Send + Sync + 
 }
 
 mod sealed {
-    /// Only the row values the gathers are written for.
-    pub trait Sealed {}
-    impl Sealed for f64 {}
-    impl Sealed for f32 {}
+    /// Only the row values the gathers are written for: what differs between them is how four
+    /// values are gathered and widened.
+    pub trait Sealed: Sized {
+        /// `row[index[k]]` for k < 4, as doubles.
+        ///
+        /// # Safety
+        /// Every index is below the row's length and the CPU supports AVX2.
+        #[cfg(target_arch = "x86_64")]
+        unsafe fn four(row: *const Self, index: std::arch::x86_64::__m128i) -> std::arch::x86_64::__m256d;
+    }
+
+    impl Sealed for f64 {
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn four(row: *const Self, index: std::arch::x86_64::__m128i) -> std::arch::x86_64::__m256d {
+            // SAFETY: as the caller promised.
+            unsafe { std::arch::x86_64::_mm256_i32gather_pd::<8>(row, index) }
+        }
+    }
+
+    impl Sealed for f32 {
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn four(row: *const Self, index: std::arch::x86_64::__m128i) -> std::arch::x86_64::__m256d {
+            use std::arch::x86_64::*;
+            // SAFETY: as the caller promised; widening is exact.
+            unsafe { _mm256_cvtps_pd(_mm_i32gather_ps::<4>(row, index)) }
+        }
+    }
 }
 
 impl RowValue for f64 {
     const ROUNDS: bool = false;
-
-    unsafe fn gather_signed(row: &[Self], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above; the indices as the caller
-            // promised.
-            unsafe { gather_signed_avx2(row, sample, sign, st, out) };
-            return;
-        }
-        gather_signed_from(row, sample, sign, st, out, 0);
-    }
 
     fn as_f64_mut(row: &mut [Self]) -> Option<&mut [f64]> {
         Some(row)
@@ -65,16 +73,6 @@ impl RowValue for f64 {
 
 impl RowValue for f32 {
     const ROUNDS: bool = true;
-
-    unsafe fn gather_signed(row: &[Self], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as for `f64`.
-            unsafe { gather_signed_f32_avx2(row, sample, sign, st, out) };
-            return;
-        }
-        gather_signed_from(row, sample, sign, st, out, 0);
-    }
 
     fn as_f64_mut(_: &mut [Self]) -> Option<&mut [f64]> {
         None
@@ -178,7 +176,7 @@ impl<R: KernelRows> QMatrix for SampleQ<'_, R> {
         let out = &mut self.buffers[h][..len];
         // SAFETY: `sample` and `sign` hold a position per variable, as many as `out` at most;
         // every sample is below `n` (made so, then only swapped), and `n ≤ row.len()`.
-        unsafe { R::Value::gather_signed(row, &self.sample[..len], &self.sign[..len], st, out) };
+        unsafe { gather_signed(row, &self.sample[..len], &self.sign[..len], st, out) };
         h
     }
 
@@ -190,6 +188,25 @@ impl<R: KernelRows> QMatrix for SampleQ<'_, R> {
         self.sample.swap(i, j);
         self.sign.swap(i, j);
     }
+}
+
+/// `out[t] = st · sign[t] · row[sample[t]]` for every `t < out.len()`: a row of Q from its
+/// sample's kernel row, in AVX2 gathers where the CPU has them (a fifth of a Friedman fit's time
+/// at n = 3,000 was this loop; the products by ±1 and the widening are exact, so both ways give
+/// the same bits).
+///
+/// # Safety
+/// `sample` and `sign` are at least as long as `out`, and each of the first `out.len()` samples
+/// is below `row.len()`: the gathers read `row` without bounds checks.
+unsafe fn gather_signed<T: RowValue>(row: &[T], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above; the indices as the caller
+        // promised.
+        unsafe { gather_signed_avx2(row, sample, sign, st, out) };
+        return;
+    }
+    gather_signed_from(row, sample, sign, st, out, 0);
 }
 
 fn gather_signed_from<T: RowValue>(
@@ -205,27 +222,13 @@ fn gather_signed_from<T: RowValue>(
     }
 }
 
-/// Four signs (±1 bytes) from `sign[start..start + 4]` as doubles.
+/// [`gather_signed`] four positions at a time.
 ///
 /// # Safety
-/// `start + 4 ≤ sign.len()`, and the CPU supports AVX2.
+/// As [`gather_signed`], on a CPU with AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn four_signs(sign: &[i8], start: usize) -> std::arch::x86_64::__m256d {
-    use std::arch::x86_64::*;
-    // SAFETY: four bytes inside `sign`, as the caller promised.
-    let bytes = unsafe { sign.as_ptr().add(start).cast::<i32>().read_unaligned() };
-    _mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(bytes)))
-}
-
-/// `out[t] = st · sign[t] · row[sample[t]]` in AVX2 gathers (a fifth of a Friedman fit's time at
-/// n = 3,000 was this loop; the products by ±1 are exact, so both ways give the same bits).
-///
-/// # Safety
-/// As [`RowValue::gather_signed`], on a CPU with AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn gather_signed_avx2(row: &[f64], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
+unsafe fn gather_signed_avx2<T: RowValue>(row: &[T], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
     use std::arch::x86_64::*;
     let n = out.len();
     let whole = n / 4 * 4;
@@ -235,34 +238,10 @@ unsafe fn gather_signed_avx2(row: &[f64], sample: &[u32], sign: &[i8], st: f64, 
         // caller's promise) and below 2³¹, so the signed 32-bit gather reads inside `row`.
         unsafe {
             let index = _mm_loadu_si128(sample.as_ptr().add(start).cast());
-            let values = _mm256_i32gather_pd::<8>(row.as_ptr(), index);
-            let signs = four_signs(sign, start);
-            _mm256_storeu_pd(
-                out.as_mut_ptr().add(start),
-                _mm256_mul_pd(_mm256_mul_pd(stv, signs), values),
-            );
-        }
-    }
-    gather_signed_from(row, sample, sign, st, out, whole);
-}
-
-/// [`gather_signed_avx2`] from a row of `f32`, each value widened exactly.
-///
-/// # Safety
-/// As [`RowValue::gather_signed`], on a CPU with AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn gather_signed_f32_avx2(row: &[f32], sample: &[u32], sign: &[i8], st: f64, out: &mut [f64]) {
-    use std::arch::x86_64::*;
-    let n = out.len();
-    let whole = n / 4 * 4;
-    let stv = _mm256_set1_pd(st);
-    for start in (0..whole).step_by(4) {
-        // SAFETY: as in `gather_signed_avx2`, with 4-byte values.
-        unsafe {
-            let index = _mm_loadu_si128(sample.as_ptr().add(start).cast());
-            let values = _mm256_cvtps_pd(_mm_i32gather_ps::<4>(row.as_ptr(), index));
-            let signs = four_signs(sign, start);
+            let values = T::four(row.as_ptr(), index);
+            // Four signs (±1 bytes) as doubles.
+            let bytes = sign.as_ptr().add(start).cast::<i32>().read_unaligned();
+            let signs = _mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(bytes)));
             _mm256_storeu_pd(
                 out.as_mut_ptr().add(start),
                 _mm256_mul_pd(_mm256_mul_pd(stv, signs), values),
@@ -288,8 +267,8 @@ mod tests {
                 let mut out_f32 = vec![f64::NAN; len];
                 // SAFETY: every sample is below 37, the rows' length.
                 unsafe {
-                    f64::gather_signed(&row, &sample, &sign, st, &mut out);
-                    f32::gather_signed(&narrow, &sample, &sign, st, &mut out_f32);
+                    gather_signed(&row, &sample, &sign, st, &mut out);
+                    gather_signed(&narrow, &sample, &sign, st, &mut out_f32);
                 }
                 for t in 0..len {
                     let (r, sr) = (sample[t] as usize, f64::from(sign[t]));
