@@ -665,30 +665,25 @@ fn certificate_of(
         return solution(&parts.fitted, parts.primal_quad, parts.dual_quad, &parts.norms);
     }
     let support: Vec<usize> = (0..n).filter(|&j| beta[j] != 0.0).collect();
-    // Without the matrix, an RBF's values come a row over the support at a time (the same
-    // bits as one by one, in a vector loop).
-    let columns = k
+    // Without the matrix, a row over the support at a time (an RBF's in a vector loop, the same
+    // bits as one by one).
+    let source = k
         .is_none()
-        .then(|| crate::kernel::RbfColumns::of(kernel, x, dim, support.iter().copied()))
-        .flatten();
+        .then(|| crate::kernel::RowSource::of(kernel, x, dim, &support));
     let k_beta: Vec<Accumulator> = (0..n)
         .into_par_iter()
         .map_init(
             || vec![0.0; support.len()],
             |values, i| {
-                let mut acc = Accumulator::new();
-                if let Some(columns) = &columns {
-                    columns.row(row(i), 0, values);
-                    for (&kij, &j) in values.iter().zip(&support) {
-                        acc.add_product(kij, beta[j]);
+                if let Some(k) = k {
+                    for (v, &j) in values.iter_mut().zip(&support) {
+                        *v = k[(i, j)];
                     }
-                    return acc;
+                } else if let Some(source) = &source {
+                    source.row(row(i), 0, values);
                 }
-                for &j in &support {
-                    let kij = match k {
-                        Some(k) => k[(i, j)],
-                        None => kernel.eval(row(j), row(i)),
-                    };
+                let mut acc = Accumulator::new();
+                for (&kij, &j) in values.iter().zip(&support) {
                     acc.add_product(kij, beta[j]);
                 }
                 acc

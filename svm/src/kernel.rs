@@ -201,6 +201,56 @@ impl RbfColumns {
     }
 }
 
+/// Rows of any kernel over a set of samples: by feature ([`RbfColumns`]) where it applies, else
+/// value by value with [`Kernel::eval`] (which gives the same bits either way round, every
+/// kernel being a function of `a·b` or `‖a − b‖²`).
+pub(crate) struct RowSource<'a> {
+    kernel: &'a Kernel,
+    x: &'a [f64],
+    dim: usize,
+    /// The samples a row runs over, in order; `None`: every sample of `x`.
+    samples: Option<Vec<usize>>,
+    by_feature: Option<RbfColumns>,
+}
+
+impl<'a> RowSource<'a> {
+    /// Rows over every sample of `x` (`n × dim`, row-major).
+    pub(crate) fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize) -> Self {
+        Self {
+            kernel,
+            x,
+            dim,
+            samples: None,
+            by_feature: RbfColumns::new(kernel, x, dim),
+        }
+    }
+
+    /// Rows over the samples `samples` of `x` only, in their order: row entry `r` is then the
+    /// kernel with `samples[r]`.
+    pub(crate) fn of(kernel: &'a Kernel, x: &'a [f64], dim: usize, samples: &[usize]) -> Self {
+        let by_feature = RbfColumns::of(kernel, x, dim, samples.iter().copied());
+        Self {
+            kernel,
+            x,
+            dim,
+            samples: by_feature.is_none().then(|| samples.to_vec()),
+            by_feature,
+        }
+    }
+
+    /// `K(xi, x_r)` for the row's entries `r` in `start..start + out.len()`, into `out`.
+    pub(crate) fn row(&self, xi: &[f64], start: usize, out: &mut [f64]) {
+        if let Some(by_feature) = &self.by_feature {
+            return by_feature.row(xi, start, out);
+        }
+        let (x, dim) = (self.x, self.dim);
+        for (r, o) in (start..).zip(out.iter_mut()) {
+            let j = self.samples.as_ref().map_or(r, |samples| samples[r]);
+            *o = self.kernel.eval(xi, &x[j * dim..(j + 1) * dim]);
+        }
+    }
+}
+
 /// The dense kernel matrix, or `None` if a value overflows. The lower triangle is filled down
 /// each column (contiguous in faer's column-major storage), then mirrored. One core: at the
 /// sizes this matrix is built for, waking a second one cost more than it saved (measured at
@@ -210,18 +260,11 @@ pub(crate) fn kernel_matrix(kernel: &Kernel, x: &[f64], dim: usize) -> Option<Ma
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
     let mut k = Mat::<f64>::zeros(n, n);
     // An RBF's columns come a feature at a time, in vector loops (the same bits).
-    let by_feature = RbfColumns::new(kernel, x, dim);
+    let source = RowSource::new(kernel, x, dim);
     let mut column = vec![0.0; n];
     for j in 0..n {
         let below = &mut column[..n - j];
-        match &by_feature {
-            Some(by_feature) => by_feature.row(row(j), j, below),
-            None => {
-                for (v, i) in below.iter_mut().zip(j..) {
-                    *v = kernel.eval(row(i), row(j));
-                }
-            }
-        }
+        source.row(row(j), j, below);
         for (&v, i) in below.iter().zip(j..) {
             if !v.is_finite() {
                 return None;

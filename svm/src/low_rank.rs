@@ -19,7 +19,7 @@ use faer::{Accum, Mat, Par, Side};
 use rayon::prelude::*;
 
 use super::ipm::NewtonOperator;
-use super::kernel::{Kernel, RbfColumns};
+use super::kernel::{Kernel, RowSource};
 
 /// Rows per parallel task.
 const CHUNK: usize = 2048;
@@ -122,7 +122,7 @@ pub(crate) fn pivoted_cholesky(
     let stop = tolerance * scale.max(f64::MIN_POSITIVE);
     let mut columns: Vec<Vec<f64>> = Vec::new();
     // Each new column is a kernel row: an RBF's come a feature at a time, in vector loops.
-    let by_feature = RbfColumns::new(kernel, x, dim);
+    let source = RowSource::new(kernel, x, dim);
     // The largest residual at the checkpoint ranks (16, 32, 64, …) so far.
     let mut checkpoints: Vec<(usize, f64)> = Vec::new();
     loop {
@@ -151,14 +151,7 @@ pub(crate) fn pivoted_cholesky(
         column.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
             let start = chunk * CHUNK;
             let end = start + out.len();
-            match &by_feature {
-                Some(by_feature) => by_feature.row(xp, start, out),
-                None => {
-                    for (o, v) in out.iter_mut().enumerate() {
-                        *v = kernel.eval(row(start + o), xp);
-                    }
-                }
-            }
+            source.row(xp, start, out);
             for (g, &gp) in columns.iter().zip(&pivot_row) {
                 for (v, gi) in out.iter_mut().zip(&g[start..end]) {
                     *v -= gi * gp;
@@ -343,22 +336,15 @@ pub(crate) fn kernel_times(kernel: &Kernel, x: &[f64], dim: usize, beta: &[f64])
     let n = beta.len();
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
     let support: Vec<(usize, f64)> = (0..n).filter(|&j| beta[j] != 0.0).map(|j| (j, beta[j])).collect();
-    let by_feature = RbfColumns::of(kernel, x, dim, support.iter().map(|&(j, _)| j));
+    let samples: Vec<usize> = support.iter().map(|&(j, _)| j).collect();
+    let source = RowSource::of(kernel, x, dim, &samples);
     let mut out = vec![0.0; n];
     out.par_chunks_mut(CHUNK / 8).enumerate().for_each_init(
         || vec![0.0; support.len()],
         |values, (chunk, out)| {
             let start = chunk * (CHUNK / 8);
             for (o, v) in out.iter_mut().enumerate() {
-                let xi = row(start + o);
-                match &by_feature {
-                    Some(by_feature) => by_feature.row(xi, 0, values),
-                    None => {
-                        for (value, &(j, _)) in values.iter_mut().zip(&support) {
-                            *value = kernel.eval(xi, row(j));
-                        }
-                    }
-                }
+                source.row(row(start + o), 0, values);
                 *v = values.iter().zip(&support).map(|(&k, &(_, b))| b * k).sum();
             }
         },

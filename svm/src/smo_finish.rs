@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::bordered::{Singular, solve_bordered};
 use super::data::SvrData;
-use super::kernel::{Kernel, RbfColumns};
+use super::kernel::{Kernel, RowSource};
 use super::params::DualSettings;
 
 /// Free samples above which no finish is tried: the system's matrix takes `m²` doubles
@@ -123,17 +123,10 @@ pub(crate) fn finish(
             (true, false) | (false, true) => 1.0,
             (false, false) => 0.0,
         });
-        let free_columns = RbfColumns::of(kernel, x, dim, free.iter().copied());
+        let free_rows = RowSource::of(kernel, x, dim, &free);
         let mut values = vec![0.0; m];
         for (s, &j) in free.iter().enumerate() {
-            match &free_columns {
-                Some(columns) => columns.row(row(j), 0, &mut values),
-                None => {
-                    for (v, &i) in values.iter_mut().zip(&free) {
-                        *v = kernel.eval(row(i), row(j));
-                    }
-                }
-            }
+            free_rows.row(row(j), 0, &mut values);
             for (r, &v) in values.iter().enumerate() {
                 a[(r, s)] = v;
             }
@@ -184,20 +177,13 @@ pub(crate) fn finish(
             .filter(|&i| new_beta[i] != beta[i])
             .map(|i| (i, new_beta[i] - beta[i]))
             .collect();
-        let delta_columns = RbfColumns::of(kernel, x, dim, delta.iter().map(|&(j, _)| j));
+        let moved_samples: Vec<usize> = delta.iter().map(|&(j, _)| j).collect();
+        let delta_rows = RowSource::of(kernel, x, dim, &moved_samples);
         k_beta.par_chunks_mut(CHUNK).enumerate().for_each_init(
             || vec![0.0; delta.len()],
             |values, (chunk, out)| {
                 for (o, kb) in out.iter_mut().enumerate() {
-                    let xi = row(chunk * CHUNK + o);
-                    match &delta_columns {
-                        Some(columns) => columns.row(xi, 0, values),
-                        None => {
-                            for (v, &(j, _)) in values.iter_mut().zip(&delta) {
-                                *v = kernel.eval(xi, row(j));
-                            }
-                        }
-                    }
+                    delta_rows.row(row(chunk * CHUNK + o), 0, values);
                     *kb += values.iter().zip(&delta).map(|(&v, &(_, d))| d * v).sum::<f64>();
                 }
             },

@@ -5,7 +5,7 @@ use super::rows::{KernelRows, RowValue, SampleQ};
 use super::solver::solve;
 use super::{SelectionCurvature, SmoSettings, libsvm_rho};
 use crate::error::SvmError;
-use crate::kernel::{Kernel, RbfColumns};
+use crate::kernel::{Kernel, RowSource};
 
 /// Memory for cached kernel rows of the ε-SVR (libsvm's `-m`; scikit-learn's default is 200 MB).
 pub(crate) const CACHE_BYTES: usize = 256 << 20;
@@ -13,12 +13,11 @@ pub(crate) const CACHE_BYTES: usize = 256 << 20;
 /// rows held never take more than the byte budget given (at least two rows, the pair's). Rows
 /// are computed in `f64` and held as `T`.
 pub(crate) struct RowCache<'a, T> {
-    kernel: &'a Kernel,
     x: &'a [f64],
     dim: usize,
     n: usize,
-    /// The inputs by feature, when the kernel's rows can be computed from them.
-    columns: Option<RbfColumns>,
+    /// Where rows come from.
+    source: RowSource<'a>,
     diag: Vec<f64>,
     slot_of: Vec<Option<usize>>,
     owner: Vec<usize>,
@@ -43,11 +42,10 @@ impl<'a, T: RowValue> RowCache<'a, T> {
     pub(crate) fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize, budget_bytes: usize) -> Self {
         let slots = (budget_bytes / (size_of::<T>() * n.max(1))).clamp(2, n.max(2));
         Self {
-            kernel,
             x,
             dim,
             n,
-            columns: RbfColumns::new(kernel, &x[..n * dim], dim),
+            source: RowSource::new(kernel, &x[..n * dim], dim),
             diag: (0..n)
                 .map(|i| kernel.eval(&x[i * dim..(i + 1) * dim], &x[i * dim..(i + 1) * dim]))
                 .collect(),
@@ -75,17 +73,8 @@ impl<'a, T: RowValue> RowCache<'a, T> {
 
     /// Computes row `i` into `out`.
     fn compute(&self, i: usize, out: &mut [f64]) {
-        let (kernel, x, dim) = (self.kernel, self.x, self.dim);
-        let xi = &x[i * dim..(i + 1) * dim];
-        let fill = |start: usize, out: &mut [f64]| match &self.columns {
-            Some(columns) => columns.row(xi, start, out),
-            None => {
-                for (j, o) in out.iter_mut().enumerate() {
-                    let r = start + j;
-                    *o = kernel.eval(xi, &x[r * dim..(r + 1) * dim]);
-                }
-            }
-        };
+        let xi = &self.x[i * self.dim..(i + 1) * self.dim];
+        let fill = |start: usize, out: &mut [f64]| self.source.row(xi, start, out);
         if out.len() >= PARALLEL_ROW && rayon::current_num_threads() > 1 {
             let half = out.len() / 2;
             let (a, b) = out.split_at_mut(half);
