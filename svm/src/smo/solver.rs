@@ -26,6 +26,12 @@ pub(super) trait QMatrix {
     fn get(&self, handle: usize) -> &[f64];
     /// Swaps positions `i < j`.
     fn swap(&mut self, i: usize, j: usize);
+    /// Told after every change of the active set (swaps come only before it): until the next
+    /// call, rows are asked for over the positions below `active`, or whole, so the matrix may
+    /// compute them over those positions' samples only.
+    fn focus(&mut self, active: usize) {
+        let _ = active;
+    }
 }
 
 /// What a solve asks, each time it has converged on every variable, of whoever called it:
@@ -633,6 +639,7 @@ fn solve_with<Q: QMatrix, const NON_POSITIVE_TO_TAU: bool>(
             if counter == 0 {
                 counter = period;
                 s.shrink(stop, &mut unshrunk);
+                s.q.focus(s.active);
             }
         }
         let mut pair = s.select::<NON_POSITIVE_TO_TAU>();
@@ -640,6 +647,7 @@ fn solve_with<Q: QMatrix, const NON_POSITIVE_TO_TAU: bool>(
             if s.active < m {
                 // Converged on the active set: every variable again, with exact gradients.
                 s.unshrink();
+                s.q.focus(s.active);
                 pair = s.select::<NON_POSITIVE_TO_TAU>();
                 counter = 1;
             }

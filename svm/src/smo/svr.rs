@@ -13,11 +13,21 @@ pub(crate) const CACHE_BYTES: usize = 256 << 20;
 /// rows held never take more than the byte budget given (at least two rows, the pair's). Rows
 /// are computed in `f64` and held as `T`.
 pub(crate) struct RowCache<'a, T> {
+    kernel: &'a Kernel,
     x: &'a [f64],
     dim: usize,
     n: usize,
-    /// Where rows come from.
+    /// Where whole rows come from.
     source: RowSource<'a>,
+    /// Where rows come from while narrowed ([`KernelRows::narrow`]).
+    window: Option<RowSource<'a>>,
+    /// Values in a row held: `n`, or the window's samples.
+    width: usize,
+    /// Each sample's entry in a row held (`u32::MAX` if outside the window).
+    entry_of: Vec<u32>,
+    budget_bytes: usize,
+    /// A whole row asked for while narrowed: computed, not held.
+    whole: Vec<T>,
     diag: Vec<f64>,
     slot_of: Vec<Option<usize>>,
     owner: Vec<usize>,
@@ -28,6 +38,8 @@ pub(crate) struct RowCache<'a, T> {
     clock: u64,
     /// Rows computed (cache misses), for the tests and the benchmark.
     computed: usize,
+    /// Times rows were narrowed, for the tests.
+    narrowings: usize,
 }
 
 /// Samples above which a kernel row is computed on all cores: below, a thread hand-off costs
@@ -40,23 +52,50 @@ impl<'a, T: RowValue> RowCache<'a, T> {
     /// A cache of rows of `kernel` over the `n` samples in `x` (`n × dim`, row-major) holding
     /// at most `budget_bytes` of rows (but always two).
     pub(crate) fn new(kernel: &'a Kernel, x: &'a [f64], dim: usize, n: usize, budget_bytes: usize) -> Self {
-        let slots = (budget_bytes / (size_of::<T>() * n.max(1))).clamp(2, n.max(2));
         Self {
+            kernel,
             x,
             dim,
             n,
             source: RowSource::new(kernel, &x[..n * dim], dim),
+            window: None,
+            width: n,
+            entry_of: (0..n as u32).collect(),
+            budget_bytes,
+            whole: Vec::new(),
             diag: (0..n)
                 .map(|i| kernel.eval(&x[i * dim..(i + 1) * dim], &x[i * dim..(i + 1) * dim]))
                 .collect(),
             slot_of: vec![None; n],
-            owner: vec![usize::MAX; slots],
-            last_used: vec![0; slots],
+            owner: Vec::new(),
+            last_used: Vec::new(),
             rows: Vec::new(),
             computing: Vec::new(),
             clock: 0,
             computed: 0,
+            narrowings: 0,
         }
+        .emptied()
+    }
+
+    /// No row held, and slots for rows of the current width within the budget.
+    fn emptied(mut self) -> Self {
+        self.empty();
+        self
+    }
+
+    /// Rows of the current width the budget holds (at least the pair's two, at most one per
+    /// sample).
+    fn slots(&self) -> usize {
+        (self.budget_bytes / (size_of::<T>() * self.width.max(1))).clamp(2, self.n.max(2))
+    }
+
+    fn empty(&mut self) {
+        let slots = self.slots();
+        self.slot_of.fill(None);
+        self.owner = vec![usize::MAX; slots];
+        self.last_used = vec![0; slots];
+        self.rows.clear();
     }
 
     /// Bytes of row storage allocated so far.
@@ -72,9 +111,9 @@ impl<'a, T: RowValue> RowCache<'a, T> {
     }
 
     /// Computes row `i` into `out`.
-    fn compute(&self, i: usize, out: &mut [f64]) {
+    fn compute(&self, source: &RowSource<'_>, i: usize, out: &mut [f64]) {
         let xi = &self.x[i * self.dim..(i + 1) * self.dim];
-        let fill = |start: usize, out: &mut [f64]| self.source.row(xi, start, out);
+        let fill = |start: usize, out: &mut [f64]| source.row(xi, start, out);
         if out.len() >= PARALLEL_ROW && rayon::current_num_threads() > 1 {
             let half = out.len() / 2;
             let (a, b) = out.split_at_mut(half);
@@ -89,7 +128,7 @@ impl<T: RowValue> RowCache<'_, T> {
     /// Makes row `i` held and returns its slot.
     fn fetch(&mut self, i: usize) -> usize {
         self.clock += 1;
-        let n = self.n;
+        let n = self.width;
         let slot = match self.slot_of[i] {
             Some(s) => s,
             None => {
@@ -119,17 +158,7 @@ impl<T: RowValue> RowCache<'_, T> {
                 self.owner[s] = i;
                 self.slot_of[i] = Some(s);
                 let mut rows = std::mem::take(&mut self.rows);
-                let held = &mut rows[s * n..(s + 1) * n];
-                match T::as_f64_mut(held) {
-                    Some(held) => self.compute(i, held),
-                    None => {
-                        let mut computing = std::mem::take(&mut self.computing);
-                        computing.resize(n, 0.0);
-                        self.compute(i, &mut computing);
-                        T::store(&computing, held);
-                        self.computing = computing;
-                    }
-                }
+                self.compute_into(i, &mut rows[s * n..(s + 1) * n], self.window.is_some());
                 self.rows = rows;
                 self.computed += 1;
                 s
@@ -139,9 +168,27 @@ impl<T: RowValue> RowCache<'_, T> {
         slot
     }
 
+    /// Computes row `i` (over the window if `narrowed`, else whole) into `held`.
+    fn compute_into(&mut self, i: usize, held: &mut [T], narrowed: bool) {
+        let source = match &self.window {
+            Some(window) if narrowed => window,
+            _ => &self.source,
+        };
+        match T::as_f64_mut(held) {
+            Some(held) => self.compute(source, i, held),
+            None => {
+                let mut computing = std::mem::take(&mut self.computing);
+                computing.resize(held.len(), 0.0);
+                self.compute(source, i, &mut computing);
+                T::store(&computing, held);
+                self.computing = computing;
+            }
+        }
+    }
+
     /// The row held in `slot`.
     fn get(&self, slot: usize) -> &[T] {
-        &self.rows[slot * self.n..(slot + 1) * self.n]
+        &self.rows[slot * self.width..(slot + 1) * self.width]
     }
 }
 
@@ -159,6 +206,74 @@ impl<T: RowValue> KernelRows for RowCache<'_, T> {
     fn row(&mut self, s: usize) -> &[T] {
         let slot = self.fetch(s);
         self.get(slot)
+    }
+
+    /// Rows held keep their values for the samples still in the window: they are moved, not
+    /// recomputed, when the new window lies within the old one (as shrinking makes it).
+    fn narrow(&mut self, window: &[u32]) -> bool {
+        let samples: Vec<usize> = window.iter().map(|&s| s as usize).collect();
+        let from: Option<Vec<usize>> = samples
+            .iter()
+            .map(|&s| (self.entry_of[s] != u32::MAX).then_some(self.entry_of[s] as usize))
+            .collect();
+        let (old, new) = (self.width, samples.len());
+        match from {
+            Some(from) if new <= old => {
+                let used = self.rows.len() / old.max(1);
+                let mut moved = vec![T::default(); new];
+                for slot in 0..used {
+                    // Slot `slot` moves down to `slot · new`; it ends at or before where its
+                    // old place ended, so no later slot is overwritten before it is moved.
+                    for (m, &f) in moved.iter_mut().zip(&from) {
+                        *m = self.rows[slot * old + f];
+                    }
+                    self.rows[slot * new..(slot + 1) * new].copy_from_slice(&moved);
+                }
+                self.rows.truncate(used * new);
+                self.width = new;
+                let slots = self.slots();
+                self.owner.resize(slots, usize::MAX);
+                self.last_used.resize(slots, 0);
+            }
+            _ => {
+                self.width = new;
+                self.empty();
+            }
+        }
+        self.entry_of.fill(u32::MAX);
+        for (r, &s) in samples.iter().enumerate() {
+            self.entry_of[s] = r as u32;
+        }
+        self.window = Some(RowSource::of(
+            self.kernel,
+            &self.x[..self.n * self.dim],
+            self.dim,
+            &samples,
+        ));
+        self.narrowings += 1;
+        true
+    }
+
+    fn widen(&mut self) {
+        if self.window.take().is_some() {
+            self.width = self.n;
+            self.empty();
+            for (s, e) in self.entry_of.iter_mut().enumerate() {
+                *e = s as u32;
+            }
+        }
+    }
+
+    fn whole_row(&mut self, s: usize) -> &[T] {
+        if self.window.is_none() {
+            return self.row(s);
+        }
+        let mut whole = std::mem::take(&mut self.whole);
+        whole.resize(self.n, T::default());
+        self.compute_into(s, &mut whole, false);
+        self.computed += 1;
+        self.whole = whole;
+        &self.whole
     }
 }
 
@@ -400,6 +515,63 @@ mod tests {
         assert_eq!(*measure, crate::error::KKT_VIOLATION);
         assert!(gap.is_infinite() || *gap > 0.0, "{gap}");
         assert!(err.to_string().contains("KKT violation"), "{err}");
+    }
+
+    /// Narrowed rows hold the whole rows' values: an SMO whose rows narrow once shrinking has
+    /// left few samples active takes the same steps as one over the whole Gram matrix, which
+    /// never narrows.
+    #[test]
+    fn narrowed_rows_give_the_same_smo_as_whole_ones() {
+        let (n, dim) = (600, 2);
+        let x: Vec<f64> = (0..n)
+            .flat_map(|i| {
+                let t = i as f64 / n as f64;
+                [t, (17.0 * t).sin()]
+            })
+            .collect();
+        let y: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 / n as f64;
+                (6.0 * t).sin() + 0.5 * (91.0 * t).sin()
+            })
+            .collect();
+        let kernel = Kernel::Rbf { gamma: 5.0 };
+        let (c, epsilon) = (10.0, 0.1);
+        let linear: Vec<f64> = (0..2 * n)
+            .map(|t| if t < n { epsilon - y[t] } else { epsilon + y[t - n] })
+            .collect();
+        let labels: Vec<f64> = (0..2 * n).map(|t| if t < n { 1.0 } else { -1.0 }).collect();
+        let settings = SmoSettings::builder()
+            .c(c)
+            .stop(1e-8)
+            .max_iterations(10_000_000)
+            .shrinking(true)
+            .selection(SelectionCurvature::Clamped)
+            .build()
+            .unwrap();
+        let mut cache = RowCache::<f64>::new(&kernel, &x, dim, n, CACHE_BYTES);
+        let gram: Vec<f64> = (0..n).flat_map(|i| cache.row(i).to_vec()).collect();
+        let narrowed = solve(
+            &mut SampleQ::new(&mut cache, &labels),
+            &labels,
+            &linear,
+            &settings,
+            &mut |_, _, _| None,
+        )
+        .unwrap();
+        assert!(cache.narrowings >= 2, "rows narrowed {} times", cache.narrowings);
+        let whole = solve(
+            &mut SampleQ::new(&mut super::super::GramRows::new(&gram, n).unwrap(), &labels),
+            &labels,
+            &linear,
+            &settings,
+            &mut |_, _, _| None,
+        )
+        .unwrap();
+        assert!(narrowed.converged && whole.converged);
+        assert_eq!(narrowed.iterations, whole.iterations);
+        assert_eq!(narrowed.alpha, whole.alpha);
+        assert_eq!(narrowed.rho, whole.rho);
     }
 
     #[test]
