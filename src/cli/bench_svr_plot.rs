@@ -78,7 +78,7 @@ pub(crate) fn run(args: &SvrScalePlotArgs) -> anyhow::Result<()> {
             rows.len(),
             format!("{:.0}–{:.0}", rows[0].n, rows[rows.len() - 1].n),
             ratio(ratios.first()),
-            ratio(ratios.get(ratios.len() / 2)),
+            ratio(median(&ratios).as_ref()),
             spike.map_or("–".to_owned(), |(n, s)| format!("{s:.2}× at n = {n:.0}")),
         );
         series.push(ScalingSeries {
@@ -93,6 +93,16 @@ pub(crate) fn run(args: &SvrScalePlotArgs) -> anyhow::Result<()> {
     write_scaling_plot(&args.out, &series)?;
     println!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// The median of values sorted ascending: the mean of the middle two where their count is even.
+fn median(sorted: &[f64]) -> Option<f64> {
+    let middle = sorted.len() / 2;
+    match sorted.len() {
+        0 => None,
+        n if n % 2 == 1 => Some(sorted[middle]),
+        _ => Some(0.5 * (sorted[middle - 1] + sorted[middle])),
+    }
 }
 
 /// The fit slowest against the larger of its neighbours' times (one neighbour at the ends):

@@ -439,6 +439,7 @@ fn a_sweep_is_drawn_and_summed_up_per_problem() {
          \"a b\",350,0.01,0.04,interior point\n\
          \"a b\",700,0.05,0.2,low-rank\n\
          \"a b\",1400,0.06,0.6,low-rank\n\
+         \"a b\",2800,0.1,0.5,low-rank\n\
          c,350,0.02,0.01,smo\n",
     )
     .unwrap();
@@ -451,10 +452,14 @@ fn a_sweep_is_drawn_and_summed_up_per_problem() {
         "--out",
         png.to_str().unwrap(),
     ]));
-    // Ratios 4, 4, 10: worst 4, median 4; 0.05 s is 0.05 / 0.06 of its slower neighbour, the
-    // first 0.01 / 0.05, the last 0.06 / 0.05 = 1.2.
+    // Ratios 4, 4, 10, 5: worst 4, median (4 + 5) / 2 (not the upper middle, 5); 0.05 s is
+    // 0.05 / 0.06 of its slower neighbour, the first 0.01 / 0.05, 0.06 s 0.06 / 0.1, the last
+    // 0.1 / 0.06 = 1.67.
     let a = said.lines().find(|l| l.starts_with("a b")).expect(&said);
-    assert!(a.contains("4.00×") && a.contains("1.20× at n = 1400"), "{a}");
+    assert!(
+        a.contains("4.00×") && a.contains("4.50×") && a.contains("1.67× at n = 2800"),
+        "{a}"
+    );
     let c = said.lines().find(|l| l.starts_with("c ")).expect(&said);
     assert!(c.contains("0.50×") && c.contains('–'), "{c}");
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);
