@@ -66,11 +66,11 @@ pub(crate) fn tolerances(n: usize, c: f64, y_scale: f64) -> Vec<f64> {
 /// Bytes the factor may hold.
 const MAX_FACTOR_BYTES: usize = 512 << 20;
 
-/// The largest rank worth factoring for n samples: a third of n (an iteration's n·r² is then a
-/// third of the dense one's n³; at a quarter, the needle log at varying speed, whose factor
-/// needs rank 150–250 at n = 555–754, fell back to the dense interior point and took 44–52 ms
-/// there against 34 ms at 879; with a third, 22–34 ms), at most 2,000 (the r × r capacitance
-/// matrix's r³ per iteration), and within [`MAX_FACTOR_BYTES`].
+/// The largest rank worth factoring for n samples: a third of n, where an iteration's n·r² is
+/// a third of the dense Cholesky's n³/3 (at a quarter, the needle log at varying speed, whose
+/// factor needs more than a quarter of n at n = 555–754, fell back to the dense interior point:
+/// 44–52 ms there, against 43 ms at 879; with a third, 22–34 ms); at most 2,000 (the r × r
+/// capacitance matrix's r³ per iteration), and within [`MAX_FACTOR_BYTES`].
 pub(crate) fn max_rank(n: usize) -> usize {
     (n / 3).min(2000).min(MAX_FACTOR_BYTES / 8 / n.max(1))
 }
