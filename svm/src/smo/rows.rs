@@ -157,8 +157,8 @@ pub(super) struct SampleQ<'r, R> {
     covered: usize,
     /// The samples rows run over while narrowed; empty while whole.
     window: Vec<u32>,
-    /// Whether each sample is in the window.
-    in_window: Vec<bool>,
+    /// Each sample's entry in the window (`u32::MAX` outside it, and while whole).
+    entry_of: Vec<u32>,
     /// Scratch: a mark per sample.
     seen: Vec<bool>,
     buffers: [Vec<f64>; 2],
@@ -194,7 +194,7 @@ impl<'r, R: KernelRows> SampleQ<'r, R> {
             sign,
             covered: m,
             window: Vec::new(),
-            in_window: vec![false; n],
+            entry_of: vec![u32::MAX; n],
             seen: vec![false; n],
             buffers: [vec![0.0; m], vec![0.0; m]],
             next: 0,
@@ -206,7 +206,7 @@ impl<'r, R: KernelRows> SampleQ<'r, R> {
         if !self.window.is_empty() {
             self.rows.widen();
             for &s in &self.window {
-                self.in_window[s as usize] = false;
+                self.entry_of[s as usize] = u32::MAX;
             }
             self.window.clear();
             self.entry.copy_from_slice(&self.sample);
@@ -253,7 +253,7 @@ impl<R: KernelRows> QMatrix for SampleQ<'_, R> {
         for &s in &self.sample[..active] {
             if !std::mem::replace(&mut self.seen[s as usize], true) {
                 samples.push(s);
-                outside |= !self.window.is_empty() && !self.in_window[s as usize];
+                outside |= !self.window.is_empty() && self.entry_of[s as usize] == u32::MAX;
             }
         }
         for &s in &samples {
@@ -280,15 +280,14 @@ impl<R: KernelRows> QMatrix for SampleQ<'_, R> {
         // Entries by sample, then by position (positions outside the window get 0: they are
         // at or above `covered`, so never gathered through `entry`).
         for &s in &self.window {
-            self.in_window[s as usize] = false;
+            self.entry_of[s as usize] = u32::MAX;
         }
-        let mut at = vec![0u32; self.n];
         for (r, &s) in samples.iter().enumerate() {
-            at[s as usize] = r as u32;
-            self.in_window[s as usize] = true;
+            self.entry_of[s as usize] = r as u32;
         }
         for (e, &s) in self.entry.iter_mut().zip(&self.sample) {
-            *e = at[s as usize];
+            let r = self.entry_of[s as usize];
+            *e = if r == u32::MAX { 0 } else { r };
         }
         self.window = samples;
         self.covered = active;
