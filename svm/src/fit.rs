@@ -665,6 +665,7 @@ fn certificate_of(
         return solution(&parts.fitted, parts.primal_quad, parts.dual_quad, &parts.norms);
     }
     let support: Vec<usize> = (0..n).filter(|&j| beta[j] != 0.0).collect();
+    let support_beta: Vec<f64> = support.iter().map(|&j| beta[j]).collect();
     // Without the matrix, a row over the support at a time (an RBF's in a vector loop, the same
     // bits as one by one).
     let source = k
@@ -682,11 +683,7 @@ fn certificate_of(
                 } else if let Some(source) = &source {
                     source.row(row(i), 0, values);
                 }
-                let mut acc = Accumulator::new();
-                for (&kij, &j) in values.iter().zip(&support) {
-                    acc.add_product(kij, beta[j]);
-                }
-                acc
+                crate::compensated::dot(values, &support_beta)
             },
         )
         .collect();

@@ -337,8 +337,8 @@ impl LowRank {
 pub(crate) fn kernel_times(kernel: &Kernel, x: &[f64], dim: usize, beta: &[f64]) -> Vec<f64> {
     let n = beta.len();
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
-    let support: Vec<(usize, f64)> = (0..n).filter(|&j| beta[j] != 0.0).map(|j| (j, beta[j])).collect();
-    let samples: Vec<usize> = support.iter().map(|&(j, _)| j).collect();
+    let samples: Vec<usize> = (0..n).filter(|&j| beta[j] != 0.0).collect();
+    let support: Vec<f64> = samples.iter().map(|&j| beta[j]).collect();
     let source = RowSource::of(kernel, x, dim, &samples);
     let mut out = vec![0.0; n];
     out.par_chunks_mut(CHUNK / 8).enumerate().for_each_init(
@@ -347,7 +347,7 @@ pub(crate) fn kernel_times(kernel: &Kernel, x: &[f64], dim: usize, beta: &[f64])
             let start = chunk * (CHUNK / 8);
             for (o, v) in out.iter_mut().enumerate() {
                 source.row(row(start + o), 0, values);
-                *v = values.iter().zip(&support).map(|(&k, &(_, b))| b * k).sum();
+                *v = crate::kernel::row_times(values, &support);
             }
         },
     );

@@ -178,13 +178,14 @@ pub(crate) fn finish(
             .map(|i| (i, new_beta[i] - beta[i]))
             .collect();
         let moved_samples: Vec<usize> = delta.iter().map(|&(j, _)| j).collect();
+        let changes: Vec<f64> = delta.iter().map(|&(_, d)| d).collect();
         let delta_rows = RowSource::of(kernel, x, dim, &moved_samples);
         k_beta.par_chunks_mut(CHUNK).enumerate().for_each_init(
             || vec![0.0; delta.len()],
             |values, (chunk, out)| {
                 for (o, kb) in out.iter_mut().enumerate() {
                     delta_rows.row(row(chunk * CHUNK + o), 0, values);
-                    *kb += values.iter().zip(&delta).map(|(&v, &(_, d))| d * v).sum::<f64>();
+                    *kb += crate::kernel::row_times(values, &changes);
                 }
             },
         );
