@@ -74,8 +74,8 @@ def ours_run(palpus, source, sizes, dump, budget_s, threads):
     rows = []
     for line in run.stdout.splitlines()[-len(sizes):]:
         f = line.split()
-        rows.append({"n": int(f[0]), "s": float(f[1]), "solver": " ".join(f[2:-4]), "svs": int(f[-3]),
-                     "gap": float(f[-2]), "mb": float(f[-1])})
+        rows.append({"n": int(f[0]), "s": float(f[1]), "solver": " ".join(f[2:-4]), "iterations": int(f[-4]),
+                     "svs": int(f[-3]), "gap": float(f[-2]), "mb": float(f[-1])})
     return rows
 
 
@@ -92,7 +92,7 @@ def libsvm(path, c, gamma, eps):
             m.fit(x, y)
             dt = min(dt, time.perf_counter() - t)
     diff = float(np.abs(m.predict(x) - d[:, -1]).max())
-    return {"s": dt, "svs": len(m.support_), "diff": diff}
+    return {"s": dt, "svs": len(m.support_), "diff": diff, "iterations": int(m.n_iter_)}
 
 
 def main():

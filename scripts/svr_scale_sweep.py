@@ -23,7 +23,8 @@ fastest of five fits below a second, on both sides). The problems:
 Ours run on --threads threads (1 by default: libsvm is single-threaded). Writes
 OUT/svr_scale_sweep.csv (one row per fit: problem, n, our and libsvm's seconds, our peak memory,
 support vectors, our certified gap, the two models' largest prediction difference, our solver's
-path) and draws OUT/svr_scale_sweep.png with `palpus bench svr-scale-plot`, which also prints the
+path, and each solver's iterations: ours are SMO's pair steps or the interior point's Newton
+steps, libsvm's its pair steps) and draws OUT/svr_scale_sweep.png with `palpus bench svr-scale-plot`, which also prints the
 per-problem summary (worst and median ratio, worst spike).
 """
 
@@ -41,7 +42,8 @@ import bench_svr_scale as bench  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 NEEDLE = (100.0, 30.0, 0.02)
 FRIEDMAN = (10.0, 1.0, 0.5)
-COLUMNS = "problem,n,ours_s,libsvm_s,our_peak_mb,our_svs,libsvm_svs,our_gap,max_abs_diff,our_solver"
+COLUMNS = ("problem,n,ours_s,libsvm_s,our_peak_mb,our_svs,libsvm_svs,our_gap,max_abs_diff,our_solver,"
+           "our_iterations,libsvm_iterations")
 
 
 def problems(palpus, work):
@@ -98,7 +100,7 @@ def main():
                 print(f"{name} n={o['n']}: ours {o['s']:.3f} s ({o['solver']}), libsvm {lib['s']:.3f} s",
                       file=sys.stderr, flush=True)
                 rows.append([f'"{name}"', o["n"], o["s"], lib["s"], o["mb"], o["svs"], lib["svs"], o["gap"],
-                             lib["diff"], f'"{o["solver"]}"'])
+                             lib["diff"], f'"{o["solver"]}"', o["iterations"], lib["iterations"]])
                 for f in dump.iterdir():
                     f.unlink()
     with open(csv, "w") as f:
