@@ -24,8 +24,9 @@ Ours run on --threads threads (1 by default: libsvm is single-threaded). Writes
 OUT/svr_scale_sweep.csv (one row per fit: problem, n, our and libsvm's seconds, our peak memory,
 support vectors, our certified gap, the two models' largest prediction difference, our solver's
 path, and each solver's iterations: ours are SMO's pair steps or the interior point's Newton
-steps, libsvm's its pair steps) and draws OUT/svr_scale_sweep.png with `palpus bench svr-scale-plot`, which also prints the
-per-problem summary (worst and median ratio, worst spike).
+steps, libsvm's its pair steps) and draws OUT/svr_scale_sweep.png with `palpus bench
+svr-scale-plot`, which also prints the per-problem summary (worst and median ratio, worst
+spike).
 """
 
 import argparse

@@ -119,16 +119,16 @@ pub(crate) fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
     lane_sum(a, b, |x, y| (x - y) * (x - y))
 }
 
+/// Entries of a row [`RbfColumns`] sums in registers at once.
+const BLOCK: usize = 16;
+
 /// The samples of an RBF kernel laid out by feature (`dim × n`), from which whole rows are
-/// computed a feature at a time: each pass over the samples is one vector loop, where a row
+/// computed in vector loops, [`BLOCK`] entries at a time summed over the features, where a row
 /// sample by sample is a short loop per value. Only for inputs whose squared distance
 /// [`Kernel::eval`] sums in one running sum (fewer than [`LANE_SUM_MIN`] features): the rows
 /// have its squared distances to the bit, and its values within the two ulps by which the
 /// vectorised [`crate::exp::exp`] may differ from the C library's (which `eval` keeps: one
 /// call at a time, the library's table-driven `exp` is twice as fast).
-/// Entries of a row [`RbfColumns`] sums in registers at once.
-const BLOCK: usize = 16;
-
 #[derive(Debug, Clone)]
 pub(crate) struct RbfColumns {
     gamma: f64,
@@ -228,29 +228,6 @@ impl RbfColumns {
         }
         crate::exp::exp_scaled_in_place(out, -self.gamma);
     }
-}
-
-/// `Σ rowᵣ · coefficientsᵣ` over the shorter of the two, in four interleaved sums: one running
-/// sum is a chain of dependent additions, which recomputing a gradient from the exact kernel
-/// runs 570 million long at n = 30,000.
-pub(crate) fn row_times(row: &[f64], coefficients: &[f64]) -> f64 {
-    let len = row.len().min(coefficients.len());
-    let whole = len / 4 * 4;
-    let mut sums = [0.0; 4];
-    for (r, c) in row[..whole]
-        .chunks_exact(4)
-        .zip(coefficients[..whole].chunks_exact(4))
-    {
-        for l in 0..4 {
-            sums[l] += r[l] * c[l];
-        }
-    }
-    let tail: f64 = row[whole..len]
-        .iter()
-        .zip(&coefficients[whole..len])
-        .map(|(r, c)| r * c)
-        .sum();
-    ((sums[0] + sums[1]) + (sums[2] + sums[3])) + tail
 }
 
 /// Rows of any kernel over a set of samples: by feature ([`RbfColumns`]) where it applies, else
@@ -385,13 +362,14 @@ mod tests {
     }
 
     #[test]
-    fn a_row_times_coefficients_sums_every_term_once() {
-        // Small integers sum exactly in any order: every term, tail included, counts once.
-        for len in [0, 1, 3, 4, 7, 8, 13] {
+    fn the_inner_product_sums_every_term_once() {
+        // Small integers sum exactly in any order: every term, in the lanes (from 16 terms on)
+        // and in the remainder after them, counts once.
+        for len in [0, 1, 3, 4, 7, 8, 13, 16, 17, 19, 40] {
             let row: Vec<f64> = (0..len).map(|i| (i + 1) as f64).collect();
             let coefficients: Vec<f64> = (0..len + 2).map(|i| (3 * i) as f64 - 4.0).collect();
             let expected: f64 = (0..len).map(|i| row[i] * coefficients[i]).sum();
-            assert_eq!(row_times(&row, &coefficients), expected, "len {len}");
+            assert_eq!(dot(&row, &coefficients), expected, "len {len}");
         }
     }
 

@@ -347,7 +347,7 @@ pub(crate) fn kernel_times(kernel: &Kernel, x: &[f64], dim: usize, beta: &[f64])
             let start = chunk * (CHUNK / 8);
             for (o, v) in out.iter_mut().enumerate() {
                 source.row(row(start + o), 0, values);
-                *v = crate::kernel::row_times(values, &support);
+                *v = crate::kernel::dot(values, &support);
             }
         },
     );

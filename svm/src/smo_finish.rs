@@ -173,19 +173,17 @@ pub(crate) fn finish(
         }
         let bias = bias0 + solution[m];
         // Kβ at the new β: the old plus every change.
-        let delta: Vec<(usize, f64)> = (0..n)
+        let (moved_samples, changes): (Vec<usize>, Vec<f64>) = (0..n)
             .filter(|&i| new_beta[i] != beta[i])
             .map(|i| (i, new_beta[i] - beta[i]))
-            .collect();
-        let moved_samples: Vec<usize> = delta.iter().map(|&(j, _)| j).collect();
-        let changes: Vec<f64> = delta.iter().map(|&(_, d)| d).collect();
+            .unzip();
         let delta_rows = RowSource::of(kernel, x, dim, &moved_samples);
         k_beta.par_chunks_mut(CHUNK).enumerate().for_each_init(
-            || vec![0.0; delta.len()],
+            || vec![0.0; changes.len()],
             |values, (chunk, out)| {
                 for (o, kb) in out.iter_mut().enumerate() {
                     delta_rows.row(row(chunk * CHUNK + o), 0, values);
-                    *kb += crate::kernel::row_times(values, &changes);
+                    *kb += crate::kernel::dot(values, &changes);
                 }
             },
         );
