@@ -153,7 +153,21 @@ pub fn fit_observed(
     };
     // Measured by the factor: its residual fell ever slower (not merely past the rank allowed
     // at this n, as the needle's kernel at n = 500).
-    let far_from_low_rank = matches!(low_rank_outcome, Err(low_rank::FactorMiss::SlowFall));
+    // Below the factor's sizes, measured by its first columns alone: whether the kernel is
+    // numerically full-rank (Friedman #1 at n = 350–476, where SMO took 3–9 ms against the
+    // dense interior point's 8–16 ms), not merely beyond the rank allowed at this n.
+    let far_from_low_rank = match low_rank_outcome {
+        Err(low_rank::FactorMiss::SlowFall) => true,
+        _ if !low_rank_tried && params.solver() == Solver::Auto && kernel != Kernel::Linear => {
+            low_rank::numerically_full_rank(
+                &kernel,
+                x,
+                dim,
+                low_rank::tolerances(n, settings.c, super::data::target_scale(y))[0],
+            )
+        }
+        _ => false,
+    };
     let low_rank_solution = low_rank_outcome.ok().flatten();
     let use_smo = match params.solver() {
         Solver::Smo => true,

@@ -114,6 +114,60 @@ pub(crate) fn pivoted_cholesky(
     tolerance: f64,
     max_rank: usize,
 ) -> Result<LowRank, FactorMiss> {
+    factor_up_to(kernel, x, dim, tolerance, max_rank, max_rank, Projection::Hopeful)
+}
+
+/// Columns [`numerically_full_rank`] factors: its third checkpoint (16, 32, 64), the first at
+/// which the residual's fall has a trend.
+pub(crate) const PROBE_COLUMNS: usize = 64;
+
+/// Whether the kernel matrix of the inputs is numerically full-rank at `tolerance`: after
+/// [`PROBE_COLUMNS`] columns of [`pivoted_cholesky`], the residual's fall, projected as it
+/// has been changing ([`Projection::AsMeasured`]), would still miss the tolerance with as many
+/// columns as samples. It costs those columns, a small part of a dense solve where it is asked
+/// (below [`MIN_SAMPLES`]); `false` below twice as many samples, where nothing is measured.
+/// On 350–476 samples of Friedman #1 (5 or 10 uniform inputs, γ = 1) the largest residual was
+/// still above half the diagonal at rank 64, falling at 0.010 per column at ranks 16–64 (the
+/// tolerance 1e-9 would take some 2,000 columns); on the needle capture's two inputs (γ = 30)
+/// it was 3.6e-3 and falling faster each doubling (0.084, then 0.127 per column).
+pub(crate) fn numerically_full_rank(kernel: &Kernel, x: &[f64], dim: usize, tolerance: f64) -> bool {
+    let n = x.len() / dim.max(1);
+    n >= 2 * PROBE_COLUMNS
+        && matches!(
+            factor_up_to(
+                kernel,
+                x,
+                dim,
+                tolerance,
+                n,
+                PROBE_COLUMNS,
+                Projection::AsMeasured
+            ),
+            Err(FactorMiss::SlowFall)
+        )
+}
+
+/// How [`out_of_reach`] projects a residual's fall whose rate has grown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Projection {
+    /// A growing rate may grow on without bound: never out of reach (the factor itself, which
+    /// would rather spend columns than give up on a low-rank kernel).
+    Hopeful,
+    /// A growing rate grows on by the ratio measured, as a shrinking one shrinks on.
+    AsMeasured,
+}
+
+/// [`pivoted_cholesky`], stopping with [`FactorMiss::RankLimit`] at `columns_at_most` columns
+/// while judging the residual's fall against `max_rank`, projected as `projection` says.
+fn factor_up_to(
+    kernel: &Kernel,
+    x: &[f64],
+    dim: usize,
+    tolerance: f64,
+    max_rank: usize,
+    columns_at_most: usize,
+    projection: Projection,
+) -> Result<LowRank, FactorMiss> {
     let n = x.len() / dim;
     let row = |i: usize| &x[i * dim..(i + 1) * dim];
     let mut diag: Vec<f64> = (0..n).map(|i| kernel.eval(row(i), row(i))).collect();
@@ -142,9 +196,12 @@ pub(crate) fn pivoted_cholesky(
         }
         if rank >= 16 && rank.is_power_of_two() {
             checkpoints.push((rank, largest));
-            if out_of_reach(&checkpoints, max_rank, stop) {
+            if out_of_reach(&checkpoints, max_rank, stop, projection) {
                 return Err(FactorMiss::SlowFall);
             }
+        }
+        if rank >= columns_at_most {
+            return Err(FactorMiss::RankLimit);
         }
         let pivot_row: Vec<f64> = columns.iter().map(|g| g[pivot]).collect();
         let xp = row(pivot);
@@ -180,14 +237,15 @@ pub(crate) fn pivoted_cholesky(
 /// 64, … cannot reach `stop` by `max_rank`: its kernel is not low-rank enough, and the columns
 /// it would add before giving up at its limit cost n·rank² for nothing. The residual's log falls
 /// at a rate per column that changes from one doubling of the rank to the next; while the rate
-/// grows the factor goes on, and where it shrinks, the rate is projected to go on shrinking by
-/// the same ratio each doubling, and the factor gives up if that projected fall misses `stop`.
+/// grows the factor goes on ([`Projection::Hopeful`]), and where it shrinks, the rate is
+/// projected to go on shrinking by the same ratio each doubling, and the factor gives up if that
+/// projected fall misses `stop` ([`Projection::AsMeasured`] projects a growing rate so too).
 /// On the needle's 2-D inputs the rate grows (the residual fell by 28 from rank 32 to 64 and by
 /// 1.5e5 from 64 to 128 at n = 3,000); on Friedman #1's five uniform inputs it shrinks by about
 /// 0.65 per doubling, and the factor went to its limit before it failed: 1,000 columns, 1.3 s,
 /// at n = 4,000; 2,000 columns, 21 s, at n = 10,000, where the projection from rank 512 said
 /// its residual would still be 1e-5 at 2,000 (from 1024 it was 1.6e-6, the tolerance 1e-9).
-fn out_of_reach(checkpoints: &[(usize, f64)], max_rank: usize, stop: f64) -> bool {
+fn out_of_reach(checkpoints: &[(usize, f64)], max_rank: usize, stop: f64, projection: Projection) -> bool {
     let [.., (r0, l0), (r1, l1), (r2, l2)] = *checkpoints else {
         return false;
     };
@@ -196,13 +254,13 @@ fn out_of_reach(checkpoints: &[(usize, f64)], max_rank: usize, stop: f64) -> boo
     }
     let rate_before = (l0 / l1).ln() / (r1 - r0) as f64;
     let rate = (l1 / l2).ln() / (r2 - r1) as f64;
-    if !(rate_before > 0.0 && rate > 0.0) || rate >= rate_before {
+    if !(rate_before > 0.0 && rate > 0.0) || (rate >= rate_before && projection == Projection::Hopeful) {
         return false;
     }
-    let shrink = rate / rate_before;
+    let change = rate / rate_before;
     let (mut at, mut step_rate, mut fall) = (r2, rate, 0.0);
     while at < max_rank {
-        step_rate *= shrink;
+        step_rate *= change;
         let next = (2 * at).min(max_rank);
         fall += step_rate * (next - at) as f64;
         at = next;
@@ -363,17 +421,63 @@ mod tests {
         // The needle's residuals at ranks 16, 32, 64, 128 (n = 3,000): the fall quickens.
         let needle = [(16, 0.796), (32, 0.277), (64, 9.93e-3), (128, 6.41e-8)];
         for k in 1..=needle.len() {
-            assert!(!out_of_reach(&needle[..k], 750, 9.1e-10), "needle at {k}");
+            assert!(
+                !out_of_reach(&needle[..k], 750, 9.1e-10, Projection::Hopeful),
+                "needle at {k}"
+            );
         }
         // Friedman #1's (n = 4,000): the fall slows by about 0.6 each doubling.
         let friedman = [(16, 0.506), (32, 0.178), (64, 5.13e-2), (128, 8.69e-3)];
-        assert!(
-            !out_of_reach(&friedman[..2], 1000, 1e-9),
-            "two points say nothing of a trend"
-        );
-        assert!(out_of_reach(&friedman[..3], 1000, 1e-9));
-        // The same slowing fall, but a target it reaches in time.
-        assert!(!out_of_reach(&friedman[..3], 1000, 1e-3));
+        for projection in [Projection::Hopeful, Projection::AsMeasured] {
+            assert!(
+                !out_of_reach(&friedman[..2], 1000, 1e-9, projection),
+                "two points say nothing of a trend"
+            );
+            assert!(out_of_reach(&friedman[..3], 1000, 1e-9, projection));
+            // The same slowing fall, but a target it reaches in time.
+            assert!(!out_of_reach(&friedman[..3], 1000, 1e-3, projection));
+        }
+    }
+
+    #[test]
+    fn a_growing_rate_is_out_of_reach_only_where_projected_as_measured() {
+        // Friedman #1 with 10 inputs at n = 350: the rate barely grows (0.0103, then 0.0104
+        // per column), some 3 of the 20 the tolerance needs by rank 350.
+        let flat = [(16, 0.856), (32, 0.726), (64, 0.520)];
+        assert!(!out_of_reach(&flat, 350, 1e-9, Projection::Hopeful));
+        assert!(out_of_reach(&flat, 350, 1e-9, Projection::AsMeasured));
+        // The needle capture at n = 350: the rate grows by half each doubling and reaches
+        // the tolerance well before rank 350, but not by 116 (the factor's limit there).
+        let needle = [(16, 0.786), (32, 0.206), (64, 3.56e-3)];
+        assert!(!out_of_reach(&needle, 350, 1e-9, Projection::AsMeasured));
+        assert!(out_of_reach(&needle, 116, 1e-9, Projection::AsMeasured));
+    }
+
+    #[test]
+    fn full_rank_is_told_from_low_rank_in_the_probes_columns() {
+        // Five uniform inputs at γ = 1, as Friedman #1, against two at γ = 30, as the needle.
+        let n = 400;
+        let mut rng = capture::rng::SplitMix64::new(5);
+        let uniform5: Vec<f64> = (0..n * 5).map(|_| rng.next_f64()).collect();
+        assert!(numerically_full_rank(
+            &Kernel::Rbf { gamma: 1.0 },
+            &uniform5,
+            5,
+            1e-9
+        ));
+        assert!(!numerically_full_rank(
+            &Kernel::Rbf { gamma: 30.0 },
+            &inputs(n),
+            2,
+            1e-9
+        ));
+        // Too few samples to measure a trend: not called full rank.
+        assert!(!numerically_full_rank(
+            &Kernel::Rbf { gamma: 1.0 },
+            &uniform5[..100 * 5],
+            5,
+            1e-9
+        ));
     }
 
     fn inputs(n: usize) -> Vec<f64> {
