@@ -48,6 +48,6 @@ pub use reduce::{Reduction, reduce_support};
 #[doc(hidden)]
 pub use sample::needle_like_model;
 pub use smo::{
-    GramRows, KernelRows, PairStep, RowValue, SelectionCurvature, SmoSettings, SmoSettingsBuilder,
-    SmoSolution, libsvm_rho, solve_smo, solve_svc,
+    GramRows, KernelRows, PairStep, RowStorage, RowValue, SelectionCurvature, SmoSettings,
+    SmoSettingsBuilder, SmoSolution, libsvm_rho, solve_smo, solve_svc,
 };

@@ -27,7 +27,7 @@ mod rows;
 mod solver;
 mod svc;
 mod svr;
-pub use rows::{GramRows, KernelRows, RowValue};
+pub use rows::{GramRows, KernelRows, RowStorage, RowValue};
 pub use svc::solve_svc;
 pub(crate) use svr::{CACHE_BYTES, TARGET_GAP, solve_svr};
 

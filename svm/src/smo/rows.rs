@@ -35,10 +35,18 @@ pub trait RowValue: sealed::Sealed + Copy + Default + Into<f64> + Send + Sync + 
     /// Whether holding a value rounds it, so that a gradient built from rows is the gradient of
     /// a neighbouring problem, not of the one asked.
     const ROUNDS: bool;
-    /// The row's own storage when it is `f64`, so that a row is computed in place.
-    fn as_f64_mut(row: &mut [Self]) -> Option<&mut [f64]>;
-    /// Holds `values` in `out`.
-    fn store(values: &[f64], out: &mut [Self]);
+    /// The row's own storage, by type, so that a row is computed in place and in the
+    /// arithmetic its values are held to.
+    fn storage(row: &mut [Self]) -> RowStorage<'_>;
+}
+
+/// A row's storage as [`RowValue::storage`] hands it out.
+#[derive(Debug)]
+pub enum RowStorage<'a> {
+    /// Values held as computed.
+    Exact(&'a mut [f64]),
+    /// Values held rounded to f32.
+    Rounded(&'a mut [f32]),
 }
 
 mod sealed {
@@ -76,26 +84,16 @@ mod sealed {
 impl RowValue for f64 {
     const ROUNDS: bool = false;
 
-    fn as_f64_mut(row: &mut [Self]) -> Option<&mut [f64]> {
-        Some(row)
-    }
-
-    fn store(values: &[f64], out: &mut [Self]) {
-        out.copy_from_slice(values);
+    fn storage(row: &mut [Self]) -> RowStorage<'_> {
+        RowStorage::Exact(row)
     }
 }
 
 impl RowValue for f32 {
     const ROUNDS: bool = true;
 
-    fn as_f64_mut(_: &mut [Self]) -> Option<&mut [f64]> {
-        None
-    }
-
-    fn store(values: &[f64], out: &mut [Self]) {
-        for (o, &v) in out.iter_mut().zip(values) {
-            *o = v as f32;
-        }
+    fn storage(row: &mut [Self]) -> RowStorage<'_> {
+        RowStorage::Rounded(row)
     }
 }
 

@@ -1,7 +1,7 @@
 //! The ε-SVR on [`super`]'s SMO: the split dual's variables, kernel rows cached within a
 //! memory budget, and the refinement to the certificate's gap with the exact finish.
 
-use super::rows::{KernelRows, RowValue, SampleQ};
+use super::rows::{KernelRows, RowStorage, RowValue, SampleQ};
 use super::solver::solve;
 use super::{SelectionCurvature, SmoSettings, libsvm_rho};
 use crate::error::SvmError;
@@ -11,7 +11,8 @@ use crate::kernel::{Kernel, RowSource};
 pub(crate) const CACHE_BYTES: usize = 256 << 20;
 /// Kernel rows computed on demand and cached: least recently used rows are evicted so that the
 /// rows held never take more than the byte budget given (at least two rows, the pair's). Rows
-/// are computed in `f64` and held as `T`.
+/// are computed in the precision they are held to: as `f64`, or within 2⁻²³ where held as
+/// `f32` (`RowSource::row_f32`, in f32 exponents that cost half as much).
 pub(crate) struct RowCache<'a, T> {
     kernel: &'a Kernel,
     x: &'a [f64],
@@ -33,8 +34,6 @@ pub(crate) struct RowCache<'a, T> {
     owner: Vec<usize>,
     last_used: Vec<u64>,
     rows: Vec<T>,
-    /// A row as computed, before it is held, when `T` is not `f64`.
-    computing: Vec<f64>,
     clock: u64,
     /// Rows computed (cache misses), for the tests and the benchmark.
     computed: usize,
@@ -70,7 +69,6 @@ impl<'a, T: RowValue> RowCache<'a, T> {
             owner: Vec::new(),
             last_used: Vec::new(),
             rows: Vec::new(),
-            computing: Vec::new(),
             clock: 0,
             computed: 0,
             narrowings: 0,
@@ -110,10 +108,10 @@ impl<'a, T: RowValue> RowCache<'a, T> {
         self.computed
     }
 
-    /// Computes row `i` into `out`.
-    fn compute(&self, source: &RowSource<'_>, i: usize, out: &mut [f64]) {
+    /// Computes row `i` into `out` by `fill(xᵢ, start, part)` (a [`RowSource`]'s rows).
+    fn compute<O: Send>(&self, i: usize, out: &mut [O], fill: impl Fn(&[f64], usize, &mut [O]) + Sync) {
         let xi = &self.x[i * self.dim..(i + 1) * self.dim];
-        let fill = |start: usize, out: &mut [f64]| source.row(xi, start, out);
+        let fill = |start: usize, out: &mut [O]| fill(xi, start, out);
         if out.len() >= PARALLEL_ROW && rayon::current_num_threads() > 1 {
             let half = out.len() / 2;
             let (a, b) = out.split_at_mut(half);
@@ -169,19 +167,15 @@ impl<T: RowValue> RowCache<'_, T> {
     }
 
     /// Computes row `i` (over the window if `narrowed`, else whole) into `held`.
-    fn compute_into(&mut self, i: usize, held: &mut [T], narrowed: bool) {
+    fn compute_into(&self, i: usize, held: &mut [T], narrowed: bool) {
         let source = match &self.window {
             Some(window) if narrowed => window,
             _ => &self.source,
         };
-        match T::as_f64_mut(held) {
-            Some(held) => self.compute(source, i, held),
-            None => {
-                let mut computing = std::mem::take(&mut self.computing);
-                computing.resize(held.len(), 0.0);
-                self.compute(source, i, &mut computing);
-                T::store(&computing, held);
-                self.computing = computing;
+        match T::storage(held) {
+            RowStorage::Exact(held) => self.compute(i, held, |xi, start, out| source.row(xi, start, out)),
+            RowStorage::Rounded(held) => {
+                self.compute(i, held, |xi, start, out| source.row_f32(xi, start, out))
             }
         }
     }
@@ -446,8 +440,9 @@ mod tests {
         (0..n).map(|i| (i.min(n - 2)) as f64 / n as f64).collect()
     }
 
-    /// Rows held as `T` are the row function's values, held as `T` (`held`), within the budget.
-    fn cache_holds_exact_rows_within_budget<T: RowValue + Into<f64>>(held: fn(f64) -> f64) {
+    /// Rows held as `T` are the row function's values for exponents `t` (`value(t)`), within
+    /// the budget.
+    fn cache_holds_exact_rows_within_budget<T: RowValue + Into<f64>>(value: fn(f64) -> f64) {
         let kernel = Kernel::Rbf { gamma: 3.0 };
         let n = 50;
         let x = grid(n);
@@ -462,11 +457,7 @@ mod tests {
                 for (j, &v) in row.iter().enumerate() {
                     // The row's exp, on the kernel's squared distance.
                     let d = x[i] - x[j];
-                    assert_eq!(
-                        v.into(),
-                        held(crate::exp::exp(-3.0 * (d * d))),
-                        "row {i} col {j} round {round}"
-                    );
+                    assert_eq!(v.into(), value(-3.0 * (d * d)), "row {i} col {j} round {round}");
                 }
                 assert!(cache.row_bytes() <= budget, "{} > {budget}", cache.row_bytes());
             }
@@ -483,8 +474,8 @@ mod tests {
 
     #[test]
     fn the_row_cache_stays_within_its_budget_and_returns_exact_rows() {
-        cache_holds_exact_rows_within_budget::<f64>(|v| v);
-        cache_holds_exact_rows_within_budget::<f32>(|v| f64::from(v as f32));
+        cache_holds_exact_rows_within_budget::<f64>(crate::exp::exp);
+        cache_holds_exact_rows_within_budget::<f32>(|t| f64::from(crate::exp::exp_f32(t as f32)));
     }
 
     #[test]
