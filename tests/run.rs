@@ -610,6 +610,57 @@ fn stall(pid: u32, how_long: std::time::Duration) {
 }
 
 #[test]
+fn a_part_the_watchdog_ended_ends_the_session_there() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let _one = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let scene = "scenes/friction_hard_soft.toml";
+    // The models are identified and cached first, so that the stop below lands in the loop.
+    run_unpaced(&[scene, "--duration", "0.2"], &dir.path().join("warm"), &cache);
+    let report_dir = dir.path().join("report");
+    let mut child = palpus_at_root(
+        "run",
+        &[
+            scene,
+            "--headless",
+            "--duration",
+            "4",
+            "--report",
+            report_dir.to_str().unwrap(),
+        ],
+        &cache,
+    )
+    .env_remove("DISPLAY")
+    .env_remove("WAYLAND_DISPLAY")
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    stdout.read_line(&mut first).unwrap();
+    assert!(first.contains("(2 parts)"), "{first}");
+    // 1.5 s into the first part (the plate), of 4 s.
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    stall(child.id(), std::time::Duration::from_secs(2));
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{first}{rest}{stderr}");
+    assert!(
+        rest.contains("part `plate` ended early: the session stops after 1 of 2 parts"),
+        "{rest}"
+    );
+    let r = report(&report_dir);
+    let segments = r["segments"].as_array().unwrap();
+    assert_eq!(segments.len(), 1, "the sponge was not run: {r}");
+    assert_eq!(segments[0]["object"], "plate");
+}
+
+#[test]
 fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;

@@ -25,9 +25,10 @@ use haptics::partial_path;
 /// report folder is written: force plots, a rendered frame, loop statistics, the recognized
 /// surface timeline, and the summary printed here.
 ///
-/// A part of the session that ended early still gets its report, and then palpus exits 3 when
-/// the haptic thread stalled and the watchdog released the force, 4 when the device failed, 5
-/// on another early end; with --record, the error names the FILE.partial the part left.
+/// A part of the session that ended early still gets its report, the parts after it are not
+/// run, and then palpus exits 3 when the haptic thread stalled and the watchdog released the
+/// force, 4 when the device failed, 5 on another early end; with --record, the error names the
+/// FILE.partial the part left.
 #[derive(Debug, Args)]
 pub(crate) struct RunArgs {
     /// The scene file.
@@ -149,7 +150,19 @@ pub(crate) fn run(args: &RunArgs) -> anyhow::Result<()> {
             if let Some(r) = &recognizer {
                 recognition.extend(r.recognize(&run));
             }
+            let ended_early = run.outcome.is_err();
             runs.push(run);
+            // A stall or a device fault ends the session: the parts after it would run on a
+            // device that just failed, for a session that can no longer count.
+            if ended_early && runs.len() < segments.len() {
+                println!(
+                    "part `{}` ended early: the session stops after {} of {} parts",
+                    segment.object,
+                    runs.len(),
+                    segments.len()
+                );
+                break;
+            }
         }
         let line = recognizer.as_ref().map(crate::recognizer::SceneRecognizer::line);
         (scene, runs, recognition, line)
