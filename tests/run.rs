@@ -609,10 +609,34 @@ fn stall(pid: u32, how_long: std::time::Duration) {
     signal("-CONT");
 }
 
-#[test]
-fn a_part_the_watchdog_ended_ends_the_session_there() {
+/// `palpus run --headless ARGS` without a display, stalled ([`stall`]) for 2 s once `after`
+/// has passed since its first line: that line, the rest of its output, and how it ended.
+fn stalled_headless_run(
+    args: &[&str],
+    cache: &Path,
+    after: std::time::Duration,
+) -> (String, String, std::process::Output) {
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;
+    let mut child = palpus_at_root("run", &[&["--headless"], args].concat(), cache)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    stdout.read_line(&mut first).unwrap();
+    std::thread::sleep(after);
+    stall(child.id(), std::time::Duration::from_secs(2));
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
+    (first, rest, child.wait_with_output().unwrap())
+}
+
+#[test]
+fn a_part_the_watchdog_ended_ends_the_session_there() {
     let _one = serial();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
@@ -620,34 +644,13 @@ fn a_part_the_watchdog_ended_ends_the_session_there() {
     // The models are identified and cached first, so that the stop below lands in the loop.
     run_unpaced(&[scene, "--duration", "0.2"], &dir.path().join("warm"), &cache);
     let report_dir = dir.path().join("report");
-    let mut child = palpus_at_root(
-        "run",
-        &[
-            scene,
-            "--headless",
-            "--duration",
-            "4",
-            "--report",
-            report_dir.to_str().unwrap(),
-        ],
-        &cache,
-    )
-    .env_remove("DISPLAY")
-    .env_remove("WAYLAND_DISPLAY")
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
-    let mut stdout = BufReader::new(child.stdout.take().unwrap());
-    let mut first = String::new();
-    stdout.read_line(&mut first).unwrap();
-    assert!(first.contains("(2 parts)"), "{first}");
     // 1.5 s into the first part (the plate), of 4 s.
-    std::thread::sleep(std::time::Duration::from_millis(1500));
-    stall(child.id(), std::time::Duration::from_secs(2));
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
-    let o = child.wait_with_output().unwrap();
+    let (first, rest, o) = stalled_headless_run(
+        &[scene, "--duration", "4", "--report", report_dir.to_str().unwrap()],
+        &cache,
+        std::time::Duration::from_millis(1500),
+    );
+    assert!(first.contains("(2 parts)"), "{first}");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{first}{rest}{stderr}");
     assert!(
@@ -662,43 +665,27 @@ fn a_part_the_watchdog_ended_ends_the_session_there() {
 
 #[test]
 fn a_session_the_watchdog_ended_exits_3_and_names_its_recording() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
     let _one = serial();
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     // The model is identified and cached first, so that the stop below lands in the loop.
     run_unpaced(&["--duration", "0.2"], &dir.path().join("warm"), &cache);
     let target = dir.path().join("session.csv");
-    let mut child = palpus_at_root(
-        "run",
+    // 2.5 s in, the scripted needle is in the liver, pressing on it.
+    let report_dir = dir.path().join("report");
+    let (first, rest, o) = stalled_headless_run(
         &[
-            "--headless",
             "--duration",
             "6",
             "--record",
             target.to_str().unwrap(),
             "--report",
-            dir.path().join("report").to_str().unwrap(),
+            report_dir.to_str().unwrap(),
         ],
         &cache,
-    )
-    .env_remove("DISPLAY")
-    .env_remove("WAYLAND_DISPLAY")
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
-    let mut stdout = BufReader::new(child.stdout.take().unwrap());
-    let mut first = String::new();
-    stdout.read_line(&mut first).unwrap();
+        std::time::Duration::from_millis(2500),
+    );
     assert!(first.starts_with("running scene"), "{first}");
-    // 2.5 s in, the scripted needle is in the liver, pressing on it.
-    std::thread::sleep(std::time::Duration::from_millis(2500));
-    stall(child.id(), std::time::Duration::from_secs(2));
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
-    let o = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{first}{rest}{stderr}");
     let partial = format!("{}.partial", target.display());

@@ -225,9 +225,9 @@ impl RbfColumns {
         }
         if !tail.is_empty() {
             let from = start + blocked;
-            // A whole block's sums, of which the entries past the row's end are not read:
+            // A whole block's sums, of which the entries before the tail are not read:
             // summed from the last BLOCK entries where the row has them, else one by one.
-            if from + tail.len() >= BLOCK && self.n >= from + tail.len() {
+            if from + tail.len() >= BLOCK {
                 let skipped = BLOCK - tail.len();
                 values(&scaled(self.block_sums(xi, from - skipped))[skipped..], tail);
             } else {
