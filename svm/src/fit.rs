@@ -20,9 +20,6 @@ use super::reduce::reduce_support;
 use super::smo;
 use super::smo_finish;
 
-/// Active-set moves allowed to a polish tried during the interior point's run.
-const EARLY_POLISH_ROUNDS: usize = 5;
-
 /// A fitted model and what it took.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SvrFit {
@@ -254,25 +251,38 @@ fn solve_dense(
     // Accept a polished iterate only when its own duality gap certifies it.
     let certify_below = (10.0 * settings.tolerance).max(1e-12);
     let linear = *kernel == Kernel::Linear;
-    let run_polish = |sides: Vec<Side>, rounds: usize| {
+    // The linear polish's rounds solve systems of d + 1 unknowns: it runs until it settles.
+    let run_polish = |sides: Vec<Side>, max_flops: f64| {
         if linear {
-            polish::polish_linear(data, settings, sides, rounds)
+            polish::Spent {
+                flops: 0.0,
+                polished: polish::polish_linear(data, settings, sides, usize::MAX),
+            }
         } else {
-            polish::polish(&k, y, settings, sides, rounds)
+            polish::polish(&k, y, settings, sides, max_flops)
         }
     };
-    // Early attempts are cheap ones: a few active-set moves, and only once the gap has
-    // shrunk tenfold since the last attempt (each round is a dense solve).
+    // Early attempts come only once the gap has shrunk tenfold since the last, and together
+    // spend at most what the interior point has (a Cholesky of K per iteration), so that they
+    // at most double the fit. A round's cost varies a hundredfold: on the needle's samples a
+    // round with nearly dependent free samples falls back to an SVD that costs what the whole
+    // Cholesky of K does, while at n = 432 of the Li & Bi capture the attempt at iteration 10
+    // needed ten rounds of small Cholesky factors; capped at five rounds, it and the next two
+    // attempts failed, and the fit took three more iterations.
+    let iteration_flops = crate::bordered::cholesky_flops(y.len());
     let run = |centring: ipm::Centring| -> Result<(ipm::IpmSolution, Option<polish::Polished>), SvmError> {
         let mut certified: Option<polish::Polished> = None;
         let mut last_attempt_gap = f64::INFINITY;
+        let mut polish_flops = 0.0;
         let mut accept = |sol: &ipm::IpmSolution| {
             if sol.gap > 0.1 * last_attempt_gap {
                 return false;
             }
             last_attempt_gap = sol.gap;
-            let rounds = if linear { usize::MAX } else { EARLY_POLISH_ROUNDS };
-            let Some(p) = run_polish(classify(sol), rounds) else {
+            let allowed = sol.iterations.max(1) as f64 * iteration_flops - polish_flops;
+            let spent = run_polish(classify(sol), allowed);
+            polish_flops += spent.flops;
+            let Some(p) = spent.polished else {
                 return false;
             };
             let ok = certified_optimal(&k, data, settings, kernel, &p, certify_below);
@@ -283,7 +293,8 @@ fn solve_dense(
         };
         let sol = ipm::solve(&k, y, settings, centring, &mut accept, observer)?;
         let polished = certified.or_else(|| {
-            run_polish(classify(&sol), usize::MAX)
+            run_polish(classify(&sol), f64::INFINITY)
+                .polished
                 .filter(|p| certified_optimal(&k, data, settings, kernel, p, certify_below))
         });
         Ok((sol, polished))

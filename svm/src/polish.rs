@@ -14,7 +14,7 @@ use std::hash::{Hash, Hasher};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
-use super::bordered::{Singular, solve_bordered, svd_solve};
+use super::bordered::{Singular, solve_bordered_counted, svd_solve};
 use super::data::SvrData;
 use super::params::DualSettings;
 
@@ -58,22 +58,48 @@ impl Tried {
     }
 }
 
-/// Tries to turn `sides` into an exact optimum; `None` if the active set does not settle.
+/// What a polish spent, in flops (its products with K and the factorisations it tried, as
+/// [`crate::bordered::Bordered::flops`] counts them), and what it found.
+#[derive(Debug, Clone)]
+pub(crate) struct Spent {
+    pub flops: f64,
+    pub polished: Option<Polished>,
+}
+
+/// Tries to turn `sides` into an exact optimum (`polished` is `None` if the active set does not
+/// settle), beginning no round once `max_flops` are spent: a round's products with K cost
+/// `4n²` and its bordered solve what [`solve_bordered_counted`] counts, from a Cholesky of the
+/// free samples (`m³/3`) to an SVD where they are nearly dependent (`22m³`).
 pub(crate) fn polish(
     k: &Mat<f64>,
     y: &[f64],
     settings: &DualSettings,
     mut sides: Vec<Side>,
-    max_rounds: usize,
+    max_flops: f64,
+) -> Spent {
+    let mut flops = 0.0;
+    let polished = polish_within(k, y, settings, &mut sides, max_flops, &mut flops);
+    Spent { flops, polished }
+}
+
+fn polish_within(
+    k: &Mat<f64>,
+    y: &[f64],
+    settings: &DualSettings,
+    sides: &mut [Side],
+    max_flops: f64,
+    flops: &mut f64,
 ) -> Option<Polished> {
     let (c, epsilon) = (settings.c, settings.epsilon);
     let n = y.len();
     let y_scale = super::data::target_scale(y);
+    let products = 4.0 * (n as f64).powi(2);
     let mut tried = Tried::default();
-    for _ in 0..max_rounds.min(2 * n + 20) {
-        if tried.again(&sides) {
+    for _ in 0..2 * n + 20 {
+        if *flops >= max_flops || tried.again(sides) {
             return None;
         }
+        *flops += products;
         let free: Vec<usize> = (0..n)
             .filter(|&i| matches!(sides[i], Side::UpperFree | Side::LowerFree))
             .collect();
@@ -161,7 +187,17 @@ pub(crate) fn polish(
             });
             // Singular (more free samples than the kernel's rank plus one, as with a linear
             // kernel): the minimum-norm least squares, judged by the KKT check below.
-            let x = solve_bordered(&a, &rhs, 1e-10, Singular::LeastSquares)?;
+            let solved = solve_bordered_counted(&a, &rhs, 1e-10, Singular::LeastSquares);
+            let x = match solved {
+                Ok(solved) => {
+                    *flops += solved.flops;
+                    solved.x
+                }
+                Err(spent) => {
+                    *flops += spent;
+                    return None;
+                }
+            };
             for (r, &i) in free.iter().enumerate() {
                 beta[i] = x[r];
             }
@@ -173,7 +209,7 @@ pub(crate) fn polish(
         let mut kbeta = vec![0.0; n];
         super::ipm::mat_vec(k, &beta, &mut kbeta);
         let residuals: Vec<f64> = (0..n).map(|i| y[i] - kbeta[i] - bias).collect();
-        let worst = worst_violation(&sides, &beta, &residuals, settings, y_scale);
+        let worst = worst_violation(sides, &beta, &residuals, settings, y_scale);
         let changed = match worst {
             Some(v) => {
                 sides[v.sample] = v.to;
