@@ -144,9 +144,12 @@ impl NewtonOperator for Mat<f64> {
             Some(f) if f.lower.nrows() == n => f.lower,
             _ => Mat::zeros(n, n),
         };
-        lower.copy_from(self);
-        for (i, hi) in h.iter().enumerate() {
-            lower[(i, i)] += hi;
+        // faer's factorisation and its solves read the lower triangle only, so only it is
+        // copied (at n = 432 the whole copy was 3.9 % of a dense fit's time, the half 2.5 %).
+        for (j, hj) in h.iter().enumerate() {
+            let (to, from) = (&mut lower.col_as_slice_mut(j)[j..], &self.col_as_slice(j)[j..]);
+            to.copy_from_slice(from);
+            to[0] += hj;
         }
         let mut scratch = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(
             n,
