@@ -265,8 +265,8 @@ fn solve_dense(
     // Early attempts come only once the gap has shrunk tenfold since the last, and together
     // spend at most what the interior point has (a Cholesky of K per iteration), so that they
     // at most double the fit. A round's cost varies a hundredfold: on the needle's samples a
-    // round with nearly dependent free samples falls back to an SVD that costs what the whole
-    // Cholesky of K does, while at n = 432 of the Li & Bi capture the attempt at iteration 10
+    // round with nearly dependent free samples falls back to a least squares that costs half
+    // the whole Cholesky of K, while at n = 432 of the Li & Bi capture the attempt at iteration 10
     // needed ten rounds of small Cholesky factors; capped at five rounds, it and the next two
     // attempts failed, and the fit took three more iterations.
     let iteration_flops = crate::bordered::cholesky_flops(y.len());

@@ -69,7 +69,7 @@ pub(crate) struct Spent {
 /// Tries to turn `sides` into an exact optimum (`polished` is `None` if the active set does not
 /// settle), beginning no round once `max_flops` are spent: a round's products with K cost
 /// `4n²` and its bordered solve what [`solve_bordered_counted`] counts, from a Cholesky of the
-/// free samples (`m³/3`) to an SVD where they are nearly dependent (`22m³`).
+/// free samples (`m³/3`) to an eigendecomposition where they are nearly dependent (`9m³`).
 pub(crate) fn polish(
     k: &Mat<f64>,
     y: &[f64],
