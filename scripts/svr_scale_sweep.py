@@ -9,7 +9,7 @@ numpy and scikit-learn; the project's tests do not):
 For each problem, 30 sizes spaced evenly on a log scale from 350 to 30,000 (to a capture's
 in-tissue samples where it has fewer); each size is fitted by `palpus bench svr-scale` in its
 own process and by scikit-learn's libsvm on the same samples (scripts/bench_svr_scale.py: the
-fastest of five fits below a second, on both sides). The problems:
+fastest of fifteen fits below a second, in three rounds that alternate the two sides). The problems:
 
 - `li_bi 100 Hz`: the committed needle capture the main job identifies from (7,514 samples in
   tissue), the needle's C = 100, γ = 30, ε = 0.02 N;
@@ -93,11 +93,10 @@ def main():
             for n in sizes:
                 dump = work / "dump"
                 dump.mkdir(exist_ok=True)
-                o = bench.ours(a.palpus, source, n, dump, 600.0, a.threads)
+                o, lib = bench.paired(a.palpus, source, n, dump, 600.0, a.threads, c, gamma, eps)
                 if "error" in o:
                     print(f"{name} n={n}: ours failed: {o['error']}", file=sys.stderr, flush=True)
                     continue
-                lib = bench.libsvm(dump / f"svr_scale_n{o['n']}.csv", c, gamma, eps)
                 print(f"{name} n={o['n']}: ours {o['s']:.3f} s ({o['solver']}), libsvm {lib['s']:.3f} s",
                       file=sys.stderr, flush=True)
                 rows.append([f'"{name}"', o["n"], o["s"], lib["s"], o["mb"], o["svs"], lib["svs"], o["gap"],
