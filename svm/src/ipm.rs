@@ -549,7 +549,7 @@ fn finish(h: [Half; 2], bias: f64, iterations: usize, gap: f64, converged: bool)
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
