@@ -124,9 +124,9 @@ mod tests {
     use svm::{Kernel, SvrParams};
 
     /// At 432 samples of the committed Li & Bi capture the interior point's first iterate
-    /// offered to the polish (iteration 9, gap 8.5e-8 below `EARLY_GAP`) has samples with nearly
-    /// the same inputs on the tube's boundary, and its active set takes several polish rounds to
-    /// settle. With the early polishes held to five rounds each, the attempts failed until
+    /// offered to the polish (iteration 9, gap 8.5e-8, below the dense operator's
+    /// `OFFER_BELOW`) has samples with nearly the same inputs on the tube's boundary, and its
+    /// active set takes several polish rounds to settle. With the early polishes held to five rounds each, the attempts failed until
     /// iteration 13; offered only below a gap of 1e-8, the fit took 10.
     #[test]
     fn the_li_bi_needle_at_432_samples_is_polished_at_the_first_iterate_offered() {

@@ -29,14 +29,6 @@ use super::params::{DualSettings, FitProgress};
 
 const NAME: &str = "interior point";
 
-/// Relative gap below which iterates are offered for polishing: by then the active set is
-/// mostly settled; tried earlier, a failed attempt costs dense solves up to what the interior
-/// point has spent. Counted in instructions (callgrind) on the three needle problems'
-/// training sets at n = 350, 408, 432, 481 (dense fits): against 1e-8, 1e-7 saved an iteration
-/// on five of the twelve and 1.6 % of their sum (−8 % at most, +1.3 % on one); 1e-6 saved one on
-/// seven but cost up to 2.5× on others, whose first attempts failed.
-pub(crate) const EARLY_GAP: f64 = 1e-7;
-
 /// At most this many centrality correctors per iteration (Gondzio 1996).
 const CENTRALITY_CORRECTORS: usize = 2;
 
@@ -95,6 +87,10 @@ struct Direction {
 pub(crate) trait NewtonOperator {
     /// A factorisation of `K + diag(h)`.
     type Factor;
+    /// Relative gap below which iterates are offered to the caller's exact finish: by then the
+    /// active set is mostly settled. Where to start depends on what a failed attempt costs
+    /// beside an iteration, so each operator says.
+    const OFFER_BELOW: f64;
     /// `out = K v` and `out_abs ≥ |K| |v|` elementwise (the scale Kβ's rounding error is
     /// relative to), in one pass where the operator allows.
     fn mat_vec_with_abs(&self, v: &[f64], out: &mut [f64], out_abs: &mut [f64]);
@@ -117,6 +113,12 @@ pub(crate) struct DenseLlt {
 
 impl NewtonOperator for Mat<f64> {
     type Factor = DenseLlt;
+    /// An iteration is a Cholesky of K, and the polish's attempts are held together to what
+    /// the iterations have spent. Counted in instructions (callgrind) on the three needle
+    /// problems' training sets at n = 350, 408, 432, 481: against 1e-8, 1e-7 saved an
+    /// iteration on five of the twelve and 1.6 % of their sum (−8 % at most, +1.3 % on one);
+    /// 1e-6 saved one on seven but cost up to 2.5× on others, whose first attempts failed.
+    const OFFER_BELOW: f64 = 1e-7;
 
     fn mat_vec_with_abs(&self, v: &[f64], out: &mut [f64], out_abs: &mut [f64]) {
         out.fill(0.0);
@@ -185,7 +187,7 @@ impl NewtonOperator for Mat<f64> {
 
 /// Solves the dual to relative gap `tolerance`, with the kernel matrix `k`.
 ///
-/// Once the gap is below [`EARLY_GAP`], `accept` is shown each iterate; when it returns true
+/// Once the gap is below [`NewtonOperator::OFFER_BELOW`], `accept` is shown each iterate; when it returns true
 /// (the caller polished that iterate into a certified optimum) the solve stops there.
 pub(crate) fn solve<K: NewtonOperator>(
     k: &K,
@@ -287,7 +289,7 @@ pub(crate) fn solve<K: NewtonOperator>(
             gap,
             elapsed_s: settings.started.elapsed().as_secs_f64(),
         });
-        if gap < EARLY_GAP {
+        if gap < K::OFFER_BELOW {
             let snapshot = finish(
                 [
                     Half {
