@@ -86,7 +86,7 @@ const LANE_SUM_MIN: usize = 16;
 /// `Σ term(aₖ, bₖ)` in four partial sums (term k into sum `k mod 4`, in increasing k), combined
 /// as `(s₀ + s₁) + (s₂ + s₃)`; a running sum below [`LANE_SUM_MIN`] terms.
 #[inline(always)]
-fn lane_sum(a: &[f64], b: &[f64], term: impl Fn(f64, f64) -> f64) -> f64 {
+pub(crate) fn lane_sum(a: &[f64], b: &[f64], term: impl Fn(f64, f64) -> f64) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
     if n < LANE_SUM_MIN {
