@@ -16,6 +16,7 @@ use faer::linalg::solvers::Solve;
 
 use super::bordered::{Singular, solve_bordered_counted, svd_solve};
 use super::data::SvrData;
+use super::ipm::NewtonOperator;
 use super::params::DualSettings;
 
 /// Where a sample sits at the optimum.
@@ -109,7 +110,7 @@ fn polish_within(
     // The last round's β and Kβ, from which the next round's Kβ is updated, and the bound on
     // that Kβ's rounding error.
     let mut last: Option<(Vec<f64>, Vec<f64>, f64)> = None;
-    let k_max = (0..n).fold(0.0f64, |m, i| m.max(k[(i, i)].abs()));
+    let k_max = k.diag_max();
     let drift_limit = 1e-2 * KKT_TOLERANCE * y_scale;
     for _ in 0..2 * n + 20 {
         if *flops >= max_flops || tried.again(sides) {
@@ -226,15 +227,13 @@ fn polish_within(
         // round, as an active-set method does: moving every violator at once can cycle.
         let update = last.take().and_then(|(last_beta, kbeta, drift)| {
             let delta: Vec<f64> = beta.iter().zip(&last_beta).map(|(b, l)| b - l).collect();
-            let changed = nonzeros(&delta);
-            let drift = drift + f64::EPSILON * changed * k_max * delta.iter().map(|d| d.abs()).sum::<f64>();
-            (drift <= drift_limit).then_some((delta, changed, kbeta, drift))
+            let drift =
+                drift + f64::EPSILON * nonzeros(&delta) * k_max * delta.iter().map(|d| d.abs()).sum::<f64>();
+            (drift <= drift_limit).then_some((delta, kbeta, drift))
         });
         let (kbeta, drift) = match update {
-            Some((delta, changed, mut kbeta, drift)) => {
-                let mut k_delta = vec![0.0; n];
-                super::ipm::mat_vec(k, &delta, &mut k_delta);
-                *flops += column * changed;
+            Some((delta, mut kbeta, drift)) => {
+                let k_delta = product(k, &delta, flops);
                 kbeta.iter_mut().zip(&k_delta).for_each(|(a, d)| *a += d);
                 (kbeta, drift)
             }
