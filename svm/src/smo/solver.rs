@@ -32,6 +32,39 @@ pub(super) trait QMatrix {
     fn focus(&mut self, active: usize) {
         let _ = active;
     }
+    /// Adds `coefficient` times row `t` over every position to Ḡ = `C · Σ_{s at upper bound}
+    /// Q₍·₎ₛ`, the gradient's part from the bounded variables, which the matrix keeps in the
+    /// layout its rows make cheapest (so that the gradient of shrunk variables can be rebuilt
+    /// from the free ones only).
+    fn add_to_bar(&mut self, t: usize, coefficient: f64);
+    /// Ḡ at position `t`.
+    fn bar(&self, t: usize) -> f64;
+}
+
+/// Ḡ kept by position, for a matrix whose rows are by position: a row added whole, entries
+/// swapped with their positions.
+#[derive(Debug, Clone)]
+pub(super) struct PositionBar(Vec<f64>);
+
+impl PositionBar {
+    pub(super) fn new(m: usize) -> Self {
+        Self(vec![0.0; m])
+    }
+
+    /// Adds `coefficient · row` (a whole row by position).
+    pub(super) fn add(&mut self, coefficient: f64, row: &[f64]) {
+        for (b, q) in self.0.iter_mut().zip(row) {
+            *b += coefficient * q;
+        }
+    }
+
+    pub(super) fn get(&self, t: usize) -> f64 {
+        self.0[t]
+    }
+
+    pub(super) fn swap(&mut self, i: usize, j: usize) {
+        self.0.swap(i, j);
+    }
 }
 
 /// What a solve asks, each time it has converged on every variable, of whoever called it:
@@ -50,9 +83,6 @@ struct State<'q, Q> {
     alpha: Vec<f64>,
     /// Gradient ∇ₜ = (Qα)ₜ + pₜ.
     grad: Vec<f64>,
-    /// `C · Σ_{s at upper bound} Qₜₛ`: the part of the gradient the bounded variables give,
-    /// kept so the gradient of shrunk variables can be rebuilt from the free ones only.
-    grad_bar: Vec<f64>,
     /// `Qₜₜ`.
     diag: Vec<f64>,
     /// Caller's index at each position.
@@ -421,7 +451,7 @@ impl<Q: QMatrix> State<'_, Q> {
     }
 
     /// The analytic two-variable step, the gradient update over the active set, and
-    /// `grad_bar` for a variable that reached or left the upper bound; `hi` is the handle of
+    /// Ḡ for a variable that reached or left the upper bound; `hi` is the handle of
     /// row i from the selection.
     fn update(&mut self, i: usize, hi: usize, j: usize) {
         let (n, c) = (self.active, self.c);
@@ -445,12 +475,7 @@ impl<Q: QMatrix> State<'_, Q> {
         }
         for (t, was_upper) in [(i, was_upper_i), (j, was_upper_j)] {
             if was_upper != self.upper(t) {
-                let all = self.alpha.len();
-                let h = self.q.fetch(t, all);
-                let sign = if was_upper { -c } else { c };
-                for (gb, q) in self.grad_bar.iter_mut().zip(&self.q.get(h)[..all]) {
-                    *gb += sign * q;
-                }
+                self.q.add_to_bar(t, if was_upper { -c } else { c });
             }
         }
     }
@@ -462,20 +487,19 @@ impl<Q: QMatrix> State<'_, Q> {
         self.p.swap(i, j);
         self.alpha.swap(i, j);
         self.grad.swap(i, j);
-        self.grad_bar.swap(i, j);
         self.diag.swap(i, j);
         self.original.swap(i, j);
     }
 
     /// libsvm's `reconstruct_gradient`: the exact gradient of the shrunk variables, from
-    /// `grad_bar` and the free variables, by rows of whichever side is cheaper.
+    /// Ḡ and the free variables, by rows of whichever side is cheaper.
     fn reconstruct_gradient(&mut self) {
         let (n, all, c) = (self.active, self.alpha.len(), self.c);
         if n == all {
             return;
         }
         for t in n..all {
-            self.grad[t] = self.grad_bar[t] + self.p[t];
+            self.grad[t] = self.q.bar(t) + self.p[t];
         }
         let free = (0..n).filter(|&t| !self.upper(t) && !self.lower(t)).count();
         if free * all > 2 * n * (all - n) {
@@ -607,7 +631,6 @@ fn solve_with<Q: QMatrix, const NON_POSITIVE_TO_TAU: bool>(
         p: p.to_vec(),
         alpha: vec![0.0; m],
         grad: p.to_vec(),
-        grad_bar: vec![0.0; m],
         diag,
         original: (0..m).collect(),
         active: m,

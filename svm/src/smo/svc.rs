@@ -2,7 +2,7 @@
 //! (libsvm's `SVC_Q`), so that a fit with a few dozen active variables computes and reads a
 //! few dozen values per row.
 
-use super::solver::{QMatrix, solve};
+use super::solver::{PositionBar, QMatrix, solve};
 use super::{NAME, SmoSettings, SmoSolution};
 use crate::error::{KKT_VIOLATION, SvmError};
 use crate::kernel::Kernel;
@@ -25,6 +25,7 @@ struct PrefixQ<'a> {
     /// Values cached, and the most to keep.
     held: usize,
     budget: usize,
+    bar: PositionBar,
 }
 
 impl PrefixQ<'_> {
@@ -73,6 +74,16 @@ impl QMatrix for PrefixQ<'_> {
         &self.rows[handle]
     }
 
+    fn add_to_bar(&mut self, t: usize, coefficient: f64) {
+        let all = self.at.len();
+        let h = self.fetch(t, all);
+        self.bar.add(coefficient, &self.rows[h][..all]);
+    }
+
+    fn bar(&self, t: usize) -> f64 {
+        self.bar.get(t)
+    }
+
     /// Swaps positions `i < j` in every cached row; a row cached past `i` but not past `j`
     /// is dropped (libsvm's rule: it cannot be swapped in place).
     fn swap(&mut self, i: usize, j: usize) {
@@ -80,6 +91,7 @@ impl QMatrix for PrefixQ<'_> {
         self.last_used.swap(i, j);
         self.at.swap(i, j);
         self.y.swap(i, j);
+        self.bar.swap(i, j);
         for r in 0..self.rows.len() {
             let len = self.rows[r].len();
             if len > j {
@@ -128,6 +140,7 @@ pub fn solve_svc(
         held: 0,
         // Two whole rows at least: an update reads a pair's.
         budget: (cache_bytes / size_of::<f64>()).max(2 * n),
+        bar: PositionBar::new(n),
     };
     let sol = solve(&mut q, y, &vec![-1.0; n], settings, &mut |_, _, _| None)?;
     if !sol.converged {
