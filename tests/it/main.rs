@@ -1,5 +1,5 @@
 //! Integration tests of the palpus binary and the crates together, gathered into one test
-//! binary so that the application is linked once; `tests/run.rs` (real-time sessions, paced
+//! binary so that the application is linked once; `tests/run/` (real-time sessions, paced
 //! one at a time) is kept apart so that nothing else runs beside its rate checks.
 
 // A failed unwrap is a failed test, reported with its line.
