@@ -134,17 +134,35 @@ fn capture_errors_are_clear() {
 
 #[test]
 fn bench_loop_reports_the_figures() {
-    succeeds_saying(
-        &["bench", "loop", "--seconds", "0.3"],
-        &[
-            "mean rate:",
-            "period error:",
-            "p99.9",
-            "overruns:",
-            "tick compute:",
-            "scheduling:",
-        ],
-    );
+    let args = ["bench", "loop", "--seconds", "0.3"];
+    let figures = [
+        "mean rate:",
+        "period error:",
+        "p99.9",
+        "overruns:",
+        "tick compute:",
+        "scheduling:",
+    ];
+    // A virtual machine is now and then descheduled for tens of milliseconds, and the loop's
+    // watchdog then ends the benchmark (exit 3, its figures printed): measured again, seconds
+    // apart, up to five runs in all, as `tests/run` measures its real-time sessions. A loop
+    // that stalls on every run still fails here.
+    let mut o = palpus(&args);
+    for _ in 1..5 {
+        if o.status.code() != Some(3) {
+            break;
+        }
+        let t = text(&o);
+        assert!(t.contains("ended early") && t.contains("stalled"), "{t}");
+        eprintln!("the machine stalled during the loop benchmark; measuring again:\n{t}");
+        std::thread::sleep(std::time::Duration::from_secs(5));
+        o = palpus(&args);
+    }
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    for figure in figures {
+        assert!(t.contains(figure), "`{figure}` missing from:\n{t}");
+    }
     let o = palpus(&["bench", "loop", "--seconds", "-1"]);
     assert!(!o.status.success());
 }
