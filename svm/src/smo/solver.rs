@@ -41,32 +41,6 @@ pub(super) trait QMatrix {
     fn bar(&self, t: usize) -> f64;
 }
 
-/// Ḡ kept by position, for a matrix whose rows are by position: a row added whole, entries
-/// swapped with their positions.
-#[derive(Debug, Clone)]
-pub(super) struct PositionBar(Vec<f64>);
-
-impl PositionBar {
-    pub(super) fn new(m: usize) -> Self {
-        Self(vec![0.0; m])
-    }
-
-    /// Adds `coefficient · row` (a whole row by position).
-    pub(super) fn add(&mut self, coefficient: f64, row: &[f64]) {
-        for (b, q) in self.0.iter_mut().zip(row) {
-            *b += coefficient * q;
-        }
-    }
-
-    pub(super) fn get(&self, t: usize) -> f64 {
-        self.0[t]
-    }
-
-    pub(super) fn swap(&mut self, i: usize, j: usize) {
-        self.0.swap(i, j);
-    }
-}
-
 /// What a solve asks, each time it has converged on every variable, of whoever called it:
 /// `(α, ∇, stop)` in the caller's order → a smaller stop value to go on to, or `None` to
 /// finish. The caller may correct ∇ (e.g. recompute it where Q's rows were rounded); the solve

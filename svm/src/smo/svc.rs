@@ -2,7 +2,7 @@
 //! (libsvm's `SVC_Q`), so that a fit with a few dozen active variables computes and reads a
 //! few dozen values per row.
 
-use super::solver::{PositionBar, QMatrix, solve};
+use super::solver::{QMatrix, solve};
 use super::{NAME, SmoSettings, SmoSolution};
 use crate::error::{KKT_VIOLATION, SvmError};
 use crate::kernel::Kernel;
@@ -25,7 +25,8 @@ struct PrefixQ<'a> {
     /// Values cached, and the most to keep.
     held: usize,
     budget: usize,
-    bar: PositionBar,
+    /// Ḡ by position, swapped with its positions.
+    bar: Vec<f64>,
 }
 
 impl PrefixQ<'_> {
@@ -77,11 +78,13 @@ impl QMatrix for PrefixQ<'_> {
     fn add_to_bar(&mut self, t: usize, coefficient: f64) {
         let all = self.at.len();
         let h = self.fetch(t, all);
-        self.bar.add(coefficient, &self.rows[h][..all]);
+        for (b, q) in self.bar.iter_mut().zip(&self.rows[h][..all]) {
+            *b += coefficient * q;
+        }
     }
 
     fn bar(&self, t: usize) -> f64 {
-        self.bar.get(t)
+        self.bar[t]
     }
 
     /// Swaps positions `i < j` in every cached row; a row cached past `i` but not past `j`
@@ -140,7 +143,7 @@ pub fn solve_svc(
         held: 0,
         // Two whole rows at least: an update reads a pair's.
         budget: (cache_bytes / size_of::<f64>()).max(2 * n),
-        bar: PositionBar::new(n),
+        bar: vec![0.0; n],
     };
     let sol = solve(&mut q, y, &vec![-1.0; n], settings, &mut |_, _, _| None)?;
     if !sol.converged {
