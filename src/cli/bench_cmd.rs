@@ -140,8 +140,9 @@ pub(crate) fn run_loop(args: &LoopArgs) -> anyhow::Result<()> {
     );
     println!("lateness:         {}", quantiles(&s.lateness));
     println!(
-        "overruns:         {} missed slots, {} ticks > 2 ms late  {}",
+        "overruns:         {} ticks a period late, {} slots skipped, {} ticks > 2 ms late  {}",
         s.overruns,
+        s.missed_slots,
         s.late_over_2ms,
         yes(s.late_over_2ms == 0)
     );

@@ -116,6 +116,13 @@ pub struct SegmentSummary {
     pub period_error_p99_us: f64,
     /// Ticks started over 2 ms late.
     pub late_over_2ms: u64,
+    /// Deadlines skipped because their tick woke after the next one (force updates lost).
+    pub missed_slots: u64,
+    /// |rate of the deadlines kept or skipped − nominal| / nominal: near zero for a loop that
+    /// keeps its grid of absolute deadlines, however often the machine makes it late.
+    pub deadline_rate_error: f64,
+    /// The loop's own work per tick, p99, µs.
+    pub compute_p99_us: f64,
     /// Stalls of the loop it rode out (force ramped to zero, then back).
     pub stalls: u64,
     /// The longest of them, ms (0 without one).
@@ -321,6 +328,9 @@ pub fn summarize(run: &SegmentRun) -> SegmentSummary {
         rate_error: st.rate_error(),
         period_error_p99_us: st.period_error.p99.as_secs_f64() * 1e6,
         late_over_2ms: st.late_over_2ms,
+        missed_slots: st.missed_slots,
+        deadline_rate_error: st.deadline_rate_error(),
+        compute_p99_us: st.compute.p99.as_secs_f64() * 1e6,
         stalls: st.stalls,
         longest_stall_ms: st.longest_stall.as_secs_f64() * 1e3,
         max_command_n,

@@ -245,7 +245,7 @@ impl SessionReport {
         for s in &self.segments {
             let _ = writeln!(
                 t,
-                "  {} [{}]: {:.2} s, {} ticks, mean rate {:.2} Hz ({:+.3} %), period error p99 {:.0} µs, {} ticks > 2 ms late, {} stalls (longest {:.1} ms)",
+                "  {} [{}]: {:.2} s, {} ticks, mean rate {:.2} Hz ({:+.3} %), period error p99 {:.0} µs, {} ticks > 2 ms late, {} slots skipped, {} stalls (longest {:.1} ms)",
                 s.object,
                 s.kind,
                 s.duration_s,
@@ -254,6 +254,7 @@ impl SessionReport {
                 100.0 * (s.mean_rate_hz - s.nominal_rate_hz) / s.nominal_rate_hz.max(1e-9),
                 s.period_error_p99_us,
                 s.late_over_2ms,
+                s.missed_slots,
                 s.stalls,
                 s.longest_stall_ms
             );

@@ -103,13 +103,20 @@ fn f(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
 
-/// The report of a real-time run, measured again (up to five runs in all, seconds apart) while
-/// the first segment shows ticks over 2 ms late. A virtual machine is sometimes descheduled for
-/// a hundred milliseconds or more, now and then for seconds on end: the loop then skips the
-/// slots it missed, its mean rate says nothing about the loop, and the segment loses samples
-/// its duration is checked on. Of the runs measured, the one least disturbed is returned: the
-/// fewest late ticks, then the rate closest to nominal. A loop that is slow without ever being
-/// late is judged on its first run.
+/// The report of a real-time run whose first segment kept the loop's rate within
+/// `rate_tolerance`, measured again (up to five runs in all, seconds apart) while that segment
+/// shows ticks over 2 ms late. A virtual machine is sometimes descheduled for a hundred
+/// milliseconds or more, now and then for minutes on end: the loop then skips the slots it
+/// missed, and its mean rate says what the machine did rather than what the loop did. Of the
+/// runs measured, the one least disturbed is judged: the fewest late ticks, then the rate
+/// closest to nominal.
+///
+/// An undisturbed run must hold its mean rate to the tolerance. When every run was disturbed,
+/// the loop is judged on its own part, and the note says so: its deadlines (the ticks run plus
+/// the slots skipped, over the same span) at the nominal rate within the tolerance, which a
+/// loop that set each deadline from a late wake-up would miss; its own work per tick (p99)
+/// within half a period, which a tick that blocked or computed too long would miss; and at
+/// least nine slots in ten kept, without which the run measured nothing.
 fn real_time_report(rate_tolerance: f64, attempt: impl Fn() -> Value) -> Value {
     // Gigabytes of build output may still be waiting to be written back: flush them first, so
     // the kernel's writeback does not compete with the loop being measured.
@@ -137,6 +144,21 @@ fn real_time_report(rate_tolerance: f64, attempt: impl Fn() -> Value) -> Value {
         if disturbance(&r) < disturbance(&best) {
             best = r;
         }
+    }
+    let seg = &best["segments"][0];
+    if f(&seg["late_over_2ms"]) == 0.0 {
+        assert!(f(&seg["rate_error"]) < rate_tolerance, "{seg}");
+    } else {
+        eprintln!(
+            "every run was disturbed by the machine; the least disturbed ({} ticks over 2 ms late, {} slots skipped, mean rate error {:.4}) is judged on the loop's deadlines and work",
+            seg["late_over_2ms"],
+            seg["missed_slots"],
+            f(&seg["rate_error"])
+        );
+        let period_us = 1e6 / f(&seg["nominal_rate_hz"]);
+        assert!(f(&seg["deadline_rate_error"]) < rate_tolerance, "{seg}");
+        assert!(f(&seg["compute_p99_us"]) < period_us / 2.0, "{seg}");
+        assert!(f(&seg["rate_error"]) < 0.1, "{seg}");
     }
     best
 }

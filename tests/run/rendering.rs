@@ -41,13 +41,13 @@ fn the_window_opens_under_xvfb_and_shows_the_needle() {
         assert!(printed.contains("in a window"), "{printed}");
         report(&out)
     };
+    // At the nominal rate within 2 % while the window draws.
     let r = real_time_report(0.02, attempt);
     let shot = render::Image::load_png(&out.join("window.png")).unwrap();
     assert_eq!((shot.width, shot.height), (1280, 720));
     // The scripted trainee pushed the needle into the capsule while the window drew.
     let seg = &r["segments"][0];
     assert!(f(&seg["max_model_force_n"]) > 0.5, "{seg}");
-    assert!(f(&seg["rate_error"]) < 0.02, "{seg}");
 }
 
 #[test]

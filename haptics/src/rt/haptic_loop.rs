@@ -306,7 +306,7 @@ where
         let woke_ns = heartbeat.at_ns(wake.at);
         let gap_ns = previous_wake.map(|p| wake.at.duration_since(p).as_nanos() as u64);
         heartbeat.beat(wake.at);
-        monitor.record_wake(woke_ns, wake.late.as_nanos() as u64, gap_ns);
+        monitor.record_wake(woke_ns, wake.late.as_nanos() as u64, wake.skipped, gap_ns);
         previous_wake = Some(wake.at);
         // Read after the beat: a trip counted from here on is one this tick has not answered.
         let trips = heartbeat.trips();

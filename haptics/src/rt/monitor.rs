@@ -126,6 +126,7 @@ pub struct RateMonitor {
     compute: Histogram,
     ticks: AtomicU64,
     overruns: AtomicU64,
+    missed_slots: AtomicU64,
     first_tick_ns: AtomicU64,
     last_tick_ns: AtomicU64,
     dropped_samples: AtomicU64,
@@ -145,6 +146,7 @@ impl RateMonitor {
             compute: Histogram::new(),
             ticks: AtomicU64::new(0),
             overruns: AtomicU64::new(0),
+            missed_slots: AtomicU64::new(0),
             first_tick_ns: AtomicU64::new(0),
             last_tick_ns: AtomicU64::new(0),
             dropped_samples: AtomicU64::new(0),
@@ -161,8 +163,9 @@ impl RateMonitor {
     }
 
     /// Records a tick that woke at `woke_ns` (on the loop's clock), `late_ns` after its
-    /// deadline, after a period of `period_ns` (None for the first tick).
-    pub(crate) fn record_wake(&self, woke_ns: u64, late_ns: u64, period_ns: Option<u64>) {
+    /// deadline, after a period of `period_ns` (None for the first tick), having skipped
+    /// `skipped` deadlines it woke after.
+    pub(crate) fn record_wake(&self, woke_ns: u64, late_ns: u64, skipped: u64, period_ns: Option<u64>) {
         if self.ticks.fetch_add(1, Ordering::Relaxed) == 0 {
             self.first_tick_ns.store(woke_ns, Ordering::Relaxed);
         }
@@ -170,6 +173,9 @@ impl RateMonitor {
         self.lateness.record_ns(late_ns);
         if late_ns > self.nominal_period_ns {
             self.overruns.fetch_add(1, Ordering::Relaxed);
+        }
+        if skipped > 0 {
+            self.missed_slots.fetch_add(skipped, Ordering::Relaxed);
         }
         if let Some(p) = period_ns {
             self.period_error.record_ns(p.abs_diff(self.nominal_period_ns));
@@ -215,6 +221,7 @@ impl RateMonitor {
         self.lateness.reset();
         self.compute.reset();
         self.overruns.store(0, Ordering::Relaxed);
+        self.missed_slots.store(0, Ordering::Relaxed);
         self.ticks.store(0, Ordering::Relaxed);
         self.stalls.store(0, Ordering::Relaxed);
         self.longest_stall_ns.store(0, Ordering::Relaxed);
@@ -240,6 +247,8 @@ impl RateMonitor {
             lateness: self.lateness.summary(),
             compute: self.compute.summary(),
             overruns: self.overruns.load(Ordering::Relaxed),
+            missed_slots: self.missed_slots.load(Ordering::Relaxed),
+            span: Duration::from_nanos(span_ns),
             late_over_2ms: self.lateness.count_above(Duration::from_millis(2)),
             dropped_samples: self.dropped_samples.load(Ordering::Relaxed),
             safety_events: self.safety_events.load(Ordering::Relaxed),
@@ -282,6 +291,11 @@ pub struct RateStats {
     pub compute: Percentiles,
     /// Ticks that started more than a whole period after their deadline (a missed slot).
     pub overruns: u64,
+    /// Deadlines skipped because the tick due at them woke after the next one: force updates
+    /// the device never got.
+    pub missed_slots: u64,
+    /// Time from the first tick's wake-up to the last's.
+    pub span: Duration,
     /// Ticks that started more than 2 ms late.
     pub late_over_2ms: u64,
     /// Samples the recorder ring had no room for.
@@ -302,6 +316,21 @@ impl RateStats {
     pub fn rate_error(&self) -> f64 {
         if self.nominal_rate_hz > 0.0 {
             (self.mean_rate_hz - self.nominal_rate_hz).abs() / self.nominal_rate_hz
+        } else {
+            0.0
+        }
+    }
+
+    /// Relative deviation from the nominal rate of the deadlines the loop kept or skipped: the
+    /// ticks run plus the slots missed, over the same span. A loop that keeps absolute
+    /// deadlines holds this near zero however long the machine stops it, since every slot
+    /// lost to a late wake-up is counted; a loop whose deadlines drift (each one set from the
+    /// late wake-up before it) shows the drift here too.
+    pub fn deadline_rate_error(&self) -> f64 {
+        let span_s = self.span.as_secs_f64();
+        if self.ticks > 1 && span_s > 0.0 && self.nominal_rate_hz > 0.0 {
+            let slots = (self.ticks - 1 + self.missed_slots) as f64;
+            (slots / span_s - self.nominal_rate_hz).abs() / self.nominal_rate_hz
         } else {
             0.0
         }
@@ -333,21 +362,32 @@ mod tests {
     #[test]
     fn monitor_counts_overruns_and_rate() {
         let m = RateMonitor::new(Duration::from_millis(1));
-        m.record_wake(0, 0, None);
+        m.record_wake(0, 0, 0, None);
         for k in 1..=1000u64 {
-            m.record_wake(k * 1_000_000, 10_000, Some(1_000_000));
+            m.record_wake(k * 1_000_000, 10_000, 0, Some(1_000_000));
         }
-        m.record_wake(1_003_000_000, 3_000_000, Some(3_000_000));
+        // Due at 1.001 s, woken at 1.0035 s: the slots at 1.002 s and 1.003 s are skipped.
+        m.record_wake(1_003_500_000, 2_500_000, 2, Some(2_500_000));
         let s = m.snapshot();
         assert_eq!(s.ticks, 1002);
         assert_eq!(s.overruns, 1);
+        assert_eq!(s.missed_slots, 2);
         assert_eq!(s.late_over_2ms, 1);
         assert!(
-            (s.mean_rate_hz - 1001.0 / 1.003).abs() < 1e-6,
+            (s.mean_rate_hz - 1001.0 / 1.0035).abs() < 1e-6,
             "{}",
             s.mean_rate_hz
         );
+        // The mean rate is two slots short; the deadlines kept and skipped are all there, but
+        // for the last tick's lateness.
+        let kept = 1.0 - 1003.0 / 1003.5;
+        assert!(s.rate_error() > 4.0 * kept, "{}", s.rate_error());
+        assert!(
+            (s.deadline_rate_error() - kept).abs() < 1e-12,
+            "{}",
+            s.deadline_rate_error()
+        );
         assert_eq!(s.period_error.p50, Duration::from_micros(1));
-        assert_eq!(s.period_error.max, Duration::from_millis(2));
+        assert_eq!(s.period_error.max, Duration::from_micros(1500));
     }
 }
