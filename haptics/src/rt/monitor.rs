@@ -248,7 +248,6 @@ impl RateMonitor {
             compute: self.compute.summary(),
             overruns: self.overruns.load(Ordering::Relaxed),
             missed_slots: self.missed_slots.load(Ordering::Relaxed),
-            span: Duration::from_nanos(span_ns),
             late_over_2ms: self.lateness.count_above(Duration::from_millis(2)),
             dropped_samples: self.dropped_samples.load(Ordering::Relaxed),
             safety_events: self.safety_events.load(Ordering::Relaxed),
@@ -294,8 +293,6 @@ pub struct RateStats {
     /// Deadlines skipped because the tick due at them woke after the next one: force updates
     /// the device never got.
     pub missed_slots: u64,
-    /// Time from the first tick's wake-up to the last's.
-    pub span: Duration,
     /// Ticks that started more than 2 ms late.
     pub late_over_2ms: u64,
     /// Samples the recorder ring had no room for.
@@ -327,10 +324,10 @@ impl RateStats {
     /// lost to a late wake-up is counted; a loop whose deadlines drift (each one set from the
     /// late wake-up before it) shows the drift here too.
     pub fn deadline_rate_error(&self) -> f64 {
-        let span_s = self.span.as_secs_f64();
-        if self.ticks > 1 && span_s > 0.0 && self.nominal_rate_hz > 0.0 {
-            let slots = (self.ticks - 1 + self.missed_slots) as f64;
-            (slots / span_s - self.nominal_rate_hz).abs() / self.nominal_rate_hz
+        if self.ticks > 1 && self.nominal_rate_hz > 0.0 {
+            let periods = (self.ticks - 1) as f64;
+            let rate_hz = self.mean_rate_hz * (periods + self.missed_slots as f64) / periods;
+            (rate_hz - self.nominal_rate_hz).abs() / self.nominal_rate_hz
         } else {
             0.0
         }
